@@ -1,0 +1,395 @@
+"""Configuration: TOML file + ``--set`` overrides -> immutable, validated objects.
+
+Every key is optional (SPEC §6). Each section is a frozen dataclass whose fields are
+declared once in ``_SCHEMA`` with their kind, default and admissible range; loading
+checks kinds and ranges and raises :class:`ConfigError` with a one-line message
+naming the key. Geometry that cannot be assembled is checked by the model
+(:mod:`softclose.kinematics`), which also raises ``ConfigError``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Iterable
+
+from .errors import ConfigError
+
+INTEGRATORS = ("rk4", "euler_cromer", "gauss4", "radau5")
+HESSIANS = ("exact", "limited-memory")
+
+
+# kind: "pos" (> 0), "nonneg" (>= 0), "real", "vec2", "vec3", "bounds" (2 numbers lo <= hi),
+#       "int+" (positive int), "str:<choices>", "bool"; default None = derived.
+_SCHEMA: dict[str, dict[str, tuple[str, Any]]] = {
+    "geometry": {
+        "lid_length": ("pos", 0.500),
+        "crank_oa": ("pos", 0.045),
+        "crank_bc": ("pos", 0.080),
+        "pivot_b": ("vec2", (0.060, 0.015)),
+        "lid_c": ("vec2", (0.012, 0.013)),
+        "lid_e": ("vec2", (0.004, 0.014)),
+        "lid_g": ("vec2", None),
+        "lid_tip": ("vec2", None),
+        "spring_anchor": ("vec2", (-0.060, 0.020)),
+        "assembly": ("vec3", (18.0, 108.6655, 146.8855)),
+    },
+    "mass": {
+        "lid": ("pos", 0.5),
+        "crank_oa": ("pos", 0.05),
+        "crank_bc": ("pos", 0.05),
+        "inertia_lid": ("pos", None),
+        "inertia_oa": ("pos", None),
+        "inertia_bc": ("pos", None),
+        "gravity": ("nonneg", 9.81),
+    },
+    "design": {
+        "spring_k": ("nonneg", 0.0),
+        "spring_rest_length": ("pos", 0.05),
+        "damper_c": ("nonneg", 0.0),
+        "rotary_damper_c": ("nonneg", 0.0),
+    },
+    "stroke": {
+        "theta0_deg": ("real", 18.0),
+        "theta_closed_deg": ("real", 0.0),
+        "t_max": ("pos", 5.0),
+    },
+    "simulate": {
+        "integrator": ("str:" + ",".join(INTEGRATORS), "rk4"),
+        "step": ("pos", 0.001),
+        "reference_tol": ("pos", 1e-12),
+    },
+    "optimise": {
+        "closing_time_max": ("pos", 1.0),
+        "closing_time_min": ("nonneg", 0.0),
+        "holding_moment_min": ("real", 0.1),
+        "weight_impact": ("nonneg", 1.0),
+        "weight_peak_tip": ("nonneg", 0.1),
+        "spring_k": ("bounds", (0.0, 10000.0)),
+        "spring_rest_length": ("bounds", (0.02, 0.12)),
+        "damper_c": ("bounds", (0.0, 5000.0)),
+        "nodes": ("int+", 20),
+        "substeps": ("int+", 4),
+        "hessian": ("str:" + ",".join(HESSIANS), "exact"),
+        "linear_solver": ("str:mumps,ma27,ma57,ma86,ma97", "mumps"),
+        "starts": ("int+", 6),
+        "max_iter": ("int+", 500),
+    },
+}
+
+
+@dataclass(frozen=True)
+class Geometry:
+    lid_length: float
+    crank_oa: float
+    crank_bc: float
+    pivot_b: tuple[float, float]
+    lid_c: tuple[float, float]
+    lid_e: tuple[float, float]
+    lid_g: tuple[float, float]
+    lid_tip: tuple[float, float]
+    spring_anchor: tuple[float, float]
+    assembly: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class Mass:
+    lid: float
+    crank_oa: float
+    crank_bc: float
+    inertia_lid: float
+    inertia_oa: float
+    inertia_bc: float
+    gravity: float
+
+
+@dataclass(frozen=True)
+class Design:
+    spring_k: float
+    spring_rest_length: float
+    damper_c: float
+    rotary_damper_c: float
+
+
+@dataclass(frozen=True)
+class Stroke:
+    theta0_deg: float
+    theta_closed_deg: float
+    t_max: float
+
+    @property
+    def theta0(self) -> float:
+        return math.radians(self.theta0_deg)
+
+    @property
+    def theta_closed(self) -> float:
+        return math.radians(self.theta_closed_deg)
+
+
+@dataclass(frozen=True)
+class Simulate:
+    integrator: str
+    step: float
+    reference_tol: float
+
+
+@dataclass(frozen=True)
+class Optimise:
+    closing_time_max: float
+    closing_time_min: float
+    holding_moment_min: float
+    weight_impact: float
+    weight_peak_tip: float
+    spring_k: tuple[float, float]
+    spring_rest_length: tuple[float, float]
+    damper_c: tuple[float, float]
+    nodes: int
+    substeps: int
+    hessian: str
+    linear_solver: str
+    starts: int
+    max_iter: int
+
+
+_SECTIONS = {"geometry": Geometry, "mass": Mass, "design": Design, "stroke": Stroke,
+             "simulate": Simulate, "optimise": Optimise}
+
+
+@dataclass(frozen=True)
+class Config:
+    geometry: Geometry
+    mass: Mass
+    design: Design
+    stroke: Stroke
+    simulate: Simulate
+    optimise: Optimise
+    raw: dict = dataclasses.field(default_factory=dict, repr=False, compare=False)
+
+    def replace(self, **sections: dict[str, Any]) -> "Config":
+        """A copy with keys changed, e.g. ``cfg.replace(design={"spring_k": 300.0})``.
+
+        Values are validated exactly as if they came from a file.
+        """
+        raw = {k: dict(v) for k, v in self.raw.items()}
+        for section, values in sections.items():
+            raw.setdefault(section, {}).update(values)
+        return from_dict(raw)
+
+    def with_design(self, spring_k=None, spring_rest_length=None, damper_c=None,
+                    rotary_damper_c=None) -> "Config":
+        """A copy with some design values changed (validated)."""
+        d = {k: v for k, v in dict(spring_k=spring_k, spring_rest_length=spring_rest_length,
+                                    damper_c=damper_c, rotary_damper_c=rotary_damper_c).items()
+             if v is not None}
+        return self.replace(design=d)
+
+
+def _fmt(v: Any) -> str:
+    if isinstance(v, str):
+        return repr(v)
+    return str(v)
+
+
+def _number(key: str, v: Any) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise ConfigError(f"{key}: expected a number, got {_fmt(v)}")
+    x = float(v)
+    if not math.isfinite(x):
+        raise ConfigError(f"{key}: expected a finite number, got {_fmt(v)}")
+    return x
+
+
+def _check(key: str, kind: str, v: Any) -> Any:
+    """Validate one value against its kind; return it normalised."""
+    if kind in ("pos", "nonneg", "real"):
+        x = _number(key, v)
+        if kind == "pos" and not x > 0:
+            raise ConfigError(f"{key}: must be positive, got {_fmt(v)}")
+        if kind == "nonneg" and x < 0:
+            raise ConfigError(f"{key}: must be non-negative, got {_fmt(v)}")
+        return x
+    if kind in ("vec2", "vec3", "bounds"):
+        n = 3 if kind == "vec3" else 2
+        if not isinstance(v, (list, tuple)) or len(v) != n:
+            raise ConfigError(f"{key}: expected a list of {n} numbers, got {_fmt(v)}")
+        xs = tuple(_number(f"{key}[{i}]", x) for i, x in enumerate(v))
+        if kind == "bounds" and xs[0] > xs[1]:
+            raise ConfigError(f"{key}: lower bound {xs[0]} exceeds upper bound {xs[1]}")
+        return xs
+    if kind == "int+":
+        if isinstance(v, bool) or not isinstance(v, int):
+            raise ConfigError(f"{key}: expected a whole number, got {_fmt(v)}")
+        if v < 1:
+            raise ConfigError(f"{key}: must be at least 1, got {v}")
+        return v
+    if kind == "bool":
+        if not isinstance(v, bool):
+            raise ConfigError(f"{key}: expected true or false, got {_fmt(v)}")
+        return v
+    if kind.startswith("str:"):
+        choices = kind[4:].split(",")
+        if not isinstance(v, str) or v not in choices:
+            raise ConfigError(f"{key}: expected one of {', '.join(choices)}; got {_fmt(v)}")
+        return v
+    raise AssertionError(kind)
+
+
+def from_dict(raw: dict[str, Any]) -> Config:
+    """Build a validated :class:`Config` from a nested dict (a parsed TOML file)."""
+    if not isinstance(raw, dict):
+        raise ConfigError("config: expected a table of sections")
+    for section, table in raw.items():
+        if section not in _SCHEMA:
+            raise ConfigError(f"unknown config section [{section}] "
+                              f"(known: {', '.join(_SCHEMA)})")
+        if not isinstance(table, dict):
+            raise ConfigError(f"[{section}]: expected a table of keys, got {_fmt(table)}")
+        for key in table:
+            if key not in _SCHEMA[section]:
+                raise ConfigError(f"unknown config key {section}.{key} "
+                                  f"(known in [{section}]: {', '.join(_SCHEMA[section])})")
+    values: dict[str, dict[str, Any]] = {}
+    for section, fields in _SCHEMA.items():
+        table = raw.get(section, {})
+        values[section] = {}
+        for key, (kind, default) in fields.items():
+            v = table.get(key, default)
+            values[section][key] = None if v is None else _check(f"{section}.{key}", kind, v)
+
+    g, m = values["geometry"], values["mass"]
+    if g["lid_g"] is None:
+        g["lid_g"] = (g["lid_length"] / 2, 0.015)
+    if g["lid_tip"] is None:
+        g["lid_tip"] = (g["lid_length"], 0.0)
+    if m["inertia_lid"] is None:
+        m["inertia_lid"] = m["lid"] * g["lid_length"] ** 2 / 12
+    if m["inertia_oa"] is None:
+        m["inertia_oa"] = m["crank_oa"] * g["crank_oa"] ** 2 / 12
+    if m["inertia_bc"] is None:
+        m["inertia_bc"] = m["crank_bc"] * g["crank_bc"] ** 2 / 12
+
+    s = values["stroke"]
+    if not s["theta0_deg"] > s["theta_closed_deg"]:
+        raise ConfigError(f"stroke.theta0_deg: the release angle ({s['theta0_deg']}) must lie "
+                          f"above stroke.theta_closed_deg ({s['theta_closed_deg']})")
+    if values["simulate"]["step"] >= s["t_max"]:
+        raise ConfigError(f"simulate.step: {values['simulate']['step']} s is not smaller than "
+                          f"stroke.t_max = {s['t_max']} s")
+    o = values["optimise"]
+    if o["closing_time_min"] >= o["closing_time_max"]:
+        raise ConfigError(f"optimise.closing_time_min: {o['closing_time_min']} must be below "
+                          f"optimise.closing_time_max = {o['closing_time_max']}")
+    if o["spring_rest_length"][0] <= 0:
+        raise ConfigError(f"optimise.spring_rest_length: lower bound must be positive, "
+                          f"got {o['spring_rest_length'][0]}")
+    for key in ("spring_k", "damper_c"):
+        if o[key][0] < 0:
+            raise ConfigError(f"optimise.{key}: lower bound must be non-negative, got {o[key][0]}")
+    sections = {name: cls(**values[name]) for name, cls in _SECTIONS.items()}
+    return Config(**sections, raw={k: dict(v) for k, v in raw.items()})
+
+
+def to_dict(cfg: Config) -> dict[str, dict[str, Any]]:
+    """The config as a nested dict of plain values (lists for vectors)."""
+    out = {}
+    for name in _SECTIONS:
+        sec = getattr(cfg, name)
+        out[name] = {f.name: (list(v) if isinstance(v := getattr(sec, f.name), tuple) else v)
+                     for f in dataclasses.fields(sec)}
+    return out
+
+
+_OVERRIDE = re.compile(r"^\s*([A-Za-z_]\w*)\.([A-Za-z_]\w*)(?:\[(\d+)\])?\s*=(.*)$", re.S)
+
+
+def parse_value(text: str) -> Any:
+    """Read a command-line value as a TOML value; a bare word is a string."""
+    try:
+        return tomllib.loads(f"v = {text.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        word = text.strip()
+        if re.fullmatch(r"[A-Za-z_][\w\-]*", word):
+            return word
+        raise ConfigError(f"cannot read {text.strip()!r} as a value (use TOML syntax: "
+                          f"1e4, true, [0.06, 0.015], \"rk4\")") from None
+
+
+def apply_override(raw: dict[str, Any], text: str) -> None:
+    """Apply one ``section.key=value`` or ``section.key[i]=value`` override to ``raw``."""
+    m = _OVERRIDE.match(text)
+    if not m:
+        raise ConfigError(f"--set {text!r}: expected section.key=value or section.key[i]=value")
+    section, key, index, value_text = m.groups()
+    if section not in _SCHEMA:
+        raise ConfigError(f"--set {text!r}: unknown config section [{section}]")
+    if key not in _SCHEMA[section]:
+        raise ConfigError(f"--set {text!r}: unknown config key {section}.{key}")
+    value = parse_value(value_text)
+    table = raw.setdefault(section, {})
+    if index is None:
+        table[key] = value
+        return
+    kind, default = _SCHEMA[section][key]
+    if kind not in ("vec2", "vec3", "bounds"):
+        raise ConfigError(f"--set {text!r}: {section}.{key} is not a vector")
+    current = table.get(key)
+    if current is None:
+        current = default if default is not None else _derived_default(raw, section, key)
+    current = list(current)
+    i = int(index)
+    if i >= len(current):
+        raise ConfigError(f"--set {text!r}: {section}.{key} has {len(current)} components")
+    current[i] = value
+    table[key] = current
+
+
+def _derived_default(raw: dict[str, Any], section: str, key: str) -> list[float]:
+    length = raw.get("geometry", {}).get("lid_length", _SCHEMA["geometry"]["lid_length"][1])
+    length = _number("geometry.lid_length", length)
+    return [length / 2, 0.015] if key == "lid_g" else [length, 0.0]
+
+
+def read_toml(path: str | Path) -> dict[str, Any]:
+    """Parse a TOML config file; unreadable or malformed files raise ConfigError."""
+    p = Path(path)
+    try:
+        text = p.read_text()
+    except OSError as exc:
+        raise ConfigError(f"--config {path}: cannot read the file ({exc.strerror})") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"--config {path}: not valid TOML ({exc})") from None
+
+
+def load_config(path: str | Path | None = None, overrides: Iterable[str] = ()) -> Config:
+    """Load the config: defaults, then the TOML file at ``path``, then ``overrides``."""
+    raw = read_toml(path) if path is not None else {}
+    for text in overrides:
+        apply_override(raw, text)
+    return from_dict(raw)
+
+
+def default_config() -> Config:
+    return from_dict({})
+
+
+def known_keys() -> dict[str, tuple[str, ...]]:
+    """Section -> key names, as accepted in files and by ``--set``."""
+    return {s: tuple(f) for s, f in _SCHEMA.items()}
+
+
+def numeric_keys() -> list[str]:
+    """Every scalar key (and vector component) a sweep may vary."""
+    out = []
+    for section, fields in _SCHEMA.items():
+        for key, (kind, _) in fields.items():
+            if kind in ("pos", "nonneg", "real"):
+                out.append(f"{section}.{key}")
+            elif kind in ("vec2", "vec3"):
+                out += [f"{section}.{key}[{i}]" for i in range(3 if kind == "vec3" else 2)]
+    return out

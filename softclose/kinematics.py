@@ -1,0 +1,111 @@
+"""Four-bar kinematics of the lid in CasADi symbolics (SPEC §1).
+
+Loop closure ``A + R(theta) AC - B - l3 e(gamma) = 0`` with ``A = l2 e(phi)``. For a
+given coupler angle theta put ``w = R(theta) AC - B``; then ``|l2 e(phi) + w| = l3``
+gives ``w . e(phi) = K`` with ``K = (l3^2 - l2^2 - |w|^2) / (2 l2)``, so
+
+    phi = atan2(w_y, w_x) + sigma * acos(u),    u = K / |w|,
+
+where sigma = +1 or -1 names the assembly (branch). ``|u| < 1`` is the condition for
+the loop to close; ``|u| -> 1`` is a toggle position, where the two branches meet and
+d phi / d theta is unbounded. Along a branch, sigma is constant, so the closed form
+follows the branch continuously as long as no toggle is crossed.
+
+The velocity and acceleration loops (the first and second time derivatives of the
+closure, seed eqs. 7.4.2 and its derivative) are linear 2x2 systems in
+(phi', gamma') and (phi'', gamma'').
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+
+def e(a):
+    """Unit vector at angle a."""
+    return ca.vertcat(ca.cos(a), ca.sin(a))
+
+
+def perp(v):
+    """z x v for a planar vector v."""
+    return ca.vertcat(-v[1], v[0])
+
+
+def rot(theta, r_local):
+    """R(theta) r_local."""
+    c, s = ca.cos(theta), ca.sin(theta)
+    return ca.vertcat(c * r_local[0] - s * r_local[1], s * r_local[0] + c * r_local[1])
+
+
+def cross(a, b):
+    """z-component of a x b."""
+    return a[0] * b[1] - a[1] * b[0]
+
+
+def closure(theta, geo, sigma):
+    """Closed-form loop closure on branch ``sigma``: returns ``(phi, gamma, u)``.
+
+    ``u`` is the acos argument: the loop closes for ``|u| < 1``.
+    """
+    l2, l3 = geo.crank_oa, geo.crank_bc
+    w = rot(theta, geo.lid_c) - ca.DM(geo.pivot_b)
+    w2 = ca.dot(w, w)
+    u = (l3 ** 2 - l2 ** 2 - w2) / (2 * l2 * ca.sqrt(w2))
+    phi = ca.atan2(w[1], w[0]) + sigma * ca.acos(u)
+    c_minus_b = l2 * e(phi) + w
+    gamma = ca.atan2(c_minus_b[1], c_minus_b[0])
+    return phi, gamma, u
+
+
+def points(theta, phi, gamma, geo):
+    """World positions of the named points for a closed configuration."""
+    A = geo.crank_oa * e(phi)
+    B = ca.DM(geo.pivot_b)
+    return {
+        "A": A,
+        "C": A + rot(theta, geo.lid_c),
+        "E": A + rot(theta, geo.lid_e),
+        "G1": A + rot(theta, geo.lid_g),
+        "T": A + rot(theta, geo.lid_tip),
+        "G2": 0.5 * A,
+        "G3": B + 0.5 * geo.crank_bc * e(gamma),
+        "B": B,
+    }
+
+
+def loop_residual(theta, phi, gamma, geo):
+    """The loop-closure residual (two equations), zero on a closed configuration."""
+    return geo.crank_oa * e(phi) + rot(theta, geo.lid_c) - ca.DM(geo.pivot_b) \
+        - geo.crank_bc * e(gamma)
+
+
+def velocity_loop(theta, phi, gamma, theta_d, geo):
+    """(phi', gamma') from the velocity loop, linear in theta'.
+
+    l2 phi' z x e(phi) - l3 gamma' z x e(gamma) = -theta' z x r_AC
+    """
+    r_AC = rot(theta, geo.lid_c)
+    a1 = geo.crank_oa * perp(e(phi))
+    a2 = -geo.crank_bc * perp(e(gamma))
+    rhs = -theta_d * perp(r_AC)
+    return _solve2(a1, a2, rhs)
+
+
+def acceleration_loop(theta, phi, gamma, theta_d, phi_d, gamma_d, theta_dd, geo):
+    """(phi'', gamma'') from the acceleration loop, affine in theta''.
+
+    l2 phi'' z x e(phi) - l3 gamma'' z x e(gamma)
+        = l2 phi'^2 e(phi) - theta'' z x r_AC + theta'^2 r_AC - l3 gamma'^2 e(gamma)
+    """
+    r_AC = rot(theta, geo.lid_c)
+    a1 = geo.crank_oa * perp(e(phi))
+    a2 = -geo.crank_bc * perp(e(gamma))
+    rhs = (geo.crank_oa * phi_d ** 2 * e(phi) - theta_dd * perp(r_AC)
+           + theta_d ** 2 * r_AC - geo.crank_bc * gamma_d ** 2 * e(gamma))
+    return _solve2(a1, a2, rhs)
+
+
+def _solve2(a1, a2, rhs):
+    """Solve [a1 a2] [x1, x2]^T = rhs by Cramer's rule."""
+    det = cross(a1, a2)
+    return cross(rhs, a2) / det, cross(a1, rhs) / det
