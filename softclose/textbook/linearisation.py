@@ -106,3 +106,21 @@ def find_error_limit(phi, error, level: float = 0.01) -> float:
         return float(phi[0])
     f0, f1 = error[k - 1] - level, error[k] - level
     return float(phi[k - 1] + (phi[k] - phi[k - 1]) * f0 / (f0 - f1))
+
+
+def solve_error_limit(link: LeverFourBar = LeverFourBar(), measure: str = "relative_error",
+                      level: float = 0.01, phi_max: float = np.radians(50.0)) -> float:
+    """First input rotation (rad) at which the error `measure` reaches `level`, by bracketing on a
+    0.25 deg grid and Brent's method; phi_max if it never does."""
+    from scipy.optimize import brentq
+
+    grid = np.arange(0.0, phi_max + 1e-12, np.radians(0.25))
+    err = compare_linearisation(grid, link)[measure]
+    above = np.nonzero(err >= level)[0]
+    if above.size == 0:
+        return float(phi_max)
+    k = above[0]
+    if k == 0:
+        return 0.0
+    f = lambda ph: compare_linearisation(np.array([0.0, ph]), link)[measure][1] - level
+    return float(brentq(f, grid[k - 1], grid[k], xtol=1e-12))

@@ -1,0 +1,150 @@
+"""Figures and trajectory files of a stroke (matplotlib, Agg backend)."""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+plt.rcParams.update({"font.size": 10, "axes.grid": True, "grid.alpha": 0.3,
+                     "figure.dpi": 110, "savefig.bbox": "tight"})
+
+
+def write_trajectory_csv(traj: dict, path: Path) -> Path:
+    keys = list(traj)
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(keys)
+        for row in zip(*(traj[k] for k in keys)):
+            w.writerow([f"{v:.12g}" for v in row])
+    return path
+
+
+def plot_time_histories(res, path: Path, title: str = "Closing stroke") -> Path:
+    tr = res.trajectory
+    fig, ax = plt.subplots(3, 1, figsize=(6.5, 6.5), sharex=True)
+    ax[0].plot(tr["t"], np.degrees(tr["theta"]), color="C0", lw=2)
+    ax[0].set_ylabel(r"$\theta$ [deg]")
+    ax[1].plot(tr["t"], tr["theta_dot"], color="C1", lw=2)
+    ax[1].set_ylabel(r"$\dot\theta$ [rad/s]")
+    ax[2].plot(tr["t"], tr["tip_speed"], color="C2", lw=2)
+    ax[2].set_ylabel(r"tip speed $|v_T|$ [m/s]")
+    ax[2].set_xlabel("time t [s]")
+    if res.closed:
+        for a in ax:
+            a.axvline(res.closing_time, color="k", ls="--", lw=1)
+        ax[0].annotate(f"closed at {res.closing_time:.4f} s", (res.closing_time, 0),
+                       xytext=(-10, 20), textcoords="offset points", ha="right")
+        ax[1].plot([res.closing_time], [res.impact_theta_dot], "ko")
+        ax[1].annotate(f"impact {res.impact_theta_dot:.3f} rad/s",
+                       (res.closing_time, res.impact_theta_dot), xytext=(-10, 0),
+                       textcoords="offset points", ha="right", va="center")
+    i = int(np.argmax(tr["tip_speed"]))
+    ax[2].annotate(f"peak {res.peak_tip_speed:.3f} m/s", (tr["t"][i], tr["tip_speed"][i]),
+                   xytext=(-10, -14), textcoords="offset points", ha="right")
+    fig.suptitle(f"{title} ({res.integrator}, step {res.step:g} s)")
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def linkage_points(model, theta: float) -> dict:
+    k = model.kin(np.array([theta, 0.0]))
+    names = ["A", "C", "E", "T", "G1"]
+    pts = {n: np.asarray(k[5 + i]).ravel() for i, n in enumerate(names)}
+    pts["O"] = np.zeros(2)
+    pts["B"] = np.asarray(model.geo.pivot_b)
+    pts["D"] = np.asarray(model.geo.spring_anchor)
+    return pts
+
+
+def _draw(ax, model, theta, alpha=1.0, label=None, spring=True):
+    p = linkage_points(model, theta)
+    R = np.array([[math.cos(theta), -math.sin(theta)], [math.sin(theta), math.cos(theta)]])
+    L = model.geo.lid_length
+    hgt = 0.02
+    corners = np.array([[0, -hgt / 2], [L, -hgt / 2], [L, hgt / 2], [0, hgt / 2]])
+    lid = p["A"] + corners @ R.T
+    ax.fill(lid[:, 0], lid[:, 1], color="#c8a26a", alpha=0.5 * alpha, ec="k", lw=0.8)
+    ax.plot([0, p["A"][0]], [0, p["A"][1]], "-o", color="C0", lw=2.5, ms=4, alpha=alpha)
+    ax.plot([p["B"][0], p["C"][0]], [p["B"][1], p["C"][1]], "-o", color="C3", lw=2.5, ms=4,
+            alpha=alpha)
+    ax.plot([p["A"][0], p["C"][0]], [p["A"][1], p["C"][1]], "-", color="k", lw=1, alpha=alpha)
+    if spring:
+        ax.plot([p["E"][0], p["D"][0]], [p["E"][1], p["D"][1]], ":", color="C2", lw=1.5,
+                alpha=alpha)
+    if label:
+        ax.annotate(label, p["T"], xytext=(4, 0), textcoords="offset points", fontsize=8)
+
+
+def plot_linkage(model, thetas, path: Path, labels=None, title="Linkage") -> Path:
+    """The linkage drawn at several angles (full view and a zoom on the cranks)."""
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2), gridspec_kw={"width_ratios": [2, 1]})
+    n = len(thetas)
+    for i, th in enumerate(thetas):
+        lab = labels[i] if labels else f"{math.degrees(th):.1f}°"
+        alpha = 0.35 + 0.65 * (i + 1) / n
+        _draw(a1, model, th, alpha, lab)
+        _draw(a2, model, th, alpha)
+    for a in (a1, a2):
+        pts = linkage_points(model, thetas[0])
+        a.plot([0, pts["B"][0]], [0, pts["B"][1]], "ks", ms=7)
+        a.plot(*pts["D"], "g^", ms=7)
+        a.set_aspect("equal")
+        a.set_xlabel("x [m]")
+        a.set_ylabel("y [m]")
+    a1.set_title(title)
+    a2.set_xlim(-0.08, 0.12)
+    a2.set_ylim(-0.04, 0.12)
+    a2.set_title("cranks OA (blue), BC (red), spring E–D (green)")
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def write_animation(model, traj: dict, path: Path, fps: int = 25) -> Path | None:
+    """A GIF of the stroke (Pillow writer, shipped with matplotlib); None if unavailable."""
+    from matplotlib import animation
+    if not animation.writers.is_available("pillow"):
+        return None
+    t = traj["t"]
+    frames = np.searchsorted(t, np.arange(0, t[-1] + 1e-12, 1 / fps))
+    frames = np.unique(np.r_[frames[frames < len(t)], len(t) - 1])
+    fig, ax = plt.subplots(figsize=(6, 3.2))
+    L = model.geo.lid_length
+
+    def update(i):
+        ax.clear()
+        _draw(ax, model, traj["theta"][i])
+        ax.set_xlim(-0.1, L + 0.05)
+        ax.set_ylim(-0.05, 0.25)
+        ax.set_aspect("equal")
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        ax.set_title(f"t = {t[i]:.3f} s   θ = {math.degrees(traj['theta'][i]):.2f}°")
+    anim = animation.FuncAnimation(fig, update, frames=frames)
+    anim.save(path, writer=animation.PillowWriter(fps=fps))
+    plt.close(fig)
+    return path
+
+
+def write_stroke_outputs(sim, res, out: Path, stem: str = "stroke") -> list[Path]:
+    """Trajectory CSV, time histories, linkage drawing and animation of one stroke."""
+    out.mkdir(parents=True, exist_ok=True)
+    tr = res.trajectory
+    files = [write_trajectory_csv(tr, out / f"{stem}_trajectory.csv"),
+             plot_time_histories(res, out / f"{stem}_time.png")]
+    idx = np.unique(np.linspace(0, len(tr["t"]) - 1, 5).astype(int))
+    labels = [f"t={tr['t'][i]:.3f}s" for i in idx]
+    files.append(plot_linkage(sim.model, tr["theta"][idx], out / f"{stem}_linkage.png", labels,
+                              title="Lid positions during the stroke"))
+    gif = write_animation(sim.model, tr, out / f"{stem}_animation.gif")
+    if gif:
+        files.append(gif)
+    return files

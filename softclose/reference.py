@@ -1,0 +1,150 @@
+"""The adaptive reference: CVODES (through CasADi) on the exact equation of motion.
+
+Independent of the fast path: no table, no fixed step. It integrates on an output grid
+(tolerance ``simulate.reference_tol``) and locates each event by Newton's method on the
+length of a last integration, ``x(tau) = CVODES(x_k, tau)`` (time scaled to [0, 1] with
+tau as a parameter); interior maxima of the tip speed and the lowest angle of a stroke that
+turns back are located the same way on the root of their time derivative. Used by tests,
+by ``optimise``'s verification and by ``bench``.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cached_property
+
+import casadi as ca
+import numpy as np
+
+from .errors import NumericalError
+
+
+class Reference:
+    """Adaptive reference simulation of one model."""
+
+    def __init__(self, model, tol: float | None = None, grid_step: float = 2e-3):
+        self.model = model
+        self.tol = tol if tol is not None else model.cfg.simulate.reference_tol
+        self.grid_step = grid_step
+        x, p, tau = ca.SX.sym("x", 2), ca.SX.sym("p", 4), ca.SX.sym("tau")
+        f = model.ode(x, p)
+        opts = {"abstol": self.tol, "reltol": self.tol, "max_num_steps": 200000}
+        dae = {"x": x, "p": ca.vertcat(p, tau), "ode": tau * f}
+        self._flow = ca.integrator("ref_flow", "cvodes", dae, 0.0, 1.0, opts)
+        v_T = model.kin(x)[4]
+        xdot = model.ode(x, p)
+        # d|v_T|/dt by AD along the flow: grad(|v_T|) . xdot
+        speed = ca.norm_2(v_T)
+        dspeed = ca.jtimes(speed, x, xdot)
+        self._speed = ca.Function("speed", [x, p], [speed, dspeed])
+
+    @cached_property
+    def _spring_length(self):
+        th = ca.SX.sym("theta")
+        from .dynamics import coefficients
+        cf = coefficients(th, self.model.geo, self.model.mass, self.model.sigma)
+        return ca.Function("l", [th], [cf["l"]])
+
+    def flow(self, x0, p, tau):
+        """State after integrating for ``tau`` seconds from ``x0``."""
+        if tau <= 0:
+            return np.asarray(x0, float)
+        return np.asarray(self._flow(x0=x0, p=np.r_[p, tau])["xf"]).ravel()
+
+    def _newton_time(self, x0, p, h, residual, lo=0.0, hi=None):
+        """Root in (lo, hi] of residual(x(tau)) (a sign change is bracketed)."""
+        hi = h if hi is None else hi
+        r_lo, r_hi = residual(self.flow(x0, p, lo)), residual(self.flow(x0, p, hi))
+        for _ in range(100):
+            tau = lo - r_lo * (hi - lo) / (r_hi - r_lo) if r_hi != r_lo else 0.5 * (lo + hi)
+            if not lo < tau < hi:
+                tau = 0.5 * (lo + hi)
+            r = residual(self.flow(x0, p, tau))
+            if r == 0 or hi - lo < 1e-14 * max(1.0, hi):
+                return tau
+            if (r > 0) == (r_lo > 0):
+                lo, r_lo = tau, r
+            else:
+                hi, r_hi = tau, r
+            if abs(r) < 1e-15:
+                return tau
+        return 0.5 * (lo + hi)
+
+    def simulate(self, p=None) -> dict:
+        """SPEC §4 metrics of one stroke (plus ``theta_min``), from the adaptive solver."""
+        m, st = self.model, self.model.cfg.stroke
+        p = m.params() if p is None else np.asarray(p, float)
+        thc, t_max, dt = st.theta_closed, st.t_max, self.grid_step
+        x = np.array([st.theta0, 0.0])
+        t, peak, th_min = 0.0, 0.0, st.theta0
+        speed = lambda y: float(self._speed(y, p)[0])  # noqa: E731
+        dspeed = lambda y: float(self._speed(y, p)[1])  # noqa: E731
+        prev = None  # (t, x, g) of the previous node
+        closed, out = False, {}
+        while t < t_max - 1e-15:
+            h = min(dt, t_max - t)
+            try:
+                x1 = self.flow(x, p, h)
+            except RuntimeError as exc:
+                raise NumericalError(f"the reference integrator failed at t = {t:.4g} s ({exc})")
+            if not np.all(np.isfinite(x1)):
+                raise NumericalError(f"the reference integrator diverged at t = {t:.4g} s")
+            g, g1 = speed(x), speed(x1)
+            if x1[0] <= thc:  # closing event inside (t, t+h]
+                tau = self._newton_time(x, p, h, lambda y: y[0] - thc)
+                xe = self.flow(x, p, tau)
+                ge = speed(xe)
+                peak = max(peak, g, ge)
+                if dspeed(x) > 0 and dspeed(xe) < 0:
+                    tm = self._newton_time(x, p, tau, dspeed, 0.0, tau)
+                    peak = max(peak, speed(self.flow(x, p, tm)))
+                elif prev is not None and g >= prev[2] and g > ge:
+                    tp, xp, _ = prev
+                    if dspeed(xp) > 0 > dspeed(xe):
+                        tm = self._newton_time(xp, p, t + tau - tp, dspeed)
+                        peak = max(peak, speed(self.flow(xp, p, tm)))
+                t += tau
+                closed, th_min = True, thc
+                out = {"closing_time": t, "impact_theta_dot": float(xe[1]),
+                       "impact_tip_speed": ge}
+                break
+            if prev is not None and g >= prev[2] and g > g1:
+                tp, xp, _ = prev
+                if dspeed(xp) > 0 > dspeed(x1):
+                    tm = self._newton_time(xp, p, t + h - tp, dspeed)
+                    peak = max(peak, speed(self.flow(xp, p, tm)))
+            if x[1] < 0 <= x1[1]:  # turned back: the lowest angle in this interval
+                tm = self._newton_time(x, p, h, lambda y: y[1])
+                th_min = min(th_min, float(self.flow(x, p, tm)[0]))
+            th_min = min(th_min, float(x1[0]))
+            peak = max(peak, g1)
+            prev = (t, x, g)
+            t, x = t + h, x1
+        lmin, lmax = self._l_extremes(th_min, st.theta0)
+        res = {"closed": closed, "closing_time": None, "impact_theta_dot": None,
+               "impact_tip_speed": None}
+        res.update(out)
+        res.update({"peak_tip_speed": peak, "min_spring_length": lmin,
+                    "max_spring_length": lmax, "holding_moment": m.holding_moment(p),
+                    "theta_min": th_min})
+        return res
+
+    def _l_extremes(self, a, b):
+        grid = np.linspace(a, b, 801)
+        lv = np.asarray(self._spring_length.map(len(grid))(grid)).ravel()
+        out = []
+        for sgn in (1, -1):
+            i = int(np.argmin(sgn * lv))
+            lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, len(grid) - 1)]
+            f = lambda th: sgn * float(self._spring_length(th))  # noqa: E731
+            gr = (math.sqrt(5) - 1) / 2  # golden section on the bracket
+            c, d = hi - gr * (hi - lo), lo + gr * (hi - lo)
+            for _ in range(80):
+                if f(c) < f(d):
+                    hi = d
+                else:
+                    lo = c
+                c, d = hi - gr * (hi - lo), lo + gr * (hi - lo)
+            best = min(f(0.5 * (lo + hi)), sgn * lv[i])
+            out.append(sgn * best)
+        return out[0], out[1]

@@ -1,0 +1,238 @@
+"""Closing strokes: metrics (SPEC §4), stability checks, accuracy estimates, trajectories.
+
+``Simulator(cfg)`` holds one model, its coefficient table and one fixed-step method; it
+runs single strokes (``run``) and batches of designs (``run_batch``) in the C kernel.
+Metric-only runs keep no trajectory and evaluate no reactions; ``run(trajectory=True)``
+also returns the per-step trajectory with the derived quantities a figure needs.
+
+``simulate(cfg)`` is the one-call wrapper. Every result knows how far it is from the
+converged answer: ``accuracy`` holds the estimated error of each metric (Richardson, from
+the same stroke at half the step), and a stroke that the method cannot integrate stably
+is reported with the step it would need -- never as a NaN.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import native
+from .config import Config
+from .errors import NumericalError
+from .integrators import Method, get_method
+from .model import LidModel
+
+METRIC_KEYS = ("closed", "closing_time", "impact_theta_dot", "impact_tip_speed",
+               "peak_tip_speed", "min_spring_length", "max_spring_length", "holding_moment")
+#: metrics whose fixed-step error is estimated
+ERROR_KEYS = ("closing_time", "impact_theta_dot", "impact_tip_speed", "peak_tip_speed")
+
+
+@dataclass
+class StrokeResult:
+    """One stroke. ``ok`` is False when the method could not integrate it (see ``message``)."""
+
+    closed: bool
+    closing_time: float | None
+    impact_theta_dot: float | None
+    impact_tip_speed: float | None
+    peak_tip_speed: float | None
+    min_spring_length: float | None
+    max_spring_length: float | None
+    holding_moment: float
+    status: str
+    integrator: str
+    step: float
+    steps: int
+    message: str | None = None
+    accuracy: dict | None = None
+    trajectory: dict | None = field(default=None, repr=False)
+
+    @property
+    def ok(self) -> bool:
+        return self.status in ("closed", "not closed")
+
+    def metrics(self) -> dict:
+        return {k: getattr(self, k) for k in METRIC_KEYS}
+
+
+def amplification(method: Method, hJ: np.ndarray) -> np.ndarray:
+    """Step matrix of a Runge-Kutta ``method`` on the linear system x' = J x (hJ = h J)."""
+    I2 = np.eye(2)
+    s = method.stages
+    A = np.asarray(method.A, float)
+    big = np.eye(2 * s) - np.kron(A, hJ)
+    rhs = np.kron(np.ones((s, 1)), hJ)
+    K = np.linalg.solve(big, rhs)  # h K_i = (hJ)(x + sum a_ij h K_j)
+    return I2 + sum(method.b[i] * K[2 * i:2 * i + 2] for i in range(s))
+
+
+def spectral_radius(method: Method, J: np.ndarray, h: float) -> float:
+    if method.kind == "symplectic_euler":
+        a, b = J[1]
+        S = np.array([[1 + h * h * a, h * (1 + h * b)], [h * a, 1 + h * b]])
+    else:
+        S = amplification(method, h * J)
+    return float(np.max(np.abs(np.linalg.eigvals(S))))
+
+
+class Simulator:
+    """Strokes of one config's geometry with one fixed-step method."""
+
+    def __init__(self, cfg: Config, model: LidModel | None = None, integrator: str | None = None,
+                 step: float | None = None):
+        self.cfg = cfg
+        self.model = model or LidModel(cfg)
+        self.method = get_method(integrator or cfg.simulate.integrator)
+        self.step = step or cfg.simulate.step
+        self.table = native.CoefficientTable(self.model)
+
+    # -- batches ---------------------------------------------------------------------
+    def energy_tol(self, P: np.ndarray) -> np.ndarray:
+        """Energy rise that flags an unstable stroke: 5 % of the energy to be released."""
+        st = self.cfg.stroke
+        c0, c1 = self.table.evaluate([st.theta0, st.theta_closed])
+        def V(c, k, l0):  # noqa: E306
+            return c[2] + 0.5 * k * (c[4] - l0) ** 2
+        E0, Vc = V(c0, P[:, 0], P[:, 1]), V(c1, P[:, 0], P[:, 1])
+        scale = np.maximum(np.abs(E0 - Vc), 1e-6 * (np.abs(E0) + np.abs(Vc)) + 1e-12)
+        return 0.05 * scale
+
+    def run_batch(self, P, threads: int | None = None) -> dict:
+        """Metrics for rows of P = (k, l0, c, c_rot): a dict of arrays (SPEC §4 keys + status)."""
+        P = np.atleast_2d(np.asarray(P, float))
+        st = self.cfg.stroke
+        designs = np.column_stack([P, self.energy_tol(P)])
+        out = native.run_strokes(self.table, self.method, self.step, st.t_max, st.theta0,
+                                 st.theta_closed, designs, threads)
+        res = {name: out[:, i] for i, name in enumerate(native.OUT_FIELDS)}
+        res["status"] = out[:, 0].astype(int)
+        res["closed"] = res["status"] == 0
+        res["holding_moment"] = self.holding_moments(P)
+        return res
+
+    def holding_moments(self, P: np.ndarray) -> np.ndarray:
+        c = self.table.evaluate([self.cfg.stroke.theta_closed])[0]
+        return c[3] + P[:, 0] * (c[4] - P[:, 1]) * c[5]
+
+    # -- one stroke ------------------------------------------------------------------
+    def run(self, p=None, trajectory: bool = False, estimate_error: bool = True) -> StrokeResult:
+        p = self.model.params() if p is None else np.asarray(p, float)
+        st = self.cfg.stroke
+        design = np.r_[p, self.energy_tol(p[None, :])]
+        if trajectory:
+            out, traj = native.run_stroke_trajectory(self.table, self.method, self.step,
+                                                     st.t_max, st.theta0, st.theta_closed, design)
+        else:
+            out = native.run_strokes(self.table, self.method, self.step, st.t_max, st.theta0,
+                                     st.theta_closed, design[None, :], threads=1)[0]
+        res = self._result(out, p)
+        if res.ok and estimate_error:
+            res.accuracy = self._error_estimate(res, p)
+        if trajectory and res.ok:
+            res.trajectory = self.derive_trajectory(traj, p)
+        return res
+
+    def _result(self, out, p) -> StrokeResult:
+        status = native.STATUS[int(out[0])]
+        closed = status == "closed"
+        f = lambda i: None if not math.isfinite(out[i]) else float(out[i])  # noqa: E731
+        res = StrokeResult(
+            closed=closed, closing_time=f(1) if closed else None,
+            impact_theta_dot=f(2) if closed else None, impact_tip_speed=f(3) if closed else None,
+            peak_tip_speed=f(4), min_spring_length=f(5), max_spring_length=f(6),
+            holding_moment=self.model.holding_moment(p), status=status,
+            integrator=self.method.name, step=self.step, steps=int(out[7]))
+        if not res.ok:
+            res.peak_tip_speed = res.min_spring_length = res.max_spring_length = None
+            res.message = self.diagnose(status, p)
+        return res
+
+    def _error_estimate(self, res: StrokeResult, p) -> dict:
+        """|metric(h) - converged| estimated from the stroke at h/2 (Richardson)."""
+        half = Simulator.__new__(Simulator)
+        half.__dict__.update(self.__dict__)
+        half.step = self.step / 2
+        r2 = half.run(p, estimate_error=False)
+        q = 2.0 ** self.method.order
+        est = {}
+        for k in ERROR_KEYS:
+            a, b = getattr(res, k), getattr(r2, k)
+            est[k] = None if a is None or b is None else abs(a - b) * q / (q - 1)
+        est["table_rel_error"] = self.table.max_rel_error
+        return est
+
+    def diagnose(self, status: str, p) -> str:
+        """A one-line report of why a stroke failed and what to change."""
+        m, h = self.method, self.step
+        if status in ("unstable", "non-finite", "left the tabulated range", "implicit solve failed"):
+            h_ok = self.stable_step(p)
+            hint = f"use simulate.step <= {h_ok:.3g} s" if h_ok < h else "use a smaller simulate.step"
+            alt = "" if m.real_stability == math.inf else \
+                " or simulate.integrator = \"radau5\" (L-stable, for stiff damping)"
+            return (f"{m.name} at step {h:g} s cannot integrate this design ({status}): its "
+                    f"fastest mode needs h|lambda| within the method's stability region; "
+                    f"{hint}{alt}")
+        return status
+
+    def stable_step(self, p) -> float:
+        """Largest step at which the linearised stroke is stable (bisection on the step)."""
+        th = np.linspace(self.cfg.stroke.theta_closed, self.cfg.stroke.theta0, 41)
+        c = self.table.evaluate(th)
+        k, l0, cd, cr = p
+        M = c[:, 0]
+        # numerical d/dtheta of the static generalised force, and the damping rate
+        eps = 1e-6
+        cp, cm = self.table.evaluate(th + eps), self.table.evaluate(th - eps)
+        Q = lambda cc: -(cc[:, 3] + k * (cc[:, 4] - l0) * cc[:, 5]) / cc[:, 0]  # noqa: E731
+        f_th = (Q(cp) - Q(cm)) / (2 * eps)
+        f_v = -(cd * c[:, 6] + cr) / M
+        Js = [np.array([[0.0, 1.0], [a, b]]) for a, b in zip(f_th, f_v)]
+
+        def stable(h):  # numerically stable: no faster growth than the exact flow's
+            return all(spectral_radius(self.method, J, h)
+                       <= max(1.0, float(np.max(np.abs(np.exp(h * np.linalg.eigvals(J))))))
+                       * (1 + 1e-6) for J in Js)
+        hi = self.step
+        if stable(hi):
+            return hi
+        lo = hi
+        while not stable(lo) and lo > 1e-12:
+            lo /= 2
+        for _ in range(40):
+            mid = math.sqrt(lo * hi)
+            lo, hi = (mid, hi) if stable(mid) else (lo, mid)
+        return lo
+
+    # -- trajectories ----------------------------------------------------------------
+    def derive_trajectory(self, traj: np.ndarray, p) -> dict:
+        """Per-step quantities for figures and CSV: angles, speeds, spring length, energy."""
+        m = self.model
+        n = len(traj)
+        X = traj[:, 1:3].T
+        P = np.repeat(np.asarray(p, float)[:, None], n, axis=1)
+        kin = m.kin.map(n)(X)
+        xdot = np.asarray(m.ode.map(n)(X, P))
+        energy = np.asarray(m.energy_fn.map(n)(X, P)).ravel()
+        v_T = np.asarray(kin[4])
+        cf = self.table.evaluate(traj[:, 1])
+        return {
+            "t": traj[:, 0], "theta": traj[:, 1], "theta_dot": traj[:, 2],
+            "theta_ddot": xdot[1], "phi": np.asarray(kin[0]).ravel(),
+            "gamma": np.asarray(kin[1]).ravel(), "tip_speed": np.hypot(v_T[0], v_T[1]),
+            "spring_length": cf[:, 4], "energy": energy,
+        }
+
+
+def simulate(cfg: Config, trajectory: bool = False) -> StrokeResult:
+    """One closing stroke of ``cfg``'s design with ``cfg``'s integrator and step."""
+    return Simulator(cfg).run(trajectory=trajectory)
+
+
+def check(result: StrokeResult) -> StrokeResult:
+    """Raise NumericalError if the stroke could not be integrated."""
+    if not result.ok:
+        raise NumericalError(result.message)
+    return result
