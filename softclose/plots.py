@@ -85,7 +85,8 @@ def _draw(ax, model, theta, alpha=1.0, label=None, spring=True):
 
 def plot_linkage(model, thetas, path: Path, labels=None, title="Linkage") -> Path:
     """The linkage drawn at several angles (full view and a zoom on the cranks)."""
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2), gridspec_kw={"width_ratios": [2, 1]})
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.4), gridspec_kw={"width_ratios": [2.2, 1]},
+                                 layout="constrained")
     n = len(thetas)
     for i, th in enumerate(thetas):
         lab = labels[i] if labels else f"{math.degrees(th):.1f}°"
@@ -100,9 +101,17 @@ def plot_linkage(model, thetas, path: Path, labels=None, title="Linkage") -> Pat
         a.set_xlabel("x [m]")
         a.set_ylabel("y [m]")
     a1.set_title(title)
-    a2.set_xlim(-0.08, 0.12)
-    a2.set_ylim(-0.04, 0.12)
-    a2.set_title("cranks OA (blue), BC (red), spring E–D (green)")
+    a2.set_xlim(-0.09, 0.12)
+    a2.set_ylim(-0.03, 0.11)
+    a2.set_title("zoom: cranks OA (blue), BC (red),\nspring E–D (green)", fontsize=9)
+    for th, tag in ((thetas[0], "0"), (thetas[-1], "1")):
+        q = linkage_points(model, th)
+        for name in ("A", "C", "E"):
+            a2.annotate(f"{name}{tag}", q[name], xytext=(3, 3), textcoords="offset points",
+                        fontsize=7)
+    for name, off in (("O", (-12, -10)), ("B", (5, -10)), ("D", (-4, -13))):
+        a2.annotate(name, pts[name], xytext=off, textcoords="offset points", fontsize=9,
+                    weight="bold")
     fig.savefig(path)
     plt.close(fig)
     return path
