@@ -167,6 +167,12 @@ class Simulator:
     def diagnose(self, status: str, p) -> str:
         """A one-line report of why a stroke failed and what to change."""
         m, h = self.method, self.step
+        st = self.cfg.stroke
+        if status == "left the tabulated range" and self.model.theta_ddot(st.theta0, 0.0, p) > 0:
+            return (f"the lid does not close: released at stroke.theta0_deg = {st.theta0_deg} deg "
+                    f"it is pushed open (theta'' = {self.model.theta_ddot(st.theta0, 0.0, p):.4g} "
+                    "rad/s^2 > 0 at release) and swings away from the rim; lower theta0_deg or "
+                    "change the spring (spring_k, spring_rest_length)")
         if status in ("unstable", "non-finite", "left the tabulated range", "implicit solve failed"):
             h_ok = self.stable_step(p)
             hint = f"use simulate.step <= {h_ok:.3g} s" if h_ok < h else "use a smaller simulate.step"
