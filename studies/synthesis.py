@@ -62,7 +62,8 @@ def draw(result, z, out: Path) -> str:
     ax.plot(curve[:, 0], curve[:, 1], "C3", lw=1.5, label="coupler curve (this circuit)")
     for j in range(5):
         col = plt.cm.viridis(j / 4.5)
-        ax.plot([0, P[j, 0], Q[j, 0], a[0]], [0, P[j, 1], Q[j, 1], a[1]], "-o", color=col, lw=1.2, ms=3)
+        ax.plot([0, P[j, 0], Q[j, 0], a[0]], [0, P[j, 1], Q[j, 1], a[1]], "-o", color=col, lw=1.2, ms=3,
+                label="mechanism in positions 0–4" if j == 0 else None)
         ax.fill([P[j, 0], Q[j, 0], d[j, 0]], [P[j, 1], Q[j, 1], d[j, 1]], color=col, alpha=0.15)
         ax.plot([P[j, 0], d[j, 0], Q[j, 0]], [P[j, 1], d[j, 1], Q[j, 1]], color=col, lw=0.8)
     ax.plot(d[:, 0], d[:, 1], "ko", ms=6, label="precision points")

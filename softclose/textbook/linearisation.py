@@ -95,19 +95,6 @@ def compare_linearisation(phi, link: LeverFourBar = LeverFourBar()) -> dict:
             "ratio": ratio, "branch": branch}
 
 
-def find_error_limit(phi, error, level: float = 0.01) -> float:
-    """Largest phi of the run from phi[0] over which error stays below level (interpolated at the crossing)."""
-    phi, error = np.asarray(phi), np.asarray(error)
-    above = np.nonzero(error >= level)[0]
-    if above.size == 0:
-        return float(phi[-1])
-    k = above[0]
-    if k == 0:
-        return float(phi[0])
-    f0, f1 = error[k - 1] - level, error[k] - level
-    return float(phi[k - 1] + (phi[k] - phi[k - 1]) * f0 / (f0 - f1))
-
-
 def solve_error_limit(link: LeverFourBar = LeverFourBar(), measure: str = "relative_error",
                       level: float = 0.01, phi_max: float = np.radians(50.0)) -> float:
     """First input rotation (rad) at which the error `measure` reaches `level`, by bracketing on a

@@ -119,22 +119,6 @@ def solve_precision_points(points, pivot_a=PIVOT_A, seed: int = 1) -> SynthesisR
     return SynthesisResult(d, a, Z[:, perm], int(solver.num_paths()), len(answer.at_infinity), seconds)
 
 
-def refine_solution(z, d, a=PIVOT_A, iterations: int = 3) -> np.ndarray:
-    """A few complex Newton steps (forward-difference-free: analytic Jacobian by complex step is not
-    available for complex z, so a central difference is used); only polishes, never relocates."""
-    z = np.array(z, dtype=complex)
-    for _ in range(iterations):
-        F = evaluate_equations(z, d, a)
-        J = np.empty((12, 12), dtype=complex)
-        h = 1e-7
-        for k in range(12):
-            e = np.zeros(12)
-            e[k] = h
-            J[:, k] = (evaluate_equations(z + e, d, a) - evaluate_equations(z - e, d, a)) / (2 * h)
-        z = z - np.linalg.solve(J, F)
-    return z
-
-
 @dataclass(frozen=True)
 class Design:
     """A real solution as a mechanism: ground pivots O, a; pins P0, Q0 and coupler point d0 in position 0."""
