@@ -25,8 +25,11 @@ from .kinematics import closure, points, velocity_loop
 
 #: |u| above which the linkage counts as "at a toggle" (transmission angle < 0.8 deg)
 TOGGLE_U = 0.9999
-#: angle beyond each end of the stroke over which the loop must also close (deg)
+#: angle below the closed position tabulated for the stages of the last step (deg)
 MARGIN_DEG = 5.0
+#: angle above the release position tabulated for a lid that a spring first pushes open (deg);
+#: the table stops earlier at a toggle position
+MARGIN_OPEN_DEG = 30.0
 
 
 def _wrap(a):
@@ -79,8 +82,10 @@ class LidModel:
         grid = np.linspace(lo, hi, max(400, int((hi - lo) / math.radians(0.05)) + 1))
         u = np.abs(np.asarray(self._u.map(len(grid))(grid)).ravel())
         bad = np.nonzero(~(u < TOGGLE_U))[0]
-        if len(bad):
-            th_bad = math.degrees(grid[bad[0]])
+        if len(bad):  # name the toggle met first when moving away from the assembly
+            first = bad[np.argmin(np.abs(grid[bad] - th_a))]
+            th_bad = math.degrees(grid[first])
+            bad = [first]
             where = ("at stroke.theta0_deg" if abs(grid[bad[0]] - st.theta0) < 1e-9 else
                      f"at theta = {th_bad:.3f} deg")
             raise ConfigError(
@@ -89,10 +94,11 @@ class LidModel:
                 f"({st.theta_closed_deg}..{st.theta0_deg} deg); change crank_oa, crank_bc, "
                 f"pivot_b or lid_c, or the stroke angles")
         # extend by a margin on each side as far as the loop still closes (stage overshoot)
-        margin = math.radians(MARGIN_DEG)
         ext = []
-        for end, sgn in ((st.theta_closed, -1), (st.theta0, +1)):
-            t = np.linspace(0, margin, 101)
+        for end, sgn, margin_deg in ((st.theta_closed, -1, MARGIN_DEG),
+                                     (st.theta0, +1, MARGIN_OPEN_DEG)):
+            margin = math.radians(margin_deg)
+            t = np.linspace(0, margin, 201)
             ue = np.abs(np.asarray(self._u.map(len(t))(end + sgn * t)).ravel())
             ok = np.nonzero(~(ue < TOGGLE_U))[0]
             m = t[ok[0] - 1] if len(ok) else margin

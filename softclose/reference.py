@@ -33,9 +33,10 @@ class Reference:
         self._flow = ca.integrator("ref_flow", "cvodes", dae, 0.0, 1.0, opts)
         v_T = model.kin(x)[4]
         xdot = model.ode(x, p)
-        # d|v_T|/dt by AD along the flow: grad(|v_T|) . xdot
+        # d|v_T|/dt = v.a/|v| with a = dv/dt by AD along the flow; at rest it is |a|
+        a_T = ca.jtimes(v_T, x, xdot)
         speed = ca.norm_2(v_T)
-        dspeed = ca.jtimes(speed, x, xdot)
+        dspeed = ca.if_else(speed > 0, ca.dot(v_T, a_T) / speed, ca.norm_2(a_T))
         self._speed = ca.Function("speed", [x, p], [speed, dspeed])
 
     @cached_property
@@ -55,28 +56,33 @@ class Reference:
         """Root in (lo, hi] of residual(x(tau)) (a sign change is bracketed)."""
         hi = h if hi is None else hi
         r_lo, r_hi = residual(self.flow(x0, p, lo)), residual(self.flow(x0, p, hi))
-        for _ in range(100):
+        side = 0
+        for _ in range(200):  # Illinois false position: superlinear, never stalls
             tau = lo - r_lo * (hi - lo) / (r_hi - r_lo) if r_hi != r_lo else 0.5 * (lo + hi)
             if not lo < tau < hi:
                 tau = 0.5 * (lo + hi)
             r = residual(self.flow(x0, p, tau))
-            if r == 0 or hi - lo < 1e-14 * max(1.0, hi):
+            if r == 0 or hi - lo < 1e-14 * max(1.0, hi) or abs(r) < 1e-15:
                 return tau
             if (r > 0) == (r_lo > 0):
                 lo, r_lo = tau, r
+                if side == -1:
+                    r_hi *= 0.5
+                side = -1
             else:
                 hi, r_hi = tau, r
-            if abs(r) < 1e-15:
-                return tau
+                if side == 1:
+                    r_lo *= 0.5
+                side = 1
         return 0.5 * (lo + hi)
 
     def simulate(self, p=None) -> dict:
-        """SPEC §4 metrics of one stroke (plus ``theta_min``), from the adaptive solver."""
+        """SPEC §4 metrics of one stroke (plus ``theta_min``, ``theta_max``), adaptively."""
         m, st = self.model, self.model.cfg.stroke
         p = m.params() if p is None else np.asarray(p, float)
         thc, t_max, dt = st.theta_closed, st.t_max, self.grid_step
         x = np.array([st.theta0, 0.0])
-        t, peak, th_min = 0.0, 0.0, st.theta0
+        t, peak, th_min, th_max = 0.0, 0.0, st.theta0, st.theta0
         speed = lambda y: float(self._speed(y, p)[0])  # noqa: E731
         dspeed = lambda y: float(self._speed(y, p)[1])  # noqa: E731
         prev = None  # (t, x, g) of the previous node
@@ -116,17 +122,21 @@ class Reference:
             if x[1] < 0 <= x1[1]:  # turned back: the lowest angle in this interval
                 tm = self._newton_time(x, p, h, lambda y: y[1])
                 th_min = min(th_min, float(self.flow(x, p, tm)[0]))
+            if x[1] > 0 >= x1[1]:  # turned down: the highest angle in this interval
+                tm = self._newton_time(x, p, h, lambda y: -y[1])
+                th_max = max(th_max, float(self.flow(x, p, tm)[0]))
             th_min = min(th_min, float(x1[0]))
+            th_max = max(th_max, float(x1[0]))
             peak = max(peak, g1)
             prev = (t, x, g)
             t, x = t + h, x1
-        lmin, lmax = self._l_extremes(th_min, st.theta0)
+        lmin, lmax = self._l_extremes(th_min, th_max)
         res = {"closed": closed, "closing_time": None, "impact_theta_dot": None,
                "impact_tip_speed": None}
         res.update(out)
         res.update({"peak_tip_speed": peak, "min_spring_length": lmin,
                     "max_spring_length": lmax, "holding_moment": m.holding_moment(p),
-                    "theta_min": th_min})
+                    "theta_min": th_min, "theta_max": th_max})
         return res
 
     def _l_extremes(self, a, b):

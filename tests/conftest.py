@@ -1,0 +1,248 @@
+"""Shared fixtures: the default config and a second geometry, with their model, simulator
+and adaptive reference (all session-scoped: a model builds in ~30 ms, a table in ~50 ms).
+
+Names: ``cfg``/``model``/``sim``/``ref`` (default geometry, SPEC §1) and
+``cfg2``/``model2``/``sim2``/``ref2`` (a second geometry: other crank lengths, pivot, spring
+anchor and lid mass, its assembly angles computed here independently of softclose).
+
+Also a few plain-numpy helpers (``np_closure``, ``assembly_angles``) that the tests use as
+an independent check of the CasADi kinematics.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from softclose.config import default_config, from_dict
+from softclose.model import LidModel
+from softclose.reference import Reference
+from softclose.simulate import Simulator
+
+#: the second geometry of the test suite (SPEC §6 keys); assembly computed below
+GEOMETRY2 = {"crank_oa": 0.05, "crank_bc": 0.09, "pivot_b": [0.065, 0.02],
+             "spring_anchor": [-0.05, 0.03]}
+MASS2 = {"lid": 0.6}
+
+
+def _rot(theta, r):
+    c, s = math.cos(theta), math.sin(theta)
+    return np.array([c * r[0] - s * r[1], s * r[0] + c * r[1]])
+
+
+def np_closure_all(theta, l2, l3, pivot_b, lid_c, n=3600):
+    """Every (phi, gamma) closing the loop at ``theta``, by a scan of phi and bisection.
+
+    Plain numpy, no closed form: |l2 e(phi) + R(theta) AC - B| = l3.
+    """
+    w = _rot(theta, lid_c) - np.asarray(pivot_b, float)
+
+    def f(phi):
+        return (l2 * np.cos(phi) + w[0]) ** 2 + (l2 * np.sin(phi) + w[1]) ** 2 - l3 ** 2
+    grid = np.linspace(0.0, 2 * math.pi, n + 1)
+    fv = f(grid)
+    roots = []
+    for i in np.nonzero(np.sign(fv[:-1]) != np.sign(fv[1:]))[0]:
+        a, b, fa = grid[i], grid[i + 1], fv[i]
+        for _ in range(200):
+            mid = 0.5 * (a + b)
+            fm = f(mid)
+            if (fm > 0) == (fa > 0):
+                a, fa = mid, fm
+            else:
+                b = mid
+            if b - a < 1e-15:
+                break
+        phi = 0.5 * (a + b)
+        c_minus_b = l2 * np.array([math.cos(phi), math.sin(phi)]) + w
+        roots.append((phi, math.atan2(c_minus_b[1], c_minus_b[0])))
+    return roots
+
+
+def np_closure(theta, geo, near_phi):
+    """(phi, gamma) of the assembly whose phi is nearest ``near_phi`` (rad)."""
+    roots = np_closure_all(theta, geo.crank_oa, geo.crank_bc, geo.pivot_b, geo.lid_c)
+    assert roots, f"the loop does not close at theta = {math.degrees(theta)} deg"
+
+    def dist(r):
+        return abs((r[0] - near_phi + math.pi) % (2 * math.pi) - math.pi)
+    return min(roots, key=dist)
+
+
+def assembly_angles(geometry: dict, theta_deg: float, near_phi_deg: float) -> list[float]:
+    """[theta, phi, gamma] in degrees (0..360) of the assembly with phi nearest near_phi_deg."""
+    geo = from_dict({"geometry": geometry}).geometry if "assembly" in geometry else \
+        from_dict({"geometry": {**geometry, "assembly": [theta_deg, 0.0, 0.0]}}).geometry
+    phi, gamma = np_closure(math.radians(theta_deg), geo, math.radians(near_phi_deg))
+    return [theta_deg, math.degrees(phi) % 360.0, math.degrees(gamma) % 360.0]
+
+
+def wrap_deg(a):
+    return (a + 180.0) % 360.0 - 180.0
+
+
+@pytest.fixture(scope="session")
+def cfg():
+    return default_config()
+
+
+@pytest.fixture(scope="session")
+def model(cfg):
+    return LidModel(cfg)
+
+
+@pytest.fixture(scope="session")
+def sim(cfg, model):
+    return Simulator(cfg, model)
+
+
+@pytest.fixture(scope="session")
+def ref(model):
+    return Reference(model)
+
+
+@pytest.fixture(scope="session")
+def cfg2():
+    # the same kind of assembly as the default (A above and left of O, phi ~ 110-120 deg)
+    asm = assembly_angles(GEOMETRY2, 18.0, 115.0)
+    return from_dict({"geometry": {**GEOMETRY2, "assembly": asm}, "mass": MASS2})
+
+
+@pytest.fixture(scope="session")
+def model2(cfg2):
+    return LidModel(cfg2)
+
+
+@pytest.fixture(scope="session")
+def sim2(cfg2, model2):
+    return Simulator(cfg2, model2)
+
+
+@pytest.fixture(scope="session")
+def ref2(model2):
+    return Reference(model2)
+
+
+@pytest.fixture(scope="session", params=["default", "second"])
+def geometry_case(request, cfg, model, cfg2, model2):
+    """(cfg, model) of each geometry: the foundation checks run on both."""
+    return (cfg, model) if request.param == "default" else (cfg2, model2)
+
+
+# -- plain-numpy body kinematics by finite differences of model.kin positions ----------
+_KIN_POINTS = {"A": 5, "C": 6, "E": 7, "T": 8, "G1": 9}
+
+
+def positions(model, theta):
+    """Positions of every named point and the crank angles at ``theta`` (from model.kin)."""
+    k = model.kin(np.array([theta, 0.0]))
+    out = {name: np.asarray(k[i], float).ravel() for name, i in _KIN_POINTS.items()}
+    phi, gamma = float(k[0]), float(k[1])
+    B = np.asarray(model.geo.pivot_b, float)
+    out["G2"] = 0.5 * out["A"]
+    out["G3"] = B + 0.5 * model.geo.crank_bc * np.array([math.cos(gamma), math.sin(gamma)])
+    out["B"], out["O"] = B, np.zeros(2)
+    out["D"] = np.asarray(model.geo.spring_anchor, float)
+    out["phi"], out["gamma"], out["theta"] = phi, gamma, theta
+    return out
+
+
+def fd_derivatives(model, theta, h=2e-3):
+    """(value, d/dtheta, d2/dtheta2) of every position and angle: 5-point central differences.
+
+    Truncation ~h^4 f^(6)/90 ~ 1e-13, round-off ~ 1e-16 |f| / h^2 ~ 1e-10 (m, rad).
+    """
+    samples = [positions(model, theta + j * h) for j in (-2, -1, 0, 1, 2)]
+    out = {}
+    for key in samples[2]:
+        v = [np.asarray(s[key], float) for s in samples]
+        if key in ("phi", "gamma"):   # unwrap angles across the stencil
+            v = list(v[2] + (np.asarray(v) - v[2] + math.pi) % (2 * math.pi) - math.pi)
+        d1 = (v[0] - 8 * v[1] + 8 * v[3] - v[4]) / (12 * h)
+        d2 = (-v[0] + 16 * v[1] - 30 * v[2] + 16 * v[3] - v[4]) / (12 * h * h)
+        out[key] = (v[2], d1, d2)
+    return out
+
+
+def cross2(a, b):
+    return a[0] * b[1] - a[1] * b[0]
+
+
+def body_motion(model, theta, theta_dot, theta_ddot):
+    """Positions, velocities and accelerations of the points, and the body rates (numpy)."""
+    d = fd_derivatives(model, theta)
+    pos = {k: v[0] for k, v in d.items()}
+    vel = {k: v[1] * theta_dot for k, v in d.items()}
+    acc = {k: v[2] * theta_dot ** 2 + v[1] * theta_ddot for k, v in d.items()}
+    return pos, vel, acc
+
+
+def external_forces(model, pos, vel, theta_dot, p):
+    """Spring force at E, dashpot force at C (both on the lid) and the rotary moment (SPEC §2)."""
+    k, l0, c, c_rot = p
+    r_ED = pos["D"] - pos["E"]
+    l = float(np.hypot(*r_ED))
+    F_s = k * (l - l0) * r_ED / l
+    e_OC = pos["C"] / float(np.hypot(*pos["C"]))
+    F_d = -c * float(e_OC @ vel["C"]) * e_OC
+    return F_s, F_d, -c_rot * theta_dot
+
+
+def body_residuals(model, theta, theta_dot, p, z):
+    """Residuals of the nine Newton-Euler equations, written here independently.
+
+    ``z`` = (R_O, R_A, R_B, R_C, theta''). Returns (force residuals (6,), moment residuals (3,),
+    force scale, moment scale).
+    """
+    m = model.mass
+    R_O, R_A, R_B, R_C, tdd = z[0:2], z[2:4], z[4:6], z[6:8], z[8]
+    pos, vel, acc = body_motion(model, theta, theta_dot, tdd)
+    F_s, F_d, M_rot = external_forces(model, pos, vel, theta_dot, p)
+    g = m.gravity
+    W = lambda mass: np.array([0.0, -mass * g])  # noqa: E731
+    G1, G2, G3 = pos["G1"], pos["G2"], pos["G3"]
+    alpha1 = tdd
+    alpha2, alpha3 = acc["phi"], acc["gamma"]
+    f = np.r_[
+        R_A + R_C + W(m.lid) + F_s + F_d - m.lid * acc["G1"],
+        R_O - R_A + W(m.crank_oa) - m.crank_oa * acc["G2"],
+        R_B - R_C + W(m.crank_bc) - m.crank_bc * acc["G3"],
+    ]
+    mom = np.array([
+        cross2(pos["A"] - G1, R_A) + cross2(pos["C"] - G1, R_C) + cross2(pos["E"] - G1, F_s)
+        + cross2(pos["C"] - G1, F_d) + M_rot - m.inertia_lid * alpha1,
+        cross2(pos["O"] - G2, R_O) + cross2(pos["A"] - G2, -R_A) - m.inertia_oa * alpha2,
+        cross2(pos["B"] - G3, R_B) + cross2(pos["C"] - G3, -R_C) - m.inertia_bc * alpha3,
+    ])
+    fscale = max(np.abs(z[:8]).max(), m.lid * g, np.abs(F_s).max(), np.abs(F_d).max(),
+                 m.lid * np.abs(acc["G1"]).max())
+    return f, mom, fscale, fscale * model.geo.lid_length
+
+
+def np_energy(model, theta, theta_dot, p):
+    """Kinetic + gravity + spring potential from the bodies (numpy, finite differences)."""
+    m = model.mass
+    pos, vel, _ = body_motion(model, theta, theta_dot, 0.0)
+    T = 0.5 * (m.lid * vel["G1"] @ vel["G1"] + m.inertia_lid * theta_dot ** 2
+               + m.crank_oa * vel["G2"] @ vel["G2"] + m.inertia_oa * vel["phi"] ** 2
+               + m.crank_bc * vel["G3"] @ vel["G3"] + m.inertia_bc * vel["gamma"] ** 2)
+    V = m.gravity * (m.lid * pos["G1"][1] + m.crank_oa * pos["G2"][1]
+                     + m.crank_bc * pos["G3"][1])
+    l = float(np.hypot(*(pos["D"] - pos["E"])))
+    return float(T + V + 0.5 * p[0] * (l - p[1]) ** 2)
+
+
+def random_states(model, n, seed, thd_max=6.0):
+    """Random (theta, theta', p) over the model's range, spring + dashpot + rotary damper on."""
+    rng = np.random.default_rng(seed)
+    lo, hi = model.theta_range
+    out = []
+    for _ in range(n):
+        th = rng.uniform(lo + 0.01, hi - 0.01)
+        thd = rng.uniform(-thd_max, thd_max)
+        p = np.array([rng.uniform(100, 5000), rng.uniform(0.02, 0.12),
+                      rng.uniform(10, 3000), rng.uniform(0.001, 0.05)])
+        out.append((th, thd, p))
+    return out
