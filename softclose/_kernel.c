@@ -23,14 +23,16 @@ enum { C_M, C_DM, C_VG, C_DVG, C_L, C_DL, C_DD, C_TAU };
 #define SMAX 4
 
 /* outputs per design */
-enum { O_STATUS, O_TIME, O_THD, O_TIP, O_PEAK, O_LMIN, O_LMAX, O_NSTEP, O_EDRIFT, O_THMIN, NOUT };
+enum { O_STATUS, O_TIME, O_THD, O_TIP, O_PEAK, O_LMIN, O_LMAX, O_NSTEP, O_EDRIFT, O_THMIN,
+       O_THDMAX, /* max of theta' over the nodes after release (> 0: the lid moved up) */
+       NOUT };
 /* status codes */
 enum { S_CLOSED = 0, S_OPEN = 1, S_UNSTABLE = 2, S_RANGE = 3, S_NONFINITE = 4, S_NEWTON = 5 };
 
 typedef struct {
     const double *cc; /* ncell * NC * 4 cubic coefficients in the local variable s in [0, 1] */
     int ncell;
-    double lo, h;
+    double lo, h, inv_h;
 } Table;
 
 typedef struct {
@@ -43,7 +45,7 @@ typedef struct { double k, l0, c, cr; } Par;
 /* coefficient values v[NC] and theta-derivatives dv[NC] (dv may be NULL) */
 static inline int tab_eval(const Table *T, double th, double *v, double *dv)
 {
-    double x = (th - T->lo) / T->h;
+    double x = (th - T->lo) * T->inv_h;
     if (!(x >= 0.0 && x <= (double)T->ncell)) return 1;
     int i = (int)x;
     if (i >= T->ncell) i = T->ncell - 1;
@@ -51,8 +53,27 @@ static inline int tab_eval(const Table *T, double th, double *v, double *dv)
     const double *q = T->cc + (size_t)i * NC * 4;
     for (int j = 0; j < NC; j++, q += 4) {
         v[j] = q[0] + s * (q[1] + s * (q[2] + s * q[3]));
-        if (dv) dv[j] = (q[1] + s * (2.0 * q[2] + s * 3.0 * q[3])) / T->h;
+        if (dv) dv[j] = (q[1] + s * (2.0 * q[2] + s * 3.0 * q[3])) * T->inv_h;
     }
+    return 0;
+}
+
+/* the hot path: theta'' only (the six coefficients it needs, no derivatives) */
+static inline int rhs_fast(const Table *T, const Par *p, double th, double thd, double *thdd)
+{
+    double x = (th - T->lo) * T->inv_h;
+    if (!(x >= 0.0 && x <= (double)T->ncell)) return 1;
+    int i = (int)x;
+    if (i >= T->ncell) i = T->ncell - 1;
+    double s = x - i;
+    const double *q = T->cc + (size_t)i * NC * 4;
+#define CUB(j) (q[4 * (j)] + s * (q[4 * (j) + 1] + s * (q[4 * (j) + 2] + s * q[4 * (j) + 3])))
+    double M = CUB(C_M), dM = CUB(C_DM), dVg = CUB(C_DVG), l = CUB(C_L), dl = CUB(C_DL),
+           dd = CUB(C_DD);
+#undef CUB
+    double damp = p->c * dd + p->cr;
+    double N = -dVg - p->k * (l - p->l0) * dl - 0.5 * dM * thd * thd - damp * thd;
+    *thdd = N / M;
     return 0;
 }
 
@@ -71,14 +92,6 @@ static inline int rhs(const Table *T, const Par *p, double th, double thd, doubl
         J[1] = (-v[C_DM] * thd - damp) / v[C_M];
     }
     return 0;
-}
-
-static double energy(const Table *T, const Par *p, double th, double thd)
-{
-    double v[NC];
-    if (tab_eval(T, th, v, NULL)) return NAN;
-    double dl = v[C_L] - p->l0;
-    return 0.5 * v[C_M] * thd * thd + v[C_VG] + 0.5 * p->k * dl * dl;
 }
 
 /* solve the n x n system a x = r in place (partial pivoting); returns 1 if singular */
@@ -249,97 +262,270 @@ static void l_extremes(const Table *T, double a, double b, double *lmin, double 
     }
 }
 
-/* one closing stroke; traj (optional) gets rows (t, th, thd) for every step */
-static void stroke(const Table *T, const Method *m, const Par *p, double dt, double t_max,
-                   double th0, double thc, double e_tol, double *out,
-                   double *traj, long traj_cap, long *traj_len)
+/* ---- the stroke loop ----------------------------------------------------------------
+ * A stroke is a small state machine (Lane). Several strokes are advanced in lockstep
+ * ("lanes"): their RK stages are independent, so the CPU overlaps the table look-ups and
+ * divisions of one lane with those of the others instead of waiting on one dependent
+ * chain. Each lane's bookkeeping after a step (event, peak, energy) is the scalar code of
+ * one stroke; a finished lane is refilled with the next design. Results do not depend on
+ * the lane count. The method's first explicit stage at a node is the theta'' already
+ * computed there (FSAL), and the tip speed, its rate, theta'' and the energy at a node
+ * come from one table look-up. */
+#define LANES 4
+
+typedef struct {
+    Par p;
+    double e_tol, *out;
+    double t, th, thd, th_min, thp, thdp, hp; /* hp: length of the previous step */
+    double gp, g, dg, a, peak, E0, Emax;      /* tip speed at previous/current node, ...  */
+    double thd_max;                           /* max theta' over the nodes after t = 0 */
+    long n, nt, traj_cap;
+    double *traj;
+    int status;
+} Lane;
+
+/* theta'', tip speed g = tau |th'|, its rate dg and the energy at a node: one look-up */
+static inline int node_eval(const Table *T, const Par *p, double th, double thd,
+                            double *a, double *g, double *dg, double *E)
 {
-    double t = 0.0, th = th0, thd = 0.0, th_min = th0;
-    double thp = th0, thdp = 0.0, tp = 0.0, hp = 0.0; /* previous node, for refinement */
-    double gp = 0.0, g = 0.0, dg, peak = 0.0;
-    double E0 = energy(T, p, th0, 0.0), Emax = E0;
-    long n = 0, nt = 0;
-    int status = S_OPEN;
-    for (int j = 0; j < NOUT; j++) out[j] = NAN;
-    if (traj && nt < traj_cap) { traj[3 * nt] = t; traj[3 * nt + 1] = th; traj[3 * nt + 2] = thd; nt++; }
-    if (!isfinite(E0)) { status = S_RANGE; goto done; }
-    while (t < t_max) {
-        double h = dt < t_max - t ? dt : t_max - t, th1, thd1;
-        if (h <= 1e-15 * t_max) break;
-        int st = step(T, m, p, h, th, thd, &th1, &thd1);
-        n++;
-        if (st) { status = st; break; }
-        if (!isfinite(th1) || !isfinite(thd1)) { status = S_NONFINITE; break; }
-        if (th1 <= thc) { /* closing event inside this step: solve its length */
-            double tau = h * (th - thc) / (th - th1), y0 = th1, y1 = thd1;
-            int ok = 0;
-            for (int it = 0; it < 50; it++) {
-                if (step(T, m, p, tau, th, thd, &y0, &y1)) break;
-                double r = y0 - thc;
-                if (fabs(r) <= 1e-15 * (1.0 + fabs(thc))) { ok = 1; break; }
-                double tn = tau - r / y1;
-                if (!(tn > 0 && tn <= h)) tn = r > 0 ? 0.5 * (tau + h) : 0.5 * tau;
-                if (fabs(tn - tau) <= 1e-16 * h) { tau = tn; ok = 1; break; }
-                tau = tn;
-            }
-            if (!ok) { /* safeguard: bisection on [0, h] */
-                double a = 0.0, b = h;
-                for (int it = 0; it < 80; it++) {
-                    tau = 0.5 * (a + b);
-                    if (step(T, m, p, tau, th, thd, &y0, &y1)) break;
-                    if (y0 > thc) a = tau; else b = tau;
-                }
-            }
-            double gi, dgi;
-            quantity(T, p, 0, thc, y1, &gi, &dgi);
-            /* a peak between the previous node and the event? */
-            if (quantity(T, p, 0, th, thd, &g, &dg) == 0) {
-                if (g > peak) peak = g;
-                if (n > 1 && g >= gp && g > gi)
-                    refine_extremum(T, m, p, 0, thp, thdp, hp + tau, &peak);
-                else if (dg > 0 && dgi < 0)
-                    refine_extremum(T, m, p, 0, th, thd, tau, &peak);
-            }
-            if (gi > peak) peak = gi;
-            t += tau; th = thc; thd = y1; th_min = thc; status = S_CLOSED;
-            out[O_TIME] = t; out[O_THD] = thd; out[O_TIP] = gi;
-            if (traj && nt < traj_cap) { traj[3 * nt] = t; traj[3 * nt + 1] = th; traj[3 * nt + 2] = thd; nt++; }
-            break;
-        }
-        /* interior extrema at the node we are leaving (t): tip-speed peak, lowest angle */
-        double g1, dg1;
-        if (quantity(T, p, 0, th1, thd1, &g1, &dg1)) { status = S_RANGE; break; }
-        quantity(T, p, 0, th, thd, &g, &dg);
-        if (n > 1 && g >= gp && g > g1) refine_extremum(T, m, p, 0, thp, thdp, hp + h, &peak);
-        if (g1 > peak) peak = g1;
-        if (thd < 0 && thd1 >= 0) { /* turned back: lowest angle inside this step */
-            double lowest = th1 < th ? th1 : th;
-            refine_extremum(T, m, p, 1, th, thd, h, &lowest);
-            if (lowest < th_min) th_min = lowest;
-        }
-        if (th1 < th_min) th_min = th1;
-        double E1 = energy(T, p, th1, thd1);
-        if (!isfinite(E1)) { status = S_RANGE; break; }
-        if (E1 > Emax) Emax = E1;
-        if (E1 - E0 > e_tol) { status = S_UNSTABLE; t += h; th = th1; thd = thd1; break; }
-        gp = g; thp = th; thdp = thd; tp = t; hp = h;
-        t += h; th = th1; thd = thd1;
-        if (traj && nt < traj_cap) { traj[3 * nt] = t; traj[3 * nt + 1] = th; traj[3 * nt + 2] = thd; nt++; }
+    double x = (th - T->lo) * T->inv_h;
+    if (!(x >= 0.0 && x <= (double)T->ncell)) return 1;
+    int i = (int)x;
+    if (i >= T->ncell) i = T->ncell - 1;
+    double s = x - i;
+    const double *q = T->cc + (size_t)i * NC * 4;
+#define CUB(j) (q[4 * (j)] + s * (q[4 * (j) + 1] + s * (q[4 * (j) + 2] + s * q[4 * (j) + 3])))
+    double M = CUB(C_M), dM = CUB(C_DM), Vg = CUB(C_VG), dVg = CUB(C_DVG), l = CUB(C_L),
+           dl = CUB(C_DL), dd = CUB(C_DD), tau = CUB(C_TAU);
+#undef CUB
+    const double *qt = q + 4 * C_TAU;
+    double dtau = (qt[1] + s * (2.0 * qt[2] + s * 3.0 * qt[3])) * T->inv_h;
+    double damp = p->c * dd + p->cr;
+    double N = -dVg - p->k * (l - p->l0) * dl - 0.5 * dM * thd * thd - damp * thd;
+    double acc = N / M;
+    double sg = thd >= 0 ? 1.0 : -1.0;
+    *a = acc;
+    *g = tau * fabs(thd);
+    *dg = sg * (dtau * thd * thd + tau * acc);
+    double dl0 = l - p->l0;
+    *E = 0.5 * M * thd * thd + Vg + 0.5 * p->k * dl0 * dl0;
+    return 0;
+}
+
+static inline void lane_record(Lane *L)
+{
+    if (L->traj && L->nt < L->traj_cap) {
+        L->traj[3 * L->nt] = L->t; L->traj[3 * L->nt + 1] = L->th; L->traj[3 * L->nt + 2] = L->thd;
+        L->nt++;
     }
-    (void)tp;
-done:
-    out[O_STATUS] = status;
-    out[O_PEAK] = peak;
-    out[O_NSTEP] = (double)n;
-    out[O_EDRIFT] = Emax - E0;
-    out[O_THMIN] = th_min;
-    if (status == S_CLOSED || status == S_OPEN) {
+}
+
+/* start a stroke from rest at th0; returns 1 if it is already over (not tabulated) */
+static int lane_start(const Table *T, Lane *L, const double *d, double *out, double th0,
+                      double *traj, long traj_cap)
+{
+    L->p.k = d[0]; L->p.l0 = d[1]; L->p.c = d[2]; L->p.cr = d[3]; L->e_tol = d[4];
+    L->out = out;
+    L->t = 0.0; L->th = th0; L->thd = 0.0; L->th_min = th0;
+    L->thp = th0; L->thdp = 0.0; L->hp = 0.0;
+    L->gp = 0.0; L->g = 0.0; L->dg = 0.0; L->peak = 0.0; L->a = 0.0;
+    L->n = 0; L->nt = 0; L->traj = traj; L->traj_cap = traj_cap; L->thd_max = -INFINITY;
+    L->status = S_OPEN;
+    for (int j = 0; j < NOUT; j++) out[j] = NAN;
+    lane_record(L);
+    double E0;
+    if (node_eval(T, &L->p, th0, 0.0, &L->a, &L->g, &L->dg, &E0) || !isfinite(E0)) {
+        L->E0 = L->Emax = NAN; L->status = S_RANGE; return 1;
+    }
+    L->E0 = L->Emax = E0;
+    return 0;
+}
+
+static void lane_finish(const Table *T, Lane *L, double th0)
+{
+    double *out = L->out;
+    out[O_STATUS] = L->status;
+    out[O_PEAK] = L->peak;
+    out[O_NSTEP] = (double)L->n;
+    out[O_EDRIFT] = L->Emax - L->E0;
+    out[O_THMIN] = L->th_min;
+    out[O_THDMAX] = L->thd_max;
+    if (L->status == S_CLOSED || L->status == S_OPEN) {
         double lmin, lmax;
-        l_extremes(T, th_min, th0, &lmin, &lmax);
+        l_extremes(T, L->th_min, th0, &lmin, &lmax);
         out[O_LMIN] = lmin; out[O_LMAX] = lmax;
     }
-    if (status != S_CLOSED) { out[O_TIME] = NAN; out[O_THD] = NAN; out[O_TIP] = NAN; }
-    if (traj_len) *traj_len = nt;
+    if (L->status != S_CLOSED) { out[O_TIME] = NAN; out[O_THD] = NAN; out[O_TIP] = NAN; }
+}
+
+/* bookkeeping after a step of length h to (th1, thd1) with step status st; 1 = over */
+static int lane_after_step(const Table *T, const Method *m, Lane *L, double h, double th1,
+                           double thd1, int st, double thc)
+{
+    const Par *p = &L->p;
+    double th = L->th, thd = L->thd;
+    L->n++;
+    if (st) { L->status = st; return 1; }
+    if (!isfinite(th1) || !isfinite(thd1)) { L->status = S_NONFINITE; return 1; }
+    if (th1 <= thc) { /* closing event inside this step: solve its length */
+        double tau = h * (th - thc) / (th - th1), y0 = th1, y1 = thd1;
+        int ok = 0;
+        for (int it = 0; it < 50; it++) {
+            if (step(T, m, p, tau, th, thd, &y0, &y1)) break;
+            double r = y0 - thc;
+            if (fabs(r) <= 1e-15 * (1.0 + fabs(thc))) { ok = 1; break; }
+            double tn = tau - r / y1;
+            if (!(tn > 0 && tn <= h)) tn = r > 0 ? 0.5 * (tau + h) : 0.5 * tau;
+            if (fabs(tn - tau) <= 1e-16 * h) { tau = tn; ok = 1; break; }
+            tau = tn;
+        }
+        if (!ok) { /* safeguard: bisection on [0, h] */
+            double a = 0.0, b = h;
+            for (int it = 0; it < 80; it++) {
+                tau = 0.5 * (a + b);
+                if (step(T, m, p, tau, th, thd, &y0, &y1)) break;
+                if (y0 > thc) a = tau; else b = tau;
+            }
+        }
+        double gi, dgi;
+        quantity(T, p, 0, thc, y1, &gi, &dgi);
+        /* a peak between the previous node and the event? */
+        double g = L->g, dg = L->dg;
+        if (g > L->peak) L->peak = g;
+        if (L->n > 1 && g >= L->gp && g > gi)
+            refine_extremum(T, m, p, 0, L->thp, L->thdp, L->hp + tau, &L->peak);
+        else if (dg > 0 && dgi < 0)
+            refine_extremum(T, m, p, 0, th, thd, tau, &L->peak);
+        if (gi > L->peak) L->peak = gi;
+        if (y1 > L->thd_max) L->thd_max = y1;
+        L->t += tau; L->th = thc; L->thd = y1; L->th_min = thc; L->status = S_CLOSED;
+        L->out[O_TIME] = L->t; L->out[O_THD] = y1; L->out[O_TIP] = gi;
+        lane_record(L);
+        return 1;
+    }
+    /* the new node: theta'' (the next step's first stage), tip speed, its rate, energy */
+    double a1, g1, dg1, E1;
+    if (node_eval(T, p, th1, thd1, &a1, &g1, &dg1, &E1)) { L->status = S_RANGE; return 1; }
+    /* interior extrema at the node we are leaving (t): tip-speed peak, lowest angle */
+    if (L->n > 1 && L->g >= L->gp && L->g > g1)
+        refine_extremum(T, m, p, 0, L->thp, L->thdp, L->hp + h, &L->peak);
+    if (g1 > L->peak) L->peak = g1;
+    if (thd < 0 && thd1 >= 0) { /* turned back: lowest angle inside this step */
+        double lowest = th1 < th ? th1 : th;
+        refine_extremum(T, m, p, 1, th, thd, h, &lowest);
+        if (lowest < L->th_min) L->th_min = lowest;
+    }
+    if (th1 < L->th_min) L->th_min = th1;
+    if (thd1 > L->thd_max) L->thd_max = thd1;
+    if (!isfinite(E1)) { L->status = S_RANGE; return 1; }
+    if (E1 > L->Emax) L->Emax = E1;
+    if (E1 - L->E0 > L->e_tol) {
+        L->status = S_UNSTABLE; L->t += h; L->th = th1; L->thd = thd1; return 1;
+    }
+    L->gp = L->g; L->thp = th; L->thdp = thd; L->hp = h;
+    L->g = g1; L->dg = dg1; L->a = a1;
+    L->t += h; L->th = th1; L->thd = thd1;
+    lane_record(L);
+    return 0;
+}
+
+/* one explicit RK step for the active lanes; s is a literal at the hot call (unrolled) */
+static inline __attribute__((always_inline)) void
+explicit_lanes(const Table *T, const Method *m, const int s, Lane *lanes, const int *act,
+               int na, const double *hh, double *y0, double *y1, int *st)
+{
+    double K0[LANES][SMAX], K1[LANES][SMAX];
+    for (int q = 0; q < na; q++) {
+        Lane *L = &lanes[act[q]];
+        K0[q][0] = L->thd; K1[q][0] = L->a; st[q] = 0;
+    }
+    for (int i = 1; i < s; i++) {
+        for (int q = 0; q < na; q++) {
+            Lane *L = &lanes[act[q]];
+            double h = hh[act[q]], z0 = L->th, z1 = L->thd;
+            for (int j = 0; j < i; j++) {
+                if (m->A[i][j] != 0.0) {
+                    double ha = h * m->A[i][j];
+                    z0 += ha * K0[q][j]; z1 += ha * K1[q][j];
+                }
+            }
+            K0[q][i] = z1;
+            if (rhs_fast(T, &L->p, z0, z1, &K1[q][i])) { K1[q][i] = NAN; st[q] = S_RANGE; }
+        }
+    }
+    for (int q = 0; q < na; q++) {
+        Lane *L = &lanes[act[q]];
+        double h = hh[act[q]], z0 = L->th, z1 = L->thd;
+        for (int i = 0; i < s; i++) { z0 += h * m->b[i] * K0[q][i]; z1 += h * m->b[i] * K1[q][i]; }
+        y0[q] = z0; y1[q] = z1;
+    }
+}
+
+/* n strokes (rows of design: k, l0, c, c_rot, e_tol) into out (n x NOUT); with traj
+ * (n must be 1) the rows (t, th, thd) of every node */
+static void strokes(const Table *T, const Method *m, double dt, double t_max, double th0,
+                    double thc, long n, const double *design, double *out,
+                    double *traj, long traj_cap, long *traj_len)
+{
+    Lane lanes[LANES];
+    int used[LANES] = {0};
+    long next = 0;
+    int nlanes = traj ? 1 : LANES;
+    const int s = m->s;
+    for (;;) {
+        int act[LANES], na = 0;
+        double hh[LANES];
+        for (int k = 0; k < nlanes; k++) {
+            for (;;) {
+                if (used[k]) {
+                    Lane *L = &lanes[k];
+                    double h = dt < t_max - L->t ? dt : t_max - L->t;
+                    if (L->t < t_max && h > 1e-15 * t_max) { hh[k] = h; break; }
+                    lane_finish(T, L, th0); /* ran to t_max without closing */
+                    if (traj_len) *traj_len = L->nt;
+                    used[k] = 0;
+                }
+                if (next >= n) break;
+                used[k] = 1;
+                if (lane_start(T, &lanes[k], design + 5 * next, out + NOUT * next, th0, traj,
+                               traj_cap)) {
+                    lane_finish(T, &lanes[k], th0);
+                    if (traj_len) *traj_len = lanes[k].nt;
+                    used[k] = 0;
+                }
+                next++;
+            }
+            if (used[k]) act[na++] = k;
+        }
+        if (na == 0) break;
+        double y0[LANES], y1[LANES];
+        int st[LANES];
+        if (m->kind == 0) { /* explicit RK, lanes interleaved, first stage from the node */
+            if (s == 4) explicit_lanes(T, m, 4, lanes, act, na, hh, y0, y1, st);
+            else explicit_lanes(T, m, s, lanes, act, na, hh, y0, y1, st);
+        } else if (m->kind == 2) { /* symplectic Euler from the node's theta'' */
+            for (int q = 0; q < na; q++) {
+                Lane *L = &lanes[act[q]];
+                double h = hh[act[q]];
+                y1[q] = L->thd + h * L->a;
+                y0[q] = L->th + h * y1[q];
+                st[q] = 0;
+            }
+        } else {
+            for (int q = 0; q < na; q++) {
+                Lane *L = &lanes[act[q]];
+                st[q] = step(T, m, &L->p, hh[act[q]], L->th, L->thd, &y0[q], &y1[q]);
+            }
+        }
+        for (int q = 0; q < na; q++) {
+            int k = act[q];
+            if (lane_after_step(T, m, &lanes[k], hh[k], y0[q], y1[q], st[q], thc)) {
+                lane_finish(T, &lanes[k], th0);
+                if (traj_len) *traj_len = lanes[k].nt;
+                used[k] = 0;
+            }
+        }
+    }
 }
 
 /* ---- exported entry points (called through ctypes; the GIL is released) ---- */
@@ -348,6 +534,7 @@ static void make(const double *tab_meta, const double *cc, const double *tableau
                  Table *T, Method *m)
 {
     T->cc = cc; T->ncell = (int)tab_meta[0]; T->lo = tab_meta[1]; T->h = tab_meta[2];
+    T->inv_h = 1.0 / T->h;
     m->kind = (int)tableau[0]; m->s = (int)tableau[1];
     int s = m->s;
     for (int i = 0; i < s; i++) {
@@ -364,11 +551,7 @@ void sc_strokes(const double *tab_meta, const double *cc, const double *tableau,
 {
     Table T; Method m;
     make(tab_meta, cc, tableau, &T, &m);
-    for (long i = 0; i < n; i++) {
-        const double *d = design + 5 * i;
-        Par p = {d[0], d[1], d[2], d[3]};
-        stroke(&T, &m, &p, dt, t_max, th0, thc, d[4], out + NOUT * i, NULL, 0, NULL);
-    }
+    strokes(&T, &m, dt, t_max, th0, thc, n, design, out, NULL, 0, NULL);
 }
 
 /* one stroke with its trajectory */
@@ -378,8 +561,8 @@ void sc_stroke_traj(const double *tab_meta, const double *cc, const double *tabl
 {
     Table T; Method m;
     make(tab_meta, cc, tableau, &T, &m);
-    Par p = {design[0], design[1], design[2], design[3]};
-    stroke(&T, &m, &p, dt, t_max, th0, thc, design[4], out, traj, traj_cap, traj_len);
+    *traj_len = 0;
+    strokes(&T, &m, dt, t_max, th0, thc, 1, design, out, traj, traj_cap, traj_len);
 }
 
 /* one step (for tests): x1 = step(x0, h) */

@@ -34,7 +34,7 @@ from .integrators import Method
 #: output columns of the kernel, in order
 OUT_FIELDS = ("status", "closing_time", "impact_theta_dot", "impact_tip_speed",
               "peak_tip_speed", "min_spring_length", "max_spring_length", "steps",
-              "energy_rise", "theta_min")
+              "energy_rise", "theta_min", "theta_dot_max")
 STATUS = {0: "closed", 1: "not closed", 2: "unstable", 3: "left the tabulated range",
           4: "non-finite", 5: "implicit solve failed"}
 
@@ -146,7 +146,8 @@ def run_strokes(table: CoefficientTable, method: Method, step: float, t_max: flo
     n = len(designs)
     out = np.empty((n, len(OUT_FIELDS)))
     tab = method.packed()
-    threads = threads or min(os.cpu_count() or 1, 8)
+    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    threads = threads or min(cpus or 1, 8)
     threads = max(1, min(threads, n // 64 or 1))
 
     def work(a, b):
@@ -156,7 +157,10 @@ def run_strokes(table: CoefficientTable, method: Method, step: float, t_max: flo
     if threads == 1:
         work(0, n)
     else:
-        bounds = np.linspace(0, n, threads + 1).astype(int)
+        # more chunks than threads: strokes differ in length (a slammed lid takes 150 steps,
+        # a heavily damped one thousands), so equal halves would leave one core idle
+        chunks = max(threads, min(8 * threads, n // 64))
+        bounds = np.linspace(0, n, chunks + 1).astype(int)
         with ThreadPoolExecutor(threads) as ex:
             list(ex.map(lambda ab: work(*ab), zip(bounds[:-1], bounds[1:])))
     return out

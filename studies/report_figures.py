@@ -1,0 +1,75 @@
+"""Regenerate every report figure in one run.
+
+Runs each study script in its own process, in a fixed order -- the seed reproduction, the
+spring-damper maps, the Pareto front (``pareto_closing_time.py``), the work-precision
+benchmark (``work_precision.py``) and the stress survey (``stress_survey.py``), then any other
+``studies/*.py`` -- each in fast mode with ``--fast``. A script that does not exist yet is
+listed as missing; one that fails is reported and the others still run.
+
+Writes to studies/out/report_figures/:
+  report_figures.json  for each study: exit code, run time, and the figures it left in
+                       studies/out/<name>/ (every study writes its own files there)
+
+Usage: python studies/report_figures.py [--fast] [--only NAME ...]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+OUT = HERE / "out" / "report_figures"
+ORDER = ("seed_reproduction", "spring_damper_maps", "pareto_closing_time", "work_precision",
+         "stress_survey")
+
+
+def studies() -> list[str]:
+    others = sorted(p.stem for p in HERE.glob("*.py")
+                    if p.stem not in ORDER and p.stem != Path(__file__).stem
+                    and not p.stem.startswith("_"))
+    return list(ORDER) + others
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--fast", action="store_true", help="every study in its fast mode")
+    ap.add_argument("--only", nargs="*", default=None, help="run only these studies")
+    ap.add_argument("--timeout", type=float, default=3600.0, help="per study (s)")
+    a = ap.parse_args(argv)
+    OUT.mkdir(parents=True, exist_ok=True)
+    report, failed = {}, 0
+    for name in studies():
+        if a.only is not None and name not in a.only:
+            continue
+        script = HERE / f"{name}.py"
+        if not script.exists():
+            report[name] = {"status": "missing"}
+            print(f"{name:22s} missing (not written yet)", flush=True)
+            continue
+        t0 = time.time()
+        cmd = [sys.executable, str(script)] + (["--fast"] if a.fast else [])
+        try:
+            p = subprocess.run(cmd, capture_output=True, text=True, timeout=a.timeout)
+            code, err = p.returncode, p.stderr.strip().splitlines()[-1:] if p.returncode else []
+        except subprocess.TimeoutExpired:
+            code, err = -1, [f"timed out after {a.timeout:.0f} s"]
+        dt = time.time() - t0
+        figs = sorted(str(f.relative_to(HERE)) for f in (HERE / "out" / name).rglob("*.png")
+                      if f.stat().st_mtime >= t0 - 1) if (HERE / "out" / name).exists() else []
+        report[name] = {"status": "ok" if code == 0 else "failed", "exit_code": code,
+                        "seconds": round(dt, 2), "figures": figs, "error": err}
+        failed += code != 0
+        print(f"{name:22s} {'ok' if code == 0 else 'FAILED'} in {dt:6.1f} s, "
+              f"{len(figs)} figures" + (f"  ({err[0]})" if err else ""), flush=True)
+    (OUT / "report_figures.json").write_text(json.dumps(report, indent=1))
+    print(f"wrote {OUT / 'report_figures.json'}")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
