@@ -25,6 +25,7 @@ enum { C_M, C_DM, C_VG, C_DVG, C_L, C_DL, C_DD, C_TAU };
 /* outputs per design */
 enum { O_STATUS, O_TIME, O_THD, O_TIP, O_PEAK, O_LMIN, O_LMAX, O_NSTEP, O_EDRIFT, O_THMIN,
        O_THDMAX, /* max of theta' over the nodes after release (> 0: the lid moved up) */
+       O_THMAX,  /* highest angle of the stroke (above theta0 when a spring pushes it open) */
        NOUT };
 /* status codes */
 enum { S_CLOSED = 0, S_OPEN = 1, S_UNSTABLE = 2, S_RANGE = 3, S_NONFINITE = 4, S_NEWTON = 5 };
@@ -180,11 +181,13 @@ static int step(const Table *T, const Method *m, const Par *p, double h,
     return 0;
 }
 
-/* quantity whose extremum is refined: 0 tip speed tau(th)|th'|, 1 theta */
+/* quantity whose extremum is refined: 0 tip speed tau(th)|th'| (max), 1 theta (min),
+ * 2 -theta (min, i.e. the highest angle) */
 static int quantity(const Table *T, const Par *p, int which, double th, double thd,
                     double *g, double *dg)
 {
     if (which == 1) { *g = th; *dg = thd; return 0; }
+    if (which == 2) { *g = -th; *dg = -thd; return 0; }
     double v[NC], dv[NC], a;
     if (tab_eval(T, th, v, dv)) return 1;
     if (rhs(T, p, th, thd, &a, NULL)) return 1;
@@ -207,7 +210,7 @@ static int refine_extremum(const Table *T, const Method *m, const Par *p, int wh
         double s1 = smax * q / NS, y0, y1, g1, d1;
         if (step(T, m, p, s1, th, thd, &y0, &y1)) return 1;
         if (quantity(T, p, which, y0, y1, &g1, &d1)) return 1;
-        if ((which == 0 && g1 > *gbest) || (which == 1 && g1 < *gbest)) *gbest = g1;
+        if ((which == 0 && g1 > *gbest) || (which != 0 && g1 < *gbest)) *gbest = g1;
         if ((prev_d > 0) != (d1 > 0)) { lo = prev_s; hi = s1; dlo = prev_d; dhi = d1; break; }
         prev_s = s1; prev_d = d1;
     }
@@ -220,7 +223,7 @@ static int refine_extremum(const Table *T, const Method *m, const Par *p, int wh
         double y0, y1, gm, dm;
         if (step(T, m, p, sm, th, thd, &y0, &y1)) return 1;
         if (quantity(T, p, which, y0, y1, &gm, &dm)) return 1;
-        if ((which == 0 && gm > *gbest) || (which == 1 && gm < *gbest)) *gbest = gm;
+        if ((which == 0 && gm > *gbest) || (which != 0 && gm < *gbest)) *gbest = gm;
         if (dm == 0.0) break;
         if ((dm > 0) == (dlo > 0)) { lo = sm; dlo = dm; if (side == -1) dhi *= 0.5; side = -1; }
         else { hi = sm; dhi = dm; if (side == 1) dlo *= 0.5; side = 1; }
@@ -276,7 +279,7 @@ static void l_extremes(const Table *T, double a, double b, double *lmin, double 
 typedef struct {
     Par p;
     double e_tol, *out;
-    double t, th, thd, th_min, thp, thdp, hp; /* hp: length of the previous step */
+    double t, th, thd, th_min, th_max, thp, thdp, hp; /* hp: length of the previous step */
     double gp, g, dg, a, peak, E0, Emax;      /* tip speed at previous/current node, ...  */
     double thd_max;                           /* max theta' over the nodes after t = 0 */
     long n, nt, traj_cap;
@@ -326,7 +329,7 @@ static int lane_start(const Table *T, Lane *L, const double *d, double *out, dou
 {
     L->p.k = d[0]; L->p.l0 = d[1]; L->p.c = d[2]; L->p.cr = d[3]; L->e_tol = d[4];
     L->out = out;
-    L->t = 0.0; L->th = th0; L->thd = 0.0; L->th_min = th0;
+    L->t = 0.0; L->th = th0; L->thd = 0.0; L->th_min = th0; L->th_max = th0;
     L->thp = th0; L->thdp = 0.0; L->hp = 0.0;
     L->gp = 0.0; L->g = 0.0; L->dg = 0.0; L->peak = 0.0; L->a = 0.0;
     L->n = 0; L->nt = 0; L->traj = traj; L->traj_cap = traj_cap; L->thd_max = -INFINITY;
@@ -350,9 +353,10 @@ static void lane_finish(const Table *T, Lane *L, double th0)
     out[O_EDRIFT] = L->Emax - L->E0;
     out[O_THMIN] = L->th_min;
     out[O_THDMAX] = L->thd_max;
+    out[O_THMAX] = L->th_max;
     if (L->status == S_CLOSED || L->status == S_OPEN) {
         double lmin, lmax;
-        l_extremes(T, L->th_min, th0, &lmin, &lmax);
+        l_extremes(T, L->th_min, L->th_max, &lmin, &lmax);
         out[O_LMIN] = lmin; out[O_LMAX] = lmax;
     }
     if (L->status != S_CLOSED) { out[O_TIME] = NAN; out[O_THD] = NAN; out[O_TIP] = NAN; }
@@ -415,7 +419,13 @@ static int lane_after_step(const Table *T, const Method *m, Lane *L, double h, d
         refine_extremum(T, m, p, 1, th, thd, h, &lowest);
         if (lowest < L->th_min) L->th_min = lowest;
     }
+    if (thd > 0 && thd1 <= 0) { /* turned down: highest angle inside this step */
+        double neg = -(th1 > th ? th1 : th);
+        refine_extremum(T, m, p, 2, th, thd, h, &neg);
+        if (-neg > L->th_max) L->th_max = -neg;
+    }
     if (th1 < L->th_min) L->th_min = th1;
+    if (th1 > L->th_max) L->th_max = th1;
     if (thd1 > L->thd_max) L->thd_max = thd1;
     if (!isfinite(E1)) { L->status = S_RANGE; return 1; }
     if (E1 > L->Emax) L->Emax = E1;

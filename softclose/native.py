@@ -34,7 +34,7 @@ from .integrators import Method
 #: output columns of the kernel, in order
 OUT_FIELDS = ("status", "closing_time", "impact_theta_dot", "impact_tip_speed",
               "peak_tip_speed", "min_spring_length", "max_spring_length", "steps",
-              "energy_rise", "theta_min", "theta_dot_max")
+              "energy_rise", "theta_min", "theta_dot_max", "theta_max")
 STATUS = {0: "closed", 1: "not closed", 2: "unstable", 3: "left the tabulated range",
           4: "non-finite", 5: "implicit solve failed"}
 

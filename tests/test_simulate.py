@@ -116,10 +116,6 @@ def test_never_closes_peak_and_spring_extremes(short, p):
     assert r.min_spring_length < r.max_spring_length
 
 
-@pytest.mark.xfail(strict=True, reason="DEFECT: min/max_spring_length only cover "
-                   "[theta_min, theta0]; a lid that first swings up (spring pushes it open) "
-                   "reaches theta > theta0 where the spring is longer (kernel l_extremes and "
-                   "Reference._l_extremes both use (th_min, theta0))")
 def test_spring_extremes_of_a_lid_that_opens_first(short):
     c, m, s, R = short
     p = np.array([2600.0, 0.09, 0.0, 0.0])          # pushes at theta0: swings up to ~19.2 deg
@@ -134,10 +130,6 @@ def test_spring_extremes_of_a_lid_that_opens_first(short):
     assert R.simulate(p)["max_spring_length"] >= l_top - 1e-9
 
 
-@pytest.mark.xfail(strict=True, reason="DEFECT: a lid pushed open beyond theta0 + 5 deg "
-                   "stops with 'left the tabulated range' and is diagnosed as a stability "
-                   "problem ('use a smaller simulate.step or radau5'), advice that cannot help; "
-                   "the reference integrates it (not closed)")
 def test_lid_pushed_open_beyond_the_table(short):
     c, m, s, R = short
     p = np.array([3000.0, 0.09, 0.0, 0.0])
