@@ -72,7 +72,7 @@ _SCHEMA: dict[str, dict[str, tuple[str, Any]]] = {
         "spring_k": ("bounds", (0.0, 10000.0)),
         "spring_rest_length": ("bounds", (0.02, 0.12)),
         "damper_c": ("bounds", (0.0, 5000.0)),
-        "nodes": ("int+", 20),
+        "nodes": ("int+", 10),
         "substeps": ("int+", 4),
         "hessian": ("str:" + ",".join(HESSIANS), "exact"),
         "linear_solver": ("str:mumps,ma27,ma57,ma86,ma97", "mumps"),
