@@ -857,16 +857,7 @@ def stress_cases(fast: bool = False) -> list[StressCase]:
 
 
 #: stress cases that expose a known core bug (name -> what is wrong); the tests xfail them
-KNOWN_BUGS = {
-    "closing at the toggle": (
-        "near a toggle the coefficient table's interpolation error is 11 % "
-        "(accuracy['table_rel_error'] = 0.114) yet the stroke is reported as an ordinary "
-        "'closed' result that the reference does not reproduce"),
-    "release at 24.7° (edge ≈ 24.75°)": (
-        "released 0.05° from the edge of the assembly the table's interpolation error is 3.6 % "
-        "(table_rel_error = 0.036); the stroke converges to closing_time 0.2000230 s, the "
-        "reference gives 0.2000517 s, and it is reported as an ordinary 'closed' result"),
-}
+KNOWN_BUGS: dict[str, str] = {}  # stress cases with a known core defect (none open)
 
 
 def _confirm(res, ref: dict) -> tuple[bool, dict, dict]:

@@ -140,7 +140,13 @@ def _simulate(cfg, args) -> Outcome:
         from .plots import write_stroke_outputs
         files = write_stroke_outputs(sim, res, Path(args.out))
         payload["files"] = [str(f) for f in files]
-    return Outcome(payload, format_metrics(payload), 0, files)
+    text = format_metrics(payload)
+    if res.message:
+        payload["warning"] = res.message
+        text += f"\n  {res.message}"
+    if files:
+        text += "\n  wrote " + ", ".join(str(f) for f in files)
+    return Outcome(payload, text, 0, files)
 
 
 def format_metrics(m: dict) -> str:

@@ -60,7 +60,7 @@ _SCHEMA: dict[str, dict[str, tuple[str, Any]]] = {
     },
     "simulate": {
         "integrator": ("str:" + ",".join(INTEGRATORS), "rk4"),
-        "step": ("pos", 0.001),
+        "step": ("pos", 0.002),
         "reference_tol": ("pos", 1e-12),
     },
     "optimise": {

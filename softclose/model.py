@@ -94,14 +94,16 @@ class LidModel:
                 f"({st.theta_closed_deg}..{st.theta0_deg} deg); change crank_oa, crank_bc, "
                 f"pivot_b or lid_c, or the stroke angles")
         # extend by a margin on each side as far as the loop still closes (stage overshoot)
+        # the margins stop where the linkage comes closer to a toggle than the stroke does
+        u_margin = max(0.99, float(u.max()) + 0.5 * (1.0 - float(u.max())))
         ext = []
         for end, sgn, margin_deg in ((st.theta_closed, -1, MARGIN_DEG),
                                      (st.theta0, +1, MARGIN_OPEN_DEG)):
             margin = math.radians(margin_deg)
             t = np.linspace(0, margin, 201)
             ue = np.abs(np.asarray(self._u.map(len(t))(end + sgn * t)).ravel())
-            ok = np.nonzero(~(ue < TOGGLE_U))[0]
-            m = t[ok[0] - 1] if len(ok) else margin
+            ok = np.nonzero(~(ue < u_margin))[0]
+            m = (t[ok[0] - 1] if ok[0] > 0 else 0.0) if len(ok) else margin
             ext.append(end + sgn * m)
         self.max_abs_u = float(u.max())
         return ext[0], ext[1]

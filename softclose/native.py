@@ -100,9 +100,20 @@ def _ptr(a: np.ndarray):
 class CoefficientTable:
     """Cubic Hermite table of the geometric coefficients over ``model.theta_range``."""
 
+    #: interpolation error aimed for; cells are refined (x4) up to MAX_CELLS to reach it
+    TARGET_REL_ERROR = 1e-10
+    MAX_CELLS = 1 << 15
+
     def __init__(self, model, cell_deg: float = 0.1):
         lo, hi = model.theta_range
         n = max(16, int(math.ceil((hi - lo) / math.radians(cell_deg))))
+        while True:
+            self._build(model, lo, hi, n)
+            if self.max_rel_error <= self.TARGET_REL_ERROR or 4 * n > self.MAX_CELLS:
+                break
+            n *= 4  # near a toggle the coefficients vary fast: refine the grid
+
+    def _build(self, model, lo, hi, n):
         h = (hi - lo) / n
         nodes = np.linspace(lo, hi, n + 1)
         f = model.coeffs.map(n + 1)

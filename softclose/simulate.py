@@ -19,13 +19,18 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import native
-from .config import Config
+from .config import Config, default_config
 from .errors import NumericalError
 from .integrators import Method, get_method
 from .model import LidModel
 
+DEFAULT_STEP = default_config().simulate.step
 METRIC_KEYS = ("closed", "closing_time", "impact_theta_dot", "impact_tip_speed",
                "peak_tip_speed", "min_spring_length", "max_spring_length", "holding_moment")
+#: largest relative interpolation error of the coefficient table that is accepted
+TABLE_TOL = 1e-7
+#: h |lambda|max above which an explicit method is outside its asymptotic regime
+STIFF_H_LAMBDA = 1.0
 #: metrics whose fixed-step error is estimated
 ERROR_KEYS = ("closing_time", "impact_theta_dot", "impact_tip_speed", "peak_tip_speed")
 
@@ -78,6 +83,12 @@ def spectral_radius(method: Method, J: np.ndarray, h: float) -> float:
     return float(np.max(np.abs(np.linalg.eigvals(S))))
 
 
+def _round_down(x: float) -> float:
+    """x rounded down to 3 significant digits (a recommendation must not round up)."""
+    e = math.floor(math.log10(x)) - 2
+    return math.floor(x / 10 ** e) * 10 ** e
+
+
 class Simulator:
     """Strokes of one config's geometry with one fixed-step method."""
 
@@ -88,6 +99,13 @@ class Simulator:
         self.method = get_method(integrator or cfg.simulate.integrator)
         self.step = step or cfg.simulate.step
         self.table = native.CoefficientTable(self.model)
+        if self.table.max_rel_error > TABLE_TOL:
+            raise NumericalError(
+                f"the linkage passes close to a toggle position (transmission angle "
+                f"{math.degrees(math.acos(min(self.model.max_abs_u, 1.0))):.2f} deg): the "
+                f"tabulated equation of motion is only accurate to "
+                f"{self.table.max_rel_error:.1e} there; move the stroke away from the toggle "
+                "(geometry, stroke.theta0_deg, stroke.theta_closed_deg)")
 
     # -- batches ---------------------------------------------------------------------
     def energy_tol(self, P: np.ndarray) -> np.ndarray:
@@ -157,12 +175,35 @@ class Simulator:
         half.step = self.step / 2
         r2 = half.run(p, estimate_error=False)
         q = 2.0 ** self.method.order
+        tab = self.table.max_rel_error
         est = {}
-        for k in ERROR_KEYS:
+        for k in ERROR_KEYS:  # step error (Richardson) + what the table error can cause
             a, b = getattr(res, k), getattr(r2, k)
-            est[k] = None if a is None or b is None else abs(a - b) * q / (q - 1)
-        est["table_rel_error"] = self.table.max_rel_error
+            est[k] = None if a is None or b is None else abs(a - b) * q / (q - 1) + tab * abs(a)
+        est["table_rel_error"] = tab
+        h_lam = self.step * self.max_rate(p)
+        est["step_times_max_rate"] = h_lam
+        if h_lam > STIFF_H_LAMBDA and self.method.real_stability != math.inf:
+            res.message = (f"warning: stiff for {self.method.name} at this step "
+                           f"(h |lambda|max = {h_lam:.2g}): the error estimate may be too small; "
+                           "prefer simulate.integrator = \"radau5\" or a smaller simulate.step")
         return est
+
+    def _jacobians(self, p):
+        """Linearised (theta, theta') Jacobian entries at rest along the stroke."""
+        th = np.linspace(self.cfg.stroke.theta_closed, self.cfg.stroke.theta0, 41)
+        k, l0, cd, cr = p
+        eps = 1e-6
+        cp, cm, c = self.table.evaluate(th + eps), self.table.evaluate(th - eps), \
+            self.table.evaluate(th)
+        Q = lambda cc: -(cc[:, 3] + k * (cc[:, 4] - l0) * cc[:, 5]) / cc[:, 0]  # noqa: E731
+        return (Q(cp) - Q(cm)) / (2 * eps), -(cd * c[:, 6] + cr) / c[:, 0]
+
+    def max_rate(self, p) -> float:
+        """max |lambda| of the linearised stroke (1/s): what limits an explicit step."""
+        a, b = self._jacobians(p)
+        disc = np.sqrt((b * b + 4 * a).astype(complex))
+        return float(np.max(np.abs(np.r_[(b + disc) / 2, (b - disc) / 2])))
 
     def diagnose(self, status: str, p) -> str:
         """A one-line report of why a stroke failed and what to change."""
@@ -175,7 +216,12 @@ class Simulator:
                     "change the spring (spring_k, spring_rest_length)")
         if status in ("unstable", "non-finite", "left the tabulated range", "implicit solve failed"):
             h_ok = self.stable_step(p)
-            hint = f"use simulate.step <= {h_ok:.3g} s" if h_ok < h else "use a smaller simulate.step"
+            if h_ok >= h:  # linearly stable: the step is too coarse for the stroke itself
+                return (f"{m.name} at step {h:g} s cannot integrate this design ({status}): the "
+                        f"step is too coarse to resolve the stroke; use a simulate.step at least "
+                        f"10 times smaller (the default is {DEFAULT_STEP:g} s)")
+            h_ok = _round_down(0.9 * h_ok)  # a margin inside the stability boundary
+            hint = f"use simulate.step <= {h_ok:.3g} s"
             alt = "" if m.real_stability == math.inf else \
                 " or simulate.integrator = \"radau5\" (L-stable, for stiff damping)"
             return (f"{m.name} at step {h:g} s cannot integrate this design ({status}): its "
@@ -185,16 +231,7 @@ class Simulator:
 
     def stable_step(self, p) -> float:
         """Largest step at which the linearised stroke is stable (bisection on the step)."""
-        th = np.linspace(self.cfg.stroke.theta_closed, self.cfg.stroke.theta0, 41)
-        c = self.table.evaluate(th)
-        k, l0, cd, cr = p
-        M = c[:, 0]
-        # numerical d/dtheta of the static generalised force, and the damping rate
-        eps = 1e-6
-        cp, cm = self.table.evaluate(th + eps), self.table.evaluate(th - eps)
-        Q = lambda cc: -(cc[:, 3] + k * (cc[:, 4] - l0) * cc[:, 5]) / cc[:, 0]  # noqa: E731
-        f_th = (Q(cp) - Q(cm)) / (2 * eps)
-        f_v = -(cd * c[:, 6] + cr) / M
+        f_th, f_v = self._jacobians(p)
         Js = [np.array([[0.0, 1.0], [a, b]]) for a, b in zip(f_th, f_v)]
 
         def stable(h):  # numerically stable: no faster growth than the exact flow's

@@ -27,7 +27,9 @@ SPEC6 = {
     "design": {"spring_k": 0.0, "spring_rest_length": 0.05, "damper_c": 0.0,
                "rotary_damper_c": 0.0},
     "stroke": {"theta0_deg": 18.0, "theta_closed_deg": 0.0, "t_max": 5.0},
-    "simulate": {"integrator": "rk4", "step": 0.001},
+    # SPEC §6: "step = 0.001 # s; the default is chosen from the work-precision benchmark";
+    # the benchmark chose 0.002 s (BENCHMARKS.md), checked in test_default_step_meets_targets
+    "simulate": {"integrator": "rk4"},
     "optimise": {"closing_time_max": 1.0, "closing_time_min": 0.0, "holding_moment_min": 0.1,
                  "weight_impact": 1.0, "weight_peak_tip": 0.1, "spring_k": [0.0, 10000.0],
                  "spring_rest_length": [0.02, 0.12], "damper_c": [0.0, 5000.0]},
@@ -167,3 +169,18 @@ def test_toggle_inside_the_stroke_is_rejected():
     import re
     where = float(re.search(r"theta = (-?[0-9.]+) deg", msg).group(1))
     assert 10.0 <= where <= 60.0 and not closes(where)
+
+
+def test_default_step_meets_targets():
+    """The default step is the benchmark's choice: on a stiff corner of the design box it still
+    meets the simulation accuracy targets against the adaptive reference."""
+    import numpy as np
+    from softclose import LidModel, Reference, Simulator
+    cfg = default_config()
+    assert cfg.simulate.step == 0.002
+    model = LidModel(cfg)
+    p = np.array([1e4, 0.02, 5000.0, 0.0])
+    r, R = Simulator(cfg, model).run(p), Reference(model).simulate(p)
+    assert abs(r.closing_time - R["closing_time"]) <= 1e-7
+    assert abs(r.impact_theta_dot - R["impact_theta_dot"]) <= 1e-6
+    assert abs(r.peak_tip_speed - R["peak_tip_speed"]) <= 1e-6 * R["peak_tip_speed"]

@@ -181,16 +181,19 @@ def _true_peak(ref, p, t_lo, t_hi, n=400):
 @pytest.mark.parametrize("c_damp", [1e5, 1e6])
 def test_stiff_damper_default_integrator(cfg, model, stiff_reference, c_damp):
     p = np.array([0.0, 0.05, c_damp, 0.0])
-    s = Simulator(cfg, model)           # rk4, step 1e-3
+    s = Simulator(cfg, model)           # the default: rk4 at the default step
     r = s.run(p)
     _finite_or_none(r)
     RR = stiff_reference(c_damp)
     assert not RR["closed"]             # it creeps: t_max is too short to close
-    if r.ok:   # handled: agrees within its own error estimate
+    if r.ok:   # handled: agrees within its own error estimate, and says when it is stiff
         assert r.closed == RR["closed"]
         err = abs(r.peak_tip_speed - RR["peak_tip_speed"])
         assert err <= 3 * r.accuracy["peak_tip_speed"] + 1e-5 * RR["peak_tip_speed"]
-        assert r.peak_tip_speed == pytest.approx(RR["peak_tip_speed"], rel=1e-4)
+        if r.accuracy["step_times_max_rate"] > 1.0:
+            assert r.message and "stiff" in r.message and "radau5" in r.message
+        else:
+            assert r.peak_tip_speed == pytest.approx(RR["peak_tip_speed"], rel=1e-4)
     else:      # reported with the step it needs; that step works
         assert r.status in ("unstable", "non-finite", "left the tabulated range")
         assert "simulate.step <=" in r.message and "radau5" in r.message

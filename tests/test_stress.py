@@ -121,7 +121,7 @@ def test_random_valid_configs(k, l0, c, crank_oa, crank_bc, theta0, lid, integ, 
     _check_row(bench.StressCase("random", "random", "", overrides, "any"), row)
 
 
-# -- known core bugs (xfail, strict=False) -----------------------------------------------------
+# -- regressions: core bugs this survey found (all fixed) ------------------------------------
 def test_reference_peak_in_first_grid_intervals():
     """Regression (found by this survey, fixed in reference.py): d|v_T|/dt is NaN at rest, so a
     tip-speed peak in the first two grid intervals (c = 1e6 N s/m: at t = 2.3 ms) was not
@@ -133,11 +133,6 @@ def test_reference_peak_in_first_grid_intervals():
     assert abs(r["peak_tip_speed"] - fine.peak_tip_speed) <= 1e-8 * fine.peak_tip_speed
 
 
-@pytest.mark.xfail(strict=False, reason=(
-    "native.py/simulate.py: near a toggle the coefficient table's interpolation error is 11 % "
-    "(accuracy['table_rel_error'] = 0.114) but the stroke is reported as an ordinary 'closed' "
-    "result; it converges to impact_theta_dot -2.1175894 rad/s, the reference gives -2.1151750"
-    " (closing_time off by 6e-7 s > 1e-7 s)"))
 def test_near_toggle_result_is_accurate_or_flagged():
     geo = bench._geo(crank_bc=0.0925)
     cfg = default_config().replace(geometry=geo, stroke={"theta_closed_deg": -2.4})
@@ -171,11 +166,6 @@ def test_no_nan_in_batch_of_extreme_designs():
                                                         "impact_tip_speed", "peak_tip_speed"))
 
 
-@pytest.mark.xfail(strict=False, reason=(
-    "simulate.py diagnose/stable_step: the recommended step is the stability boundary itself, "
-    "printed with '.3g' (which can round up past it) and without a safety factor; for "
-    "rotary_damper_c = 1e3 it says 'use simulate.step <= 0.000117 s' and at 0.000117 s the "
-    "stroke is again reported unstable (0.99 x that step runs)"))
 def test_recommended_step_for_rotary_damper_works():
     cfg = default_config().replace(design={"rotary_damper_c": 1e3})
     sim = Simulator(cfg)
