@@ -98,9 +98,7 @@ def compare_linearisation(phi, link: LeverFourBar = LeverFourBar()) -> dict:
 def solve_error_limit(link: LeverFourBar = LeverFourBar(), measure: str = "relative_error",
                       level: float = 0.01, phi_max: float = np.radians(50.0)) -> float:
     """First input rotation (rad) at which the error `measure` reaches `level`, by bracketing on a
-    0.25 deg grid and Brent's method; phi_max if it never does."""
-    from scipy.optimize import brentq
-
+    0.25 deg grid and bisection; phi_max if it never does."""
     grid = np.arange(0.0, phi_max + 1e-12, np.radians(0.25))
     err = compare_linearisation(grid, link)[measure]
     above = np.nonzero(err >= level)[0]
@@ -110,4 +108,21 @@ def solve_error_limit(link: LeverFourBar = LeverFourBar(), measure: str = "relat
     if k == 0:
         return 0.0
     f = lambda ph: compare_linearisation(np.array([0.0, ph]), link)[measure][1] - level
-    return float(brentq(f, grid[k - 1], grid[k], xtol=1e-12))
+    return bisect_root(f, grid[k - 1], grid[k], xtol=1e-12)
+
+
+def bisect_root(f, a: float, b: float, xtol: float = 1e-12) -> float:
+    """Root of f on [a, b] (f(a), f(b) of opposite signs) by bisection to ``xtol``."""
+    fa = f(a)
+    if fa * f(b) > 0:
+        raise ValueError(f"no sign change of f on [{a}, {b}]")
+    while b - a > xtol:
+        m = 0.5 * (a + b)
+        fm = f(m)
+        if fm == 0:
+            return float(m)
+        if (fm > 0) == (fa > 0):
+            a, fa = m, fm
+        else:
+            b = m
+    return float(0.5 * (a + b))
