@@ -46,8 +46,11 @@ def plot_time_histories(res, path: Path, title: str = "Closing stroke") -> Path:
                        (res.closing_time, res.impact_theta_dot), xytext=(-10, 0),
                        textcoords="offset points", ha="right", va="center")
     i = int(np.argmax(tr["tip_speed"]))
-    ax[2].annotate(f"peak {res.peak_tip_speed:.3f} m/s", (tr["t"][i], tr["tip_speed"][i]),
-                   xytext=(-10, -14), textcoords="offset points", ha="right")
+    ax[2].plot([tr["t"][i]], [res.peak_tip_speed], "kv", ms=5)
+    late = tr["t"][i] > 0.8 * tr["t"][-1]  # a peak at the end is labelled on its left
+    ax[2].annotate(f"peak {res.peak_tip_speed:.3f} m/s", (tr["t"][i], res.peak_tip_speed),
+                   xytext=(-8 if late else 8, -2), textcoords="offset points",
+                   ha="right" if late else "left", va="top")
     fig.suptitle(f"{title} ({res.integrator}, step {res.step:g} s)")
     fig.savefig(path)
     plt.close(fig)
