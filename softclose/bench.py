@@ -569,88 +569,139 @@ def plot_work_precision(wp: WorkPrecision, path: Path) -> Path:
                         hd, = ax.plot(xx, yy, "D", color="gold", ms=11, mec="k", zorder=5,
                                       label=f"default: {m}, h = {r['step']:g} s")
                         handles.setdefault("default", hd)
-            ax.axhline(bound, color="gray", ls="-.", lw=1.0)
-            ax.text(0.98, bound, "target", color="gray", transform=ax.get_yaxis_transform(),
-                    va="bottom", ha="right", fontsize=8)
+            ht = ax.axhline(bound, color="gray", ls="-.", lw=1.0, label="accuracy target")
+            handles.setdefault("target", ht)
             if tf:
-                ax.axhspan(bottom, max(tf, bottom), color="0.88", zorder=0)
+                hb = ax.axhspan(bottom, max(tf, bottom), color="0.88", zorder=0,
+                                label="below the truth's own uncertainty")
+                handles.setdefault("floor", hb)
             ax.set_ylim(bottom=bottom / 2)
             ax.set_xlabel("run time per stroke (µs)")
             ax.set_ylabel(_LABEL[k])
             ax.set_title(f"{dname}: {k}", fontsize=10)
             ax.grid(True, which="major", alpha=0.3)
     fig.legend(list(handles.values()), [h.get_label() for h in handles.values()],
-               loc="lower center", ncol=4, fontsize=9, frameon=False)
+               loc="lower center", ncol=5, fontsize=10, frameon=False)
     fig.suptitle("Work precision of the closing stroke: error against run time per stroke "
-                 "(C kernel, median of repeats). Grey band: below the truth's own uncertainty",
-                 fontsize=11)
-    fig.tight_layout(rect=(0, 0.045, 1, 0.98))
+                 "(C kernel, one thread, median of repeats)", fontsize=12)
+    fig.tight_layout(rect=(0, 0.05, 1, 0.98))
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return path
 
 
 def plot_error_vs_step(wp: WorkPrecision, path: Path, metric: str = "impact_theta_dot") -> Path:
-    """Error against step with order guides, one panel per design."""
+    """Error against step, one panel per design (2 columns), with the fitted orders in each
+    panel's title; the default setting (diamond) and the seed's method (star) are marked,
+    the grey band is below the truth's own uncertainty."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     dnames = list(wp.truths)
-    fig, axes = plt.subplots(1, len(dnames), figsize=(4.6 * len(dnames), 4.2), squeeze=False)
-    for ax, dname in zip(axes[0], dnames):
+    ncol = 2 if len(dnames) > 1 else 1
+    nrow = math.ceil(len(dnames) / ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(6.2 * ncol, 4.4 * nrow + 0.8), squeeze=False)
+    handles = {}
+    bottom = 1e-14
+    short = {"rk4": "rk4", "euler_cromer": "E–C", "gauss4": "gauss4", "radau5": "radau5"}
+    for idx, dname in enumerate(dnames):
+        ax = axes[idx // ncol][idx % ncol]
+        orders = []
         for m in METHODS:
             rs = [r for r in wp.rows if r["design"] == dname and r["method"] == m]
             ok = [r for r in rs if r[f"err_{metric}"] is not None]
             bad = [r for r in rs if r["status"] not in ("closed", "not closed")]
+            o = wp.orders.get((dname, m, metric))
+            orders.append(f"{short.get(m, m)} {_fmt(o, '.2f')}")
             if ok:
-                o = wp.orders.get((dname, m, metric))
-                ax.loglog([r["step"] for r in ok], [max(r[f"err_{metric}"], 1e-16) for r in ok],
-                          "o-", color=_COLORS[m], ms=4,
-                          label=f"{m}: fitted order {_fmt(o, '.2f')} (stated {METHODS[m].order})")
+                lab = f"{m} (stated order {METHODS[m].order})"
+                h, = ax.loglog([r["step"] for r in ok],
+                               [max(r[f"err_{metric}"], bottom) for r in ok],
+                               "o-", color=_COLORS[m], ms=4, lw=1.4, label=lab)
+                handles.setdefault(lab, h)
+                for r in ok:
+                    yy = max(r[f"err_{metric}"], bottom)
+                    if r["seed"]:
+                        hs, = ax.plot(r["step"], yy, "*", color="C3", ms=16, mec="k",
+                                      zorder=5, label="seed: Euler–Cromer at 1 kHz")
+                        handles.setdefault("seed", hs)
+                    if (m, r["step"]) == (wp.default.get("method"), wp.default.get("step")):
+                        hd, = ax.plot(r["step"], yy, "D", color="gold", ms=11, mec="k",
+                                      zorder=5, label=f"default: {m}, h = {r['step']:g} s")
+                        handles.setdefault("default", hd)
             for r in bad:
-                ax.axvline(r["step"], color=_COLORS[m], ls=":", lw=0.8)
-        ax.axhline(TARGETS[metric][1], color="gray", ls=":", lw=1.2)
+                hv = ax.axvline(r["step"], color=_COLORS[m], ls=":", lw=0.8,
+                                label="unstable step")
+                handles.setdefault("unstable", hv)
+        kind, bound = TARGETS[metric]
+        ht = ax.axhline(bound, color="gray", ls="-.", lw=1.0, label="accuracy target")
+        handles.setdefault("target", ht)
+        tf = wp.truth_floor[dname].get(metric) or 0.0
+        if tf:
+            hb = ax.axhspan(bottom, max(tf, bottom), color="0.88", zorder=0,
+                            label="below the truth's own uncertainty")
+            handles.setdefault("floor", hb)
+        ax.set_ylim(bottom=bottom / 2)
         ax.set_xlabel("step h (s)")
         ax.set_ylabel(_LABEL[metric])
-        ax.set_title(dname, fontsize=10)
-        ax.legend(fontsize=7, loc="lower right")
-    fig.suptitle(f"Error of {metric} against the step (dotted verticals: unstable steps)",
-                 fontsize=11)
-    fig.tight_layout()
+        ax.set_title(f"{dname} — fitted order: " + ", ".join(orders), fontsize=10)
+        ax.grid(True, which="major", alpha=0.3)
+    for idx in range(len(dnames), nrow * ncol):
+        axes[idx // ncol][idx % ncol].set_visible(False)
+    fig.legend(list(handles.values()), [h.get_label() for h in handles.values()],
+               loc="lower center", ncol=4, fontsize=10, frameon=False)
+    fig.suptitle(f"Error of {metric} against the step (fitted order: slope over the "
+                 "asymptotic points; — where too few lie above the floor)", fontsize=12)
+    fig.tight_layout(rect=(0, 0.09 if nrow > 1 else 0.14, 1, 0.97))
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return path
 
 
-def plot_optimiser(rows: list, path: Path) -> Path | None:
+def plot_optimiser(rows: list, path: Path, default=(10, 4)) -> Path | None:
+    """Optimal-objective error against solve time, and the objective's discretisation error
+    against N x sub-steps; the default (nodes, sub-steps) is marked."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     ok = [r for r in rows if r.get("objective_error") is not None]
     if not ok:
         return None
-    fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
+    fig, ax = plt.subplots(1, 2, figsize=(13, 5.2))
+    # left: colour = sub-steps, marker = N (no labels to collide); right: lines per sub-steps
+    node_marks = dict(zip(sorted({r["nodes"] for r in ok}), "osD^vPX*"))
+    handles = {}
     for i, s in enumerate(sorted({r["substeps"] for r in ok})):
         rs = sorted([r for r in ok if r["substeps"] == s], key=lambda r: r["nodes"])
-        ax[0].loglog([r["solve_time"] for r in rs],
-                     [max(r["objective_error"], 1e-16) for r in rs], "o-", color=f"C{i}",
-                     label=f"{s} sub-steps")
+        hc, = ax[0].plot([], [], "-", color=f"C{i}", lw=6, label=f"{s} sub-steps")
+        handles.setdefault(f"s{s}", hc)
         for r in rs:
-            ax[0].annotate(f"N={r['nodes']}", (r["solve_time"], max(r["objective_error"], 1e-16)),
-                           fontsize=7, xytext=(3, 3), textcoords="offset points")
+            x, y = r["solve_time"], max(r["objective_error"], 1e-16)
+            ax[0].loglog(x, y, node_marks[r["nodes"]], color=f"C{i}", ms=8, mec="k", mew=0.6)
+            if (r["nodes"], r["substeps"]) == tuple(default):
+                for a, xx, yy in ((ax[0], x, y), (ax[1], r["nodes"] * r["substeps"],
+                                                  max(r["discretisation_error"], 1e-16))):
+                    hd, = a.plot(xx, yy, "o", ms=20, mfc="none", mec="gold", mew=3, zorder=6,
+                                 label=f"default: N = {default[0]}, {default[1]} sub-steps")
+                handles.setdefault("default", hd)
         ax[1].loglog([r["nodes"] * r["substeps"] for r in rs],
-                     [max(r["discretisation_error"], 1e-16) for r in rs], "o-", color=f"C{i}",
-                     label=f"{s} sub-steps")
-    ax[0].set_xlabel("solve time (s)")
+                     [max(r["discretisation_error"], 1e-16) for r in rs], "o-",
+                     color=f"C{i}", ms=11 - 3 * i, lw=2.5 - 0.6 * i)
+    for n, mk in node_marks.items():
+        hn, = ax[0].plot([], [], mk, color="0.6", mec="k", ms=8, label=f"N = {n}")
+        handles.setdefault(f"n{n}", hn)
+    ax[0].set_xlabel("Ipopt solve time (s), one cold solve")
     ax[0].set_ylabel("|J_N − J*|")
     ax[0].set_title("optimal objective error against solve time")
-    ax[1].set_xlabel("integrator steps over the horizon (N × sub-steps)")
+    ax[1].set_xlabel("RK4 steps over the stroke (N × sub-steps)")
     ax[1].set_ylabel("|J_N − J_reference(design_N)|")
-    ax[1].set_title("discretisation error of the objective at the optimum")
+    ax[1].set_title("discretisation error of the objective at the optimum\n"
+                    "(depends on N × sub-steps only: the lines coincide)", fontsize=11)
     for a in ax:
-        a.legend(fontsize=8)
         a.grid(True, alpha=0.3)
-    fig.tight_layout()
+    fig.legend(list(handles.values()), [h.get_label() for h in handles.values()],
+               loc="lower center", ncol=len(handles), fontsize=10, frameon=False)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return path
@@ -696,7 +747,8 @@ def run(cfg: Config, quick: bool = False, out: Path | None = None, log=None,
         files.append(plot_work_precision(wp, out / "work_precision.png"))
         files.append(plot_error_vs_step(wp, out / "error_vs_step.png"))
         if opt:
-            f = plot_optimiser(opt, out / "optimiser.png")
+            f = plot_optimiser(opt, out / "optimiser.png",
+                               default=(cfg.optimise.nodes, cfg.optimise.substeps))
             if f:
                 files.append(f)
         js = out / "bench.json"
@@ -784,23 +836,25 @@ def _geo(**g):
 
 def stress_cases(fast: bool = False) -> list[StressCase]:
     """Every stress case of the survey (``fast``: a representative subset for the tests)."""
+    from .config import _SCHEMA
     S = StressCase
     cases = []
+    h0 = f"{_SCHEMA['simulate']['step'][1] * 1e3:g} ms"  # the default step, as the cases use it
     # damping from 0 to 1e6 N s/m, default integrator and step
     for c in ([0.0, 1e3, 1e6] if fast else [0.0, 1e1, 1e2, 1e3, 1e4, 1e5, 3e5, 1e6]):
-        cases.append(S(f"damper_c={c:g}", "damping", f"dashpot c = {c:g} N s/m, rk4 at 1 ms",
+        cases.append(S(f"damper_c={c:g}", "damping", f"dashpot c = {c:g} N s/m, rk4 at {h0}",
                        {"design": {"damper_c": c}},
                        "answer" if c <= 1e5 else ("report" if c >= 1e6 else "any")))
     for integ in ("radau5",) if fast else ("radau5", "gauss4"):
-        cases.append(S(f"damper_c=1e6 {integ}", "damping", f"dashpot c = 1e6 N s/m, {integ} at 1 ms",
+        cases.append(S(f"damper_c=1e6 {integ}", "damping", f"dashpot c = 1e6 N s/m, {integ} at {h0}",
                        {"design": {"damper_c": 1e6}, "simulate": {"integrator": integ}}))
-    cases.append(S("rotary_damper_c=1e3", "damping", "rotary damper 1e3 N m s/rad, rk4 at 1 ms",
+    cases.append(S("rotary_damper_c=1e3", "damping", f"rotary damper 1e3 N m s/rad, rk4 at {h0}",
                    {"design": {"rotary_damper_c": 1e3}}, "report"))
     # spring stiffness up to 1e6 N/m
     for k in ([1e4, 1e6] if fast else [1e3, 1e4, 1e5, 1e6]):
         cases.append(S(f"spring_k={k:g}", "spring", f"spring k = {k:g} N/m, l0 = 0.05 m, "
-                       "no damper, rk4 at 1 ms", {"design": {"spring_k": k}}, "any"))
-    cases.append(S("spring_k=1e6 c=1e3", "spring", "k = 1e6 N/m with c = 1e3 N s/m, rk4 at 1 ms",
+                       f"no damper, rk4 at {h0}", {"design": {"spring_k": k}}, "any"))
+    cases.append(S("spring_k=1e6 c=1e3", "spring", f"k = 1e6 N/m with c = 1e3 N s/m, rk4 at {h0}",
                    {"design": {"spring_k": 1e6, "damper_c": 1e3}}, "any"))
     cases.append(S("spring_k=1e6 gauss4 0.1ms", "spring", "k = 1e6 N/m, gauss4 at 0.1 ms",
                    {"design": {"spring_k": 1e6}, "simulate": {"integrator": "gauss4",
@@ -823,7 +877,7 @@ def stress_cases(fast: bool = False) -> list[StressCase]:
     for integ in (["rk4"] if fast else ["rk4", "gauss4", "euler_cromer", "radau5"]):
         cases.append(S(f"undamped {t_long:g} s {integ}", "long run",
                        f"k = 2000 N/m, l0 = 0.1 m, no damping: oscillates {t_long:g} s; {integ} "
-                       "at 1 ms; energy drift reported",
+                       f"at {h0}; energy drift reported",
                        {"design": {"spring_k": 2000.0, "spring_rest_length": 0.1},
                         "stroke": {"t_max": t_long}, "simulate": {"integrator": integ}}))
     # geometry near a toggle position

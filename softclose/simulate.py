@@ -31,6 +31,10 @@ METRIC_KEYS = ("closed", "closing_time", "impact_theta_dot", "impact_tip_speed",
 TABLE_TOL = 1e-7
 #: h |lambda|max above which an explicit method is outside its asymptotic regime
 STIFF_H_LAMBDA = 1.0
+#: accuracy targets (SPEC §4 metrics vs the converged answer): absolute, or relative for RELATIVE
+TARGETS = {"closing_time": 1e-7, "impact_theta_dot": 1e-6, "impact_tip_speed": 1e-6,
+           "peak_tip_speed": 1e-6}
+RELATIVE = ("impact_tip_speed", "peak_tip_speed")
 #: metrics whose fixed-step error is estimated
 ERROR_KEYS = ("closing_time", "impact_theta_dot", "impact_tip_speed", "peak_tip_speed")
 
@@ -187,6 +191,17 @@ class Simulator:
             res.message = (f"warning: stiff for {self.method.name} at this step "
                            f"(h |lambda|max = {h_lam:.2g}): the error estimate may be too small; "
                            "prefer simulate.integrator = \"radau5\" or a smaller simulate.step")
+            return est
+        over = [k for k in ERROR_KEYS if est[k] is not None
+                and est[k] > TARGETS[k] * (abs(getattr(res, k)) if k in RELATIVE else 1.0)]
+        if over:
+            # error ~ h^order: the step that brings the worst metric within its target
+            worst = max(est[k] / (TARGETS[k] * (abs(getattr(res, k)) if k in RELATIVE else 1.0))
+                        for k in over)
+            h_new = _round_down(0.8 * self.step * worst ** (-1.0 / self.method.order))
+            res.message = (f"warning: the estimated error of {', '.join(over)} exceeds the "
+                           f"accuracy targets at simulate.step = {self.step:g} s; for the targets "
+                           f"use simulate.step <= {h_new:.3g} s")
         return est
 
     def _jacobians(self, p):
