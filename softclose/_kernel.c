@@ -43,15 +43,23 @@ typedef struct {
 
 typedef struct { double k, l0, c, cr; } Par;
 
+/* the table cell holding th and the local variable s in [0, 1]; NULL outside the table */
+static inline const double *cell(const Table *T, double th, double *s)
+{
+    double x = (th - T->lo) * T->inv_h;
+    if (!(x >= 0.0 && x <= (double)T->ncell)) return NULL;
+    int i = (int)x;
+    if (i >= T->ncell) i = T->ncell - 1;
+    *s = x - i;
+    return T->cc + (size_t)i * NC * 4;
+}
+
 /* coefficient values v[NC] and theta-derivatives dv[NC] (dv may be NULL) */
 static inline int tab_eval(const Table *T, double th, double *v, double *dv)
 {
-    double x = (th - T->lo) * T->inv_h;
-    if (!(x >= 0.0 && x <= (double)T->ncell)) return 1;
-    int i = (int)x;
-    if (i >= T->ncell) i = T->ncell - 1;
-    double s = x - i;
-    const double *q = T->cc + (size_t)i * NC * 4;
+    double s;
+    const double *q = cell(T, th, &s);
+    if (!q) return 1;
     for (int j = 0; j < NC; j++, q += 4) {
         v[j] = q[0] + s * (q[1] + s * (q[2] + s * q[3]));
         if (dv) dv[j] = (q[1] + s * (2.0 * q[2] + s * 3.0 * q[3])) * T->inv_h;
@@ -62,12 +70,9 @@ static inline int tab_eval(const Table *T, double th, double *v, double *dv)
 /* the hot path: theta'' only (the six coefficients it needs, no derivatives) */
 static inline int rhs_fast(const Table *T, const Par *p, double th, double thd, double *thdd)
 {
-    double x = (th - T->lo) * T->inv_h;
-    if (!(x >= 0.0 && x <= (double)T->ncell)) return 1;
-    int i = (int)x;
-    if (i >= T->ncell) i = T->ncell - 1;
-    double s = x - i;
-    const double *q = T->cc + (size_t)i * NC * 4;
+    double s;
+    const double *q = cell(T, th, &s);
+    if (!q) return 1;
 #define CUB(j) (q[4 * (j)] + s * (q[4 * (j) + 1] + s * (q[4 * (j) + 2] + s * q[4 * (j) + 3])))
     double M = CUB(C_M), dM = CUB(C_DM), dVg = CUB(C_DVG), l = CUB(C_L), dl = CUB(C_DL),
            dd = CUB(C_DD);
@@ -291,12 +296,9 @@ typedef struct {
 static inline int node_eval(const Table *T, const Par *p, double th, double thd,
                             double *a, double *g, double *dg, double *E)
 {
-    double x = (th - T->lo) * T->inv_h;
-    if (!(x >= 0.0 && x <= (double)T->ncell)) return 1;
-    int i = (int)x;
-    if (i >= T->ncell) i = T->ncell - 1;
-    double s = x - i;
-    const double *q = T->cc + (size_t)i * NC * 4;
+    double s;
+    const double *q = cell(T, th, &s);
+    if (!q) return 1;
 #define CUB(j) (q[4 * (j)] + s * (q[4 * (j) + 1] + s * (q[4 * (j) + 2] + s * q[4 * (j) + 3])))
     double M = CUB(C_M), dM = CUB(C_DM), Vg = CUB(C_VG), dVg = CUB(C_DVG), l = CUB(C_L),
            dl = CUB(C_DL), dd = CUB(C_DD), tau = CUB(C_TAU);
