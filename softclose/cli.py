@@ -102,18 +102,11 @@ def _state(cfg, args) -> Outcome:
         raise ConfigError(f"--theta-dot: expected a finite rate, got {args.theta_dot}")
     model = LidModel(cfg)
     theta = math.radians(args.theta_deg)
-    lo, hi = model.theta_range
-    u = abs(float(model._u(theta)))
-    if not u < 1:
-        raise ConfigError(f"--theta-deg: the loop cannot close at {args.theta_deg} deg "
-                          f"with this geometry")
-    if not lo <= theta <= hi:
-        # beyond the checked stroke range: make sure no toggle lies between
-        import numpy as np
-        grid = np.linspace(min(theta, lo), max(theta, hi), 2001)
-        if np.any(~(np.abs(np.asarray(model._u.map(len(grid))(grid)).ravel()) < 0.9999)):
-            raise ConfigError(f"--theta-deg: {args.theta_deg} deg lies beyond a toggle position "
-                              "of this branch")
+    th_release = cfg.stroke.theta0
+    toggle = model.toggle_between(th_release, theta)
+    if toggle is not None:  # the branch followed from the stroke does not reach theta
+        raise ConfigError(f"--theta-deg: the loop cannot close at {args.theta_deg} deg on this "
+                          f"branch (toggle position at {math.degrees(toggle):.3f} deg)")
     s = model.state(theta, args.theta_dot)
     lines = [f"theta      = {args.theta_deg:.6g} deg   theta' = {s['theta_dot']:.6g} rad/s",
              f"theta''    = {s['theta_ddot']:.8g} rad/s^2",

@@ -79,15 +79,10 @@ class LidModel:
         st = self.cfg.stroke
         th_a = math.radians(self.geo.assembly[0])
         lo, hi = min(th_a, st.theta_closed), max(th_a, st.theta0)
-        grid = np.linspace(lo, hi, max(400, int((hi - lo) / math.radians(0.05)) + 1))
-        u = np.abs(np.asarray(self._u.map(len(grid))(grid)).ravel())
-        bad = np.nonzero(~(u < TOGGLE_U))[0]
-        if len(bad):  # name the toggle met first when moving away from the assembly
-            first = bad[np.argmin(np.abs(grid[bad] - th_a))]
-            th_bad = math.degrees(grid[first])
-            bad = [first]
-            where = ("at stroke.theta0_deg" if abs(grid[bad[0]] - st.theta0) < 1e-9 else
-                     f"at theta = {th_bad:.3f} deg")
+        th_bad, u = self._scan(lo, hi, th_a)
+        if th_bad is not None:  # name the toggle met first when moving away from the assembly
+            where = ("at stroke.theta0_deg" if abs(th_bad - st.theta0) < 1e-9 else
+                     f"at theta = {math.degrees(th_bad):.3f} deg")
             raise ConfigError(
                 f"geometry: the loop reaches a toggle position or cannot close {where}, which "
                 f"lies between the assembly (theta = {self.geo.assembly[0]} deg) and the stroke "
@@ -107,6 +102,20 @@ class LidModel:
             ext.append(end + sgn * m)
         self.max_abs_u = float(u.max())
         return ext[0], ext[1]
+
+    def _scan(self, lo: float, hi: float, start: float):
+        """Sample |u| on [lo, hi]: (the toggle angle nearest ``start`` or None, |u| samples)."""
+        grid = np.linspace(lo, hi, max(400, int((hi - lo) / math.radians(0.05)) + 1))
+        u = np.abs(np.asarray(self._u.map(len(grid))(grid)).ravel())
+        bad = np.nonzero(~(u < TOGGLE_U))[0]
+        if not len(bad):
+            return None, u
+        return float(grid[bad[np.argmin(np.abs(grid[bad] - start))]]), u
+
+    def toggle_between(self, a: float, b: float) -> float | None:
+        """The toggle position (or angle where the loop cannot close) met first when the
+        lid moves on this branch from ``a`` towards ``b`` (rad); None if there is none."""
+        return self._scan(min(a, b), max(a, b), a)[0]
 
     @property
     def near_toggle(self) -> bool:
