@@ -11,12 +11,14 @@ by ``optimise``'s verification and by ``bench``.
 from __future__ import annotations
 
 import math
-from functools import cached_property
 
 import casadi as ca
 import numpy as np
 
+from .dynamics import COEFFS
 from .errors import NumericalError
+
+_L = COEFFS.index("l")  # spring length among the model's coefficients
 
 
 class Reference:
@@ -38,13 +40,6 @@ class Reference:
         speed = ca.norm_2(v_T)
         dspeed = ca.if_else(speed > 0, ca.dot(v_T, a_T) / speed, ca.norm_2(a_T))
         self._speed = ca.Function("speed", [x, p], [speed, dspeed])
-
-    @cached_property
-    def _spring_length(self):
-        th = ca.SX.sym("theta")
-        from .dynamics import coefficients
-        cf = coefficients(th, self.model.geo, self.model.mass, self.model.sigma)
-        return ca.Function("l", [th], [cf["l"]])
 
     def flow(self, x0, p, tau):
         """State after integrating for ``tau`` seconds from ``x0``."""
@@ -141,12 +136,12 @@ class Reference:
 
     def _l_extremes(self, a, b):
         grid = np.linspace(a, b, 801)
-        lv = np.asarray(self._spring_length.map(len(grid))(grid)).ravel()
+        lv = np.asarray(self.model.coeffs.map(len(grid))(grid)[0])[_L]
         out = []
         for sgn in (1, -1):
             i = int(np.argmin(sgn * lv))
             lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, len(grid) - 1)]
-            f = lambda th: sgn * float(self._spring_length(th))  # noqa: E731
+            f = lambda th: sgn * float(self.model.coeffs(th)[0][_L])  # noqa: E731
             gr = (math.sqrt(5) - 1) / 2  # golden section on the bracket
             c, d = hi - gr * (hi - lo), lo + gr * (hi - lo)
             for _ in range(80):
