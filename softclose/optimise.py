@@ -190,17 +190,19 @@ class ShootingNLP:
             t, dt = tau(x[0])
             return -t * x[1], -h * (dt * x[1] * x[1] + t * xdot[1])
 
+        def rk4(x, fx, cq_):  # one RK4 sub-step of length h; fx = f(x) (first stage reused)
+            k2 = f_c(x + 0.5 * h * fx, cq_)
+            k3 = f_c(x + 0.5 * h * k2, cq_)
+            k4 = f_c(x + h * k3, cq_)
+            return x + h / 6 * (fx + 2 * k2 + 2 * k3 + k4)
+
         if M <= UNROLL_MAX:  # unrolled in SX (cheapest to evaluate)
             x = x0
             fx = f_c(x, cq)
             va, ma = speed(x, fx)
             ths, thds, spd, peak = [], [], [], []
             for j in range(M):
-                k1 = fx
-                k2 = f_c(x + 0.5 * h * k1, cq)
-                k3 = f_c(x + 0.5 * h * k2, cq)
-                k4 = f_c(x + h * k3, cq)
-                x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+                x = rk4(x, fx, cq)
                 fx = f_c(x, cq)
                 vb, mb = speed(x, fx)
                 if j < M - 1:
@@ -217,10 +219,7 @@ class ShootingNLP:
         else:  # one SX sub-step, accumulated M times (build time independent of M)
             a, cqs = ca.SX.sym("a", 6), ca.SX.sym("cq", 2 * nb)   # a = (x, x', v, h v')
             x, fx, va, ma = a[0:2], a[2:4], a[4], a[5]
-            k2 = f_c(x + 0.5 * h * fx, cqs)
-            k3 = f_c(x + 0.5 * h * k2, cqs)
-            k4 = f_c(x + h * k3, cqs)
-            x1 = x + h / 6 * (fx + 2 * k2 + 2 * k3 + k4)
+            x1 = rk4(x, fx, cqs)
             fx1 = f_c(x1, cqs)
             vb, mb = speed(x1, fx1)
             step = ca.Function("substep", [a, cqs, h],
