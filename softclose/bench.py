@@ -516,6 +516,17 @@ _LABEL = {"closing_time": "|Δ closing_time| (s)", "impact_theta_dot":
 FIG_METRICS = ("closing_time", "impact_theta_dot", "peak_tip_speed")
 
 
+
+def _mark_target_and_floor(ax, bound, truth_floor, bottom, handles):
+    """The accuracy target line and the band below the truth's own uncertainty (shared legend)."""
+    handles.setdefault("target", ax.axhline(bound, color="gray", ls="-.", lw=1.0,
+                                            label="accuracy target"))
+    if truth_floor:
+        handles.setdefault("floor", ax.axhspan(bottom, max(truth_floor, bottom), color="0.88",
+                                               zorder=0,
+                                               label="below the truth's own uncertainty"))
+    ax.set_ylim(bottom=bottom / 2)
+
 def plot_work_precision(wp: WorkPrecision, path: Path) -> Path:
     """Error against run time per stroke, log-log, one line per method; rows = designs.
 
@@ -569,13 +580,7 @@ def plot_work_precision(wp: WorkPrecision, path: Path) -> Path:
                         hd, = ax.plot(xx, yy, "D", color="gold", ms=11, mec="k", zorder=5,
                                       label=f"default: {m}, h = {r['step']:g} s")
                         handles.setdefault("default", hd)
-            ht = ax.axhline(bound, color="gray", ls="-.", lw=1.0, label="accuracy target")
-            handles.setdefault("target", ht)
-            if tf:
-                hb = ax.axhspan(bottom, max(tf, bottom), color="0.88", zorder=0,
-                                label="below the truth's own uncertainty")
-                handles.setdefault("floor", hb)
-            ax.set_ylim(bottom=bottom / 2)
+            _mark_target_and_floor(ax, bound, tf, bottom, handles)
             ax.set_xlabel("run time per stroke (µs)")
             ax.set_ylabel(_LABEL[k])
             ax.set_title(f"{dname}: {k}", fontsize=10)
@@ -634,14 +639,8 @@ def plot_error_vs_step(wp: WorkPrecision, path: Path, metric: str = "impact_thet
                                 label="unstable step")
                 handles.setdefault("unstable", hv)
         kind, bound = TARGETS[metric]
-        ht = ax.axhline(bound, color="gray", ls="-.", lw=1.0, label="accuracy target")
-        handles.setdefault("target", ht)
         tf = wp.truth_floor[dname].get(metric) or 0.0
-        if tf:
-            hb = ax.axhspan(bottom, max(tf, bottom), color="0.88", zorder=0,
-                            label="below the truth's own uncertainty")
-            handles.setdefault("floor", hb)
-        ax.set_ylim(bottom=bottom / 2)
+        _mark_target_and_floor(ax, bound, tf, bottom, handles)
         ax.set_xlabel("step h (s)")
         ax.set_ylabel(_LABEL[metric])
         ax.set_title(f"{dname} — fitted order: " + ", ".join(orders), fontsize=10)
