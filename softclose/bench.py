@@ -772,7 +772,7 @@ def _jsonable(x):
 
 def command(cfg: Config, args):
     """``softclose bench [--out DIR] [--json] [--quick]``."""
-    from .cli import Outcome
+    from .cli.common import Outcome
     quiet = getattr(args, "json", False)
     log = (lambda *a: None) if quiet else (lambda *a: print(*a, file=sys.stderr, flush=True))
     out = Path(args.out) if getattr(args, "out", None) else None
@@ -916,7 +916,7 @@ KNOWN_BUGS: dict[str, str] = {}  # stress cases with a known core defect (none o
 def _confirm(res, ref: dict) -> tuple[bool, dict, dict]:
     """Does the reference confirm the fixed-step stroke? Each metric must lie within the
     accuracy target, or within 4 x the stroke's own error estimate, of the reference."""
-    if bool(res.closed) != bool(ref["closed"]):
+    if bool(res.closed) != bool(ref.closed):
         return False, {}, {}
     err, allowed = {}, {}
     keys = list(TARGETS) + ["min_spring_length", "max_spring_length"]
@@ -990,19 +990,19 @@ def run_stress_case(case: StressCase, ref_tol: float = 1e-12, rerun: bool = True
             ref = Reference(model, ref_tol).simulate(p)
             ok, err, allowed = _confirm(res, ref)
             row["max_err_ratio"] = max((err[k] / allowed[k] for k in err), default=0.0)
-            row["ref_closed"] = ref["closed"]
+            row["ref_closed"] = ref.closed
             row["closing_time"] = res.closing_time
             row["impact_theta_dot"] = res.impact_theta_dot
-            row["ref_closing_time"] = ref["closing_time"]
-            row["ref_impact_theta_dot"] = ref["impact_theta_dot"]
+            row["ref_closing_time"] = ref.closing_time
+            row["ref_impact_theta_dot"] = ref.impact_theta_dot
             row["peak_tip_speed"] = res.peak_tip_speed
-            row["ref_peak_tip_speed"] = ref["peak_tip_speed"]
+            row["ref_peak_tip_speed"] = ref.peak_tip_speed
             row["outcome"] = "confirmed" if ok else "MISMATCH"
             if not ok:
                 worst = max(err, key=lambda k: err[k] / allowed[k]) if err else "closed"
                 row["message"] = (f"{worst}: fixed step {getattr(res, worst)} vs reference "
                                   f"{ref.get(worst)}" if err else
-                                  f"closed {res.closed} vs reference {ref['closed']}")
+                                  f"closed {res.closed} vs reference {ref.closed}")
     except NumericalError as exc:
         row.update(outcome="reported", message=str(exc))
     except Exception as exc:

@@ -587,7 +587,7 @@ def verify_design(cfg: Config, design: dict, metrics: dict | None = None,
         ref = chk.reference.simulate(p)
     except NumericalError as exc:
         return {"ok": False, "error": str(exc), "method": "CVODES"}
-    ver = {k: _py(ref.get(k)) for k in METRIC_KEYS}
+    ver = {k: _py(getattr(ref, k)) for k in METRIC_KEYS}
     J = objective_of(cfg, ver["impact_theta_dot"], ver["peak_tip_speed"])
     ver["objective"] = J
     if metrics is not None:
@@ -611,7 +611,7 @@ def verify_design(cfg: Config, design: dict, metrics: dict | None = None,
     hm = ver["holding_moment"]
     cons["holding_moment_min"] = {"value": hm, "bound": o.holding_moment_min,
                                   "ok": hm >= o.holding_moment_min - CONSTRAINT_TOL}
-    th_min = float(ref.get("theta_min", st.theta_closed))
+    th_min = float(ref.theta_min)
     cons["theta_above_closed"] = {"value": th_min, "bound": st.theta_closed,
                                   "ok": th_min >= st.theta_closed - 1e-12}
     ver["constraints"] = cons
@@ -1211,7 +1211,7 @@ def format_result(res: OptimiseResult) -> str:
 
 def command(cfg: Config, args):
     """``softclose optimise [--json] [--out DIR]``: exit code 0 verified optimum, 3 otherwise."""
-    from .cli import Outcome
+    from .cli.common import Outcome
     from .errors import SoftcloseError
     try:
         res = optimise(cfg)
@@ -1235,13 +1235,13 @@ def command(cfg: Config, args):
 
 def write_outputs(cfg: Config, res: OptimiseResult, out: Path) -> list[Path]:
     """The optimum's stroke (trajectory CSV, figures) and ``optimise.json`` in ``out``."""
-    from .plots import write_stroke_outputs
+    from .cli.files import write_stroke_outputs
     d = res.design
     cfg_opt = cfg.with_design(spring_k=d["spring_k"], spring_rest_length=d["spring_rest_length"],
                               damper_c=d["damper_c"])
     sim = Simulator(cfg_opt)          # its own model: carries the optimal design
     stroke = sim.run(trajectory=True)
-    files = write_stroke_outputs(sim, stroke, out, stem="optimum")
+    files = write_stroke_outputs(sim.model, stroke, out, stem="optimum")
     path = out / "optimise.json"
     path.write_text(json.dumps(res.to_json(), indent=1))
     return [path, *files]

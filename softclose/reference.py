@@ -17,6 +17,7 @@ import numpy as np
 
 from .dynamics import COEFFS
 from .errors import NumericalError
+from .stroke import StrokeResult, StrokeStatus
 
 _L = COEFFS.index("l")  # spring length among the model's coefficients
 
@@ -71,8 +72,13 @@ class Reference:
                 side = 1
         return 0.5 * (lo + hi)
 
-    def simulate(self, p=None) -> dict:
-        """SPEC §4 metrics of one stroke (plus ``theta_min``, ``theta_max``), adaptively."""
+    def simulate(self, p=None) -> StrokeResult:
+        """The metrics of one stroke (plus ``theta_min``, ``theta_max``), adaptively.
+
+        Returns the same :class:`~softclose.stroke.StrokeResult` as the fixed-step
+        simulator, with ``method`` "cvodes" and ``tolerance`` the CVODES tolerance. A failure
+        of CVODES raises :class:`~softclose.errors.NumericalError`.
+        """
         m, st = self.model, self.model.cfg.stroke
         p = m.params() if p is None else np.asarray(p, float)
         thc, t_max, dt = st.theta_closed, st.t_max, self.grid_step
@@ -126,13 +132,15 @@ class Reference:
             prev = (t, x, g)
             t, x = t + h, x1
         lmin, lmax = self._l_extremes(th_min, th_max)
-        res = {"closed": closed, "closing_time": None, "impact_theta_dot": None,
-               "impact_tip_speed": None}
-        res.update(out)
-        res.update({"peak_tip_speed": peak, "min_spring_length": lmin,
-                    "max_spring_length": lmax, "holding_moment": m.holding_moment(p),
-                    "theta_min": th_min, "theta_max": th_max})
-        return res
+        return StrokeResult(
+            closed=closed, closing_time=out.get("closing_time"),
+            impact_theta_dot=out.get("impact_theta_dot"),
+            impact_tip_speed=out.get("impact_tip_speed"), peak_tip_speed=float(peak),
+            min_spring_length=float(lmin), max_spring_length=float(lmax),
+            holding_moment=m.holding_moment(p),
+            status=StrokeStatus.CLOSED if closed else StrokeStatus.NOT_CLOSED,
+            method="cvodes", tolerance=self.tol, theta_min=float(th_min),
+            theta_max=float(th_max))
 
     def _l_extremes(self, a, b):
         grid = np.linspace(a, b, 801)

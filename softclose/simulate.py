@@ -14,7 +14,7 @@ is reported with the step it would need -- never as a NaN.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import replace
 
 import numpy as np
 
@@ -23,48 +23,14 @@ from .config import Config, default_config
 from .errors import NumericalError
 from .integrators import Method, get_method
 from .model import LidModel
+from .problem import ERROR_KEYS, target
+from .stroke import StrokeResult, StrokeStatus, none_if_nan
 
 DEFAULT_STEP = default_config().simulate.step
-METRIC_KEYS = ("closed", "closing_time", "impact_theta_dot", "impact_tip_speed",
-               "peak_tip_speed", "min_spring_length", "max_spring_length", "holding_moment")
 #: largest relative interpolation error of the coefficient table that is accepted
 TABLE_TOL = 1e-7
 #: h |lambda|max above which an explicit method is outside its asymptotic regime
 STIFF_H_LAMBDA = 1.0
-#: accuracy targets (SPEC §4 metrics vs the converged answer): absolute, or relative for RELATIVE
-TARGETS = {"closing_time": 1e-7, "impact_theta_dot": 1e-6, "impact_tip_speed": 1e-6,
-           "peak_tip_speed": 1e-6}
-RELATIVE = ("impact_tip_speed", "peak_tip_speed")
-#: metrics whose fixed-step error is estimated
-ERROR_KEYS = ("closing_time", "impact_theta_dot", "impact_tip_speed", "peak_tip_speed")
-
-
-@dataclass
-class StrokeResult:
-    """One stroke. ``ok`` is False when the method could not integrate it (see ``message``)."""
-
-    closed: bool
-    closing_time: float | None
-    impact_theta_dot: float | None
-    impact_tip_speed: float | None
-    peak_tip_speed: float | None
-    min_spring_length: float | None
-    max_spring_length: float | None
-    holding_moment: float
-    status: str
-    integrator: str
-    step: float
-    steps: int
-    message: str | None = None
-    accuracy: dict | None = None
-    trajectory: dict | None = field(default=None, repr=False)
-
-    @property
-    def ok(self) -> bool:
-        return self.status in ("closed", "not closed")
-
-    def metrics(self) -> dict:
-        return {k: getattr(self, k) for k in METRIC_KEYS}
 
 
 def amplification(method: Method, hJ: np.ndarray) -> np.ndarray:
@@ -152,28 +118,37 @@ class Simulator:
                                      st.theta_closed, design[None, :], threads=1)[0]
         res = self._result(out, p)
         if res.ok and estimate_error:
-            res.accuracy = self._error_estimate(res, p)
+            accuracy, message = self._error_estimate(res, p)
+            res = replace(res, accuracy=accuracy, message=message)
         if trajectory and res.ok:
-            res.trajectory = self.derive_trajectory(traj, p)
+            res = replace(res, trajectory=self.derive_trajectory(traj, p))
         return res
 
     def _result(self, out, p) -> StrokeResult:
-        status = native.STATUS[int(out[0])]
-        closed = status == "closed"
-        f = lambda i: None if not math.isfinite(out[i]) else float(out[i])  # noqa: E731
-        res = StrokeResult(
-            closed=closed, closing_time=f(1) if closed else None,
-            impact_theta_dot=f(2) if closed else None, impact_tip_speed=f(3) if closed else None,
-            peak_tip_speed=f(4), min_spring_length=f(5), max_spring_length=f(6),
+        status = StrokeStatus(int(out[0]))
+        closed = status is StrokeStatus.CLOSED
+        col = {name: none_if_nan(out[i]) for i, name in enumerate(native.OUT_FIELDS)}
+        ok = status.ok
+        reason = None
+        if status is StrokeStatus.NOT_CLOSED and hasattr(native, "not_closed_reasons"):
+            reason = str(native.not_closed_reasons(np.asarray(out)[None, :])[0]) or None
+        return StrokeResult(
+            closed=closed,
+            closing_time=col["closing_time"] if closed else None,
+            impact_theta_dot=col["impact_theta_dot"] if closed else None,
+            impact_tip_speed=col["impact_tip_speed"] if closed else None,
+            peak_tip_speed=col["peak_tip_speed"] if ok else None,
+            min_spring_length=col["min_spring_length"] if ok else None,
+            max_spring_length=col["max_spring_length"] if ok else None,
             holding_moment=self.model.holding_moment(p), status=status,
-            integrator=self.method.name, step=self.step, steps=int(out[7]))
-        if not res.ok:
-            res.peak_tip_speed = res.min_spring_length = res.max_spring_length = None
-            res.message = self.diagnose(status, p)
-        return res
+            method=self.method.name, step=self.step, steps=int(out[7]),
+            message=None if ok else self.diagnose(status, p), reason=reason,
+            theta_min=col["theta_min"] if ok else None, theta_max=col["theta_max"] if ok else None,
+            theta_dot_max=col["theta_dot_max"] if ok else None)
 
-    def _error_estimate(self, res: StrokeResult, p) -> dict:
-        """|metric(h) - converged| estimated from the stroke at h/2 (Richardson)."""
+    def _error_estimate(self, res: StrokeResult, p) -> tuple[dict, str | None]:
+        """|metric(h) - converged| estimated from the stroke at h/2 (Richardson), and a
+        warning when the estimate exceeds the accuracy targets or the design is stiff."""
         half = Simulator.__new__(Simulator)
         half.__dict__.update(self.__dict__)
         half.step = self.step / 2
@@ -188,21 +163,19 @@ class Simulator:
         h_lam = self.step * self.max_rate(p)
         est["step_times_max_rate"] = h_lam
         if h_lam > STIFF_H_LAMBDA and self.method.real_stability != math.inf:
-            res.message = (f"warning: stiff for {self.method.name} at this step "
-                           f"(h |lambda|max = {h_lam:.2g}): the error estimate may be too small; "
-                           "prefer simulate.integrator = \"radau5\" or a smaller simulate.step")
-            return est
+            return est, (f"warning: stiff for {self.method.name} at this step "
+                         f"(h |lambda|max = {h_lam:.2g}): the error estimate may be too small; "
+                         "prefer simulate.integrator = \"radau5\" or a smaller simulate.step")
         over = [k for k in ERROR_KEYS if est[k] is not None
-                and est[k] > TARGETS[k] * (abs(getattr(res, k)) if k in RELATIVE else 1.0)]
+                and est[k] > target(k, getattr(res, k))]
         if over:
             # error ~ h^order: the step that brings the worst metric within its target
-            worst = max(est[k] / (TARGETS[k] * (abs(getattr(res, k)) if k in RELATIVE else 1.0))
-                        for k in over)
+            worst = max(est[k] / target(k, getattr(res, k)) for k in over)
             h_new = _round_down(0.8 * self.step * worst ** (-1.0 / self.method.order))
-            res.message = (f"warning: the estimated error of {', '.join(over)} exceeds the "
-                           f"accuracy targets at simulate.step = {self.step:g} s; for the targets "
-                           f"use simulate.step <= {h_new:.3g} s")
-        return est
+            return est, (f"warning: the estimated error of {', '.join(over)} exceeds the "
+                         f"accuracy targets at simulate.step = {self.step:g} s; for the targets "
+                         f"use simulate.step <= {h_new:.3g} s")
+        return est, None
 
     def _jacobians(self, p):
         """Linearised (theta, theta') Jacobian entries at rest along the stroke."""
@@ -220,16 +193,17 @@ class Simulator:
         disc = np.sqrt((b * b + 4 * a).astype(complex))
         return float(np.max(np.abs(np.r_[(b + disc) / 2, (b - disc) / 2])))
 
-    def diagnose(self, status: str, p) -> str:
+    def diagnose(self, status: StrokeStatus, p) -> str:
         """A one-line report of why a stroke failed and what to change."""
         m, h = self.method, self.step
         st = self.cfg.stroke
-        if status == "left the tabulated range" and self.model.theta_ddot(st.theta0, 0.0, p) > 0:
+        status = StrokeStatus(status)
+        if status is StrokeStatus.LEFT_RANGE and self.model.theta_ddot(st.theta0, 0.0, p) > 0:
             return (f"the lid does not close: released at stroke.theta0_deg = {st.theta0_deg} deg "
                     f"it is pushed open (theta'' = {self.model.theta_ddot(st.theta0, 0.0, p):.4g} "
                     "rad/s^2 > 0 at release) and swings away from the rim; lower theta0_deg or "
                     "change the spring (spring_k, spring_rest_length)")
-        if status in ("unstable", "non-finite", "left the tabulated range", "implicit solve failed"):
+        if not status.ok:
             h_ok = self.stable_step(p)
             if h_ok >= h:  # linearly stable: the step is too coarse for the stroke itself
                 return (f"{m.name} at step {h:g} s cannot integrate this design ({status}): the "
@@ -242,7 +216,7 @@ class Simulator:
             return (f"{m.name} at step {h:g} s cannot integrate this design ({status}): its "
                     f"fastest mode needs h|lambda| within the method's stability region; "
                     f"{hint}{alt}")
-        return status
+        return status.text
 
     def stable_step(self, p) -> float:
         """Largest step at which the linearised stroke is stable (bisection on the step)."""
@@ -285,12 +259,12 @@ class Simulator:
 
 
 def simulate(cfg: Config, trajectory: bool = False) -> StrokeResult:
-    """One closing stroke of ``cfg``'s design with ``cfg``'s integrator and step."""
+    """One closing stroke of ``cfg``'s design with ``cfg``'s integrator and step.
+
+    Returns a :class:`~softclose.stroke.StrokeResult`: the metrics, each fixed-step one with
+    its estimated distance from the converged answer (``accuracy``), and with
+    ``trajectory=True`` the time histories (``.plot()``, ``.trajectory_frame()``). A stroke
+    the method cannot integrate is reported (``ok`` False, ``message`` says what to change),
+    never raised.
+    """
     return Simulator(cfg).run(trajectory=trajectory)
-
-
-def check(result: StrokeResult) -> StrokeResult:
-    """Raise NumericalError if the stroke could not be integrated."""
-    if not result.ok:
-        raise NumericalError(result.message)
-    return result

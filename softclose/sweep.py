@@ -594,7 +594,7 @@ def summary(res: SweepResult) -> dict:
 
 def command(cfg: Config, args):
     """``softclose sweep --grid KEY=START:STOP:COUNT ... --out DIR``."""
-    from .cli import Outcome
+    from .cli.common import Outcome
     progress = (not getattr(args, "json", False)) and sys.stderr.isatty()
     res, files = sweep(cfg, list(args.grid), Path(args.out), progress=progress)
     payload = summary(res)

@@ -184,6 +184,6 @@ def test_default_step_meets_targets():
     model = LidModel(cfg)
     p = np.array([1e4, 0.02, 5000.0, 0.0])
     r, R = Simulator(cfg, model).run(p), Reference(model).simulate(p)
-    assert abs(r.closing_time - R["closing_time"]) <= 1e-7
-    assert abs(r.impact_theta_dot - R["impact_theta_dot"]) <= 1e-6
-    assert abs(r.peak_tip_speed - R["peak_tip_speed"]) <= 1e-6 * R["peak_tip_speed"]
+    assert abs(r.closing_time - R.closing_time) <= 1e-7
+    assert abs(r.impact_theta_dot - R.impact_theta_dot) <= 1e-6
+    assert abs(r.peak_tip_speed - R.peak_tip_speed) <= 1e-6 * R.peak_tip_speed

@@ -115,7 +115,7 @@ def tight_reference(model):
 
 @pytest.mark.parametrize("name", list(ORDER_STEPS))
 def test_convergence_order_of_impact_theta_dot(cfg, model, tight_reference, name, capsys):
-    exact = tight_reference["impact_theta_dot"]
+    exact = tight_reference.impact_theta_dot
     steps = np.array(ORDER_STEPS[name])
     errs = []
     for h in steps:

@@ -63,7 +63,7 @@ def test_unstable_report_names_a_step_that_works():
     cfg = default_config().replace(design={"damper_c": 1e6})
     model = LidModel(cfg)
     res = Simulator(cfg, model=model).run()
-    assert res.status == "unstable" and not res.ok
+    assert res.status.text == "unstable" and not res.ok
     h = bench._recommended_step(res.message)
     assert h is not None and 1e-5 < h < 1e-3, res.message
     assert "radau5" in res.message
@@ -140,8 +140,8 @@ def test_near_toggle_result_is_accurate_or_flagged():
     res = Simulator(cfg, model=model, step=1e-4).run()
     ref = Reference(model).simulate()
     if res.ok:
-        assert abs(res.closing_time - ref["closing_time"]) <= 1e-7
-        assert abs(res.impact_theta_dot - ref["impact_theta_dot"]) <= 1e-6
+        assert abs(res.closing_time - ref.closing_time) <= 1e-7
+        assert abs(res.impact_theta_dot - ref.impact_theta_dot) <= 1e-6
     else:
         assert "toggle" in res.message
 
@@ -170,7 +170,7 @@ def test_recommended_step_for_rotary_damper_works():
     cfg = default_config().replace(design={"rotary_damper_c": 1e3})
     sim = Simulator(cfg)
     res = sim.run()
-    assert res.status == "unstable"
+    assert res.status.text == "unstable"
     h = bench._recommended_step(res.message)
     assert h is not None
     again = Simulator(cfg, model=sim.model, step=h).run()

@@ -69,8 +69,8 @@ def test_seed_reproduction_numbers():
     assert p.returncode == 0, p.stderr
     r = json.loads(p.stdout)
     ref = r["reference"]
-    assert abs(ref["closing_time"] - 0.1491478) < 1e-7          # SPEC §8
-    assert abs(ref["impact_theta_dot"] + 4.155764) < 1e-6
+    assert abs(ref.closing_time - 0.1491478) < 1e-7          # SPEC §8
+    assert abs(ref.impact_theta_dot + 4.155764) < 1e-6
     assert abs(r["rk4_1ms_errors"]["impact_theta_dot"]) < 1e-6   # the default meets the target
     # the seed's Euler-Cromer at 1 kHz is first order and off by ~1e-3 .. 1e-2
     assert 1e-4 < abs(r["seed_errors"]["impact_theta_dot"]) < 5e-2

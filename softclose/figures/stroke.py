@@ -1,32 +1,17 @@
-"""Figures and trajectory files of a stroke (matplotlib, Agg backend)."""
+"""Figures of one stroke: time histories, the linkage at several angles, an animation."""
 
 from __future__ import annotations
 
-import csv
 import math
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-plt.rcParams.update({"font.size": 10, "axes.grid": True, "grid.alpha": 0.3,
-                     "figure.dpi": 110, "savefig.bbox": "tight"})
+from . import plt
 
 
-def write_trajectory_csv(traj: dict, path: Path) -> Path:
-    keys = list(traj)
-    with open(path, "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(keys)
-        for row in zip(*(traj[k] for k in keys)):
-            w.writerow([f"{v:.12g}" for v in row])
-    return path
-
-
-def plot_time_histories(res, path: Path, title: str = "Closing stroke") -> Path:
+def plot_time_histories(res, title: str = "Closing stroke"):
+    """theta, theta' and the tip speed against time, with the event and the peak marked."""
     tr = res.trajectory
     fig, ax = plt.subplots(3, 1, figsize=(6.5, 6.5), sharex=True)
     ax[0].plot(tr["t"], np.degrees(tr["theta"]), color="C0", lw=2)
@@ -51,10 +36,8 @@ def plot_time_histories(res, path: Path, title: str = "Closing stroke") -> Path:
     ax[2].annotate(f"peak {res.peak_tip_speed:.3f} m/s", (tr["t"][i], res.peak_tip_speed),
                    xytext=(-8 if late else 8, -2), textcoords="offset points",
                    ha="right" if late else "left", va="top")
-    fig.suptitle(f"{title} ({res.integrator}, step {res.step:g} s)")
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    fig.suptitle(f"{title} ({res.method}, step {res.step:g} s)")
+    return fig
 
 
 def linkage_points(model, theta: float) -> dict:
@@ -86,7 +69,7 @@ def _draw(ax, model, theta, alpha=1.0, label=None, spring=True):
         ax.annotate(label, p["T"], xytext=(4, 0), textcoords="offset points", fontsize=8)
 
 
-def plot_linkage(model, thetas, path: Path, labels=None, title="Linkage") -> Path:
+def plot_linkage(model, thetas, labels=None, title="Linkage"):
     """The linkage drawn at several angles (full view and a zoom on the cranks)."""
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.4), gridspec_kw={"width_ratios": [2.2, 1]},
                                  layout="constrained")
@@ -107,17 +90,17 @@ def plot_linkage(model, thetas, path: Path, labels=None, title="Linkage") -> Pat
     a2.set_xlim(-0.09, 0.12)
     a2.set_ylim(-0.03, 0.11)
     a2.set_title("zoom: cranks OA (blue), BC (red),\nspring E–D (green)", fontsize=9)
-    for th, tag in ((thetas[0], "0"), (thetas[-1], "1")):
+    # labels of the moving points at the first and last position, pushed apart from each
+    # other (start: up-left, end: down-right) so that they do not overlap
+    for th, tag, off in ((thetas[0], "0", (-14, 6)), (thetas[-1], "1", (5, -11))):
         q = linkage_points(model, th)
         for name in ("A", "C", "E"):
-            a2.annotate(f"{name}{tag}", q[name], xytext=(3, 3), textcoords="offset points",
-                        fontsize=7)
+            a2.annotate(f"{name}{tag}", q[name], xytext=off, textcoords="offset points",
+                        fontsize=7, color="0.15")
     for name, off in (("O", (-12, -10)), ("B", (5, -10)), ("D", (-4, -13))):
         a2.annotate(name, pts[name], xytext=off, textcoords="offset points", fontsize=9,
                     weight="bold")
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return fig
 
 
 def write_animation(model, traj: dict, path: Path, fps: int = 25) -> Path | None:
@@ -144,19 +127,3 @@ def write_animation(model, traj: dict, path: Path, fps: int = 25) -> Path | None
     anim.save(path, writer=animation.PillowWriter(fps=fps))
     plt.close(fig)
     return path
-
-
-def write_stroke_outputs(sim, res, out: Path, stem: str = "stroke") -> list[Path]:
-    """Trajectory CSV, time histories, linkage drawing and animation of one stroke."""
-    out.mkdir(parents=True, exist_ok=True)
-    tr = res.trajectory
-    files = [write_trajectory_csv(tr, out / f"{stem}_trajectory.csv"),
-             plot_time_histories(res, out / f"{stem}_time.png")]
-    idx = np.unique(np.linspace(0, len(tr["t"]) - 1, 5).astype(int))
-    labels = [f"t={tr['t'][i]:.3f}s" for i in idx]
-    files.append(plot_linkage(sim.model, tr["theta"][idx], out / f"{stem}_linkage.png", labels,
-                              title="Lid positions during the stroke"))
-    gif = write_animation(sim.model, tr, out / f"{stem}_animation.gif")
-    if gif:
-        files.append(gif)
-    return files

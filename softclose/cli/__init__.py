@@ -1,0 +1,79 @@
+"""The command line: ``softclose COMMAND [--config FILE] [--set KEY=VALUE ...] [--json]``.
+
+This package sits on top of the library: it parses arguments, loads the config, calls the
+library, formats text, writes files and picks the exit code. Nothing in the library imports
+it. Each command family is one module with ``register(subparsers)``; a command's handler is
+``run(cfg, args) -> Outcome``.
+
+Exit codes: 0 success; 2 invalid input (one line naming the culprit); 3 a numerical or
+optimiser failure that was detected and reported (with what to change); 130 interrupted
+(Ctrl-C: what was finished is kept). Every error line starts ``softclose: error:``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from ..errors import ConfigError, SoftcloseError
+from .common import Outcome
+
+#: command modules, in the order ``--help`` lists them
+COMMAND_MODULES = ("state", "simulate", "optimise", "sweep", "bench", "robust")
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, exit code 2
+        raise ConfigError(f"{self.prog}: {message}")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="softclose",
+                     description="Design soft-closing lids on a four-bar linkage.")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+    for name in COMMAND_MODULES:
+        try:
+            mod = importlib.import_module(f"{__name__}.{name}")
+        except ModuleNotFoundError as exc:  # a command family not installed in this build
+            if exc.name != f"{__name__}.{name}":
+                raise
+            continue
+        mod.register(sub)
+    return parser
+
+
+def _error(msg: str, code: int, as_json: bool) -> int:
+    from ..jsonio import dumps
+    if as_json:
+        print(dumps({"error": msg, "exit_code": code}))
+    print(f"softclose: error: {msg}", file=sys.stderr)
+    return code
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    as_json = "--json" in argv
+    try:
+        args = build_parser().parse_args(argv)
+        from ..config import load_config
+        cfg = load_config(args.config, args.overrides)
+        outcome: Outcome = args.run(cfg, args)
+    except SoftcloseError as exc:
+        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        return _error(msg, exc.exit_code, as_json)
+    except KeyboardInterrupt:
+        print("softclose: interrupted (Ctrl-C); nothing more was computed", file=sys.stderr)
+        return 130
+    from ..jsonio import dumps
+    if args.json:
+        print(dumps(outcome.payload))
+    elif outcome.text:
+        print(outcome.text)
+    if outcome.error:
+        print(f"softclose: error: {outcome.error.splitlines()[0]}", file=sys.stderr)
+    return outcome.exit_code
+
+
+__all__ = ["main", "build_parser", "Outcome"]

@@ -1,0 +1,96 @@
+"""What every command shares: the outcome type, the common options, the output folder check
+and the metrics table."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..errors import ConfigError
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What a command reports: a JSON-able payload, its text form, an exit code, the files
+    it wrote, and (exit code 3) the one-line error that goes to stderr."""
+
+    payload: dict
+    text: str
+    exit_code: int = 0
+    files: tuple = field(default_factory=tuple)
+    error: str | None = None
+
+
+def add_common(p: argparse.ArgumentParser) -> None:
+    """--config, --set and --json (every command)."""
+    p.add_argument("--config", metavar="FILE", help="TOML config file (see docs/model.md)")
+    p.add_argument("--set", dest="overrides", action="append", default=[],
+                   metavar="SECTION.KEY=VALUE",
+                   help="override one config key; the value is read as TOML (repeatable)")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+
+
+def add_out(p: argparse.ArgumentParser, required: bool = False, what: str = "") -> None:
+    p.add_argument("--out", metavar="DIR", required=required,
+                   help=what or "folder for the tables and figures (created if missing)")
+
+
+def prepare_out(path: str | os.PathLike | None) -> Path | None:
+    """Check and create the output folder before any work is done.
+
+    A path that names an existing file, lies under a file, or cannot be created or written
+    is refused with one line naming it (exit 2), so that no result is computed and then lost.
+    """
+    if path is None:
+        return None
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise ConfigError(f"--out {path}: exists and is not a folder; name a folder")
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"--out {path}: cannot create the folder "
+                          f"({exc.strerror or type(exc).__name__})") from None
+    probe = p / f".softclose-write-test-{os.getpid()}"
+    try:
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as exc:
+        raise ConfigError(f"--out {path}: cannot write in the folder "
+                          f"({exc.strerror or type(exc).__name__})") from None
+    return p
+
+
+def interactive(args) -> bool:
+    """Draw progress: stderr is a terminal and the output is not --json."""
+    return (not getattr(args, "json", False)) and sys.stderr.isatty()
+
+
+def format_metrics(m: dict) -> str:
+    """The stroke metrics as an aligned table (with accuracy where known)."""
+    from ..problem import METRIC_KEYS, UNITS
+    acc = m.get("accuracy") or {}
+    out = []
+    for key in METRIC_KEYS:
+        v = m.get(key)
+        if key == "closed":
+            out.append(f"  {key:<19} {'yes' if v else 'no'}")
+        elif v is None:
+            out.append(f"  {key:<19} —")
+        else:
+            e = acc.get(key)
+            err = f"  (± {e:.1e})" if e is not None else ""
+            out.append(f"  {key:<19} {v:.7g} {UNITS[key]}{err}")
+    if m.get("reason"):
+        out.append(f"  why not closed: {m['reason']}")
+    if "method" in m and m.get("step") is not None:
+        out.append(f"  ({m['method']}, step {m['step']:g} s, {m['steps']} steps; "
+                   "± = estimated distance from the converged answer)")
+    return "\n".join(out)
+
+
+def wrote(files) -> str:
+    return ("\n  wrote " + ", ".join(str(f) for f in files)) if files else ""

@@ -1,0 +1,39 @@
+"""``softclose state --theta-deg X [--theta-dot Y]``: kinematics, theta'' and pin reactions."""
+
+from __future__ import annotations
+
+import math
+
+from ..errors import ConfigError
+from .common import Outcome, add_common
+
+
+def register(sub) -> None:
+    p = sub.add_parser("state", help="kinematics, theta'' and pin reactions at one state")
+    add_common(p)
+    p.add_argument("--theta-deg", type=float, required=True, help="lid angle theta (deg)")
+    p.add_argument("--theta-dot", type=float, default=0.0, help="theta' (rad/s), default 0")
+    p.set_defaults(run=run)
+
+
+def run(cfg, args) -> Outcome:
+    from ..model import LidModel
+    if not math.isfinite(args.theta_deg):
+        raise ConfigError(f"--theta-deg: expected a finite angle, got {args.theta_deg}")
+    if not math.isfinite(args.theta_dot):
+        raise ConfigError(f"--theta-dot: expected a finite rate, got {args.theta_dot}")
+    model = LidModel(cfg)
+    theta = math.radians(args.theta_deg)
+    toggle = model.toggle_between(cfg.stroke.theta0, theta)
+    if toggle is not None:  # the branch followed from the stroke does not reach theta
+        raise ConfigError(f"--theta-deg: the loop cannot close at {args.theta_deg} deg on this "
+                          f"branch (toggle position at {math.degrees(toggle):.3f} deg)")
+    s = model.state(theta, args.theta_dot)
+    lines = [f"theta      = {args.theta_deg:.6g} deg   theta' = {s['theta_dot']:.6g} rad/s",
+             f"theta''    = {s['theta_ddot']:.8g} rad/s^2",
+             f"phi        = {math.degrees(s['phi']):.6f} deg   gamma = {math.degrees(s['gamma']):.6f} deg",
+             f"phi'       = {s['phi_dot']:.6g} rad/s   gamma' = {s['gamma_dot']:.6g} rad/s",
+             f"tip v      = [{s['tip_velocity'][0]:.6g}, {s['tip_velocity'][1]:.6g}] m/s",
+             "reactions (N): " + ", ".join(f"R_{k} = [{v[0]:.5g}, {v[1]:.5g}]"
+                                            for k, v in s["reactions"].items())]
+    return Outcome(s, "\n".join(lines))

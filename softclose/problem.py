@@ -1,0 +1,173 @@
+"""The soft-close design problem, stated once: what is designed, what is measured, what is
+asked of a design, and how accurately each number must be known.
+
+Every feature reads this module -- the optimiser, sweeps, verification, robust design, the
+benchmark -- and none restates it.
+
+- **Design** (:data:`DESIGN_KEYS`): the spring stiffness, its rest length and the damper;
+  the stroke kernels take them, with the rotary damper, as one parameter vector
+  ``p = (k, l0, c, c_rot)`` (:data:`PARAM_KEYS`, :func:`params_of`).
+- **Metrics** (:data:`METRICS`): the quantities of one closing stroke, with units.
+- **Objective**: ``J = weight_impact · impact_theta_dot² + weight_peak_tip · peak_tip_speed²``
+  (:func:`objective`).
+- **Constraints** (:data:`CONSTRAINTS`): the lid closes, ``closing_time_min <= closing_time
+  <= closing_time_max``, no rebound (theta' <= 0 throughout; theta >= theta_closed),
+  ``holding_moment >= holding_moment_min``. A design that breaks one is infeasible for the
+  first of :data:`REASONS` that applies (:func:`infeasibility`).
+- **Accuracy targets** (:data:`TARGETS`): how close to the converged answer a fixed-step
+  number must be (absolute, or relative for :data:`RELATIVE`), and how closely the optimiser's
+  own numbers must agree with the independent reference (:data:`VERIFY_RTOL`,
+  :func:`agreement_tolerance`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+#: the design variables the optimiser picks (config section [design], bounds in [optimise])
+DESIGN_KEYS = ("spring_k", "spring_rest_length", "damper_c")
+#: the stroke kernels' parameter vector p, in order
+PARAM_KEYS = DESIGN_KEYS + ("rotary_damper_c",)
+#: scale of each design variable in the NLP, so that the scaled values are of order one
+SCALES = np.array([1000.0, 0.1, 1000.0])
+
+
+@dataclass(frozen=True)
+class Metric:
+    """One quantity of a closing stroke."""
+
+    key: str
+    unit: str
+    description: str
+
+
+#: the metrics of one closing stroke, in the order every table and JSON object uses
+METRICS = (
+    Metric("closed", "", "the lid reached theta_closed moving down within t_max"),
+    Metric("closing_time", "s", "time of the closing event"),
+    Metric("impact_theta_dot", "rad/s", "theta' at the closing event (negative)"),
+    Metric("impact_tip_speed", "m/s", "lid tip speed at the closing event"),
+    Metric("peak_tip_speed", "m/s", "largest tip speed over the stroke"),
+    Metric("min_spring_length", "m", "shortest spring length over the stroke"),
+    Metric("max_spring_length", "m", "longest spring length over the stroke"),
+    Metric("holding_moment", "N m", "dV/dtheta at theta_closed (> 0 presses the lid shut)"),
+)
+METRIC_KEYS = tuple(m.key for m in METRICS)
+
+#: units of the metrics, the objective and the design variables (config keys by full name)
+UNITS: dict[str, str] = {
+    **{m.key: m.unit for m in METRICS},
+    "objective": "",
+    "spring_k": "N/m", "spring_rest_length": "m", "damper_c": "N s/m",
+    "rotary_damper_c": "N m s/rad",
+    "design.spring_k": "N/m", "design.spring_rest_length": "m", "design.damper_c": "N s/m",
+    "design.rotary_damper_c": "N m s/rad",
+}
+
+#: the named constraints of the design problem
+CONSTRAINTS = ("closed", "closing_time_max", "closing_time_min", "no_rebound",
+               "holding_moment_min")
+#: why a design is infeasible, in the order they are tested (the first that applies is given)
+REASONS = ("not closed", "too slow", "too fast", "not held shut", "rebound")
+
+#: accuracy targets of the fixed-step metrics against the converged answer
+TARGETS = {"closing_time": 1e-7, "impact_theta_dot": 1e-6, "impact_tip_speed": 1e-6,
+           "peak_tip_speed": 1e-6}
+#: metrics whose target is relative to their magnitude
+RELATIVE = ("impact_tip_speed", "peak_tip_speed")
+#: the metrics whose fixed-step error is estimated
+ERROR_KEYS = tuple(TARGETS)
+
+#: relative agreement of the optimiser's objective with the reference's that counts as verified
+VERIFY_RTOL = 1e-3
+#: tolerance of the constraint checks in verification (absolute, SI)
+CONSTRAINT_TOL = 1e-7
+
+
+def params_of(cfg, design: dict | None = None) -> np.ndarray:
+    """The parameter vector (k, l0, c, c_rot) of ``cfg``'s design, with ``design`` (a dict
+    of some :data:`DESIGN_KEYS`) taking precedence."""
+    d = cfg.design
+    p = np.array([d.spring_k, d.spring_rest_length, d.damper_c, d.rotary_damper_c], float)
+    for i, k in enumerate(DESIGN_KEYS):
+        if design is not None and k in design:
+            p[i] = float(design[k])
+    return p
+
+
+def design_of(p) -> dict:
+    """The design dict ``{spring_k, spring_rest_length, damper_c}`` of a parameter vector."""
+    return {k: float(v) for k, v in zip(DESIGN_KEYS, np.asarray(p, float)[:3])}
+
+
+def objective(opt, impact_theta_dot, peak_tip_speed):
+    """``J = weight_impact · impact_theta_dot² + weight_peak_tip · peak_tip_speed²``.
+
+    ``opt`` is the [optimise] section (``cfg.optimise``). Scalars give a float (None when
+    either metric is None: a stroke that did not close has no objective); arrays give an
+    array (NaN where a metric is NaN).
+    """
+    if impact_theta_dot is None or peak_tip_speed is None:
+        return None
+    J = opt.weight_impact * np.square(impact_theta_dot) \
+        + opt.weight_peak_tip * np.square(peak_tip_speed)
+    return float(J) if np.ndim(J) == 0 else J
+
+
+def infeasibility(opt, closed, closing_time, holding_moment, theta_dot_max) -> np.ndarray:
+    """Why each design is infeasible: the first of :data:`REASONS` that applies, "" if none.
+
+    Vectorised over designs; ``theta_dot_max`` is the largest theta' of the stroke (> 0 is
+    a rebound). NaN closing times (not closed) never count as too slow or too fast.
+    """
+    closed = np.atleast_1d(np.asarray(closed, bool))
+    ct = np.atleast_1d(np.asarray(closing_time, float))
+    hm = np.broadcast_to(np.asarray(holding_moment, float), closed.shape)
+    tdm = np.broadcast_to(np.asarray(theta_dot_max, float), closed.shape)
+    reason = np.full(closed.shape, "", dtype=object)
+    with np.errstate(invalid="ignore"):
+        # assigned in reverse order of REASONS so that the first applicable one is kept
+        reason[closed & (tdm > 0)] = "rebound"
+        reason[hm < opt.holding_moment_min] = "not held shut"
+        reason[closed & (ct < opt.closing_time_min)] = "too fast"
+        reason[closed & (ct > opt.closing_time_max)] = "too slow"
+    reason[~closed] = "not closed"
+    return reason
+
+
+def feasible(opt, closed, closing_time, holding_moment, theta_dot_max) -> np.ndarray:
+    """True where a design meets every constraint (see :func:`infeasibility`)."""
+    return infeasibility(opt, closed, closing_time, holding_moment, theta_dot_max) == ""
+
+
+def target(key: str, value: float) -> float:
+    """The accuracy target of one metric value (absolute units of the metric)."""
+    return TARGETS[key] * (abs(value) if key in RELATIVE else 1.0)
+
+
+def agreement_tolerance(key: str, value: float, accuracy: float | None = None) -> float:
+    """How far the optimiser's own value of a metric may lie from the reference's.
+
+    The optimiser's numbers come from its own discretisation (N intervals of RK4 sub-steps);
+    they count as confirmed when they agree with the adaptive reference to
+    :data:`VERIFY_RTOL` relative (the objective's criterion) or to the stated ``accuracy``,
+    whichever is larger, with an absolute floor of the metric's fixed-step target.
+    """
+    tol = VERIFY_RTOL * abs(value)
+    if accuracy is not None:
+        tol = max(tol, accuracy)
+    if key in TARGETS:
+        tol = max(tol, TARGETS[key])
+    return tol
+
+
+def describe(cfg) -> dict[str, Any]:
+    """The problem of ``cfg`` as plain values (for reports and JSON)."""
+    o = cfg.optimise
+    return {"closing_time_min": o.closing_time_min, "closing_time_max": o.closing_time_max,
+            "holding_moment_min": o.holding_moment_min, "weight_impact": o.weight_impact,
+            "weight_peak_tip": o.weight_peak_tip,
+            "bounds": {k: list(getattr(o, k)) for k in DESIGN_KEYS}}

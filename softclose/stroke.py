@@ -1,0 +1,139 @@
+"""One closing stroke's result, whichever integrator produced it.
+
+:class:`StrokeStatus` names how a stroke ended (the values are the C kernel's status
+codes); :class:`StrokeResult` holds its metrics (:data:`softclose.problem.METRICS`), how it
+was computed, how accurate it is, and -- when asked for -- its trajectory. The fixed-step
+:class:`softclose.simulate.Simulator` and the adaptive :class:`softclose.reference.Reference`
+both return it, so a result can be compared with its verification field by field.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from enum import IntEnum
+
+from .problem import METRIC_KEYS
+
+
+class StrokeStatus(IntEnum):
+    """How a stroke ended (values: the stroke kernel's status codes)."""
+
+    CLOSED = 0
+    NOT_CLOSED = 1
+    UNSTABLE = 2
+    LEFT_RANGE = 3
+    NON_FINITE = 4
+    IMPLICIT_FAILED = 5
+
+    @property
+    def ok(self) -> bool:
+        """True when the stroke was integrated to its end (closed or not)."""
+        return self in (StrokeStatus.CLOSED, StrokeStatus.NOT_CLOSED)
+
+    @property
+    def text(self) -> str:
+        return _TEXT[self]
+
+    def __str__(self) -> str:
+        return self.text
+
+
+_TEXT = {StrokeStatus.CLOSED: "closed", StrokeStatus.NOT_CLOSED: "not closed",
+         StrokeStatus.UNSTABLE: "unstable", StrokeStatus.LEFT_RANGE: "left the tabulated range",
+         StrokeStatus.NON_FINITE: "non-finite",
+         StrokeStatus.IMPLICIT_FAILED: "implicit solve failed"}
+
+
+@dataclass(frozen=True)
+class StrokeResult:
+    """The metrics of one stroke and how they were obtained.
+
+    ``ok`` is False when the method could not integrate the stroke; ``message`` then says
+    why and what to change (and otherwise carries a warning, if any). ``accuracy`` holds the
+    estimated distance of each fixed-step metric from the converged answer (None for the
+    adaptive reference, whose tolerance is ``tolerance``). ``reason`` says why a stroke that
+    ran to its end did not close, when that is known.
+    """
+
+    closed: bool
+    closing_time: float | None
+    impact_theta_dot: float | None
+    impact_tip_speed: float | None
+    peak_tip_speed: float | None
+    min_spring_length: float | None
+    max_spring_length: float | None
+    holding_moment: float
+    status: StrokeStatus
+    method: str
+    step: float | None = None
+    steps: int = 0
+    tolerance: float | None = None
+    message: str | None = None
+    reason: str | None = None
+    accuracy: dict | None = None
+    theta_min: float | None = None
+    theta_max: float | None = None
+    theta_dot_max: float | None = None
+    trajectory: dict | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def ok(self) -> bool:
+        return self.status.ok
+
+    @property
+    def success(self) -> bool:
+        """The stroke was integrated (closed or not): the public API's success flag."""
+        return self.ok
+
+    @property
+    def integrator(self) -> str:
+        return self.method
+
+    def metrics(self) -> dict:
+        """The metrics as a dict (:data:`softclose.problem.METRIC_KEYS`)."""
+        return {k: getattr(self, k) for k in METRIC_KEYS}
+
+    def to_json(self) -> dict:
+        """Plain JSON values: the metrics, then how they were computed (no trajectory)."""
+        from .jsonio import jsonable
+        out = self.metrics()
+        out.update({"status": self.status.text, "method": self.method, "step": self.step,
+                    "steps": self.steps, "accuracy": self.accuracy})
+        for k in ("tolerance", "message", "reason"):
+            if getattr(self, k) is not None:
+                out[k] = getattr(self, k)
+        return jsonable(out)
+
+    def to_frame(self):
+        """One row (pandas DataFrame): the metrics and the status. With a trajectory, use
+        :meth:`trajectory_frame` for the time histories."""
+        import pandas as pd
+        row = self.metrics()
+        row["status"] = self.status.text
+        return pd.DataFrame([row])
+
+    def trajectory_frame(self):
+        """The trajectory (one row per step) as a DataFrame; columns carry their units."""
+        import pandas as pd
+        if self.trajectory is None:
+            raise ValueError("this result has no trajectory: simulate(cfg, trajectory=True)")
+        return pd.DataFrame(self.trajectory)
+
+    def plot(self):
+        """Time histories of the stroke (needs ``trajectory=True``): a matplotlib Figure."""
+        from .figures.stroke import plot_time_histories
+        if self.trajectory is None:
+            raise ValueError("this result has no trajectory: simulate(cfg, trajectory=True)")
+        return plot_time_histories(self)
+
+
+def none_if_nan(x) -> float | None:
+    """A float, or None for NaN/inf/None (how metrics of strokes that did not close read)."""
+    if x is None:
+        return None
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+__all__ = ["StrokeStatus", "StrokeResult", "none_if_nan"]
