@@ -8,8 +8,29 @@ gives ``w . e(phi) = K`` with ``K = (l3^2 - l2^2 - |w|^2) / (2 l2)``, so
 
 where sigma = +1 or -1 names the assembly (branch). ``|u| < 1`` is the condition for
 the loop to close; ``|u| -> 1`` is a toggle position, where the two branches meet and
-d phi / d theta is unbounded. Along a branch, sigma is constant, so the closed form
-follows the branch continuously as long as no toggle is crossed.
+d phi / d theta is unbounded.
+
+Which branch a configuration is on (:func:`crank_cross`, :func:`branch_of`). Since
+``C - B = A + w``,
+
+    D = A x (C - B) = A x w = l2 |w| sin(arg w - phi) = -sigma l2 |w| sqrt(1 - u^2),
+
+because ``phi - arg w = sigma acos(u)`` with ``acos(u)`` in (0, pi) when ``|u| < 1``. Also
+``D = l2 l3 sin(gamma - phi)``. So ``sign D = -sigma``: on the branch sigma = -1 crank BC
+points counter-clockwise of crank OA (0 < gamma - phi < pi), on sigma = +1 clockwise.
+Geometrically: hang a copy of crank BC from A (shift it by A - C); its pivot moves to
+``P = B - R(theta) AC = -w``, and the two assemblies put A on the two sides of the line
+from O to P (mirror images); ``D = P x A`` > 0 when A lies to the left of it.
+
+Why the sign is invariant along a branch: a branch is a configuration that moves
+continuously with theta, so D(theta) is continuous, and by the identity above it is zero
+only where ``sqrt(1 - u^2) = 0``, i.e. ``|u| = 1`` (|w| > 0 wherever u is finite). By the
+intermediate value theorem D keeps its sign on every theta interval without a toggle. D
+is also, up to sign, the determinant of the velocity loop (:func:`velocity_loop`), which is
+why phi' and gamma' are unbounded exactly there. The closed form with a fixed sigma is
+therefore one branch followed continuously until a toggle; the 2 pi jump of ``atan2``
+where w crosses the negative x axis changes the representation of phi, not the
+configuration (sin(gamma - phi) does not jump).
 
 The velocity and acceleration loops (the first and second time derivatives of the
 closure, seed eqs. 7.4.2 and its derivative) are linear 2x2 systems in
@@ -17,6 +38,8 @@ closure, seed eqs. 7.4.2 and its derivative) are linear 2x2 systems in
 """
 
 from __future__ import annotations
+
+import math
 
 import casadi as ca
 
@@ -55,6 +78,25 @@ def closure(theta, geo, sigma):
     c_minus_b = l2 * e(phi) + w
     gamma = ca.atan2(c_minus_b[1], c_minus_b[0])
     return phi, gamma, u
+
+
+def crank_cross(phi, gamma, geo):
+    """``D = A x (C - B) = l2 l3 sin(gamma - phi)`` (m^2): its sign is ``-sigma``.
+
+    Zero exactly at a toggle (the cranks in line), so its sign names the branch of a
+    configuration and does not change along it (module docstring).
+    """
+    return geo.crank_oa * geo.crank_bc * ca.sin(gamma - phi)
+
+
+def branch_of(phi: float, gamma: float) -> int:
+    """sigma of the assembly whose crank angles are phi, gamma (rad): ``-sign sin(gamma - phi)``.
+
+    Only the side matters: the angles need not close the loop exactly. Cranks in line
+    (sin = 0) name no branch; the caller decides what to do with that (returns 0).
+    """
+    s = math.sin(gamma - phi)
+    return -1 if s > 0 else (1 if s < 0 else 0)
 
 
 def points(theta, phi, gamma, geo):

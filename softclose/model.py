@@ -1,8 +1,9 @@
 """The lid model: one geometry and mass set, its branch, and its CasADi functions.
 
-``LidModel(cfg)`` picks the assembly branch named by ``geometry.assembly``, checks that
-the loop closes without a toggle over every angle the stroke can visit, and builds the
-CasADi functions the rest of softclose calls:
+``LidModel(cfg)`` picks the branch on the side named by ``geometry.assembly`` (the sign of
+``sin(gamma - phi)``, which only a toggle changes; see :mod:`softclose.kinematics`), checks
+that the loop closes without a toggle from the assembly angle over every angle the stroke
+visits, and builds the CasADi functions the rest of softclose calls:
 
 - ``ode(x, p) -> x'`` with x = (theta, theta'), p = (k, l0, c, c_rot) (SX, cheap);
 - ``coeffs(theta) -> (M, dM, Vg, dVg, l, dl, dd, tau)`` and their theta-derivatives, which the
@@ -21,10 +22,13 @@ import numpy as np
 from . import dynamics as dyn
 from .config import Config
 from .errors import ConfigError
-from .kinematics import closure, points, velocity_loop
+from .kinematics import branch_of, closure, points, velocity_loop
 
-#: |u| above which the linkage counts as "at a toggle" (transmission angle < 0.8 deg)
+#: |u| above which the linkage counts as "at a toggle": acos|u| < 0.81 deg, i.e. the crank
+#: angles phi of the two assemblies (phi = arg w +- acos u) less than 1.6 deg apart
 TOGGLE_U = 0.9999
+#: assembly angles with the cranks closer to in line than this (deg) name no branch
+INLINE_DEG = 0.01
 #: angle below the closed position tabulated for the stages of the last step (deg)
 MARGIN_DEG = 5.0
 #: angle above the release position tabulated for a lid that a spring first pushes open (deg);
@@ -50,29 +54,59 @@ class LidModel:
 
     # -- branch and range ------------------------------------------------------------
     def _pick_branch(self) -> int:
-        th_a, phi_a, gamma_a = (math.radians(v) for v in self.geo.assembly)
-        u = float(self._u(th_a))
-        if not abs(u) < 1:
+        """sigma of the configuration named by ``geometry.assembly`` (by its side, not distance).
+
+        The loop must close at the assembly's theta. The branch is the side of the
+        assembly's cranks: sigma = -sign sin(gamma - phi) (:func:`kinematics.branch_of`),
+        a sign that is constant along a branch and changes only at a toggle. phi and gamma
+        therefore only select the branch: they need not close the loop for these lengths, so
+        a changed crank length keeps its branch without touching ``geometry.assembly``.
+        Cranks given in line (within ``INLINE_DEG``) name no side and are refused.
+        """
+        th_a_deg, phi_a_deg, gamma_a_deg = self.geo.assembly
+        th_a = math.radians(th_a_deg)
+        if not abs(float(self._u(th_a))) < 1:
+            raise ConfigError(self._no_closure_message(th_a_deg))
+        phi_a, gamma_a = math.radians(phi_a_deg), math.radians(gamma_a_deg)
+        if abs(math.sin(gamma_a - phi_a)) < math.sin(math.radians(INLINE_DEG)):
+            both = "; ".join(f"({math.degrees(p) % 360:.4f}, {math.degrees(g) % 360:.4f})"
+                             for p, g in (self._closure_at(th_a, s) for s in (-1, 1)))
             raise ConfigError(
-                f"geometry.assembly: the loop cannot close at theta = {self.geo.assembly[0]} deg "
-                f"with these lengths (crank_oa, crank_bc, pivot_b, lid_c)")
+                f"geometry.assembly: phi = {phi_a_deg} and gamma = {gamma_a_deg} deg put the "
+                f"cranks in line, which names neither assembly; give phi, gamma (deg) of the "
+                f"wanted one, at theta = {th_a_deg} deg: {both}")
+        return branch_of(phi_a, gamma_a)
+
+    def _closure_at(self, theta: float, sigma: int) -> tuple[float, float]:
         th = ca.SX.sym("theta")
-        best = None
-        for sigma in (1, -1):
-            phi, gamma, _ = closure(th, self.geo, sigma)
-            f = ca.Function("pg", [th], [phi, gamma])
-            p, g = (float(v) for v in f(th_a))
-            dist = max(abs(_wrap(p - phi_a)), abs(_wrap(g - gamma_a)))
-            if best is None or dist < best[0]:
-                best = (dist, sigma, p, g)
-        dist, sigma, p, g = best
-        if dist > math.radians(10.0):
-            raise ConfigError(
-                f"geometry.assembly: phi = {phi_a * 180 / math.pi:.4f}, gamma = "
-                f"{gamma_a * 180 / math.pi:.4f} deg is {math.degrees(dist):.1f} deg from the nearest "
-                f"assembly at theta = {self.geo.assembly[0]} deg (phi = {math.degrees(p):.4f}, "
-                f"gamma = {math.degrees(g):.4f} deg)")
-        return sigma
+        phi, gamma, _ = closure(th, self.geo, sigma)
+        out = ca.Function("pg", [th], [phi, gamma])(theta)
+        return float(out[0]), float(out[1])
+
+    def _no_closure_message(self, th_a_deg: float) -> str:
+        """Where the loop closes at all (0.1-deg scan over a turn): the one-line refusal."""
+        deg = th_a_deg + np.linspace(-180.0, 180.0, 3601)
+        ok = np.abs(np.asarray(self._u.map(len(deg))(np.radians(deg))).ravel()) < 1
+        lengths = "geometry.crank_oa, crank_bc, pivot_b or lid_c"
+        if not ok.any():
+            return (f"geometry: the loop cannot close at any lid angle (crank_oa = "
+                    f"{self.geo.crank_oa}, crank_bc = {self.geo.crank_bc} m); change {lengths}")
+        edges = np.flatnonzero(np.diff(ok.astype(int)))
+        runs, i0 = [], (0 if ok[0] else None)
+        for i in edges:
+            if ok[i + 1]:
+                i0 = i + 1
+            else:
+                runs.append((deg[i0], deg[i]))
+        if i0 is not None and ok[-1]:
+            if runs and ok[0]:   # the first and the last run are one interval across the seam
+                runs[0] = (deg[i0], runs[0][1] + 360.0)
+            else:
+                runs.append((deg[i0], deg[-1]))
+        where = ", ".join(f"{a:.1f}..{b:.1f}" for a, b in runs[:3])
+        return (f"geometry.assembly: the loop cannot close at theta = {th_a_deg} deg with "
+                f"these lengths (it closes for theta in {where} deg); move geometry.assembly[0] "
+                f"and the stroke there, or change {lengths}")
 
     def _check_range(self) -> tuple[float, float]:
         """Check closure from the assembly angle over the stroke; return the table range."""
@@ -80,14 +114,8 @@ class LidModel:
         th_a = math.radians(self.geo.assembly[0])
         lo, hi = min(th_a, st.theta_closed), max(th_a, st.theta0)
         th_bad, u = self._scan(lo, hi, th_a)
-        if th_bad is not None:  # name the toggle met first when moving away from the assembly
-            where = ("at stroke.theta0_deg" if abs(th_bad - st.theta0) < 1e-9 else
-                     f"at theta = {math.degrees(th_bad):.3f} deg")
-            raise ConfigError(
-                f"geometry: the loop reaches a toggle position or cannot close {where}, which "
-                f"lies between the assembly (theta = {self.geo.assembly[0]} deg) and the stroke "
-                f"({st.theta_closed_deg}..{st.theta0_deg} deg); change crank_oa, crank_bc, "
-                f"pivot_b or lid_c, or the stroke angles")
+        if th_bad is not None:
+            raise ConfigError(self._toggle_message(th_bad, th_a))
         # extend by a margin on each side as far as the loop still closes (stage overshoot)
         # the margins stop where the linkage comes closer to a toggle than the stroke does
         u_margin = max(0.99, float(u.max()) + 0.5 * (1.0 - float(u.max())))
@@ -103,24 +131,57 @@ class LidModel:
         self.max_abs_u = float(u.max())
         return ext[0], ext[1]
 
+    def _toggle_message(self, th_bad: float, th_a: float) -> str:
+        """One line: the toggle met first from the assembly, and the keys that move it."""
+        st = self.cfg.stroke
+        inside = st.theta_closed <= th_bad <= st.theta0
+        reached = not abs(float(self._u(th_bad))) < 1
+        # print the angle rounded away from the assembly: the loop does not close there
+        q = 1000.0
+        deg = math.degrees(th_bad)
+        deg = (math.ceil(deg * q) if th_bad > th_a else math.floor(deg * q)) / q
+        what = ("reaches a toggle position (cranks in line; beyond it the loop cannot close)"
+                if reached else
+                f"nearly reaches a toggle position (the two assemblies' phi within "
+                f"{2 * math.degrees(math.acos(TOGGLE_U)):.1f} deg)")
+        where = (f"inside the stroke ({st.theta_closed_deg}..{st.theta0_deg} deg)" if inside else
+                 f"between the assembly (theta = {self.geo.assembly[0]} deg) and the stroke "
+                 f"({st.theta_closed_deg}..{st.theta0_deg} deg)")
+        keys = "geometry.crank_oa, crank_bc, pivot_b or lid_c, or stroke.theta0_deg / " \
+            "theta_closed_deg"
+        if not inside:
+            keys += ", or geometry.assembly[0]"
+        return f"geometry: the linkage {what} at theta = {deg:.3f} deg, {where}; change {keys}"
+
     def _scan(self, lo: float, hi: float, start: float):
-        """Sample |u| on [lo, hi]: (the toggle angle nearest ``start`` or None, |u| samples)."""
+        """Sample |u| on [lo, hi]: (the toggle angle nearest ``start`` or None, |u| samples).
+
+        A sample with |u| >= ``TOGGLE_U`` is a toggle; when |u| reaches 1 there, the angle
+        returned is where |u| = 1, found by bisection between it and its neighbour on the
+        ``start`` side.
+        """
         grid = np.linspace(lo, hi, max(400, int((hi - lo) / math.radians(0.05)) + 1))
         u = np.abs(np.asarray(self._u.map(len(grid))(grid)).ravel())
         bad = np.nonzero(~(u < TOGGLE_U))[0]
         if not len(bad):
             return None, u
-        return float(grid[bad[np.argmin(np.abs(grid[bad] - start))]]), u
+        i = int(bad[np.argmin(np.abs(grid[bad] - start))])
+        j = i - 1 if grid[i] > start else i + 1
+        if u[i] < 1 or not 0 <= j < len(grid) or not u[j] < 1:
+            return float(grid[i]), u
+        a, b = float(grid[j]), float(grid[i])   # |u(a)| < 1 <= |u(b)|
+        for _ in range(60):
+            m = 0.5 * (a + b)
+            if abs(float(self._u(m))) < 1:
+                a = m
+            else:
+                b = m
+        return b, u
 
     def toggle_between(self, a: float, b: float) -> float | None:
         """The toggle position (or angle where the loop cannot close) met first when the
         lid moves on this branch from ``a`` towards ``b`` (rad); None if there is none."""
         return self._scan(min(a, b), max(a, b), a)[0]
-
-    @property
-    def near_toggle(self) -> bool:
-        """True when the transmission angle over the stroke drops below about 8 deg."""
-        return self.max_abs_u > 0.99
 
     # -- CasADi functions ------------------------------------------------------------
     def _build(self):

@@ -57,7 +57,7 @@ CONFIG_CASES = [
     ("closing time window empty", "[optimise]\nclosing_time_min = 2.0\n",
      "optimise.closing_time_min"),
     ("loop cannot close", "[geometry]\ncrank_bc = 0.001\n", "geometry"),
-    ("assembly on no branch", "[geometry]\nassembly = [18.0, 10.0, 300.0]\n",
+    ("assembly names no side", "[geometry]\nassembly = [18.0, 10.0, 10.0]\n",
      "geometry.assembly"),
     ("toggle inside the stroke",
      "[geometry]\ncrank_bc = 0.0935\nassembly = [18.0, 139.5, 161.9]\n", "toggle"),

@@ -108,7 +108,7 @@ BAD = [
     ("negative-damper", lambda t: ["--set", "design.damper_c=-1"], ["design.damper_c"]),
     ("no-closure-at-assembly", lambda t: ["--set", "geometry.crank_bc=0.1"], ["crank_bc"]),
     ("no-closure-at-theta0", _cannot_close_at_theta0, ["geometry", "crank_bc", "theta"]),
-    ("assembly-far-from-branch", lambda t: ["--set", "geometry.assembly=[18, 10, 40]"],
+    ("assembly-cranks-in-line", lambda t: ["--set", "geometry.assembly=[18, 10, 190]"],
      ["geometry.assembly"]),
     ("theta0-equal-closed", lambda t: ["--set", "stroke.theta0_deg=0"], ["stroke.theta0_deg"]),
     ("theta0-below-closed", lambda t: ["--set", "stroke.theta0_deg=5",
