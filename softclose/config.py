@@ -180,6 +180,24 @@ class Config:
             raw.setdefault(section, {}).update(values)
         return from_dict(raw)
 
+    def set(self, key: str, value: Any) -> "Config":
+        """A copy with one key changed: ``cfg.set("mass.lid", 0.6)``,
+        ``cfg.set("geometry.pivot_b[0]", 0.062)`` (validated as if from a file)."""
+        return self.update({key: value})
+
+    def update(self, values: dict[str, Any]) -> "Config":
+        """A copy with several keys changed, by their full names (``section.key`` or
+        ``section.key[i]``), e.g. ``cfg.update({"mass.lid": 0.6, "design.damper_c": 900})``."""
+        if not values:
+            return self
+        raw = {k: dict(v) for k, v in self.raw.items()}
+        for key, value in values.items():
+            if not isinstance(key, str):
+                raise ConfigError(f"config key {key!r}: expected a string like 'mass.lid'")
+            _set_raw(raw, key, value.item() if hasattr(value, "item") else value,
+                     origin=f"{key}")
+        return from_dict(raw)
+
     def with_design(self, spring_k=None, spring_rest_length=None, damper_c=None,
                     rotary_damper_c=None) -> "Config":
         """A copy with some design values changed (validated)."""
@@ -308,7 +326,6 @@ def to_dict(cfg: Config) -> dict[str, dict[str, Any]]:
     return out
 
 
-_OVERRIDE = re.compile(r"^\s*([A-Za-z_]\w*)\.([A-Za-z_]\w*)(?:\[(\d+)\])?\s*=(.*)$", re.S)
 
 
 def parse_value(text: str) -> Any:
@@ -325,35 +342,44 @@ def parse_value(text: str) -> Any:
 
 def apply_override(raw: dict[str, Any], text: str) -> None:
     """Apply one ``section.key=value`` or ``section.key[i]=value`` override to ``raw``."""
-    if text.strip().startswith("tolerance.") and "=" in text:  # tolerance.<config key>=spread
-        key, value_text = text.strip()[len("tolerance."):].split("=", 1)
-        raw.setdefault("tolerance", {})[key.strip().strip('"')] = parse_value(value_text)
-        return
-    m = _OVERRIDE.match(text)
-    if not m:
+    if "=" not in text:
         raise ConfigError(f"--set {text!r}: expected section.key=value or section.key[i]=value")
-    section, key, index, value_text = m.groups()
+    key, value_text = text.split("=", 1)
+    _set_raw(raw, key.strip(), parse_value(value_text), origin=f"--set {text!r}")
+
+
+_KEY = re.compile(r"^([A-Za-z_]\w*)\.([A-Za-z_]\w*)(?:\[(\d+)\])?$")
+
+
+def _set_raw(raw: dict[str, Any], key: str, value: Any, origin: str) -> None:
+    """Set ``section.key`` or ``section.key[i]`` (or ``tolerance.<config key>``) in ``raw``."""
+    if key.startswith("tolerance."):  # tolerance.<config key> = spread
+        raw.setdefault("tolerance", {})[key[len("tolerance."):].strip().strip('"')] = value
+        return
+    m = _KEY.match(key)
+    if not m:
+        raise ConfigError(f"{origin}: expected section.key=value or section.key[i]=value")
+    section, name, index = m.groups()
     if section not in _SCHEMA:
-        raise ConfigError(f"--set {text!r}: unknown config section [{section}]")
-    if key not in _SCHEMA[section]:
-        raise ConfigError(f"--set {text!r}: unknown config key {section}.{key}")
-    value = parse_value(value_text)
+        raise ConfigError(f"{origin}: unknown config section [{section}]")
+    if name not in _SCHEMA[section]:
+        raise ConfigError(f"{origin}: unknown config key {section}.{name}")
     table = raw.setdefault(section, {})
     if index is None:
-        table[key] = value
+        table[name] = value
         return
-    kind, default = _SCHEMA[section][key]
+    kind, default = _SCHEMA[section][name]
     if kind not in ("vec2", "vec3", "bounds"):
-        raise ConfigError(f"--set {text!r}: {section}.{key} is not a vector")
-    current = table.get(key)
+        raise ConfigError(f"{origin}: {section}.{name} is not a vector")
+    current = table.get(name)
     if current is None:
-        current = default if default is not None else _derived_default(raw, section, key)
+        current = default if default is not None else _derived_default(raw, section, name)
     current = list(current)
     i = int(index)
     if i >= len(current):
-        raise ConfigError(f"--set {text!r}: {section}.{key} has {len(current)} components")
+        raise ConfigError(f"{origin}: {section}.{name} has {len(current)} components")
     current[i] = value
-    table[key] = current
+    table[name] = current
 
 
 def _derived_default(raw: dict[str, Any], section: str, key: str) -> list[float]:
@@ -385,11 +411,6 @@ def load_config(path: str | Path | None = None, overrides: Iterable[str] = ()) -
 
 def default_config() -> Config:
     return from_dict({})
-
-
-def known_keys() -> dict[str, tuple[str, ...]]:
-    """Section -> key names, as accepted in files and by ``--set``."""
-    return {s: tuple(f) for s, f in _SCHEMA.items()}
 
 
 def numeric_keys() -> list[str]:
