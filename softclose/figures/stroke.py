@@ -89,14 +89,19 @@ def plot_linkage(model, thetas, labels=None, title="Linkage"):
     a1.set_title(title)
     a2.set_xlim(-0.09, 0.12)
     a2.set_ylim(-0.03, 0.11)
-    a2.set_title("zoom: cranks OA (blue), BC (red),\nspring E–D (green)", fontsize=9)
-    # labels of the moving points at the first and last position, pushed apart from each
-    # other (start: up-left, end: down-right) so that they do not overlap
-    for th, tag, off in ((thetas[0], "0", (-14, 6)), (thetas[-1], "1", (5, -11))):
-        q = linkage_points(model, th)
-        for name in ("A", "C", "E"):
-            a2.annotate(f"{name}{tag}", q[name], xytext=off, textcoords="offset points",
-                        fontsize=7, color="0.15")
+    a2.set_title("zoom: cranks OA (blue), BC (red),\nspring E–D (green); pins at the last position",
+                 fontsize=9)
+    # the moving pins A, C, E lie within ~1.5 cm of each other: label them at the last
+    # position only, each pushed out along its own direction from their centroid, with a
+    # leader line, so that the labels never overlap each other or the points
+    q = linkage_points(model, thetas[-1])
+    centre = np.mean([q[n] for n in ("A", "C", "E")], axis=0)
+    for name in ("A", "C", "E"):
+        d = q[name] - centre
+        d = d / (np.linalg.norm(d) or 1.0)
+        a2.annotate(name, q[name], xytext=(28 * d[0], 28 * d[1]), textcoords="offset points",
+                    fontsize=9, ha="center", va="center", color="0.1",
+                    arrowprops={"arrowstyle": "-", "color": "0.4", "lw": 0.6})
     for name, off in (("O", (-12, -10)), ("B", (5, -10)), ("D", (-4, -13))):
         a2.annotate(name, pts[name], xytext=off, textcoords="offset points", fontsize=9,
                     weight="bold")
