@@ -13,6 +13,7 @@ from . import plt
 def plot_time_histories(res, title: str = "Closing stroke"):
     """theta, theta' and the tip speed against time, with the event and the peak marked."""
     tr = res.trajectory
+    box = {"boxstyle": "round,pad=0.2", "fc": "white", "ec": "none", "alpha": 0.85}
     fig, ax = plt.subplots(3, 1, figsize=(6.5, 6.5), sharex=True)
     ax[0].plot(tr["t"], np.degrees(tr["theta"]), color="C0", lw=2)
     ax[0].set_ylabel(r"$\theta$ [deg]")
@@ -25,17 +26,17 @@ def plot_time_histories(res, title: str = "Closing stroke"):
         for a in ax:
             a.axvline(res.closing_time, color="k", ls="--", lw=1)
         ax[0].annotate(f"closed at {res.closing_time:.4f} s", (res.closing_time, 0),
-                       xytext=(-10, 20), textcoords="offset points", ha="right")
+                       xytext=(-10, 20), textcoords="offset points", ha="right", bbox=box)
         ax[1].plot([res.closing_time], [res.impact_theta_dot], "ko")
         ax[1].annotate(f"impact {res.impact_theta_dot:.3f} rad/s",
                        (res.closing_time, res.impact_theta_dot), xytext=(-10, 0),
-                       textcoords="offset points", ha="right", va="center")
+                       textcoords="offset points", ha="right", va="center", bbox=box)
     i = int(np.argmax(tr["tip_speed"]))
     ax[2].plot([tr["t"][i]], [res.peak_tip_speed], "kv", ms=5)
     late = tr["t"][i] > 0.8 * tr["t"][-1]  # a peak at the end is labelled on its left
     ax[2].annotate(f"peak {res.peak_tip_speed:.3f} m/s", (tr["t"][i], res.peak_tip_speed),
                    xytext=(-8 if late else 8, -2), textcoords="offset points",
-                   ha="right" if late else "left", va="top")
+                   ha="right" if late else "left", va="top", bbox=box)
     fig.suptitle(f"{title} ({res.method}, step {res.step:g} s)")
     return fig
 
