@@ -1,30 +1,35 @@
-"""``softclose bench``: run time against error, for every integrator and step size.
+"""Run time against error, for every integrator and step size, and the speed of the calls.
 
-What it measures (all in-process, ``time.perf_counter``, several repeats, the median):
+What it measures (in-process, ``time.perf_counter``, several repeats, the median):
 
-- **Work precision of the closing stroke.** For every fixed-step method (rk4, euler_cromer,
-  gauss4, radau5) and a range of steps, the error of ``closing_time``, ``impact_theta_dot``,
-  ``impact_tip_speed`` and ``peak_tip_speed`` against a tight adaptive reference (CVODES at
-  tolerance :data:`TRUTH_TOL`), and the run time per stroke of the C kernel. The designs are
-  the SPEC §8 case (no spring, no damper) and spring + dashpot designs. The adaptive
-  reference itself is a line too (its tolerance against its run time), and the seed's method
-  (Euler-Cromer at 1 kHz) is marked.
-- **The default step**: the cheapest setting that meets :data:`TARGETS` on every design.
-- **Speed**: building the model, one ``Simulator.run`` (with and without its error
-  estimate), the raw kernel call, a batch, the reference, and ``softclose simulate`` end to
-  end in a fresh interpreter.
-- **Optimiser** (when :mod:`softclose.optimise` exists): shooting intervals N and sub-steps
-  against the error of the optimal objective and the solve time.
+- **Work precision of the closing stroke** (:func:`work_precision`). For every fixed-step
+  method (rk4, euler_cromer, gauss4, radau5) and a range of steps, the error of the
+  metrics that carry an accuracy target (:data:`softclose.problem.TARGETS`) against a tight
+  adaptive reference (CVODES at :data:`TRUTH_TOL`), and the C kernel's run time per stroke.
+  The designs are the config's own (the SPEC §8 case by default) and the spring + dashpot
+  designs :data:`SPRING_DASHPOT`. The adaptive reference is a line of its own (tolerance
+  against run time); the seed's method (Euler-Cromer at 1 kHz) is marked.
+- **The configured default** (:func:`assess_default`): does ``cfg.simulate.integrator`` at
+  ``cfg.simulate.step`` meet the targets on every design, and is it the cheapest setting
+  that does? The cheapest setting on the designs of a run is reported separately: a quick
+  run (fewer designs) cannot confirm a default that a design it omits rules out.
+- **Speed** (:func:`speed`): model build, one stroke (with and without its error estimate),
+  the raw kernel, a batch, the reference, ``softclose simulate`` end to end in a fresh
+  interpreter (and which heavy modules its start-up imports), and -- when their public
+  functions exist -- sweep throughput, robust optimisation, Monte Carlo yield and Sobol
+  indices. Rows carry the speed target they are held to (:data:`SPEED_TARGETS`).
+- **Optimiser** (:func:`optimiser_study`): shooting intervals N and sub-steps against the
+  error of the optimal objective and the solve time.
 
-With ``--out DIR`` it writes ``work_precision.csv``, ``work_precision.md``, ``speed.csv``,
-``optimiser.csv``, ``bench.json`` and the figures ``work_precision.png`` (error against run
-time, one line per method), ``error_vs_step.png`` (error against step, with the fitted
-orders) and ``optimiser.png``.
+Everything is returned as data (:class:`BenchResult`); ``softclose bench`` formats it and
+writes the files, :mod:`softclose.figures.bench` draws it.
 """
 
 from __future__ import annotations
 
-import csv
+import datetime
+import importlib
+import inspect
 import json
 import math
 import os
@@ -33,7 +38,7 @@ import statistics
 import subprocess
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -42,21 +47,21 @@ from . import native
 from .config import Config
 from .integrators import METHODS
 from .model import LidModel
+from .problem import RELATIVE, TARGETS, objective, params_of
 from .reference import Reference
 from .simulate import Simulator
 
-#: accuracy targets of the simulation issue: (kind, bound); "abs" in SI units, "rel" relative
-TARGETS = {"closing_time": ("abs", 1e-7), "impact_theta_dot": ("abs", 1e-6),
-           "impact_tip_speed": ("rel", 1e-6), "peak_tip_speed": ("rel", 1e-6)}
+#: the metrics with an accuracy target, in table order
 METRICS = tuple(TARGETS)
 #: tolerance of the adaptive reference that is taken as the truth
 TRUTH_TOL = 1e-14
-#: the adaptive reference's own line in the figure
+#: the adaptive reference's own line in the work-precision table
 REFERENCE_TOLS = (1e-6, 1e-8, 1e-10, 1e-12)
-#: the seed notebook's method
+#: the seed notebook's method and step
 SEED = ("euler_cromer", 1e-3)
 
 _HIGH = (2e-2, 1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4)
+#: steps of each method (the configured default step is always added to its method)
 STEPS = {"rk4": _HIGH, "gauss4": _HIGH, "radau5": _HIGH,
          "euler_cromer": (2e-3, 1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5, 5e-6, 2e-6, 1e-6)}
 QUICK_STEPS = {"rk4": (1e-2, 5e-3, 2e-3, 1e-3, 5e-4), "gauss4": (1e-2, 5e-3, 2e-3, 1e-3),
@@ -68,18 +73,39 @@ SPRING_DASHPOT = {
     "strong_spring": (5000.0, 0.06, 2000.0, 0.0),   # nearly balanced: 0.36 s, -0.40 rad/s
     "stiff_corner": (10000.0, 0.02, 5000.0, 0.0),   # corner of the design box: 0.10 s, -3.2 rad/s
 }
+#: how many of the spring + dashpot designs a quick run takes (in the order above)
+QUICK_DESIGNS = 1
+
+#: speed targets (from the issues): "max_s" -- at most this many seconds; "min_per_s" --
+#: at least this many items per second. Rows without an entry have no target.
+SPEED_TARGETS = {
+    "model": {"max_s": 1.0},
+    "run": {"max_s": 0.5e-3},
+    "cli_simulate": {"max_s": 0.3},
+    "sweep_40000": {"min_per_s": 20000.0},
+}
+#: modules that ``softclose simulate`` must not import at start-up (they are imported lazily)
+HEAVY_MODULES = ("pandas", "pyarrow", "scipy", "SALib", "dask", "matplotlib")
+#: the 40,000-design grid of the sweep throughput entry
+SWEEP_GRID = {"design.spring_k": (500.0, 9500.0, 40),
+              "design.spring_rest_length": (0.05, 0.09, 40),
+              "design.damper_c": (100.0, 4000.0, 25)}
+
+#: optimiser settings of the N / sub-steps study
+OPT_NODES = (5, 10, 20, 40)
+OPT_SUBSTEPS = (1, 2, 4)
 
 
 def designs_for(cfg: Config, quick: bool = False) -> dict[str, np.ndarray]:
-    """The benchmark's designs: the config's own (the SPEC §8 case by default) + spring/dashpot."""
-    d = cfg.design
-    own = (d.spring_k, d.spring_rest_length, d.damper_c, d.rotary_damper_c)
+    """The benchmark's designs: the config's own (named "spec8" when it is the SPEC §8 case:
+    no spring, no damper) and the spring + dashpot designs (the first only when ``quick``)."""
+    own = params_of(cfg)
     name = "spec8" if own[0] == 0 and own[2] == 0 and own[3] == 0 else "config"
-    out = {name: np.array(own, float)}
-    for k, v in SPRING_DASHPOT.items():
-        out[k] = np.array(v, float)
-        if quick:
+    out = {name: own}
+    for i, (k, v) in enumerate(SPRING_DASHPOT.items()):
+        if quick and i >= QUICK_DESIGNS:
             break
+        out[k] = np.array(v, float)
     return out
 
 
@@ -122,27 +148,24 @@ def kernel_times(sim: Simulator, p: np.ndarray, repeats: int = 5,
     return med / n, low / n
 
 
-def kernel_time_per_stroke(sim: Simulator, p: np.ndarray, repeats: int = 5) -> float:
-    """Median run time of one stroke in the C kernel (see :func:`kernel_times`), in s."""
-    return kernel_times(sim, p, repeats)[0]
-
-
 # -- errors --------------------------------------------------------------------------------
-def errors(res: dict, truth: dict) -> dict:
-    """Error of each metric of ``res`` against ``truth`` (abs or rel as in TARGETS); None if
-    either is missing."""
+def errors(res, truth) -> dict:
+    """Error of each targeted metric of ``res`` against ``truth`` (both
+    :class:`~softclose.stroke.StrokeResult`): absolute, or relative for
+    :data:`softclose.problem.RELATIVE`; None where either value is missing."""
     out = {}
-    for k, (kind, _) in TARGETS.items():
-        a, b = res.get(k), truth.get(k)
+    for k in METRICS:
+        a, b = getattr(res, k), getattr(truth, k)
         if a is None or b is None or not (math.isfinite(a) and math.isfinite(b)):
             out[k] = None
         else:
-            out[k] = abs(a - b) / (abs(b) if kind == "rel" else 1.0)
+            out[k] = abs(a - b) / (abs(b) if k in RELATIVE else 1.0)
     return out
 
 
 def meets(err: dict) -> bool:
-    return all(err.get(k) is not None and err[k] <= bound for k, (_, bound) in TARGETS.items())
+    """Every error of :func:`errors` within its target."""
+    return all(err.get(k) is not None and err[k] <= TARGETS[k] for k in METRICS)
 
 
 def fit_order(hs, errs, truth_scale: float, floor: float = 0.0, hi: float = 1e-2):
@@ -162,14 +185,40 @@ def fit_order(hs, errs, truth_scale: float, floor: float = 0.0, hi: float = 1e-2
 
 
 # -- the work-precision study ---------------------------------------------------------------
-@dataclass
+@dataclass(frozen=True)
 class WorkPrecision:
-    rows: list          # one dict per (design, method, step) and per reference tolerance
-    truths: dict        # design -> reference metrics at TRUTH_TOL
-    truth_floor: dict   # design -> errors of the reference at 10 x TRUTH_TOL against truth
-    orders: dict        # (design, method, metric) -> fitted order (error against step)
-    slopes: dict        # (design, method, metric) -> fitted slope (error against run time)
-    default: dict       # the recommended setting
+    """Errors and run times of every method and step on the benchmark's designs.
+
+    ``rows``: one dict per (design, method, step) and per reference tolerance (errors
+    ``err_<metric>``, the stroke's own estimates ``est_<metric>``, ``time_per_stroke`` in s,
+    ``meets_targets``, ``seed``). ``truths``: the reference at :data:`TRUTH_TOL` per design;
+    ``truth_floor``: the errors of the reference at 10 x TRUTH_TOL against it (the truth's
+    own uncertainty). ``orders`` / ``slopes``: fitted slopes of error against step / run
+    time, keyed (design, method, metric). ``default``: :func:`assess_default`.
+    """
+
+    rows: tuple
+    truths: dict
+    truth_floor: dict
+    orders: dict
+    slopes: dict
+    default: dict
+    designs: tuple
+    quick: bool = False
+
+    def rows_of(self, design: str, method: str) -> list[dict]:
+        return [r for r in self.rows if r["design"] == design and r["method"] == method]
+
+    def to_json(self) -> dict:
+        from .jsonio import jsonable
+        return jsonable({
+            "designs": list(self.designs), "quick": self.quick, "truth_tol": TRUTH_TOL,
+            "default": self.default, "rows": list(self.rows),
+            "truths": {d: t.to_json() for d, t in self.truths.items()},
+            "truth_floor": self.truth_floor,
+            "orders": [{"design": d, "method": m, "metric": k, "order": o,
+                        "slope_vs_time": self.slopes.get((d, m, k))}
+                       for (d, m, k), o in self.orders.items()]})
 
 
 def work_precision(cfg: Config, quick: bool = False, repeats: int | None = None,
@@ -177,8 +226,9 @@ def work_precision(cfg: Config, quick: bool = False, repeats: int | None = None,
     """Errors and run times of every method and step on the benchmark designs."""
     log = log or (lambda *a: None)
     repeats = repeats or (3 if quick else 7)
-    steps = QUICK_STEPS if quick else STEPS
-    methods = methods or list(METHODS)
+    steps = {m: set(s) for m, s in (QUICK_STEPS if quick else STEPS).items()}
+    steps.setdefault(cfg.simulate.integrator, set()).add(cfg.simulate.step)
+    methods = list(methods or METHODS)
     model = LidModel(cfg)
     designs = designs_for(cfg, quick)
     truth_ref = Reference(model, TRUTH_TOL)
@@ -188,20 +238,19 @@ def work_precision(cfg: Config, quick: bool = False, repeats: int | None = None,
     for dname, p in designs.items():
         truths[dname] = truth_ref.simulate(p)
         floor[dname] = errors(check_ref.simulate(p), truths[dname])
-        log(f"  truth for {dname}: closing_time {truths[dname]['closing_time']}")
+        log(f"  truth for {dname}: closing_time {truths[dname].closing_time}")
         for mname in methods:
             sim = Simulator(cfg, model=model, integrator=mname)
             if table is not None:
                 sim.table = table
             table = sim.table
-            for h in steps[mname]:
+            for h in sorted(steps.get(mname, ()), reverse=True):
                 sim.step = h
                 res = sim.run(p)
-                err = errors(res.metrics(), truths[dname]) if res.ok else \
-                    {k: None for k in METRICS}
+                err = errors(res, truths[dname]) if res.ok else {k: None for k in METRICS}
                 t_kernel, t_min = kernel_times(sim, p, repeats)
                 rows.append({
-                    "design": dname, "method": mname, "step": h, "status": res.status,
+                    "design": dname, "method": mname, "step": h, "status": res.status.text,
                     "steps": res.steps, "time_per_stroke": t_kernel, "time_min": t_min,
                     **{f"err_{k}": err[k] for k in METRICS},
                     **{f"est_{k}": (res.accuracy or {}).get(k) for k in METRICS},
@@ -214,9 +263,9 @@ def work_precision(cfg: Config, quick: bool = False, repeats: int | None = None,
             r = ref.simulate(p)
             t, t_min = time_stats(lambda: ref.simulate(p), max(1, repeats // 2), warmup=0)
             err = errors(r, truths[dname])
-            rows.append({"design": dname, "method": "reference", "step": tol, "status":
-                         "closed" if r["closed"] else "not closed", "steps": 0,
-                         "time_per_stroke": t, "time_min": t_min, **{f"err_{k}": err[k] for k in METRICS},
+            rows.append({"design": dname, "method": "reference", "step": tol,
+                         "status": r.status.text, "steps": 0, "time_per_stroke": t,
+                         "time_min": t_min, **{f"err_{k}": err[k] for k in METRICS},
                          **{f"est_{k}": None for k in METRICS},
                          "meets_targets": meets(err), "seed": False, "message": ""})
         log(f"  {dname}: done")
@@ -225,138 +274,276 @@ def work_precision(cfg: Config, quick: bool = False, repeats: int | None = None,
         for mname in methods:
             rs = [r for r in rows if r["design"] == dname and r["method"] == mname
                   and r["status"] in ("closed", "not closed")]
-            for k, (kind, _) in TARGETS.items():
-                scale = abs(truths[dname][k] or 1.0) if kind == "abs" else 1.0
+            for k in METRICS:
+                scale = 1.0 if k in RELATIVE else abs(getattr(truths[dname], k) or 1.0)
                 es = [r[f"err_{k}"] for r in rs]
                 fl = floor[dname].get(k) or 0.0
                 orders[(dname, mname, k)] = fit_order([r["step"] for r in rs], es, scale, fl)
-                s = fit_order([r["time_per_stroke"] for r in rs], es, scale, fl)
-                slopes[(dname, mname, k)] = s
-    default = choose_default(rows, list(designs))
-    return WorkPrecision(rows, truths, floor, orders, slopes, default)
+                slopes[(dname, mname, k)] = fit_order([r["time_per_stroke"] for r in rs], es,
+                                                      scale, fl)
+    default = assess_default(cfg, rows, list(designs))
+    return WorkPrecision(tuple(rows), truths, floor, orders, slopes, default,
+                         tuple(designs), quick)
 
 
-def choose_default(rows: list, designs: list) -> dict:
-    """The cheapest (method, step) that meets the targets on every design.
+def cheapest_setting(rows: list, designs: list) -> dict:
+    """The cheapest (method, step) that meets the targets on every design of ``designs``.
 
-    Cost is the total kernel run time over the designs. Also returns the cheapest step of
-    each method (``per_method``), so the default integrator's step can be read off.
+    Cost is the total kernel run time over the designs. ``per_method`` gives the cheapest
+    passing step of each method. ``method`` and ``step`` are None when nothing passes.
     """
     per = {}
     for r in rows:
-        if r["method"] == "reference":
+        if r["method"] == "reference" or r["design"] not in designs:
             continue
-        key = (r["method"], r["step"])
-        e = per.setdefault(key, {"method": r["method"], "step": r["step"], "ok": True,
-                                 "time": 0.0, "designs": 0})
+        e = per.setdefault((r["method"], r["step"]), {"method": r["method"], "step": r["step"],
+                                                      "ok": True, "time": 0.0, "designs": 0})
         e["ok"] &= bool(r["meets_targets"])
         e["time"] += r["time_per_stroke"]
         e["designs"] += 1
-    good = [e for e in per.values() if e["ok"] and e["designs"] == len(designs)]
+    good = sorted((e for e in per.values() if e["ok"] and e["designs"] == len(designs)),
+                  key=lambda e: e["time"])
     per_method = {}
-    for e in sorted(good, key=lambda e: e["time"]):
+    for e in good:
         per_method.setdefault(e["method"], {"step": e["step"],
                                             "mean_time_per_stroke": e["time"] / len(designs)})
     if not good:
-        return {"method": None, "step": None, "per_method": per_method}
-    best = min(good, key=lambda e: e["time"])
-    # the largest step of the default integrator meeting the targets (the config's step)
-    return {"method": best["method"], "step": best["step"],
-            "mean_time_per_stroke": best["time"] / len(designs), "per_method": per_method}
+        return {"method": None, "step": None, "mean_time_per_stroke": None,
+                "per_method": per_method}
+    return {"method": good[0]["method"], "step": good[0]["step"],
+            "mean_time_per_stroke": good[0]["time"] / len(designs), "per_method": per_method}
+
+
+def assess_default(cfg: Config, rows: list, designs: list) -> dict:
+    """The configured default (``cfg.simulate.integrator`` at ``cfg.simulate.step``) against
+    the designs of this run.
+
+    Returns ``method``, ``step`` (the configured setting), ``meets_targets`` (on every
+    design), ``failing_designs``, ``cheapest`` (:func:`cheapest_setting` on these designs),
+    ``confirmed`` (the default meets the targets and nothing cheaper does), and
+    ``omitted_designs``: designs of the full benchmark this run left out. When the default
+    is not confirmed and designs were omitted, this run cannot tell whether one of them is
+    what rules the cheaper setting out.
+    """
+    method, step = cfg.simulate.integrator, cfg.simulate.step
+    mine = [r for r in rows if r["method"] == method and r["step"] == step]
+    failing = [r["design"] for r in mine if not r["meets_targets"]]
+    ok = len(mine) == len(designs) and not failing
+    cheapest = cheapest_setting(rows, designs)
+    mean = (sum(r["time_per_stroke"] for r in mine) / len(mine)) if mine else None
+    confirmed = ok and (cheapest["method"], cheapest["step"]) == (method, step)
+    full = list(designs_for(cfg, quick=False))
+    return {"method": method, "step": step, "meets_targets": ok, "failing_designs": failing,
+            "mean_time_per_stroke": mean, "confirmed": confirmed, "cheapest": cheapest,
+            "designs": list(designs), "omitted_designs": [d for d in full if d not in designs]}
 
 
 # -- speed of the user-facing calls --------------------------------------------------------
-def speed(cfg: Config, quick: bool = False, cli: bool = True, log=None) -> list[dict]:
-    """Run times (median of repeats) of model build, one stroke, the kernel, the CLI."""
+def _speed_row(key, what, seconds, repeats, note="", count=None, unit="designs") -> dict:
+    """One speed row: median seconds; ``count`` items per call gives a rate (per second)."""
+    rate = count / seconds if count and seconds > 0 else None
+    tgt = SPEED_TARGETS.get(key)
+    met = None
+    if tgt and "max_s" in tgt:
+        met = seconds <= tgt["max_s"]
+    elif tgt and "min_per_s" in tgt and rate is not None:
+        met = rate >= tgt["min_per_s"]
+    return {"key": key, "what": what, "median_s": seconds, "repeats": repeats,
+            "rate": rate, "unit": unit if count else "", "target": tgt, "met": met,
+            "note": note}
+
+
+def speed(cfg: Config, quick: bool = False, cli: bool = True, later: bool = True,
+          log=None) -> list[dict]:
+    """Run times (median of repeats) of model build, one stroke, the kernel, the reference,
+    the CLI start-up, and (``later``) the sweep / robust / yield / Sobol entries."""
     log = log or (lambda *a: None)
     rows = []
 
-    def add(what, seconds, repeats, note=""):
-        rows.append({"what": what, "median_s": seconds, "repeats": repeats, "note": note})
-        log(f"  {what}: {seconds * 1e3:.3f} ms")
+    def add(row):
+        rows.append(row)
+        log(f"  {row['what']}: {row['median_s'] * 1e3:.3f} ms")
     r = 3 if quick else 9
-    add("LidModel(cfg) (symbolic model, CasADi)", median_time(lambda: LidModel(cfg), r), r)
+    add(_speed_row("model", "LidModel(cfg) (symbolic model, CasADi)",
+                   median_time(lambda: LidModel(cfg), r), r))
     model = LidModel(cfg)
-    add("Simulator(cfg, model) (coefficient table)",
-        median_time(lambda: Simulator(cfg, model=model), r), r)
+    add(_speed_row("table", "Simulator(cfg, model) (coefficient table)",
+                   median_time(lambda: Simulator(cfg, model=model), r), r))
     sim = Simulator(cfg, model=model)
     p = model.params()
     n = 50 if quick else 300
-    add("Simulator.run(p, estimate_error=False)",
-        median_time(lambda: sim.run(p, estimate_error=False), n, warmup=5), n,
-        f"{sim.method.name}, step {sim.step:g} s")
-    add("Simulator.run(p) (with the h/2 error estimate)",
-        median_time(lambda: sim.run(p), n // 3, warmup=3), n // 3)
+    add(_speed_row("run", "Simulator.run(p, estimate_error=False)",
+                   median_time(lambda: sim.run(p, estimate_error=False), n, warmup=5), n,
+                   f"{sim.method.name}, step {sim.step:g} s"))
+    add(_speed_row("run_estimate", "Simulator.run(p) (with the h/2 error estimate)",
+                   median_time(lambda: sim.run(p), n // 3, warmup=3), n // 3))
     st = cfg.stroke
     d1 = np.r_[p, sim.energy_tol(p[None, :])][None, :]
-    add("raw kernel call native.run_strokes (1 design, 1 thread)",
-        median_time(lambda: native.run_strokes(sim.table, sim.method, sim.step, st.t_max,
-                                               st.theta0, st.theta_closed, d1, threads=1),
-                    n, warmup=5), n)
-    add("kernel time per stroke (batch, 1 thread)", kernel_time_per_stroke(sim, p, 7), 7)
+    add(_speed_row("kernel_call", "raw kernel call native.run_strokes (1 design, 1 thread)",
+                   median_time(lambda: native.run_strokes(sim.table, sim.method, sim.step,
+                                                          st.t_max, st.theta0,
+                                                          st.theta_closed, d1, threads=1),
+                               n, warmup=5), n))
+    add(_speed_row("kernel_stroke", "kernel time per stroke (batch, 1 thread)",
+                   kernel_times(sim, p, 7)[0], 7))
     rng = np.random.default_rng(0)
     B = 2000
-    P = np.column_stack([rng.uniform(0, 3000, B), rng.uniform(0.02, 0.12, B),
-                         rng.uniform(0, 5000, B), np.zeros(B)])
-    tb = median_time(lambda: sim.run_batch(P), 3 if quick else 5)
-    add(f"Simulator.run_batch, {B} random designs, all cores, per design", tb / B,
-        3 if quick else 5, f"{os.cpu_count()} threads; batch total {tb * 1e3:.1f} ms")
+    lo = [getattr(cfg.optimise, k)[0] for k in ("spring_k", "spring_rest_length", "damper_c")]
+    hi = [getattr(cfg.optimise, k)[1] for k in ("spring_k", "spring_rest_length", "damper_c")]
+    P = np.column_stack([rng.uniform(lo, hi, (B, 3)), np.zeros(B)])
+    rb = 3 if quick else 5
+    tb = median_time(lambda: sim.run_batch(P), rb)
+    add(_speed_row("batch", f"Simulator.run_batch, {B} random designs of the design box, "
+                   "all cores", tb, rb, f"{os.cpu_count()} threads", count=B))
     ref = Reference(model)
     rr = 2 if quick else 5
-    add(f"Reference(model).simulate(p) (CVODES, tol {ref.tol:g})",
-        median_time(lambda: ref.simulate(p), rr), rr)
+    add(_speed_row("reference", f"Reference(model).simulate(p) (CVODES, tol {ref.tol:g})",
+                   median_time(lambda: ref.simulate(p), rr), rr))
     if cli:
-        rc = 3 if quick else 7
-        add("`python -m softclose simulate --json` end to end (fresh interpreter)",
-            cli_time(["simulate", "--json"], rc), rc)
+        rc = 5 if quick else 9
+        heavy = startup_imports(["simulate", "--json"])
+        note = ("imports none of " + ", ".join(HEAVY_MODULES) if not heavy else
+                "imports " + ", ".join(heavy) + " at start-up")
+        add(_speed_row("cli_simulate", "`python -m softclose simulate --json` end to end "
+                       "(fresh interpreter)", cli_time(["simulate", "--json"], rc), rc, note))
+    if later:
+        rows.extend(later_entries(cfg, quick=quick, log=log))
     return rows
 
 
 def cli_time(argv: list[str], repeats: int) -> float:
-    """Median wall time of ``python -m softclose ARGV`` in a fresh interpreter."""
-    root = str(Path(__file__).resolve().parents[1])
-    env = dict(os.environ)
-    env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    """Median wall time of ``python -m softclose ARGV`` in a fresh interpreter, in s."""
     cmd = [sys.executable, "-m", "softclose", *argv]
+    env = _env()
 
     def run():
         r = subprocess.run(cmd, capture_output=True, env=env, text=True)
         if r.returncode != 0:
-            raise RuntimeError(f"{' '.join(argv)} failed: {r.stderr.strip()}")
+            raise RuntimeError(f"softclose {' '.join(argv)} failed: {r.stderr.strip()}")
     return median_time(run, repeats)
 
 
-# -- optimiser ---------------------------------------------------------------------------
-OPT_NODES = (5, 10, 20, 40)
-OPT_SUBSTEPS = (1, 2, 4)
+def startup_imports(argv: list[str], modules=HEAVY_MODULES) -> list[str]:
+    """Which of ``modules`` a fresh interpreter has imported after
+    ``softclose.cli.main(argv)`` (the command's own start-up and run)."""
+    code = ("import io, json, sys, contextlib\n"
+            "from softclose.cli import main\n"
+            "with contextlib.redirect_stdout(io.StringIO()):\n"
+            f"    main({list(argv)!r})\n"
+            f"print(json.dumps([m for m in {list(modules)!r} if m in sys.modules]))\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       env=_env())
+    if r.returncode != 0:
+        raise RuntimeError(f"softclose {' '.join(argv)} failed: {r.stderr.strip()[-300:]}")
+    return json.loads(r.stdout.strip().splitlines()[-1])
 
 
-def objective(cfg: Config, metrics: dict) -> float | None:
-    o = cfg.optimise
-    if metrics.get("impact_theta_dot") is None or metrics.get("peak_tip_speed") is None:
+def _env() -> dict:
+    """The environment of a fresh interpreter that imports this copy of softclose."""
+    root = str(Path(__file__).resolve().parents[1])
+    env = dict(os.environ)
+    env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    return env
+
+
+def _public(module: str, name: str, needs: tuple = ()):
+    """``module.name`` if it exists and takes the keyword arguments ``needs``, else None."""
+    try:
+        fn = getattr(importlib.import_module(module), name, None)
+    except ImportError:
         return None
-    return o.weight_impact * metrics["impact_theta_dot"] ** 2 + \
-        o.weight_peak_tip * metrics["peak_tip_speed"] ** 2
+    if not callable(fn):
+        return None
+    try:
+        params = inspect.signature(fn).parameters
+    except (TypeError, ValueError):
+        return fn
+    if any(p.kind is p.VAR_KEYWORD for p in params.values()):
+        return fn
+    return fn if all(k in params for k in needs) else None
 
 
-def optimiser_study(cfg: Config, quick: bool = False, log=None):
+def sweep_axes() -> dict[str, np.ndarray]:
+    """The 40,000-design grid of the sweep throughput entry (:data:`SWEEP_GRID`)."""
+    return {k: np.linspace(a, b, n) for k, (a, b, n) in SWEEP_GRID.items()}
+
+
+def later_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
+    """Sweep throughput on the 40,000-design grid, robust optimisation, Monte Carlo yield
+    of 1e5 samples and Sobol indices at N = 1024 -- each when its public function exists
+    (a row with a note says which is not available yet)."""
+    log = log or (lambda *a: None)
+    rows = []
+
+    def timed(key, what, fn, repeats, count=None, unit="designs", note=""):
+        try:
+            t = median_time(fn, repeats, warmup=0)
+        except Exception as exc:  # reported in the table, the bench goes on
+            rows.append({**_speed_row(key, what, math.nan, repeats),
+                         "median_s": None, "met": None,
+                         "note": f"failed: {type(exc).__name__}: {str(exc).splitlines()[0]}"})
+            log(f"  {what}: failed ({exc})")
+            return
+        rows.append(_speed_row(key, what, t, repeats, note, count=count, unit=unit))
+        log(f"  {what}: {t:.3f} s")
+
+    def missing(key, what, name):
+        rows.append({**_speed_row(key, what, math.nan, 0), "median_s": None, "met": None,
+                     "note": f"not measured: {name} is not available yet"})
+
+    rep = 1 if quick else 3
+    sweep = _public("softclose.sweep", "sweep")
+    n_grid = int(np.prod([n for _, _, n in SWEEP_GRID.values()]))
+    what = f"sweep of the {n_grid:,}-design grid (k x l0 x c), in-process"
+    if sweep is not None and "out" not in inspect.signature(sweep).parameters:
+        axes = sweep_axes()
+        timed("sweep_40000", what, lambda: sweep(cfg, axes), rep, count=n_grid)
+    else:
+        missing("sweep_40000", what, "softclose.sweep.sweep(cfg, axes)")
+    opt = _public("softclose", "optimise", ("robust",))
+    robust = _public("softclose.robust", "optimise_robust")
+    what = "robust optimisation (the [tolerance] box)"
+    if opt is not None:
+        timed("robust_optimise", what + ": softclose.optimise(cfg, robust=True)",
+              lambda: opt(cfg, robust=True), 1)
+    elif robust is not None:
+        timed("robust_optimise", what + ": softclose.robust.optimise_robust(cfg)",
+              lambda: robust(cfg), 1)
+    else:
+        missing("robust_optimise", what, "softclose.optimise(cfg, robust=True)")
+    ta = _public("softclose.robust", "tolerance_analysis", ("samples",))
+    what = "Monte Carlo yield, 100,000 samples: tolerance_analysis(cfg, samples=100000)"
+    if ta is not None:
+        timed("yield_1e5", what, lambda: ta(cfg, samples=100000), rep, count=100000,
+              unit="samples")
+    else:
+        missing("yield_1e5", what, "softclose.robust.tolerance_analysis")
+    sens = _public("softclose.robust", "sensitivity", ("samples",))
+    what = "Sobol indices, N = 1024: sensitivity(cfg, samples=1024)"
+    if sens is not None:
+        timed("sobol_1024", what, lambda: sens(cfg, samples=1024), rep)
+    else:
+        missing("sobol_1024", what, "softclose.robust.sensitivity")
+    return rows
+
+
+# -- optimiser ---------------------------------------------------------------------------
+def optimiser_study(cfg: Config, quick: bool = False, log=None) -> tuple[list, str]:
     """N and sub-steps against the error of the optimal objective and the solve time.
 
     The error is measured against the best estimate of the continuous optimum: the
     objective that the adaptive reference gives at the design of the finest setting.
     Each row also carries the discretisation error at its own design,
     |J_N - J_reference(design_N)|. Returns (rows, note); rows is empty with a note
-    when :mod:`softclose.optimise` is not available.
+    when the optimiser's ``solve`` is not available.
     """
     log = log or (lambda *a: None)
-    try:
-        from .optimise import solve
-    except ImportError as exc:
-        return [], f"optimiser section skipped: softclose.optimise is not available ({exc})"
+    solve = _public("softclose.optimise", "solve", ("nodes", "substeps"))
+    if solve is None:
+        return [], "optimiser section skipped: softclose.optimise.solve is not available"
     nodes = (5, 10, 20) if quick else OPT_NODES
     subs = (1, 4) if quick else OPT_SUBSTEPS
-    model = LidModel(cfg)
-    ref = Reference(model, TRUTH_TOL)
+    ref = Reference(LidModel(cfg), TRUTH_TOL)
     rows = []
     for n in nodes:
         for s in subs:
@@ -373,10 +560,9 @@ def optimiser_study(cfg: Config, quick: bool = False, log=None):
                              "message": str(getattr(r, "message", "") or "not solved")})
                 continue
             d = r.design
-            p = np.array([d["spring_k"], d["spring_rest_length"], d["damper_c"],
-                          cfg.design.rotary_damper_c], float)
-            J_ref = objective(cfg, ref.simulate(p))
-            rows.append({"nodes": n, "substeps": s, "success": bool(r.success),
+            rr = ref.simulate(params_of(cfg, d))
+            J_ref = objective(cfg.optimise, rr.impact_theta_dot, rr.peak_tip_speed)
+            rows.append({"nodes": n, "substeps": s, "success": True,
                          "objective": float(r.objective), "objective_reference": J_ref,
                          "discretisation_error": None if J_ref is None else
                          abs(float(r.objective) - J_ref),
@@ -396,8 +582,88 @@ def optimiser_study(cfg: Config, quick: bool = False, log=None):
     return rows, ""
 
 
-# -- output --------------------------------------------------------------------------------
+# -- the seed's computation ----------------------------------------------------------------
+#: the seed notebook's step (1000 samples per second)
+SEED_STEP = SEED[1]
+#: the metrics the seed reads off its drop
+SEED_KEYS = ("closing_time", "impact_theta_dot", "impact_tip_speed")
+
+
+def seed_reading(sim: Simulator) -> dict:
+    """The seed's numbers: ``sim`` (Euler-Cromer at 1 ms) with the impact read at the first
+    sample at or below theta_closed, as the seed notebook does, instead of located in the
+    step. Also returns the same stroke with the event located (``located_event``) and the
+    trajectory."""
+    res = sim.run(trajectory=True, estimate_error=False)
+    tr = res.trajectory
+    # the kernel stops at the located event; the sample the seed reads is one full step on
+    # from the last node before it
+    t, th, thd = tr["t"][-2], tr["theta"][-2], tr["theta_dot"][-2]
+    x1 = native.kernel_step(sim.table, sim.method, sim.model.params(), sim.step,
+                            np.array([th, thd]))
+    v_T = np.asarray(sim.model.kin(np.array([x1[0], x1[1]]))[4]).ravel()
+    return {"closing_time": t + sim.step, "impact_theta_dot": float(x1[1]),
+            "impact_tip_speed": float(np.hypot(v_T[0], v_T[1])),
+            "theta_at_sample_deg": math.degrees(x1[0]), "located_event": res.metrics(),
+            "trajectory": tr}
+
+
+def _slope(hs, errs, above: float = 1e-8):
+    """Slope of log error against log step over the errors above ``above`` (NaN if < 2)."""
+    e, h = np.asarray(errs, float), np.asarray(hs, float)
+    ok = e > above
+    if ok.sum() < 2:
+        return math.nan
+    return float(np.polyfit(np.log(h[ok]), np.log(e[ok]), 1)[0])
+
+
+def seed_reproduction(cfg: Config, fast: bool = False) -> dict:
+    """The seed notebook's gravity-only drop (Euler-Cromer at 1 kHz, impact read off the
+    sample grid) against the adaptive reference (tolerance ``simulate.reference_tol``) and
+    the configured default (``simulate.integrator`` at ``simulate.step``, event located).
+
+    Returns the metrics and errors of each, the errors of Euler-Cromer and rk4 against the
+    step (``convergence``), their observed orders, and the trajectories of the seed's drop
+    and of the default (``trajectories``, for the figure).
+    """
+    ec = Simulator(cfg, integrator=SEED[0], step=SEED_STEP)
+    seed = seed_reading(ec)
+    default = Simulator(cfg, model=ec.model).run(trajectory=True)
+    ref = Reference(ec.model).simulate()
+    steps = SEED_STEP * 2.0 ** -np.arange(0, 4 if fast else 8)
+    steps = np.r_[SEED_STEP * np.array([8, 4, 2]), steps]
+    conv = {"step": steps.tolist()}
+    for name in ("euler_cromer", "rk4"):
+        for k in SEED_KEYS[:2]:
+            conv[f"{name}_{k}_error"] = []
+        for h in steps:
+            r = Simulator(cfg, model=ec.model, integrator=name, step=float(h)).run(
+                estimate_error=False)
+            for k in SEED_KEYS[:2]:
+                conv[f"{name}_{k}_error"].append(abs(getattr(r, k) - getattr(ref, k)))
+    order = {n: _slope(steps, conv[f"{n}_impact_theta_dot_error"])
+             for n in ("euler_cromer", "rk4")}
+    refv = {k: getattr(ref, k) for k in SEED_KEYS}
+    loc = seed["located_event"]
+    return {
+        "reference": refv, "reference_tol": ref.tolerance,
+        "seed_grid_reading": {k: seed[k] for k in SEED_KEYS},
+        "seed_theta_at_sample_deg": seed["theta_at_sample_deg"],
+        "seed_errors": {k: seed[k] - refv[k] for k in SEED_KEYS},
+        "euler_cromer_located_event": {k: loc[k] for k in SEED_KEYS},
+        "euler_cromer_located_errors": {k: loc[k] - refv[k] for k in SEED_KEYS},
+        "default": {"method": default.method, "step": default.step,
+                    **{k: getattr(default, k) for k in SEED_KEYS}},
+        "default_errors": {k: getattr(default, k) - refv[k] for k in SEED_KEYS},
+        "default_accuracy": {k: (default.accuracy or {}).get(k) for k in SEED_KEYS},
+        "observed_order": order, "convergence": conv,
+        "trajectories": {"seed": seed["trajectory"], "default": default.trajectory},
+    }
+
+
+# -- the whole benchmark ---------------------------------------------------------------------
 def machine() -> str:
+    """CPU, cores, OS, Python, NumPy and CasADi versions of this machine."""
     cpu = platform.processor() or ""
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():
@@ -412,620 +678,82 @@ def machine() -> str:
             f"CasADi {casadi.__version__}")
 
 
-def _fmt(v, spec=".2e"):
-    if v is None:
-        return "—"
-    if isinstance(v, float) and not math.isfinite(v):
-        return "—"
-    return format(v, spec)
-
-
-def wp_markdown(wp: WorkPrecision) -> str:
-    """The work-precision table (one block per design) as Markdown."""
-    out = []
-    for dname in wp.truths:
-        t = wp.truths[dname]
-        out.append(f"**{dname}** — truth (CVODES, tol {TRUTH_TOL:g}): closing_time "
-                   f"{_fmt(t['closing_time'], '.10g')} s, impact_theta_dot "
-                   f"{_fmt(t['impact_theta_dot'], '.10g')} rad/s, peak_tip_speed "
-                   f"{_fmt(t['peak_tip_speed'], '.10g')} m/s; truth uncertainty (tol "
-                   f"{10 * TRUTH_TOL:g} against it): "
-                   + ", ".join(f"{k} {_fmt(v, '.0e')}" for k, v in wp.truth_floor[dname].items()))
-        out.append("")
-        out.append("| method | step / tol | status | µs per stroke | Δ closing_time (s) | "
-                   "Δ impact_theta_dot (rad/s) | rel Δ impact_tip_speed | rel Δ peak_tip_speed "
-                   "| meets targets |")
-        out.append("|---|---|---|---:|---:|---:|---:|---:|:-:|")
-        for r in wp.rows:
-            if r["design"] != dname:
-                continue
-            name = r["method"] + (" (seed)" if r["seed"] else "")
-            if (r["method"], r["step"]) == (wp.default.get("method"), wp.default.get("step")):
-                name += " **(default)**"
-            out.append(f"| {name} | {r['step']:g} | {r['status']} | "
-                       f"{r['time_per_stroke'] * 1e6:.1f} | "
-                       + " | ".join(_fmt(r[f'err_{k}']) for k in METRICS)
-                       + f" | {'yes' if r['meets_targets'] else 'no'} |")
-        out.append("")
-    out.append("Fitted order (slope of log error against log step, asymptotic points):")
-    out.append("")
-    out.append("| design | method | " + " | ".join(METRICS) + " | slope against run time "
-               "(impact_theta_dot) |")
-    out.append("|---|---|" + "---:|" * (len(METRICS) + 1))
-    for dname in wp.truths:
-        for m in METHODS:
-            if (dname, m, METRICS[0]) not in wp.orders:
-                continue
-            out.append(f"| {dname} | {m} | "
-                       + " | ".join(_fmt(wp.orders[(dname, m, k)], '.2f') for k in METRICS)
-                       + f" | {_fmt(wp.slopes[(dname, m, 'impact_theta_dot')], '.2f')} |")
-    return "\n".join(out)
-
-
-def speed_markdown(rows) -> str:
-    out = ["| what | median | repeats | note |", "|---|---:|---:|---|"]
-    for r in rows:
-        s = r["median_s"]
-        val = f"{s * 1e6:.1f} µs" if s < 1e-3 else (f"{s * 1e3:.2f} ms" if s < 1 else
-                                                       f"{s:.2f} s")
-        out.append(f"| {r['what']} | {val} | {r['repeats']} | {r['note']} |")
-    return "\n".join(out)
-
-
-def opt_markdown(rows, note="") -> str:
-    if not rows:
-        return note or "(no optimiser rows)"
-    out = ["| N | sub-steps | success | objective J_N | J_reference(design_N) | "
-           "abs(J_N - J*) | abs(J_N - J_ref(design_N)) | solve time (s) | k | l0 | c |",
-           "|---:|---:|:-:|---:|---:|---:|---:|---:|---:|---:|---:|"]
-    for r in rows:
-        if "objective" not in r:
-            out.append(f"| {r['nodes']} | {r['substeps']} | no | {r['message']} |"
-                       + " |" * 7)
-            continue
-        out.append(f"| {r['nodes']} | {r['substeps']} | {'yes' if r['success'] else 'no'} | "
-                   f"{r['objective']:.8g} | {_fmt(r['objective_reference'], '.8g')} | "
-                   f"{_fmt(r.get('objective_error'))} | {_fmt(r['discretisation_error'])} | "
-                   f"{r['solve_time']:.3f} | {r['spring_k']:.5g} | "
-                   f"{r['spring_rest_length']:.5g} | {r['damper_c']:.5g} |")
-    if rows and rows[0].get("J_star") is not None:
-        out.append("")
-        out.append(f"J* = {rows[0]['J_star']:.10g} (the reference objective at the design of "
-                   "the finest setting)")
-    return "\n".join(out)
-
-
-def write_csv(rows: list, path: Path) -> Path:
-    keys = []
-    for r in rows:
-        keys += [k for k in r if k not in keys]
-    with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=keys)
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: ("" if r.get(k) is None else r.get(k)) for k in keys})
-    return path
-
-
-# -- figures -------------------------------------------------------------------------------
-_COLORS = {"rk4": "C0", "euler_cromer": "C3", "gauss4": "C2", "radau5": "C1",
-           "reference": "k"}
-_LABEL = {"closing_time": "|Δ closing_time| (s)", "impact_theta_dot":
-          "|Δ impact_theta_dot| (rad/s)", "impact_tip_speed": "rel. Δ impact_tip_speed",
-          "peak_tip_speed": "rel. Δ peak_tip_speed"}
-FIG_METRICS = ("closing_time", "impact_theta_dot", "peak_tip_speed")
-
-
-
-def _mark_target_and_floor(ax, bound, truth_floor, bottom, handles):
-    """The accuracy target line and the band below the truth's own uncertainty (shared legend)."""
-    handles.setdefault("target", ax.axhline(bound, color="gray", ls="-.", lw=1.0,
-                                            label="accuracy target"))
-    if truth_floor:
-        handles.setdefault("floor", ax.axhspan(bottom, max(truth_floor, bottom), color="0.88",
-                                               zorder=0,
-                                               label="below the truth's own uncertainty"))
-    ax.set_ylim(bottom=bottom / 2)
-
-def plot_work_precision(wp: WorkPrecision, path: Path) -> Path:
-    """Error against run time per stroke, log-log, one line per method; rows = designs.
-
-    Thin dashed lines are guides of slope -order through each method's first asymptotic
-    point (error ~ h^p ~ time^-p); the star is the seed's method, the diamond the default.
-    """
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    dnames = list(wp.truths)
-    fig, axes = plt.subplots(len(dnames), len(FIG_METRICS),
-                             figsize=(5.0 * len(FIG_METRICS), 3.6 * len(dnames)), squeeze=False)
-    bottom = 1e-14
-    handles = {}
-    for i, dname in enumerate(dnames):
-        for j, k in enumerate(FIG_METRICS):
-            ax = axes[i][j]
-            kind, bound = TARGETS[k]
-            tf = wp.truth_floor[dname].get(k) or 0.0
-            scale = abs(wp.truths[dname][k] or 1.0) if kind == "abs" else 1.0
-            for m in list(METHODS) + ["reference"]:
-                rs = [r for r in wp.rows if r["design"] == dname and r["method"] == m
-                      and r[f"err_{k}"] is not None]
-                if not rs:
-                    continue
-                x = [r["time_per_stroke"] * 1e6 for r in rs]
-                y = [max(r[f"err_{k}"], bottom) for r in rs]
-                if m == "reference":
-                    lab = "adaptive reference (CVODES, tol 1e-6 … 1e-12)"
-                else:
-                    lab = f"{m} (order {METHODS[m].order})"
-                h, = ax.loglog(x, y, "o-" if m != "reference" else "s--", color=_COLORS[m],
-                               ms=4, lw=1.4, label=lab)
-                handles.setdefault(lab, h)
-                if m != "reference":  # slope guide through the first asymptotic point
-                    lo = max(30 * tf, 1e-12 * scale)
-                    asym = [(xx, yy) for xx, yy in zip(x, y) if yy > lo and yy / scale <= 1e-2]
-                    if asym:
-                        x0, y0 = asym[0]
-                        xs = np.array([x0, x0 * 10 ** (2.5 / METHODS[m].order)])
-                        g, = ax.loglog(xs, y0 * (xs / x0) ** (-METHODS[m].order), ":",
-                                       color=_COLORS[m], lw=2.2, alpha=0.6,
-                                       label="guides: slope −order")
-                        handles.setdefault("guide", g)
-                for r, xx, yy in zip(rs, x, y):
-                    if r["seed"]:
-                        hs, = ax.plot(xx, yy, "*", color="C3", ms=16, mec="k", zorder=5,
-                                      label="seed: Euler–Cromer at 1 kHz")
-                        handles.setdefault("seed", hs)
-                    if (m, r["step"]) == (wp.default.get("method"), wp.default.get("step")):
-                        hd, = ax.plot(xx, yy, "D", color="gold", ms=11, mec="k", zorder=5,
-                                      label=f"default: {m}, h = {r['step']:g} s")
-                        handles.setdefault("default", hd)
-            _mark_target_and_floor(ax, bound, tf, bottom, handles)
-            ax.set_xlabel("run time per stroke (µs)")
-            ax.set_ylabel(_LABEL[k])
-            ax.set_title(f"{dname}: {k}", fontsize=10)
-            ax.grid(True, which="major", alpha=0.3)
-    fig.legend(list(handles.values()), [h.get_label() for h in handles.values()],
-               loc="lower center", ncol=5, fontsize=10, frameon=False)
-    fig.suptitle("Work precision of the closing stroke: error against run time per stroke "
-                 "(C kernel, one thread, median of repeats)", fontsize=12)
-    fig.tight_layout(rect=(0, 0.05, 1, 0.98))
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
-
-
-def plot_error_vs_step(wp: WorkPrecision, path: Path, metric: str = "impact_theta_dot") -> Path:
-    """Error against step, one panel per design (2 columns), with the fitted orders in each
-    panel's title; the default setting (diamond) and the seed's method (star) are marked,
-    the grey band is below the truth's own uncertainty."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    dnames = list(wp.truths)
-    ncol = 2 if len(dnames) > 1 else 1
-    nrow = math.ceil(len(dnames) / ncol)
-    fig, axes = plt.subplots(nrow, ncol, figsize=(6.2 * ncol, 4.4 * nrow + 0.8), squeeze=False)
-    handles = {}
-    bottom = 1e-14
-    short = {"rk4": "rk4", "euler_cromer": "E–C", "gauss4": "gauss4", "radau5": "radau5"}
-    for idx, dname in enumerate(dnames):
-        ax = axes[idx // ncol][idx % ncol]
-        orders = []
-        for m in METHODS:
-            rs = [r for r in wp.rows if r["design"] == dname and r["method"] == m]
-            ok = [r for r in rs if r[f"err_{metric}"] is not None]
-            bad = [r for r in rs if r["status"] not in ("closed", "not closed")]
-            o = wp.orders.get((dname, m, metric))
-            orders.append(f"{short.get(m, m)} {_fmt(o, '.2f')}")
-            if ok:
-                lab = f"{m} (stated order {METHODS[m].order})"
-                h, = ax.loglog([r["step"] for r in ok],
-                               [max(r[f"err_{metric}"], bottom) for r in ok],
-                               "o-", color=_COLORS[m], ms=4, lw=1.4, label=lab)
-                handles.setdefault(lab, h)
-                for r in ok:
-                    yy = max(r[f"err_{metric}"], bottom)
-                    if r["seed"]:
-                        hs, = ax.plot(r["step"], yy, "*", color="C3", ms=16, mec="k",
-                                      zorder=5, label="seed: Euler–Cromer at 1 kHz")
-                        handles.setdefault("seed", hs)
-                    if (m, r["step"]) == (wp.default.get("method"), wp.default.get("step")):
-                        hd, = ax.plot(r["step"], yy, "D", color="gold", ms=11, mec="k",
-                                      zorder=5, label=f"default: {m}, h = {r['step']:g} s")
-                        handles.setdefault("default", hd)
-            for r in bad:
-                hv = ax.axvline(r["step"], color=_COLORS[m], ls=":", lw=0.8,
-                                label="unstable step")
-                handles.setdefault("unstable", hv)
-        kind, bound = TARGETS[metric]
-        tf = wp.truth_floor[dname].get(metric) or 0.0
-        _mark_target_and_floor(ax, bound, tf, bottom, handles)
-        ax.set_xlabel("step h (s)")
-        ax.set_ylabel(_LABEL[metric])
-        ax.set_title(f"{dname} — fitted order: " + ", ".join(orders), fontsize=10)
-        ax.grid(True, which="major", alpha=0.3)
-    for idx in range(len(dnames), nrow * ncol):
-        axes[idx // ncol][idx % ncol].set_visible(False)
-    fig.legend(list(handles.values()), [h.get_label() for h in handles.values()],
-               loc="lower center", ncol=4, fontsize=10, frameon=False)
-    fig.suptitle(f"Error of {metric} against the step (fitted order: slope over the "
-                 "asymptotic points; — where too few lie above the floor)", fontsize=12)
-    fig.tight_layout(rect=(0, 0.09 if nrow > 1 else 0.14, 1, 0.97))
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
-
-
-def plot_optimiser(rows: list, path: Path, default=(10, 4)) -> Path | None:
-    """Optimal-objective error against solve time, and the objective's discretisation error
-    against N x sub-steps; the default (nodes, sub-steps) is marked."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    ok = [r for r in rows if r.get("objective_error") is not None]
-    if not ok:
+def commit() -> str | None:
+    """The git commit of this source tree (with "+dirty" if it has changes), if known."""
+    root = Path(__file__).resolve().parents[1]
+    try:
+        h = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, text=True,
+                           capture_output=True, timeout=10)
+        if h.returncode != 0:
+            return None
+        d = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=root,
+                           text=True, capture_output=True, timeout=10)
+        return h.stdout.strip() + ("+dirty" if d.stdout.strip() else "")
+    except (OSError, subprocess.SubprocessError):
         return None
-    fig, ax = plt.subplots(1, 2, figsize=(13, 5.2))
-    # left: colour = sub-steps, marker = N (no labels to collide); right: lines per sub-steps
-    node_marks = dict(zip(sorted({r["nodes"] for r in ok}), "osD^vPX*"))
-    handles = {}
-    for i, s in enumerate(sorted({r["substeps"] for r in ok})):
-        rs = sorted([r for r in ok if r["substeps"] == s], key=lambda r: r["nodes"])
-        hc, = ax[0].plot([], [], "-", color=f"C{i}", lw=6, label=f"{s} sub-steps")
-        handles.setdefault(f"s{s}", hc)
-        for r in rs:
-            x, y = r["solve_time"], max(r["objective_error"], 1e-16)
-            ax[0].loglog(x, y, node_marks[r["nodes"]], color=f"C{i}", ms=8, mec="k", mew=0.6)
-            if (r["nodes"], r["substeps"]) == tuple(default):
-                for a, xx, yy in ((ax[0], x, y), (ax[1], r["nodes"] * r["substeps"],
-                                                  max(r["discretisation_error"], 1e-16))):
-                    hd, = a.plot(xx, yy, "o", ms=20, mfc="none", mec="gold", mew=3, zorder=6,
-                                 label=f"default: N = {default[0]}, {default[1]} sub-steps")
-                handles.setdefault("default", hd)
-        ax[1].loglog([r["nodes"] * r["substeps"] for r in rs],
-                     [max(r["discretisation_error"], 1e-16) for r in rs], "o-",
-                     color=f"C{i}", ms=11 - 3 * i, lw=2.5 - 0.6 * i)
-    for n, mk in node_marks.items():
-        hn, = ax[0].plot([], [], mk, color="0.6", mec="k", ms=8, label=f"N = {n}")
-        handles.setdefault(f"n{n}", hn)
-    ax[0].set_xlabel("Ipopt solve time (s), one cold solve")
-    ax[0].set_ylabel("|J_N − J*|")
-    ax[0].set_title("optimal objective error against solve time")
-    ax[1].set_xlabel("RK4 steps over the stroke (N × sub-steps)")
-    ax[1].set_ylabel("|J_N − J_reference(design_N)|")
-    ax[1].set_title("discretisation error of the objective at the optimum\n"
-                    "(depends on N × sub-steps only: the lines coincide)", fontsize=11)
-    for a in ax:
-        a.grid(True, alpha=0.3)
-    fig.legend(list(handles.values()), [h.get_label() for h in handles.values()],
-               loc="lower center", ncol=len(handles), fontsize=10, frameon=False)
-    fig.tight_layout(rect=(0, 0.08, 1, 1))
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
 
 
-# -- the command ---------------------------------------------------------------------------
-def run(cfg: Config, quick: bool = False, out: Path | None = None, log=None,
-        cli: bool = True, optimiser: bool = True) -> dict:
-    """The whole benchmark; with ``out`` the tables and figures are written there."""
+@dataclass(frozen=True)
+class BenchResult:
+    """Everything one benchmark run measured (see the module docstring)."""
+
+    machine: str
+    date: str
+    commit: str | None
+    quick: bool
+    work_precision: WorkPrecision
+    speed: tuple
+    optimiser: tuple
+    optimiser_note: str
+    elapsed: float
+    config: dict = field(default_factory=dict)
+
+    @property
+    def default(self) -> dict:
+        return self.work_precision.default
+
+    @property
+    def success(self) -> bool:
+        return True
+
+    def to_json(self) -> dict:
+        from .jsonio import jsonable
+        return jsonable({"machine": self.machine, "date": self.date, "commit": self.commit,
+                         "quick": self.quick, "targets": dict(TARGETS),
+                         "relative": list(RELATIVE), "speed_targets": SPEED_TARGETS,
+                         "default": self.default,
+                         "work_precision": self.work_precision.to_json(),
+                         "speed": list(self.speed), "optimiser": list(self.optimiser),
+                         "optimiser_note": self.optimiser_note, "elapsed": self.elapsed,
+                         "config": self.config})
+
+
+def run(cfg: Config, quick: bool = False, log=None, cli: bool = True,
+        optimiser: bool = True, later: bool = True) -> BenchResult:
+    """The whole benchmark: work precision, speed, optimiser (see the module docstring)."""
     log = log or (lambda *a: None)
     t0 = time.perf_counter()
     log("work precision ...")
     wp = work_precision(cfg, quick=quick, log=log)
     log("speed ...")
-    sp = speed(cfg, quick=quick, cli=cli, log=log)
+    sp = speed(cfg, quick=quick, cli=cli, later=later, log=log)
     log("optimiser ...")
     opt, note = optimiser_study(cfg, quick=quick, log=log) if optimiser else \
         ([], "optimiser section not run")
-    result = {"machine": machine(), "quick": quick, "targets": {k: list(v) for k, v in
-                                                                 TARGETS.items()},
-              "truth_tol": TRUTH_TOL, "default": wp.default,
-              "work_precision": wp.rows, "truths": wp.truths, "truth_floor": wp.truth_floor,
-              "orders": [{"design": d, "method": m, "metric": k, "order": o,
-                          "slope_vs_time": wp.slopes.get((d, m, k))}
-                         for (d, m, k), o in wp.orders.items()],
-              "speed": sp, "optimiser": opt, "optimiser_note": note,
-              "markdown": {"work_precision": wp_markdown(wp), "speed": speed_markdown(sp),
-                           "optimiser": opt_markdown(opt, note)}}
-    files = []
-    if out is not None:
-        out = Path(out)
-        out.mkdir(parents=True, exist_ok=True)
-        files.append(write_csv(wp.rows, out / "work_precision.csv"))
-        files.append(write_csv(sp, out / "speed.csv"))
-        if opt:
-            files.append(write_csv(opt, out / "optimiser.csv"))
-        md = out / "bench.md"
-        md.write_text(f"Machine: {result['machine']}\n\n## Work precision\n\n"
-                      f"{result['markdown']['work_precision']}\n\n## Speed\n\n"
-                      f"{result['markdown']['speed']}\n\n## Optimiser\n\n"
-                      f"{result['markdown']['optimiser']}\n")
-        files.append(md)
-        files.append(plot_work_precision(wp, out / "work_precision.png"))
-        files.append(plot_error_vs_step(wp, out / "error_vs_step.png"))
-        if opt:
-            f = plot_optimiser(opt, out / "optimiser.png",
-                               default=(cfg.optimise.nodes, cfg.optimise.substeps))
-            if f:
-                files.append(f)
-        js = out / "bench.json"
-        files.append(js)
-        result["files"] = [str(f) for f in files]
-        js.write_text(json.dumps(_jsonable(result), indent=1))
-    result["elapsed"] = time.perf_counter() - t0
-    return result
+    return BenchResult(machine=machine(),
+                       date=datetime.datetime.now().astimezone().isoformat(timespec="seconds"),
+                       commit=commit(), quick=quick, work_precision=wp, speed=tuple(sp),
+                       optimiser=tuple(opt), optimiser_note=note,
+                       elapsed=time.perf_counter() - t0,
+                       config={"integrator": cfg.simulate.integrator,
+                               "step": cfg.simulate.step,
+                               "nodes": cfg.optimise.nodes,
+                               "substeps": cfg.optimise.substeps})
 
 
-def _jsonable(x):
-    if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, (np.floating, np.integer, np.bool_)):
-        x = x.item()
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    return x
-
-
-def command(cfg: Config, args):
-    """``softclose bench [--out DIR] [--json] [--quick]``."""
-    from .cli.common import Outcome
-    quiet = getattr(args, "json", False)
-    log = (lambda *a: None) if quiet else (lambda *a: print(*a, file=sys.stderr, flush=True))
-    out = Path(args.out) if getattr(args, "out", None) else None
-    res = run(cfg, quick=bool(getattr(args, "quick", False)), out=out, log=log)
-    d = res["default"]
-    text = [f"machine: {res['machine']}", "", "work precision (errors against CVODES at tol "
-            f"{TRUTH_TOL:g}; µs per stroke in the C kernel):", res["markdown"]["work_precision"],
-            "", "speed:", res["markdown"]["speed"], "", "optimiser:",
-            res["markdown"]["optimiser"], "",
-            (f"default setting (cheapest meeting the targets on every design): {d['method']} "
-             f"at step {d['step']:g} s" if d.get("method") else
-             "no setting met the accuracy targets on every design")]
-    if out is not None:
-        text.append(f"written: {', '.join(res['files'])}")
-    payload = {k: v for k, v in res.items() if k != "markdown"}
-    return Outcome(_jsonable(payload), "\n".join(text), 0,
-                   [Path(f) for f in res.get("files", [])])
-
-
-# -- stress survey ---------------------------------------------------------------------------
-def assembly_for(geometry: dict, theta_deg: float = 18.0, like=(108.6655, 146.8855)):
-    """``geometry.assembly`` for changed lengths: [theta, phi, gamma] (deg) on the branch
-    nearest to ``like`` (the default assembly), or None if the loop cannot close there."""
-    import casadi as ca
-    from types import SimpleNamespace
-
-    from .config import _SCHEMA
-    from .kinematics import closure
-    g = {k: v[1] for k, v in _SCHEMA["geometry"].items()}
-    g.update(geometry)
-    geo = SimpleNamespace(**g)
-    th = math.radians(theta_deg)
-    best = None
-    for sigma in (1, -1):
-        phi, gamma, u = (float(v) for v in closure(ca.DM(th), geo, sigma))
-        if not abs(u) < 1:
-            return None
-        p, q = math.degrees(phi), math.degrees(gamma)
-        d = max(abs((p - like[0] + 180) % 360 - 180), abs((q - like[1] + 180) % 360 - 180))
-        if best is None or d < best[0]:
-            best = (d, [theta_deg, p, q])
-    return best[1]
-
-
-@dataclass
-class StressCase:
-    name: str
-    group: str
-    what: str
-    overrides: dict            # config sections -> keys
-    expect: str = "answer"     # "answer" (reference-confirmed) | "report" | "config error"
-
-
-def _geo(**g):
-    """Geometry overrides with a matching assembly."""
-    g = dict(g)
-    g["assembly"] = assembly_for(g) or [18.0, 108.6655, 146.8855]
-    return g
-
-
-def stress_cases(fast: bool = False) -> list[StressCase]:
-    """Every stress case of the survey (``fast``: a representative subset for the tests)."""
-    from .config import _SCHEMA
-    S = StressCase
-    cases = []
-    h0 = f"{_SCHEMA['simulate']['step'][1] * 1e3:g} ms"  # the default step, as the cases use it
-    # damping from 0 to 1e6 N s/m, default integrator and step
-    for c in ([0.0, 1e3, 1e6] if fast else [0.0, 1e1, 1e2, 1e3, 1e4, 1e5, 3e5, 1e6]):
-        cases.append(S(f"damper_c={c:g}", "damping", f"dashpot c = {c:g} N s/m, rk4 at {h0}",
-                       {"design": {"damper_c": c}},
-                       "answer" if c <= 1e5 else ("report" if c >= 1e6 else "any")))
-    for integ in ("radau5",) if fast else ("radau5", "gauss4"):
-        cases.append(S(f"damper_c=1e6 {integ}", "damping", f"dashpot c = 1e6 N s/m, {integ} at {h0}",
-                       {"design": {"damper_c": 1e6}, "simulate": {"integrator": integ}}))
-    cases.append(S("rotary_damper_c=1e3", "damping", f"rotary damper 1e3 N m s/rad, rk4 at {h0}",
-                   {"design": {"rotary_damper_c": 1e3}}, "report"))
-    # spring stiffness up to 1e6 N/m
-    for k in ([1e4, 1e6] if fast else [1e3, 1e4, 1e5, 1e6]):
-        cases.append(S(f"spring_k={k:g}", "spring", f"spring k = {k:g} N/m, l0 = 0.05 m, "
-                       f"no damper, rk4 at {h0}", {"design": {"spring_k": k}}, "any"))
-    cases.append(S("spring_k=1e6 c=1e3", "spring", f"k = 1e6 N/m with c = 1e3 N s/m, rk4 at {h0}",
-                   {"design": {"spring_k": 1e6, "damper_c": 1e3}}, "any"))
-    cases.append(S("spring_k=1e6 gauss4 0.1ms", "spring", "k = 1e6 N/m, gauss4 at 0.1 ms",
-                   {"design": {"spring_k": 1e6}, "simulate": {"integrator": "gauss4",
-                                                               "step": 1e-4}}))
-    cases.append(S("spring opens the lid", "spring",
-                   "k = 1e4 N/m, l0 = 0.12 m: the spring pushes the lid open (holding moment < 0)",
-                   {"design": {"spring_k": 1e4, "spring_rest_length": 0.12}}, "any"))
-    # steps far too large and very small
-    for integ, h in ([("rk4", 0.05), ("rk4", 1.0), ("euler_cromer", 0.05)] if fast else
-                     [("rk4", 0.02), ("rk4", 0.05), ("rk4", 0.2), ("rk4", 1.0),
-                      ("euler_cromer", 0.05), ("gauss4", 0.1), ("radau5", 0.1)]):
-        cases.append(S(f"{integ} step={h:g}", "step", f"{integ} at h = {h:g} s (stroke 0.15 s)",
-                       {"simulate": {"integrator": integ, "step": h}}, "any"))
-    for integ, h in ([("rk4", 1e-6)] if fast else
-                     [("rk4", 1e-6), ("rk4", 1e-7), ("euler_cromer", 1e-7), ("gauss4", 1e-6)]):
-        cases.append(S(f"{integ} step={h:g}", "step", f"{integ} at h = {h:g} s",
-                       {"simulate": {"integrator": integ, "step": h}}))
-    # long undamped runs: a spring holds the lid open, it oscillates for t_max
-    t_long = 5.0 if fast else 60.0
-    for integ in (["rk4"] if fast else ["rk4", "gauss4", "euler_cromer", "radau5"]):
-        cases.append(S(f"undamped {t_long:g} s {integ}", "long run",
-                       f"k = 2000 N/m, l0 = 0.1 m, no damping: oscillates {t_long:g} s; {integ} "
-                       f"at {h0}; energy drift reported",
-                       {"design": {"spring_k": 2000.0, "spring_rest_length": 0.1},
-                        "stroke": {"t_max": t_long}, "simulate": {"integrator": integ}}))
-    # geometry near a toggle position
-    cases.append(S("near toggle (closing end)", "toggle",
-                   "crank_bc = 0.0925 m: toggle at theta ≈ -2.5°, just below the closed lid",
-                   {"geometry": _geo(crank_bc=0.0925)}, "any"))
-    cases.append(S("toggle inside the stroke", "toggle",
-                   "crank_bc = 0.0935 m: toggle at theta ≈ +2.3°, inside the stroke",
-                   {"geometry": _geo(crank_bc=0.0935)}, "config error"))
-    cases.append(S("closing at the toggle", "toggle",
-                   "crank_bc = 0.0925 m, theta_closed = -2.4°: the stroke ends 0.1° from the toggle",
-                   {"geometry": _geo(crank_bc=0.0925), "stroke": {"theta_closed_deg": -2.4}},
-                   "any"))
-    # release angle near the edge of the assembly (short crank BC: the loop closes below ~25°)
-    edge = _geo(crank_bc=0.0096)
-    for th0, exp in ((24.0, "any"), (24.7, "any"), (24.9, "config error")):
-        cases.append(S(f"release at {th0:g}° (edge ≈ 24.75°)", "release edge",
-                       f"crank_bc = 9.6 mm (the loop closes only below ≈ 24.75°), "
-                       f"theta0 = {th0:g}°",
-                       {"geometry": edge, "stroke": {"theta0_deg": th0}}, exp))
-    cases.append(S("release at 170°", "release edge", "default geometry (Grashof), theta0 = 170°",
-                   {"stroke": {"theta0_deg": 170.0}}, "any"))
-    # other edges
-    cases.append(S("tiny stroke", "other", "theta0 = 0.001°: a stroke of 1.7e-5 rad",
-                   {"stroke": {"theta0_deg": 0.001}}))
-    cases.append(S("t_max too short", "other", "t_max = 0.05 s: the lid has not closed yet",
-                   {"stroke": {"t_max": 0.05}}))
-    cases.append(S("no gravity", "other", "gravity = 0, no spring: the lid stays where it is",
-                   {"mass": {"gravity": 0.0}}))
-    return cases
-
-
-#: stress cases that expose a known core bug (name -> what is wrong); the tests xfail them
-KNOWN_BUGS: dict[str, str] = {}  # stress cases with a known core defect (none open)
-
-
-def _confirm(res, ref: dict) -> tuple[bool, dict, dict]:
-    """Does the reference confirm the fixed-step stroke? Each metric must lie within the
-    accuracy target, or within 4 x the stroke's own error estimate, of the reference."""
-    if bool(res.closed) != bool(ref.closed):
-        return False, {}, {}
-    err, allowed = {}, {}
-    keys = list(TARGETS) + ["min_spring_length", "max_spring_length"]
-    for k in keys:
-        a, b = getattr(res, k), ref.get(k)
-        if a is None and b is None:
-            continue
-        if a is None or b is None:
-            return False, err, allowed
-        kind, bound = TARGETS.get(k, ("rel", 1e-6))
-        scale = abs(b) if kind == "rel" else 1.0
-        e = abs(a - b) / max(scale, 1e-300)
-        est = ((res.accuracy or {}).get(k) or 0.0) / max(scale, 1e-300)
-        err[k], allowed[k] = e, max(bound, 4 * est) + 1e-8
-    return all(err[k] <= allowed[k] for k in err), err, allowed
-
-
-def run_stress_case(case: StressCase, ref_tol: float = 1e-12, rerun: bool = True) -> dict:
-    """Run one stress case; return its outcome (never raises for a softclose failure).
-
-    outcome: "confirmed" (the reference reproduces the answer), "reported" (a clear
-    one-line report; for an unstable stroke also re-run at the step it recommends),
-    "config error" (rejected with a one-line message), or a failure: "MISMATCH",
-    "NaN", "EXCEPTION".
-    """
-    from .config import default_config
-    from .errors import ConfigError, NumericalError
-    t0 = time.perf_counter()
-    row = {"name": case.name, "group": case.group, "what": case.what, "expect": case.expect,
-           "outcome": "", "status": "", "message": "", "energy_drift": None,
-           "max_err_ratio": None, "rerun": "", "time_s": None}
-    try:
-        cfg = default_config().replace(**case.overrides)
-        model = LidModel(cfg)
-        sim = Simulator(cfg, model=model)
-    except ConfigError as exc:
-        row.update(outcome="config error", message=str(exc),
-                   time_s=time.perf_counter() - t0)
-        return row
-    except NumericalError as exc:
-        row.update(outcome="reported", message=str(exc), time_s=time.perf_counter() - t0)
-        return row
-    except Exception as exc:  # pragma: no cover - a bug: reported as such
-        row.update(outcome="EXCEPTION", message=f"{type(exc).__name__}: {exc}",
-                   time_s=time.perf_counter() - t0)
-        return row
-    try:
-        p = model.params()
-        res = sim.run(p)
-        b = sim.run_batch(p[None, :], threads=1)
-        E = float(model.energy_fn([cfg.stroke.theta0, 0.0], p))
-        row["energy_drift"] = float(b["energy_rise"][0])
-        row["energy_drift_rel"] = float(b["energy_rise"][0]) / max(abs(E), 1e-300)
-        row["status"] = res.status
-        row["steps"] = res.steps
-        vals = [getattr(res, k) for k in ("closing_time", "impact_theta_dot",
-                                          "impact_tip_speed", "peak_tip_speed",
-                                          "min_spring_length", "max_spring_length",
-                                          "holding_moment")]
-        if any(v is not None and not math.isfinite(v) for v in vals):
-            row.update(outcome="NaN", message="a metric is not finite")
-        elif not res.ok:
-            row.update(outcome="reported", message=res.message or "")
-            h_ok = _recommended_step(res.message or "")
-            if rerun and h_ok is not None:
-                cfg2 = cfg.replace(simulate={"step": h_ok})
-                sub = run_stress_case(StressCase(case.name + " (rerun)", case.group, "",
-                                                 cfg2.raw), ref_tol, rerun=False)
-                row["rerun"] = f"at {h_ok:.3g} s: {sub['outcome']} ({sub['status']})"
-        else:
-            ref = Reference(model, ref_tol).simulate(p)
-            ok, err, allowed = _confirm(res, ref)
-            row["max_err_ratio"] = max((err[k] / allowed[k] for k in err), default=0.0)
-            row["ref_closed"] = ref.closed
-            row["closing_time"] = res.closing_time
-            row["impact_theta_dot"] = res.impact_theta_dot
-            row["ref_closing_time"] = ref.closing_time
-            row["ref_impact_theta_dot"] = ref.impact_theta_dot
-            row["peak_tip_speed"] = res.peak_tip_speed
-            row["ref_peak_tip_speed"] = ref.peak_tip_speed
-            row["outcome"] = "confirmed" if ok else "MISMATCH"
-            if not ok:
-                worst = max(err, key=lambda k: err[k] / allowed[k]) if err else "closed"
-                row["message"] = (f"{worst}: fixed step {getattr(res, worst)} vs reference "
-                                  f"{ref.get(worst)}" if err else
-                                  f"closed {res.closed} vs reference {ref.closed}")
-    except NumericalError as exc:
-        row.update(outcome="reported", message=str(exc))
-    except Exception as exc:
-        row.update(outcome="EXCEPTION", message=f"{type(exc).__name__}: {exc}")
-    row["time_s"] = time.perf_counter() - t0
-    return row
-
-
-def _recommended_step(message: str) -> float | None:
-    import re
-    m = re.search(r"simulate\.step <= ([0-9.eE+-]+) s", message)
-    return float(m.group(1)) if m else None
-
-
-def stress_markdown(rows: list) -> str:
-    out = ["| case | what | expected | outcome | status | energy drift (rel.) | "
-           "err / allowed | time (s) | message / re-run |",
-           "|---|---|---|---|---|---:|---:|---:|---|"]
-    for r in rows:
-        msg = r["message"] + (f" — re-run {r['rerun']}" if r.get("rerun") else "")
-        msg = msg.replace("|", "\\|")
-        out.append(f"| {r['name']} | {r['what']} | {r['expect']} | **{r['outcome']}** | "
-                   f"{r['status']} | {_fmt(r.get('energy_drift_rel'), '.1e')} | "
-                   f"{_fmt(r.get('max_err_ratio'), '.2g')} | {_fmt(r['time_s'], '.2f')} | "
-                   f"{msg} |")
-    return "\n".join(out)
+__all__ = ["run", "work_precision", "speed", "optimiser_study", "later_entries",
+           "assess_default", "cheapest_setting", "errors", "meets", "fit_order",
+           "designs_for", "kernel_times", "time_stats", "median_time", "cli_time",
+           "startup_imports", "machine", "commit", "sweep_axes", "BenchResult",
+           "WorkPrecision", "TRUTH_TOL", "REFERENCE_TOLS", "SEED", "STEPS", "QUICK_STEPS",
+           "SPRING_DASHPOT", "SPEED_TARGETS", "HEAVY_MODULES", "SWEEP_GRID", "METRICS"]

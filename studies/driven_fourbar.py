@@ -18,9 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from softclose.textbook.driven_fourbar import (DrivenFourBar, assemble_driven_fourbar,  # noqa: E402
+from softclose.textbook.driven_fourbar import (DrivenFourBar, assemble_driven_fourbar,
                                                build_driven_fourbar, evaluate_constraints,
                                                locate_joints, track_motion)
 

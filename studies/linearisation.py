@@ -19,9 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from softclose.textbook.linearisation import (LeverFourBar, compare_linearisation,  # noqa: E402
+from softclose.textbook.linearisation import (LeverFourBar, compare_linearisation,
                                               compute_loop_residual, solve_error_limit,
                                               solve_output_angle)
 

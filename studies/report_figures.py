@@ -24,6 +24,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 OUT = HERE / "out" / "report_figures"
+STUDIES_OUT = HERE / "out"
 ORDER = ("seed_reproduction", "spring_damper_maps", "pareto_closing_time", "work_precision",
          "stress_survey")
 
@@ -35,13 +36,21 @@ def studies() -> list[str]:
     return list(ORDER) + others
 
 
+def takes_out(script: Path) -> bool:
+    """The study accepts ``--out DIR``."""
+    return '"--out"' in script.read_text()
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--fast", action="store_true", help="every study in its fast mode")
     ap.add_argument("--only", nargs="*", default=None, help="run only these studies")
     ap.add_argument("--timeout", type=float, default=3600.0, help="per study (s)")
+    ap.add_argument("--out", type=Path, default=OUT, help=f"folder of the report (default {OUT})")
+    ap.add_argument("--studies-out", type=Path, default=STUDIES_OUT,
+                    help=f"each study that takes --out writes to DIR/<name> (default {STUDIES_OUT})")
     a = ap.parse_args(argv)
-    OUT.mkdir(parents=True, exist_ok=True)
+    a.out.mkdir(parents=True, exist_ok=True)
     report, failed = {}, 0
     for name in studies():
         if a.only is not None and name not in a.only:
@@ -52,22 +61,25 @@ def main(argv=None) -> int:
             print(f"{name:22s} missing (not written yet)", flush=True)
             continue
         t0 = time.time()
-        cmd = [sys.executable, str(script)] + (["--fast"] if a.fast else [])
+        where = a.studies_out / name if takes_out(script) else HERE / "out" / name
+        cmd = [sys.executable, str(script)] + (["--fast"] if a.fast else []) + \
+            (["--out", str(where)] if takes_out(script) else [])
         try:
             p = subprocess.run(cmd, capture_output=True, text=True, timeout=a.timeout)
             code, err = p.returncode, p.stderr.strip().splitlines()[-1:] if p.returncode else []
         except subprocess.TimeoutExpired:
             code, err = -1, [f"timed out after {a.timeout:.0f} s"]
         dt = time.time() - t0
-        figs = sorted(str(f.relative_to(HERE)) for f in (HERE / "out" / name).rglob("*.png")
-                      if f.stat().st_mtime >= t0 - 1) if (HERE / "out" / name).exists() else []
+        figs = sorted(str(f) for f in where.rglob("*.png")
+                      if f.stat().st_mtime >= t0 - 1) if where.exists() else []
         report[name] = {"status": "ok" if code == 0 else "failed", "exit_code": code,
-                        "seconds": round(dt, 2), "figures": figs, "error": err}
+                        "seconds": round(dt, 2), "out": str(where), "figures": figs,
+                        "error": err}
         failed += code != 0
         print(f"{name:22s} {'ok' if code == 0 else 'FAILED'} in {dt:6.1f} s, "
               f"{len(figs)} figures" + (f"  ({err[0]})" if err else ""), flush=True)
-    (OUT / "report_figures.json").write_text(json.dumps(report, indent=1))
-    print(f"wrote {OUT / 'report_figures.json'}")
+    (a.out / "report_figures.json").write_text(json.dumps(report, indent=1))
+    print(f"wrote {a.out / 'report_figures.json'}")
     return 1 if failed else 0
 
 

@@ -20,9 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from softclose.textbook.synthesis import (PIVOT_A, PROBLEM7_POINTS, classify_solutions,  # noqa: E402
+from softclose.textbook.synthesis import (PIVOT_A, PROBLEM7_POINTS, classify_solutions,
                                           locate_poses, make_design, solve_precision_points,
                                           trace_circuit)
 

@@ -4,24 +4,25 @@ For every fixed-step method (rk4, euler_cromer, gauss4, radau5) and a range of s
 of closing_time, impact_theta_dot, impact_tip_speed and peak_tip_speed against CVODES at
 tolerance 1e-14, on the SPEC §8 case and on spring + dashpot designs, against the C kernel's run
 time per stroke (median of repeats); the adaptive reference at tolerances 1e-6 … 1e-12 and the
-seed's method (Euler–Cromer at 1 kHz) are included. The default step is the cheapest setting that
-meets |Δ closing_time| ≤ 1e-7 s, |Δ impact_theta_dot| ≤ 1e-6 rad/s and relative 1e-6 on both tip
-speeds on every design. Also: the speed of model build, one stroke, the raw kernel, the reference
-and the CLI end to end, and (when softclose.optimise exists) N and sub-steps of the optimiser
-against the error of the optimal objective and the solve time. All of it is
-``softclose.bench.run``; this script only chooses where the files go.
+seed's method (Euler–Cromer at 1 kHz) are included. The configured default (rk4 at
+simulate.step) is checked against the accuracy targets of ``softclose.problem`` on every design,
+and the cheapest setting that meets them is reported next to it. Also: the speed of model build,
+one stroke, the raw kernel, the reference and the CLI end to end (with the speed targets), and N
+and sub-steps of the optimiser against the error of the optimal objective and the solve time.
+The measuring is ``softclose.bench.run``; the tables and figures are what ``softclose bench
+--out DIR`` writes (``softclose.cli.bench.write_files``). This script only chooses the folder.
 
 Writes to studies/out/work_precision/:
   work_precision.png  error against run time per stroke, one line per method, rows = designs
   error_vs_step.png   error of impact_theta_dot against the step, with the fitted orders
-  optimiser.png       optimal-objective error against solve time (if the optimiser exists)
+  optimiser.png       optimal-objective error against solve time (if the optimiser ran)
   work_precision.csv  one row per design, method and step (errors, run times, status)
-  speed.csv           the speed measurements
-  optimiser.csv       one row per N and sub-steps (if the optimiser exists)
+  speed.csv           the speed measurements, with their targets
+  optimiser.csv       one row per N and sub-steps (if the optimiser ran)
   bench.md            the tables as Markdown (pasted into BENCHMARKS.md)
-  bench.json          everything above, machine description included
+  bench.json          everything above, machine, date and commit included
 
-Usage: python studies/work_precision.py [--fast] [--no-optimiser]
+Usage: python studies/work_precision.py [--fast] [--no-optimiser] [--no-later] [--out DIR]
 """
 
 from __future__ import annotations
@@ -30,10 +31,9 @@ import argparse
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from softclose import bench  # noqa: E402
-from softclose.config import default_config  # noqa: E402
+import softclose
+from softclose import bench
+from softclose.cli.bench import default_text, write_files
 
 OUT = Path(__file__).resolve().parent / "out" / "work_precision"
 
@@ -42,15 +42,19 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--fast", action="store_true", help="fewer steps, designs and repeats")
     ap.add_argument("--no-optimiser", action="store_true", help="skip the optimiser section")
-    ap.add_argument("--out", type=Path, default=OUT)
+    ap.add_argument("--no-later", action="store_true",
+                    help="skip the sweep / robust / yield / Sobol speed entries")
+    ap.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
     a = ap.parse_args(argv)
+    a.out.mkdir(parents=True, exist_ok=True)
     log = lambda *m: print(*m, flush=True)  # noqa: E731
-    res = bench.run(default_config(), quick=a.fast, out=a.out, log=log,
-                    optimiser=not a.no_optimiser)
-    d = res["default"]
-    print(f"default: {d['method']} at step {d['step']} s; per method: {d['per_method']}")
-    print(f"{res['optimiser_note']}")
-    print(f"written to {a.out} in {res['elapsed']:.1f} s")
+    res = bench.run(softclose.default_config(), quick=a.fast, log=log,
+                    optimiser=not a.no_optimiser, later=not a.no_later)
+    files = write_files(res, a.out)
+    print(default_text(res.default))
+    if res.optimiser_note:
+        print(res.optimiser_note)
+    print(f"wrote {len(files)} files to {a.out} in {res.elapsed:.1f} s")
     return 0
 
 

@@ -1,11 +1,11 @@
 """Numerical stress: every stressed stroke gives an answer that the adaptive reference
 confirms, or a clear one-line report of why not. Never a NaN, a hang or a traceback.
 
-The cases are ``softclose.bench.stress_cases(fast=True)`` (damping 0 … 1e6 N s/m, springs up
+The cases are ``softclose.stress.stress_cases(fast=True)`` (damping 0 … 1e6 N s/m, springs up
 to 1e6 N/m, steps far too large and very small, long undamped runs with their energy drift, a
 toggle near or inside the stroke, a release angle at the edge of the assembly) plus random
 valid configs (hypothesis). ``studies/stress_survey.py`` runs the full list and writes the
-stress table of BENCHMARKS.md. Known core bugs are ``xfail(strict=False)`` with the reason.
+stress table of BENCHMARKS.md.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
-from softclose import bench
+from softclose import stress
 from softclose.config import default_config
 from softclose.errors import ConfigError
 from softclose.model import LidModel
@@ -26,14 +26,13 @@ from softclose.simulate import Simulator
 
 pytestmark = pytest.mark.stress
 
-CASES = bench.stress_cases(fast=True)
+CASES = stress.stress_cases(fast=True)
 #: a stroke of this survey that takes longer than this counts as a hang
 HANG_S = 30.0
-FAILURES = ("MISMATCH", "NaN", "EXCEPTION")
 
 
 def _check_row(case, row):
-    assert row["outcome"] not in FAILURES, f"{case.name}: {row['outcome']}: {row['message']}"
+    assert row["outcome"] not in stress.FAILURES, f"{case.name}: {row['outcome']}: {row['message']}"
     assert row["time_s"] < HANG_S, f"{case.name} took {row['time_s']:.1f} s"
     if row["outcome"] in ("reported", "config error"):
         msg = row["message"]
@@ -49,11 +48,9 @@ def _check_row(case, row):
         assert math.isfinite(row["energy_drift"])
 
 
-@pytest.mark.parametrize("case", [
-    pytest.param(c, marks=pytest.mark.xfail(strict=False, reason=bench.KNOWN_BUGS[c.name]))
-    if c.name in bench.KNOWN_BUGS else c for c in CASES], ids=[c.name for c in CASES])
+@pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
 def test_stress_case(case):
-    row = bench.run_stress_case(case, rerun=False)
+    row = stress.run_stress_case(case, rerun=False)
     _check_row(case, row)
 
 
@@ -64,7 +61,7 @@ def test_unstable_report_names_a_step_that_works():
     model = LidModel(cfg)
     res = Simulator(cfg, model=model).run()
     assert res.status.text == "unstable" and not res.ok
-    h = bench._recommended_step(res.message)
+    h = stress.recommended_step(res.message)
     assert h is not None and 1e-5 < h < 1e-3, res.message
     assert "radau5" in res.message
     ok = Simulator(cfg, model=model, step=0.8 * h).run()
@@ -111,14 +108,13 @@ def test_steps_far_too_large_are_reported_not_nan():
        integ=st.sampled_from(["rk4", "gauss4", "radau5", "euler_cromer"]),
        step=st.sampled_from([2e-4, 5e-4, 1e-3, 2e-3]))
 def test_random_valid_configs(k, l0, c, crank_oa, crank_bc, theta0, lid, integ, step):
-    geo = bench._geo(crank_oa=crank_oa, crank_bc=crank_bc)
+    geo = stress.geometry_with_assembly(crank_oa=crank_oa, crank_bc=crank_bc)
     overrides = {"geometry": geo, "mass": {"lid": lid},
                  "design": {"spring_k": k, "spring_rest_length": l0, "damper_c": c},
                  "stroke": {"theta0_deg": theta0, "t_max": 2.0},
                  "simulate": {"integrator": integ, "step": step}}
-    row = bench.run_stress_case(bench.StressCase("random", "random", "", overrides, "any"),
-                                rerun=False)
-    _check_row(bench.StressCase("random", "random", "", overrides, "any"), row)
+    case = stress.StressCase("random", "random", "", overrides, "any")
+    _check_row(case, stress.run_stress_case(case, rerun=False))
 
 
 # -- regressions: core bugs this survey found (all fixed) ------------------------------------
@@ -130,11 +126,11 @@ def test_reference_peak_in_first_grid_intervals():
     model = LidModel(cfg)
     r = Reference(model).simulate()
     fine = Simulator(cfg, model=model, integrator="radau5", step=1e-5).run(estimate_error=False)
-    assert abs(r["peak_tip_speed"] - fine.peak_tip_speed) <= 1e-8 * fine.peak_tip_speed
+    assert abs(r.peak_tip_speed - fine.peak_tip_speed) <= 1e-8 * fine.peak_tip_speed
 
 
 def test_near_toggle_result_is_accurate_or_flagged():
-    geo = bench._geo(crank_bc=0.0925)
+    geo = stress.geometry_with_assembly(crank_bc=0.0925)
     cfg = default_config().replace(geometry=geo, stroke={"theta_closed_deg": -2.4})
     model = LidModel(cfg)
     res = Simulator(cfg, model=model, step=1e-4).run()
@@ -147,7 +143,7 @@ def test_near_toggle_result_is_accurate_or_flagged():
 
 
 def test_toggle_inside_stroke_is_a_config_error():
-    geo = bench._geo(crank_bc=0.0935)
+    geo = stress.geometry_with_assembly(crank_bc=0.0935)
     with pytest.raises(ConfigError, match="toggle"):
         LidModel(default_config().replace(geometry=geo))
 
@@ -171,7 +167,33 @@ def test_recommended_step_for_rotary_damper_works():
     sim = Simulator(cfg)
     res = sim.run()
     assert res.status.text == "unstable"
-    h = bench._recommended_step(res.message)
+    h = stress.recommended_step(res.message)
     assert h is not None
     again = Simulator(cfg, model=sim.model, step=h).run()
     assert again.ok, again.message
+
+
+def test_confirm_uses_the_targets_and_the_estimate():
+    """confirm(): a stroke equal to the reference passes; one moved by 2x the closing_time
+    target fails, unless its own error estimate covers the move (4x the estimate)."""
+    import dataclasses
+
+    from softclose.problem import TARGETS
+    cfg = default_config()
+    model = LidModel(cfg)
+    ref = Reference(model).simulate()
+    same = dataclasses.replace(ref, method="rk4", accuracy=None)
+    ok, err, allowed = stress.confirm(same, ref)
+    assert ok and err["closing_time"] == 0.0
+    moved = dataclasses.replace(same, closing_time=ref.closing_time + 2 * TARGETS["closing_time"])
+    ok, err, allowed = stress.confirm(moved, ref)
+    assert not ok
+    assert err["closing_time"] == pytest.approx(2 * TARGETS["closing_time"], rel=1e-6)
+    covered = dataclasses.replace(moved, accuracy={"closing_time": TARGETS["closing_time"]})
+    assert stress.confirm(covered, ref)[0]
+    # a relative target: peak_tip_speed moved by 2e-6 relative fails
+    rel = dataclasses.replace(same, peak_tip_speed=ref.peak_tip_speed * (1 + 2e-6))
+    ok, err, _ = stress.confirm(rel, ref)
+    assert not ok and err["peak_tip_speed"] == pytest.approx(2e-6, rel=1e-6)
+    # closed against not closed is never confirmed
+    assert not stress.confirm(dataclasses.replace(same, closed=False), ref)[0]

@@ -1,19 +1,242 @@
-"""``softclose bench`` (transitional adapter: the bench owner replaces this module)."""
+"""``softclose bench [--quick] [--out DIR]``: run time against error, speeds, optimiser.
+
+The measuring is :func:`softclose.bench.run`; this module formats its result (text and
+Markdown tables), writes the files and picks the exit code. With ``--out DIR`` (checked
+before any work) it writes ``work_precision.csv``, ``speed.csv``, ``optimiser.csv``,
+``bench.md``, ``bench.json`` and the figures ``work_precision.png``, ``error_vs_step.png``
+and ``optimiser.png``.
+"""
 
 from __future__ import annotations
 
-from .common import Outcome, add_common, add_out, prepare_out
+import csv
+import math
+import sys
+from pathlib import Path
+
+from .common import Outcome, add_common, add_out, prepare_out, wrote
 
 
 def register(sub) -> None:
-    p = sub.add_parser("bench", help="run time against error for every integrator and step")
+    p = sub.add_parser("bench", help="run time against error for every integrator and step; "
+                                     "speed of the calls; optimiser N and sub-steps")
     add_common(p)
-    add_out(p)
-    p.add_argument("--quick", action="store_true", help="fewer steps and repeats")
+    add_out(p, what="write the tables (CSV, Markdown, JSON) and figures to this folder")
+    p.add_argument("--quick", action="store_true",
+                   help="fewer designs, steps and repeats (cannot confirm the default step)")
     p.set_defaults(run=run)
 
 
 def run(cfg, args) -> Outcome:
+    out = prepare_out(args.out)
     from .. import bench
-    prepare_out(args.out)
-    return bench.command(cfg, args)
+    log = (lambda *a: None) if args.json else \
+        (lambda *a: print(*a, file=sys.stderr, flush=True))
+    res = bench.run(cfg, quick=args.quick, log=log)
+    files = write_files(res, out) if out is not None else []
+    payload = res.to_json()
+    payload["files"] = [str(f) for f in files]
+    return Outcome(payload, report_text(res) + wrote(files), 0, tuple(files))
+
+
+# -- text ----------------------------------------------------------------------------------
+def _fmt(v, spec=".2e"):
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "—"
+    return format(v, spec)
+
+
+def _ms(step: float) -> str:
+    return f"{step * 1e3:g} ms"
+
+
+def default_text(default: dict) -> str:
+    """What the run says about the configured default step, and the cheapest setting on
+    its designs, as separate lines."""
+    m, h = default["method"], default["step"]
+    designs = ", ".join(default["designs"])
+    head = f"default: {m} at {_ms(h)} (configured: simulate.integrator, simulate.step)"
+    if default["meets_targets"]:
+        head += f"; meets the accuracy targets on {designs}"
+    else:
+        head += (f"; misses the accuracy targets on "
+                 f"{', '.join(default['failing_designs']) or 'designs it could not run'}")
+    lines = [head]
+    c = default["cheapest"]
+    if default["confirmed"]:
+        lines.append("  confirmed: it is the cheapest setting meeting the targets on every "
+                     "design of this run")
+    elif default["omitted_designs"]:
+        lines.append(f"  the quick set omits {', '.join(default['omitted_designs'])}, so its "
+                     f"designs cannot confirm the choice; the full bench (without --quick) "
+                     f"is what confirms {_ms(h)}")
+    if c["method"] is None:
+        lines.append("cheapest meeting the targets on these designs: none of the settings "
+                     "tried")
+    elif (c["method"], c["step"]) != (m, h):
+        lines.append(f"cheapest meeting the targets on these designs: {c['method']} at "
+                     f"{_ms(c['step'])} ({c['mean_time_per_stroke'] * 1e6:.1f} µs per stroke, "
+                     "mean over the designs)")
+    return "\n".join(lines)
+
+
+def work_precision_markdown(wp) -> str:
+    """The work-precision table (one block per design) and the fitted orders, as Markdown."""
+    from ..bench import METRICS, TRUTH_TOL
+    from ..integrators import METHODS
+    d = wp.default
+    c = d["cheapest"]
+    out = []
+    for dname, t in wp.truths.items():
+        out.append(f"**{dname}** — truth (CVODES, tol {TRUTH_TOL:g}): closing_time "
+                   f"{_fmt(t.closing_time, '.10g')} s, impact_theta_dot "
+                   f"{_fmt(t.impact_theta_dot, '.10g')} rad/s, peak_tip_speed "
+                   f"{_fmt(t.peak_tip_speed, '.10g')} m/s; truth uncertainty (tol "
+                   f"{10 * TRUTH_TOL:g} against it): "
+                   + ", ".join(f"{k} {_fmt(v, '.0e')}" for k, v in wp.truth_floor[dname].items()))
+        out.append("")
+        out.append("| method | step / tol | status | µs per stroke | Δ closing_time (s) | "
+                   "Δ impact_theta_dot (rad/s) | rel Δ impact_tip_speed | rel Δ peak_tip_speed "
+                   "| meets targets |")
+        out.append("|---|---|---|---:|---:|---:|---:|---:|:-:|")
+        for r in wp.rows:
+            if r["design"] != dname:
+                continue
+            name = r["method"] + (" (seed)" if r["seed"] else "")
+            if (r["method"], r["step"]) == (d["method"], d["step"]):
+                name += " **(default)**"
+            elif (r["method"], r["step"]) == (c["method"], c["step"]):
+                name += " (cheapest here)"
+            out.append(f"| {name} | {r['step']:g} | {r['status']} | "
+                       f"{r['time_per_stroke'] * 1e6:.1f} | "
+                       + " | ".join(_fmt(r[f'err_{k}']) for k in METRICS)
+                       + f" | {'yes' if r['meets_targets'] else 'no'} |")
+        out.append("")
+    out.append("Fitted order (slope of log error against log step, asymptotic points):")
+    out.append("")
+    out.append("| design | method | " + " | ".join(METRICS) + " | slope against run time "
+               "(impact_theta_dot) |")
+    out.append("|---|---|" + "---:|" * (len(METRICS) + 1))
+    for dname in wp.truths:
+        for m in METHODS:
+            if (dname, m, METRICS[0]) not in wp.orders:
+                continue
+            out.append(f"| {dname} | {m} | "
+                       + " | ".join(_fmt(wp.orders[(dname, m, k)], '.2f') for k in METRICS)
+                       + f" | {_fmt(wp.slopes[(dname, m, 'impact_theta_dot')], '.2f')} |")
+    return "\n".join(out)
+
+
+def _duration(s) -> str:
+    if s is None or not math.isfinite(s):
+        return "—"
+    return f"{s * 1e6:.1f} µs" if s < 1e-3 else (f"{s * 1e3:.2f} ms" if s < 1 else f"{s:.2f} s")
+
+
+def target_text(target: dict | None) -> str:
+    if not target:
+        return "—"
+    if "max_s" in target:
+        return f"≤ {_duration(target['max_s'])}"
+    return f"≥ {target['min_per_s']:,.0f} /s"
+
+
+def speed_markdown(rows) -> str:
+    """The speed table: median, rate, repeats, target and whether it is met."""
+    out = ["| what | median | rate | repeats | target | met? | note |",
+           "|---|---:|---:|---:|---|:-:|---|"]
+    for r in rows:
+        rate = f"{r['rate']:,.0f} {r['unit']}/s" if r.get("rate") else ""
+        met = {True: "yes", False: "**no**", None: ""}[r.get("met")]
+        out.append(f"| {r['what']} | {_duration(r['median_s'])} | {rate} | {r['repeats']} | "
+                   f"{target_text(r.get('target'))} | {met} | {r['note']} |")
+    return "\n".join(out)
+
+
+def optimiser_markdown(rows, note="") -> str:
+    """The optimiser table (N, sub-steps, objective error, solve time, design)."""
+    if not rows:
+        return note or "(no optimiser rows)"
+    out = ["| N | sub-steps | success | objective J_N | J_reference(design_N) | "
+           "abs(J_N - J*) | abs(J_N - J_ref(design_N)) | solve time (s) | k | l0 | c |",
+           "|---:|---:|:-:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for r in rows:
+        if "objective" not in r:
+            out.append(f"| {r['nodes']} | {r['substeps']} | no | {r['message']} |" + " |" * 7)
+            continue
+        out.append(f"| {r['nodes']} | {r['substeps']} | {'yes' if r['success'] else 'no'} | "
+                   f"{r['objective']:.8g} | {_fmt(r['objective_reference'], '.8g')} | "
+                   f"{_fmt(r.get('objective_error'))} | {_fmt(r['discretisation_error'])} | "
+                   f"{r['solve_time']:.3f} | {r['spring_k']:.5g} | "
+                   f"{r['spring_rest_length']:.5g} | {r['damper_c']:.5g} |")
+    if rows[0].get("J_star") is not None:
+        out += ["", f"J* = {rows[0]['J_star']:.10g} (the reference objective at the design of "
+                "the finest setting)"]
+    return "\n".join(out)
+
+
+def report_text(res) -> str:
+    """The whole report as text (Markdown tables)."""
+    from ..bench import TRUTH_TOL
+    return "\n".join([
+        f"machine: {res.machine}", f"commit {res.commit or 'unknown'}, {res.date}"
+        f"{', quick' if res.quick else ''}; {res.elapsed:.0f} s", "",
+        f"work precision (errors against CVODES at tol {TRUTH_TOL:g}; µs per stroke in the "
+        "C kernel):", work_precision_markdown(res.work_precision), "",
+        "speed (median of repeats):", speed_markdown(res.speed), "",
+        "optimiser:", optimiser_markdown(res.optimiser, res.optimiser_note), "",
+        default_text(res.default)])
+
+
+def report_markdown(res) -> str:
+    """``bench.md``: the report with section headings."""
+    return (f"Machine: {res.machine}\n\nCommit {res.commit or 'unknown'}, {res.date}"
+            f"{', quick run' if res.quick else ''}.\n\n"
+            f"## Default step\n\n{default_text(res.default)}\n\n"
+            f"## Work precision\n\n{work_precision_markdown(res.work_precision)}\n\n"
+            f"## Speed\n\n{speed_markdown(res.speed)}\n\n"
+            f"## Optimiser\n\n{optimiser_markdown(res.optimiser, res.optimiser_note)}\n")
+
+
+# -- files ---------------------------------------------------------------------------------
+def write_csv(rows, path: Path) -> Path:
+    """Rows (dicts) as CSV; the header is the union of their keys; None is an empty cell."""
+    keys = []
+    for r in rows:
+        keys += [k for k in r if k not in keys]
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=keys)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: ("" if r.get(k) is None else r.get(k)) for k in keys})
+    return path
+
+
+def write_files(res, out: Path) -> list[Path]:
+    """Tables, report, JSON and figures of one bench run into ``out`` (which exists)."""
+    from ..figures import save
+    from ..figures.bench import plot_error_vs_step, plot_optimiser, plot_work_precision
+    from ..jsonio import dumps
+    out = Path(out)
+    speed_rows = [{**r, "target": target_text(r.get("target"))} for r in res.speed]
+    files = [write_csv(res.work_precision.rows, out / "work_precision.csv"),
+             write_csv(speed_rows, out / "speed.csv")]
+    if res.optimiser:
+        files.append(write_csv(res.optimiser, out / "optimiser.csv"))
+    (out / "bench.md").write_text(report_markdown(res))
+    files.append(out / "bench.md")
+    files.append(save(plot_work_precision(res.work_precision), out / "work_precision.png"))
+    files.append(save(plot_error_vs_step(res.work_precision), out / "error_vs_step.png"))
+    fig = plot_optimiser(list(res.optimiser), default=(res.config.get("nodes", 10),
+                                                       res.config.get("substeps", 4)))
+    if fig is not None:
+        files.append(save(fig, out / "optimiser.png"))
+    payload = res.to_json()
+    payload["files"] = [str(f) for f in files + [out / "bench.json"]]
+    (out / "bench.json").write_text(dumps(payload, indent=1))
+    files.append(out / "bench.json")
+    return files
+
+
+__all__ = ["register", "run", "write_files", "write_csv", "report_text", "report_markdown",
+           "default_text", "work_precision_markdown", "speed_markdown", "optimiser_markdown"]

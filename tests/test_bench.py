@@ -1,0 +1,173 @@
+"""The benchmark's numbers: errors against the reference, the fitted orders, the default step
+(configured, confirmed or not, and the cheapest setting on a run's designs), the legend of its
+figures, and the start-up imports of ``softclose simulate``.
+
+The work-precision run here is the quick one, restricted to rk4 (spec8 and soft_close).
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from softclose import bench
+from softclose.cli import main
+from softclose.cli.bench import default_text, work_precision_markdown
+from softclose.config import default_config
+from softclose.model import LidModel
+from softclose.problem import TARGETS
+from softclose.reference import Reference
+from softclose.simulate import Simulator
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def wp():
+    return bench.work_precision(default_config(), quick=True, repeats=1, methods=["rk4"])
+
+
+def test_rows_are_errors_against_the_truth(wp):
+    """The table's rk4 row at 2 ms on soft_close equals an independent recomputation:
+    the stroke against CVODES at 1e-14, absolute errors, relative for the tip speeds."""
+    cfg = default_config()
+    model = LidModel(cfg)
+    p = np.array(bench.SPRING_DASHPOT["soft_close"])
+    res = Simulator(cfg, model=model, step=2e-3).run(p)
+    truth = Reference(model, bench.TRUTH_TOL).simulate(p)
+    row = next(r for r in wp.rows if r["design"] == "soft_close" and r["method"] == "rk4"
+               and r["step"] == 2e-3)
+    assert row["err_closing_time"] == abs(res.closing_time - truth.closing_time)
+    assert row["err_impact_theta_dot"] == abs(res.impact_theta_dot - truth.impact_theta_dot)
+    assert row["err_peak_tip_speed"] == pytest.approx(
+        abs(res.peak_tip_speed - truth.peak_tip_speed) / truth.peak_tip_speed, rel=1e-12)
+    assert wp.truths["soft_close"].closing_time == truth.closing_time
+    # SPEC §8 from the truth of the spec8 design
+    assert abs(wp.truths["spec8"].closing_time - 0.1491478) < 1e-7
+    assert abs(wp.truths["spec8"].impact_theta_dot + 4.155764) < 1e-6
+
+
+def test_rk4_converges_at_fourth_order(wp):
+    """Fitted over the asymptotic points of the quick steps on soft_close: 3.7 < order < 4.3."""
+    for k in ("closing_time", "impact_theta_dot", "impact_tip_speed"):
+        o = wp.orders[("soft_close", "rk4", k)]
+        assert o is not None and 3.7 < o < 4.3, (k, o)
+
+
+def test_quick_run_reports_the_configured_default_not_its_cheapest(wp):
+    """Issue 12 item 3: the quick set (spec8, soft_close) lets rk4 at 5 ms pass, but the
+    default is the configured 2 ms; the quick run says it cannot confirm it and reports
+    5 ms separately as the cheapest on its designs."""
+    d = wp.default
+    assert (d["method"], d["step"]) == ("rk4", default_config().simulate.step) == ("rk4", 2e-3)
+    assert d["meets_targets"] and not d["confirmed"]
+    assert d["designs"] == ["spec8", "soft_close"]
+    assert d["omitted_designs"] == ["strong_spring", "stiff_corner"]
+    assert (d["cheapest"]["method"], d["cheapest"]["step"]) == ("rk4", 5e-3)
+    five = [r for r in wp.rows if r["method"] == "rk4" and r["step"] == 5e-3]
+    assert len(five) == 2 and all(r["meets_targets"] for r in five)
+    text = default_text(d)
+    assert text.splitlines()[0].startswith("default: rk4 at 2 ms (configured")
+    assert "omits strong_spring, stiff_corner" in text and "cannot confirm" in text
+    assert "cheapest meeting the targets on these designs: rk4 at 5 ms" in text
+    md = work_precision_markdown(wp)
+    assert "| rk4 **(default)** | 0.002 |" in md and "| rk4 (cheapest here) | 0.005 |" in md
+    assert "| rk4 **(default)** | 0.005 |" not in md
+
+
+def test_stiff_corner_rules_out_5ms():
+    """What the full bench adds to the quick one: on stiff_corner rk4 at 5 ms misses the
+    impact_theta_dot target and 2 ms meets every target (against CVODES at 1e-14)."""
+    cfg = default_config()
+    model = LidModel(cfg)
+    p = np.array(bench.SPRING_DASHPOT["stiff_corner"])
+    truth = Reference(model, bench.TRUTH_TOL).simulate(p)
+    sim = Simulator(cfg, model=model)
+    sim.step = 5e-3
+    e5 = bench.errors(sim.run(p), truth)
+    sim.step = 2e-3
+    e2 = bench.errors(sim.run(p), truth)
+    assert e5["impact_theta_dot"] > TARGETS["impact_theta_dot"]
+    assert not bench.meets(e5) and bench.meets(e2)
+
+
+def test_full_design_set_confirms_the_default_from_rows():
+    """assess_default on the four designs with rk4 at 5 ms failing stiff_corner (as measured
+    in test_stiff_corner_rules_out_5ms): the configured 2 ms is confirmed, nothing omitted."""
+    cfg = default_config()
+    designs = list(bench.designs_for(cfg))
+    rows = [{"design": d, "method": "rk4", "step": h, "time_per_stroke": t,
+             "meets_targets": not (h == 5e-3 and d == "stiff_corner")}
+            for d in designs for h, t in ((5e-3, 4e-6), (2e-3, 8e-6), (1e-3, 15e-6))]
+    d = bench.assess_default(cfg, rows, designs)
+    assert d["confirmed"] and d["omitted_designs"] == [] and d["failing_designs"] == []
+    assert "confirmed" in default_text(d) and "cheapest meeting" not in default_text(d)
+    # a configured step that misses a target is said to
+    cfg5 = cfg.replace(simulate={"step": 5e-3})
+    d5 = bench.assess_default(cfg5, rows, designs)
+    assert not d5["meets_targets"] and d5["failing_designs"] == ["stiff_corner"]
+    assert "misses the accuracy targets on stiff_corner" in default_text(d5)
+
+
+def test_figure_legend_names_the_configured_default(wp):
+    from softclose.figures import plt
+    from softclose.figures.bench import plot_error_vs_step, plot_work_precision
+    for fig in (plot_work_precision(wp), plot_error_vs_step(wp)):
+        labels = [t.get_text() for t in fig.legends[0].get_texts()]
+        plt.close(fig)
+        assert "configured default: rk4, h = 0.002 s (these designs cannot confirm it)" in labels
+        assert ("cheapest meeting the targets on these designs: rk4, h = 0.005 s"
+                in labels)
+        assert not any("default" in lab and "0.005" in lab for lab in labels)
+
+
+def test_speed_row_targets():
+    r = bench._speed_row("cli_simulate", "cli", 0.25, 3)
+    assert r["target"] == {"max_s": 0.3} and r["met"] is True
+    assert bench._speed_row("cli_simulate", "cli", 0.31, 3)["met"] is False
+    s = bench._speed_row("sweep_40000", "sweep", 2.5, 1, count=40000)
+    assert s["rate"] == 16000 and s["met"] is False
+    assert bench._speed_row("table", "table", 1.0, 1)["met"] is None
+
+
+def test_sweep_grid_has_40000_designs():
+    axes = bench.sweep_axes()
+    assert [len(v) for v in axes.values()] == [40, 40, 25]
+    assert np.prod([len(v) for v in axes.values()]) == 40000
+    assert axes["design.spring_k"][[0, -1]].tolist() == [500.0, 9500.0]
+
+
+def test_bench_checks_out_before_any_work(tmp_path, capsys):
+    """--out naming a file is refused (exit 2) before anything is measured."""
+    f = tmp_path / "afile"
+    f.write_text("x")
+    assert main(["bench", "--quick", "--out", str(f)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("softclose: error: --out") and "work precision" not in err
+
+
+def test_simulate_start_up_imports_nothing_heavy():
+    """Issue 11 item 7: ``softclose simulate --json`` in a fresh interpreter imports none of
+    pandas, pyarrow, scipy, SALib, dask, matplotlib (they are imported lazily)."""
+    code = ("import io, json, sys, contextlib\n"
+            "from softclose.cli import main\n"
+            "buf = io.StringIO()\n"
+            "with contextlib.redirect_stdout(buf):\n"
+            "    code = main(['simulate', '--json'])\n"
+            "heavy = ('pandas', 'pyarrow', 'scipy', 'SALib', 'dask', 'matplotlib')\n"
+            "loaded = sorted(m for m in sys.modules if m.split('.')[0] in heavy)\n"
+            "print(json.dumps({'code': code, 'loaded': loaded,\n"
+            "                  'closing_time': json.loads(buf.getvalue())['closing_time']}))\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       cwd=ROOT, timeout=120)
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout.strip().splitlines()[-1])
+    assert out["code"] == 0
+    assert abs(out["closing_time"] - 0.1491478) < 1e-7   # it ran the stroke
+    assert out["loaded"] == [], out["loaded"]
+    assert bench.startup_imports(["simulate", "--json"]) == []
