@@ -1,9 +1,10 @@
 """Configuration: TOML file + ``--set`` overrides -> immutable, validated objects.
 
 Every key is optional (SPEC §6). Each section is a frozen dataclass whose fields are
-declared once in ``_SCHEMA`` with their kind, default and admissible range; loading
-checks kinds and ranges and raises :class:`ConfigError` with a one-line message
-naming the key. Geometry that cannot be assembled is checked by the model
+declared once in ``_SCHEMA`` with their kind and default, and in ``RANGES`` with their
+admissible magnitudes; loading checks kinds, ranges and the work a config asks for (steps per
+stroke, the optimiser's grid) and raises :class:`ConfigError` with a one-line message naming
+the key. Geometry that cannot be assembled is checked by the model
 (:mod:`softclose.kinematics`), which also raises ``ConfigError``.
 """
 
@@ -155,6 +156,96 @@ class Optimise:
     max_iter: int
 
 
+#: Admissible magnitudes: key -> (lowest, highest, unit), both ends included, SI units (angles
+#: in degrees). They are wide -- a jewellery box to a car boot -- and they exist because
+#: physics bounds every value: without them a 1e300 m lid overflows the inertia, a spring of
+#: 1e300 N/m on a 2 kg m^2 lid overflows the linearisation, and an angle of 1e300 deg makes the
+#: toggle scan unbounded. Vector keys: every component; ``bounds`` keys: both ends. Checked on
+#: load after the kind (sign, type), so a negative length still reads "must be positive".
+#: Derived defaults (lid_g, lid_tip, the inertias) always fall inside. docs/model.md lists them.
+RANGES: dict[str, tuple[float, float, str]] = {
+    "geometry.lid_length": (1e-4, 10.0, "m"),
+    "geometry.crank_oa": (1e-4, 10.0, "m"),
+    "geometry.crank_bc": (1e-4, 10.0, "m"),
+    "geometry.pivot_b": (-10.0, 10.0, "m"),
+    "geometry.lid_c": (-10.0, 10.0, "m"),
+    "geometry.lid_e": (-10.0, 10.0, "m"),
+    "geometry.lid_g": (-10.0, 10.0, "m"),
+    "geometry.lid_tip": (-10.0, 10.0, "m"),
+    "geometry.spring_anchor": (-10.0, 10.0, "m"),
+    "geometry.assembly": (-360.0, 360.0, "deg"),
+    "mass.lid": (1e-4, 1e3, "kg"),
+    "mass.crank_oa": (1e-4, 1e3, "kg"),
+    "mass.crank_bc": (1e-4, 1e3, "kg"),
+    "mass.inertia_lid": (1e-15, 1e4, "kg m^2"),
+    "mass.inertia_oa": (1e-15, 1e4, "kg m^2"),
+    "mass.inertia_bc": (1e-15, 1e4, "kg m^2"),
+    "mass.gravity": (0.0, 100.0, "m/s^2"),
+    "design.spring_k": (0.0, 1e7, "N/m"),
+    "design.spring_rest_length": (1e-4, 10.0, "m"),
+    "design.damper_c": (0.0, 1e7, "N s/m"),
+    "design.rotary_damper_c": (0.0, 1e5, "N m s/rad"),
+    "stroke.theta0_deg": (-360.0, 360.0, "deg"),
+    "stroke.theta_closed_deg": (-360.0, 360.0, "deg"),
+    "stroke.t_max": (1e-6, 60.0, "s"),
+    "simulate.step": (1e-7, 1.0, "s"),
+    "simulate.reference_tol": (1e-14, 1e-3, ""),
+    "optimise.closing_time_max": (1e-3, 60.0, "s"),
+    "optimise.closing_time_min": (0.0, 60.0, "s"),
+    "optimise.holding_moment_min": (-1e6, 1e6, "N m"),
+    "optimise.weight_impact": (0.0, 1e6, ""),
+    "optimise.weight_peak_tip": (0.0, 1e6, ""),
+    "optimise.spring_k": (0.0, 1e7, "N/m"),
+    "optimise.spring_rest_length": (1e-4, 10.0, "m"),
+    "optimise.damper_c": (0.0, 1e7, "N s/m"),
+    "optimise.nodes": (1, 1000, ""),
+    "optimise.substeps": (1, 1000, ""),
+    "optimise.starts": (1, 100, ""),
+    "optimise.max_iter": (1, 10000, ""),
+}
+#: most fixed steps one stroke may take (stroke.t_max / simulate.step): bounds its loop
+#: (rk4 ~0.1 us, radau5 ~0.5 us a step; 60 s at 1.2 us or 5 s at 0.1 us)
+STEP_BUDGET = 5e7
+#: most RK4 steps in the optimiser's NLP (optimise.nodes x optimise.substeps)
+NLP_BUDGET = 2000
+#: most fixed steps of a batch of strokes (designs x STEP_BUDGET-bounded steps per stroke):
+#: 20 million designs at the default step; see :func:`check_batch`
+BATCH_STEP_BUDGET = 5e10
+
+
+def _fmt_range(key: str) -> str:
+    lo, hi, unit = RANGES[key]
+    return f"{lo:g}..{hi:g}" + (f" {unit}" if unit else "")
+
+
+def _in_range(key: str, name: str, value: Any) -> None:
+    """ConfigError (one line: key, value, admissible range) when ``value`` (a number or each
+    number of a vector) lies outside ``RANGES[key]``; ``name`` is how the message names it."""
+    lo, hi, unit = RANGES[key]
+    for i, x in enumerate(value if isinstance(value, tuple) else (value,)):
+        if not lo <= x <= hi:
+            which = f"{name}[{i}]" if isinstance(value, tuple) else name
+            raise ConfigError(f"{which}: {x:g}{' ' + unit if unit else ''} is outside the "
+                              f"admissible range {_fmt_range(key)}")
+
+
+def steps_per_stroke(cfg: "Config") -> int:
+    """The most fixed steps one stroke of ``cfg`` can take (ceil(t_max / step))."""
+    return int(math.ceil(cfg.stroke.t_max / cfg.simulate.step * (1 - 1e-12)))
+
+
+def check_batch(cfg: "Config", strokes: int, what: str = "the batch",
+                budget: float = BATCH_STEP_BUDGET) -> None:
+    """Refuse (ConfigError, one line) a batch of ``strokes`` strokes whose steps could exceed
+    ``budget``: designs x steps per stroke bounds every batch loop (sweeps, samples)."""
+    steps = steps_per_stroke(cfg)
+    if strokes * steps > budget:
+        raise ConfigError(
+            f"{what}: {strokes} strokes of up to {steps} steps (stroke.t_max / simulate.step) is "
+            f"{strokes * steps:.3g} steps, above the budget of {budget:g}; use fewer points, a "
+            "larger simulate.step or a shorter stroke.t_max")
+
+
 _SECTIONS = {"geometry": Geometry, "mass": Mass, "design": Design, "stroke": Stroke,
              "simulate": Simulate, "optimise": Optimise}
 
@@ -216,7 +307,10 @@ def _fmt(v: Any) -> str:
 def _number(key: str, v: Any) -> float:
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         raise ConfigError(f"{key}: expected a number, got {_fmt(v)}")
-    x = float(v)
+    try:
+        x = float(v)
+    except OverflowError:           # an integer beyond the floats (TOML allows any length)
+        raise ConfigError(f"{key}: {str(v)[:12]}... is too large a number") from None
     if not math.isfinite(x):
         raise ConfigError(f"{key}: expected a finite number, got {_fmt(v)}")
     return x
@@ -280,6 +374,8 @@ def from_dict(raw: dict[str, Any]) -> Config:
         for key, (kind, default) in fields.items():
             v = table.get(key, default)
             values[section][key] = None if v is None else _check(f"{section}.{key}", kind, v)
+            if v is not None and f"{section}.{key}" in RANGES:
+                _in_range(f"{section}.{key}", f"{section}.{key}", values[section][key])
 
     g, m = values["geometry"], values["mass"]
     if g["lid_g"] is None:
@@ -300,10 +396,22 @@ def from_dict(raw: dict[str, Any]) -> Config:
     if values["simulate"]["step"] >= s["t_max"]:
         raise ConfigError(f"simulate.step: {values['simulate']['step']} s is not smaller than "
                           f"stroke.t_max = {s['t_max']} s")
+    steps = s["t_max"] / values["simulate"]["step"]
+    if steps > STEP_BUDGET * (1 + 1e-9):
+        raise ConfigError(f"simulate.step: {values['simulate']['step']:g} s over stroke.t_max = "
+                          f"{s['t_max']:g} s is {steps:.3g} steps a stroke, above the budget of "
+                          f"{STEP_BUDGET:g}; use a larger simulate.step or a shorter stroke.t_max")
     o = values["optimise"]
     if o["closing_time_min"] >= o["closing_time_max"]:
         raise ConfigError(f"optimise.closing_time_min: {o['closing_time_min']} must be below "
                           f"optimise.closing_time_max = {o['closing_time_max']}")
+    if o["closing_time_min"] >= s["t_max"]:   # a closing_time_max past t_max cannot bind: fine
+        raise ConfigError(f"optimise.closing_time_min: {o['closing_time_min']:g} s is not below "
+                          f"stroke.t_max = {s['t_max']:g} s, so no simulated stroke can meet it")
+    if o["nodes"] * o["substeps"] > NLP_BUDGET:
+        raise ConfigError(f"optimise.nodes x optimise.substeps: {o['nodes']} x {o['substeps']} "
+                          f"= {o['nodes'] * o['substeps']} RK4 steps in the optimisation problem, "
+                          f"above the budget of {NLP_BUDGET}; use fewer nodes or substeps")
     if o["spring_rest_length"][0] <= 0:
         raise ConfigError(f"optimise.spring_rest_length: lower bound must be positive, "
                           f"got {o['spring_rest_length'][0]}")

@@ -19,7 +19,7 @@ from dataclasses import replace
 import numpy as np
 
 from . import native
-from .config import Config, default_config
+from .config import RANGES, STEP_BUDGET, Config, default_config
 from .errors import NumericalError
 from .integrators import Method, get_method
 from .model import LidModel
@@ -31,30 +31,49 @@ DEFAULT_STEP = default_config().simulate.step
 TABLE_TOL = 1e-7
 #: h |lambda|max above which an explicit method is outside its asymptotic regime
 STIFF_H_LAMBDA = 1.0
+#: the smallest step the config admits (simulate.step): no recommendation goes below it
+MIN_STEP = RANGES["simulate.step"][0]
 
 
 def amplification(method: Method, hJ: np.ndarray) -> np.ndarray:
-    """Step matrix of a Runge-Kutta ``method`` on the linear system x' = J x (hJ = h J)."""
+    """Step matrix of a Runge-Kutta ``method`` on the linear system x' = J x (hJ = h J).
+
+    None where the step is not defined: hJ not finite, or (implicit methods) h J meets an
+    eigenvalue of A^-1, where the stage equations have no unique solution.
+    """
     I2 = np.eye(2)
     s = method.stages
     A = np.asarray(method.A, float)
+    if not np.all(np.isfinite(hJ)):
+        return None
     big = np.eye(2 * s) - np.kron(A, hJ)
     rhs = np.kron(np.ones((s, 1)), hJ)
-    K = np.linalg.solve(big, rhs)  # h K_i = (hJ)(x + sum a_ij h K_j)
-    return I2 + sum(method.b[i] * K[2 * i:2 * i + 2] for i in range(s))
+    try:
+        K = np.linalg.solve(big, rhs)  # h K_i = (hJ)(x + sum a_ij h K_j)
+    except np.linalg.LinAlgError:
+        return None
+    S = I2 + sum(method.b[i] * K[2 * i:2 * i + 2] for i in range(s))
+    return S if np.all(np.isfinite(S)) else None
 
 
 def spectral_radius(method: Method, J: np.ndarray, h: float) -> float:
-    if method.kind == "symplectic_euler":
-        a, b = J[1]
-        S = np.array([[1 + h * h * a, h * (1 + h * b)], [h * a, 1 + h * b]])
-    else:
-        S = amplification(method, h * J)
-    return float(np.max(np.abs(np.linalg.eigvals(S))))
+    """Spectral radius of the step matrix at step h; inf where the step is not defined
+    (see :func:`amplification`), so that such a step never counts as stable."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        if method.kind == "symplectic_euler":
+            a, b = J[1]
+            S = np.array([[1 + h * h * a, h * (1 + h * b)], [h * a, 1 + h * b]])
+        else:
+            S = amplification(method, h * J)
+        if S is None or not np.all(np.isfinite(S)):
+            return math.inf
+        return float(np.max(np.abs(np.linalg.eigvals(S))))
 
 
 def _round_down(x: float) -> float:
     """x rounded down to 3 significant digits (a recommendation must not round up)."""
+    if not (math.isfinite(x) and x > 0):
+        return x
     e = math.floor(math.log10(x)) - 2
     return math.floor(x / 10 ** e) * 10 ** e
 
@@ -161,7 +180,7 @@ class Simulator:
             est[k] = None if a is None or b is None else abs(a - b) * q / (q - 1) + tab * abs(a)
         est["table_rel_error"] = tab
         h_lam = self.step * self.max_rate(p)
-        est["step_times_max_rate"] = h_lam
+        est["step_times_max_rate"] = h_lam if math.isfinite(h_lam) else None
         if h_lam > STIFF_H_LAMBDA and self.method.real_stability != math.inf:
             return est, (f"warning: stiff for {self.method.name} at this step "
                          f"(h |lambda|max = {h_lam:.2g}): the error estimate may be too small; "
@@ -169,12 +188,15 @@ class Simulator:
         over = [k for k in ERROR_KEYS if est[k] is not None
                 and est[k] > target(k, getattr(res, k))]
         if over:
-            # error ~ h^order: the step that brings the worst metric within its target
-            worst = max(est[k] / target(k, getattr(res, k)) for k in over)
+            # error ~ h^order: the step that brings the worst metric within its target (a
+            # relative target of a zero value is zero: any error exceeds it, by a large ratio)
+            worst = max(est[k] / max(target(k, getattr(res, k)), 1e-300) for k in over)
             h_new = _round_down(0.8 * self.step * worst ** (-1.0 / self.method.order))
+            where = (f"use simulate.step <= {h_new:.3g} s" if h_new >= MIN_STEP else
+                     f"a step below the smallest admissible ({MIN_STEP:g} s) would be needed")
             return est, (f"warning: the estimated error of {', '.join(over)} exceeds the "
                          f"accuracy targets at simulate.step = {self.step:g} s; for the targets "
-                         f"use simulate.step <= {h_new:.3g} s")
+                         f"{where}")
         return est, None
 
     def _jacobians(self, p):
@@ -185,13 +207,17 @@ class Simulator:
         cp, cm, c = self.table.evaluate(th + eps), self.table.evaluate(th - eps), \
             self.table.evaluate(th)
         Q = lambda cc: -(cc[:, 3] + k * (cc[:, 4] - l0) * cc[:, 5]) / cc[:, 0]  # noqa: E731
-        return (Q(cp) - Q(cm)) / (2 * eps), -(cd * c[:, 6] + cr) / c[:, 0]
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            return (Q(cp) - Q(cm)) / (2 * eps), -(cd * c[:, 6] + cr) / c[:, 0]
 
     def max_rate(self, p) -> float:
-        """max |lambda| of the linearised stroke (1/s): what limits an explicit step."""
+        """max |lambda| of the linearised stroke (1/s): what limits an explicit step
+        (inf when the linearisation overflows)."""
         a, b = self._jacobians(p)
-        disc = np.sqrt((b * b + 4 * a).astype(complex))
-        return float(np.max(np.abs(np.r_[(b + disc) / 2, (b - disc) / 2])))
+        with np.errstate(over="ignore", invalid="ignore"):
+            disc = np.sqrt((b * b + 4 * a).astype(complex))
+            lam = np.abs(np.r_[(b + disc) / 2, (b - disc) / 2])
+        return float(np.max(lam)) if np.all(np.isfinite(lam)) else math.inf
 
     def diagnose(self, status: StrokeStatus, p) -> str:
         """A one-line report of why a stroke failed and what to change."""
@@ -210,7 +236,17 @@ class Simulator:
                         f"step is too coarse to resolve the stroke; use a simulate.step at least "
                         f"10 times smaller (the default is {DEFAULT_STEP:g} s)")
             h_ok = _round_down(0.9 * h_ok)  # a margin inside the stability boundary
+            stiff = ("lower design.spring_k, design.damper_c or design.rotary_damper_c, or "
+                     "raise the masses")
+            if h_ok < MIN_STEP:  # no admissible step is stable: the method cannot do it
+                hint = (f"no admissible step (>= {MIN_STEP:g} s) is stable for it; "
+                        + ("" if m.real_stability == math.inf else
+                           "use simulate.integrator = \"radau5\" (L-stable) or ") + stiff)
+                return (f"{m.name} at step {h:g} s cannot integrate this design ({status}): "
+                        f"its fastest mode is too fast (stiff); {hint}")
             hint = f"use simulate.step <= {h_ok:.3g} s"
+            if st.t_max / h_ok > STEP_BUDGET:
+                hint += f" with stroke.t_max <= {_round_down(STEP_BUDGET * h_ok):.3g} s"
             alt = "" if m.real_stability == math.inf else \
                 " or simulate.integrator = \"radau5\" (L-stable, for stiff damping)"
             return (f"{m.name} at step {h:g} s cannot integrate this design ({status}): its "
@@ -219,19 +255,26 @@ class Simulator:
         return status.text
 
     def stable_step(self, p) -> float:
-        """Largest step at which the linearised stroke is stable (bisection on the step)."""
+        """Largest step at which the linearised stroke is stable (bisection on the step);
+        0.0 when none down to 1e-12 s is, or the linearisation is not finite."""
         f_th, f_v = self._jacobians(p)
+        if not (np.all(np.isfinite(f_th)) and np.all(np.isfinite(f_v))):
+            return 0.0
         Js = [np.array([[0.0, 1.0], [a, b]]) for a, b in zip(f_th, f_v)]
+        lams = [np.linalg.eigvals(J) for J in Js]
 
         def stable(h):  # numerically stable: no faster growth than the exact flow's
-            return all(spectral_radius(self.method, J, h)
-                       <= max(1.0, float(np.max(np.abs(np.exp(h * np.linalg.eigvals(J))))))
-                       * (1 + 1e-6) for J in Js)
+            with np.errstate(over="ignore"):
+                return all(spectral_radius(self.method, J, h)
+                           <= max(1.0, float(np.max(np.abs(np.exp(h * lam))))) * (1 + 1e-6)
+                           for J, lam in zip(Js, lams))
         hi = self.step
         if stable(hi):
             return hi
         lo = hi
-        while not stable(lo) and lo > 1e-12:
+        while not stable(lo):
+            if lo < 1e-12:
+                return 0.0
             lo /= 2
         for _ in range(40):
             mid = math.sqrt(lo * hi)

@@ -22,6 +22,10 @@ def run(cfg, args) -> Outcome:
         raise ConfigError(f"--theta-deg: expected a finite angle, got {args.theta_deg}")
     if not math.isfinite(args.theta_dot):
         raise ConfigError(f"--theta-dot: expected a finite rate, got {args.theta_dot}")
+    if not abs(args.theta_deg) <= 360.0:   # the toggle scan's length grows with the angle
+        raise ConfigError(f"--theta-deg: {args.theta_deg:g} deg is outside -360..360 deg")
+    if not abs(args.theta_dot) <= 1e4:     # its square enters the reactions
+        raise ConfigError(f"--theta-dot: {args.theta_dot:g} rad/s is outside -1e4..1e4 rad/s")
     model = LidModel(cfg)
     theta = math.radians(args.theta_deg)
     toggle = model.toggle_between(cfg.stroke.theta0, theta)
