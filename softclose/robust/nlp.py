@@ -1,0 +1,305 @@
+"""The scenario NLP: one multiple-shooting problem over several scenarios of the lid.
+
+A *scenario* is one point of the tolerance box: a model (geometry and masses: a scenario
+with another lid mass has its own model and its own Chebyshev fit of the equation of
+motion) and a map from the drawn design to the parameters the lid really has,
+
+    p_s = a_s * (k, l0, c, c_rot) + b_s          (elementwise; a_s = 1 + relative deviation,
+                                                  b_s = absolute deviation)
+
+The design d (scaled as in the nominal NLP) is shared; every scenario has its own closing
+time T_s, shooting states X_s at the N nodes and peak-speed bound s_s, and its own copy of
+every constraint of the problem: continuity, theta(T_s) = theta_closed, the closing-time
+window on T_s, theta' <= 0 and theta >= theta_closed at every RK4 sub-step, the peak tip
+speed caught by the cubic Hermite bound inside every sub-step, the lid moving down at
+release, and the holding moment. The objective is
+
+    worst:  minimise t  subject to  t >= J_s / J_ref  for every scenario (epigraph), or
+    mean:   minimise the mean of J_s / J_ref,
+
+with J_s = weight_impact theta'_s(T_s)^2 + weight_peak_tip s_s^2. Each scenario's shooting
+interval is the nominal optimiser's (``ShootingNLP.interval``: M RK4 sub-steps on the
+Chebyshev series of its model, with the Hermite peak bound), so the robust and the nominal
+problem share their discretisation. The NLP is built for a given list of scenario models
+(:func:`get_scenario_nlp` caches it); the a_s, b_s are parameters.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import casadi as ca
+import numpy as np
+
+from ..config import Config
+from ..problem import SCALES
+
+#: NLP parameters before the time grid and the scenario maps
+PARAMS = ("theta0", "theta_closed", "weight_impact", "weight_peak_tip", "rotary_damper_c",
+          "J_ref")
+#: smallest closing time a scenario may take (s)
+T_FLOOR = 1e-3
+#: per-scenario constraint groups, in order
+GROUPS = ("continuity", "theta_above_closed", "theta_dot_nonpositive", "peak_tip_speed",
+          "holding_moment", "release_downwards", "epigraph")
+CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+WARM_OPTIONS = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
+                "ipopt.warm_start_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9,
+                "ipopt.warm_start_slack_bound_push": 1e-9}
+
+
+#: where the nominal optimiser's pieces live (its package after the split, else its module)
+_OPTIMISER_MODULES = ("softclose.optimise.nlp", "softclose.optimise.verify",
+                      "softclose.optimise.solve", "softclose.optimise")
+
+
+def optimiser_piece(name: str):
+    """A function of the nominal optimiser (``get_model``, ``get_nlp``, ``discretisation``,
+    ``verify_design``, ``optimise``), wherever its package keeps it."""
+    import importlib
+    import types
+    for mod_name in _OPTIMISER_MODULES:
+        try:
+            mod = importlib.import_module(mod_name)
+        except ImportError:
+            continue
+        f = getattr(mod, name, None)
+        if f is not None and not isinstance(f, types.ModuleType):
+            return f
+    raise ImportError(f"softclose.optimise has no {name}")
+
+
+def model_config(cfg: Config, values: dict) -> Config:
+    """The config of a scenario's model: ``cfg`` with its non-design keys set."""
+    from .evaluate import with_values
+    return with_values(cfg, {k: v for k, v in values.items() if not k.startswith("design.")})
+
+
+def interval_of(cfg_model: Config, nodes: int, substeps: int):
+    """(model, shooting-interval Function) of a scenario's model: the nominal optimiser's."""
+    try:
+        make = optimiser_piece("interval_function")
+    except ImportError:
+        nlp = optimiser_piece("get_nlp")(cfg_model, nodes, substeps)
+        return nlp.model, nlp.interval
+    model = optimiser_piece("get_model")(cfg_model)
+    return model, make(model, substeps)
+
+
+class ScenarioNLP:
+    """The multiple-shooting NLP of S scenarios (see the module docstring).
+
+    ``models`` lists the scenarios' model configs (equal configs share a model and its
+    interval Function). Variables: w = (d (3), t, then per scenario T_s, X_s (2N), s_s).
+    """
+
+    def __init__(self, cfg: Config, model_cfgs: list[Config], nodes: int, substeps: int,
+                 robust_objective: str = "worst", tol: float = 1e-10):
+        t0 = time.perf_counter()
+        o = cfg.optimise
+        self.N, self.M, self.S = nodes, substeps, len(model_cfgs)
+        self.robust_objective = robust_objective
+        N, M, S = nodes, substeps, self.S
+        # one interval Function per distinct model
+        keys, self.model_index, funcs, models = [], [], [], []
+        for c in model_cfgs:
+            key = (c.geometry, c.mass, c.stroke.theta0_deg, c.stroke.theta_closed_deg)
+            if key not in keys:
+                keys.append(key)
+                model, f = interval_of(c, N, M)
+                models.append(model)
+                funcs.append(f)
+            self.model_index.append(keys.index(key))
+        self.models = models
+        self.scenario_models = [models[i] for i in self.model_index]
+        npar = len(PARAMS)
+        P = ca.MX.sym("P", npar + N + 8 * S)
+        theta0, thc, wi, wp, crot, Jref = (P[i] for i in range(npar))
+        grid = P[npar:npar + N]
+        A = ca.reshape(P[npar + N:npar + N + 4 * S], 4, S)
+        B = ca.reshape(P[npar + N + 4 * S:], 4, S)
+        d, t = ca.MX.sym("d", 3), ca.MX.sym("t")
+        T = [ca.MX.sym(f"T{s}") for s in range(S)]
+        X = [ca.MX.sym(f"X{s}", 2, N) for s in range(S)]
+        pk = [ca.MX.sym(f"s{s}") for s in range(S)]
+        q = ca.vertcat(d * ca.DM(SCALES), crot)
+        ps = [A[:, s] * q + B[:, s] for s in range(S)]
+        # the shooting intervals, one map per model over all of its scenarios' intervals
+        outs: list = [None] * S
+        for m, f in enumerate(funcs):
+            ss = [s for s in range(S) if self.model_index[s] == m]
+            if not ss:
+                continue
+            X0 = ca.horzcat(*[ca.horzcat(ca.vertcat(theta0, 0), X[s][:, :N - 1]) for s in ss])
+            Q = ca.horzcat(*[ca.repmat(ps[s], 1, N) for s in ss])
+            H = ca.horzcat(*[T[s] * grid.T / M for s in ss])
+            xe, a, b, sp = f.map(N * len(ss))(X0, Q, H)
+            for j, s in enumerate(ss):
+                cols = slice(j * N, (j + 1) * N)
+                outs[s] = (xe[:, cols], a[:, cols], b[:, cols], sp[:, cols])
+        g, self.g_sizes, J = [], [], []
+        for s in range(S):
+            xe, a, b, sp = outs[s]
+            model = self.scenario_models[s]
+            Js = wi * X[s][1, N - 1] ** 2 + wp * pk[s] ** 2
+            J.append(Js)
+            blocks = [ca.vec(xe - X[s]), ca.vec(a) - thc, ca.vec(b), pk[s] - ca.vec(sp),
+                      model.dV(thc, ps[s]), model.ode(ca.vertcat(theta0, 0), ps[s])[1],
+                      t - Js / Jref]
+            g += blocks
+            self.g_sizes.append([int(v.numel()) for v in blocks])
+        self.block = sum(self.g_sizes[0])
+        if robust_objective == "worst":
+            f_obj = t
+        else:
+            f_obj = sum(J) / (S * Jref)
+        w = ca.vertcat(d, t, *[ca.vertcat(T[s], ca.vec(X[s]), pk[s]) for s in range(S)])
+        self.nw = int(w.numel())
+        self.J_fn = ca.Function("J", [w, P], [ca.vertcat(*J)])
+        nlp = {"x": w, "f": f_obj, "g": ca.vertcat(*g), "p": P}
+        self.options = {"print_time": False, "show_eval_warnings": False,
+                        "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": tol,
+                        "ipopt.max_iter": o.max_iter,
+                        "ipopt.hessian_approximation": o.hessian,
+                        "ipopt.linear_solver": o.linear_solver,
+                        "ipopt.bound_relax_factor": 0.0}
+        self.solver = ca.nlpsol("softclose_robust", "ipopt", nlp,
+                                {**self.options, "ipopt.mu_strategy": "adaptive"})
+        oracle = self.solver.oracle()
+        wx, wp_ = ca.MX.sym("x", self.nw), ca.MX.sym("p", P.numel())
+        fo, go = oracle(wx, wp_)
+        self.warm_solver = ca.nlpsol("softclose_robust_warm", "ipopt",
+                                     {"x": wx, "p": wp_, "f": fo, "g": go},
+                                     {**self.options, **WARM_OPTIONS})
+        self.build_time = time.perf_counter() - t0
+
+    # -- layout ------------------------------------------------------------------------
+    @property
+    def per(self) -> int:
+        """Variables per scenario: T, X (2N), s."""
+        return 2 * self.N + 2
+
+    def offset(self, s: int) -> int:
+        return 4 + s * self.per
+
+    def pack(self, design, t, states) -> np.ndarray:
+        """w from the design (SI), t, and per scenario (T, X (2, N), s)."""
+        parts = [np.asarray(design[:3], float) / SCALES, [t]]
+        for T, X, pk in states:
+            parts += [[T], np.asarray(X, float).T.ravel(), [pk]]
+        return np.concatenate([np.atleast_1d(np.asarray(p, float)) for p in parts])
+
+    def unpack(self, w):
+        """(design (SI), t, [(T, X (2, N), s) per scenario])."""
+        w = np.asarray(w, float).ravel()
+        N = self.N
+        states = []
+        for s in range(self.S):
+            i = self.offset(s)
+            states.append((float(w[i]), w[i + 1:i + 1 + 2 * N].reshape(N, 2).T,
+                           float(w[i + 1 + 2 * N])))
+        return w[:3] * SCALES, float(w[3]), states
+
+    def params(self, cfg: Config, maps: list[tuple[np.ndarray, np.ndarray]],
+               J_ref: float = 1.0) -> np.ndarray:
+        o, st = cfg.optimise, cfg.stroke
+        A = np.concatenate([np.asarray(a, float) for a, _ in maps])
+        B = np.concatenate([np.asarray(b, float) for _, b in maps])
+        return np.r_[st.theta0, st.theta_closed, o.weight_impact, o.weight_peak_tip,
+                     cfg.design.rotary_damper_c, J_ref, np.full(self.N, 1.0 / self.N), A, B]
+
+    def bounds(self, cfg: Config, t_hi: list[float] | None = None,
+               t_lo: list[float] | None = None, design_lb=None):
+        """(lbx, ubx, lbg, ubg); ``t_hi``/``t_lo`` give per-scenario closing-time bounds
+        (corrected for the discretisation error), ``design_lb`` raised lower design bounds."""
+        o, st = cfg.optimise, cfg.stroke
+        N = self.N
+        lbx, ubx = np.full(self.nw, -np.inf), np.full(self.nw, np.inf)
+        for i, key in enumerate(("spring_k", "spring_rest_length", "damper_c")):
+            lo, hi = getattr(o, key)
+            if design_lb is not None:
+                lo = max(lo, design_lb[i])
+            lbx[i], ubx[i] = lo / SCALES[i], hi / SCALES[i]
+        if self.robust_objective != "worst":
+            lbx[3] = ubx[3] = 0.0
+        for s in range(self.S):
+            i = self.offset(s)
+            lbx[i] = max(o.closing_time_min if t_lo is None else t_lo[s], T_FLOOR)
+            ubx[i] = o.closing_time_max if t_hi is None else t_hi[s]
+            th = slice(i + 1, i + 1 + 2 * N, 2)
+            thd = slice(i + 2, i + 2 + 2 * N, 2)
+            lbx[th], ubx[th] = st.theta_closed, st.theta0
+            ubx[thd] = 0.0
+            lbx[i + 1 + 2 * (N - 1)] = ubx[i + 1 + 2 * (N - 1)] = st.theta_closed
+            lbx[i + 1 + 2 * N] = 0.0
+        lo = {"continuity": 0.0, "theta_above_closed": 0.0, "theta_dot_nonpositive": -np.inf,
+              "peak_tip_speed": 0.0, "holding_moment": o.holding_moment_min,
+              "release_downwards": -np.inf,
+              "epigraph": 0.0 if self.robust_objective == "worst" else -np.inf}
+        hi = {"continuity": 0.0, "theta_above_closed": np.inf, "theta_dot_nonpositive": 0.0,
+              "peak_tip_speed": np.inf, "holding_moment": np.inf, "release_downwards": 0.0,
+              "epigraph": np.inf}
+        lbg = np.concatenate([np.full(n, lo[k]) for sizes in self.g_sizes
+                              for k, n in zip(GROUPS, sizes)])
+        ubg = np.concatenate([np.full(n, hi[k]) for sizes in self.g_sizes
+                              for k, n in zip(GROUPS, sizes)])
+        return lbx, ubx, lbg, ubg
+
+    def violations(self, g, lbg, ubg) -> list[dict]:
+        """Per scenario, the largest violation of each constraint group."""
+        out, i = [], 0
+        for sizes in self.g_sizes:
+            row = {}
+            for k, n in zip(GROUPS, sizes):
+                gi, lo, hi = g[i:i + n], lbg[i:i + n], ubg[i:i + n]
+                row[k] = float(np.max(np.maximum(np.maximum(lo - gi, gi - hi), 0.0))) if n else 0.0
+                i += n
+            out.append(row)
+        return out
+
+    def objectives(self, w, p) -> np.ndarray:
+        """J_s of every scenario at w (unscaled)."""
+        return np.asarray(self.J_fn(w, p)).ravel() * 1.0
+
+    def solve(self, x0, p, lbx, ubx, lbg, ubg, lam_x0=None, lam_g0=None,
+              warm: bool = False) -> dict:
+        """One Ipopt run; never raises (an evaluation error is a failed status)."""
+        solver = self.warm_solver if warm else self.solver
+        x0 = np.clip(np.asarray(x0, float), lbx, ubx)
+        args = dict(x0=x0, p=p, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+        if lam_x0 is not None:
+            args.update(lam_x0=lam_x0, lam_g0=lam_g0)
+        t0 = time.perf_counter()
+        try:
+            sol = solver(**args)
+            st = solver.stats()
+            status, ok, its = st["return_status"], bool(st["success"]), int(st["iter_count"])
+        except RuntimeError as exc:
+            return {"x": x0, "g": np.full(len(lbg), np.nan), "lam_x": None, "lam_g": None,
+                    "status": f"Error: {str(exc).splitlines()[0]}", "success": False,
+                    "iterations": 0, "time": time.perf_counter() - t0, "f": math.nan}
+        return {"x": np.asarray(sol["x"]).ravel(), "f": float(sol["f"]),
+                "g": np.asarray(sol["g"]).ravel(), "lam_x": np.asarray(sol["lam_x"]).ravel(),
+                "lam_g": np.asarray(sol["lam_g"]).ravel(), "status": status,
+                "success": ok and status in CONVERGED, "iterations": its,
+                "time": time.perf_counter() - t0}
+
+
+_NLPS: dict = {}
+
+
+def get_scenario_nlp(cfg: Config, model_cfgs: list[Config], nodes: int, substeps: int,
+                     robust_objective: str) -> tuple[ScenarioNLP, bool]:
+    """The ScenarioNLP of these scenario models (cached); (nlp, was it cached)."""
+    o = cfg.optimise
+    key = (tuple((c.geometry, c.mass, c.stroke.theta0_deg, c.stroke.theta_closed_deg)
+                 for c in model_cfgs), nodes, substeps, robust_objective, o.hessian,
+           o.linear_solver, o.max_iter)
+    if key in _NLPS:
+        return _NLPS[key], True
+    if len(_NLPS) > 16:
+        _NLPS.clear()
+    nlp = ScenarioNLP(cfg, model_cfgs, nodes, substeps, robust_objective)
+    _NLPS[key] = nlp
+    return nlp, False

@@ -1,0 +1,149 @@
+"""Global sensitivity: Sobol indices of closing time and impact speed (SALib).
+
+Inputs are the toleranced keys over the tolerance box of the design: uniform on the box,
+or (``distribution = "normal"``) normal with the spread as 3 sigma, truncated at the key's
+admissible range like the Monte Carlo samples. Samples come from SALib's Sobol' sequence
+with Saltelli's cross-sampling (``SALib.sample.sobol.sample``, N (D + 2) points, first and
+total order only), the indices and their 95 % bootstrap confidence intervals from
+``SALib.analyze.sobol.analyze`` (Saltelli 2010 / Jansen estimators). Every point is one
+stroke in the C kernel.
+
+Strokes that do not close within stroke.t_max have no closing time and no impact. They are
+counted (``not_closed``) and enter the indices *censored*: closing time = stroke.t_max (the
+stroke ran that long without closing) and impact theta' = 0 (no impact). The indices then
+describe the censored outputs; when many samples do not close, read them with that in mind.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..config import Config
+from ..errors import ConfigError
+from ..problem import DESIGN_KEYS, design_of, params_of
+from .box import box_of
+from .evaluate import evaluate
+
+#: the outputs analysed
+OUTPUTS = ("closing_time", "impact_theta_dot")
+CENSORING = ("strokes that do not close count as closing at stroke.t_max (closing_time) "
+             "and as an impact at theta' = 0 (impact_theta_dot)")
+
+
+@dataclass(frozen=True)
+class SensitivityResult:
+    """First-order (S1) and total (ST) Sobol indices of each output per toleranced key."""
+
+    success: bool
+    message: str
+    design: dict
+    keys: tuple
+    base_samples: int
+    evaluations: int
+    not_closed: int
+    indices: dict          # output -> {"S1": {key: v}, "ST": ..., "S1_conf": ..., "ST_conf": ...}
+    distribution: str
+    seed: int
+    time: float = 0.0
+    data: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def to_json(self) -> dict:
+        from ..jsonio import jsonable
+        out = {"success": self.success, "message": self.message, "design": self.design}
+        out.update(self.indices)
+        out.update({"not_closed": self.not_closed, "not_closed_treatment": CENSORING,
+                    "keys": list(self.keys), "base_samples": self.base_samples,
+                    "evaluations": self.evaluations, "distribution": self.distribution,
+                    "seed": self.seed, "confidence": 0.95,
+                    "method": "SALib: Sobol' sequence with Saltelli sampling; Saltelli 2010 "
+                              "(S1) and Jansen (ST) estimators, bootstrap intervals",
+                    "time": self.time})
+        return jsonable(out)
+
+    def to_frame(self):
+        """One row per (output, key): S1, S1_conf, ST, ST_conf."""
+        import pandas as pd
+        rows = []
+        for out, d in self.indices.items():
+            for k in self.keys:
+                rows.append({"output": out, "key": k, "S1": d["S1"][k],
+                             "S1_conf": d["S1_conf"][k], "ST": d["ST"][k],
+                             "ST_conf": d["ST_conf"][k]})
+        return pd.DataFrame(rows)
+
+    def plot(self):
+        """Bars of S1 and ST with their intervals, one panel per output (a Figure)."""
+        from ..figures.robust import plot_sobol
+        return plot_sobol(self)
+
+
+def _sub_box(box, idx):
+    """The box restricted to the keys ``idx``."""
+    from dataclasses import replace
+    return replace(box, keys=tuple(box.keys[j] for j in idx), nominal=box.nominal[idx],
+                   half=box.half[idx], z_min=box.z_min[idx],
+                   relative=tuple(box.relative[j] for j in idx),
+                   spreads=tuple(box.spreads[j] for j in idx))
+
+
+def sensitivity(cfg: Config, *, samples: int = 1024, seed: int = 0,
+                design: dict | None = None) -> SensitivityResult:
+    """Sobol indices of closing time and impact theta' over cfg's tolerance box.
+
+    ``samples`` is SALib's base sample count N (a power of 2); N (D + 2) strokes are run.
+    """
+    from SALib.analyze import sobol as sobol_analyze
+    from SALib.sample import sobol as sobol_sample
+    t0 = time.perf_counter()
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 2 \
+            or samples & (samples - 1):
+        raise ConfigError(f"--samples {samples}: the Sobol base sample count must be a power "
+                          "of 2 (e.g. 1024)")
+    if design:
+        cfg = cfg.with_design(**{k: design[k] for k in DESIGN_KEYS if k in design})
+    full = box_of(cfg)
+    live = [j for j in range(full.dim) if full.half[j] > 0]
+    if not live:
+        raise ConfigError("tolerance: no key has a spread at this design (a relative spread of "
+                          "a zero value is zero); give one, e.g. --set tolerance.mass.lid=0.05")
+    box = _sub_box(full, live)
+    fixed = [k for j, k in enumerate(full.keys) if j not in live]
+    keys = list(box.keys)
+    if box.distribution == "uniform":
+        problem = {"num_vars": box.dim, "names": keys,
+                   "bounds": [[float(a), float(b)] for a, b in zip(box.lo, box.hi)]}
+    else:   # normal, spread = 3 sigma, truncated at the key's range (as the MC samples)
+        lo = box.nominal + box.half * box.z_min
+        problem = {"num_vars": box.dim, "names": keys, "dists": ["truncnorm"] * box.dim,
+                   "bounds": [[float(a), float(np.inf), float(m), float(h / 3)]
+                              for a, m, h in zip(lo, box.nominal, box.half)]}
+    X = sobol_sample.sample(problem, int(samples), calc_second_order=False, scramble=True,
+                            seed=seed)
+    cols = evaluate(cfg, keys, X)
+    closed = np.asarray(cols["closed"], bool)
+    Y = {"closing_time": np.where(closed, cols["closing_time"], cfg.stroke.t_max),
+         "impact_theta_dot": np.where(closed, cols["impact_theta_dot"], 0.0)}
+    indices = {}
+    for out in OUTPUTS:
+        y = np.asarray(Y[out], float)
+        if np.ptp(y) == 0:        # a constant output has no variance to apportion
+            zero = {k: 0.0 for k in keys}
+            indices[out] = {"S1": zero, "ST": zero, "S1_conf": zero, "ST_conf": zero}
+            continue
+        Si = sobol_analyze.analyze(problem, y, calc_second_order=False, seed=seed)
+        indices[out] = {name: {k: float(v) for k, v in zip(keys, Si[name])}
+                        for name in ("S1", "ST", "S1_conf", "ST_conf")}
+    nc = int((~closed).sum())
+    msgs = []
+    if fixed:
+        msgs.append(f"{', '.join(fixed)}: no spread at this design (relative spread of a zero "
+                    "value), left out")
+    if nc:
+        msgs.append(f"{nc} of {len(X)} strokes did not close; {CENSORING}")
+    msg = "; ".join(msgs)
+    return SensitivityResult(True, msg, design_of(params_of(cfg)), tuple(keys), int(samples),
+                             len(X), nc, indices, box.distribution, seed,
+                             time.perf_counter() - t0, {"X": X, "Y": Y, "cols": cols})
