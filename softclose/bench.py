@@ -86,6 +86,8 @@ SPEED_TARGETS = {
 }
 #: modules that ``softclose simulate`` must not import at start-up (they are imported lazily)
 HEAVY_MODULES = ("pandas", "pyarrow", "scipy", "SALib", "dask", "matplotlib")
+#: a later entry is repeated (up to its repeat count) only while its runs took less than this
+LATER_BUDGET_S = 30.0
 #: the 40,000-design grid of the sweep throughput entry
 SWEEP_GRID = {"design.spring_k": (500.0, 9500.0, 40),
               "design.spring_rest_length": (0.05, 0.09, 40),
@@ -476,21 +478,26 @@ def later_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
     design): the default config's own design has no spring and no damper, so relative
     spreads of spring_k and damper_c would be zero there. A function that does not exist
     yet gives a row with a note; ``quick`` skips the two longest (robust optimisation and
-    the Monte Carlo run) with a note.
+    the Monte Carlo run) with a note. Each entry is the median of up to 3 runs (1 with
+    ``quick``), fewer when the runs so far took :data:`LATER_BUDGET_S` or more.
     """
     log = log or (lambda *a: None)
     rows = []
 
     def timed(key, what, fn, repeats, count=None, unit="designs", note=""):
-        out = []
+        out, ts = [], []
         try:
-            t = median_time(lambda: out.append(fn()), repeats, warmup=0)
+            while len(ts) < repeats and (not ts or sum(ts) < LATER_BUDGET_S):
+                t = time.perf_counter()
+                out.append(fn())
+                ts.append(time.perf_counter() - t)
         except Exception as exc:  # reported in the table, the bench goes on
             rows.append(_not_measured(key, what, f"failed: {type(exc).__name__}: "
                                                  f"{str(exc).splitlines()[0]}", repeats))
             log(f"  {what}: failed ({exc})")
             return None
-        rows.append(_speed_row(key, what, t, repeats, note, count=count, unit=unit))
+        t = statistics.median(ts)
+        rows.append(_speed_row(key, what, t, len(ts), note, count=count, unit=unit))
         log(f"  {what}: {t:.3f} s")
         return out[-1]
 
@@ -750,6 +757,7 @@ class BenchResult:
     optimiser_note: str
     elapsed: float
     config: dict = field(default_factory=dict)
+    load: tuple = ()  # 1-minute load average at the start and at the end of the run
 
     @property
     def default(self) -> dict:
@@ -768,7 +776,7 @@ class BenchResult:
                          "work_precision": self.work_precision.to_json(),
                          "speed": list(self.speed), "optimiser": list(self.optimiser),
                          "optimiser_note": self.optimiser_note, "elapsed": self.elapsed,
-                         "config": self.config})
+                         "load": list(self.load), "config": self.config})
 
 
 def run(cfg: Config, quick: bool = False, log=None, cli: bool = True,
@@ -776,6 +784,7 @@ def run(cfg: Config, quick: bool = False, log=None, cli: bool = True,
     """The whole benchmark: work precision, speed, optimiser (see the module docstring)."""
     log = log or (lambda *a: None)
     t0 = time.perf_counter()
+    load0 = _load()
     log("work precision ...")
     wp = work_precision(cfg, quick=quick, log=log)
     log("speed ...")
@@ -791,7 +800,16 @@ def run(cfg: Config, quick: bool = False, log=None, cli: bool = True,
                        config={"integrator": cfg.simulate.integrator,
                                "step": cfg.simulate.step,
                                "nodes": cfg.optimise.nodes,
-                               "substeps": cfg.optimise.substeps})
+                               "substeps": cfg.optimise.substeps},
+                       load=(load0, _load()))
+
+
+def _load() -> float | None:
+    """The 1-minute load average (None where the OS does not give it)."""
+    try:
+        return os.getloadavg()[0]
+    except (AttributeError, OSError):
+        return None
 
 
 __all__ = ["run", "work_precision", "speed", "optimiser_study", "later_entries",

@@ -175,12 +175,20 @@ def optimiser_markdown(rows, note="") -> str:
     return "\n".join(out)
 
 
+def run_line(res) -> str:
+    """Commit, date, run time and load average of a run."""
+    load = ""
+    if res.load and None not in res.load:
+        load = f"; load average {res.load[0]:.1f} at the start, {res.load[1]:.1f} at the end"
+    return (f"commit {res.commit or 'unknown'}, {res.date}{', quick' if res.quick else ''}; "
+            f"{res.elapsed:.0f} s{load}")
+
+
 def report_text(res) -> str:
     """The whole report as text (Markdown tables)."""
     from ..bench import TRUTH_TOL
     return "\n".join([
-        f"machine: {res.machine}", f"commit {res.commit or 'unknown'}, {res.date}"
-        f"{', quick' if res.quick else ''}; {res.elapsed:.0f} s", "",
+        f"machine: {res.machine}", run_line(res), "",
         f"work precision (errors against CVODES at tol {TRUTH_TOL:g}; µs per stroke in the "
         "C kernel):", work_precision_markdown(res.work_precision), "",
         "speed (median of repeats):", speed_markdown(res.speed), "",
@@ -190,8 +198,7 @@ def report_text(res) -> str:
 
 def report_markdown(res) -> str:
     """``bench.md``: the report with section headings."""
-    return (f"Machine: {res.machine}\n\nCommit {res.commit or 'unknown'}, {res.date}"
-            f"{', quick run' if res.quick else ''}.\n\n"
+    return (f"Machine: {res.machine}\n\nRun: {run_line(res)}.\n\n"
             f"## Default step\n\n{default_text(res.default)}\n\n"
             f"## Work precision\n\n{work_precision_markdown(res.work_precision)}\n\n"
             f"## Speed\n\n{speed_markdown(res.speed)}\n\n"
