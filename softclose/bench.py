@@ -291,8 +291,10 @@ def work_precision(cfg: Config, quick: bool = False, repeats: int | None = None,
 def cheapest_setting(rows: list, designs: list) -> dict:
     """The cheapest (method, step) that meets the targets on every design of ``designs``.
 
-    Cost is the total kernel run time over the designs. ``per_method`` gives the cheapest
-    passing step of each method. ``method`` and ``step`` are None when nothing passes.
+    Cost is the total kernel run time over the designs, each the fastest of its repeats
+    (``time_min``: the least disturbed by other load on the machine). ``per_method`` gives
+    the cheapest passing step of each method. ``method`` and ``step`` are None when nothing
+    passes.
     """
     per = {}
     for r in rows:
@@ -301,7 +303,7 @@ def cheapest_setting(rows: list, designs: list) -> dict:
         e = per.setdefault((r["method"], r["step"]), {"method": r["method"], "step": r["step"],
                                                       "ok": True, "time": 0.0, "designs": 0})
         e["ok"] &= bool(r["meets_targets"])
-        e["time"] += r["time_per_stroke"]
+        e["time"] += r.get("time_min", r["time_per_stroke"])
         e["designs"] += 1
     good = sorted((e for e in per.values() if e["ok"] and e["designs"] == len(designs)),
                   key=lambda e: e["time"])

@@ -29,7 +29,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 @pytest.fixture(scope="module")
 def wp():
-    return bench.work_precision(default_config(), quick=True, repeats=1, methods=["rk4"])
+    return bench.work_precision(default_config(), quick=True, repeats=3, methods=["rk4"])
 
 
 def test_rows_are_errors_against_the_truth(wp):
