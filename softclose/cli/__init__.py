@@ -52,20 +52,34 @@ def _error(msg: str, code: int, as_json: bool) -> int:
     return code
 
 
+def _interrupted() -> int:
+    print("softclose: interrupted (Ctrl-C); nothing more was computed", file=sys.stderr)
+    return 130
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     as_json = "--json" in argv
+    from .. import interrupt
     try:
-        args = build_parser().parse_args(argv)
-        from ..config import load_config
-        cfg = load_config(args.config, args.overrides)
-        outcome: Outcome = args.run(cfg, args)
+        with interrupt.guard():   # Ctrl-C ends the command even inside a compiled solver
+            args = build_parser().parse_args(argv)
+            from ..config import load_config
+            cfg = load_config(args.config, args.overrides)
+            outcome: Outcome = args.run(cfg, args)
     except SoftcloseError as exc:
+        if interrupt.interrupted():   # a solver turned the Ctrl-C into an error
+            return _interrupted()
         msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         return _error(msg, exc.exit_code, as_json)
     except KeyboardInterrupt:
-        print("softclose: interrupted (Ctrl-C); nothing more was computed", file=sys.stderr)
-        return 130
+        return _interrupted()
+    except Exception:
+        if interrupt.interrupted():
+            return _interrupted()
+        raise
+    if interrupt.interrupted():       # swallowed by a solver, and the command ran to its end
+        return _interrupted()
     from ..jsonio import dumps
     if args.json:
         print(dumps(outcome.payload))
