@@ -1,4 +1,5 @@
-"""`softclose sweep`: grid parsing, agreement with single strokes, CSV, feasibility, Ctrl-C."""
+"""Sweeps: grid parsing, agreement with single strokes, the table's columns, feasibility,
+figures, Ctrl-C (see also test_sweep_space.py and test_sweep_resume.py)."""
 
 from __future__ import annotations
 
@@ -11,22 +12,31 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from softclose import sweep as sw
 from softclose.cli import main
 from softclose.config import default_config
 from softclose.errors import ConfigError
+from softclose.problem import METRIC_KEYS
 from softclose.simulate import Simulator
+from softclose.sweep import columns, recompute, sweep
+from softclose.sweep import store
+from softclose.sweep.space import parse_grid
 
 ROOT = Path(__file__).resolve().parents[1]
 GRID = ["design.spring_k=0:2000:9", "design.damper_c=0:5000:9",
         "design.spring_rest_length=0.02:0.12:5"]
+AXES = {"design.spring_k": np.linspace(0, 2000, 9), "design.damper_c": np.linspace(0, 5000, 9),
+        "design.spring_rest_length": np.linspace(0.02, 0.12, 5)}
 
 
 @pytest.fixture(scope="module")
 def design_sweep(tmp_path_factory):
+    """The grid through the command line (CSV and maps) and through the API."""
     out = tmp_path_factory.mktemp("sweep")
-    res, files = sw.sweep(default_config(), GRID, out)
-    return res, files, out
+    argv = ["sweep", "--out", str(out), "--json"]
+    for g in GRID:
+        argv += ["--grid", g]
+    assert main(argv) == 0
+    return sweep(default_config(), AXES), out, store.read_csv(out / "sweep.csv")
 
 
 @pytest.mark.parametrize("spec, words", [
@@ -34,37 +44,61 @@ def design_sweep(tmp_path_factory):
     ("design.spring_k=0:10", "KEY=START:STOP:COUNT"),
     ("design.spring=0:10:3", "not a numeric config key"),
     ("simulate.integrator=0:1:2", "not a numeric config key"),
-    ("design.spring_k=a:10:3", "must be numbers"),
+    ("design.spring_k=a:10:3", "START must be a number"),
     ("design.spring_k=0:10:0", "positive integer"),
     ("design.spring_k=0:10:2.5", "positive integer"),
     ("design.spring_k=0:10:1", "COUNT = 1"),
+    ("design.spring_k=5:5:3", "START = STOP"),
     ("design.spring_k=-5:10:3", "design.spring_k"),
     ("mass.lid=0:1:3", "mass.lid"),
     ("geometry.spring_anchor[2]=0:1:3", "not a numeric config key"),
+    ("design.damper_c=0:4000:5:log", "log spacing needs START > 0"),
+    ("design.damper_c=-1:4000:5:log", "cannot reach or cross zero"),
+    ("design.damper_c=1:4000:5:lin", "may only be 'log'"),
+    ("design.damper_c=[1, 2, 2]", "repeated"),
+    ("design.damper_c=[]", "non-empty array"),
+    ("design.damper_c=[1, true]", "array of numbers"),
+    ("design.damper_c=[1, 2", "TOML array"),
+    ("design.damper_c=[1, -2]", "design.damper_c"),
 ])
 def test_bad_grid_strings(spec, words):
     with pytest.raises(ConfigError, match=words.replace("[", r"\[")):
-        sw.parse_grid([spec], default_config())
+        parse_grid([spec], default_config())
+
+
+def test_grid_forms():
+    g = parse_grid(["design.damper_c=10:1000:3:log", "design.spring_k=[300, 100.5, 2e3]",
+                    "mass.lid=0.4:0.6:3"], default_config())
+    np.testing.assert_allclose(g.values[0], [10, 100, 1000], rtol=1e-14)
+    assert g.values[0][0] == 10 and g.values[0][-1] == 1000
+    assert list(g.values[1]) == [300, 100.5, 2000]     # explicit values, in the given order
+    np.testing.assert_allclose(g.values[2], [0.4, 0.5, 0.6], rtol=1e-15)
+    assert g.log == (True, False, False) and g.n == 27
+    # ids run in C order over the keys as given (the last key fastest)
+    X = g.points(np.arange(27))
+    assert np.array_equal(X[1], [10, 300, 0.5]) and np.array_equal(X[3], [10, 100.5, 0.4])
+    assert np.array_equal(X[26], [1000, 2000, 0.6])
 
 
 def test_duplicate_key_and_cli_exit_code(tmp_path, capsys):
     with pytest.raises(ConfigError, match="swept twice"):
-        sw.parse_grid(["design.damper_c=0:1:2", "design.damper_c=0:2:2"])
-    code = main(["sweep", "--grid", "design.bogus=0:1:2", "--out", str(tmp_path), "--json"])
+        parse_grid(["design.damper_c=0:1:2", "design.damper_c=0:2:2"])
+    code = main(["sweep", "--grid", "design.bogus=0:1:2", "--out", str(tmp_path / "o"),
+                 "--json"])
     assert code == 2
     err = capsys.readouterr()
     assert "design.bogus" in json.loads(err.out)["error"]
     assert "Traceback" not in err.err
+    assert not (tmp_path / "o").exists()          # refused before the folder was made
 
 
-def test_csv_columns_and_objective(design_sweep):
-    res, files, out = design_sweep
-    csvp = out / "sweep.csv"
-    header = csvp.read_text().splitlines()[0].split(",")
-    assert header == [a.split("=")[0] for a in GRID] + list(sw.METRICS) + [
-        "objective", "feasible", "status", "reason"]
-    c = sw.read_csv(csvp)
-    assert len(c["closed"]) == 9 * 9 * 5
+def test_columns_objective_and_reference_row(design_sweep):
+    res, out, c = design_sweep
+    header = (out / "sweep.csv").read_text().splitlines()[0].replace('"', "").split(",")
+    keys = [a.split("=")[0] for a in GRID]
+    assert header == ["id"] + keys + list(METRIC_KEYS) + [
+        "objective", "feasible", "status", "reason"] == columns(keys)
+    assert np.array_equal(c["id"], np.arange(9 * 9 * 5))
     o = default_config().optimise
     J = o.weight_impact * c["impact_theta_dot"] ** 2 + o.weight_peak_tip * c["peak_tip_speed"] ** 2
     closed = c["closed"]
@@ -77,12 +111,25 @@ def test_csv_columns_and_objective(design_sweep):
     assert abs(c["impact_tip_speed"][i] - 2.150045) < 1e-6
 
 
+def test_api_equals_cli_table(design_sweep):
+    """The API result (axes in another order: other ids) holds the same numbers."""
+    res, _, c = design_sweep
+    f = res.to_frame()
+    keys = ["design.spring_k", "design.damper_c", "design.spring_rest_length"]
+    a = f.sort_values(keys).reset_index(drop=True)
+    order = np.lexsort([c[k] for k in reversed(keys)])
+    for k in keys + list(METRIC_KEYS) + ["objective", "feasible", "status", "reason"]:
+        x, y = np.asarray(a[k]), np.asarray(c[k])[order]
+        if x.dtype.kind == "f":
+            assert np.array_equal(x, y, equal_nan=True), k
+        else:
+            assert list(x) == list(y), k
+
+
 def test_feasibility_reasons(design_sweep):
-    res, _, out = design_sweep
-    c = sw.read_csv(out / "sweep.csv")
+    res, _, c = design_sweep
     o = default_config().optimise
     feas = c["feasible"]
-    # the reasons are exactly the SPEC §5 constraints
     closed = c["closed"]
     slow = closed & (c["closing_time"] > o.closing_time_max)
     loose = c["holding_moment"] < o.holding_moment_min
@@ -93,37 +140,48 @@ def test_feasibility_reasons(design_sweep):
     assert loose.any() and (~closed).any() and feas.any()
     # the best point is feasible and has the least objective among feasible rows
     b = res.best
-    assert res.cols["feasible"][b]
-    assert res.cols["objective"][b] == np.nanmin(np.where(feas, c["objective"], np.nan))
-    s = sw.summary(res)
-    assert s["feasible"] == int(feas.sum())
+    assert b["feasible"]
+    assert b["objective"] == np.nanmin(np.where(feas, c["objective"], np.nan))
+    s = res.to_json()
+    assert s["feasible"] == int(feas.sum()) == res.feasible
     assert sum(s["infeasible_reasons"].values()) == int((~feas).sum())
+    json.dumps(s, allow_nan=False)
 
 
 def test_rows_agree_with_single_strokes(design_sweep):
     """Random rows against Simulator.run (the `simulate` path), to its accuracy."""
-    res, _, out = design_sweep
-    c = sw.read_csv(out / "sweep.csv")
+    res, out, c = design_sweep
     rng = np.random.default_rng(7)
-    cfg = default_config()
-    sim = Simulator(cfg)
+    sim = Simulator(default_config())
     for i in rng.choice(len(c["closed"]), 12, replace=False):
         k, cd, l0 = (c[key][i] for key in ("design.spring_k", "design.damper_c",
                                             "design.spring_rest_length"))
         r = sim.run(np.array([k, l0, cd, 0.0]))
         assert r.closed == c["closed"][i]
-        for key in sw.METRICS[1:]:
+        for key in METRIC_KEYS[1:]:
             v = getattr(r, key)
             if v is None:
                 assert math.isnan(c[key][i])
                 continue
-            tol = 1e-12 + (r.accuracy or {}).get(key, 0.0) or 1e-12
-            assert abs(v - c[key][i]) <= max(tol, 1e-12 * abs(v)), (key, v, c[key][i])
+            assert abs(v - c[key][i]) <= 1e-12 * max(1.0, abs(v)), (key, v, c[key][i])
+
+
+def test_rows_recomputed_by_id(design_sweep):
+    res, _, _ = design_sweep
+    ids = np.array([0, 17, 404, 211])
+    again = recompute(default_config(), res.space, ids)
+    for j, i in enumerate(ids):
+        row = res.row(int(i))
+        for k in columns(res.keys):
+            a, b = row[k], again[k][j]
+            if isinstance(a, float) or a is None:
+                assert (a is None and np.isnan(b)) or a == b, k
+            else:
+                assert a == b, k
 
 
 def test_rows_agree_with_simulate_cli(design_sweep):
-    res, _, out = design_sweep
-    c = sw.read_csv(out / "sweep.csv")
+    res, _, c = design_sweep
     rng = np.random.default_rng(3)
     idx = [i for i in rng.permutation(len(c["closed"])) if c["closed"][i]][:2]
     for i in idx:
@@ -141,39 +199,81 @@ def test_rows_agree_with_simulate_cli(design_sweep):
             assert abs(m[key] - c[key][i]) <= 1e-12 * max(1.0, abs(m[key])), key
 
 
-def test_figures_written_with_masks(design_sweep):
-    res, files, out = design_sweep
-    names = sorted(f.name for f in files if f.suffix == ".png")
-    assert len(names) == 3  # one per pair of swept keys
-    for f in files:
-        assert f.stat().st_size > 10_000
+def test_result_is_immutable(design_sweep):
+    res, _, _ = design_sweep
+    with pytest.raises(ValueError):
+        res.columns["objective"][0] = 0.0
+    with pytest.raises(TypeError):
+        res.columns["objective"] = None
+    with pytest.raises(AttributeError):
+        res.points = 3
+    assert res.success and res.message == "" and res.computed == res.points == 405
 
 
-def test_geometry_and_mass_keys_and_invalid_geometry(tmp_path):
+def test_chunking_does_not_change_rows():
     cfg = default_config()
-    grid = ["geometry.spring_anchor[0]=-0.08:-0.04:3", "mass.lid=0.4:0.6:2",
-            "design.spring_k=0:800:3"]
-    res, _ = sw.sweep(cfg, grid, tmp_path, figures=False)
-    assert res.done.all() and res.cols["closed"].any()
+    axes = {"design.spring_k": np.linspace(0, 3000, 7), "design.damper_c": [0.0, 800, 2500]}
+    a, b = sweep(cfg, axes), sweep(cfg, axes, chunk=4, threads=1)
+    for k in columns(a.keys):
+        x, y = a.columns[k], b.columns[k]
+        assert np.array_equal(x, y, equal_nan=x.dtype.kind == "f"), k
+    assert a.best == b.best
+
+
+def test_figures_written_with_units_and_round_ticks(design_sweep):
+    res, out, _ = design_sweep
+    names = sorted(p.name for p in out.glob("*.png"))
+    assert names == ["map_design_damper_c__design_spring_rest_length.png",
+                     "map_design_spring_k__design_damper_c.png",
+                     "map_design_spring_k__design_spring_rest_length.png"]
+    for p in out.glob("*.png"):
+        assert p.stat().st_size > 10_000
+    figs = res.plot()
+    fig = figs["map_design_spring_k__design_damper_c"]
+    b = res.best
+    title = fig._suptitle.get_text()
+    assert f"design.spring_rest_length = {b['design.spring_rest_length']:.4g} m" in title
+    axes = fig.axes
+    assert axes[2].get_xlabel() == "spring stiffness k [N/m]"
+    assert axes[0].get_ylabel() == "damper c [N s/m]"
+    bars = [a for a in axes if a.get_label() == "<colorbar>"]
+    assert len(bars) == 4
+    for bar in bars:
+        assert "[" in bar.get_ylabel()
+        ticks = [float(t.get_text()) for t in bar.get_yticklabels()]
+        assert 2 <= len(ticks) <= 8
+        for t in ticks:   # round numbers: 1, 2, 2.5 or 5 times a power of ten (or 0)
+            m = abs(t) / 10 ** math.floor(math.log10(abs(t))) if t else 1.0
+            assert any(abs(m - r) < 1e-9 for r in (1, 1.5, 2, 2.5, 3, 4, 5, 6, 7, 7.5, 8, 9)), t
+    # contour lines carry labels
+    assert any(len(getattr(a, "texts", [])) for a in axes)
+
+
+def test_geometry_and_mass_keys_and_invalid_geometry():
+    cfg = default_config()
+    res = sweep(cfg, {"geometry.spring_anchor[0]": np.linspace(-0.08, -0.04, 3),
+                      "mass.lid": [0.4, 0.6], "design.spring_k": [0.0, 400, 800]})
+    assert res.success and res.columns["closed"].any()
     for i in (0, 7, 17):
-        x, m, k = res.X[i]
+        row = res.row(i)
+        x, m, k = (row[key] for key in res.keys)
         c2 = cfg.replace(geometry={"spring_anchor": [x, cfg.geometry.spring_anchor[1]]},
                          mass={"lid": m})
         r = Simulator(c2).run(np.array([k, c2.design.spring_rest_length, 0, 0]),
                               estimate_error=False)
-        assert abs(r.closing_time - res.cols["closing_time"][i]) < 1e-13
-        assert abs(r.peak_tip_speed - res.cols["peak_tip_speed"][i]) < 1e-13
+        assert abs(r.closing_time - row["closing_time"]) < 1e-13
+        assert abs(r.peak_tip_speed - row["peak_tip_speed"]) < 1e-13
     # a crank too long for the loop to close: invalid rows with the reason, no crash
-    res, files = sw.sweep(cfg, ["geometry.crank_oa=0.045:0.6:3", "design.damper_c=0:100:2"],
-                          tmp_path / "bad")
-    st = res.cols["status"]
+    res = sweep(cfg, {"geometry.crank_oa": np.linspace(0.045, 0.6, 3),
+                      "design.damper_c": [0.0, 100.0]})
+    st = res.columns["status"]
     assert (st == "invalid").sum() >= 2 and (st == "closed").sum() == 2
-    assert all("geometry" in r for r in res.cols["reason"][st == "invalid"])
-    c = sw.read_csv(tmp_path / "bad" / "sweep.csv")
-    assert len(c["status"]) == 6 and not c["feasible"][c["status"] == "invalid"].any()
+    assert all("geometry" in r for r in res.columns["reason"][st == "invalid"])
+    assert not res.columns["feasible"][st == "invalid"].any()
+    assert res.reasons["invalid"] == (st == "invalid").sum()
 
 
-def test_ctrl_c_keeps_computed_rows(tmp_path, monkeypatch):
+def test_ctrl_c_keeps_finished_chunks(tmp_path, monkeypatch):
     calls = {"n": 0}
     orig = Simulator.run_batch
 
@@ -182,24 +282,28 @@ def test_ctrl_c_keeps_computed_rows(tmp_path, monkeypatch):
         if calls["n"] == 3:
             raise KeyboardInterrupt
         return orig(self, P, threads)
-    monkeypatch.setattr(sw, "CHUNK", 50)
     monkeypatch.setattr(Simulator, "run_batch", flaky)
-
-    class A:
-        grid = ["design.spring_k=0:1000:20", "design.damper_c=0:3000:10"]
-        out = str(tmp_path)
-        json = True
-    o = sw.command(default_config(), A())
-    assert o.exit_code == 130 and o.payload["interrupted"]
-    c = sw.read_csv(tmp_path / "sweep.csv")
-    assert len(c["closed"]) == 100 == o.payload["computed"]
+    axes = {"design.spring_k": np.linspace(0, 1000, 20), "design.damper_c": np.linspace(0, 3000, 10)}
+    res = sweep(default_config(), axes, chunk=50)
+    assert res.interrupted and not res.success and res.computed == 100
+    assert np.array_equal(res.columns["id"], np.arange(100))
+    assert "interrupted" in res.message
+    calls["n"] = 0
+    code = main(["sweep", "--grid", "design.spring_k=0:1000:20", "--grid",
+                 "design.damper_c=0:3000:10", "--chunk", "50", "--out", str(tmp_path), "--json"])
+    assert code == 130
+    c = store.read_csv(tmp_path / "sweep.csv")
+    assert np.array_equal(c["id"], np.arange(100))
     assert not np.isnan(c["peak_tip_speed"]).any()
+    assert not list(tmp_path.glob("*.png"))     # no maps of a partial sweep
+    m = json.loads((tmp_path / "manifest.json").read_text())
+    assert m["complete"] is False
 
 
-def test_progress_bar_only_on_tty(tmp_path, capsys):
+def test_progress_line_only_on_a_terminal(tmp_path, capsys):
     code = main(["sweep", "--grid", "design.damper_c=0:1000:5", "--out", str(tmp_path)])
     cap = capsys.readouterr()
     assert code == 0 and "sweep [" not in cap.err  # stderr is not a terminal under pytest
     assert (tmp_path / "profile_design_damper_c.png").exists()
-    sw._Progress(10, True).update(5, force=True)
-    assert "designs/s" in capsys.readouterr().err
+    res = sweep(default_config(), {"design.damper_c": [0.0, 500.0]}, progress=True)
+    assert res.success and "sweep [" not in capsys.readouterr().err

@@ -1,20 +1,268 @@
-"""``softclose sweep`` (transitional adapter: the sweep owner replaces this module)."""
+"""``softclose sweep``: metrics over a grid or a sample of config values, to CSV or Parquet.
+
+    softclose sweep --grid KEY=START:STOP:COUNT[:log] | --grid 'KEY=[v1, v2]' ... --out DIR
+    softclose sweep --sample N --range KEY=LO:HI[:log] ... [--sampler sobol|lhs|random]
+                    [--seed S] --out DIR
+    softclose sweep --resume DIR
+
+Options: ``--format csv|parquet`` (Parquet: one part file per finished chunk, for sweeps
+larger than memory), ``--chunk N`` designs per chunk, ``--threads N`` kernel threads,
+``--dask ADDRESS|local:N`` and ``--optimise`` (when their modules are installed).
+
+The folder gets ``manifest.json`` (what the sweep is), ``sweep.csv`` or ``sweep.parquet/``,
+and the maps (``map_<k1>__<k2>.png`` per pair of keys, ``profile_<k>.png`` for one key).
+Ctrl-C keeps every finished chunk, prints the resume command and exits 130; ``--resume DIR``
+computes only the missing chunks and refuses a folder of another sweep, naming what differs.
+
+Hooks for the scale-out modules (absent in a build without them: exit 2):
+``softclose.sweep.distributed.mapper(address, threads)`` -- a context manager giving a
+mapper (see :mod:`softclose.sweep.run`); ``softclose.sweep.optimal.command(cfg, args,
+space, out)`` -- the ``--optimise`` command, returning an :class:`Outcome`.
+"""
 
 from __future__ import annotations
 
-from .common import Outcome, add_common, prepare_out
+import contextlib
+import importlib
+import shlex
+import signal
+import threading
+import time
+from pathlib import Path
+
+from .common import Outcome, add_common, interactive, prepare_out
 
 
 def register(sub) -> None:
-    p = sub.add_parser("sweep", help="metrics over a grid of config values")
+    p = sub.add_parser("sweep", help="metrics over a grid or a sample of config values",
+                       description="Metrics, objective and feasibility of every design of a "
+                                   "grid (--grid) or a sample (--sample N --range ...).")
     add_common(p)
-    p.add_argument("--grid", action="append", default=[], required=True,
-                   metavar="KEY=START:STOP:COUNT", help="one swept key (repeatable)")
-    p.add_argument("--out", metavar="DIR", required=True, help="folder for sweep.csv and figures")
+    g = p.add_argument_group("designs")
+    g.add_argument("--grid", action="append", default=[],
+                   metavar="KEY=START:STOP:COUNT[:log] | KEY=[v1, v2, ...]",
+                   help="one swept key of a full-factorial grid (repeatable)")
+    g.add_argument("--sample", type=int, metavar="N",
+                   help="draw N designs in the --range boxes instead of a grid")
+    g.add_argument("--range", dest="ranges", action="append", default=[],
+                   metavar="KEY=LO:HI[:log]", help="range of one sampled key (repeatable)")
+    g.add_argument("--sampler", choices=("sobol", "lhs", "random"),
+                   help="how --sample draws: scrambled Sobol (default), Latin hypercube, random")
+    g.add_argument("--seed", type=int, help="seed of the sampler (default 0)")
+    o = p.add_argument_group("output and execution")
+    o.add_argument("--out", metavar="DIR", help="folder for the table, the maps and the manifest")
+    o.add_argument("--format", choices=("csv", "parquet"),
+                   help="csv (default): sweep.csv; parquet: sweep.parquet/, one part per chunk")
+    o.add_argument("--resume", metavar="DIR",
+                   help="finish an interrupted sweep in DIR (computes the missing chunks only)")
+    o.add_argument("--chunk", type=int, metavar="N",
+                   help="designs per chunk (unit of progress, Ctrl-C and resume; default 16384)")
+    o.add_argument("--threads", type=int, metavar="N", help="kernel threads (default: all cores)")
+    o.add_argument("--dask", metavar="ADDRESS|local:N",
+                   help="evaluate the chunks on a Dask cluster (scheduler address or local:N)")
+    o.add_argument("--optimise", action="store_true",
+                   help="the optimal design at every point of the grid of non-design keys")
     p.set_defaults(run=run)
 
 
+def _module(name: str, option: str):
+    try:
+        return importlib.import_module(f"softclose.sweep.{name}")
+    except ModuleNotFoundError as exc:
+        if exc.name not in (f"softclose.sweep.{name}",):
+            raise
+        from ..errors import ConfigError
+        raise ConfigError(f"{option}: not available in this build") from None
+
+
+def _space(cfg, args):
+    from ..errors import ConfigError
+    from ..sweep.space import make_sample, parse_grid, parse_range
+    if args.grid and args.sample is not None:
+        raise ConfigError("--grid and --sample: give one of them (a grid or a sample)")
+    if args.ranges and args.sample is None:
+        raise ConfigError("--range: only with --sample N (a grid takes --grid)")
+    if args.sample is None and (args.sampler or args.seed is not None):
+        raise ConfigError("--sampler/--seed: only with --sample N")
+    if args.grid:
+        return parse_grid(args.grid, cfg)
+    if args.sample is not None:
+        if args.sample <= 0:
+            raise ConfigError(f"--sample: N must be positive, got {args.sample}")
+        if not args.ranges:
+            raise ConfigError("--sample: give the range of each sampled key with "
+                              "--range KEY=LO:HI (repeatable)")
+        ranges = [parse_range(r, cfg) for r in args.ranges]
+        return make_sample(ranges, args.sample, args.sampler or "sobol",
+                           0 if args.seed is None else args.seed, cfg, "--sample")
+    return None
+
+
+def _resume_spec(cfg, args):
+    """The sweep to finish: the folder's manifest, checked against what was asked."""
+    from ..config import from_dict
+    from ..errors import ConfigError
+    from ..sweep import store
+    from ..sweep.space import space_from_spec
+    folder = Path(args.resume)
+    if args.out is not None and Path(args.out).resolve() != folder.resolve():
+        raise ConfigError(f"--out {args.out} and --resume {args.resume}: a sweep is resumed "
+                          "in its own folder; give only --resume DIR")
+    if not folder.is_dir():
+        raise ConfigError(f"--resume {args.resume}: no such folder")
+    old = store.read_manifest(folder)
+    if old is None:
+        raise ConfigError(f"--resume {args.resume}: no sweep there ({store.MANIFEST} missing)")
+    asked = _space(cfg, args)
+    space = asked if asked is not None else space_from_spec(old["space"])
+    if not (args.config or args.overrides):
+        cfg = from_dict(old["raw"])      # the folder's config unless one is given
+    fmt = args.format or old["format"]
+    chunk = args.chunk or old["chunk"]
+    new = store.manifest(cfg, space, chunk, fmt)
+    diff = store.differences(old, new)
+    if diff:
+        more = f" (and {len(diff) - 2} more)" if len(diff) > 2 else ""
+        raise ConfigError(f"--resume {args.resume}: the folder holds a different sweep: "
+                          f"{'; '.join(diff[:2])}{more}")
+    return cfg, space, fmt, chunk, folder, old
+
+
 def run(cfg, args) -> Outcome:
-    from .. import sweep
-    prepare_out(args.out)
-    return sweep.command(cfg, args)
+    from ..errors import ConfigError
+    from ..sweep import store
+    from ..sweep.chunks import CHUNK
+    if args.chunk is not None and args.chunk < 1:
+        raise ConfigError(f"--chunk: must be a positive number of designs, got {args.chunk}")
+    if args.threads is not None and args.threads < 1:
+        raise ConfigError(f"--threads: must be at least 1, got {args.threads}")
+    dask = _module("distributed", "--dask") if args.dask else None
+    optimal = _module("optimal", "--optimise") if args.optimise else None
+    if args.resume:
+        cfg, space, fmt, chunk, out, old = _resume_spec(cfg, args)
+        m = store.manifest(cfg, space, chunk, fmt)
+    else:
+        if args.out is None:
+            raise ConfigError("--out: give the output folder (or --resume DIR)")
+        space = _space(cfg, args)
+        if space is None:
+            raise ConfigError("--grid: give at least one KEY=START:STOP:COUNT "
+                              "(or --sample N with --range)")
+        fmt, chunk = args.format or "csv", args.chunk or CHUNK
+        out = prepare_out(args.out)
+        old = store.read_manifest(out)
+        if old is not None and not old.get("complete"):
+            raise ConfigError(f"--out {args.out}: holds an unfinished sweep; finish it with "
+                              f"--resume {args.out}, or choose another folder")
+        m = store.manifest(cfg, space, chunk, fmt)
+    if optimal is not None:
+        return optimal.command(cfg, args, space, out)
+    if not args.resume and old is not None:
+        store.clear(out)                 # a finished earlier sweep is replaced
+    store.write_manifest(out, m, complete=False)
+    return _sweep(cfg, args, space, fmt, chunk, out, m, dask)
+
+
+@contextlib.contextmanager
+def _plain_ctrl_c():
+    """Ctrl-C as Python's plain KeyboardInterrupt while the sweep runs: the runner catches
+    it between chunks, keeps what is finished and the command reports it (exit 130). (The
+    command line's own handler, made for solvers that swallow the interrupt, would keep
+    re-sending it; the sweep calls no such solver.)"""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+def _sweep(cfg, args, space, fmt, chunk, out: Path, m: dict, dask) -> Outcome:
+    with _plain_ctrl_c():
+        return _sweep_run(cfg, args, space, fmt, chunk, out, m, dask)
+
+
+def _sweep_run(cfg, args, space, fmt, chunk, out: Path, m: dict, dask) -> Outcome:
+    from ..sweep import store
+    from ..sweep.run import _no_interrupt
+    from ..sweep.run import run as run_sweep
+    t0 = time.perf_counter()
+    parquet = fmt == "parquet"
+    keys = list(space.keys)
+    if args.resume:
+        if parquet:
+            done = store.parquet_chunks(out, keys, space.n, chunk)
+        elif (out / store.CSV).exists():
+            done = store.chunks_of(store.read_csv(out / store.CSV, keys), space.n, chunk)
+        else:
+            done = ()
+    else:
+        done = ()
+    sink = store.ParquetSink(out, keys) if parquet else None
+    ctx = dask.mapper(args.dask, args.threads) if dask is not None else \
+        contextlib.nullcontext(None)
+    with ctx as mapper:
+        res = run_sweep(cfg, space, progress=interactive(args), threads=args.threads,
+                        chunk=chunk, keep=not parquet, sink=sink, done=done, mapper=mapper,
+                        dataset=str(out / store.DATASET) if parquet else None)
+    stages = dict(res.stages)
+    files: list[Path] = []
+    if parquet:
+        files.append(out / store.DATASET)
+    else:
+        tw = time.perf_counter()
+        # the finished chunks are written whatever happens (a second Ctrl-C waits for it)
+        with _no_interrupt(reraise=not res.interrupted):
+            files.append(store.write_csv(res.columns, keys, out / store.CSV))
+        stages["csv"] = time.perf_counter() - tw
+    interrupted = res.interrupted
+    if not interrupted:
+        tm = time.perf_counter()
+        try:
+            files += write_maps(res, out)
+            store.write_manifest(out, m, complete=True)
+        except KeyboardInterrupt:        # the table is whole; resuming draws the maps
+            interrupted = True
+        stages["maps"] = time.perf_counter() - tm
+    resume = f"softclose sweep --resume {shlex.quote(str(out))}" if interrupted else None
+    stages["total"] = time.perf_counter() - t0
+    files.append(out / store.MANIFEST)
+    payload = res.to_json()
+    payload.update(stages=stages, format=fmt, out=str(out), resume=resume,
+                   files=[str(f) for f in files])
+    payload["interrupted"] = interrupted
+    text = _text(res, payload, files, resume)
+    return Outcome(payload, text, 130 if interrupted else 0, tuple(files))
+
+
+def write_maps(res, out: Path) -> list[Path]:
+    """Draw and save the maps of ``res`` in ``out``."""
+    from ..figures import save
+    from ..figures.sweep import plot_maps
+    return [save(fig, out / f"{name}.png") for name, fig in plot_maps(res).items()]
+
+
+def _text(res, payload: dict, files, resume) -> str:
+    rate = payload["designs_per_second"] or 0.0
+    kind = "sample" if res.kind == "sample" else "sweep"
+    new = payload["stages"].get("evaluated", 0)
+    speed = f"{new} evaluated at {rate:,.0f} designs/s" if new else "nothing left to evaluate"
+    lines = [f"{kind} over {', '.join(res.keys)}: {res.computed} of {res.points} designs, "
+             f"{res.feasible} feasible; {speed}, {payload['stages']['total']:.2f} s in all"]
+    if res.reasons:
+        lines.append("  infeasible: " + ", ".join(f"{k} {v}" for k, v in res.reasons.items()))
+    b = res.best
+    if b:
+        lines.append(f"  best feasible (id {b['id']}): "
+                     + ", ".join(f"{k} = {b[k]:.6g}" for k in res.keys)
+                     + f"; objective {b['objective']:.6g}, closing_time "
+                       f"{b['closing_time']:.4f} s, impact {b['impact_theta_dot']:.4f} rad/s, "
+                       f"peak tip {b['peak_tip_speed']:.4f} m/s")
+    elif res.computed:
+        lines.append("  no feasible design")
+    lines += [f"  wrote {f}" for f in files]
+    if resume:
+        lines.append(f"  interrupted: the finished chunks are kept; resume with: {resume}")
+    return "\n".join(lines)

@@ -1,0 +1,171 @@
+"""The unit of work of a sweep: one chunk of designs, evaluated from plain values.
+
+:func:`evaluate_chunk` takes only plain values -- the config as a dict (``cfg.raw``), the
+swept keys, the design ids and their swept values -- and returns a dict of numpy columns.
+It builds (and caches, per process) its own :class:`~softclose.simulate.Simulator`, because
+CasADi objects do not pickle; so the same function runs in this process (the local runner)
+or in any worker process that can import softclose (a Dask worker, a job array), and its
+result depends on nothing but its arguments.
+
+How a chunk is evaluated (metric only, batched):
+
+- rows are grouped by their non-design values; each group gets the config with those
+  values (validated as if from a file) and a simulator (model + coefficient table, about
+  0.1 s, cached: groups that differ only in ``optimise.*`` keys share one);
+- a group whose values the config or the model refuse (a loop that cannot close, a toggle
+  on the stroke) gets status ``invalid`` and the one-line reason -- the sweep goes on;
+- the design keys (``design.spring_k``, ``design.spring_rest_length``, ``design.damper_c``,
+  ``design.rotary_damper_c``) go into the kernel's parameter rows, and the group's strokes
+  run as one batch in the C kernel (threads, nothing kept per step);
+- the objective and the feasibility come from :mod:`softclose.problem` (never restated);
+  a stroke the method cannot integrate carries the simulator's diagnosis as its reason.
+"""
+
+from __future__ import annotations
+
+import json
+from collections import OrderedDict
+
+import numpy as np
+
+from ..problem import METRIC_KEYS, PARAM_KEYS, infeasibility, objective
+from ..stroke import StrokeStatus
+
+#: designs per chunk: the unit of progress, of Ctrl-C and resume, and of a Parquet part file
+CHUNK = 16384
+#: config keys that go into the kernel's parameter rows, with their column
+PARAM_COLUMNS = {f"design.{k}": i for i, k in enumerate(PARAM_KEYS)}
+#: status of a design whose config values were refused
+INVALID = "invalid"
+#: the columns of a chunk (and of every sweep table) around the swept keys
+HEAD = ("id",)
+TAIL = METRIC_KEYS + ("objective", "feasible", "status", "reason")
+#: simulators kept per process
+_CACHE_SIZE = 16
+_sims: OrderedDict = OrderedDict()
+_cfgs: OrderedDict = OrderedDict()
+
+
+def columns(keys) -> list[str]:
+    """Column names of a sweep table: id, the swept keys, the metrics, objective,
+    feasible, status, reason."""
+    return [*HEAD, *keys, *TAIL]
+
+
+def _lru(cache: OrderedDict, key, make):
+    if key in cache:
+        cache.move_to_end(key)
+        return cache[key]
+    value = make()
+    cache[key] = value
+    if len(cache) > _CACHE_SIZE:
+        cache.popitem(last=False)
+    return value
+
+
+def _config(cfg_dict: dict):
+    from ..config import from_dict
+    return _lru(_cfgs, json.dumps(cfg_dict, sort_keys=True, default=float),
+                lambda: from_dict(cfg_dict))
+
+
+def _simulator(cfg):
+    """The simulator of ``cfg``'s model and method (the [optimise] and [tolerance] sections
+    do not change a stroke, so configs differing only there share one)."""
+    from ..config import to_dict
+    from ..simulate import Simulator
+    d = to_dict(cfg)
+    d.pop("optimise", None)
+    d.pop("tolerance", None)
+    return _lru(_sims, json.dumps(d, sort_keys=True), lambda: Simulator(cfg))
+
+
+def empty(keys, n: int) -> dict[str, np.ndarray]:
+    """A chunk of ``n`` rows with nothing computed yet."""
+    out: dict[str, np.ndarray] = {"id": np.zeros(n, np.int64)}
+    for k in keys:
+        out[k] = np.full(n, np.nan)
+    for k in METRIC_KEYS + ("objective",):
+        out[k] = np.full(n, np.nan)
+    out["closed"] = np.zeros(n, bool)
+    out["feasible"] = np.zeros(n, bool)
+    out["status"] = np.full(n, "", dtype=object)
+    out["reason"] = np.full(n, "", dtype=object)
+    return out
+
+
+def evaluate_chunk(cfg_dict: dict, keys: list[str], ids: np.ndarray, X: np.ndarray,
+                   threads: int | None = None) -> dict[str, np.ndarray]:
+    """Metrics, objective and feasibility of designs ``ids`` with swept values ``X``.
+
+    ``cfg_dict`` is a config as plain values (``cfg.raw``: what a TOML file and ``--set``
+    gave); ``keys`` the swept config keys; ``X`` an array (len(ids), len(keys)). Returns the
+    columns of :func:`columns` (``status``/``reason`` as str objects, ``closed``/
+    ``feasible`` as bool, ``id`` as int64), rows in the order of ``ids``.
+    """
+    from ..errors import SoftcloseError
+    keys = list(keys)
+    ids = np.asarray(ids, np.int64)
+    X = np.asarray(X, float).reshape(len(ids), len(keys))
+    n = len(ids)
+    out = empty(keys, n)
+    out["id"][:] = ids
+    for j, k in enumerate(keys):
+        out[k][:] = X[:, j]
+    if n == 0:
+        return out
+    base = _config(cfg_dict)
+    P = np.tile(np.array([getattr(base.design, k) for k in PARAM_KEYS], float), (n, 1))
+    for j, k in enumerate(keys):
+        if k in PARAM_COLUMNS:
+            P[:, PARAM_COLUMNS[k]] = X[:, j]
+    other = [j for j, k in enumerate(keys) if k not in PARAM_COLUMNS]
+    if other:
+        uniq, inv = np.unique(X[:, other], axis=0, return_inverse=True)
+        inv = np.asarray(inv).ravel()
+    else:
+        uniq, inv = np.zeros((1, 0)), np.zeros(n, np.int64)
+    order = np.argsort(inv, kind="stable")
+    bounds = np.searchsorted(inv[order], np.arange(len(uniq) + 1))
+    for g in range(len(uniq)):
+        rows = order[bounds[g]:bounds[g + 1]]
+        values = {keys[j]: float(uniq[g, i]) for i, j in enumerate(other)}
+        try:
+            cfg = base.update(values) if values else base
+            sim = _simulator(cfg)
+        except SoftcloseError as exc:
+            out["status"][rows] = INVALID
+            out["reason"][rows] = str(exc).splitlines()[0]
+            continue
+        _store(out, rows, sim.run_batch(P[rows], threads=threads), cfg, sim, P[rows])
+    return out
+
+
+_STATUS_TEXT = np.array([StrokeStatus(s).text for s in range(len(StrokeStatus))], dtype=object)
+
+
+def _store(out: dict, rows: np.ndarray, res: dict, cfg, sim, P: np.ndarray) -> None:
+    """Fill ``rows`` of ``out`` from a kernel batch ``res`` of the group's config ``cfg``."""
+    status = np.asarray(res["status"], int)
+    ok = (status == StrokeStatus.CLOSED) | (status == StrokeStatus.NOT_CLOSED)
+    closed = status == StrokeStatus.CLOSED
+    for k in METRIC_KEYS[1:]:
+        v = np.asarray(res[k], float).copy()
+        if k != "holding_moment":
+            v[~ok] = np.nan
+        out[k][rows] = v
+    out["closed"][rows] = closed
+    J = objective(cfg.optimise, res["impact_theta_dot"], res["peak_tip_speed"])
+    out["objective"][rows] = np.where(closed, J, np.nan)
+    reason = infeasibility(cfg.optimise, closed, res["closing_time"], res["holding_moment"],
+                           res["theta_dot_max"])
+    for i in np.nonzero(~ok)[0]:  # the method could not integrate it: say why, with the remedy
+        s = StrokeStatus(int(status[i]))
+        reason[i] = ("not closed (the lid swung beyond the stroke range)"
+                     if s is StrokeStatus.LEFT_RANGE else sim.diagnose(s, P[i]))
+    out["status"][rows] = _STATUS_TEXT[np.clip(status, 0, len(_STATUS_TEXT) - 1)]
+    out["reason"][rows] = reason
+    out["feasible"][rows] = reason == ""
+
+
+__all__ = ["evaluate_chunk", "columns", "CHUNK", "INVALID", "PARAM_COLUMNS", "empty"]

@@ -1,0 +1,132 @@
+"""The result of a sweep: immutable, its rows as read-only columns (or a Parquet dataset)."""
+
+from __future__ import annotations
+
+import types
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+import numpy as np
+
+from .chunks import columns as column_names
+
+
+@dataclass(frozen=True, eq=False)
+class SweepResult:
+    """Metrics, objective and feasibility of every design of a grid or sample.
+
+    ``columns`` holds the rows (one per design, sorted by ``id``) as read-only numpy arrays
+    named as in :meth:`to_frame`; it is None for a sweep streamed to a Parquet dataset
+    (``dataset``, read back by :meth:`to_frame`). ``bins`` is the binned summary the maps of
+    any sweep can be drawn from (:class:`softclose.sweep.tally.Bins`). After Ctrl-C
+    (``interrupted``) only the finished chunks are present: ``computed < points``.
+    """
+
+    space: Any
+    points: int
+    computed: int
+    feasible: int
+    reasons: Mapping[str, int]
+    best: dict | None
+    bins: Any
+    seconds: float
+    stages: Mapping[str, float]
+    chunk: int
+    interrupted: bool = False
+    columns: Mapping[str, np.ndarray] | None = field(default=None, repr=False)
+    dataset: str | None = None
+
+    def __post_init__(self):
+        if self.columns is not None:
+            cols = {}
+            for k, v in self.columns.items():
+                v = np.asarray(v)
+                v.setflags(write=False)
+                cols[k] = v
+            object.__setattr__(self, "columns", types.MappingProxyType(cols))
+        object.__setattr__(self, "reasons", types.MappingProxyType(dict(self.reasons)))
+        object.__setattr__(self, "stages", types.MappingProxyType(dict(self.stages)))
+        if self.best is not None:
+            object.__setattr__(self, "best", types.MappingProxyType(dict(self.best)))
+
+    # -- what it is -------------------------------------------------------------------------
+    @property
+    def keys(self) -> tuple[str, ...]:
+        return tuple(self.space.keys)
+
+    @property
+    def kind(self) -> str:
+        """"grid" or "sample"."""
+        return self.space.kind
+
+    @property
+    def success(self) -> bool:
+        """Every design was computed (a design that fails is a row with its status and
+        reason, not a failure of the sweep)."""
+        return self.computed == self.points and not self.interrupted
+
+    @property
+    def message(self) -> str:
+        if self.interrupted or self.computed < self.points:
+            return (f"interrupted: {self.computed} of {self.points} designs computed "
+                    "(the finished chunks are kept)")
+        if self.best is None:
+            return f"no feasible design among the {self.points}"
+        return ""
+
+    @property
+    def designs_per_second(self) -> float | None:
+        ev = self.stages.get("evaluate", self.seconds)
+        n = self.stages.get("evaluated", self.computed)
+        return n / ev if ev > 0 and n else None
+
+    # -- rows ------------------------------------------------------------------------------
+    def row(self, id: int) -> dict:
+        """One design's row by its ``id`` (computed again with ``sweep.recompute``)."""
+        from .tally import row_of
+        if self.columns is not None:
+            ids = self.columns["id"]
+            i = int(np.searchsorted(ids, id))
+            if i >= len(ids) or ids[i] != id:
+                raise KeyError(f"design {id} was not computed")
+            return row_of(self.columns, i, self.keys)
+        import pyarrow.dataset as ds
+        t = ds.dataset(self.dataset, format="parquet").to_table(
+            filter=ds.field("id") == int(id))
+        if t.num_rows == 0:
+            raise KeyError(f"design {id} was not computed")
+        cols = {k: t.column(k).to_numpy(zero_copy_only=False) for k in t.column_names}
+        return row_of(cols, 0, self.keys)
+
+    def to_frame(self):
+        """One row per design (pandas): ``id``, the swept keys by their config key, the
+        metrics, ``objective``, ``feasible``, ``status``, ``reason``; sorted by id."""
+        import pandas as pd
+        names = column_names(self.keys)
+        if self.columns is None:
+            df = pd.read_parquet(self.dataset)
+            return df[names].sort_values("id", kind="stable").reset_index(drop=True)
+        return pd.DataFrame({k: np.asarray(self.columns[k]) for k in names})
+
+    def to_json(self) -> dict:
+        """The summary: counts, reasons, the best feasible design, timings."""
+        from ..jsonio import jsonable
+        rate = self.designs_per_second
+        return jsonable({
+            "kind": self.kind, "keys": list(self.keys), "space": self.space.describe(),
+            "points": self.points, "computed": self.computed, "feasible": self.feasible,
+            "infeasible_reasons": dict(self.reasons), "interrupted": self.interrupted,
+            "success": self.success, "message": self.message,
+            "seconds": self.seconds, "designs_per_second": rate,
+            "stages": dict(self.stages), "chunk": self.chunk,
+            "best": dict(self.best) if self.best is not None else None,
+        })
+
+    def plot(self) -> dict:
+        """The maps as matplotlib Figures, by file stem (``map_<k1>__<k2>``, or
+        ``profile_<k>`` for one swept key): see :mod:`softclose.figures.sweep`."""
+        from ..figures.sweep import plot_maps
+        return plot_maps(self)
+
+
+__all__ = ["SweepResult"]
