@@ -1,19 +1,230 @@
-"""``softclose optimise`` (transitional adapter: the optimise owner replaces this module)."""
+"""``softclose optimise`` (alias ``optimize``) and ``softclose pareto``.
+
+optimise: the verified soft-close design (exit 0), or a reported failure (exit 3) --
+infeasible problem, solver failure, or an answer the adaptive reference does not confirm.
+``--robust`` designs for the ``[tolerance]`` box instead. pareto: the verified front of the
+objective against closing_time_max (exit 3 when a point is not verified).
+"""
 
 from __future__ import annotations
 
-from .common import Outcome, add_common, add_out, prepare_out
+import math
+
+from ..errors import ConfigError
+from .common import Outcome, add_common, add_out, interactive, prepare_out, wrote
+
+#: the default closing times of ``pareto`` (s)
+PARETO_DEFAULT = "0.3:3:10:log"
 
 
 def register(sub) -> None:
     p = sub.add_parser("optimise", aliases=["optimize"],
-                       help="soft-close design by multiple shooting + Ipopt")
+                       help="soft-close design by multiple shooting + Ipopt, verified")
     add_common(p)
-    add_out(p, what="also write the optimum's trajectory and figures")
-    p.set_defaults(run=run)
+    add_out(p, what="also write the optimum's trajectory, figures and optimise.json")
+    p.add_argument("--robust", action="store_true",
+                   help="design for the [tolerance] box (yield, scenarios) instead")
+    p.set_defaults(run=run_optimise)
+    q = sub.add_parser("pareto", help="verified front of the objective against closing_time_max")
+    add_common(q)
+    add_out(q, what="write pareto.csv and pareto.png to this folder")
+    q.add_argument("--closing-times", default=PARETO_DEFAULT, metavar="START:STOP:COUNT[:log]",
+                   help=f"closing_time_max values in s (default {PARETO_DEFAULT}: "
+                        "10 log-spaced values)")
+    q.set_defaults(run=run_pareto)
 
 
-def run(cfg, args) -> Outcome:
-    from .. import optimise as opt
-    prepare_out(args.out)
-    return opt.command(cfg, args)
+# -- optimise ------------------------------------------------------------------------------
+def run_optimise(cfg, args) -> Outcome:
+    out = prepare_out(args.out)
+    if args.robust:
+        return _run_robust(cfg, args, out)
+    from ..optimise import optimise
+    res = optimise(cfg, progress=interactive(args))
+    payload = res.to_json()
+    files = []
+    if out is not None and res.design is not None:
+        files = write_optimum(res, out)
+        payload["files"] = [str(f) for f in files]
+    text = format_result(res) + wrote(files)
+    return Outcome(payload, text, 0 if res.success else 3, tuple(files),
+                   None if res.success else (res.message or f"no optimum ({res.status})"))
+
+
+def _run_robust(cfg, args, out) -> Outcome:
+    from ..jsonio import dumps
+    from ..optimise import optimise
+    res = optimise(cfg, robust=True, progress=interactive(args))
+    payload = res.to_json()
+    try:
+        from .robust import format_robust
+        text = format_robust(res)
+    except ImportError:
+        text = dumps(payload, indent=1)
+    files = []
+    if out is not None:
+        path = out / "optimise_robust.json"
+        path.write_text(dumps(payload, indent=1))
+        files.append(path)
+        payload["files"] = [str(path)]
+    ok = bool(getattr(res, "success", False))
+    return Outcome(payload, text + wrote(files), 0 if ok else 3, tuple(files),
+                   None if ok else (getattr(res, "message", "") or "no robust design"))
+
+
+def write_optimum(res, out) -> list:
+    """The optimum's stroke (trajectory CSV, figures), its figure and ``optimise.json``."""
+    from ..figures import save
+    from ..jsonio import dumps
+    from ..simulate import Simulator
+    from .files import write_stroke_outputs
+    sim = Simulator(res.config.with_design(**res.design))   # its model carries the design
+    stroke = sim.run(trajectory=True)
+    files = [out / "optimise.json"]
+    files[0].write_text(dumps(res.to_json(), indent=1))
+    files.append(save(res.plot(), out / "optimum.png"))
+    files += write_stroke_outputs(sim.model, stroke, out, stem="optimum")
+    return files
+
+
+def _v(x, fmt=".9g") -> str:
+    if x is None:
+        return "—"
+    if isinstance(x, bool):
+        return "yes" if x else "no"
+    return format(x, fmt)
+
+
+def format_result(res) -> str:
+    """The optimisation as text: verdict, problem, design, objective, the verified metrics
+    beside the optimiser's own, constraints, active limits, starts, notes."""
+    from ..problem import METRIC_KEYS, UNITS, VERIFY_RTOL
+    head = ("optimum found and verified" if res.success else
+            "optimum found, NOT verified" if res.verification is None and res.design else
+            "NO verified optimum")
+    lines = [f"softclose optimise: {head} (Ipopt: {res.status})"]
+    if res.message:
+        lines.append(f"  {res.message}")
+    pr = res.problem
+    if pr:
+        lines.append(f"  problem: J = {pr['weight_impact']:g}·impact_theta_dot² + "
+                     f"{pr['weight_peak_tip']:g}·peak_tip_speed², "
+                     f"{pr['closing_time_min']:g} s <= closing_time <= "
+                     f"{pr['closing_time_max']:g} s, holding moment >= "
+                     f"{pr['holding_moment_min']:g} N m")
+    if res.design:
+        d = res.design
+        lines.append(f"  design: spring_k = {d['spring_k']:.6g} N/m, spring_rest_length = "
+                     f"{d['spring_rest_length']:.6g} m, damper_c = {d['damper_c']:.6g} N s/m")
+    ver = res.verification
+    if res.objective is not None:
+        s = f"  objective J = {res.objective:.8g} (the optimiser's)"
+        if ver is not None and ver.objective is not None:
+            rel = ((res.objective - ver.objective) / abs(ver.objective) if ver.objective
+                   else math.inf)
+            s += (f"; the reference's J = {ver.objective:.8g} (relative difference {rel:.1e}, "
+                  f"allowed {VERIFY_RTOL:g})")
+        lines.append(s)
+    if res.optimiser:
+        agr = ver.agreement if ver is not None else {}
+        lines.append(f"  {'metric':<19} {'verified':>15} {'optimiser':>15} {'difference':>11} "
+                     f"{'allowed':>9}  unit   (verified = adaptive reference, CVODES)")
+        for k in METRIC_KEYS:
+            a = agr.get(k, {})
+            vv = res.metrics.get(k) if res.metrics else None
+            diff = a.get("difference")
+            flag = "" if a.get("ok", True) else "  <-- DISAGREES"
+            lines.append(f"  {k:<19} {_v(vv):>15} {_v(res.optimiser.get(k)):>15} "
+                         f"{_v(diff, '.2e') if diff is not None else '':>11} "
+                         f"{_v(a.get('tolerance'), '.1e') if a.get('tolerance') else '':>9}  "
+                         f"{UNITS[k]}{flag}")
+    if ver is not None and ver.constraints:
+        bad = [k for k, c in ver.constraints.items() if not c["ok"]]
+        lines.append("  constraints in the reference simulation: " +
+                     ("all hold" if not bad else "VIOLATED: " + ", ".join(bad)))
+    if res.active:
+        lines.append("  what limits the design (dJ: change of J per unit relaxation, from "
+                     "Ipopt's multipliers):")
+        for a in res.active:
+            lines.append(f"    {a.describe(res.objective)}")
+    elif res.design:
+        lines.append("  no bound or constraint is active: an interior optimum")
+    if res.starts:
+        lines.append(f"  starts ({len(res.starts)}, from a coarse sweep of the design box):")
+        for i, s in enumerate(res.starts, 1):
+            st = s["start"]
+            J = f"{s['objective']:.8g}" if s.get("objective") is not None else "—"
+            lines.append(f"    {i}. from k={st['spring_k']:.4g}, "
+                         f"l0={st['spring_rest_length']:.4g}, c={st['damper_c']:.4g}: "
+                         f"{s['status']}, {s['iterations']} it, {s['solve_time']:.3f} s, J = {J}")
+    for n in res.notes:
+        lines.append(f"  note: {n}")
+    lines.append(f"  ({res.nodes} shooting intervals x {res.substeps} RK4 sub-steps, "
+                 f"{res.hessian} Hessian; total {res.total_time:.2f} s)")
+    return "\n".join(lines)
+
+
+# -- pareto --------------------------------------------------------------------------------
+def parse_closing_times(text: str):
+    """``START:STOP:COUNT`` (linear) or ``START:STOP:COUNT:log`` -> array of closing times."""
+    import numpy as np
+    from ..optimise.pareto import MAX_POINTS
+    parts = str(text).split(":")
+    bad = f"--closing-times {text}: "
+    if len(parts) not in (3, 4) or (len(parts) == 4 and parts[3] != "log"):
+        raise ConfigError(bad + "expected START:STOP:COUNT or START:STOP:COUNT:log")
+    try:
+        a, b = float(parts[0]), float(parts[1])
+        n = int(parts[2])
+    except ValueError:
+        raise ConfigError(bad + "START and STOP must be numbers (s), COUNT a whole number") \
+            from None
+    if not (math.isfinite(a) and math.isfinite(b) and 0 < a <= b):
+        raise ConfigError(bad + "expected 0 < START <= STOP (finite, in s)")
+    if not 1 <= n <= MAX_POINTS:
+        raise ConfigError(bad + f"COUNT must lie in 1..{MAX_POINTS}, got {n}")
+    if a == b and n > 1:
+        raise ConfigError(bad + "START equals STOP: use COUNT 1")
+    return np.geomspace(a, b, n) if len(parts) == 4 else np.linspace(a, b, n)
+
+
+def run_pareto(cfg, args) -> Outcome:
+    out = prepare_out(args.out)
+    times = parse_closing_times(args.closing_times)
+    from ..optimise import front
+    fr = front(cfg, times, progress=interactive(args))
+    payload = fr.to_json()
+    files = []
+    if out is not None:
+        from ..figures import save
+        frame = fr.to_frame()
+        path = out / "pareto.csv"
+        frame.to_csv(path, index=False)
+        files = [path, save(fr.plot(), out / "pareto.png")]
+        payload["files"] = [str(f) for f in files]
+    text = format_front(fr) + wrote(files)
+    return Outcome(payload, text, 0 if fr.success else 3, tuple(files),
+                   None if fr.success else fr.message)
+
+
+def format_front(fr) -> str:
+    head = "every point verified" if fr.success else "NOT every point verified"
+    lines = [f"softclose pareto: {len(fr.points)} points, {head} ({fr.total_time:.2f} s)",
+             f"  {'T_max [s]':>9} {'k [N/m]':>9} {'l0 [m]':>8} {'c [N s/m]':>9} {'J':>10} "
+             f"{'impact [m/s]':>12} {'peak [m/s]':>10} {'verified':>8}  active"]
+    for t, p in zip(fr.closing_times, fr.points):
+        if p.design is None:
+            lines.append(f"  {t:9.4g}  no optimum: {p.message}")
+            continue
+        m = p.metrics or {}
+        act = ", ".join(f"{a.name} ({a.bound})" for a in p.active)
+        lines.append(f"  {t:9.4g} {p.design['spring_k']:9.1f} "
+                     f"{p.design['spring_rest_length']:8.5f} {p.design['damper_c']:9.1f} "
+                     f"{p.objective:10.6g} {_v(m.get('impact_tip_speed'), '12.5f'):>12} "
+                     f"{_v(m.get('peak_tip_speed'), '10.5f'):>10} "
+                     f"{'yes' if p.success else 'NO':>8}  {act}")
+    lines.append("  (speeds: the adaptive reference's simulation of each optimum; "
+                 "J: the optimiser's, agreeing with the reference's to 1e-3)")
+    if fr.message:
+        lines.append(f"  {fr.message}")
+    return "\n".join(lines)

@@ -1,0 +1,310 @@
+"""The one-call optimiser: starts, solves, polish, verification, the active limits.
+
+:func:`optimise` solves cfg's problem from several starts (:mod:`.starts`), refines and
+corrects the best answer (:mod:`.polish`), re-simulates it with the adaptive reference
+(:mod:`.verify`) and reads from Ipopt's multipliers what limits it (:func:`active_set`).
+:func:`solve` is one Ipopt solve, cold or warm, for benchmarks and continuation.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from ..errors import ConfigError, NumericalError, SoftcloseError
+from ..problem import DESIGN_KEYS, SCALES, UNITS, describe, design_of
+from ..progress import Progress
+from .cache import get_model, get_nlp, has_nlp, stroke_simulator
+from .diagnose import diagnose
+from .nlp import J_INDEX, Discretisation, Run, ShootingNLP, check_options, discretisation
+from .polish import nlp_objective, refine, tighten
+from .result import Active, OptimiseResult
+from .starts import MAX_STARTS, initial_guess, sweep_starts, sweep_time
+from .verify import get_checker, verify as verify_design
+
+#: a scaled Ipopt multiplier (J/J_ref per scaled unit) above this marks a limit as active
+ACTIVE_LAM = 1e-6
+
+
+def check_problem(cfg, starts: int | None = None) -> int:
+    """Refuse problems that cannot be posed; the number of starts."""
+    o = cfg.optimise
+    if o.weight_impact == 0 and o.weight_peak_tip == 0:
+        raise ConfigError("optimise.weight_impact and optimise.weight_peak_tip are both zero: "
+                          "there is nothing to minimise; make one of them positive")
+    n = o.starts if starts is None else starts
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise ConfigError(f"starts: expected a whole number >= 1, got {n!r}")
+    if n > MAX_STARTS:
+        raise ConfigError(f"optimise.starts: {n} starts is more than the limit of {MAX_STARTS} "
+                          "(each is a full solve); lower optimise.starts")
+    return int(n)
+
+
+def claims(nlp: ShootingNLP, cfg, run: Run) -> tuple[dict, dict, float]:
+    """(design, the NLP's own §4 metrics, its J) at ``run``'s point.
+
+    The peak tip speed is the largest sub-step speed or Hermite maximum at the solution
+    (:meth:`ShootingNLP.peak`), never the free epigraph variable; the spring-length extremes
+    are those of the exact model over the stroke's angles, the holding moment the model's.
+    """
+    d, T, X, _ = nlp.unpack(run.x)
+    st = cfg.stroke
+    model = nlp.model
+    p = np.r_[d, cfg.design.rotary_damper_c]
+    thd = float(X[1, -1])
+    vT = np.asarray(model.kin(np.array([st.theta_closed, thd]))[4]).ravel()
+    lmin, lmax = get_checker(cfg).spring_extremes(st.theta_closed, st.theta0)
+    peak = nlp.peak(run)
+    m = {"closed": True, "closing_time": T, "impact_theta_dot": thd,
+         "impact_tip_speed": float(np.hypot(*vT)), "peak_tip_speed": peak,
+         "min_spring_length": lmin, "max_spring_length": lmax,
+         "holding_moment": model.holding_moment(p)}
+    return design_of(d), m, nlp_objective(nlp, cfg, run)
+
+
+def active_set(nlp: ShootingNLP, cfg, run: Run, t_limit: float) -> tuple[Active, ...]:
+    """The bounds and constraints that limit ``run``'s answer, with dJ per unit relaxation.
+
+    Ipopt's multipliers (CasADi's sign convention: > 0 at an upper, < 0 at a lower bound)
+    are derivatives of the NLP objective J/J_ref with respect to the bounds, in the scaled
+    variables; dJ = -J_ref · lam / scale per unit of the upper bound, +J_ref · lam / scale
+    per unit the lower bound is lowered.
+    """
+    if run.lam_x is None:
+        return ()
+    o, st = cfg.optimise, cfg.stroke
+    lbx, ubx = run.bounds[0], run.bounds[1]
+    Jr, lam_x, lam_g = run.J_ref, run.lam_x, run.lam_g
+    out = []
+    for i, key in enumerate(DESIGN_KEYS):
+        lam = float(lam_x[i])
+        lo, hi = getattr(o, key)
+        for side, b, sign in (("upper", hi, 1.0), ("lower", lo, -1.0)):
+            at = abs(run.x[i] - b / SCALES[i]) <= 1e-7 * max(1.0, abs(b / SCALES[i]))
+            if sign * lam > ACTIVE_LAM or (at and lo != hi):
+                out.append(Active(key, "bound", side, float(b), UNITS[key],
+                                  -sign * Jr * lam / SCALES[i]))
+                break
+    lam = float(lam_x[3])
+    if lam > ACTIVE_LAM:
+        name, v = (("closing_time_max", o.closing_time_max) if t_limit >= o.closing_time_max
+                   else ("stroke.t_max", st.t_max))
+        out.append(Active(name, "constraint", "upper", v, "s", -Jr * lam))
+    elif lam < -ACTIVE_LAM:
+        out.append(Active("closing_time_min", "constraint", "lower", o.closing_time_min, "s",
+                          Jr * lam))
+    N = nlp.N
+    groups = dict(nlp.groups())
+    lam_hm = float(lam_g[groups["holding_moment"]].sum())
+    if lam_hm < -ACTIVE_LAM:
+        out.append(Active("holding_moment_min", "constraint", "lower", o.holding_moment_min,
+                          "N m", Jr * lam_hm))
+    # theta' <= 0 at every sub-step and node: relaxed together (theta' <= eps everywhere)
+    lam_rb = float(np.maximum(lam_g[groups["theta_dot_nonpositive"]], 0).sum()
+                   + np.maximum(lam_x[5:5 + 2 * N:2], 0).sum())
+    if lam_rb > ACTIVE_LAM:
+        out.append(Active("no_rebound", "constraint", "upper", 0.0, "rad/s", -Jr * lam_rb))
+    lam_rim = float(np.minimum(lam_g[groups["theta_above_closed"]], 0).sum()
+                    + np.minimum(lam_x[4:4 + 2 * (N - 1):2], 0).sum())
+    if lam_rim < -ACTIVE_LAM:
+        out.append(Active("theta_above_closed", "constraint", "lower", st.theta_closed, "rad",
+                          Jr * lam_rim))
+    lam_rel = float(lam_g[groups["release_downwards"]].sum())
+    if lam_rel > ACTIVE_LAM:
+        out.append(Active("release_downwards", "constraint", "upper", 0.0, "rad/s^2",
+                          -Jr * lam_rel))
+    return tuple(out)
+
+
+def start_row(nlp: ShootingNLP, cfg, start, run: Run, J0) -> dict:
+    """One start as reported: where it began, where it ended, how it went."""
+    d, T, _, _ = nlp.unpack(run.x)
+    row = {"start": design_of(start), "start_objective": J0, "design": design_of(d),
+           "objective": nlp_objective(nlp, cfg, run) if run.success else None,
+           "closing_time": T, "status": run.status, "success": run.success,
+           "iterations": run.iterations, "solve_time": run.time}
+    if run.origin:
+        row["from"] = run.origin
+    return row
+
+
+def distinct(rows: list, rtol: float = 1e-3) -> int:
+    """How many distinct designs (scaled distance > rtol) the rows reached."""
+    seen: list = []
+    for r in rows:
+        v = np.array([r["design"][k] for k in DESIGN_KEYS]) / SCALES
+        if all(np.linalg.norm(v - s) > rtol * max(1.0, np.linalg.norm(s)) for s in seen):
+            seen.append(v)
+    return len(seen)
+
+
+def finish(cfg, nlp: ShootingNLP, run: Run, disc: Discretisation, *, verify: bool,
+           polish: bool, notes: list, **base) -> OptimiseResult:
+    """From a converged run to the result: polish (refine, tighten), the optimiser's claims,
+    verification, the active limits."""
+    if polish:
+        sim = stroke_simulator(cfg)
+        nlp, run = refine(cfg, nlp, run, sim, notes)
+        run = tighten(cfg, nlp, run, sim, disc.t_limit, notes)
+    design, own, J = claims(nlp, cfg, run)
+    active = active_set(nlp, cfg, run, disc.t_limit)
+    common = dict(nodes=nlp.N, substeps=nlp.M, hessian=cfg.optimise.hessian,
+                  iterations=base.pop("iterations", run.iterations),
+                  solve_time=base.pop("solve_time", run.time), problem=describe(cfg),
+                  config=cfg, run=run, nlp_key=nlp.key, active=active, **base)
+    if not verify:
+        return OptimiseResult(True, "not verified (verify=False): the numbers in 'optimiser' "
+                              "are the NLP's own", run.status, design, J, None,
+                              {"objective": J, **own}, notes=tuple(notes), **common)
+    ver = verify_design(cfg, design, own, J)
+    return OptimiseResult(ver.ok, ver.message and f"the answer is {ver.message}", run.status,
+                          design, J, ver.metrics, {"objective": J, **own}, ver,
+                          notes=tuple(notes), **common)
+
+
+def guarded(fn):
+    """Turn an exception out of CasADi/Ipopt into a NumericalError with what to change."""
+    import functools
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        try:
+            return fn(*args, **kwargs)
+        except SoftcloseError:
+            raise
+        except (RuntimeError, ArithmeticError, np.linalg.LinAlgError) as exc:
+            msg = str(exc).strip().splitlines()
+            msg = msg[-1] if msg else type(exc).__name__
+            raise NumericalError(
+                f"the optimiser failed ({type(exc).__name__}: {msg[:200]}); try "
+                "optimise.hessian = \"limited-memory\", optimise.linear_solver = \"mumps\", or "
+                "other optimise.nodes / optimise.substeps") from None
+    return wrapper
+
+
+@guarded
+def optimise(cfg, *, robust: bool = False, starts: int | None = None, verify: bool = True,
+             progress: bool = False, nodes: int | None = None,
+             substeps: int | None = None) -> OptimiseResult:
+    """Solve cfg's soft-close problem from several starts; the best answer, verified.
+
+    Starts come from a coarse sweep of the design box (``starts`` of them, default
+    optimise.starts); each is solved by Ipopt; the best converged one is refined, has its
+    closing-time bounds corrected for the NLP's discretisation error and is re-simulated by
+    the adaptive reference. ``success`` means: Ipopt converged, every constraint holds in
+    the reference simulation and every number the optimiser reports agrees with the
+    reference's (objective to 1e-3 relative). Infeasible problems and solver failures are
+    reported in the result, never raised. ``progress=True`` draws the starts on a terminal.
+
+    ``robust=True`` designs for the ``[tolerance]`` box instead
+    (:func:`softclose.robust.optimise_robust`).
+    """
+    if robust:
+        try:
+            from ..robust import optimise_robust
+        except ImportError:
+            raise ConfigError("optimise(robust=True): robust design (softclose.robust) is not "
+                              "available in this build") from None
+        return optimise_robust(cfg, progress=progress)
+    t_start = time.perf_counter()
+    n_starts = check_problem(cfg, starts)
+    o = cfg.optimise
+    disc = discretisation(cfg, nodes, substeps)
+    notes = list(disc.notes)
+    bar = Progress(n_starts, "optimise", enabled=progress, unit="")
+    if disc.steps > 400:
+        bar.update(0, f"building the NLP ({disc.nodes} x {disc.substeps} RK4 steps)", force=True)
+    cached = has_nlp(cfg, disc.nodes, disc.substeps)
+    nlp = get_nlp(cfg, disc.nodes, disc.substeps)
+    build = 0.0 if cached else nlp.build_time
+    sim_sweep = stroke_simulator(cfg, sweep_time(cfg, disc.t_limit))
+    designs, info = sweep_starts(cfg, n_starts, disc.t_limit, sim_sweep)
+    bounds = nlp.bounds(cfg)
+    runs, rows = [], []
+    with bar:
+        for i, d0 in enumerate(designs):
+            bar.update(i, f"start {i + 1} of {len(designs)}: solving ({disc.nodes} x "
+                          f"{disc.substeps} RK4 steps)", force=True)
+            p = nlp.params(cfg)
+            w0, J0 = initial_guess(nlp, cfg, d0, sim_sweep, p, disc.t_limit)
+            p[J_INDEX] = max(J0, 1e-8)
+            r = nlp.solve(w0, p, *bounds, origin=f"start {i + 1}")
+            check_options(r, cfg)
+            runs.append(r)
+            rows.append(start_row(nlp, cfg, d0, r, J0))
+            bar.update(i + 1, f"start {i + 1}: {r.status}, {r.iterations} iterations",
+                       force=True)
+        base = dict(starts=tuple(rows), build_time=build, sweep=info)
+        ok = [i for i, r in enumerate(runs) if r.success]
+        if not ok:
+            msg, inf = diagnose(cfg, nlp, runs)
+            best = min(runs, key=lambda r: sum(r.violations.values()))
+            return OptimiseResult(
+                False, msg, best.status, None, None, nodes=nlp.N, substeps=nlp.M,
+                hessian=o.hessian, iterations=sum(r.iterations for r in runs),
+                solve_time=sum(r.time for r in runs), problem=describe(cfg),
+                infeasibility=inf, notes=tuple(notes), config=cfg,
+                total_time=time.perf_counter() - t_start, **base)
+        best = runs[min(ok, key=lambda i: rows[i]["objective"])]
+        notes.append(f"{len(ok)} of {len(runs)} starts converged, to "
+                     f"{distinct([rows[i] for i in ok])} distinct optima")
+        if verify:
+            bar.update(len(designs), "verifying with the adaptive reference", force=True)
+        res = finish(cfg, nlp, best, disc, verify=verify, polish=True, notes=notes, **base)
+    return replace(res, total_time=time.perf_counter() - t_start)
+
+
+@guarded
+def solve(cfg, nodes: int | None = None, substeps: int | None = None,
+          warm: OptimiseResult | None = None, verify: bool = False) -> OptimiseResult:
+    """One Ipopt solve (for benchmarks and continuation): no multistart, no polish.
+
+    Cold: from the best point of the coarse sweep. Warm (``warm`` = an earlier result of the
+    same NLP): from its primal-dual point -- with the warm-start solver when the problem is
+    unchanged, else with the cold solver from its primal point.
+    """
+    t_start = time.perf_counter()
+    check_problem(cfg, 1)
+    disc = discretisation(cfg, nodes, substeps)
+    cached = has_nlp(cfg, disc.nodes, disc.substeps)
+    nlp = get_nlp(cfg, disc.nodes, disc.substeps)
+    build = 0.0 if cached else nlp.build_time
+    bounds = nlp.bounds(cfg)
+    rows, info = [], None
+    if warm is not None and warm.run is not None and warm.nlp_key == nlp.key:
+        prev: Run = warm.run
+        p = nlp.params(cfg, J_ref=prev.J_ref)
+        same = all(np.array_equal(a, b) for a, b in zip(prev.bounds, bounds)) \
+            and np.array_equal(p, prev.p)
+        if same:
+            r = nlp.solve(prev.x, p, *bounds, prev.lam_x, prev.lam_g, warm=True, origin="warm")
+        else:
+            r = nlp.solve(prev.x, p, *bounds, origin="previous answer")
+    else:
+        sim = stroke_simulator(cfg, sweep_time(cfg, disc.t_limit))
+        designs, info = sweep_starts(cfg, 1, disc.t_limit, sim)
+        p = nlp.params(cfg)
+        w0, J0 = initial_guess(nlp, cfg, designs[0], sim, p, disc.t_limit)
+        p[J_INDEX] = max(J0, 1e-8)
+        r = nlp.solve(w0, p, *bounds, origin="best sweep point")
+        rows.append(start_row(nlp, cfg, designs[0], r, J0))
+    check_options(r, cfg)
+    base = dict(starts=tuple(rows), build_time=build, sweep=info)
+    if not r.success:
+        res = OptimiseResult(
+            False, f"Ipopt stopped with status {r.status} after {r.iterations} iterations; "
+            "use optimise() (several starts) or raise optimise.max_iter", r.status, None, None,
+            nodes=nlp.N, substeps=nlp.M, hessian=cfg.optimise.hessian, iterations=r.iterations,
+            solve_time=r.time, problem=describe(cfg), config=cfg, run=r, nlp_key=nlp.key,
+            notes=disc.notes, **base)
+    else:
+        res = finish(cfg, nlp, r, disc, verify=verify, polish=False, notes=list(disc.notes),
+                     **base)
+    return replace(res, total_time=time.perf_counter() - t_start)
+
+
+__all__ = ["optimise", "solve", "claims", "active_set", "check_problem", "finish",
+           "get_model"]

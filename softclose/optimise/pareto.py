@@ -1,0 +1,127 @@
+"""The Pareto front of the objective against the allowed closing time, by continuation.
+
+:func:`front` solves the first closing_time_max from a few sweep starts and every next one
+warm from the previous optimum (its design, T moved to the new bound, the same
+normalised-time states); as a guard against following a local branch, the best point of a
+coarse sweep of each problem is solved too whenever the warm answer failed or the sweep
+already beats it. Every point is polished and verified like :func:`optimise`'s answer.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..problem import describe
+from ..progress import Progress
+from .cache import get_nlp, stroke_simulator
+from .nlp import J_INDEX, ShootingNLP, discretisation
+from .optimiser import check_problem, finish, guarded, optimise, start_row
+from .polish import nlp_objective
+from .result import FrontResult, OptimiseResult
+from .starts import initial_guess, sweep_starts, sweep_time
+
+#: most points of one front (each is an optimisation)
+MAX_POINTS = 200
+
+
+@guarded
+def front(cfg, closing_times, *, starts: int = 3, progress: bool = False) -> FrontResult:
+    """The verified optimum for each closing_time_max in ``closing_times`` (continuation).
+
+    ``starts``: sweep starts of the first point. Returns a :class:`FrontResult` whose
+    ``success`` says that every point was found and verified; a point that fails is
+    reported in it (and the next point continues from the last good one).
+    """
+    t0 = time.perf_counter()
+    try:
+        times = [float(t) for t in np.atleast_1d(np.asarray(closing_times, dtype=float))]
+    except (TypeError, ValueError):
+        raise ConfigError(f"closing_times: expected numbers, got {closing_times!r}") from None
+    if not times:
+        raise ConfigError("closing_times: expected at least one closing time")
+    if len(times) > MAX_POINTS:
+        raise ConfigError(f"closing_times: {len(times)} points is more than the limit of "
+                          f"{MAX_POINTS}")
+    o = cfg.optimise
+    for t in times:
+        if not (math.isfinite(t) and t > o.closing_time_min):
+            raise ConfigError(f"closing_times: {t:g} s is not a finite time above "
+                              f"optimise.closing_time_min = {o.closing_time_min:g} s")
+    check_problem(cfg, starts)
+    points: list[OptimiseResult] = []
+    prev = None
+    with Progress(len(times), "pareto", enabled=progress, unit="") as bar:
+        for i, tm in enumerate(times):
+            bar.update(i, f"closing_time_max = {tm:g} s", force=True)
+            c = cfg.replace(optimise={"closing_time_max": tm})
+            t1 = time.perf_counter()
+            r = optimise(c, starts=starts) if prev is None else continue_from(c, prev)
+            r = _timed(r, time.perf_counter() - t1)
+            points.append(r)
+            if r.run is not None and r.design is not None:
+                prev = r
+            bar.update(i + 1, f"closing_time_max = {tm:g} s: "
+                              f"{'verified' if r.success else 'NOT verified'}", force=True)
+    return FrontResult(tuple(times), tuple(points), time.perf_counter() - t0)
+
+
+def _timed(r: OptimiseResult, t: float) -> OptimiseResult:
+    from dataclasses import replace
+    return replace(r, total_time=t)
+
+
+def continue_from(cfg, prev: OptimiseResult) -> OptimiseResult:
+    """The verified optimum of ``cfg`` from ``prev``, the answer of a neighbouring problem
+    (same geometry and nodes): warm from its design and states, and from the best point of
+    a coarse sweep when that answer fails or the sweep beats it."""
+    o = cfg.optimise
+    disc = discretisation(cfg, prev.nodes)
+    nlp = get_nlp(cfg, disc.nodes, disc.substeps)
+    bounds = nlp.bounds(cfg)
+    lbx, ubx = bounds[0], bounds[1]
+    p = nlp.params(cfg, J_ref=max(prev.objective or 1.0, 1e-8))
+    # the previous optimum, its states moved to the new grid (same normalised time)
+    st = cfg.stroke
+    d_old, T_old, X_old, s_old = nlp.unpack(prev.run.x)      # same N: the same layout
+    tau_old = np.r_[0.0, np.cumsum(ShootingNLP.grid_of(prev.run.p))]
+    tau_new = np.cumsum(nlp.grid_of(p))
+    Xo = np.column_stack([[st.theta0, 0.0], X_old])
+    Xn = np.vstack([np.interp(tau_new, tau_old, Xo[0]), np.interp(tau_new, tau_old, Xo[1])])
+    Xn[0, -1] = st.theta_closed
+    x0 = nlp.pack(d_old, float(np.clip(T_old, lbx[3], ubx[3])), Xn, s_old)
+    runs = [nlp.solve(x0, p, *bounds, origin="previous optimum")]
+    starts = [d_old]
+    J0s = [None]
+    # guard against following a local branch: the best point of a coarse sweep of this
+    # problem is solved too when the warm answer failed or the sweep already beats it
+    sim = stroke_simulator(cfg, sweep_time(cfg, disc.t_limit))
+    designs, info = sweep_starts(cfg, 1, disc.t_limit, sim, shape=(6, 5, 6))
+    J_warm = nlp_objective(nlp, cfg, runs[0]) if runs[0].success else math.inf
+    J_sweep = info["best_feasible_objective"]
+    if not runs[0].success or (J_sweep is not None and J_sweep < J_warm * (1 - 1e-3)):
+        p2 = nlp.params(cfg)
+        w0, J0 = initial_guess(nlp, cfg, designs[0], sim, p2, disc.t_limit)
+        p2[J_INDEX] = max(J0, 1e-8)
+        runs.append(nlp.solve(w0, p2, *bounds, origin="best sweep point"))
+        starts.append(designs[0])
+        J0s.append(J0)
+    rows = tuple(start_row(nlp, cfg, s, r, J0) for s, r, J0 in zip(starts, runs, J0s))
+    ok = [i for i, r in enumerate(runs) if r.success]
+    notes = list(disc.notes)
+    base = dict(starts=rows, sweep=info, iterations=sum(r.iterations for r in runs),
+                solve_time=sum(r.time for r in runs))
+    if not ok:
+        return OptimiseResult(False, f"Ipopt did not converge ({runs[0].status}) from the "
+                              "previous optimum or the best sweep point; solve this point "
+                              "alone with optimise()", runs[0].status, None, None,
+                              nodes=nlp.N, substeps=nlp.M, hessian=o.hessian,
+                              problem=describe(cfg), config=cfg, notes=tuple(notes), **base)
+    best = runs[min(ok, key=lambda i: rows[i]["objective"])]
+    return finish(cfg, nlp, best, disc, verify=True, polish=True, notes=notes, **base)
+
+
+_continue = continue_from      # the name softclose.sweep.optimal imports (to be moved)

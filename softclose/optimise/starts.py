@@ -1,0 +1,99 @@
+"""Where the solves start: designs from a coarse sweep of the design box, and a primal
+initial guess from each start's simulated stroke."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..problem import DESIGN_KEYS, objective
+from .cache import stroke_simulator
+from .nlp import T_FLOOR, ShootingNLP
+
+#: the coarse sweep of the design box: points along (spring_k, spring_rest_length, damper_c)
+SWEEP_SHAPE = (8, 6, 8)
+#: most starts one optimisation may solve (each is a full Ipopt solve, ~0.1 s)
+MAX_STARTS = 100
+
+
+def sweep_time(cfg, t_limit: float) -> float:
+    """How long the strokes of the start sweep are simulated: a little beyond the limit."""
+    return 1.05 * t_limit + 0.05
+
+
+def sweep_starts(cfg, count: int, t_limit: float, sim=None,
+                 shape=SWEEP_SHAPE) -> tuple[np.ndarray, dict]:
+    """Start designs from a coarse sweep of the design box (C kernel, ~0.05 s).
+
+    The feasible points (closed within the closing-time bounds, holding moment, moving down
+    at release, no rebound) are ranked by objective and picked greedily so that each start
+    lies at least 0.2 (in box-normalised units) from the ones before; with too few feasible
+    points the least infeasible ones fill up. Returns (designs (count, 3), info).
+    """
+    o = cfg.optimise
+    sim = sim or stroke_simulator(cfg, sweep_time(cfg, t_limit))
+    axes = [np.linspace(*getattr(o, k), n) for k, n in zip(DESIGN_KEYS, shape)]
+    G = np.array(np.meshgrid(*axes, indexing="ij")).reshape(3, -1).T
+    P = np.column_stack([G, np.full(len(G), cfg.design.rotary_damper_c)])
+    r = sim.run_batch(P)
+    st = cfg.stroke
+    c0 = sim.table.evaluate([st.theta0])[0]
+    release = -(c0[3] + G[:, 0] * (c0[4] - G[:, 1]) * c0[5])   # M theta'' at release
+    T = np.where(r["closed"], r["closing_time"], np.inf)
+    J = objective(o, r["impact_theta_dot"], r["peak_tip_speed"])
+    # violation measure (relative), 0 when feasible: ranks the infeasible points too
+    with np.errstate(invalid="ignore"):
+        viol = (np.maximum(T - t_limit, 0) / t_limit
+                + np.maximum(o.closing_time_min - T, 0) / max(t_limit, 1e-9)
+                + np.maximum(o.holding_moment_min - r["holding_moment"], 0)
+                / max(abs(o.holding_moment_min), 1e-3)
+                + np.maximum(release, 0) / max(abs(c0[3]), 1e-6)
+                + np.maximum(r["theta_dot_max"], 0))
+    viol = np.where(np.isfinite(viol), viol, 1e3)
+    feasible = viol == 0
+    order = np.lexsort((np.where(np.isfinite(J), J, np.inf), viol))
+    lo = np.array([getattr(o, k)[0] for k in DESIGN_KEYS])
+    span = np.maximum(np.array([getattr(o, k)[1] for k in DESIGN_KEYS]) - lo, 1e-12)
+    picked: list[int] = []
+    for min_dist in (0.2, 0.1, 0.0):
+        for i in order:
+            if len(picked) >= count:
+                break
+            if i in picked:
+                continue
+            z = (G[i] - lo) / span
+            if all(np.linalg.norm(z - (G[j] - lo) / span) >= min_dist for j in picked):
+                picked.append(int(i))
+    info = {"grid": [int(n) for n in shape], "evaluated": int(len(G)),
+            "feasible": int(feasible.sum()),
+            "best_feasible_objective": float(J[feasible].min()) if feasible.any() else None,
+            "fastest_closing_time": float(T.min()) if np.isfinite(T).any() else None}
+    return G[picked], info
+
+
+def initial_guess(nlp: ShootingNLP, cfg, design, sim, p: np.ndarray,
+                  t_max: float) -> tuple[np.ndarray, float]:
+    """Primal start from the simulated stroke of ``design`` on the time grid of ``p``
+    (closing time clipped into [closing_time_min, t_max]): (w0, the stroke's objective)."""
+    o, st = cfg.optimise, cfg.stroke
+    frac = np.minimum(np.cumsum(nlp.grid_of(p)), 1.0)   # node times / T
+    q = np.r_[np.asarray(design, float)[:3], cfg.design.rotary_damper_c]
+    r = sim.run(q, trajectory=True, estimate_error=False)
+    N = nlp.N
+    J0 = None
+    if r.ok and r.trajectory is not None:
+        tr = r.trajectory
+        T = r.closing_time if r.closed else tr["t"][-1]
+        T = float(np.clip(T, max(o.closing_time_min, T_FLOOR), t_max))
+        tn = T * frac
+        X = np.vstack([np.interp(tn, tr["t"], tr["theta"]),
+                       np.minimum(np.interp(tn, tr["t"], tr["theta_dot"]), 0.0)])
+        peak = float(np.max(tr["tip_speed"][tr["t"] <= T + 1e-12]))
+        J0 = objective(o, float(X[1, -1]), peak)
+    else:  # not integrable at this step: a straight line in theta
+        T = t_max
+        X = np.vstack([st.theta0 + frac * (st.theta_closed - st.theta0),
+                       np.full(N, (st.theta_closed - st.theta0) / T)])
+        peak = 1.0
+    X[0, -1] = st.theta_closed
+    J0 = J0 if J0 is not None and np.isfinite(J0) else 1.0
+    return nlp.pack(q, T, X, peak), float(J0)

@@ -1,0 +1,266 @@
+"""Verification: an answer counts when the independent adaptive reference reproduces it.
+
+:func:`verify` re-simulates a design with CVODES on the exact equation of motion
+(:class:`softclose.reference.Reference`) and checks
+
+- every constraint of the problem on that simulation (closed; closing_time within its
+  bounds; holding moment; no rebound: theta' <= 0 on an 800-point CVODES grid over the
+  stroke, theta''(release) <= 0, theta >= theta_closed);
+- with the optimiser's own numbers (``claims``): each metric against the reference's to
+  :func:`softclose.problem.agreement_tolerance`, the objective to
+  :data:`softclose.problem.VERIFY_RTOL` (relative). A number that disagrees is a failed
+  verification naming it.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from ..dynamics import coefficients
+from ..errors import NumericalError
+from ..problem import (CONSTRAINT_TOL, DESIGN_KEYS, METRIC_KEYS, UNITS, VERIFY_RTOL,
+                       agreement_tolerance, objective)
+from ..stroke import StrokeResult
+from .cache import get_model
+
+#: output grid of the verifying reference simulation (s): events and peaks are located by
+#: Newton inside it, to the tolerance; a 2 ms grid changes the metrics by < 1e-9 and takes
+#: 3x longer
+VERIFY_GRID = 0.01
+#: relative slack of the closing-time bounds in verification (the NLP's bound is corrected
+#: for its own discretisation error, so the verified closing time meets it to ~1e-10)
+CLOSING_RTOL = 1e-6
+#: points of the CVODES grid on which theta' <= 0 is checked
+REBOUND_GRID = 800
+
+
+class Checker:
+    """Independent checks of one model: the CVODES reference and theta' on a fine grid."""
+
+    def __init__(self, model):
+        from ..reference import Reference
+        self.model = model
+        self.reference = Reference(model, grid_step=VERIFY_GRID)
+        x, p, tau = ca.SX.sym("x", 2), ca.SX.sym("p", 4), ca.SX.sym("tau")
+        tol = min(1e-10, model.cfg.simulate.reference_tol * 100)
+        grid = list(np.linspace(0.0, 1.0, REBOUND_GRID + 1)[1:])
+        dae = {"x": x, "p": ca.vertcat(p, tau), "ode": tau * model.ode(x, p)}
+        self._grid_flow = ca.integrator("check_grid", "cvodes", dae, 0.0, grid,
+                                        {"abstol": tol, "reltol": tol, "max_num_steps": 200000})
+        th = ca.SX.sym("theta")
+        cf = coefficients(th, model.geo, model.mass, model.sigma)
+        self._l = ca.Function("l", [th], [cf["l"]])
+
+    def theta_dot_max(self, p, T) -> float:
+        """max theta' over (0, T] of the exact equation (CVODES on a fine grid)."""
+        st = self.model.cfg.stroke
+        out = self._grid_flow(x0=[st.theta0, 0.0], p=np.r_[p, T])["xf"]
+        return float(np.max(np.asarray(out)[1]))
+
+    def spring_extremes(self, a: float, b: float) -> tuple[float, float]:
+        """min and max of the spring length over theta in [a, b] (grid + parabola)."""
+        g = np.linspace(a, b, 2001)
+        lv = np.asarray(self._l.map(len(g))(g)).ravel()
+        out = []
+        for sgn in (1, -1):
+            i = int(np.argmin(sgn * lv))
+            v = lv[i]
+            if 0 < i < len(g) - 1:
+                y0, y1, y2 = lv[i - 1], lv[i], lv[i + 1]
+                den = y0 - 2 * y1 + y2
+                if den != 0:
+                    v = y1 - (y2 - y0) ** 2 / (8 * den)
+            out.append(float(v))
+        return out[0], out[1]
+
+
+_CHECKERS: dict = {}
+
+
+def get_checker(cfg) -> Checker:
+    """The Checker of cfg's model (cached with the model)."""
+    model = get_model(cfg)
+    if id(model) not in _CHECKERS:
+        _CHECKERS[id(model)] = Checker(model)
+    return _CHECKERS[id(model)]
+
+
+@dataclass(frozen=True)
+class Verification:
+    """What the adaptive reference says about one design.
+
+    ``stroke``: the reference's stroke (its metrics are the verified ones); ``objective``:
+    J of those metrics; ``constraints``: name -> {value, bound, unit, ok} (names of
+    :data:`softclose.problem.CONSTRAINTS`); ``agreement``: for each number the optimiser
+    claimed, {optimiser, reference, difference, tolerance, ok}; ``error``: why the
+    reference could not simulate the design (then nothing else is known).
+    """
+
+    stroke: StrokeResult | None
+    objective: float | None
+    constraints: dict = field(default_factory=dict)
+    agreement: dict = field(default_factory=dict)
+    method: str = ""
+    time: float = 0.0
+    error: str | None = None
+
+    @property
+    def constraints_ok(self) -> bool:
+        return self.error is None and all(c["ok"] for c in self.constraints.values())
+
+    @property
+    def agreement_ok(self) -> bool:
+        return all(a["ok"] for a in self.agreement.values())
+
+    @property
+    def ok(self) -> bool:
+        """The reference simulated the design, every constraint holds and every claimed
+        number agrees within its tolerance."""
+        return self.error is None and self.constraints_ok and self.agreement_ok
+
+    @property
+    def metrics(self) -> dict | None:
+        """The verified §4 metrics (the reference's)."""
+        return None if self.stroke is None else self.stroke.metrics()
+
+    @property
+    def failures(self) -> tuple[str, ...]:
+        """One phrase per failed check, naming it with its numbers."""
+        if self.error is not None:
+            return (f"the adaptive reference could not simulate the design ({self.error})",)
+        out = []
+        for k, c in self.constraints.items():
+            if not c["ok"]:
+                u = f" {c['unit']}" if c.get("unit") else ""
+                out.append(f"{k} is violated in the reference simulation "
+                           f"({_g(c['value'])}{u} against the bound {_g(c['bound'])}{u})")
+        for k, a in self.agreement.items():
+            if not a["ok"]:
+                u = f" {UNITS.get(k, '')}" if UNITS.get(k) else ""
+                if a["reference"] is None or a["optimiser"] is None or k == "closed":
+                    out.append(f"{k}: the optimiser has {a['optimiser']}, the reference "
+                               f"{a['reference']}")
+                else:
+                    out.append(f"{k}: the optimiser's {_g(a['optimiser'])}{u} differs from the "
+                               f"reference's {_g(a['reference'])}{u} by "
+                               f"{abs(a['difference']):.2e} (allowed {a['tolerance']:.1e})")
+        return tuple(out)
+
+    @property
+    def message(self) -> str:
+        """'' when verified, else why not and what to change."""
+        if self.ok:
+            return ""
+        msg = "not confirmed by the adaptive reference: " + "; ".join(self.failures)
+        if any(not a["ok"] for a in self.agreement.values()):
+            msg += "; raise optimise.nodes or optimise.substeps"
+        return msg
+
+    def to_json(self) -> dict:
+        """Plain values: ok, the reference's metrics (top level) and objective, the
+        differences from the optimiser's numbers with their tolerances, the constraints."""
+        from ..jsonio import jsonable
+        if self.error is not None:
+            return {"ok": False, "error": self.error, "method": self.method,
+                    "failures": list(self.failures)}
+        out = {"ok": self.ok, **self.metrics, "objective": self.objective}
+        diffs = {k: a["difference"] for k, a in self.agreement.items()
+                 if k not in ("closed", "objective") and a["difference"] is not None}
+        if self.agreement:
+            out["differences"] = diffs
+            out["tolerances"] = {k: a["tolerance"] for k, a in self.agreement.items()
+                                 if k not in ("closed", "objective")}
+        obj = self.agreement.get("objective")
+        if obj is not None and obj["difference"] is not None:
+            out["objective_difference"] = obj["difference"]
+            out["objective_relative_difference"] = (obj["difference"] / abs(self.objective)
+                                                    if self.objective else math.inf)
+            out["objective_ok"] = obj["ok"]
+        out["agreement_ok"] = self.agreement_ok
+        out["constraints"] = self.constraints
+        out["constraints_ok"] = self.constraints_ok
+        out["failures"] = list(self.failures)
+        out["method"] = self.method
+        out["time"] = self.time
+        return jsonable(out)
+
+
+def _g(v) -> str:
+    return f"{v:.9g}" if isinstance(v, float) else str(v)
+
+
+def verify(cfg, design: dict, claims: dict | None = None,
+           claimed_objective: float | None = None) -> Verification:
+    """Re-simulate ``design`` with the adaptive reference and check it (module docstring).
+
+    ``claims``: the optimiser's own §4 metrics; ``claimed_objective``: its J. Never raises
+    for a design the reference cannot simulate: ``error`` says why.
+    """
+    o, st = cfg.optimise, cfg.stroke
+    chk = get_checker(cfg)
+    model = chk.model
+    p = np.array([design[k] for k in DESIGN_KEYS] + [cfg.design.rotary_damper_c], float)
+    method = (f"CVODES (adaptive BDF) on the exact equation, tolerance "
+              f"{chk.reference.tol:g}")
+    t0 = time.perf_counter()
+    try:
+        ref = chk.reference.simulate(p)
+    except NumericalError as exc:
+        return Verification(None, None, method=method, time=time.perf_counter() - t0,
+                            error=str(exc))
+    J = objective(o, ref.impact_theta_dot, ref.peak_tip_speed)
+    T = ref.closing_time
+    cons = {"closed": {"value": bool(ref.closed), "bound": True, "unit": "",
+                       "ok": bool(ref.closed)}}
+    if T is not None:
+        cons["closing_time_max"] = {"value": T, "bound": o.closing_time_max, "unit": "s",
+                                    "ok": T <= o.closing_time_max * (1 + CLOSING_RTOL)}
+        cons["closing_time_min"] = {"value": T, "bound": o.closing_time_min, "unit": "s",
+                                    "ok": T >= o.closing_time_min * (1 - CLOSING_RTOL)}
+    # no rebound: theta' <= 0 throughout (from the release: theta''(0) <= 0), and the lid
+    # never passes the rim
+    release = float(model.ode(ca.vertcat(st.theta0, 0.0), p)[1])
+    thd_max = chk.theta_dot_max(p, T if T is not None else st.t_max)
+    th_min = float(ref.theta_min)
+    cons["no_rebound"] = {"value": max(thd_max, min(release, 0.0)), "bound": 0.0,
+                          "unit": "rad/s", "theta_ddot_release": release, "theta_min": th_min,
+                          "ok": thd_max <= CONSTRAINT_TOL and release <= 0.0
+                          and th_min >= st.theta_closed - 1e-12}
+    hm = ref.holding_moment
+    cons["holding_moment_min"] = {"value": hm, "bound": o.holding_moment_min, "unit": "N m",
+                                  "ok": hm >= o.holding_moment_min - CONSTRAINT_TOL}
+    agreement = {}
+    if claims is not None:
+        for k in METRIC_KEYS:
+            a, b = claims.get(k), getattr(ref, k)
+            if k == "closed":
+                agreement[k] = {"optimiser": a, "reference": b, "difference": None,
+                                "tolerance": None, "ok": bool(a) == bool(b)}
+            elif a is None or b is None:
+                agreement[k] = {"optimiser": a, "reference": b, "difference": None,
+                                "tolerance": None, "ok": a is None and b is None}
+            else:
+                tol = agreement_tolerance(k, b)
+                agreement[k] = {"optimiser": a, "reference": b, "difference": a - b,
+                                "tolerance": tol, "ok": abs(a - b) <= tol}
+    if claimed_objective is not None:
+        if J is None:
+            agreement["objective"] = {"optimiser": claimed_objective, "reference": None,
+                                      "difference": None, "tolerance": None, "ok": False}
+        else:
+            tol = VERIFY_RTOL * abs(J)
+            agreement["objective"] = {"optimiser": claimed_objective, "reference": J,
+                                      "difference": claimed_objective - J, "tolerance": tol,
+                                      "ok": abs(claimed_objective - J) <= tol}
+    return Verification(ref, J, cons, agreement, method, time.perf_counter() - t0)
+
+
+def verify_design(cfg, design: dict, metrics: dict | None = None,
+                  objective: float | None = None) -> dict:
+    """:func:`verify` as plain JSON values (``Verification.to_json()``)."""
+    return verify(cfg, design, metrics, objective).to_json()
