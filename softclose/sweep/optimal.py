@@ -1,0 +1,463 @@
+"""An optimal design at every point of a grid over non-design config keys.
+
+>>> from softclose import default_config
+>>> from softclose.sweep.optimal import optimise_grid
+>>> r = optimise_grid(default_config(), {"mass.lid": [0.4, 0.5, 0.6]})
+>>> r.to_frame()       # mass.lid, spring_k, spring_rest_length, damper_c, objective, ...
+>>> r.plot()           # the optimal design and objective over the grid
+
+One spring and one damper per lid of a product range: the grid spans keys the optimiser does
+not pick (``mass.lid``, ``geometry.lid_length``, ``optimise.closing_time_max``, ...); the
+design keys (:data:`softclose.problem.DESIGN_KEYS`) are refused -- the optimiser picks them.
+
+How the points are solved. The grid's points are numbered in C order (the last key varies
+fastest) and cut into *segments*: runs of at most :data:`SEGMENT` neighbouring points along
+the last key. The first point of a segment is solved by the multistart optimiser
+(:func:`softclose.optimise.optimise`, ``optimise.starts`` starts from a coarse sweep of
+the design box); every next point starts from its neighbour's optimum (its design and
+states, the continuation of :func:`softclose.optimise.front`, with the best point of a
+coarse sweep of its own problem solved too when that beats the warm answer), and falls back
+to the multistart optimiser when the warm solve does not give a verified answer. Every
+point is polished and verified by the adaptive reference like ``softclose optimise``'s
+answer; ``success`` says so per point.
+
+A segment is a pure function of plain values (the config as a dict, the keys, the points:
+:func:`solve_segment`), so the same segments run here one after the other or as Dask tasks
+on worker processes with one thread each (``dask="local:N"`` or a scheduler address; Ipopt
+and MUMPS are not thread-safe): the table is the same either way, whatever the number of
+workers, because the cut into segments depends on the grid only.
+
+``robust=True`` designs each point for its ``[tolerance]`` box instead
+(:func:`softclose.robust.optimise_robust`, solved cold at every point) and adds its yield.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+import types
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from ..errors import ConfigError, SoftcloseError
+from ..problem import DESIGN_KEYS, METRIC_KEYS
+
+#: most neighbouring points (along the last key) solved one from the other in one task
+SEGMENT = 8
+#: most points of one grid (each is an optimisation of a few seconds)
+MAX_POINTS = 10_000
+#: the table's columns after the grid keys
+DESIGN_COLUMNS = DESIGN_KEYS + ("objective",) + METRIC_KEYS + ("success",)
+EXTRA_COLUMNS = ("verified_objective", "objective_relative_difference", "active", "start",
+                 "iterations", "seconds", "message")
+ROBUST_COLUMNS = ("yield", "yield_ci_low", "yield_ci_high")
+REFUSED = "--optimise picks the design; sweep only non-design keys"
+
+
+# -- the grid ------------------------------------------------------------------------------
+def check_grid(cfg, axes) -> Any:
+    """The :class:`softclose.sweep.space.Grid` of ``axes`` (a dict ``{key: values}`` or a
+    Grid), refusing design keys and oversized grids with a one-line ConfigError."""
+    from .space import Grid, make_grid
+    grid = axes if isinstance(axes, Grid) else make_grid(axes, cfg, "axes")
+    for key in grid.keys:
+        if key.startswith("design.") and key.split(".", 1)[1] in DESIGN_KEYS:
+            raise ConfigError(f"--grid {key}: {REFUSED} (e.g. mass.lid, geometry.lid_length)")
+    if grid.n > MAX_POINTS:
+        raise ConfigError(f"--grid: {grid.n} points is more than {MAX_POINTS} optimisations; "
+                          "use fewer points")
+    return grid
+
+
+def segments(shape: tuple[int, ...], length: int = SEGMENT) -> list[np.ndarray]:
+    """The ids of each segment: runs of at most ``length`` neighbours along the last axis,
+    each line cut into near-equal pieces. Depends on the grid's shape only."""
+    n = math.prod(shape)
+    if n == 0:
+        return []
+    last = shape[-1] if shape else 1
+    pieces = -(-last // length)
+    out = []
+    for start in range(0, n, last):
+        out += [a for a in np.array_split(np.arange(start, start + last), pieces) if a.size]
+    return out
+
+
+# -- one segment (runs anywhere: plain values in, plain values out) -------------------------
+def solve_segment(cfg_dict: dict, keys: list[str], ids, X, robust: bool = False) -> list[dict]:
+    """The optimum at each point ``X[i]`` (values of ``keys``) of one segment, each from its
+    predecessor's (see the module docstring). ``cfg_dict`` is the config as plain values
+    (``cfg.raw``). Returns one row dict per point (plain values): design, objective, the
+    verified metrics, success, verification, how it was started, time and message."""
+    with _SOLVING:
+        return _solve_segment(cfg_dict, keys, ids, X, robust)
+
+
+#: one optimisation at a time per process: Ipopt and MUMPS are not thread-safe, and a Dask
+#: worker with several threads would otherwise run segments side by side
+_SOLVING = threading.Lock()
+
+
+def _solve_segment(cfg_dict: dict, keys: list[str], ids, X, robust: bool) -> list[dict]:
+    from ..config import from_dict
+    base = from_dict(cfg_dict)
+    keys = list(keys)
+    X = np.asarray(X, float).reshape(len(ids), len(keys))
+    rows, prev = [], None
+    for i, x in zip(np.asarray(ids, np.int64), X):
+        values = {k: float(v) for k, v in zip(keys, x)}
+        t0 = time.perf_counter()
+        try:
+            cfg = base.update(values)
+            if robust:
+                res, start = _robust(cfg), "robust (cold)"
+            else:
+                res, start = _optimum(cfg, prev)
+        except SoftcloseError as exc:
+            row = _row(int(i), values, None, "", str(exc).splitlines()[0])
+            row["seconds"] = time.perf_counter() - t0
+            rows.append(row)
+            prev = None
+            continue
+        if start.startswith("warm"):
+            start = f"warm from id {rows[-1]['id']}"
+        row = _row(int(i), values, res, start, res.message or "")
+        row["seconds"] = time.perf_counter() - t0
+        rows.append(row)
+        prev = res if (not robust and getattr(res, "run", None) is not None
+                       and res.design is not None) else None
+    return rows
+
+
+def _optimum(cfg, prev) -> tuple[Any, str]:
+    """cfg's verified optimum: warm from ``prev`` (a neighbour's result) when there is one,
+    with the multistart optimiser as the fallback; (result, how it was started)."""
+    from ..optimise import optimise
+    if prev is not None:
+        from ..optimise.pareto import _continue as continue_from
+        warm = continue_from(cfg, prev)
+        if warm.success:
+            return warm, "warm"
+        cold = optimise(cfg, verify=True)
+        if cold.success or warm.design is None:
+            return cold, "multistart (the warm start failed)"
+        return warm, "warm"
+    return optimise(cfg, verify=True), "multistart"
+
+
+def _robust(cfg):
+    from ..robust import optimise_robust
+    return optimise_robust(cfg, verify=True)
+
+
+def _row(i: int, values: dict, res, start: str, message: str) -> dict:
+    row: dict[str, Any] = {"id": i, **values}
+    design = getattr(res, "design", None) or {}
+    metrics = getattr(res, "metrics", None) or {}
+    for k in DESIGN_KEYS:
+        row[k] = _num(design.get(k))
+    row["objective"] = _num(getattr(res, "objective", None))
+    for k in METRIC_KEYS:
+        v = metrics.get(k)
+        row[k] = bool(v) if k == "closed" else _num(v)
+    row["success"] = bool(getattr(res, "success", False))
+    ver = getattr(res, "verification", None)
+    if ver is not None and hasattr(ver, "to_json"):
+        ver = ver.to_json()
+    ver = ver or {}
+    row["verified_objective"] = _num(ver.get("objective"))
+    row["objective_relative_difference"] = _num(ver.get("objective_relative_difference"))
+    row["active"] = ", ".join(f"{a.name} ({a.bound})" for a in getattr(res, "active", ()) or ())
+    row["start"] = start
+    row["iterations"] = int(getattr(res, "iterations", 0) or 0)
+    row["message"] = message
+    if hasattr(res, "yield_result"):
+        y = res.yield_result
+        ci = getattr(y, "yield_ci", None) or (None, None)
+        row["yield"] = _num(getattr(y, "yield_", None))
+        row["yield_ci_low"], row["yield_ci_high"] = _num(ci[0]), _num(ci[1])
+    return row
+
+
+def _num(v) -> float:
+    try:
+        return float(v) if v is not None else math.nan
+    except (TypeError, ValueError):
+        return math.nan
+
+
+# -- the whole grid ------------------------------------------------------------------------
+def optimise_grid(cfg, axes, *, dask=None, robust: bool = False, progress: bool = False,
+                  segment: int = SEGMENT) -> "OptimalGridResult":
+    """The verified optimal design at every point of the grid ``axes`` = ``{config key:
+    values}`` of non-design keys (a design key is a ConfigError).
+
+    ``dask``: None (here, one segment after the other), ``"local:N"`` (N worker processes)
+    or a Dask scheduler address; the table is the same either way. ``robust=True``: the
+    robust design of each point (:func:`softclose.robust.optimise_robust`). ``progress``
+    draws a progress line on a terminal. ``segment``: most neighbours solved one from the
+    other in one task (:func:`segments`). Ctrl-C returns the points finished so far
+    (``interrupted``). A point that cannot be solved is reported in the table
+    (``success`` False, ``message``), never raised.
+    """
+    from ..progress import Progress
+    grid = check_grid(cfg, axes)
+    if isinstance(segment, bool) or not isinstance(segment, (int, np.integer)) or segment < 1:
+        raise ConfigError(f"segment: expected a whole number >= 1, got {segment!r}")
+    keys = list(grid.keys)
+    segs = segments(grid.shape, int(segment))
+    points = grid.points(np.arange(grid.n))
+    tasks = ((ids, (cfg.raw, keys, ids, points[ids], bool(robust))) for ids in segs)
+    rows: dict[int, dict] = {}
+    t0 = time.perf_counter()
+    where = "local"
+    interrupted = False
+    bar = Progress(grid.n, "optimal grid", enabled=progress, unit="")
+    try:
+        if dask is None:
+            for ids, args in tasks:
+                bar.update(len(rows), f"solving ids {ids[0]}..{ids[-1]}", force=True)
+                for r in solve_segment(*args):
+                    rows[r["id"]] = r
+                bar.update(len(rows), force=True)
+        else:
+            from .distributed import connect, map_tasks
+            where = dask if isinstance(dask, str) else "client"
+            with connect(dask) as client:
+                for _, out in map_tasks(client, solve_segment, tasks, label="segment"):
+                    for r in out:
+                        rows.setdefault(r["id"], r)
+                    bar.update(len(rows), force=True)
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        bar.close()
+    return OptimalGridResult.from_rows(grid, rows, time.perf_counter() - t0, where,
+                                       bool(robust), interrupted)
+
+
+@dataclass(frozen=True, eq=False)
+class OptimalGridResult:
+    """The optimal design over a grid of non-design keys: one row per grid point.
+
+    ``columns`` (read-only numpy arrays, rows in id order = C order over ``keys``): ``id``,
+    the grid keys, spring_k, spring_rest_length, damper_c, objective (the optimiser's J),
+    the verified metrics of :data:`softclose.problem.METRIC_KEYS`, success (optimal and
+    confirmed by the adaptive reference), verified_objective (the reference's J) and
+    objective_relative_difference, active (the bounds and constraints that limit the optimum),
+    start (multistart or warm from which id), iterations,
+    seconds, message (why a point failed); with ``robust``, its yield and interval too.
+    A point not computed (Ctrl-C) has success False and message "not computed".
+    """
+
+    keys: tuple[str, ...]
+    axes: tuple[np.ndarray, ...]
+    columns: Mapping[str, np.ndarray] = field(repr=False)
+    seconds: float = 0.0
+    where: str = "local"
+    robust: bool = False
+    interrupted: bool = False
+
+    def __post_init__(self):
+        cols = {}
+        for k, v in self.columns.items():
+            v = np.array(v)
+            v.setflags(write=False)
+            cols[k] = v
+        object.__setattr__(self, "columns", types.MappingProxyType(cols))
+        axes = []
+        for a in self.axes:
+            a = np.array(a, float)
+            a.setflags(write=False)
+            axes.append(a)
+        object.__setattr__(self, "axes", tuple(axes))
+        object.__setattr__(self, "keys", tuple(self.keys))
+
+    @classmethod
+    def from_rows(cls, grid, rows: dict, seconds: float, where: str, robust: bool,
+                  interrupted: bool) -> "OptimalGridResult":
+        keys = list(grid.keys)
+        X = grid.points(np.arange(grid.n))
+        names = cls.column_names(keys, robust)
+        cols: dict[str, list] = {k: [] for k in names}
+        for i in range(grid.n):
+            r = rows.get(i)
+            if r is None:
+                r = _row(i, dict(zip(keys, map(float, X[i]))), None, "", "not computed")
+                r["seconds"] = math.nan
+            for k in names:
+                cols[k].append(r.get(k, math.nan))
+        out = {}
+        for k, v in cols.items():
+            if k == "id":
+                out[k] = np.array(v, np.int64)
+            elif k in ("success", "closed"):
+                out[k] = np.array(v, bool)
+            elif k in ("active", "start", "message"):
+                out[k] = np.array(v, dtype=object)
+            elif k == "iterations":
+                out[k] = np.array(v, np.int64)
+            else:
+                out[k] = np.array(v, float)
+        return cls(tuple(keys), tuple(grid.values), out, seconds, where, robust,
+                   interrupted or len(rows) < grid.n)
+
+    @staticmethod
+    def column_names(keys, robust: bool = False) -> list[str]:
+        return ["id", *keys, *DESIGN_COLUMNS, *EXTRA_COLUMNS,
+                *(ROBUST_COLUMNS if robust else ())]
+
+    # -- what it is ----------------------------------------------------------------------
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(len(a) for a in self.axes)
+
+    @property
+    def points(self) -> int:
+        return len(self.columns["id"])
+
+    @property
+    def verified(self) -> int:
+        """Points whose optimum was found and confirmed by the adaptive reference."""
+        return int(self.columns["success"].sum())
+
+    @property
+    def success(self) -> bool:
+        """Every point optimal and verified (and nothing interrupted)."""
+        return self.verified == self.points and not self.interrupted
+
+    @property
+    def message(self) -> str:
+        if self.success:
+            return ""
+        bad = np.nonzero(~self.columns["success"])[0]
+        first = int(bad[0])
+        where = ", ".join(f"{k} = {self.columns[k][first]:.6g}" for k in self.keys)
+        more = f" (and {len(bad) - 1} more)" if len(bad) > 1 else ""
+        return (f"{len(bad)} of {self.points} points have no verified optimum; first at "
+                f"{where}: {self.columns['message'][first]}{more}")
+
+    def row(self, i: int) -> dict:
+        """The row of grid point ``i`` (plain values; NaN as None)."""
+        from ..jsonio import jsonable
+        return jsonable({k: v[i] for k, v in self.columns.items()})
+
+    def grid(self, name: str) -> np.ndarray:
+        """Column ``name`` shaped as the grid (axes in the order of ``keys``)."""
+        return np.reshape(self.columns[name], self.shape)
+
+    # -- forms -----------------------------------------------------------------------------
+    def to_frame(self):
+        """One row per grid point (pandas DataFrame): the grid keys by config key, then
+        spring_k, spring_rest_length, damper_c, objective, the metrics, success, then the
+        verification and solve columns."""
+        import pandas as pd
+        names = self.column_names(self.keys, self.robust)[1:]
+        return pd.DataFrame({k: self.columns[k] for k in names})
+
+    def to_json(self) -> dict:
+        from ..jsonio import jsonable
+        return jsonable({
+            "success": self.success, "message": self.message, "keys": list(self.keys),
+            "axes": {k: a for k, a in zip(self.keys, self.axes)}, "points": self.points,
+            "verified": self.verified, "robust": self.robust, "where": self.where,
+            "seconds": self.seconds, "interrupted": self.interrupted,
+            "rows": [self.row(i) for i in range(self.points)]})
+
+    def plot(self):
+        """Maps (two or more keys) or profiles (one key) of the optimal spring_k,
+        spring_rest_length, damper_c and objective: a matplotlib Figure."""
+        from ..figures.sweep_optimal import plot_optimal_grid
+        return plot_optimal_grid(self)
+
+
+# -- files and the command line ------------------------------------------------------------
+TABLE = "optimal"
+FIGURE = "optimal.png"
+
+
+def write_table(res: OptimalGridResult, out, fmt: str = "csv") -> Path:
+    """``optimal.csv`` (empty cells for NaN, true/false) or ``optimal.parquet`` in ``out``:
+    the columns of :meth:`OptimalGridResult.to_frame`."""
+    import pyarrow as pa
+    names = res.column_names(res.keys, res.robust)[1:]
+    table = pa.table({k: pa.array(res.columns[k].tolist() if res.columns[k].dtype == object
+                                  else res.columns[k], from_pandas=True) for k in names})
+    out = Path(out)
+    path = out / f"{TABLE}.{'parquet' if fmt == 'parquet' else 'csv'}"
+    tmp = path.with_name(f".{path.name}.tmp")
+    if fmt == "parquet":
+        import pyarrow.parquet as pq
+        pq.write_table(table, tmp)
+    else:
+        import pyarrow.csv as pcsv
+        pcsv.write_csv(table, tmp, pcsv.WriteOptions(quoting_style="needed"))
+    tmp.replace(path)
+    return path
+
+
+def format_text(res: OptimalGridResult) -> str:
+    """The table as text: one line per point (up to 40 points), else the ranges."""
+    keys = list(res.keys)
+    head = (f"optimal {'robust ' if res.robust else ''}design over {', '.join(keys)}: "
+            f"{res.verified} of {res.points} points verified, {res.seconds:.1f} s "
+            f"({res.where})")
+    lines = [head]
+    c = res.columns
+    if res.points <= 40:
+        w = [max(len(k), 9) for k in keys]
+        lines.append("  " + "  ".join(f"{k:>{n}}" for k, n in zip(keys, w))
+                     + f"  {'spring_k':>9}  {'rest_len':>8}  {'damper_c':>9}  {'objective':>9}"
+                       "  verified  start")
+        for i in range(res.points):
+            vals = "  ".join(f"{c[k][i]:>{n}.5g}" for k, n in zip(keys, w))
+            if np.isfinite(c["objective"][i]):
+                des = (f"{c['spring_k'][i]:>9.6g}  {c['spring_rest_length'][i]:>8.5g}  "
+                       f"{c['damper_c'][i]:>9.6g}  {c['objective'][i]:>9.6g}")
+            else:
+                des = f"{'—':>9}  {'—':>8}  {'—':>9}  {'—':>9}"
+            lines.append(f"  {vals}  {des}  {'yes' if c['success'][i] else 'NO':>8}  "
+                         f"{c['start'][i]}")
+    else:
+        ok = c["success"]
+        for k, u in (("spring_k", "N/m"), ("spring_rest_length", "m"),
+                     ("damper_c", "N s/m"), ("objective", "")):
+            v = c[k][ok]
+            if v.size:
+                lines.append(f"  {k}: {v.min():.6g} .. {v.max():.6g} {u}".rstrip())
+    if not res.success and not res.interrupted:
+        lines.append(f"  {res.message}")
+    return "\n".join(lines)
+
+
+def command(cfg, args, space, out):
+    """``softclose sweep --optimise --grid KEY=... [--dask ADDRESS|local:N] [--robust]
+    --out DIR``: the table (``optimal.csv`` or, with ``--format parquet``,
+    ``optimal.parquet``) and the maps (``optimal.png``) in DIR. Exit 0 when every point is
+    verified, 3 when some point has no verified optimum (the table says which and why),
+    130 after Ctrl-C (the finished points are written)."""
+    from ..cli.common import Outcome, interactive, wrote
+    if getattr(args, "resume", None):
+        raise ConfigError("--resume: not with --optimise (an optimal grid is not resumed; "
+                          "run it again)")
+    if getattr(space, "kind", "grid") != "grid":
+        raise ConfigError("--optimise: needs a grid of non-design keys (--grid KEY=...), "
+                          "not --sample")
+    robust = bool(getattr(args, "robust", False))
+    res = optimise_grid(cfg, space, dask=getattr(args, "dask", None), robust=robust,
+                        progress=interactive(args))
+    files = [write_table(res, out, getattr(args, "format", None) or "csv")]
+    if not res.interrupted and res.verified:
+        from ..figures import save
+        files.append(save(res.plot(), Path(out) / FIGURE))
+    payload = res.to_json()
+    payload["files"] = [str(f) for f in files]
+    code = 130 if res.interrupted else 0 if res.success else 3
+    text = format_text(res) + wrote(files)
+    if res.interrupted:
+        text += "\n  interrupted: the finished points are in the table"
+    return Outcome(payload, text, code, tuple(files), error=res.message if code == 3 else None)
