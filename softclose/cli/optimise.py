@@ -52,6 +52,14 @@ def run_optimise(cfg, args) -> Outcome:
 
 
 def _run_robust(cfg, args, out) -> Outcome:
+    """``optimise --robust``: the robust command's own outcome (text, files) when it is
+    installed; else the robust result printed as JSON."""
+    try:
+        from .robust import robust_outcome
+    except ImportError:
+        robust_outcome = None
+    if robust_outcome is not None:
+        return robust_outcome(cfg, args)
     from ..jsonio import dumps
     from ..optimise import optimise
     res = optimise(cfg, robust=True, progress=interactive(args))
@@ -63,7 +71,7 @@ def _run_robust(cfg, args, out) -> Outcome:
         text = dumps(payload, indent=1)
     files = []
     if out is not None:
-        path = out / "optimise_robust.json"
+        path = out / "robust.json"
         path.write_text(dumps(payload, indent=1))
         files.append(path)
         payload["files"] = [str(path)]
