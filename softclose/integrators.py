@@ -5,8 +5,9 @@ A method is a Butcher tableau (``A``, ``b``, ``c``) plus a ``kind`` and its stat
 
 - the C kernel (:mod:`softclose.native`), which integrates whole strokes for batches of
   designs on the tabulated coefficients of the equation of motion;
-- :func:`casadi_step`, a CasADi Function of one step of the exact equation of motion,
-  which the optimiser puts inside its shooting intervals.
+- :func:`casadi_step`, a CasADi Function of one step of the exact equation of motion
+  (tests compare it with the kernel's step; the optimiser has its own RK4 sub-step on
+  Chebyshev series of the geometry, :mod:`softclose.optimise.nlp`).
 
 Kinds: ``explicit`` (A strictly lower triangular), ``implicit`` (full A, solved by
 Newton's method), ``symplectic_euler`` (Euler-Cromer: velocity first, then position with
