@@ -95,9 +95,10 @@ def connect(dask) -> Iterator[Any]:
         return
     where, n = parse_dask(dask)
     if where == "local":
-        cluster = distributed.LocalCluster(
-            n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-            silence_logs=logging.ERROR)
+        with _workers_ignore_ctrl_c():
+            cluster = distributed.LocalCluster(
+                n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                silence_logs=logging.ERROR)
         try:
             client = distributed.Client(cluster)
             try:
@@ -118,6 +119,24 @@ def connect(dask) -> Iterator[Any]:
         yield client
     finally:
         client.close()
+
+
+@contextlib.contextmanager
+def _workers_ignore_ctrl_c():
+    """Start local worker processes with SIGINT ignored (they inherit it): Ctrl-C in a
+    terminal reaches the whole process group, and only this process should act on it (it
+    cancels the tasks and closes the cluster); otherwise every worker prints a traceback.
+    A Ctrl-C during the second or so of start-up is therefore not seen."""
+    import signal
+    import threading
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
 
 
 def _check_workers(client, where: str) -> None:

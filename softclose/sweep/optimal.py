@@ -209,7 +209,8 @@ def optimise_grid(cfg, axes, *, dask=None, robust: bool = False, progress: bool 
     if isinstance(segment, bool) or not isinstance(segment, (int, np.integer)) or segment < 1:
         raise ConfigError(f"segment: expected a whole number >= 1, got {segment!r}")
     keys = list(grid.keys)
-    segs = segments(grid.shape, int(segment))
+    # robust designs start cold at every point: one point per task parallelises them fully
+    segs = segments(grid.shape, 1 if robust else int(segment))
     points = grid.points(np.arange(grid.n))
     tasks = ((ids, (cfg.raw, keys, ids, points[ids], bool(robust))) for ids in segs)
     rows: dict[int, dict] = {}
