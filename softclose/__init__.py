@@ -19,11 +19,12 @@ Lower layers for scripts that need them: :class:`LidModel`, :class:`Simulator`,
 from .config import Config, default_config, load_config
 from .errors import ConfigError, NumericalError, SoftcloseError
 from .model import LidModel
+from .optimise import front, optimise
 from .reference import Reference
 from .simulate import Simulator, simulate
 from .stroke import StrokeResult, StrokeStatus
 
-__all__ = ["simulate", "load_config", "default_config", "Config", "StrokeResult",
+__all__ = ["simulate", "optimise", "front", "load_config", "default_config", "Config", "StrokeResult",
            "StrokeStatus", "ConfigError", "NumericalError", "SoftcloseError", "LidModel",
            "Reference", "Simulator"]
 __version__ = "0.2.0"
