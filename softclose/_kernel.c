@@ -12,74 +12,152 @@
  * their accuracy is that of the method itself; the same for the peak tip speed and the
  * lowest angle of a stroke that turns back. Nothing is integrated past the event.
  *
+ * A design row is (k, l0, c, c_rot, e_tol[, m_lid]): m_lid (kg, NaN = the table's own
+ * mass m0) selects the lid mass. M, dM, Vg and dVg are affine in the lid's mass, so the
+ * coefficients of a row are c(m0) + (m_lid - m0) dc/dm, with dc/dm from a second table
+ * (four coefficients per cell); a row at m0 never touches it (bit-identical results).
+ *
+ * EARLY EXIT ("skip what the scene doesn't need -- exactly"). With V = Vg + k (l - l0)^2 / 2
+ * and E = M th'^2 / 2 + V, the equation gives dE/dt = -(c dd + c_rot) th'^2 <= 0. Hence, for
+ * every later time t' >= t of the exact flow:
+ *   (1) V(th(t')) <= E(t') <= E(t), and th is continuous, so th(t') stays in the connected
+ *       component R(t) of {th : V(th) <= E(t)} that contains th(t);
+ *   (2) |v_T| = tau |th'| = tau sqrt(2 (E - V) / M) <= G(t) = max over R(t) of
+ *       tau sqrt(2 (E(t) - V) / M).
+ * Let [th_min, th_max] be the range visited so far (th_min > th_closed: not closed).
+ * If V(th_min) > E(t) and V(th_max) > E(t), R(t) lies strictly inside (th_min, th_max)
+ * (it cannot contain either end and contains th(t)): the lid never reaches th_closed
+ * (below th_min), th_min and th_max never change again, so neither do the spring-length
+ * extremes (l over [th_min, th_max]); if moreover G(t) <= the peak recorded so far, the
+ * peak tip speed is final. Every SPEC metric of the stroke is then what integrating to
+ * t_max would give, and the stroke stops (status "not closed").
+ * The numbers come from a fixed-step method, whose energy is not exactly non-increasing (a
+ * step may gain a little): the rule is applied to E_hat = E_n + delta with
+ * delta = 2 (steps left) g + 1e-12 E_scale, g the largest energy gain of one step seen so far
+ * (the method's own error, visible where the dampers do not mask it, as at the turning
+ * points) and E_scale the size of the energy's terms (its rounding): it assumes no later
+ * step gains more than twice the worst one so far (the motion only decays); the tests check
+ * that the rest of every exited stroke stays below E_hat. An undamped design (c = c_rot = 0)
+ * keeps its energy: the rule is not applied (its extremes and peak over [0, t_max] depend
+ * on the method's drift) and it runs to t_max.
+ * A lid that creeps towards an equilibrium without turning back keeps moving th_min (and
+ * a spring extreme) until t_max: it is integrated to the end. A second exit: when a step
+ * returns its own start state bit for bit, the stroke is at rest at a fixed point of the
+ * step map and nothing changes any more (but for the shorter last step to t_max, which
+ * could move it by a rounding error).
+ * Not final (they cover [0, stop time]): steps, energy_rise, theta_dot_max.
+ * Why the lid stays open is recorded as stop_reason (1: it is trapped behind a barrier, a
+ * maximum of V between it and the rim, stop_theta = the barrier top; 2: the potential
+ * rises all the way from its well to the rim -- it is held open at the stable equilibrium
+ * stop_theta, the bottom of the well); the same classification is made at t_max for a
+ * stroke that ran to the end without closing. stop_time is when integration stopped.
+ *
+ * SPEED. Several strokes ("lanes") advance in lockstep; with AVX2 (chosen at run time) the
+ * lanes are SIMD vectors, and every coefficient of a cell comes from one Horner evaluation
+ * of its row of pieces -- the same IEEE operations, in the same order, as the scalar code,
+ * so both paths give the same numbers bit for bit (no FMA contraction: none is enabled).
+ *
  * No Python API is used by the solver; the module init only lets setuptools build it.
  */
 #include <Python.h>
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
+#define KERNEL_ABI 2 /* bumped when the exported signatures or outputs change */
 #define NC 8 /* M, dM, Vg, dVg, l, dl, dd, tau */
 enum { C_M, C_DM, C_VG, C_DVG, C_L, C_DL, C_DD, C_TAU };
+#define NMASS 4 /* M, dM, Vg, dVg: the coefficients that depend on the lid's mass */
 #define SMAX 4
 
 /* outputs per design */
 enum { O_STATUS, O_TIME, O_THD, O_TIP, O_PEAK, O_LMIN, O_LMAX, O_NSTEP, O_EDRIFT, O_THMIN,
        O_THDMAX, /* max of theta' over the nodes after release (> 0: the lid moved up) */
        O_THMAX,  /* highest angle of the stroke (above theta0 when a spring pushes it open) */
+       O_REASON, /* why it does not close: 0 undecided/closed, 1 barrier, 2 held open */
+       O_STHETA, /* the barrier top (1) or the equilibrium (2), rad */
+       O_STIME,  /* time at which integration stopped (event, early exit, t_max, failure) */
        NOUT };
 /* status codes */
 enum { S_CLOSED = 0, S_OPEN = 1, S_UNSTABLE = 2, S_RANGE = 3, S_NONFINITE = 4, S_NEWTON = 5 };
+/* stop reasons */
+enum { R_NONE = 0, R_BARRIER = 1, R_HELD = 2 };
 
+/* The table, power-major: cell i holds 4 rows (powers s^0..s^3) of the NC coefficients. */
 typedef struct {
-    const double *cc; /* ncell * NC * 4 cubic coefficients in the local variable s in [0, 1] */
+    const double *cc;  /* ncell * 4 * NC cubic coefficients in the local variable s in [0, 1] */
+    const double *dcc; /* the same layout: their derivative w.r.t. the lid mass (0 for l, dl,
+                        * dd, tau), or NULL */
+    const double *rng; /* ncell * NRNG: ranges of some pieces over each whole cell (or NULL) */
     int ncell;
-    double lo, h, inv_h;
+    double lo, h, inv_h, m0;
 } Table;
+/* per cell, at the table's mass: ranges over s in [0, 1] of tau, M, Vg, l, dVg, dl (lo, hi
+ * each, widened for rounding), then Vg, l, tau, M at s = 1/2, then 1 if l' may vanish in
+ * the cell (a root of its derivative within 1e-9 of [0, 1]), else 0 */
+enum { R_TAU = 0, R_M = 2, R_VG = 4, R_L = 6, R_DVG = 8, R_DL = 10, R_MID = 12, R_LCRIT = 16,
+       NRNG = 18 };
+#define CQ(base, i, e, j) ((base)[((size_t)(i) * 4 + (e)) * NC + (j)])
+
+/* lanes of the stroke loop are advanced as NG SIMD vectors of VW (see the stroke loop) */
+#ifndef NG
+#define NG 2
+#endif
+#define VW 4
+#define LANES (NG * VW)
+typedef double v4 __attribute__((vector_size(VW * sizeof(double))));
+typedef long long v4l __attribute__((vector_size(VW * sizeof(long long))));
+typedef int v4i __attribute__((vector_size(VW * sizeof(int))));
+#define ALWAYS static inline __attribute__((always_inline))
+#define MIN2(a, b) ((a) < (b) ? (a) : (b))
+#define MAX2(a, b) ((a) > (b) ? (a) : (b))
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi" /* v4 never crosses a call: always inlined */
+#endif
 
 typedef struct {
     int kind, s;
     double A[SMAX][SMAX], b[SMAX], c[SMAX];
 } Method;
 
-typedef struct { double k, l0, c, cr; } Par;
+/* dm = m_lid - m0: 0 for a row at the table's mass */
+typedef struct { double k, l0, c, cr, dm; } Par;
 
-/* the table cell holding th and the local variable s in [0, 1]; NULL outside the table */
-static inline const double *cell(const Table *T, double th, double *s)
+/* index of the table cell holding th and the local variable s in [0, 1]; -1 outside */
+static inline int cell_index(const Table *T, double th, double *s)
 {
     double x = (th - T->lo) * T->inv_h;
-    if (!(x >= 0.0 && x <= (double)T->ncell)) return NULL;
+    if (!(x >= 0.0 && x <= (double)T->ncell)) return -1;
     int i = (int)x;
     if (i >= T->ncell) i = T->ncell - 1;
     *s = x - i;
-    return T->cc + (size_t)i * NC * 4;
+    return i;
 }
 
-/* coefficient values v[NC] and theta-derivatives dv[NC] (dv may be NULL) */
-static inline int tab_eval(const Table *T, double th, double *v, double *dv)
+#define CUB(q, j, s) ((q)[j] + (s) * ((q)[NC + (j)] + (s) * ((q)[2 * NC + (j)] \
+                      + (s) * (q)[3 * NC + (j)])))
+#define DCUB(q, j, s, ih) (((q)[NC + (j)] + (s) * (2.0 * (q)[2 * NC + (j)] \
+                           + (s) * 3.0 * (q)[3 * NC + (j)])) * (ih))
+
+/* coefficient values v[NC] and theta-derivatives dv[NC] (dv may be NULL) of the row p
+ * (p may be NULL: the table's own mass) */
+static inline int tab_eval(const Table *T, const Par *p, double th, double *v, double *dv)
 {
     double s;
-    const double *q = cell(T, th, &s);
-    if (!q) return 1;
-    for (int j = 0; j < NC; j++, q += 4) {
-        v[j] = q[0] + s * (q[1] + s * (q[2] + s * q[3]));
-        if (dv) dv[j] = (q[1] + s * (2.0 * q[2] + s * 3.0 * q[3])) * T->inv_h;
+    int i = cell_index(T, th, &s);
+    if (i < 0) return 1;
+    const double *q = T->cc + (size_t)i * 4 * NC;
+    for (int j = 0; j < NC; j++) {
+        v[j] = CUB(q, j, s);
+        if (dv) dv[j] = DCUB(q, j, s, T->inv_h);
     }
-    return 0;
-}
-
-/* the hot path: theta'' only (the six coefficients it needs, no derivatives) */
-static inline int rhs_fast(const Table *T, const Par *p, double th, double thd, double *thdd)
-{
-    double s;
-    const double *q = cell(T, th, &s);
-    if (!q) return 1;
-#define CUB(j) (q[4 * (j)] + s * (q[4 * (j) + 1] + s * (q[4 * (j) + 2] + s * q[4 * (j) + 3])))
-    double M = CUB(C_M), dM = CUB(C_DM), dVg = CUB(C_DVG), l = CUB(C_L), dl = CUB(C_DL),
-           dd = CUB(C_DD);
-#undef CUB
-    double damp = p->c * dd + p->cr;
-    double N = -dVg - p->k * (l - p->l0) * dl - 0.5 * dM * thd * thd - damp * thd;
-    *thdd = N / M;
+    if (p && p->dm != 0.0) {
+        const double *r = T->dcc + (size_t)i * 4 * NC;
+        for (int j = 0; j < NMASS; j++) {
+            v[j] += p->dm * CUB(r, j, s);
+            if (dv) dv[j] += p->dm * DCUB(r, j, s, T->inv_h);
+        }
+    }
     return 0;
 }
 
@@ -87,7 +165,7 @@ static inline int rhs_fast(const Table *T, const Par *p, double th, double thd, 
 static inline int rhs(const Table *T, const Par *p, double th, double thd, double *thdd, double *J)
 {
     double v[NC], dv[NC];
-    if (tab_eval(T, th, v, J ? dv : NULL)) return 1;
+    if (tab_eval(T, p, th, v, J ? dv : NULL)) return 1;
     double damp = p->c * v[C_DD] + p->cr;
     double N = -v[C_DVG] - p->k * (v[C_L] - p->l0) * v[C_DL] - 0.5 * v[C_DM] * thd * thd - damp * thd;
     *thdd = N / v[C_M];
@@ -98,6 +176,40 @@ static inline int rhs(const Table *T, const Par *p, double th, double thd, doubl
         J[1] = (-v[C_DM] * thd - damp) / v[C_M];
     }
     return 0;
+}
+
+/* potential V = Vg + k (l - l0)^2 / 2 and its tabulated slope dVg + k (l - l0) dl in cell
+ * i at s (four cubics) */
+static inline void potential_at(const Table *T, const Par *p, int i, double s, double *V,
+                                double *dV)
+{
+    const double *q = T->cc + (size_t)i * 4 * NC;
+    double Vg = CUB(q, C_VG, s), l = CUB(q, C_L, s);
+    double dVg = dV ? CUB(q, C_DVG, s) : 0.0, dl = dV ? CUB(q, C_DL, s) : 0.0;
+    if (p->dm != 0.0) {
+        const double *r = T->dcc + (size_t)i * 4 * NC;
+        Vg += p->dm * CUB(r, C_VG, s);
+        if (dV) dVg += p->dm * CUB(r, C_DVG, s);
+    }
+    double dl0 = l - p->l0;
+    *V = Vg + 0.5 * p->k * dl0 * dl0;
+    if (dV) *dV = dVg + p->k * dl0 * dl;
+}
+
+static inline int potential(const Table *T, const Par *p, double th, double *V, double *dV)
+{
+    double s;
+    int i = cell_index(T, th, &s);
+    if (i < 0) return 1;
+    potential_at(T, p, i, s, V, dV);
+    return 0;
+}
+
+/* V and its slope at node j = 0..ncell (the pieces' end values) */
+static inline void node_potential(const Table *T, const Par *p, int j, double *V, double *dV)
+{
+    if (j < T->ncell) potential_at(T, p, j, 0.0, V, dV);
+    else potential_at(T, p, T->ncell - 1, 1.0, V, dV);
 }
 
 /* solve the n x n system a x = r in place (partial pivoting); returns 1 if singular */
@@ -194,7 +306,7 @@ static int quantity(const Table *T, const Par *p, int which, double th, double t
     if (which == 1) { *g = th; *dg = thd; return 0; }
     if (which == 2) { *g = -th; *dg = -thd; return 0; }
     double v[NC], dv[NC], a;
-    if (tab_eval(T, th, v, dv)) return 1;
+    if (tab_eval(T, p, th, v, dv)) return 1;
     if (rhs(T, p, th, thd, &a, NULL)) return 1;
     double sg = thd >= 0 ? 1.0 : -1.0;
     *g = v[C_TAU] * fabs(thd);
@@ -243,7 +355,7 @@ static void l_extremes(const Table *T, double a, double b, double *lmin, double 
     double ends[2] = {a, b};
     *lmin = INFINITY; *lmax = -INFINITY;
     for (int e = 0; e < 2; e++)
-        if (!tab_eval(T, ends[e], v, NULL)) {
+        if (!tab_eval(T, NULL, ends[e], v, NULL)) {
             if (v[C_L] < *lmin) *lmin = v[C_L];
             if (v[C_L] > *lmax) *lmax = v[C_L];
         }
@@ -251,7 +363,9 @@ static void l_extremes(const Table *T, double a, double b, double *lmin, double 
     if (i0 < 0) i0 = 0;
     if (i1 > T->ncell - 1) i1 = T->ncell - 1;
     for (int i = i0; i <= i1; i++) {
-        const double *q = T->cc + (size_t)i * NC * 4 + C_L * 4;
+        if (T->rng && T->rng[(size_t)i * NRNG + R_LCRIT] == 0.0) continue; /* l monotone */
+        double q[4] = {CQ(T->cc, i, 0, C_L), CQ(T->cc, i, 1, C_L), CQ(T->cc, i, 2, C_L),
+                       CQ(T->cc, i, 3, C_L)};
         /* roots of q1 + 2 q2 s + 3 q3 s^2 */
         double A = 3 * q[3], B = 2 * q[2], C = q[1], r[2];
         int nr = 0;
@@ -270,6 +384,226 @@ static void l_extremes(const Table *T, double a, double b, double *lmin, double 
     }
 }
 
+/* ---- early exit: what the rest of a stroke can still reach ------------------------- */
+
+/* range of the cubic q0 + q1 s + q2 s^2 + q3 s^3 over [s0, s1] (ends and interior extrema) */
+static void cubic_range(const double *q, double s0, double s1, double *lo, double *hi)
+{
+    double a = q[0] + s0 * (q[1] + s0 * (q[2] + s0 * q[3]));
+    double b = q[0] + s1 * (q[1] + s1 * (q[2] + s1 * q[3]));
+    *lo = a < b ? a : b; *hi = a < b ? b : a;
+    double A = 3 * q[3], B = 2 * q[2], C = q[1], r[2];
+    int nr = 0;
+    if (fabs(A) < 1e-300) { if (B != 0) r[nr++] = -C / B; }
+    else {
+        double D = B * B - 4 * A * C;
+        if (D >= 0) {
+            double sq = sqrt(D);
+            r[nr++] = (-B + sq) / (2 * A); r[nr++] = (-B - sq) / (2 * A);
+        }
+    }
+    for (int j = 0; j < nr; j++) {
+        if (!(r[j] > s0 && r[j] < s1)) continue;
+        double v = q[0] + r[j] * (q[1] + r[j] * (q[2] + r[j] * q[3]));
+        if (v < *lo) *lo = v;
+        if (v > *hi) *hi = v;
+    }
+}
+
+/* the cubic of coefficient j in cell i for the row p (mass-corrected) */
+static inline void piece(const Table *T, const Par *p, int i, int j, double *q)
+{
+    for (int e = 0; e < 4; e++) q[e] = CQ(T->cc, i, e, j);
+    if (j < NMASS && p->dm != 0.0)
+        for (int e = 0; e < 4; e++) q[e] += p->dm * CQ(T->dcc, i, e, j);
+}
+
+/* Is 2 tau^2 (Eh - V) / M <= target wherever V <= Eh on cell i, s in [s0, s1]? A rigorous
+ * bound from the ranges of the cubic pieces, with V bounded below both by
+ * min Vg + k d^2 / 2 (d: distance of l0 from the range of l) and by the mean value theorem,
+ * V(mid) - max |dV| * half width (dV = dVg + k (l - l0) dl over the ranges: tight near a
+ * well's bottom, where the two terms of V vary in opposite senses); halved where it is too
+ * coarse. Returns 0 as soon as a point exceeds the target (or the work budget is spent),
+ * 1 if the bound holds, 2 if V > Eh on the whole piece (unreachable). */
+static int speed_piece_ok(const Table *T, const Par *p, int i, double s0, double s1, double Eh,
+                          double target, int depth, int *budget)
+{
+    if (--*budget < 0) return 0;
+    double q[4], glo, ghi, llo, lhi, dglo, dghi, dllo, dlhi, tlo, thi, Mlo, Mhi, v[NC];
+    const double *R = depth == 0 && p->dm == 0.0 && T->rng ? T->rng + (size_t)i * NRNG : NULL;
+    double sm = 0.5 * (s0 + s1), hw = 0.5 * (s1 - s0) * T->h;
+    if (R) { /* the whole cell's precomputed ranges (a superset of [s0, s1]) */
+        glo = R[R_VG]; ghi = R[R_VG + 1]; llo = R[R_L]; lhi = R[R_L + 1];
+        dglo = R[R_DVG]; dghi = R[R_DVG + 1]; dllo = R[R_DL]; dlhi = R[R_DL + 1];
+        tlo = R[R_TAU]; thi = R[R_TAU + 1]; Mlo = R[R_M]; Mhi = R[R_M + 1];
+        v[C_VG] = R[R_MID]; v[C_L] = R[R_MID + 1]; v[C_TAU] = R[R_MID + 2]; v[C_M] = R[R_MID + 3];
+        hw = 0.5 * T->h;
+    } else {
+        if (tab_eval(T, p, T->lo + (i + sm) * T->h, v, NULL)) return 0;
+        piece(T, p, i, C_VG, q); cubic_range(q, s0, s1, &glo, &ghi);
+        piece(T, p, i, C_L, q); cubic_range(q, s0, s1, &llo, &lhi);
+        piece(T, p, i, C_DVG, q); cubic_range(q, s0, s1, &dglo, &dghi);
+        piece(T, p, i, C_DL, q); cubic_range(q, s0, s1, &dllo, &dlhi);
+        piece(T, p, i, C_TAU, q); cubic_range(q, s0, s1, &tlo, &thi);
+        piece(T, p, i, C_M, q); cubic_range(q, s0, s1, &Mlo, &Mhi);
+    }
+    double dlm = v[C_L] - p->l0, Vm = v[C_VG] + 0.5 * p->k * dlm * dlm;
+    double d = p->l0 < llo ? llo - p->l0 : (p->l0 > lhi ? p->l0 - lhi : 0.0);
+    double V1 = glo + 0.5 * p->k * d * d;
+    double e1 = llo - p->l0, e2 = lhi - p->l0; /* (l - l0) dl over the box */
+    double x1 = e1 * dllo, x2 = e1 * dlhi, x3 = e2 * dllo, x4 = e2 * dlhi;
+    double plo = MIN2(MIN2(x1, x2), MIN2(x3, x4)), phi = MAX2(MAX2(x1, x2), MAX2(x3, x4));
+    double slo = dglo + p->k * plo, shi = dghi + p->k * phi;
+    double smax = MAX2(fabs(slo), fabs(shi));
+    double V2 = Vm - smax * hw;
+    double Vlow = MAX2(V1, V2);
+    Vlow -= 1e-13 * (fabs(Vlow) + fabs(Eh)); /* rounding of the bound itself */
+    if (Vlow > Eh) return 2; /* unreachable */
+    (void)Mhi;
+    if (!(Mlo > 0)) return 0;
+    double t2 = thi > -tlo ? thi * thi : tlo * tlo;
+    if (2.0 * t2 * (Eh - Vlow) / Mlo <= target) return 1;
+    if (R && !(s0 == 0.0 && s1 == 1.0)) /* (the cell's middle may lie outside [s0, s1]) */
+        return speed_piece_ok(T, p, i, s0, s1, Eh, target, depth + 1, budget);
+    if (2.0 * v[C_TAU] * v[C_TAU] * (Eh - Vm) / v[C_M] > target)
+        return 0; /* reachable: not final */
+    if (depth >= 30) return 0;
+    return speed_piece_ok(T, p, i, s0, sm, Eh, target, depth + 1, budget)
+           && speed_piece_ok(T, p, i, sm, s1, Eh, target, depth + 1, budget);
+}
+
+/* Can the lid, from th with energy at most Eh and never leaving [a, b], reach a tip speed
+ * above `peak`? 1 if not (the peak is final). The cells are visited outwards from th's
+ * until a cell lies wholly above Eh (the component of {V <= Eh} cannot cross it). */
+static int speed_bound_ok(const Table *T, const Par *p, double th, double a, double b,
+                          double Eh, double peak)
+{
+    double xa = (a - T->lo) * T->inv_h, xb = (b - T->lo) * T->inv_h, x = (th - T->lo) * T->inv_h;
+    if (!(xa >= 0 && xb <= T->ncell && x >= xa && x <= xb)) return 0;
+    int i0 = (int)floor(xa), i1 = (int)floor(xb), ith = (int)floor(x), budget = 4000;
+    if (i1 > T->ncell - 1) i1 = T->ncell - 1;
+    if (ith > i1) ith = i1;
+    double target = peak * peak * (1.0 - 1e-10); /* margin for the rounding of g = tau |th'| */
+    for (int dir = -1; dir <= 1; dir += 2)
+        for (int i = dir < 0 ? ith : ith + 1; dir < 0 ? i >= i0 : i <= i1; i += dir) {
+            double s0 = xa - i > 0 ? xa - i : 0.0, s1 = xb - i < 1 ? xb - i : 1.0;
+            if (s1 < s0) continue;
+            int r = speed_piece_ok(T, p, i, s0, s1, Eh, target, 0, &budget);
+            if (r == 0) return 0;
+            if (r == 2 && i != ith) break;
+        }
+    return 1;
+}
+
+/* root of the tabulated slope dV in [a, b] by bisection, given its signs at the ends */
+static double slope_root(const Table *T, const Par *p, double a, double b, double fa)
+{
+    for (int it = 0; it < 200 && b - a > 4e-16 * (1.0 + fabs(a)); it++) {
+        double mid = 0.5 * (a + b), V, dV;
+        if (potential(T, p, mid, &V, &dV)) break;
+        if (dV == 0.0) return mid;
+        if ((dV > 0) == (fa > 0)) { a = mid; fa = dV; } else b = mid;
+    }
+    return 0.5 * (a + b);
+}
+
+static inline double node_at(const Table *T, int j) { return T->lo + j * T->h; }
+
+/* extremum of V over [a, b] (sgn +1: max, -1: min): the ends, and every root of the
+ * tabulated slope dV where it changes sign the right way between consecutive nodes
+ * (bisection to full precision). *at_end: 1 if it is at a, 2 at b, else 0. */
+static double v_extremum(const Table *T, const Par *p, double a, double b, int sgn,
+                         double *Vbest, int *at_end)
+{
+    double Va, Vb, dVa, dVb;
+    if (potential(T, p, a, &Va, &dVa) || potential(T, p, b, &Vb, &dVb)) {
+        *at_end = 1; *Vbest = NAN; return a;
+    }
+    double best = sgn * Va, arg = a;
+    int end = 1;
+    if (sgn * Vb > best) { best = sgn * Vb; arg = b; end = 2; }
+    int j0 = (int)ceil((a - T->lo) * T->inv_h), j1 = (int)floor((b - T->lo) * T->inv_h);
+    double x0 = a, d0 = dVa;
+    for (int j = j0; j <= j1 + 1; j++) {
+        double x1 = j <= j1 ? node_at(T, j) : b, V1, d1;
+        if (x1 <= x0) continue;
+        if (x1 > b) x1 = b;
+        if (x1 == b) d1 = dVb;
+        else if (j >= 0 && j <= T->ncell) node_potential(T, p, j, &V1, &d1);
+        else break;
+        if (sgn * d0 > 0 && sgn * d1 < 0) {
+            double r = slope_root(T, p, x0, x1, d0), V;
+            if (!potential(T, p, r, &V, NULL) && sgn * V > best) {
+                best = sgn * V; arg = r; end = 0;
+            }
+        }
+        x0 = x1; d0 = d1;
+        if (x1 >= b) break;
+    }
+    *at_end = end;
+    *Vbest = sgn * best;
+    return arg;
+}
+
+/* Why the lid at th with energy (plus margin) Eh cannot reach thc, if it cannot. The well
+ * [a, b] of {V <= Eh} around th is found on the nodes between cap_lo >= thc and cap_hi
+ * (an end is a cap whose V is above Eh, else the first node above Eh); its bottom th_eq is
+ * the stable equilibrium the lid settles at. Below the well, V rises over the hill that
+ * stops the lid: if it rises all the way to the rim, the lid is held open (R_HELD,
+ * *theta = th_eq); else the top of that hill is the barrier (R_BARRIER, *theta = its
+ * top). R_NONE: the energy still reaches the rim. */
+static int classify(const Table *T, const Par *p, double th, double Eh, double thc,
+                    double cap_lo, double cap_hi, double *theta)
+{
+    double V;
+    int j = (int)floor((th - T->lo) * T->inv_h);
+    double a = cap_lo, b = cap_hi;
+    for (int jj = j; jj >= 0; jj--) { /* down to the first node above Eh */
+        double x = node_at(T, jj);
+        if (x <= cap_lo || x > th) { if (x <= cap_lo) break; continue; }
+        node_potential(T, p, jj, &V, NULL);
+        if (V > Eh) { a = x; break; }
+    }
+    if (a == cap_lo && (potential(T, p, cap_lo, &V, NULL) || !(V > Eh))) return R_NONE;
+    for (int jj = j + 1; jj <= T->ncell; jj++) {
+        double x = node_at(T, jj);
+        if (x >= cap_hi) break;
+        if (x < th) continue;
+        node_potential(T, p, jj, &V, NULL);
+        if (V > Eh) { b = x; break; }
+    }
+    if (th < a) a = th; /* (th lies in the well; guard against the rounding of the nodes) */
+    if (th > b) b = th;
+    double Veq;
+    int end;
+    *theta = v_extremum(T, p, a, b, -1, &Veq, &end);
+    /* climb the hill below the well, node by node, while V keeps rising */
+    double xp = a, Vp, dp;
+    if (a <= thc || potential(T, p, a, &Vp, &dp)) return R_HELD;
+    for (int jj = (int)ceil((a - T->lo) * T->inv_h) - 1; jj >= 0; jj--) {
+        double x = node_at(T, jj), Vj, dj;
+        if (x >= xp) continue;
+        int rim = x <= thc;
+        if (rim) x = thc;
+        if (potential(T, p, x, &Vj, &dj)) return R_HELD;
+        if (Vj < Vp) { /* xp is the highest point so far: the top is on one of its sides */
+            double top = xp;
+            if (dj > 0 && dp < 0) top = slope_root(T, p, x, xp, dj);
+            else if (dp > 0) { /* above xp, towards the well */
+                double x2 = xp + T->h, V2, d2;
+                if (x2 > a) x2 = a;
+                if (x2 > xp && !potential(T, p, x2, &V2, &d2) && d2 < 0)
+                    top = slope_root(T, p, xp, x2, dp);
+            }
+            *theta = top;
+            return R_BARRIER;
+        }
+        if (rim) return R_HELD; /* rising all the way to the rim */
+        xp = x; Vp = Vj; dp = dj;
+    }
+    return R_HELD;
+}
+
 /* ---- the stroke loop ----------------------------------------------------------------
  * A stroke is a small state machine (Lane). Several strokes are advanced in lockstep
  * ("lanes"): their RK stages are independent, so the CPU overlaps the table look-ups and
@@ -279,32 +613,38 @@ static void l_extremes(const Table *T, double a, double b, double *lmin, double 
  * the lane count. The method's first explicit stage at a node is the theta'' already
  * computed there (FSAL), and the tip speed, its rate, theta'' and the energy at a node
  * come from one table look-up. */
-#define LANES 4
-
 typedef struct {
     Par p;
     double e_tol, *out;
     double t, th, thd, th_min, th_max, thp, thdp, hp; /* hp: length of the previous step */
     double gp, g, dg, a, peak, E0, Emax;      /* tip speed at previous/current node, ...  */
     double thd_max;                           /* max theta' over the nodes after t = 0 */
+    double E, Vlo, Vhi;         /* energy at the node, V(th_min), V(th_max) */
+    double gain, floor_, t_max, inv_dt; /* largest energy gain of a step so far, ... */
+    double stop_theta;
     long n, nt, traj_cap;
     double *traj;
-    int status;
+    int status, early, wait, reason;
 } Lane;
 
-/* theta'', tip speed g = tau |th'|, its rate dg and the energy at a node: one look-up */
+/* theta'', tip speed g = tau |th'|, its rate dg, the energy and the potential at a node:
+ * one look-up */
 static inline int node_eval(const Table *T, const Par *p, double th, double thd,
-                            double *a, double *g, double *dg, double *E)
+                            double *a, double *g, double *dg, double *E, double *V)
 {
     double s;
-    const double *q = cell(T, th, &s);
-    if (!q) return 1;
-#define CUB(j) (q[4 * (j)] + s * (q[4 * (j) + 1] + s * (q[4 * (j) + 2] + s * q[4 * (j) + 3])))
-    double M = CUB(C_M), dM = CUB(C_DM), Vg = CUB(C_VG), dVg = CUB(C_DVG), l = CUB(C_L),
-           dl = CUB(C_DL), dd = CUB(C_DD), tau = CUB(C_TAU);
-#undef CUB
-    const double *qt = q + 4 * C_TAU;
-    double dtau = (qt[1] + s * (2.0 * qt[2] + s * 3.0 * qt[3])) * T->inv_h;
+    int i = cell_index(T, th, &s);
+    if (i < 0) return 1;
+    const double *q = T->cc + (size_t)i * 4 * NC;
+    double M = CUB(q, C_M, s), dM = CUB(q, C_DM, s), Vg = CUB(q, C_VG, s),
+           dVg = CUB(q, C_DVG, s), l = CUB(q, C_L, s), dl = CUB(q, C_DL, s),
+           dd = CUB(q, C_DD, s), tau = CUB(q, C_TAU, s);
+    if (p->dm != 0.0) {
+        const double *r = T->dcc + (size_t)i * 4 * NC;
+        M += p->dm * CUB(r, C_M, s); dM += p->dm * CUB(r, C_DM, s);
+        Vg += p->dm * CUB(r, C_VG, s); dVg += p->dm * CUB(r, C_DVG, s);
+    }
+    double dtau = DCUB(q, C_TAU, s, T->inv_h);
     double damp = p->c * dd + p->cr;
     double N = -dVg - p->k * (l - p->l0) * dl - 0.5 * dM * thd * thd - damp * thd;
     double acc = N / M;
@@ -314,6 +654,7 @@ static inline int node_eval(const Table *T, const Par *p, double th, double thd,
     *dg = sg * (dtau * thd * thd + tau * acc);
     double dl0 = l - p->l0;
     *E = 0.5 * M * thd * thd + Vg + 0.5 * p->k * dl0 * dl0;
+    *V = Vg + 0.5 * p->k * dl0 * dl0;
     return 0;
 }
 
@@ -326,27 +667,41 @@ static inline void lane_record(Lane *L)
 }
 
 /* start a stroke from rest at th0; returns 1 if it is already over (not tabulated) */
-static int lane_start(const Table *T, Lane *L, const double *d, double *out, double th0,
-                      double *traj, long traj_cap)
+static int lane_start(const Table *T, Lane *L, const double *d, int ncol, double *out,
+                      double th0, double dt, double t_max, int early, double *traj,
+                      long traj_cap)
 {
     L->p.k = d[0]; L->p.l0 = d[1]; L->p.c = d[2]; L->p.cr = d[3]; L->e_tol = d[4];
+    L->p.dm = 0.0;
+    if (ncol > 5 && isfinite(d[5]) && d[5] != T->m0) L->p.dm = d[5] - T->m0;
     L->out = out;
     L->t = 0.0; L->th = th0; L->thd = 0.0; L->th_min = th0; L->th_max = th0;
     L->thp = th0; L->thdp = 0.0; L->hp = 0.0;
     L->gp = 0.0; L->g = 0.0; L->dg = 0.0; L->peak = 0.0; L->a = 0.0;
     L->n = 0; L->nt = 0; L->traj = traj; L->traj_cap = traj_cap; L->thd_max = -INFINITY;
-    L->status = S_OPEN;
+    L->status = S_OPEN; L->reason = R_NONE; L->stop_theta = NAN; L->wait = 0;
+    L->gain = 0.0; L->t_max = t_max; L->inv_dt = 1.0 / dt;
+    /* the energy rule needs dissipation (c dd + c_rot > 0 on the stroke) */
+    L->early = early && (L->p.c > 0 || L->p.cr > 0) && L->p.c >= 0 && L->p.cr >= 0;
     for (int j = 0; j < NOUT; j++) out[j] = NAN;
     lane_record(L);
-    double E0;
-    if (node_eval(T, &L->p, th0, 0.0, &L->a, &L->g, &L->dg, &E0) || !isfinite(E0)) {
+    double E0, V0;
+    if ((L->p.dm != 0.0 && !T->dcc)
+        || node_eval(T, &L->p, th0, 0.0, &L->a, &L->g, &L->dg, &E0, &V0) || !isfinite(E0)) {
         L->E0 = L->Emax = NAN; L->status = S_RANGE; return 1;
     }
-    L->E0 = L->Emax = E0;
+    L->E0 = L->Emax = L->E = E0;
+    L->Vlo = L->Vhi = V0;
+    { /* rounding scale of the energy: the size of its terms */
+        double v[NC];
+        tab_eval(T, &L->p, th0, v, NULL);
+        double dl0 = v[C_L] - L->p.l0;
+        L->floor_ = 1e-12 * (fabs(v[C_VG]) + 0.5 * fabs(L->p.k) * dl0 * dl0 + fabs(E0));
+    }
     return 0;
 }
 
-static void lane_finish(const Table *T, Lane *L, double th0)
+static void lane_finish(const Table *T, Lane *L, double thc, double t_max)
 {
     double *out = L->out;
     out[O_STATUS] = L->status;
@@ -356,17 +711,57 @@ static void lane_finish(const Table *T, Lane *L, double th0)
     out[O_THMIN] = L->th_min;
     out[O_THDMAX] = L->thd_max;
     out[O_THMAX] = L->th_max;
+    out[O_STIME] = L->t;
     if (L->status == S_CLOSED || L->status == S_OPEN) {
         double lmin, lmax;
         l_extremes(T, L->th_min, L->th_max, &lmin, &lmax);
         out[O_LMIN] = lmin; out[O_LMAX] = lmax;
     }
+    if (L->status == S_OPEN && L->reason == R_NONE && L->t >= t_max * (1 - 1e-12)) {
+        /* ran to t_max: say why it is open, if the energy (with its margin) decides it */
+        double th = NAN, margin = 2.0 * L->gain + L->floor_;
+        L->reason = classify(T, &L->p, L->th, L->E + margin, thc, thc, T->lo + T->ncell * T->h,
+                             &th);
+        L->stop_theta = th;
+    }
+    out[O_REASON] = L->reason;
+    out[O_STHETA] = L->reason ? L->stop_theta : NAN;
     if (L->status != S_CLOSED) { out[O_TIME] = NAN; out[O_THD] = NAN; out[O_TIP] = NAN; }
 }
 
-/* bookkeeping after a step of length h to (th1, thd1) with step status st; 1 = over */
-static int lane_after_step(const Table *T, const Method *m, Lane *L, double h, double th1,
-                           double thd1, int st, double thc)
+/* after an accepted node: can the rest of the stroke still change anything? (see top)
+ * Called when E < V(th_min), V(th_max) or at a fixed point. */
+__attribute__((noinline)) static int lane_try_exit(const Table *T, Lane *L, double thc,
+                                                   double th_prev, double thd_prev)
+{
+    if (L->th == th_prev && L->thd == thd_prev) { /* a fixed point of the step map: at rest */
+        L->reason = R_HELD; L->stop_theta = L->th;
+        return 1;
+    }
+    /* what the method may still gain: twice its largest gain per step so far for each
+     * step left, plus the rounding of E */
+    double left = (L->t_max - L->t) * L->inv_dt + 1.0;
+    double Eh = L->E + 2.0 * left * L->gain + L->floor_;
+    if (!(Eh < L->Vlo && Eh < L->Vhi)) return 0; /* a visited end is still reachable */
+    if (L->wait > 0) { L->wait--; return 0; }
+    if (!speed_bound_ok(T, &L->p, L->th, L->th_min, L->th_max, Eh, L->peak)) {
+        L->wait = 8; /* the peak may still grow: look again a few steps later */
+        return 0;
+    }
+    double th = NAN;
+    L->reason = classify(T, &L->p, L->th, Eh, thc, L->th_min, L->th_max, &th);
+    if (L->reason == R_NONE) L->reason = R_HELD, th = L->th; /* (cannot happen: th_min > thc) */
+    L->stop_theta = th;
+    return 1;
+}
+
+/* the node quantities of node_eval, computed for all lanes at once (or not: ok = -1) */
+typedef struct { double a, g, dg, E, V; int ok; } Node;
+
+/* bookkeeping after a step of length h to (th1, thd1) with step status st; nd: the new
+ * node's quantities if already evaluated; 1 = over */
+ALWAYS int lane_after_step(const Table *T, const Method *m, Lane *L, double h, double th1,
+                           double thd1, int st, double thc, const Node *nd)
 {
     const Par *p = &L->p;
     double th = L->th, thd = L->thd;
@@ -410,8 +805,13 @@ static int lane_after_step(const Table *T, const Method *m, Lane *L, double h, d
         return 1;
     }
     /* the new node: theta'' (the next step's first stage), tip speed, its rate, energy */
-    double a1, g1, dg1, E1;
-    if (node_eval(T, p, th1, thd1, &a1, &g1, &dg1, &E1)) { L->status = S_RANGE; return 1; }
+    double a1, g1, dg1, E1, V1;
+    if (nd && nd->ok >= 0) {
+        if (!nd->ok) { L->status = S_RANGE; return 1; }
+        a1 = nd->a; g1 = nd->g; dg1 = nd->dg; E1 = nd->E; V1 = nd->V;
+    } else if (node_eval(T, p, th1, thd1, &a1, &g1, &dg1, &E1, &V1)) {
+        L->status = S_RANGE; return 1;
+    }
     /* interior extrema at the node we are leaving (t): tip-speed peak, lowest angle */
     if (L->n > 1 && L->g >= L->gp && L->g > g1)
         refine_extremum(T, m, p, 0, L->thp, L->thdp, L->hp + h, &L->peak);
@@ -419,37 +819,176 @@ static int lane_after_step(const Table *T, const Method *m, Lane *L, double h, d
     if (thd < 0 && thd1 >= 0) { /* turned back: lowest angle inside this step */
         double lowest = th1 < th ? th1 : th;
         refine_extremum(T, m, p, 1, th, thd, h, &lowest);
-        if (lowest < L->th_min) L->th_min = lowest;
+        if (lowest < L->th_min) {
+            L->th_min = lowest;
+            if (potential(T, p, lowest, &L->Vlo, NULL)) L->Vlo = -INFINITY;
+        }
     }
     if (thd > 0 && thd1 <= 0) { /* turned down: highest angle inside this step */
         double neg = -(th1 > th ? th1 : th);
         refine_extremum(T, m, p, 2, th, thd, h, &neg);
-        if (-neg > L->th_max) L->th_max = -neg;
+        if (-neg > L->th_max) {
+            L->th_max = -neg;
+            if (potential(T, p, -neg, &L->Vhi, NULL)) L->Vhi = -INFINITY;
+        }
     }
-    if (th1 < L->th_min) L->th_min = th1;
-    if (th1 > L->th_max) L->th_max = th1;
+    if (th1 < L->th_min) { L->th_min = th1; L->Vlo = V1; }
+    if (th1 > L->th_max) { L->th_max = th1; L->Vhi = V1; }
     if (thd1 > L->thd_max) L->thd_max = thd1;
     if (!isfinite(E1)) { L->status = S_RANGE; return 1; }
     if (E1 > L->Emax) L->Emax = E1;
+    if (E1 - L->E > L->gain) L->gain = E1 - L->E;
     if (E1 - L->E0 > L->e_tol) {
         L->status = S_UNSTABLE; L->t += h; L->th = th1; L->thd = thd1; return 1;
     }
     L->gp = L->g; L->thp = th; L->thdp = thd; L->hp = h;
-    L->g = g1; L->dg = dg1; L->a = a1;
+    L->g = g1; L->dg = dg1; L->a = a1; L->E = E1;
     L->t += h; L->th = th1; L->thd = thd1;
     lane_record(L);
+    if (L->early && ((th1 == th && thd1 == thd) || (E1 < L->Vlo && E1 < L->Vhi)))
+        return lane_try_exit(T, L, thc, th, thd);
     return 0;
 }
 
-/* one explicit RK step for the active lanes; s is a literal at the hot call (unrolled) */
-static inline __attribute__((always_inline)) void
-explicit_lanes(const Table *T, const Method *m, const int s, Lane *lanes, const int *act,
-               int na, const double *hh, double *y0, double *y1, int *st)
+/* ---- the lanes as SIMD vectors ------------------------------------------------------
+ * Element q of a v4 is lane q. Every operation below is the scalar one of rhs()/node_eval()
+ * applied element by element, in the same order, so a lane's numbers are those of a scalar
+ * stroke bit for bit; what changes is that the dependent chain of one stage (cell look-up,
+ * Horner, division) is shared by the lanes instead of being waited for lane by lane. */
+
+typedef struct { v4 k, l0, c, cr; double dm[VW]; int any; } Par4;
+
+/* lane q's cell of the angles th: its base pointer and local variable s;
+ * bad[q] = 1 outside the table (then cell 0, and the result is discarded) */
+ALWAYS void cells4(const Table *T, v4 th, const double **b, v4 *s, int *bad)
 {
+    v4 x = (th - T->lo) * T->inv_h;
+    v4 zero = {0.0, 0.0, 0.0, 0.0}, top = zero + (double)T->ncell;
+    v4l ok = (x >= zero) & (x <= top);
+    v4 xs = (v4)((v4l)x & ok); /* 0 where outside (or NaN): a safe conversion */
+    v4i ii = __builtin_convertvector(xs, v4i); /* truncation, as (int) */
+    v4i last = {T->ncell - 1, T->ncell - 1, T->ncell - 1, T->ncell - 1};
+    v4i over = ii > last;
+    ii = (ii & ~over) | (last & over);
+    *s = xs - __builtin_convertvector(ii, v4);
+    for (int q = 0; q < VW; q++) {
+        bad[q] = !ok[q];
+        b[q] = T->cc + (size_t)ii[q] * 4 * NC;
+    }
+}
+
+ALWAYS v4 ld4(const double *a) { v4 v; memcpy(&v, a, sizeof v); return v; }
+
+#if defined(__clang__) || (defined(__GNUC__) && __GNUC__ >= 12)
+#define SHUF(a, b, i, j, k, l) __builtin_shufflevector(a, b, i, j, k, l)
+#else
+#define SHUF(a, b, i, j, k, l) __builtin_shuffle(a, b, (v4l){i, j, k, l})
+#endif
+
+/* rows r[q] (lane q, four coefficients) -> columns c[j] (coefficient j, four lanes) */
+ALWAYS void transpose4(const v4 *r, v4 *c)
+{
+    v4 t0 = SHUF(r[0], r[1], 0, 4, 2, 6), t1 = SHUF(r[0], r[1], 1, 5, 3, 7);
+    v4 t2 = SHUF(r[2], r[3], 0, 4, 2, 6), t3 = SHUF(r[2], r[3], 1, 5, 3, 7);
+    c[0] = SHUF(t0, t2, 0, 1, 4, 5); c[1] = SHUF(t1, t3, 0, 1, 4, 5);
+    c[2] = SHUF(t0, t2, 2, 3, 6, 7); c[3] = SHUF(t1, t3, 2, 3, 6, 7);
+}
+
+
+
+/* the NC coefficients of the lanes at th as columns c[j] (four lanes each): each lane's
+ * cubic pieces are evaluated as rows (Horner in s, as CUB), mass-corrected where dm != 0,
+ * then transposed; bad[q] = 1 where th is outside the table */
+ALWAYS void coef4(const Table *T, const Par4 *P, v4 th, v4 *c, const double **b, v4 *s,
+                  int *bad)
+{
+    v4 lo[VW], hi[VW];
+    cells4(T, th, b, s, bad);
+    for (int q = 0; q < VW; q++) {
+        const double *r = b[q];
+        double sq = (*s)[q];
+        lo[q] = ld4(r) + sq * (ld4(r + NC) + sq * (ld4(r + 2 * NC) + sq * ld4(r + 3 * NC)));
+        hi[q] = ld4(r + 4) + sq * (ld4(r + NC + 4) + sq * (ld4(r + 2 * NC + 4)
+                                                          + sq * ld4(r + 3 * NC + 4)));
+        if (P->any && P->dm[q] != 0.0) { /* M, dM, Vg, dVg only */
+            const double *rm = T->dcc + (r - T->cc);
+            lo[q] += P->dm[q] * (ld4(rm) + sq * (ld4(rm + NC) + sq * (ld4(rm + 2 * NC)
+                                                                     + sq * ld4(rm + 3 * NC))));
+        }
+    }
+    transpose4(lo, c);
+    transpose4(hi, c + 4);
+}
+
+/* theta'' of the lanes (as rhs()) */
+ALWAYS v4 rhs4(const Table *T, const Par4 *P, v4 th, v4 thd, int *bad)
+{
+    v4 c[NC], s;
+    const double *b[VW];
+    coef4(T, P, th, c, b, &s, bad);
+    v4 damp = P->c * c[C_DD] + P->cr;
+    v4 N = -c[C_DVG] - P->k * (c[C_L] - P->l0) * c[C_DL] - 0.5 * c[C_DM] * thd * thd
+           - damp * thd;
+    return N / c[C_M];
+}
+
+/* node_eval() of the lanes: theta'', tip speed, its rate, energy, potential */
+ALWAYS void node4(const Table *T, const Par4 *P, v4 th, v4 thd, Node *nd)
+{
+    v4 c[NC], s;
+    const double *b[VW];
+    int bad[VW];
+    coef4(T, P, th, c, b, &s, bad);
+    v4 M = c[C_M], dM = c[C_DM], Vg = c[C_VG], dVg = c[C_DVG], l = c[C_L], dl = c[C_DL],
+       dd = c[C_DD], tau = c[C_TAU];
+    v4 damp = P->c * dd + P->cr;
+    v4 N = -dVg - P->k * (l - P->l0) * dl - 0.5 * dM * thd * thd - damp * thd;
+    v4 acc = N / M;
+    v4 dl0 = l - P->l0;
+    v4 E = 0.5 * M * thd * thd + Vg + 0.5 * P->k * dl0 * dl0;
+    v4 V = Vg + 0.5 * P->k * dl0 * dl0;
+    for (int q = 0; q < VW; q++) {
+        double sq = s[q], t = thd[q];
+        double dtau = DCUB(b[q], C_TAU, sq, T->inv_h);
+        double sg = t >= 0 ? 1.0 : -1.0;
+        nd[q].ok = !bad[q];
+        nd[q].a = acc[q];
+        nd[q].g = tau[q] * fabs(t);
+        nd[q].dg = sg * (dtau * t * t + tau[q] * acc[q]);
+        nd[q].E = E[q];
+        nd[q].V = V[q];
+    }
+}
+
+/* theta'' only, from the six coefficients it needs (the scalar hot path) */
+ALWAYS int rhs_fast(const Table *T, const Par *p, double th, double thd, double *thdd)
+{
+    double s;
+    int i = cell_index(T, th, &s);
+    if (i < 0) return 1;
+    const double *q = T->cc + (size_t)i * 4 * NC;
+    double M = CUB(q, C_M, s), dM = CUB(q, C_DM, s), dVg = CUB(q, C_DVG, s),
+           l = CUB(q, C_L, s), dl = CUB(q, C_DL, s), dd = CUB(q, C_DD, s);
+    if (p->dm != 0.0) {
+        const double *r = T->dcc + (size_t)i * 4 * NC;
+        M += p->dm * CUB(r, C_M, s); dM += p->dm * CUB(r, C_DM, s);
+        dVg += p->dm * CUB(r, C_DVG, s);
+    }
+    double damp = p->c * dd + p->cr;
+    double N = -dVg - p->k * (l - p->l0) * dl - 0.5 * dM * thd * thd - damp * thd;
+    *thdd = N / M;
+    return 0;
+}
+
+/* one explicit RK step of the active lanes, lane by lane (for a CPU without wide vectors) */
+ALWAYS void explicit_scalar(const Table *T, const Method *m, const int s, Lane *lanes,
+                            const int *act, int na, const double *hh, double *y0, double *y1,
+                            int *st)
+{ /* (outputs indexed by the lane's slot act[q]) */
     double K0[LANES][SMAX], K1[LANES][SMAX];
     for (int q = 0; q < na; q++) {
         Lane *L = &lanes[act[q]];
-        K0[q][0] = L->thd; K1[q][0] = L->a; st[q] = 0;
+        K0[q][0] = L->thd; K1[q][0] = L->a; st[act[q]] = 0;
     }
     for (int i = 1; i < s; i++) {
         for (int q = 0; q < na; q++) {
@@ -462,47 +1001,111 @@ explicit_lanes(const Table *T, const Method *m, const int s, Lane *lanes, const 
                 }
             }
             K0[q][i] = z1;
-            if (rhs_fast(T, &L->p, z0, z1, &K1[q][i])) { K1[q][i] = NAN; st[q] = S_RANGE; }
+            if (rhs_fast(T, &L->p, z0, z1, &K1[q][i])) { K1[q][i] = NAN; st[act[q]] = S_RANGE; }
         }
     }
     for (int q = 0; q < na; q++) {
         Lane *L = &lanes[act[q]];
         double h = hh[act[q]], z0 = L->th, z1 = L->thd;
         for (int i = 0; i < s; i++) { z0 += h * m->b[i] * K0[q][i]; z1 += h * m->b[i] * K1[q][i]; }
-        y0[q] = z0; y1[q] = z1;
+        y0[act[q]] = z0; y1[act[q]] = z1;
     }
 }
 
-/* n strokes (rows of design: k, l0, c, c_rot, e_tol) into out (n x NOUT); with traj
- * (n must be 1) the rows (t, th, thd) of every node */
-static void strokes(const Table *T, const Method *m, double dt, double t_max, double th0,
-                    double thc, long n, const double *design, double *out,
-                    double *traj, long traj_cap, long *traj_len)
+/* one explicit RK step of every lane slot, as NG vectors of VW lanes (slot g VW + q is
+ * element q of vector g; idle slots compute from whatever state they hold, look-ups
+ * outside the table are caught, and their results are discarded), then the new nodes;
+ * the groups are independent, so their dependent chains overlap; s is a literal at the
+ * hot call. P: the lanes' parameters as vectors (kept up to date by lane_start). */
+ALWAYS void explicit_lanes(const Table *T, const Method *m, const int s, const Lane *lanes,
+                           const Par4 *P, const double *hh, double *y0, double *y1, int *st,
+                           Node *nd, double thc)
+{
+    v4 th[NG], thd[NG], h[NG], K0[NG][SMAX], K1[NG][SMAX];
+    for (int g = 0; g < NG; g++)
+        for (int q = 0; q < VW; q++) {
+            const Lane *L = &lanes[g * VW + q];
+            th[g][q] = L->th; thd[g][q] = L->thd; h[g][q] = hh[g * VW + q]; K1[g][0][q] = L->a;
+            st[g * VW + q] = 0;
+        }
+    for (int g = 0; g < NG; g++) K0[g][0] = thd[g];
+    for (int i = 1; i < s; i++) {
+        int bad[NG][VW];
+        for (int g = 0; g < NG; g++) {
+            v4 z0 = th[g], z1 = thd[g];
+            for (int j = 0; j < i; j++) {
+                if (m->A[i][j] != 0.0) {
+                    v4 ha = h[g] * m->A[i][j];
+                    z0 += ha * K0[g][j]; z1 += ha * K1[g][j];
+                }
+            }
+            K0[g][i] = z1;
+            K1[g][i] = rhs4(T, P + g, z0, z1, bad[g]);
+        }
+        for (int g = 0; g < NG; g++)
+            for (int q = 0; q < VW; q++)
+                if (bad[g][q]) { K1[g][i][q] = NAN; st[g * VW + q] = S_RANGE; }
+    }
+    for (int g = 0; g < NG; g++) {
+        v4 z0 = th[g], z1 = thd[g];
+        for (int i = 0; i < s; i++) {
+            z0 += h[g] * m->b[i] * K0[g][i]; z1 += h[g] * m->b[i] * K1[g][i];
+        }
+        /* the new nodes (a lane that closed, failed or left the table ignores its node) */
+        v4 zs = z0;
+        for (int q = 0; q < VW; q++) {
+            y0[g * VW + q] = z0[q]; y1[g * VW + q] = z1[q];
+            if (!(z0[q] > thc)) zs[q] = th[g][q]; /* keep the look-up inside the table */
+        }
+        node4(T, P + g, zs, z1, nd + g * VW);
+        for (int q = 0; q < VW; q++)
+            if (!(z0[q] > thc)) nd[g * VW + q].ok = -1; /* lane_after_step sees the event */
+    }
+}
+
+/* n strokes (rows of design, ncol = 5 or 6 columns: k, l0, c, c_rot, e_tol[, m_lid]) into
+ * out (n x NOUT); early: stop a stroke as soon as nothing can change (see the top); with
+ * traj (n must be 1) the rows (t, th, thd) of every node */
+ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, double th0,
+                   double thc, long n, int ncol, const double *design, int early, double *out,
+                   double *traj, long traj_cap, long *traj_len, const int vec)
 {
     Lane lanes[LANES];
+    Par4 P[NG];
     int used[LANES] = {0};
     long next = 0;
     int nlanes = traj ? 1 : LANES;
     const int s = m->s;
+    double hh[LANES] = {0};
+    memset(lanes, 0, sizeof lanes);
+    memset(P, 0, sizeof P);
     for (;;) {
         int act[LANES], na = 0;
-        double hh[LANES];
         for (int k = 0; k < nlanes; k++) {
             for (;;) {
                 if (used[k]) {
                     Lane *L = &lanes[k];
                     double h = dt < t_max - L->t ? dt : t_max - L->t;
                     if (L->t < t_max && h > 1e-15 * t_max) { hh[k] = h; break; }
-                    lane_finish(T, L, th0); /* ran to t_max without closing */
+                    lane_finish(T, L, thc, t_max); /* ran to t_max without closing */
                     if (traj_len) *traj_len = L->nt;
                     used[k] = 0;
                 }
+                hh[k] = 0.0;
                 if (next >= n) break;
                 used[k] = 1;
-                if (lane_start(T, &lanes[k], design + 5 * next, out + NOUT * next, th0, traj,
-                               traj_cap)) {
-                    lane_finish(T, &lanes[k], th0);
-                    if (traj_len) *traj_len = lanes[k].nt;
+                Lane *L = &lanes[k];
+                int over = lane_start(T, L, design + (size_t)ncol * next, ncol,
+                                      out + NOUT * next, th0, dt, t_max, early, traj, traj_cap);
+                Par4 *G = &P[k / VW];
+                int q = k % VW;
+                G->k[q] = L->p.k; G->l0[q] = L->p.l0; G->c[q] = L->p.c; G->cr[q] = L->p.cr;
+                G->dm[q] = L->p.dm;
+                G->any = 0;
+                for (int e = 0; e < VW; e++) G->any |= G->dm[e] != 0.0;
+                if (over) {
+                    lane_finish(T, L, thc, t_max);
+                    if (traj_len) *traj_len = L->nt;
                     used[k] = 0;
                 }
                 next++;
@@ -510,29 +1113,37 @@ static void strokes(const Table *T, const Method *m, double dt, double t_max, do
             if (used[k]) act[na++] = k;
         }
         if (na == 0) break;
+        /* the step of every active lane; results by slot */
         double y0[LANES], y1[LANES];
         int st[LANES];
-        if (m->kind == 0) { /* explicit RK, lanes interleaved, first stage from the node */
-            if (s == 4) explicit_lanes(T, m, 4, lanes, act, na, hh, y0, y1, st);
-            else explicit_lanes(T, m, s, lanes, act, na, hh, y0, y1, st);
+        Node nd[LANES], *ndp = NULL;
+        if (m->kind == 0 && vec) { /* explicit RK, lanes as vectors, first stage: the node */
+            ndp = nd;
+            if (s == 4) explicit_lanes(T, m, 4, lanes, P, hh, y0, y1, st, nd, thc);
+            else explicit_lanes(T, m, s, lanes, P, hh, y0, y1, st, nd, thc);
+        } else if (m->kind == 0) { /* explicit RK, lane by lane */
+            if (s == 4) explicit_scalar(T, m, 4, lanes, act, na, hh, y0, y1, st);
+            else explicit_scalar(T, m, s, lanes, act, na, hh, y0, y1, st);
         } else if (m->kind == 2) { /* symplectic Euler from the node's theta'' */
             for (int q = 0; q < na; q++) {
-                Lane *L = &lanes[act[q]];
-                double h = hh[act[q]];
-                y1[q] = L->thd + h * L->a;
-                y0[q] = L->th + h * y1[q];
-                st[q] = 0;
+                int k = act[q];
+                Lane *L = &lanes[k];
+                y1[k] = L->thd + hh[k] * L->a;
+                y0[k] = L->th + hh[k] * y1[k];
+                st[k] = 0;
             }
         } else {
             for (int q = 0; q < na; q++) {
-                Lane *L = &lanes[act[q]];
-                st[q] = step(T, m, &L->p, hh[act[q]], L->th, L->thd, &y0[q], &y1[q]);
+                int k = act[q];
+                Lane *L = &lanes[k];
+                st[k] = step(T, m, &L->p, hh[k], L->th, L->thd, &y0[k], &y1[k]);
             }
         }
         for (int q = 0; q < na; q++) {
             int k = act[q];
-            if (lane_after_step(T, m, &lanes[k], hh[k], y0[q], y1[q], st[q], thc)) {
-                lane_finish(T, &lanes[k], th0);
+            if (lane_after_step(T, m, &lanes[k], hh[k], y0[k], y1[k], st[k], thc,
+                                ndp ? &ndp[k] : NULL)) {
+                lane_finish(T, &lanes[k], thc, t_max);
                 if (traj_len) *traj_len = lanes[k].nt;
                 used[k] = 0;
             }
@@ -540,12 +1151,57 @@ static void strokes(const Table *T, const Method *m, double dt, double t_max, do
     }
 }
 
-/* ---- exported entry points (called through ctypes; the GIL is released) ---- */
-
-static void make(const double *tab_meta, const double *cc, const double *tableau,
-                 Table *T, Method *m)
+/* the stroke loop compiled twice: with AVX2 (lanes as 4-wide vectors; no FMA, so every
+ * operation is the scalar one and the results are the same bit for bit) and for any CPU */
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+#define SC_AVX2 1
+__attribute__((target("avx2"), noinline))
+static void strokes_avx2(const Table *T, const Method *m, double dt, double t_max, double th0,
+                         double thc, long n, int ncol, const double *design, int early,
+                         double *out, double *traj, long traj_cap, long *traj_len)
 {
-    T->cc = cc; T->ncell = (int)tab_meta[0]; T->lo = tab_meta[1]; T->h = tab_meta[2];
+    strokes(T, m, dt, t_max, th0, thc, n, ncol, design, early, out, traj, traj_cap, traj_len, 1);
+}
+#endif
+
+__attribute__((noinline))
+static void strokes_any(const Table *T, const Method *m, double dt, double t_max, double th0,
+                        double thc, long n, int ncol, const double *design, int early,
+                        double *out, double *traj, long traj_cap, long *traj_len)
+{
+    strokes(T, m, dt, t_max, th0, thc, n, ncol, design, early, out, traj, traj_cap, traj_len, 0);
+}
+
+static int use_vec = -1; /* -1: not decided; SC_SCALAR=1 in the environment forces 0 */
+
+static void run(const Table *T, const Method *m, double dt, double t_max, double th0,
+                double thc, long n, int ncol, const double *design, int early, double *out,
+                double *traj, long traj_cap, long *traj_len)
+{
+#ifdef SC_AVX2
+    if (use_vec < 0) {
+        const char *e = getenv("SC_SCALAR");
+        __builtin_cpu_init();
+        use_vec = __builtin_cpu_supports("avx2") && !(e && *e == '1');
+    }
+    if (use_vec) {
+        strokes_avx2(T, m, dt, t_max, th0, thc, n, ncol, design, early, out, traj, traj_cap,
+                     traj_len);
+        return;
+    }
+#endif
+    strokes_any(T, m, dt, t_max, th0, thc, n, ncol, design, early, out, traj, traj_cap, traj_len);
+}
+
+/* ---- exported entry points (called through ctypes; the GIL is released) ----
+ * tab_meta = (ncell, lo, h, m0); cc: ncell x 4 x NC; dcc: the same, or NULL; rng: ncell x
+ * NRNG (see the Table) or NULL */
+
+static void make(const double *tab_meta, const double *cc, const double *dcc,
+                 const double *rng, const double *tableau, Table *T, Method *m)
+{
+    T->cc = cc; T->dcc = dcc; T->rng = rng; T->ncell = (int)tab_meta[0]; T->lo = tab_meta[1];
+    T->h = tab_meta[2]; T->m0 = tab_meta[3];
     T->inv_h = 1.0 / T->h;
     m->kind = (int)tableau[0]; m->s = (int)tableau[1];
     int s = m->s;
@@ -556,38 +1212,46 @@ static void make(const double *tab_meta, const double *cc, const double *tableau
     }
 }
 
-/* strokes for n designs (rows of `design`: k, l0, c, c_rot, e_tol); out: n x NOUT */
-void sc_strokes(const double *tab_meta, const double *cc, const double *tableau,
-                double dt, double t_max, double th0, double thc,
-                long n, const double *design, double *out)
+/* strokes for n designs (rows of `design`, ncol columns: k, l0, c, c_rot, e_tol[, m_lid]);
+ * out: n x NOUT */
+void sc_strokes(const double *tab_meta, const double *cc, const double *dcc,
+                const double *rng, const double *tableau, double dt, double t_max, double th0,
+                double thc, long n, long ncol, const double *design, long early, double *out)
 {
     Table T; Method m;
-    make(tab_meta, cc, tableau, &T, &m);
-    strokes(&T, &m, dt, t_max, th0, thc, n, design, out, NULL, 0, NULL);
+    make(tab_meta, cc, dcc, rng, tableau, &T, &m);
+    run(&T, &m, dt, t_max, th0, thc, n, (int)ncol, design, (int)early, out, NULL, 0, NULL);
 }
 
 /* one stroke with its trajectory */
-void sc_stroke_traj(const double *tab_meta, const double *cc, const double *tableau,
-                    double dt, double t_max, double th0, double thc, const double *design,
+void sc_stroke_traj(const double *tab_meta, const double *cc, const double *dcc,
+                    const double *rng, const double *tableau, double dt, double t_max,
+                    double th0, double thc, long ncol, const double *design, long early,
                     double *out, double *traj, long traj_cap, long *traj_len)
 {
     Table T; Method m;
-    make(tab_meta, cc, tableau, &T, &m);
+    make(tab_meta, cc, dcc, rng, tableau, &T, &m);
     *traj_len = 0;
-    strokes(&T, &m, dt, t_max, th0, thc, 1, design, out, traj, traj_cap, traj_len);
+    run(&T, &m, dt, t_max, th0, thc, 1, (int)ncol, design, (int)early, out, traj, traj_cap,
+        traj_len);
 }
 
-/* one step (for tests): x1 = step(x0, h) */
-int sc_step(const double *tab_meta, const double *cc, const double *tableau,
+/* one step (for tests): x1 = step(x0, h); design = (k, l0, c, c_rot, e_tol, m_lid) */
+int sc_step(const double *tab_meta, const double *cc, const double *dcc, const double *tableau,
             const double *design, double h, const double *x0, double *x1)
 {
     Table T; Method m;
-    make(tab_meta, cc, tableau, &T, &m);
-    Par p = {design[0], design[1], design[2], design[3]};
+    make(tab_meta, cc, dcc, NULL, tableau, &T, &m);
+    Par p = {design[0], design[1], design[2], design[3], 0.0};
+    if (isfinite(design[5]) && design[5] != T.m0) {
+        if (!dcc) return S_RANGE;
+        p.dm = design[5] - T.m0;
+    }
     return step(&T, &m, &p, h, x0[0], x0[1], &x1[0], &x1[1]);
 }
 
 int sc_nout(void) { return NOUT; }
+int sc_abi(void) { return KERNEL_ABI; }
 
 static struct PyModuleDef moddef = {PyModuleDef_HEAD_INIT, "_kernel",
                                     "softclose C stroke kernel (used through ctypes)", -1, NULL};

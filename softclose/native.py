@@ -6,9 +6,65 @@ no closure is solved per step. :class:`CoefficientTable` evaluates them and thei
 theta-derivatives (CasADi AD) on a uniform grid once, as cubic Hermite pieces; the
 interpolation error is measured at every cell midpoint and kept in ``max_rel_error``.
 
+Design rows
+-----------
+:func:`run_strokes` integrates one stroke per row of a float array with 5 or 6 columns::
+
+    k (N/m), l0 (m), c (N s/m), c_rot (N m s/rad), energy_tol (J)[, lid_mass (kg)]
+
+``energy_tol`` is the energy rise that flags the stroke unstable (and the margin of the
+early exit, below). ``lid_mass`` is the lid's mass for that row; NaN, or a missing column,
+means the table's own mass (``table.lid_mass``). The coefficients M, dM, Vg, dVg are affine
+in the lid's mass (M = m |dG1/dtheta|^2 + I_lid + cranks, Vg = g (m y_G1 + cranks), with
+I_lid = m L^2 / 12 when it is derived, or fixed when ``mass.inertia_lid`` is configured), so
+a row's coefficients are ``c(m0) + (m - m0) dc/dm`` with dc/dm from
+:attr:`CoefficientTable.mass_derivative`: 10^5 Monte Carlo samples of ``mass.lid`` need no
+model rebuild. A row at the table's mass never reads that table (bit-identical results).
+
+Early exit -- why it is exact
+-----------------------------
+With V = Vg + k (l - l0)^2 / 2 and E = M theta'^2 / 2 + V, the equation of motion gives
+dE/dt = -(c dd + c_rot) theta'^2 <= 0: the dampers only dissipate. So at every later time
+t' >= t, V(theta(t')) <= E(t') <= E(t), and since theta is continuous it stays in the
+connected component R(t) of {theta : V(theta) <= E(t)} that contains theta(t); its tip
+speed tau |theta'| = tau sqrt(2 (E - V) / M) is at most G(t) = max over R(t) of
+tau sqrt(2 (E(t) - V) / M). Let [theta_min, theta_max] be the range visited so far
+(theta_min > theta_closed while not closed). If V(theta_min) > E(t) and
+V(theta_max) > E(t), R(t) lies strictly inside (theta_min, theta_max): the lid can never
+reach theta_closed, theta_min and theta_max never change, nor do the spring-length
+extremes (l over [theta_min, theta_max]); if also G(t) <= the peak recorded so far
+(bounded rigorously from the ranges of the cubic pieces), the peak tip speed is final.
+Then every SPEC metric is what integrating to t_max would give, and the kernel stops.
+
+A fixed-step method's energy is not exactly non-increasing (a step may gain a little), so
+the rule uses E + delta with the margin delta = 2 (steps left to t_max) g + 1e-12 E_scale,
+g the largest energy gain of one step seen so far in this stroke (the method's own error,
+measured where the dampers do not mask it, e.g. at the turning points) and E_scale the size
+of the energy's terms (its rounding). It assumes that no later step gains more than twice
+the worst step so far -- the motion only decays -- and the tests check on every exited row
+of a design grid, for each method, that the rest of the stroke never rises above E + delta.
+(``energy_tol``, 5 % of the energy the stroke releases, would be far too coarse a margin:
+a lid held open in a shallow well would never be stopped.) An undamped design
+(c = c_rot = 0) keeps its energy, so the rule is not applied to it at all: its metrics over
+[0, t_max] depend on the method's drift, and it runs to t_max. Likewise a lid that
+creeps monotonically towards an equilibrium never turns back, so theta_min (and a spring
+extreme) keeps moving until t_max and the stroke is integrated to the end. A step that
+returns its start state bit for bit (a fixed point of the step map: at rest) also stops.
+``steps``, ``energy_rise`` and ``theta_dot_max`` cover [0, stop_time] only.
+
+Why a stroke stays open is recorded in ``stop_reason`` (1: trapped behind a barrier, a
+maximum of V between the lid and the rim, ``stop_theta`` = its top; 2: held open, the
+potential rises from the lid's well all the way to the rim, ``stop_theta`` = the stable
+equilibrium at the bottom of the well, V'(theta) = 0), also for a stroke that ran to t_max
+when the energy then decides it; ``stop_time`` is when integration stopped (the closing
+time, the early exit, t_max or a failure). :func:`not_closed_reasons` turns them into text.
+
 The kernel is built by ``pip install`` as the extension ``softclose._kernel``; in a source
-checkout without it, it is compiled once with the system C compiler into a cache folder.
-Calls go through ctypes, which releases the GIL, so batches run on all cores in threads.
+checkout without it (or with one older than ``_kernel.c``), it is compiled once with the
+system C compiler into a cache folder. Calls go through ctypes, which releases the GIL, so
+batches run on all cores in threads. On a CPU with AVX2 the strokes of a thread advance as
+SIMD vectors (the same numbers bit for bit as the lane-by-lane code, which the environment
+variable ``SC_SCALAR=1`` selects).
 """
 
 from __future__ import annotations
@@ -18,29 +74,38 @@ import hashlib
 import math
 import os
 import subprocess
-import sys
 import sysconfig
 import tempfile
 import threading
 from concurrent.futures import ThreadPoolExecutor
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
 
 from .dynamics import COEFFS
-from .errors import NumericalError
+from .errors import ConfigError, NumericalError
 from .integrators import Method
 
 #: output columns of the kernel, in order
 OUT_FIELDS = ("status", "closing_time", "impact_theta_dot", "impact_tip_speed",
               "peak_tip_speed", "min_spring_length", "max_spring_length", "steps",
-              "energy_rise", "theta_min", "theta_dot_max", "theta_max")
+              "energy_rise", "theta_min", "theta_dot_max", "theta_max",
+              "stop_reason", "stop_theta", "stop_time")
 STATUS = {0: "closed", 1: "not closed", 2: "unstable", 3: "left the tabulated range",
           4: "non-finite", 5: "implicit solve failed"}
+#: ``stop_reason`` codes: why a stroke does not close (0: it closed, failed, or is undecided)
+STOP_REASONS = {0: "", 1: "energy below the barrier", 2: "held open"}
+#: the design-row columns, in order (the last one is optional)
+DESIGN_COLUMNS = ("spring_k", "spring_rest_length", "damper_c", "rotary_damper_c",
+                  "energy_tol", "lid_mass")
+#: version of the exported C signatures; a built extension reporting another is not used
+KERNEL_ABI = 2
 
 _lib = None
 _lock = threading.Lock()
 _SRC = Path(__file__).with_name("_kernel.c")
+_COL = {name: i for i, name in enumerate(OUT_FIELDS)}
 
 
 def _compile_fallback() -> Path:
@@ -67,44 +132,136 @@ def _compile_fallback() -> Path:
     return lib
 
 
+def _built_extension() -> Path | None:
+    """The extension built by pip install, if it is current (same ABI, not older than the
+    source next to it: an edited ``_kernel.c`` in a checkout is compiled afresh)."""
+    try:
+        from . import _kernel  # noqa: F401  (built by pip install)
+    except ImportError:
+        return None
+    path = Path(_kernel.__file__)
+    if _SRC.exists() and path.stat().st_mtime < _SRC.stat().st_mtime:
+        return None
+    try:
+        lib = ctypes.CDLL(str(path))
+        if lib.sc_abi() != KERNEL_ABI:
+            return None
+    except (OSError, AttributeError):
+        return None
+    return path
+
+
 def load():
     """The ctypes handle of the kernel (built extension, else compiled on first use)."""
     global _lib
     with _lock:
         if _lib is not None:
             return _lib
-        path = None
-        try:
-            from . import _kernel  # noqa: F401  (built by pip install)
-            path = Path(_kernel.__file__)
-        except ImportError:
-            path = _compile_fallback()
+        path = _built_extension() or _compile_fallback()
         lib = ctypes.CDLL(str(path))
         dp, lp = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_long)
         d, l = ctypes.c_double, ctypes.c_long
-        lib.sc_strokes.argtypes = [dp, dp, dp, d, d, d, d, l, dp, dp]
+        lib.sc_strokes.argtypes = [dp, dp, dp, dp, dp, d, d, d, d, l, l, dp, l, dp]
         lib.sc_strokes.restype = None
-        lib.sc_stroke_traj.argtypes = [dp, dp, dp, d, d, d, d, dp, dp, dp, l, lp]
+        lib.sc_stroke_traj.argtypes = [dp, dp, dp, dp, dp, d, d, d, d, l, dp, l, dp, dp, l, lp]
         lib.sc_stroke_traj.restype = None
-        lib.sc_step.argtypes = [dp, dp, dp, dp, d, dp, dp]
+        lib.sc_step.argtypes = [dp, dp, dp, dp, dp, d, dp, dp]
         lib.sc_step.restype = ctypes.c_int
-        assert lib.sc_nout() == len(OUT_FIELDS)
+        if lib.sc_nout() != len(OUT_FIELDS) or lib.sc_abi() != KERNEL_ABI:
+            raise NumericalError("the stroke kernel does not match softclose/native.py; "
+                                 "reinstall softclose")
         _lib = lib
         return lib
 
 
-def _ptr(a: np.ndarray):
+def _ptr(a: np.ndarray | None):
+    if a is None:
+        return ctypes.POINTER(ctypes.c_double)()
     return a.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
 
 
+def _kernel_layout(cc: np.ndarray) -> np.ndarray:
+    """(ncell, NC, 4) pieces -> the kernel's power-major (ncell, 4, NC), 64-byte aligned."""
+    t = cc.transpose(0, 2, 1)
+    buf = np.empty(t.size + 8)
+    off = (-buf.ctypes.data % 64) // 8
+    out = buf[off:off + t.size].reshape(t.shape)
+    out[...] = t
+    return out
+
+
+def _cubic_ranges(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Ranges over s in [0, 1] of the cubics q0 + q1 s + q2 s^2 + q3 s^3 (rows of q),
+    from the ends and the real roots of the derivative, widened for rounding."""
+    def at(s):
+        return q[:, 0] + s * (q[:, 1] + s * (q[:, 2] + s * q[:, 3]))
+    vals = [at(np.zeros(len(q))), at(np.ones(len(q)))]
+    A, B, C = 3 * q[:, 3], 2 * q[:, 2], q[:, 1]
+    with np.errstate(all="ignore"):
+        D = B * B - 4 * A * C
+        sq = np.sqrt(np.where(D >= 0, D, np.nan))
+        lin = np.abs(A) < 1e-300
+        roots = [np.where(lin, -C / B, (-B + sq) / (2 * A)),
+                 np.where(lin, np.nan, (-B - sq) / (2 * A))]
+        for r in roots:
+            ok = (r > 0) & (r < 1)
+            v = at(np.where(ok, r, 0.0))
+            vals.append(np.where(ok, v, vals[0]))
+    V = np.array(vals)
+    lo, hi = V.min(axis=0), V.max(axis=0)
+    pad = 1e-13 * (np.abs(lo) + np.abs(hi)) + 1e-300
+    return lo - pad, hi + pad
+
+
+def _cell_ranges(cc: np.ndarray) -> np.ndarray:
+    """Per cell (the kernel's NRNG columns): ranges of tau, M, Vg, l, dVg, dl over the whole
+    cell, then Vg, l, tau, M at its middle (for the early exit's tip-speed bound), then a
+    flag: may the spring length have an extremum inside the cell."""
+    M, _, Vg, dVg, l, dl, _, tau = range(8)
+    out = np.empty((len(cc), 18))
+    for col, j in zip(range(0, 12, 2), (tau, M, Vg, l, dVg, dl)):
+        out[:, col], out[:, col + 1] = _cubic_ranges(cc[:, j])
+    for col, j in zip(range(12, 16), (Vg, l, tau, M)):
+        q = cc[:, j]
+        out[:, col] = q[:, 0] + 0.5 * (q[:, 1] + 0.5 * (q[:, 2] + 0.5 * q[:, 3]))
+    # may l' vanish in the cell? (roots of q1 + 2 q2 s + 3 q3 s^2 near [0, 1]; else the
+    # kernel's spring-length extremes skip the cell)
+    q = cc[:, l]
+    A, B, C = 3 * q[:, 3], 2 * q[:, 2], q[:, 1]
+    with np.errstate(all="ignore"):
+        D = B * B - 4 * A * C
+        sq = np.sqrt(np.where(D >= 0, D, np.nan))
+        lin = np.abs(A) < 1e-300
+        r1 = np.where(lin, np.where(B != 0, -C / B, np.nan), (-B + sq) / (2 * A))
+        r2 = np.where(lin, np.nan, (-B - sq) / (2 * A))
+        near = lambda r: (r >= -1e-9) & (r <= 1 + 1e-9)  # noqa: E731
+        out[:, 16] = (near(r1) | near(r2)).astype(float)
+    out[:, 17] = 0.0
+    return out
+
+
+def _pieces(model, nodes: np.ndarray, h: float) -> np.ndarray:
+    """Cubic Hermite pieces (ncell, NC, 4) in the local variable s in [0, 1]."""
+    v, dv = (np.asarray(a) for a in model.coeffs.map(len(nodes))(nodes))  # (NC, n+1) each
+    f0, f1, d0, d1 = v[:, :-1], v[:, 1:], dv[:, :-1] * h, dv[:, 1:] * h
+    cc = np.stack([f0, d0, 3 * (f1 - f0) - 2 * d0 - d1, 2 * (f0 - f1) + d0 + d1], axis=-1)
+    return np.ascontiguousarray(cc.transpose(1, 0, 2)), v
+
+
 class CoefficientTable:
-    """Cubic Hermite table of the geometric coefficients over ``model.theta_range``."""
+    """Cubic Hermite table of the geometric coefficients over ``model.theta_range``.
+
+    ``lid_mass`` is the mass it was built at; :attr:`mass_derivative` (built on first use)
+    holds d/d(mass.lid) of M, dM, Vg, dVg on the same cells.
+    """
 
     #: interpolation error aimed for; cells are refined (x4) up to MAX_CELLS to reach it
     TARGET_REL_ERROR = 1e-10
     MAX_CELLS = 1 << 15
 
     def __init__(self, model, cell_deg: float = 0.1):
+        self.model = model
+        self.lid_mass = float(model.mass.lid)
         lo, hi = model.theta_range
         n = max(16, int(math.ceil((hi - lo) / math.radians(cell_deg))))
         while True:
@@ -116,12 +273,8 @@ class CoefficientTable:
     def _build(self, model, lo, hi, n):
         h = (hi - lo) / n
         nodes = np.linspace(lo, hi, n + 1)
-        f = model.coeffs.map(n + 1)
-        v, dv = (np.asarray(a) for a in f(nodes))           # (NC, n+1) each
-        f0, f1, d0, d1 = v[:, :-1], v[:, 1:], dv[:, :-1] * h, dv[:, 1:] * h
-        cc = np.stack([f0, d0, 3 * (f1 - f0) - 2 * d0 - d1, 2 * (f0 - f1) + d0 + d1], axis=-1)
-        self.cc = np.ascontiguousarray(cc.transpose(1, 0, 2))  # (ncell, NC, 4)
-        self.meta = np.array([n, lo, h], float)
+        self.cc, v = _pieces(model, nodes, h)                  # (ncell, NC, 4)
+        self.meta = np.array([n, lo, h, self.lid_mass], float)
         self.lo, self.hi, self.h, self.ncell = lo, hi, h, n
         # interpolation error at the cell midpoints, relative to each coefficient's scale
         mid = 0.5 * (nodes[:-1] + nodes[1:])
@@ -135,26 +288,96 @@ class CoefficientTable:
             raise NumericalError(f"the coefficient {bad} is not finite on the stroke range; "
                                  "the geometry is at or near a toggle position")
 
-    def evaluate(self, theta) -> np.ndarray:
-        """Interpolated coefficients at angles ``theta`` (shape (len, NC))."""
+    def _kernel_arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        """The kernel's views of ``cc`` (derived again whenever ``cc`` is replaced)."""
+        if getattr(self, "_kernel_src", None) is not self.cc:
+            self._kernel = (_kernel_layout(self.cc), _cell_ranges(self.cc))
+            self._kernel_src = self.cc
+        return self._kernel
+
+    @property
+    def cc_kernel(self) -> np.ndarray:
+        """``cc`` in the kernel's power-major layout (ncell, 4, NC), 64-byte aligned."""
+        return self._kernel_arrays()[0]
+
+    @property
+    def cell_ranges(self) -> np.ndarray:
+        """Per-cell ranges the kernel's early exit and spring extremes use (ncell, 18)."""
+        return self._kernel_arrays()[1]
+
+    @cached_property
+    def mass_derivative(self) -> np.ndarray:
+        """d/d(mass.lid) of the pieces of M, dM, Vg, dVg: array (ncell, 4, 4) laid out as
+        ``cc`` (cell, coefficient, power).
+
+        The coefficients are affine in the lid's mass, so the difference quotient of the
+        tables at m0 and 2 m0 (same cells, same inertia rule: derived I = m L^2/12 unless
+        ``mass.inertia_lid`` is configured) is exact up to rounding.
+        """
+        from .model import LidModel
+        cfg, m0 = self.model.cfg, self.lid_mass
+        other = LidModel(cfg.replace(mass={"lid": 2.0 * m0}))
+        nodes = np.linspace(self.lo, self.hi, self.ncell + 1)
+        cc2, _ = _pieces(other, nodes, self.h)
+        return np.ascontiguousarray((cc2[:, :4] - self.cc[:, :4]) / m0)
+
+    @cached_property
+    def mass_derivative_kernel(self) -> np.ndarray:
+        """:attr:`mass_derivative` in the kernel's layout, zero for the other coefficients."""
+        d = np.zeros_like(self.cc)
+        d[:, :4] = self.mass_derivative
+        return _kernel_layout(d)
+
+    def evaluate(self, theta, lid_mass=None) -> np.ndarray:
+        """Interpolated coefficients at angles ``theta`` (shape (len, NC)), for the lid mass
+        ``lid_mass`` (scalar or one per angle; None or NaN: the table's own mass)."""
         th = np.atleast_1d(np.asarray(theta, float))
         x = np.clip((th - self.lo) / self.h, 0, self.ncell)
         i = np.minimum(x.astype(int), self.ncell - 1)
         s = (x - i)[:, None]
         q = self.cc[i]
-        return q[..., 0] + s * (q[..., 1] + s * (q[..., 2] + s * q[..., 3]))
+        c = q[..., 0] + s * (q[..., 1] + s * (q[..., 2] + s * q[..., 3]))
+        if lid_mass is not None:
+            dm = np.broadcast_to(np.asarray(lid_mass, float), th.shape) - self.lid_mass
+            dm = np.where(np.isfinite(dm), dm, 0.0)
+            if np.any(dm != 0):
+                r = self.mass_derivative[i]
+                dc = r[..., 0] + s * (r[..., 1] + s * (r[..., 2] + s * r[..., 3]))
+                c = c.copy()
+                c[:, :4] += dm[:, None] * dc
+        return c
+
+
+def _lid_masses(designs: np.ndarray, table: CoefficientTable) -> np.ndarray | None:
+    """Validate the optional lid-mass column; the derivative table if any row needs it."""
+    if designs.shape[1] == 5:
+        return None
+    if designs.shape[1] != 6:
+        raise ConfigError(f"design rows: expected 5 or 6 columns ({', '.join(DESIGN_COLUMNS)}), "
+                          f"got {designs.shape[1]}")
+    m = designs[:, 5]
+    given = ~np.isnan(m)
+    if np.any(given & ~(np.isfinite(m) & (m > 0))):
+        bad = m[given & ~(np.isfinite(m) & (m > 0))][0]
+        raise ConfigError(f"lid_mass: must be a positive number of kg, got {bad}")
+    if np.any(given & (m != table.lid_mass)):
+        return table.mass_derivative_kernel
+    return None
 
 
 def run_strokes(table: CoefficientTable, method: Method, step: float, t_max: float,
                 theta0: float, theta_closed: float, designs: np.ndarray,
-                threads: int | None = None) -> np.ndarray:
-    """Metrics of strokes for rows of ``designs`` = (k, l0, c, c_rot, energy_tol).
+                threads: int | None = None, early_exit: bool = True) -> np.ndarray:
+    """Metrics of strokes for the design rows ``designs`` (see the module doc: 5 or 6
+    columns). ``early_exit=False`` integrates every open stroke to ``t_max``.
 
     Returns an array (n, len(OUT_FIELDS)). Work is split across threads.
     """
     lib = load()
-    designs = np.ascontiguousarray(designs, float)
-    n = len(designs)
+    designs = np.ascontiguousarray(np.atleast_2d(designs), float)
+    dcc = _lid_masses(designs, table)
+    cc, ranges = table.cc_kernel, table.cell_ranges      # held here while C reads them
+    n, ncol = designs.shape
     out = np.empty((n, len(OUT_FIELDS)))
     tab = method.packed()
     cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
@@ -162,42 +385,98 @@ def run_strokes(table: CoefficientTable, method: Method, step: float, t_max: flo
     threads = max(1, min(threads, n // 64 or 1))
 
     def work(a, b):
-        lib.sc_strokes(_ptr(table.meta), _ptr(table.cc), _ptr(tab), step, t_max, theta0,
-                       theta_closed, b - a, _ptr(designs[a:b]), _ptr(out[a:b]))
+        lib.sc_strokes(_ptr(table.meta), _ptr(cc), _ptr(dcc), _ptr(ranges), _ptr(tab), step, t_max,
+                       theta0, theta_closed, b - a, ncol, _ptr(designs[a:b]), int(early_exit),
+                       _ptr(out[a:b]))
 
     if threads == 1:
         work(0, n)
     else:
         # more chunks than threads: strokes differ in length (a slammed lid takes 150 steps,
-        # a heavily damped one thousands), so equal halves would leave one core idle
-        chunks = max(threads, min(8 * threads, n // 64))
+        # a creeping one runs to t_max), so equal halves would leave one core idle
+        chunks = max(threads, min(32 * threads, n // 64))
         bounds = np.linspace(0, n, chunks + 1).astype(int)
         with ThreadPoolExecutor(threads) as ex:
             list(ex.map(lambda ab: work(*ab), zip(bounds[:-1], bounds[1:])))
     return out
 
 
-def run_stroke_trajectory(table, method, step, t_max, theta0, theta_closed, design):
-    """One stroke with its trajectory: (metrics row, array of (t, theta, theta'))."""
+def run_stroke_trajectory(table, method, step, t_max, theta0, theta_closed, design,
+                          early_exit: bool = False):
+    """One stroke with its trajectory: (metrics row, array of (t, theta, theta')).
+
+    By default an open stroke is integrated to ``t_max`` (a figure shows all of it); the
+    metrics are the same either way.
+    """
     lib = load()
-    design = np.ascontiguousarray(design, float)
+    design = np.ascontiguousarray(np.atleast_1d(design), float)
+    dcc = _lid_masses(design[None, :], table)
+    cc, ranges = table.cc_kernel, table.cell_ranges
     cap = int(math.ceil(t_max / step)) + 3
     traj = np.empty((cap, 3))
     out = np.empty(len(OUT_FIELDS))
     nt = ctypes.c_long(0)
-    lib.sc_stroke_traj(_ptr(table.meta), _ptr(table.cc), _ptr(method.packed()), step, t_max,
-                       theta0, theta_closed, _ptr(design), _ptr(out), _ptr(traj), cap,
-                       ctypes.byref(nt))
+    tab = method.packed()
+    lib.sc_stroke_traj(_ptr(table.meta), _ptr(cc), _ptr(dcc), _ptr(ranges), _ptr(tab),
+                       step, t_max, theta0, theta_closed, len(design), _ptr(design),
+                       int(early_exit), _ptr(out), _ptr(traj), cap, ctypes.byref(nt))
     return out, traj[:nt.value].copy()
 
 
 def kernel_step(table, method, design, h, x0) -> np.ndarray:
-    """One step of the kernel (for tests)."""
+    """One step of the kernel (for tests); ``design`` = (k, l0, c, c_rot[, e_tol, lid_mass])."""
     lib = load()
     x1 = np.empty(2)
-    d = np.ascontiguousarray(np.r_[design[:4], 0.0], float)
-    st = lib.sc_step(_ptr(table.meta), _ptr(table.cc), _ptr(method.packed()), _ptr(d), h,
-                     _ptr(np.ascontiguousarray(x0, float)), _ptr(x1))
+    design = np.asarray(design, float)
+    mass = design[5] if len(design) > 5 else np.nan
+    d = np.ascontiguousarray(np.r_[design[:4], 0.0, mass], float)
+    dcc = _lid_masses(d[None, :], table)
+    cc, tab, x0 = table.cc_kernel, method.packed(), np.ascontiguousarray(x0, float)
+    st = lib.sc_step(_ptr(table.meta), _ptr(cc), _ptr(dcc), _ptr(tab), _ptr(d), h, _ptr(x0),
+                     _ptr(x1))
     if st:
         raise NumericalError(f"kernel step failed: {STATUS.get(st, st)}")
     return x1
+
+
+def potential_energy(table: CoefficientTable, theta, P, lid_mass=None) -> np.ndarray:
+    """V = Vg + k (l - l0)^2 / 2 (J) at ``theta`` (scalar or one per row) for rows of
+    P = (k, l0, ...), at ``lid_mass`` (scalar, one per row, or None: the table's mass)."""
+    P = np.atleast_2d(np.asarray(P, float))
+    th = np.broadcast_to(np.asarray(theta, float), (len(P),))
+    c = table.evaluate(th, lid_mass)
+    return c[:, 2] + 0.5 * P[:, 0] * (c[:, 4] - P[:, 1]) ** 2
+
+
+def holding_moments(table: CoefficientTable, theta_closed: float, P,
+                    lid_mass=None) -> np.ndarray:
+    """dV/dtheta at ``theta_closed`` (N m, > 0 presses the lid shut) for rows of
+    P = (k, l0, ...), from the table, at ``lid_mass`` (scalar, one per row, or None)."""
+    P = np.atleast_2d(np.asarray(P, float))
+    th = np.full(len(P), float(theta_closed))
+    c = table.evaluate(th, lid_mass)
+    return c[:, 3] + P[:, 0] * (c[:, 4] - P[:, 1]) * c[:, 5]
+
+
+def not_closed_reasons(out) -> np.ndarray:
+    """Why each stroke did not close, as text ("" for a closed or failed stroke).
+
+    ``out``: kernel rows (n, len(OUT_FIELDS)) or one row, or a mapping with the columns
+    ``status``, ``stop_reason``, ``stop_theta`` (e.g. ``Simulator.run_batch``'s result).
+    """
+    if hasattr(out, "keys"):
+        status, reason, theta = (np.atleast_1d(np.asarray(out[k], float))
+                                 for k in ("status", "stop_reason", "stop_theta"))
+    else:
+        a = np.atleast_2d(np.asarray(out, float))
+        status, reason, theta = (a[:, _COL[k]] for k in ("status", "stop_reason", "stop_theta"))
+    text = np.full(status.shape, "", dtype=object)
+    open_ = status == 1
+    deg = np.char.mod("%.1f", np.where(np.isfinite(theta), np.degrees(theta), 0.0))
+    for code, head in ((1, "cannot reach the rim: energy below the barrier at theta = "),
+                       (2, "held open at theta = ")):
+        m = open_ & (reason == code)
+        text[m] = np.char.add(np.char.add(head, deg[m]), " deg").astype(object)
+    text[open_ & (reason == 0)] = ("still moving towards the rim at t_max "
+                                   "(too slow to close in time)")
+    return text
