@@ -307,3 +307,24 @@ def test_progress_line_only_on_a_terminal(tmp_path, capsys):
     assert (tmp_path / "profile_design_damper_c.png").exists()
     res = sweep(default_config(), {"design.damper_c": [0.0, 500.0]}, progress=True)
     assert res.success and "sweep [" not in capsys.readouterr().err
+
+
+def test_binned_summary_is_the_best_over_the_other_keys(design_sweep):
+    """What the maps of a streamed sweep are drawn from, against the full table."""
+    res, _, _ = design_sweep
+    shape = res.space.shape
+    feas = res.columns["feasible"].reshape(shape)
+    J = np.where(feas, res.columns["objective"].reshape(shape), np.inf)
+    b = res.bins
+    for g, other in (((0, 1), 2), ((0, 2), 1), ((1, 2), 0)):
+        best = J.min(axis=other)
+        assert np.array_equal(b.grid(g, "objective"),
+                              np.where(np.isfinite(best), best, np.nan), equal_nan=True)
+        assert np.array_equal(b.grid(g, "feasible"), feas.sum(axis=other))
+        assert b.grid(g, "count").sum() == res.points
+        # the kept metrics are those of the cell's best design
+        ids = b.grid(g, "id")
+        for cell in zip(*np.nonzero(ids >= 0)):
+            row = res.row(int(ids[cell]))
+            assert row["objective"] == b.grid(g, "objective")[cell]
+            assert row["peak_tip_speed"] == b.grid(g, "peak_tip_speed")[cell]

@@ -237,11 +237,40 @@ def _sweep_run(cfg, args, space, fmt, chunk, out: Path, m: dict, dask) -> Outcom
     return Outcome(payload, text, 130 if interrupted else 0, tuple(files))
 
 
-def write_maps(res, out: Path) -> list[Path]:
-    """Draw and save the maps of ``res`` in ``out``."""
-    from ..figures import save
-    from ..figures.sweep import plot_maps
-    return [save(fig, out / f"{name}.png") for name, fig in plot_maps(res).items()]
+def write_maps(res, out: Path, parallel: bool = True) -> list[Path]:
+    """Draw and save the maps of ``res`` in ``out``.
+
+    With two maps or more and two cores, a forked child draws half of them while this
+    process draws the rest (matplotlib is single-threaded; drawing is most of the time of a
+    small sweep). Whatever the child did not write is drawn here.
+    """
+    import os
+
+    from ..figures.sweep import map_names, plot_maps, save_maps
+    names = map_names(res)
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
+    pid = 0
+    theirs: list[str] = []
+    if parallel and len(names) >= 2 and cores >= 2 and hasattr(os, "fork"):
+        theirs = names[1::2]
+        pid = os.fork()
+        if pid == 0:                                 # the child: draw its half, then leave
+            code = 1
+            try:
+                save_maps(plot_maps(res, only=theirs), out)
+                code = 0
+            finally:
+                os._exit(code)
+    ours = [n for n in names if n not in theirs]
+    try:
+        save_maps(plot_maps(res, only=ours), out)
+    except BaseException:
+        if pid:
+            os.waitpid(pid, 0)
+        raise
+    if pid and os.waitpid(pid, 0)[1] != 0:           # the child failed: draw its half here
+        save_maps(plot_maps(res, only=theirs), out)
+    return [out / f"{n}.png" for n in names]
 
 
 def _text(res, payload: dict, files, resume) -> str:

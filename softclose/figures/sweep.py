@@ -87,9 +87,10 @@ def _fmt(v: float) -> str:
 class _View:
     """One map or profile: centres per axis, the quantities and the category of each cell."""
 
-    def __init__(self, keys, centres, logs, Z, cat, best, note):
+    def __init__(self, keys, centres, logs, Z, cat, best, note, contours=True):
         self.keys, self.centres, self.logs = keys, centres, logs
         self.Z, self.cat, self.best, self.note = Z, cat, best, note
+        self.contours = contours      # not over the scatter of a random sample's cells
 
 
 def _views_from_columns(res) -> list[_View]:
@@ -150,16 +151,16 @@ def _views_from_bins(res) -> list[_View]:
         Z = {q: b.grid(g, q) for q in QUANTITIES}
         others = [a for j, a in enumerate(b.axes) if j not in g and a.n >= 2]
         if res.kind == "sample":
-            what = (f"{res.points} designs ({res.space.sampler}) in "
+            what = (f"{res.points:,} designs ({res.space.sampler}) in "
                     f"{' x '.join(str(b.axes[j].n) for j in g)} bins")
         else:
-            what = f"{res.points} designs in {' x '.join(str(b.axes[j].n) for j in g)} bins"
+            what = f"{res.points:,} designs in {' x '.join(str(b.axes[j].n) for j in g)} bins"
         free = ", ".join(f"{a.key} {_fmt(a.lo)}..{_fmt(a.hi)} {unit(a.key)}" for a in others)
         exact = all(b.axes[j].exact is not None for j in g)
         if exact and not free:
-            note = f"every design of the grid ({res.points})"
+            note = f"every design of the grid ({res.points:,})"
         elif exact:
-            note = f"{res.points} designs; each point: the best feasible design over {free}"
+            note = f"{res.points:,} designs; each point: the best feasible design over {free}"
         else:
             note = f"{what}; each cell: its best feasible design" + \
                 (f" over {free}" if free else "")
@@ -167,7 +168,8 @@ def _views_from_bins(res) -> list[_View]:
         if res.best is not None:
             best = tuple(float(res.best[b.axes[j].key]) for j in g)
         views.append(_View([b.axes[j].key for j in g], [b.axes[j].centres for j in g],
-                           [b.axes[j].log for j in g], Z, cat, best, note))
+                           [b.axes[j].log for j in g], Z, cat, best, note,
+                           contours=res.kind == "grid"))
     return views
 
 
@@ -228,7 +230,7 @@ def _panel(fig, ax, v: _View, q: str, feas: np.ndarray) -> None:
         cb.set_ticks(ticks)
         cb.set_ticklabels([f"{t:g}" for t in ticks])
         cb.set_label(f"{name} [{u}]")
-        if ok.sum() >= 6 and min(Z.shape) >= 3:
+        if v.contours and ok.sum() >= 6 and min(Z.shape) >= 3:
             lines = [t for t in ticks if levels[0] < t < levels[-1]]
             if len(lines):
                 X, Y = np.meshgrid(v.centres[0], v.centres[1], indexing="ij")
@@ -240,28 +242,33 @@ def _panel(fig, ax, v: _View, q: str, feas: np.ndarray) -> None:
 
 
 def _infeasible(ax, v: _View, present: list) -> None:
-    """Infeasible cells: filled by category, hatched by reason (one contourf per category
-    present, on the cell grid padded by half a cell)."""
+    """Infeasible cells: whole cells filled by category (one mesh), hatched by reason (the
+    hatch lines of one contourf per hatched category present, on the cell grid padded by
+    half a cell); cells with no design (binned summaries) stay white."""
+    from matplotlib.colors import ListedColormap
     from ..sweep.tally import CATEGORIES
     xe, ye = _edges(v.centres[0], v.logs[0]), _edges(v.centres[1], v.logs[1])
-    # nodes: the cell centres plus the outer edges, so a category fills whole cells
+    cat = np.asarray(v.cat)
+    bad = cat >= 0
+    if bad.any():
+        cmap = ListedColormap([STYLE[c][0] for c in CATEGORIES])
+        ax.pcolormesh(xe, ye, np.ma.masked_where(~bad, cat).T, cmap=cmap, vmin=-0.5,
+                      vmax=len(CATEGORIES) - 0.5)
     xn = np.r_[xe[0], v.centres[0], xe[-1]]
     yn = np.r_[ye[0], v.centres[1], ye[-1]]
-    cat = np.pad(v.cat, 1, mode="edge")
+    padded = np.pad(cat, 1, mode="edge")
     for code, name in enumerate(CATEGORIES):
-        m = cat == code
+        m = padded == code
         if not m.any():
             continue
         if name not in present:
             present.append(name)
-        colour, hatch = STYLE[name]
-        ax.contourf(xn, yn, m.T.astype(float), levels=[0.5, 1.5], colors=[colour],
-                    hatches=[hatch], alpha=0.9)
-    empty = cat == -2
-    if empty.any():
-        ax.contourf(xn, yn, empty.T.astype(float), levels=[0.5, 1.5], colors=["white"])
-        if "no design" not in present:
-            present.append("no design")
+        hatch = STYLE[name][1]
+        if hatch:
+            ax.contourf(xn, yn, m.T.astype(float), levels=[0.5, 1.5], colors="none",
+                        hatches=[hatch])
+    if (cat == -2).any() and "no design" not in present:
+        present.append("no design")
 
 
 def _legend(fig, present, best_label):
@@ -278,7 +285,8 @@ def _legend(fig, present, best_label):
 
 
 def _map(v: _View, res):
-    fig, axs = plt.subplots(2, 2, figsize=(11, 8.6), sharex=True, sharey=True)
+    # axes not shared (sharing costs a tick-label search per draw): the same edges anyway
+    fig, axs = plt.subplots(2, 2, figsize=(11, 8.6))
     feas = v.cat == -1
     present: list[str] = []
     for ax, q in zip(axs.ravel(), QUANTITIES):
@@ -291,6 +299,10 @@ def _map(v: _View, res):
             ax.set_xscale("log")
         if v.logs[1]:
             ax.set_yscale("log")
+    for ax in axs[0]:
+        ax.tick_params(labelbottom=False)
+    for ax in axs[:, 1]:
+        ax.tick_params(labelleft=False)
     for ax in axs[1]:
         ax.set_xlabel(label(v.keys[0]))
         ax.xaxis.set_label_coords(0.5, -0.1)  # fixed: tick labels have one height
@@ -301,7 +313,7 @@ def _map(v: _View, res):
     _legend(fig, present, best_label)
     fig.suptitle(f"Sweep maps; infeasible designs grey or hatched by reason\n{v.note}",
                  fontsize=10)
-    fig.subplots_adjust(left=0.08, right=0.97, bottom=0.12, top=0.91, wspace=0.12, hspace=0.14)
+    fig.subplots_adjust(left=0.08, right=0.97, bottom=0.12, top=0.89, wspace=0.12, hspace=0.14)
     return fig
 
 
@@ -325,24 +337,60 @@ def _profile(v: _View, res):
         ax.set_xlabel(label(key))
     axs[0, 0].legend(fontsize=8)
     fig.suptitle(f"Sweep over {key}\n{v.note}", fontsize=10)
-    fig.subplots_adjust(left=0.08, right=0.97, bottom=0.09, top=0.9, wspace=0.25, hspace=0.12)
+    fig.subplots_adjust(left=0.08, right=0.97, bottom=0.09, top=0.87, wspace=0.25, hspace=0.12)
     return fig
 
 
-def plot_maps(res) -> dict:
-    """The maps of a sweep result, by file stem: ``map_<k1>__<k2>`` for each pair of swept
-    keys, or ``profile_<k>`` when one key is swept. Empty when nothing can be drawn."""
+def save_maps(figs: dict, out) -> list:
+    """Write the maps as ``<stem>.png`` in ``out`` (their layout is fixed: no tight-bbox
+    pass, which would draw each figure twice) and close them."""
+    from pathlib import Path
+
+    from . import DPI
+    paths = []
+    for name, fig in figs.items():
+        path = Path(out) / f"{name}.png"
+        fig.savefig(path, dpi=DPI, bbox_inches=None)
+        plt.close(fig)
+        paths.append(path)
+    return paths
+
+
+def _views(res) -> list[_View]:
     if res.computed == 0:
-        return {}
+        return []
     in_memory = res.columns is not None and res.kind == "grid" and res.computed == res.points
     views = _views_from_columns(res) if in_memory else _views_from_bins(res)
+    if res.fixed:       # the design keys not swept, at the config's values
+        fixed = ", ".join(f"{k.split('.')[1]} = {_fmt(v)} {unit(k)}"
+                          for k, v in res.fixed.items())
+        for v in views:
+            v.note += f"\nnot swept: {fixed}"
+    return views
+
+
+def _name(v: _View) -> str:
+    if len(v.keys) == 1:
+        return f"profile_{stem(v.keys[0])}"
+    return f"map_{stem(v.keys[0])}__{stem(v.keys[1])}"
+
+
+def map_names(res) -> list[str]:
+    """The file stems :func:`plot_maps` would draw, without drawing them."""
+    return [_name(v) for v in _views(res)]
+
+
+def plot_maps(res, only=None) -> dict:
+    """The maps of a sweep result, by file stem: ``map_<k1>__<k2>`` for each pair of swept
+    keys, or ``profile_<k>`` when one key is swept (``only``: these stems). Empty when
+    nothing can be drawn."""
     out = {}
-    for v in views:
-        if len(v.keys) == 1:
-            out[f"profile_{stem(v.keys[0])}"] = _profile(v, res)
-        else:
-            out[f"map_{stem(v.keys[0])}__{stem(v.keys[1])}"] = _map(v, res)
+    for v in _views(res):
+        name = _name(v)
+        if only is not None and name not in only:
+            continue
+        out[name] = _profile(v, res) if len(v.keys) == 1 else _map(v, res)
     return out
 
 
-__all__ = ["plot_maps", "label", "QUANTITIES", "LABELS"]
+__all__ = ["plot_maps", "save_maps", "map_names", "label", "QUANTITIES", "LABELS"]

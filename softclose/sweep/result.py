@@ -18,7 +18,8 @@ class SweepResult:
     ``columns`` holds the rows (one per design, sorted by ``id``) as read-only numpy arrays
     named as in :meth:`to_frame`; it is None for a sweep streamed to a Parquet dataset
     (``dataset``, read back by :meth:`to_frame`). ``bins`` is the binned summary the maps of
-    any sweep can be drawn from (:class:`softclose.sweep.tally.Bins`). After Ctrl-C
+    any sweep can be drawn from (:class:`softclose.sweep.tally.Bins`); ``fixed`` the values
+    of the design keys that were not swept (from the config). After Ctrl-C
     (``interrupted``) only the finished chunks are present: ``computed < points``.
     """
 
@@ -35,6 +36,7 @@ class SweepResult:
     interrupted: bool = False
     columns: Mapping[str, np.ndarray] | None = field(default=None, repr=False)
     dataset: str | None = None
+    fixed: Mapping[str, float] = field(default_factory=dict)
 
     def __post_init__(self):
         if self.columns is not None:
@@ -46,6 +48,7 @@ class SweepResult:
             object.__setattr__(self, "columns", types.MappingProxyType(cols))
         object.__setattr__(self, "reasons", types.MappingProxyType(dict(self.reasons)))
         object.__setattr__(self, "stages", types.MappingProxyType(dict(self.stages)))
+        object.__setattr__(self, "fixed", types.MappingProxyType(dict(self.fixed)))
         if self.best is not None:
             object.__setattr__(self, "best", types.MappingProxyType(dict(self.best)))
 
@@ -118,7 +121,7 @@ class SweepResult:
             "infeasible_reasons": dict(self.reasons), "interrupted": self.interrupted,
             "success": self.success, "message": self.message,
             "seconds": self.seconds, "designs_per_second": rate,
-            "stages": dict(self.stages), "chunk": self.chunk,
+            "stages": dict(self.stages), "chunk": self.chunk, "fixed": dict(self.fixed),
             "best": dict(self.best) if self.best is not None else None,
         })
 

@@ -23,7 +23,7 @@ from typing import Callable, Iterable, Iterator
 import numpy as np
 
 from ..errors import ConfigError
-from .chunks import CHUNK, columns, empty, evaluate_chunk
+from .chunks import CHUNK, PARAM_COLUMNS, columns, empty, evaluate_chunk
 from .result import SweepResult
 from .tally import Bins, Tally, categorise
 
@@ -140,7 +140,9 @@ def run(cfg, space, *, progress: bool = False, threads: int | None = None,
                        reasons=tally.reasons(), best=tally.best, bins=bins.freeze(),
                        seconds=time.perf_counter() - t0, stages=stages, chunk=chunk,
                        interrupted=interrupted or tally.computed < n, columns=cols,
-                       dataset=dataset)
+                       dataset=dataset,
+                       fixed={k: float(getattr(cfg.design, k.split(".")[1]))
+                              for k in PARAM_COLUMNS if k not in keys})
 
 
 __all__ = ["run", "local_map", "chunk_ids", "n_chunks", "MAX_IN_MEMORY"]

@@ -34,18 +34,16 @@ MAX_PAIRS = 15
 def categorise(status: np.ndarray, reason: np.ndarray) -> np.ndarray:
     """Category code per row: -1 feasible, else an index into :data:`CATEGORIES`."""
     reason = np.asarray(reason, dtype=object)
-    uniq, inv = np.unique(reason.astype(str), return_inverse=True)
-    code = np.empty(len(uniq), np.int64)
-    for i, r in enumerate(uniq):
-        if r == "":
-            code[i] = -1
-        elif r in REASONS:
-            code[i] = REASONS.index(r)
-        elif r.startswith("not closed"):
-            code[i] = REASONS.index("not closed")
-        else:
-            code[i] = CATEGORIES.index("not integrated")
-    out = code[np.asarray(inv).ravel()]
+    out = np.full(len(reason), CATEGORIES.index("not integrated"), np.int64)
+    known = np.zeros(len(reason), bool)
+    for code, r in ((-1, ""),) + tuple(enumerate(REASONS)):   # the common cases, vectorised
+        m = reason == r
+        out[m] = code
+        known |= m
+    rest = np.flatnonzero(~known)
+    if rest.size:   # e.g. "not closed (the lid swung ...)", a stroke's diagnosis
+        nc = np.array([str(r).startswith("not closed") for r in reason[rest]], bool)
+        out[rest[nc]] = REASONS.index("not closed")
     out[np.asarray(status, dtype=object) == "invalid"] = CATEGORIES.index("invalid")
     return out
 
@@ -126,7 +124,8 @@ class Bins:
                                 space.log or (False,) * len(space.keys)):
                 self.axes.append(Axis(k, float(v.min()), float(v.max()), lg, values=v))
         else:
-            nb = int(np.clip(round(math.sqrt(space.n / 4)), 8, 60))
+            # about 16 designs a cell in each 2-D map (a cell shows its best: fewer is noise)
+            nb = int(np.clip(round(math.sqrt(space.n / 16)), 6, 60))
             for r in space.ranges:
                 self.axes.append(Axis(r.key, r.lo, r.hi, r.log, nbins=nb))
         multi = [j for j, a in enumerate(self.axes) if a.n >= 2]
