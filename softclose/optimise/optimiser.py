@@ -16,7 +16,7 @@ import numpy as np
 from ..errors import ConfigError, NumericalError, SoftcloseError
 from ..problem import DESIGN_KEYS, SCALES, UNITS, describe, design_of
 from ..progress import Progress
-from .cache import get_model, get_nlp, has_nlp, stroke_simulator
+from .cache import get_nlp, has_nlp, stroke_simulator
 from .diagnose import diagnose
 from .nlp import J_INDEX, Discretisation, Run, ShootingNLP, check_options, discretisation
 from .polish import nlp_objective, refine, tighten
@@ -306,5 +306,4 @@ def solve(cfg, nodes: int | None = None, substeps: int | None = None,
     return replace(res, total_time=time.perf_counter() - t_start)
 
 
-__all__ = ["optimise", "solve", "claims", "active_set", "check_problem", "finish",
-           "get_model"]
+__all__ = ["optimise", "solve", "claims", "active_set", "check_problem", "finish"]

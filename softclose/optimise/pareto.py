@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -60,18 +61,13 @@ def front(cfg, closing_times, *, starts: int = 3, progress: bool = False) -> Fro
             c = cfg.replace(optimise={"closing_time_max": tm})
             t1 = time.perf_counter()
             r = optimise(c, starts=starts) if prev is None else continue_from(c, prev)
-            r = _timed(r, time.perf_counter() - t1)
+            r = replace(r, total_time=time.perf_counter() - t1)
             points.append(r)
             if r.run is not None and r.design is not None:
                 prev = r
             bar.update(i + 1, f"closing_time_max = {tm:g} s: "
                               f"{'verified' if r.success else 'NOT verified'}", force=True)
     return FrontResult(tuple(times), tuple(points), time.perf_counter() - t0)
-
-
-def _timed(r: OptimiseResult, t: float) -> OptimiseResult:
-    from dataclasses import replace
-    return replace(r, total_time=t)
 
 
 def continue_from(cfg, prev: OptimiseResult) -> OptimiseResult:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..problem import DESIGN_KEYS, METRIC_KEYS, UNITS
+from ..problem import DESIGN_KEYS, METRIC_KEYS
 from .verify import Verification
 
 
@@ -196,7 +196,3 @@ class FrontResult:
         """Objective, speeds and design against closing_time_max: a matplotlib Figure."""
         from ..figures.optimise import plot_front
         return plot_front(self)
-
-
-#: units of the front table's columns (CSV header)
-FRONT_UNITS = {"closing_time_max": "s", **UNITS}
