@@ -94,6 +94,12 @@ def test_design_keys_are_refused(cfg, tmp_path, capsys):
                       "sweep only non-design keys (e.g. mass.lid, geometry.lid_length)")
 
 
+def test_robust_only_with_optimise(tmp_path, capsys):
+    code = main(["sweep", "--robust", "--grid", "mass.lid=[0.4, 0.5]", "--out", str(tmp_path)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "--robust: only with --optimise" in err[0]
+
+
 def test_command_line_writes_the_table_and_the_map(tmp_path, capsys):
     out = tmp_path / "opt"
     assert main(["sweep", "--optimise", "--grid", "mass.lid=[0.5]", "--out", str(out),

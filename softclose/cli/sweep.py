@@ -62,6 +62,8 @@ def register(sub) -> None:
                    help="evaluate the chunks on a Dask cluster (scheduler address or local:N)")
     o.add_argument("--optimise", action="store_true",
                    help="the optimal design at every point of the grid of non-design keys")
+    o.add_argument("--robust", action="store_true",
+                   help="with --optimise: the robust design (under [tolerance]) at every point")
     p.set_defaults(run=run)
 
 
@@ -137,6 +139,8 @@ def run(cfg, args) -> Outcome:
     if args.threads is not None and args.threads < 1:
         raise ConfigError(f"--threads: must be at least 1, got {args.threads}")
     dask = _module("distributed", "--dask") if args.dask else None
+    if args.robust and not args.optimise:
+        raise ConfigError("--robust: only with --optimise (the robust design at every point)")
     optimal = _module("optimal", "--optimise") if args.optimise else None
     if args.resume:
         cfg, space, fmt, chunk, out, old = _resume_spec(cfg, args)

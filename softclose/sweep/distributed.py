@@ -1,30 +1,32 @@
-"""Sweeps on a Dask cluster: the chunks of a sweep (or the lines of an optimal grid) as
+"""Sweeps on a Dask cluster: the chunks of a sweep (or the segments of an optimal grid) as
 Dask tasks, on a running ``dask.distributed`` scheduler or on a local cluster of processes.
 
 Where the work runs is one string, ``dask`` (``--dask`` on the command line):
 
 - ``"local:N"`` starts a :class:`distributed.LocalCluster` of N worker *processes* with one
-  thread each (Ipopt and MUMPS are not thread-safe; the stroke kernel is compiled C and
-  gains nothing from a second Python thread per process) and stops it afterwards;
+  thread each (Ipopt and MUMPS are not thread-safe; N processes use N cores) and stops it
+  afterwards;
 - any other string is the address of a running scheduler (``tcp://host:8786``, or
   ``host:8786``), e.g. one started by dask-jobqueue on SLURM or by dask-kubernetes. An
   address that does not answer within :data:`CONNECT_TIMEOUT` seconds is a
-  :class:`~softclose.errors.ConfigError` naming it (exit 2).
+  :class:`~softclose.errors.ConfigError` naming it (exit 2), and so is a worker that cannot
+  import this version of softclose.
 
 What is sent is plain values, never CasADi objects (they do not pickle): the task function is
-importable (``softclose.sweep.chunks.evaluate_chunk``, ``softclose.sweep.optimal.solve_line``)
-and its arguments are a config dict, key names and numpy arrays; each worker process builds
-(and caches) its own simulator or NLP from the config. The results are therefore the same
-numbers as the local run's, whatever the number of workers.
+importable (:func:`softclose.sweep.chunks.evaluate_chunk`,
+:func:`softclose.sweep.optimal.solve_segment`) and its arguments are a config dict, key names
+and numpy arrays; each worker process builds (and caches) its own simulator or NLP from the
+config. The results are therefore the same numbers as the local run's, whatever the number
+of workers.
 
-A worker that is lost while it runs a task (killed, out of memory, its node preempted) has
-that task rescheduled by the Dask scheduler on another worker; :func:`run_tasks` hands every
-task's result to its callback exactly once (a result that arrives twice is dropped) and keeps
-a bounded number of tasks in flight, so a sweep of millions of designs streams. A task that
-kills workers repeatedly (``distributed.KilledWorker``) is a
-:class:`~softclose.errors.NumericalError` naming its ids. Progress is softclose's own line
-(:class:`softclose.progress.Progress`, fed from ``as_completed``): Dask's ``progress`` does
-not combine with ``as_completed``.
+A worker that is lost while it holds a task (killed, out of memory, its node preempted) has
+that task rescheduled by the Dask scheduler on another worker; :func:`map_tasks` yields every
+task's result exactly once, releases it at once (so a lost worker never forces finished work
+to be redone) and keeps a bounded number of tasks in flight, so a sweep of millions of
+designs streams. A task that kills workers repeatedly (``distributed.KilledWorker``) is a
+:class:`~softclose.errors.NumericalError` naming it. Progress is the caller's own line
+(:class:`softclose.progress.Progress`, fed as results arrive from ``as_completed``): Dask's
+``progress`` does not combine with ``as_completed`` (dask/distributed#2423).
 """
 
 from __future__ import annotations

@@ -94,7 +94,7 @@ def solve_segment(cfg_dict: dict, keys: list[str], ids, X, robust: bool = False)
     (``cfg.raw``). Returns one row dict per point (plain values): design, objective, the
     verified metrics, success, verification, how it was started, time and message."""
     with _SOLVING:
-        return _solve_segment(cfg_dict, keys, ids, X, robust)
+        return list(_segment(cfg_dict, keys, ids, X, robust))
 
 
 #: one optimisation at a time per process: Ipopt and MUMPS are not thread-safe, and a Dask
@@ -102,7 +102,8 @@ def solve_segment(cfg_dict: dict, keys: list[str], ids, X, robust: bool = False)
 _SOLVING = threading.Lock()
 
 
-def _solve_segment(cfg_dict: dict, keys: list[str], ids, X, robust: bool) -> list[dict]:
+def _segment(cfg_dict: dict, keys: list[str], ids, X, robust: bool):
+    """The rows of :func:`solve_segment`, yielded as each point is finished."""
     from ..config import from_dict
     base = from_dict(cfg_dict)
     keys = list(keys)
@@ -122,6 +123,7 @@ def _solve_segment(cfg_dict: dict, keys: list[str], ids, X, robust: bool) -> lis
             row["seconds"] = time.perf_counter() - t0
             rows.append(row)
             prev = None
+            yield row
             continue
         if start.startswith("warm"):
             start = f"warm from id {rows[-1]['id']}"
@@ -130,7 +132,7 @@ def _solve_segment(cfg_dict: dict, keys: list[str], ids, X, robust: bool) -> lis
         rows.append(row)
         prev = res if (not robust and getattr(res, "run", None) is not None
                        and res.design is not None) else None
-    return rows
+        yield row
 
 
 def _optimum(cfg, prev) -> tuple[Any, str]:
@@ -171,6 +173,11 @@ def _row(i: int, values: dict, res, start: str, message: str) -> dict:
     ver = ver or {}
     row["verified_objective"] = _num(ver.get("objective"))
     row["objective_relative_difference"] = _num(ver.get("objective_relative_difference"))
+    if "worst_objective_relative_difference" in ver:     # a robust design: its worst scenario
+        worst = [s for s in getattr(res, "scenarios", ()) if s.get("worst")]
+        ref = (worst[0].get("reference") or {}) if worst else {}
+        row["verified_objective"] = _num(ref.get("objective"))
+        row["objective_relative_difference"] = _num(ver["worst_objective_relative_difference"])
     row["active"] = ", ".join(f"{a.name} ({a.bound})" for a in getattr(res, "active", ()) or ())
     row["start"] = start
     row["iterations"] = int(getattr(res, "iterations", 0) or 0)
@@ -220,11 +227,13 @@ def optimise_grid(cfg, axes, *, dask=None, robust: bool = False, progress: bool 
     bar = Progress(grid.n, "optimal grid", enabled=progress, unit="")
     try:
         if dask is None:
-            for ids, args in tasks:
-                bar.update(len(rows), f"solving ids {ids[0]}..{ids[-1]}", force=True)
-                for r in solve_segment(*args):
-                    rows[r["id"]] = r
-                bar.update(len(rows), force=True)
+            with _SOLVING:
+                for ids, args in tasks:
+                    for r in _segment(*args):       # each point kept as soon as it is done
+                        rows[r["id"]] = r
+                        bar.update(len(rows), f"id {r['id']}: "
+                                   f"{'verified' if r['success'] else 'NOT verified'}",
+                                   force=True)
         else:
             from .distributed import connect, map_tasks
             where = dask if isinstance(dask, str) else "client"
@@ -251,7 +260,8 @@ class OptimalGridResult:
     confirmed by the adaptive reference), verified_objective (the reference's J) and
     objective_relative_difference, active (the bounds and constraints that limit the optimum),
     start (multistart or warm from which id), iterations,
-    seconds, message (why a point failed); with ``robust``, its yield and interval too.
+    seconds, message (why a point failed); with ``robust``, its yield and interval too, and
+    the verification columns are those of the worst scenario.
     A point not computed (Ctrl-C) has success False and message "not computed".
     """
 
