@@ -285,6 +285,7 @@ def _legend(fig, present, best_label):
 
 
 def _map(v: _View, res):
+    from matplotlib.ticker import MaxNLocator
     # axes not shared (sharing costs a tick-label search per draw): the same edges anyway
     fig, axs = plt.subplots(2, 2, figsize=(11, 8.6))
     feas = v.cat == -1
@@ -297,8 +298,12 @@ def _map(v: _View, res):
         ax.grid(False)
         if v.logs[0]:
             ax.set_xscale("log")
+        else:
+            ax.xaxis.set_major_locator(MaxNLocator(nbins=5, steps=[1, 2, 2.5, 5, 10]))
         if v.logs[1]:
             ax.set_yscale("log")
+        else:
+            ax.yaxis.set_major_locator(MaxNLocator(nbins=6, steps=[1, 2, 2.5, 5, 10]))
     for ax in axs[0]:
         ax.tick_params(labelbottom=False)
     for ax in axs[:, 1]:
@@ -346,13 +351,16 @@ def save_maps(figs: dict, out) -> list:
     pass, which would draw each figure twice) and close them."""
     from pathlib import Path
 
+    import matplotlib
+
     from . import DPI
     paths = []
-    for name, fig in figs.items():
-        path = Path(out) / f"{name}.png"
-        fig.savefig(path, dpi=DPI, bbox_inches=None)
-        plt.close(fig)
-        paths.append(path)
+    with matplotlib.rc_context({"savefig.bbox": "standard"}):
+        for name, fig in figs.items():
+            path = Path(out) / f"{name}.png"
+            fig.savefig(path, dpi=DPI, pil_kwargs={"compress_level": 3})
+            plt.close(fig)
+            paths.append(path)
     return paths
 
 
