@@ -40,12 +40,12 @@
  * that the rest of every exited stroke stays below E_hat. An undamped design (c = c_rot = 0)
  * keeps its energy: the rule is not applied (its extremes and peak over [0, t_max] depend
  * on the method's drift) and it runs to t_max.
+ * The same bound with tau = 1 keeps theta_dot_max final, and E_hat < V(th_max) <= E_max
+ * keeps energy_rise final: only steps and stop_time tell that a stroke stopped early.
  * A lid that creeps towards an equilibrium without turning back keeps moving th_min (and
- * a spring extreme) until t_max: it is integrated to the end. A second exit: when a step
- * returns its own start state bit for bit, the stroke is at rest at a fixed point of the
- * step map and nothing changes any more (but for the shorter last step to t_max, which
- * could move it by a rounding error).
- * Not final (they cover [0, stop time]): steps, energy_rise, theta_dot_max.
+ * a spring extreme) until t_max: it is integrated to the end. When a step returns its own
+ * start state bit for bit (at rest at a fixed point of the step map), the remaining full
+ * steps would all do the same and change nothing: they are skipped, exactly.
  * Why the lid stays open is recorded as stop_reason (1: it is trapped behind a barrier, a
  * maximum of V between it and the rim, stop_theta = the barrier top; 2: the potential
  * rises all the way from its well to the rim -- it is held open at the stable equilibrium
@@ -418,7 +418,8 @@ static inline void piece(const Table *T, const Par *p, int i, int j, double *q)
         for (int e = 0; e < 4; e++) q[e] += p->dm * CQ(T->dcc, i, e, j);
 }
 
-/* Is 2 tau^2 (Eh - V) / M <= target wherever V <= Eh on cell i, s in [s0, s1]? A rigorous
+/* Is 2 tau^2 (Eh - V) / M <= tg (the squared tip speed, tau |th'|) and 2 (Eh - V) / M <= tv
+ * (the squared |th'|) wherever V <= Eh on cell i, s in [s0, s1]? A rigorous
  * bound from the ranges of the cubic pieces, with V bounded below both by
  * min Vg + k d^2 / 2 (d: distance of l0 from the range of l) and by the mean value theorem,
  * V(mid) - max |dV| * half width (dV = dVg + k (l - l0) dl over the ranges: tight near a
@@ -426,7 +427,7 @@ static inline void piece(const Table *T, const Par *p, int i, int j, double *q)
  * coarse. Returns 0 as soon as a point exceeds the target (or the work budget is spent),
  * 1 if the bound holds, 2 if V > Eh on the whole piece (unreachable). */
 static int speed_piece_ok(const Table *T, const Par *p, int i, double s0, double s1, double Eh,
-                          double target, int depth, int *budget)
+                          double tg, double tv, int depth, int *budget)
 {
     if (--*budget < 0) return 0;
     double q[4], glo, ghi, llo, lhi, dglo, dghi, dllo, dlhi, tlo, thi, Mlo, Mhi, v[NC];
@@ -461,34 +462,37 @@ static int speed_piece_ok(const Table *T, const Par *p, int i, double s0, double
     if (Vlow > Eh) return 2; /* unreachable */
     (void)Mhi;
     if (!(Mlo > 0)) return 0;
-    double t2 = thi > -tlo ? thi * thi : tlo * tlo;
-    if (2.0 * t2 * (Eh - Vlow) / Mlo <= target) return 1;
+    double t2 = thi > -tlo ? thi * thi : tlo * tlo, w = 2.0 * (Eh - Vlow) / Mlo;
+    if (t2 * w <= tg && w <= tv) return 1;
     if (R && !(s0 == 0.0 && s1 == 1.0)) /* (the cell's middle may lie outside [s0, s1]) */
-        return speed_piece_ok(T, p, i, s0, s1, Eh, target, depth + 1, budget);
-    if (2.0 * v[C_TAU] * v[C_TAU] * (Eh - Vm) / v[C_M] > target)
-        return 0; /* reachable: not final */
+        return speed_piece_ok(T, p, i, s0, s1, Eh, tg, tv, depth + 1, budget);
+    double wm = 2.0 * (Eh - Vm) / v[C_M];
+    if (v[C_TAU] * v[C_TAU] * wm > tg || wm > tv) return 0; /* reachable: not final */
     if (depth >= 30) return 0;
-    return speed_piece_ok(T, p, i, s0, sm, Eh, target, depth + 1, budget)
-           && speed_piece_ok(T, p, i, sm, s1, Eh, target, depth + 1, budget);
+    return speed_piece_ok(T, p, i, s0, sm, Eh, tg, tv, depth + 1, budget)
+           && speed_piece_ok(T, p, i, sm, s1, Eh, tg, tv, depth + 1, budget);
 }
 
 /* Can the lid, from th with energy at most Eh and never leaving [a, b], reach a tip speed
- * above `peak`? 1 if not (the peak is final). The cells are visited outwards from th's
- * until a cell lies wholly above Eh (the component of {V <= Eh} cannot cross it). */
+ * above `peak` or a theta' above `thd_max`? 1 if not (both are final). The cells are
+ * visited outwards from th's until a cell lies wholly above Eh (the component of
+ * {V <= Eh} cannot cross it). */
 static int speed_bound_ok(const Table *T, const Par *p, double th, double a, double b,
-                          double Eh, double peak)
+                          double Eh, double peak, double thd_max)
 {
     double xa = (a - T->lo) * T->inv_h, xb = (b - T->lo) * T->inv_h, x = (th - T->lo) * T->inv_h;
     if (!(xa >= 0 && xb <= T->ncell && x >= xa && x <= xb)) return 0;
     int i0 = (int)floor(xa), i1 = (int)floor(xb), ith = (int)floor(x), budget = 4000;
     if (i1 > T->ncell - 1) i1 = T->ncell - 1;
     if (ith > i1) ith = i1;
-    double target = peak * peak * (1.0 - 1e-10); /* margin for the rounding of g = tau |th'| */
+    if (!(thd_max > 0)) return 0;
+    /* (1 - 1e-10): a margin for the rounding of tau |th'| and th' from the energy */
+    double tg = peak * peak * (1.0 - 1e-10), tv = thd_max * thd_max * (1.0 - 1e-10);
     for (int dir = -1; dir <= 1; dir += 2)
         for (int i = dir < 0 ? ith : ith + 1; dir < 0 ? i >= i0 : i <= i1; i += dir) {
             double s0 = xa - i > 0 ? xa - i : 0.0, s1 = xb - i < 1 ? xb - i : 1.0;
             if (s1 < s0) continue;
-            int r = speed_piece_ok(T, p, i, s0, s1, Eh, target, 0, &budget);
+            int r = speed_piece_ok(T, p, i, s0, s1, Eh, tg, tv, 0, &budget);
             if (r == 0) return 0;
             if (r == 2 && i != ith) break;
         }
@@ -620,7 +624,7 @@ typedef struct {
     double gp, g, dg, a, peak, E0, Emax;      /* tip speed at previous/current node, ...  */
     double thd_max;                           /* max theta' over the nodes after t = 0 */
     double E, Vlo, Vhi;         /* energy at the node, V(th_min), V(th_max) */
-    double gain, floor_, t_max, inv_dt; /* largest energy gain of a step so far, ... */
+    double gain, floor_, t_max, dt, inv_dt; /* largest energy gain of a step so far, ... */
     double stop_theta;
     long n, nt, traj_cap;
     double *traj;
@@ -680,7 +684,7 @@ static int lane_start(const Table *T, Lane *L, const double *d, int ncol, double
     L->gp = 0.0; L->g = 0.0; L->dg = 0.0; L->peak = 0.0; L->a = 0.0;
     L->n = 0; L->nt = 0; L->traj = traj; L->traj_cap = traj_cap; L->thd_max = -INFINITY;
     L->status = S_OPEN; L->reason = R_NONE; L->stop_theta = NAN; L->wait = 0;
-    L->gain = 0.0; L->t_max = t_max; L->inv_dt = 1.0 / dt;
+    L->gain = 0.0; L->t_max = t_max; L->dt = dt; L->inv_dt = 1.0 / dt;
     /* the energy rule needs dissipation (c dd + c_rot > 0 on the stroke) */
     L->early = early && (L->p.c > 0 || L->p.cr > 0) && L->p.c >= 0 && L->p.cr >= 0;
     for (int j = 0; j < NOUT; j++) out[j] = NAN;
@@ -734,9 +738,18 @@ static void lane_finish(const Table *T, Lane *L, double thc, double t_max)
 __attribute__((noinline)) static int lane_try_exit(const Table *T, Lane *L, double thc,
                                                    double th_prev, double thd_prev)
 {
-    if (L->th == th_prev && L->thd == thd_prev) { /* a fixed point of the step map: at rest */
-        L->reason = R_HELD; L->stop_theta = L->th;
-        return 1;
+    if (L->th == th_prev && L->thd == thd_prev) {
+        /* a fixed point of the step map (at rest): every further full step returns the same
+         * state and changes nothing but the clock, so those steps are skipped; a last,
+         * shorter step to t_max (if any) is taken as usual */
+        if (L->hp == L->dt)
+            for (;;) {
+                double h = L->dt < L->t_max - L->t ? L->dt : L->t_max - L->t;
+                if (!(L->t < L->t_max && h > 1e-15 * L->t_max) || h != L->dt) break;
+                L->t += h; L->n++;
+                lane_record(L);
+            }
+        return 0;
     }
     /* what the method may still gain: twice its largest gain per step so far for each
      * step left, plus the rounding of E */
@@ -744,7 +757,7 @@ __attribute__((noinline)) static int lane_try_exit(const Table *T, Lane *L, doub
     double Eh = L->E + 2.0 * left * L->gain + L->floor_;
     if (!(Eh < L->Vlo && Eh < L->Vhi)) return 0; /* a visited end is still reachable */
     if (L->wait > 0) { L->wait--; return 0; }
-    if (!speed_bound_ok(T, &L->p, L->th, L->th_min, L->th_max, Eh, L->peak)) {
+    if (!speed_bound_ok(T, &L->p, L->th, L->th_min, L->th_max, Eh, L->peak, L->thd_max)) {
         L->wait = 8; /* the peak may still grow: look again a few steps later */
         return 0;
     }

@@ -49,8 +49,11 @@ a lid held open in a shallow well would never be stopped.) An undamped design
 [0, t_max] depend on the method's drift, and it runs to t_max. Likewise a lid that
 creeps monotonically towards an equilibrium never turns back, so theta_min (and a spring
 extreme) keeps moving until t_max and the stroke is integrated to the end. A step that
-returns its start state bit for bit (a fixed point of the step map: at rest) also stops.
-``steps``, ``energy_rise`` and ``theta_dot_max`` cover [0, stop_time] only.
+returns its start state bit for bit (at rest at a fixed point of the step map) skips the
+remaining full steps, which would all return that state. The same bound with
+tau = 1 (|theta'| <= sqrt(2 (E - V) / M) <= the largest theta' so far) keeps
+``theta_dot_max`` final too, and E < V(theta_max) <= max E keeps ``energy_rise``: only
+``steps`` and ``stop_time`` show that a stroke stopped early.
 
 Why a stroke stays open is recorded in ``stop_reason`` (1: trapped behind a barrier, a
 maximum of V between the lid and the rim, ``stop_theta`` = its top; 2: held open, the

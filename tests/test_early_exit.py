@@ -24,9 +24,11 @@ from softclose import native
 from softclose.reference import Reference
 from softclose.simulate import Simulator
 
-#: the columns that must not depend on the early exit (SPEC 4 metrics, the visited range, why)
+#: the columns that must not depend on the early exit: the SPEC 4 metrics, the visited
+#: range, the largest theta' (the rebound flag), the energy rise, why it stays open
 FINAL = ("status", "closing_time", "impact_theta_dot", "impact_tip_speed", "peak_tip_speed",
-         "min_spring_length", "max_spring_length", "theta_min", "theta_max")
+         "min_spring_length", "max_spring_length", "theta_min", "theta_max", "theta_dot_max",
+         "energy_rise", "stop_reason")
 COL = {name: i for i, name in enumerate(native.OUT_FIELDS)}
 
 
@@ -63,10 +65,10 @@ def test_grid_metrics_identical_with_and_without_early_exit(sim, grid):
     t_max = sim.cfg.stroke.t_max
     for key in FINAL:
         assert np.array_equal(on[:, COL[key]], off[:, COL[key]], equal_nan=True), key
-    # the physics decides the same thing at the exit as at t_max
+    # the physics names the same equilibrium at the exit as at t_max (to rounding)
     ex = exited(on, t_max)
-    assert np.array_equal(on[ex, COL["stop_reason"]], off[ex, COL["stop_reason"]])
-    assert np.allclose(on[ex, COL["stop_theta"]], off[ex, COL["stop_theta"]], rtol=0, atol=1e-9)
+    assert np.allclose(on[:, COL["stop_theta"]], off[:, COL["stop_theta"]], rtol=0, atol=1e-12,
+                       equal_nan=True)
     # without early exit every open stroke runs to t_max; with it, most stop well before
     is_open = off[:, COL["status"]] == 1
     assert np.all(off[is_open, COL["stop_time"]] == pytest.approx(t_max, rel=1e-12))
