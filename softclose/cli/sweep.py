@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import contextlib
 import importlib
+import os
 import shlex
 import signal
 import threading
@@ -213,23 +214,31 @@ def _sweep_run(cfg, args, space, fmt, chunk, out: Path, m: dict, dask) -> Outcom
                         dataset=str(out / store.DATASET) if parquet else None)
     stages = dict(res.stages)
     files: list[Path] = []
-    if parquet:
-        files.append(out / store.DATASET)
-    else:
-        tw = time.perf_counter()
-        # the finished chunks are written whatever happens (a second Ctrl-C waits for it)
-        with _no_interrupt(reraise=not res.interrupted):
-            files.append(store.write_csv(res.columns, keys, out / store.CSV))
-        stages["csv"] = time.perf_counter() - tw
     interrupted = res.interrupted
-    if not interrupted:
-        tm = time.perf_counter()
-        try:
-            files += write_maps(res, out)
+    # the maps: a forked child starts drawing (the larger half) while the table is written
+    child = 0
+    pid = 0 if interrupted else _fork_maps(res, out, child)
+    try:
+        if parquet:
+            files.append(out / store.DATASET)
+        else:
+            tw = time.perf_counter()
+            # the finished chunks are written whatever happens (a second Ctrl-C waits)
+            with _no_interrupt(reraise=not interrupted):
+                files.append(store.write_csv(res.columns, keys, out / store.CSV))
+            stages["csv"] = time.perf_counter() - tw
+        if not interrupted:
+            tm = time.perf_counter()
+            files += _finish_maps(res, out, pid, child)
+            pid = 0
             store.write_manifest(out, m, complete=True)
-        except KeyboardInterrupt:        # the table is whole; resuming draws the maps
-            interrupted = True
-        stages["maps"] = time.perf_counter() - tm
+            stages["maps"] = time.perf_counter() - tm
+    except KeyboardInterrupt:            # the table is whole; resuming draws the maps
+        interrupted = True
+    finally:
+        if pid:
+            with contextlib.suppress(ChildProcessError):
+                os.waitpid(pid, 0)
     resume = f"softclose sweep --resume {shlex.quote(str(out))}" if interrupted else None
     stages["total"] = time.perf_counter() - t0
     files.append(out / store.MANIFEST)
@@ -241,40 +250,55 @@ def _sweep_run(cfg, args, space, fmt, chunk, out: Path, m: dict, dask) -> Outcom
     return Outcome(payload, text, 130 if interrupted else 0, tuple(files))
 
 
-def write_maps(res, out: Path, parallel: bool = True) -> list[Path]:
-    """Draw and save the maps of ``res`` in ``out``.
+def _maps_count(res) -> int:
+    """How many maps the result has (without importing matplotlib)."""
+    if res.computed == 0:
+        return 0
+    multi = sum(1 for n in res.space.shape if n >= 2) if res.kind == "grid" else len(res.keys)
+    return 1 if multi == 1 else min(multi * (multi - 1) // 2, 15)
 
-    With two maps or more and two cores, a forked child draws half of them while this
-    process draws the rest (matplotlib is single-threaded; drawing is most of the time of a
-    small sweep). Whatever the child did not write is drawn here.
-    """
-    import os
 
+def _fork_maps(res, out: Path, part: int) -> int:
+    """Fork a child that draws maps ``part::2`` (matplotlib is single-threaded: two
+    processes draw twice as fast); its pid, or 0 when there is one core or nothing to draw."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
+    if not hasattr(os, "fork") or cores < 2 or _maps_count(res) <= part:
+        return 0
+    pid = os.fork()
+    if pid == 0:
+        code = 1
+        try:
+            from ..figures.sweep import map_names, plot_maps, save_maps
+            save_maps(plot_maps(res, only=map_names(res)[part::2]), out)
+            code = 0
+        except BaseException:  # noqa: BLE001  (the parent draws what is missing)
+            pass
+        finally:
+            os._exit(code)
+    return pid
+
+
+def _finish_maps(res, out: Path, pid: int, part: int) -> list[Path]:
+    """Draw the maps the child (``pid``, drawing ``part::2``) does not; wait for it, and
+    draw its share here if it failed."""
     from ..figures.sweep import map_names, plot_maps, save_maps
     names = map_names(res)
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
-    pid = 0
-    theirs: list[str] = []
-    if parallel and len(names) >= 2 and cores >= 2 and hasattr(os, "fork"):
-        theirs = names[1::2]
-        pid = os.fork()
-        if pid == 0:                                 # the child: draw its half, then leave
-            code = 1
-            try:
-                save_maps(plot_maps(res, only=theirs), out)
-                code = 0
-            finally:
-                os._exit(code)
-    ours = [n for n in names if n not in theirs]
+    theirs = names[part::2] if pid else []
+    save_maps(plot_maps(res, only=[n for n in names if n not in theirs]), out)
+    if pid and os.waitpid(pid, 0)[1] != 0:
+        save_maps(plot_maps(res, only=theirs), out)
+    return [out / f"{n}.png" for n in names]
+
+
+def write_maps(res, out: Path, parallel: bool = True) -> list[Path]:
+    """Draw and save the maps of ``res`` in ``out`` (two processes when ``parallel``)."""
+    pid = _fork_maps(res, out, 0) if parallel else 0
     try:
-        save_maps(plot_maps(res, only=ours), out)
+        return _finish_maps(res, out, pid, 0)
     except BaseException:
         if pid:
             os.waitpid(pid, 0)
         raise
-    if pid and os.waitpid(pid, 0)[1] != 0:           # the child failed: draw its half here
-        save_maps(plot_maps(res, only=theirs), out)
-    return [out / f"{n}.png" for n in names]
 
 
 def _text(res, payload: dict, files, resume) -> str:
