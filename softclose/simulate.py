@@ -97,32 +97,43 @@ class Simulator:
                 "(geometry, stroke.theta0_deg, stroke.theta_closed_deg)")
 
     # -- batches ---------------------------------------------------------------------
-    def energy_tol(self, P: np.ndarray) -> np.ndarray:
+    def energy_tol(self, P: np.ndarray, lid_mass=None) -> np.ndarray:
         """Energy rise that flags an unstable stroke: 5 % of the energy to be released."""
         st = self.cfg.stroke
-        c0, c1 = self.table.evaluate([st.theta0, st.theta_closed])
-        def V(c, k, l0):  # noqa: E306
-            return c[2] + 0.5 * k * (c[4] - l0) ** 2
-        E0, Vc = V(c0, P[:, 0], P[:, 1]), V(c1, P[:, 0], P[:, 1])
+        E0 = native.potential_energy(self.table, st.theta0, P, lid_mass)
+        Vc = native.potential_energy(self.table, st.theta_closed, P, lid_mass)
         scale = np.maximum(np.abs(E0 - Vc), 1e-6 * (np.abs(E0) + np.abs(Vc)) + 1e-12)
         return 0.05 * scale
 
-    def run_batch(self, P, threads: int | None = None) -> dict:
-        """Metrics for rows of P = (k, l0, c, c_rot): a dict of arrays (SPEC §4 keys + status)."""
+    def run_batch(self, P, threads: int | None = None, lid_mass=None,
+                  early_exit: bool = True) -> dict:
+        """Metrics for rows of P = (k, l0, c, c_rot): a dict of arrays (the metric keys,
+        ``status`` as :class:`~softclose.stroke.StrokeStatus` codes, ``reason`` why an open
+        stroke did not close, and the kernel's other outputs).
+
+        ``lid_mass`` (scalar or one per row, kg) runs the rows at another lid mass without
+        rebuilding the model (the coefficients are linear in it). ``early_exit`` stops a
+        stroke as soon as the energy proves it can no longer close and its metrics can no
+        longer change (see :mod:`softclose.native`); the metrics are the same either way.
+        """
         P = np.atleast_2d(np.asarray(P, float))
         st = self.cfg.stroke
-        designs = np.column_stack([P, self.energy_tol(P)])
+        m = None if lid_mass is None else \
+            np.broadcast_to(np.asarray(lid_mass, float), (len(P),)).copy()
+        cols = [P, self.energy_tol(P, m)] + ([m] if m is not None else [])
         out = native.run_strokes(self.table, self.method, self.step, st.t_max, st.theta0,
-                                 st.theta_closed, designs, threads)
+                                 st.theta_closed, np.column_stack(cols), threads,
+                                 early_exit=early_exit)
         res = {name: out[:, i] for i, name in enumerate(native.OUT_FIELDS)}
         res["status"] = out[:, 0].astype(int)
-        res["closed"] = res["status"] == 0
-        res["holding_moment"] = self.holding_moments(P)
+        res["closed"] = res["status"] == StrokeStatus.CLOSED
+        res["holding_moment"] = self.holding_moments(P, m)
+        res["reason"] = native.not_closed_reasons(out)
         return res
 
-    def holding_moments(self, P: np.ndarray) -> np.ndarray:
-        c = self.table.evaluate([self.cfg.stroke.theta_closed])[0]
-        return c[3] + P[:, 0] * (c[4] - P[:, 1]) * c[5]
+    def holding_moments(self, P: np.ndarray, lid_mass=None) -> np.ndarray:
+        """dV/dtheta at theta_closed (N m) for rows of P."""
+        return native.holding_moments(self.table, self.cfg.stroke.theta_closed, P, lid_mass)
 
     # -- one stroke ------------------------------------------------------------------
     def run(self, p=None, trajectory: bool = False, estimate_error: bool = True) -> StrokeResult:
@@ -149,7 +160,7 @@ class Simulator:
         col = {name: none_if_nan(out[i]) for i, name in enumerate(native.OUT_FIELDS)}
         ok = status.ok
         reason = None
-        if status is StrokeStatus.NOT_CLOSED and hasattr(native, "not_closed_reasons"):
+        if status is StrokeStatus.NOT_CLOSED:
             reason = str(native.not_closed_reasons(np.asarray(out)[None, :])[0]) or None
         return StrokeResult(
             closed=closed,
