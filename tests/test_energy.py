@@ -52,15 +52,11 @@ def _slope(hs, ys):
     return float(np.polyfit(np.log(hs), np.log(ys), 1)[0])
 
 
-def test_rk4_energy_drift_is_secular_and_shrinks_at_order_4(long_run, capsys):
+def test_rk4_energy_drift_is_secular_and_shrinks_at_order_4(long_run):
     hs = [0.016, 0.008, 0.004]
     runs = [long_run("rk4", h) for h in hs]
     drifts = [r["max"] for r in runs]
     slope = _slope(hs, drifts)
-    with capsys.disabled():
-        print(f"\n  rk4 energy drift over 20 s: {', '.join(f'{d:.2e}' for d in drifts)} J "
-              f"-> slope {slope:.2f}; last/first 10%: "
-              + ", ".join(f"{r['last'] / r['first']:.1f}" for r in runs))
     # RK4 dissipates: |R(i y)|^2 = 1 - y^6/72 + ..., an energy loss per unit time ~ h^5,
     # so the energy error converges one order faster than the state (observed ~5)
     assert slope >= 4 - 0.3
@@ -72,10 +68,8 @@ def test_rk4_energy_drift_is_secular_and_shrinks_at_order_4(long_run, capsys):
 
 @pytest.mark.parametrize("method,h", [("euler_cromer", 0.002), ("euler_cromer", 0.001),
                                       ("gauss4", 0.008), ("gauss4", 0.004)])
-def test_symplectic_energy_error_stays_bounded(long_run, method, h, capsys):
+def test_symplectic_energy_error_stays_bounded(long_run, method, h):
     r = long_run(method, h)
-    with capsys.disabled():
-        print(f"\n  {method} h={h}: |dE| first 10% {r['first']:.2e}, last 10% {r['last']:.2e} J")
     # no secular drift: the error over the last 2 s is that of the first 2 s
     assert r["last"] <= 1.3 * r["first"] + 1e-13
     if method == "gauss4":
