@@ -206,12 +206,20 @@ def _sweep_run(cfg, args, space, fmt, chunk, out: Path, m: dict, dask) -> Outcom
     else:
         done = ()
     sink = store.ParquetSink(out, keys) if parquet else None
+    # the table and plotting libraries are imported while the kernel runs (its threads
+    # leave the interpreter free), so that neither the table nor the maps wait for them
+    prefetch = threading.Thread(target=_import_outputs, name="softclose-imports", daemon=True)
+    prefetch.start()
     ctx = dask.mapper(args.dask, args.threads) if dask is not None else \
         contextlib.nullcontext(None)
-    with ctx as mapper:
-        res = run_sweep(cfg, space, progress=interactive(args), threads=args.threads,
-                        chunk=chunk, keep=not parquet, sink=sink, done=done, mapper=mapper,
-                        dataset=str(out / store.DATASET) if parquet else None)
+    try:
+        with ctx as mapper:
+            res = run_sweep(cfg, space, progress=interactive(args), threads=args.threads,
+                            chunk=chunk, keep=not parquet, sink=sink, done=done,
+                            mapper=mapper,
+                            dataset=str(out / store.DATASET) if parquet else None)
+    finally:
+        prefetch.join()                  # before any fork: no import half done
     stages = dict(res.stages)
     files: list[Path] = []
     interrupted = res.interrupted
@@ -248,6 +256,15 @@ def _sweep_run(cfg, args, space, fmt, chunk, out: Path, m: dict, dask) -> Outcom
     payload["interrupted"] = interrupted
     text = _text(res, payload, files, resume)
     return Outcome(payload, text, 130 if interrupted else 0, tuple(files))
+
+
+def _import_outputs() -> None:
+    with contextlib.suppress(Exception):
+        import pandas  # noqa: F401  (pyarrow imports it on its first numpy conversion)
+        import pyarrow.csv  # noqa: F401
+        import pyarrow.parquet  # noqa: F401
+
+        from ..figures import sweep  # noqa: F401  (matplotlib)
 
 
 def _maps_count(res) -> int:

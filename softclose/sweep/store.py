@@ -136,8 +136,12 @@ def arrow_table(cols: dict, keys, nulls: bool = False):
     """The chunk ``cols`` as a pyarrow Table (``nulls``: NaN as null, for CSV)."""
     import pyarrow as pa
     schema = _schema(keys)
-    arrays = [pa.array(np.asarray(cols[f.name]), type=f.type,
-                       from_pandas=nulls and f.type == pa.float64()) for f in schema]
+    arrays = []
+    for f in schema:
+        x = np.asarray(cols[f.name])
+        # NaN as null by an explicit mask (from_pandas=True would import pandas)
+        mask = np.isnan(x) if nulls and f.type == pa.float64() else None
+        arrays.append(pa.array(x, type=f.type, mask=mask))
     return pa.Table.from_arrays(arrays, schema=schema)
 
 
