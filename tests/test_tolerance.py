@@ -185,7 +185,8 @@ C_NOM = 3000.0           # closes in ~0.97 s; the box 2400..3600 N s/m straddles
 def c_star():
     """The damper at which the stroke takes exactly closing_time_max, by the reference."""
     from scipy.optimize import brentq
-    cfg = default_config().with_design(spring_k=K_HELD, spring_rest_length=OPT["spring_rest_length"])
+    cfg = default_config().with_design(spring_k=K_HELD,
+                                       spring_rest_length=OPT["spring_rest_length"])
     ref = Reference(LidModel(cfg))
     p = lambda c: np.array([K_HELD, OPT["spring_rest_length"], c, 0.0])  # noqa: E731
     f = lambda c: ref.simulate(p(c)).closing_time - cfg.optimise.closing_time_max  # noqa: E731

@@ -138,7 +138,8 @@ def run_sensitivity(cfg, args) -> Outcome:
         lines.append(f"  {name}:  {'key':<22} {'S1':>14} {'ST':>14}")
         for k in r.keys:
             lines.append(f"  {'':<{len(name) + 1}} {k:<22} {idx['S1'][k]:>7.3f} ± "
-                         f"{idx['S1_conf'][k]:<5.3f} {idx['ST'][k]:>7.3f} ± {idx['ST_conf'][k]:.3f}")
+                         f"{idx['S1_conf'][k]:<5.3f} {idx['ST'][k]:>7.3f} ± "
+                         f"{idx['ST_conf'][k]:.3f}")
     lines.append(f"  (± : 95 % bootstrap interval) not closed: {r.not_closed} of {r.evaluations}"
                  + (" — counted as closing at stroke.t_max with impact θ' = 0" if r.not_closed
                     else ""))
@@ -184,10 +185,10 @@ def format_robust(res) -> str:
                          f"    {s['label']:<48} T = {s['metrics']['closing_time']:.5f} s")
             lines[-1] += f", J = {s['objective']:.5g}, {ok}{mark}"
     if res.yield_result is not None:
-        lines.append("  Monte Carlo on the same samples:")
-        lines += format_yield(res.yield_result, "robust design")
+        lines.append("  Monte Carlo, both designs on the same samples:")
+        lines += ["  " + x for x in format_yield(res.yield_result, "robust design")]
         if res.nominal_yield is not None:
-            lines += format_yield(res.nominal_yield, "nominal optimum")
+            lines += ["  " + x for x in format_yield(res.nominal_yield, "nominal optimum")]
     if res.infeasibility:
         inf = res.infeasibility
         if inf.get("feasible_spreads"):
@@ -214,7 +215,8 @@ def robust_outcome(cfg, args) -> Outcome:
 
     from ..robust import optimise_robust
     out = prepare_out(getattr(args, "out", None))
-    res = optimise_robust(cfg, progress=not getattr(args, "json", False))
+    from .common import interactive
+    res = optimise_robust(cfg, progress=interactive(args))
     payload = res.to_json()
     files = []
     if out is not None:

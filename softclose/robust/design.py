@@ -42,17 +42,21 @@ import numpy as np
 
 from ..config import Config
 from ..errors import NumericalError
-from ..problem import (CONSTRAINT_TOL, DESIGN_KEYS, METRIC_KEYS, PARAM_KEYS, VERIFY_RTOL,
-                       describe, objective, params_of)
+from ..problem import DESIGN_KEYS, METRIC_KEYS, PARAM_KEYS, VERIFY_RTOL, describe, objective
 from .analysis import YieldResult, analyse_samples
 from .box import Box, box_of
-from .evaluate import evaluate, simulator
-from .nlp import T_FLOOR, ScenarioNLP, get_scenario_nlp, model_config, optimiser_piece
+from .evaluate import evaluate, simulator, slow_keys
+from .nlp import (T_FLOOR, ScenarioNLP, discretise, get_scenario_nlp, model_config,
+                  optimiser_piece, t_limit)
 from .stats import CI_METHOD, margins
 from .verify import reference_check
 
 #: Monte Carlo samples of each interior worst-case search (uniform in the box)
 CHECK_SAMPLES = 4096
+#: the same when a toleranced key needs a model per sample (geometry, crank masses ...)
+SLOW_CHECK_SAMPLES = 256
+#: most yield samples of the robust optimiser when a key needs a model per sample
+SLOW_YIELD_SAMPLES = 2000
 #: scenarios added per search round, and the most rounds
 ADD_PER_ROUND = 2
 MAX_ROUNDS = 6
@@ -167,7 +171,7 @@ class RobustResult:
         return plot_yield(ys, labels)
 
 
-# -- scenarios ---------------------------------------------------------------------------------
+# -- scenarios ------------------------------------------------------------------------------------
 def _maps(box: Box, z) -> tuple[np.ndarray, np.ndarray, dict]:
     """(a, b, model values) of the point z: p = a * (k, l0, c, c_rot) + b, model keys."""
     a, b, values = np.ones(4), np.zeros(4), {}
@@ -198,19 +202,20 @@ def _scenario_rows(box: Box, designs: np.ndarray, Z: np.ndarray, rot: float):
     return keys, np.array(rows)
 
 
-def _start_design(cfg: Config, box: Box, Z: np.ndarray, shape=(8, 6, 8)) -> tuple[np.ndarray, dict]:
+def _start_design(cfg: Config, box: Box, Z: np.ndarray,
+                  shape=(8, 6, 8)) -> tuple[np.ndarray, dict]:
     """The design of a coarse sweep with the best worst-case objective over the scenarios."""
     o = cfg.optimise
     axes = [np.linspace(*getattr(o, k), n) for k, n in zip(DESIGN_KEYS, shape)]
     G = np.array(np.meshgrid(*axes, indexing="ij")).reshape(3, -1).T
     keys, X = _scenario_rows(box, G, Z, cfg.design.rotary_damper_c)
-    cols = evaluate(cfg, keys, X, t_end=1.05 * o.closing_time_max + 0.05)
+    cols = evaluate(cfg, keys, X, t_end=1.05 * t_limit(cfg) + 0.05)
     S = len(Z)
     m = margins(cols, o).reshape(len(G), S)
     J = np.asarray(cols["objective"], float).reshape(len(G), S)
     viol = np.where(np.isfinite(m), np.maximum(-m, 0.0), 10.0).sum(axis=1)
-    Jw = np.nanmax(np.where(np.isfinite(J), J, np.inf), axis=1) \
-        if cfg.tolerance.robust_objective == "worst" else np.nanmean(J, axis=1)
+    Jf = np.where(np.isfinite(J), J, np.inf)      # a stroke without an objective: inf
+    Jw = Jf.max(axis=1) if cfg.tolerance.robust_objective == "worst" else Jf.mean(axis=1)
     feasible = viol == 0
     if feasible.any():
         i = int(np.argmin(np.where(feasible, Jw, np.inf)))
@@ -257,7 +262,7 @@ class _Problem:
                                             cfg.tolerance.robust_objective)
         self.build_time = 0.0 if cached else self.nlp.build_time
         o = cfg.optimise
-        self.t_hi = [o.closing_time_max] * len(scenarios)
+        self.t_hi = [t_limit(cfg)] * len(scenarios)
         self.t_lo = [max(o.closing_time_min, T_FLOOR)] * len(scenarios)
         # absolute spreads of design keys must not take a scenario below zero
         self.design_lb = np.zeros(3)
@@ -325,7 +330,7 @@ class _Run:
         return lam_x, lam_g
 
 
-# -- the accuracy loop: sub-steps and closing-time bounds ---------------------------------------------
+# -- the accuracy loop: sub-steps and closing-time bounds -----------------------------------------
 def _accurate(problem: _Problem, design) -> list:
     """Each scenario's stroke by the C kernel at a small step: (closed, T, J) per scenario."""
     out = []
@@ -384,34 +389,69 @@ def _polish(problem: _Problem, run: _Run, notes: list) -> tuple[_Problem, _Run]:
 
 
 # -- interior worst cases -------------------------------------------------------------------------
-def _search(cfg: Config, scale: float, run: _Run, seed: int, n: int) -> tuple[list, dict]:
-    """Samples inside the box that break a constraint or exceed the worst objective.
-
-    Each sample's score is its worst relative constraint violation (-margin) or, in
-    worst-case mode, its objective's excess over the worst scenario's, scaled so that an
-    excess of OBJ_RTOL scores like a violation of MC_TOL; the highest scores above MC_TOL
-    become scenarios."""
-    o = cfg.optimise
-    box_d = box_of(cfg, dict(zip(DESIGN_KEYS, run.design)), scale=scale)
-    z = box_d.draw(n, seed, "uniform")
-    c = cfg.with_design(**dict(zip(DESIGN_KEYS, map(float, run.design))))
-    cols = evaluate(c, box_d.keys, box_d.values(z), t_end=1.05 * o.closing_time_max + 0.05)
-    m = margins(cols, o)
-    score = np.where(np.isfinite(m), -m, 10.0)
+def _scores(cfg: Config, c: Config, box_d: Box, z: np.ndarray, Jmax: float,
+            cut: bool = True):
+    """(score, margin) of unit points z at the design of ``c``: the score is the worst
+    relative constraint violation (-margin; for a lid that does not close, 10 + the lowest
+    angle it reached, so that lids stopping higher score higher) or, in worst-case mode,
+    the objective's excess over the worst scenario's, scaled so that an excess of OBJ_RTOL
+    scores like a violation of MC_TOL. ``cut``: strokes end shortly after the closing-time
+    limit (fast; later closings count as not closed)."""
+    t_end = 1.05 * t_limit(cfg) + 0.05 if cut else None
+    cols = evaluate(c, box_d.keys, box_d.values(z), t_end=t_end)
+    m = margins(cols, cfg.optimise)
+    th = np.nan_to_num(np.asarray(cols["theta_min"], float), nan=10.0)
+    score = np.where(np.isfinite(m), -m, 10.0 + th)
     if cfg.tolerance.robust_objective == "worst":
-        Jmax = float(np.max(run.J))
         J = np.asarray(cols["objective"], float)
         score = np.maximum(score, np.where(np.isfinite(J), (J - Jmax) / Jmax * MC_TOL / OBJ_RTOL,
                                            0.0))
+    return score, m
+
+
+def _climb(cfg, c, box_d, z, f, Jmax, step: float = 0.5, min_step: float = 1e-3):
+    """Local ascent of the score from a violating sample (compass search in the box):
+    sampling finds the region of a worst case, this finds its point (often a face or
+    corner of the box)."""
+    d = box_d.dim
+    E = np.vstack([np.eye(d), -np.eye(d)])
+    f = float(_scores(cfg, c, box_d, z[None, :], Jmax, cut=False)[0][0])  # whole stroke
+    while step >= min_step:
+        cand = np.clip(z + step * E, -1.0, 1.0)
+        fs, _ = _scores(cfg, c, box_d, cand, Jmax, cut=False)
+        i = int(np.argmax(fs))
+        if fs[i] > f * (1 + 1e-9) + 1e-15:
+            z, f = cand[i], float(fs[i])
+        else:
+            step /= 2
+    return z, f
+
+
+def _search(cfg: Config, scale: float, run: _Run, seed: int, n: int) -> tuple[list, dict]:
+    """Points inside the box that break a constraint or exceed the worst objective: the
+    highest-scoring of ``n`` uniform samples (:func:`_scores`), each improved by a local
+    ascent (:func:`_climb`); those scoring above MC_TOL become scenarios."""
+    box_d = box_of(cfg, dict(zip(DESIGN_KEYS, run.design)), scale=scale)
+    z = box_d.draw(n, seed, "uniform")
+    c = cfg.with_design(**dict(zip(DESIGN_KEYS, map(float, run.design))))
+    Jmax = float(np.max(run.J))
+    score, m = _scores(cfg, c, box_d, z, Jmax)
     bad = score > MC_TOL
-    picks = [int(i) for i in np.argsort(-score)[:ADD_PER_ROUND] if bad[i]]
+    picks = []
+    for i in np.argsort(-score)[:ADD_PER_ROUND]:
+        if not bad[i]:
+            break
+        zi, fi = _climb(cfg, c, box_d, z[i], float(score[i]), Jmax)
+        if all(np.max(np.abs(zi - zj)) > 1e-6 for zj, _ in picks):
+            picks.append((zi, fi))
     info = {"samples": int(n), "violating": int(bad.sum()),
             "worst_margin": float(np.min(m)) if len(m) else None,
-            "added": [box_d.label(z[i]) for i in picks]}
-    return [tuple(map(float, z[i])) for i in picks], info
+            "added": [box_d.label(zi) for zi, _ in picks],
+            "added_scores": [fi for _, fi in picks]}
+    return [tuple(map(float, zi)) for zi, _ in picks], info
 
 
-# -- the whole procedure -------------------------------------------------------------------------------
+# -- the whole procedure --------------------------------------------------------------------------
 def _nominal(cfg: Config) -> dict:
     """The nominal optimum (no tolerances), for the start and the comparison."""
     res = optimiser_piece("optimise")(cfg, verify=False)
@@ -433,13 +473,14 @@ def _solve_box(cfg: Config, scale: float, scenarios: list, N: int, M: int, start
     problem, run = _polish(problem, run, notes)
     for k in range(MAX_ROUNDS):
         bar.update(min(2 + k, 8), f"searching the box ({len(problem.scenarios)} scenarios)")
-        new, info = _search(cfg, scale, run, seed + 1 + k, CHECK_SAMPLES)
+        n_check = SLOW_CHECK_SAMPLES if slow_keys(cfg.tolerance.keys) else CHECK_SAMPLES
+        new, info = _search(cfg, scale, run, seed + 1 + k, n_check)
         rounds[-1].update(search=info)
         if not new:
             break
         scen = problem.scenarios + [Scenario(z, f"Monte Carlo, round {k + 1}") for z in new]
         bigger = _Problem(cfg, scale, scen, problem.N, problem.M)
-        bigger.t_hi = problem.t_hi + [cfg.optimise.closing_time_max] * len(new)
+        bigger.t_hi = problem.t_hi + [t_limit(cfg)] * len(new)
         bigger.t_lo = problem.t_lo + [max(cfg.optimise.closing_time_min, T_FLOOR)] * len(new)
         x0, _ = bigger.initial(run.design, run)
         r2 = bigger.solve(x0, run.J_ref, run.extended_lam(bigger.nlp))
@@ -512,12 +553,16 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     t0 = time.perf_counter()
     nominal = _nominal(cfg)
     times["nominal_optimise"] = time.perf_counter() - t0
-    N, M, note = optimiser_piece("discretisation")(cfg)
-    if note:
-        notes.append(note)
+    N, M, t_limit, disc_notes = discretise(cfg)
+    notes += disc_notes
     box_cfg = box_of(cfg)
     scale = 1.0
     n_yield = int(samples or tol.samples)
+    slow = slow_keys(tol.keys)
+    if slow and samples is None and n_yield > SLOW_YIELD_SAMPLES:
+        n_yield = SLOW_YIELD_SAMPLES
+        notes.append(f"{', '.join(slow)} need a model per sample (~0.05 s each): the yield "
+                     f"uses {n_yield} samples (softclose yield --samples N for more)")
     z_yield = box_cfg.draw(n_yield, seed)
     problem = run = yres = None
     for attempt in range(MAX_WIDEN + 1):
@@ -626,7 +671,7 @@ def _box_summary(box: Box) -> dict:
     return {k: {"spread": s, "relative": r} for k, s, r in zip(box.keys, box.spreads, box.relative)}
 
 
-# -- no robust design: which constraint, where, by how much, and what spreads would do ----------------
+# -- no robust design: which constraint, where, by how much, and what spreads would do ------------
 REASON_CONSTRAINT = {"not closed": "closed", "too slow": "closing_time_max",
                      "too fast": "closing_time_min", "not held shut": "holding_moment_min",
                      "rebound": "no_rebound"}
@@ -638,10 +683,12 @@ def _violation(cols: dict, i: int, o) -> tuple[str, str]:
     ct, hm = cols["closing_time"][i], cols["holding_moment"][i]
     if reason == "too slow":
         return "closing_time_max", (f"closes in {ct:.4g} s > closing_time_max = "
-                                    f"{o.closing_time_max:g} s (by {ct - o.closing_time_max:.3g} s)")
+                                    f"{o.closing_time_max:g} s "
+                                    f"(by {ct - o.closing_time_max:.3g} s)")
     if reason == "too fast":
         return "closing_time_min", (f"closes in {ct:.4g} s < closing_time_min = "
-                                    f"{o.closing_time_min:g} s (by {o.closing_time_min - ct:.3g} s)")
+                                    f"{o.closing_time_min:g} s "
+                                    f"(by {o.closing_time_min - ct:.3g} s)")
     if reason == "not held shut":
         return "holding_moment_min", (f"holding moment {hm:.4g} N m < holding_moment_min = "
                                       f"{o.holding_moment_min:g} N m (by "
@@ -661,17 +708,24 @@ def _diagnose(cfg: Config, run: _Run, problem: _Problem, N: int, M: int, seed: i
         box_a = box_of(cfg, scale=a)
         scen = _initial_scenarios(box_a)
         try:
-            start, _ = _start_design(cfg, box_a, np.array([s.z for s in scen]))
+            start, info_a = _start_design(cfg, box_a, np.array([s.z for s in scen]))
+        except NumericalError:
+            hi = a
+            continue
+        if info_a["robust_feasible"]:          # a sweep design meets everything: feasible
+            lo, best = a, start
+            continue
+        try:
             pa = _Problem(cfg, a, scen, N, M)
             x0, J_ref = pa.initial(start)
             ra = pa.solve(x0, J_ref)
         except NumericalError:
             ra = None
         if ra is not None and ra.success:
-            lo, best = a, ra
+            lo, best = a, ra.design
         else:
             hi = a
-    design = best.design if best is not None else run.design
+    design = best if best is not None else run.design
     box1 = box_of(cfg, dict(zip(DESIGN_KEYS, design)))
     Z = box1.corners()
     c = cfg.with_design(**dict(zip(DESIGN_KEYS, map(float, design))))

@@ -4,26 +4,21 @@ How each kind of key reaches the C kernel (fastest first):
 
 - design keys (``design.spring_k`` ...) are columns of the kernel's parameter rows
   ``p = (k, l0, c, c_rot)``: one batch call for all samples;
-- ``mass.lid`` is the kernel's per-stroke lid-mass column when the kernel has one
-  (``Simulator.run_batch(P, lid_mass=...)``). Without it, the coefficient table of each
-  sampled mass is formed exactly from two tables: every tabulated coefficient (M, M', Vg,
-  Vg', and the mass-free ones) is affine in the lid mass (the lid inertia too, derived or
-  fixed), and so are their cubic Hermite pieces; then one kernel call per sample (correct,
-  about 10x slower);
+- ``mass.lid`` is the kernel's per-stroke lid-mass column (:mod:`softclose.native`: the
+  tabulated coefficients are affine in the lid mass, so one table serves every mass, exactly);
 - any other key (geometry, crank masses, stroke angles ...) changes the model: samples are
   grouped by their values and each group gets its own model, table and simulator (about
   0.03 s each; correct, slow when every sample has its own value).
 
 Every sample gets the metrics of :data:`softclose.problem.METRIC_KEYS`, ``theta_dot_max``,
+``theta_min`` (the lowest angle reached: how far a lid that did not close got),
 the kernel status, the objective and the reason it is infeasible ("" if feasible), from
 :mod:`softclose.problem`.
 """
 
 from __future__ import annotations
 
-import copy
 import inspect
-from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -33,8 +28,13 @@ from ..problem import METRIC_KEYS, infeasibility, objective, params_of
 from .box import PARAM_COLUMNS
 
 #: the kernel's output columns kept per sample
-COLUMNS = METRIC_KEYS + ("theta_dot_max", "status", "objective", "reason", "feasible")
+COLUMNS = METRIC_KEYS + ("theta_dot_max", "theta_min", "status", "objective", "reason", "feasible")
 _SIMS: dict = {}
+
+
+def slow_keys(keys) -> list[str]:
+    """The keys that need a model per distinct value (neither design nor lid mass)."""
+    return [k for k in keys if k not in PARAM_COLUMNS and k != "mass.lid"]
 
 
 def with_values(cfg: Config, values: dict[str, float]) -> Config:
@@ -61,52 +61,26 @@ def kernel_has_lid_mass(sim) -> bool:
     return "lid_mass" in inspect.signature(sim.run_batch).parameters
 
 
-class _MassFamily:
-    """Coefficient tables of one geometry for any lid mass, exact (affine in the mass)."""
-
-    def __init__(self, sim):
-        from ..model import LidModel
-        self.sim = sim
-        m0 = sim.cfg.mass.lid
-        m1 = 1.5 * m0
-        model1 = LidModel(sim.cfg.replace(mass={"lid": m1}))
-        t0 = sim.table
-        t1 = copy.copy(t0)
-        t1._build(model1, t0.lo, t0.hi, t0.ncell)          # same cells as the base table
-        self.m0, self.cc0 = m0, t0.cc
-        self.dcc = (t1.cc - t0.cc) / (m1 - m0)
-
-    def simulator(self, m: float):
-        tab = copy.copy(self.sim.table)
-        tab.cc = np.ascontiguousarray(self.cc0 + (m - self.m0) * self.dcc)
-        s = copy.copy(self.sim)
-        s.table = tab
-        return s
-
-
 def _run(sim, P: np.ndarray, masses: np.ndarray | None, threads: int | None) -> dict:
+    """One kernel batch; ``masses`` (one per row) go into the kernel's lid-mass column."""
     if masses is None:
         return sim.run_batch(P, threads=threads)
     if kernel_has_lid_mass(sim):
         return sim.run_batch(P, lid_mass=masses, threads=threads)
-    fam = _MassFamily(sim)
-    uniq, inv = np.unique(masses, return_inverse=True)
-    order = np.argsort(inv.ravel(), kind="stable")
-    bounds = np.searchsorted(inv.ravel()[order], np.arange(len(uniq) + 1))
-    groups = [order[bounds[j]:bounds[j + 1]] for j in range(len(uniq))]
-    outs: list = [None] * len(uniq)
-
-    def work(js):
-        for j in js:
-            outs[j] = fam.simulator(float(uniq[j])).run_batch(P[groups[j]], threads=1)
-
-    nthreads = max(1, min(threads or 2, len(uniq)))
-    with ThreadPoolExecutor(nthreads) as ex:
-        list(ex.map(work, np.array_split(np.arange(len(uniq)), nthreads)))
-    res = {k: np.empty(len(P), np.asarray(v).dtype) for k, v in outs[0].items()}
-    for rows, o in zip(groups, outs):
-        for k, v in o.items():
-            res[k][rows] = v
+    from .. import native
+    st, tab = sim.cfg.stroke, sim.table
+    # the instability flag of Simulator.energy_tol (5 % of the energy the stroke releases),
+    # at each row's own lid mass
+    E0 = native.potential_energy(tab, st.theta0, P, masses)
+    Vc = native.potential_energy(tab, st.theta_closed, P, masses)
+    scale = np.maximum(np.abs(E0 - Vc), 1e-6 * (np.abs(E0) + np.abs(Vc)) + 1e-12)
+    designs = np.column_stack([P, 0.05 * scale, masses])
+    out = native.run_strokes(tab, sim.method, sim.step, st.t_max, st.theta0, st.theta_closed,
+                             designs, threads)
+    res = {name: out[:, i] for i, name in enumerate(native.OUT_FIELDS)}
+    res["status"] = out[:, 0].astype(int)
+    res["closed"] = res["status"] == 0
+    res["holding_moment"] = native.holding_moments(tab, st.theta_closed, P, masses)
     return res
 
 
@@ -131,7 +105,7 @@ def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
             masses = X[:, j].copy()
         else:
             other.append(j)
-    cols = {k: np.full(n, np.nan) for k in METRIC_KEYS + ("theta_dot_max",)}
+    cols = {k: np.full(n, np.nan) for k in METRIC_KEYS + ("theta_dot_max", "theta_min")}
     cols["closed"] = np.zeros(n, bool)
     cols["status"] = np.full(n, -1, int)
     if other:
@@ -145,12 +119,12 @@ def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
         try:
             sim = simulator(with_values(cfg, vals), t_end)
         except SoftcloseError as exc:   # a sampled geometry that cannot close its loop
-            raise type(exc)(f"tolerance box: at {', '.join(f'{k} = {v:g}' for k, v in vals.items())}"
-                            f" {str(exc).splitlines()[0]}") from None
+            where = ", ".join(f"{k} = {v:g}" for k, v in vals.items())
+            raise type(exc)(f"tolerance box: at {where} {str(exc).splitlines()[0]}") from None
         out = _run(sim, P[rows], None if masses is None else masses[rows], threads)
         status = np.asarray(out["status"], int)
         ok = (status == 0) | (status == 1)
-        for k in METRIC_KEYS[1:] + ("theta_dot_max",):
+        for k in METRIC_KEYS[1:] + ("theta_dot_max", "theta_min"):
             v = np.asarray(out[k], float).copy()
             if k != "holding_moment":
                 v[~ok] = np.nan

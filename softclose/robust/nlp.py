@@ -70,6 +70,20 @@ def optimiser_piece(name: str):
     raise ImportError(f"softclose.optimise has no {name}")
 
 
+def t_limit(cfg: Config) -> float:
+    """The largest closing time the NLP allows: a stroke must close within stroke.t_max."""
+    return min(cfg.optimise.closing_time_max, cfg.stroke.t_max)
+
+
+def discretise(cfg: Config) -> tuple[int, int, float, list[str]]:
+    """(N, M, closing-time limit, notes) of the nominal optimiser's discretisation."""
+    d = optimiser_piece("discretisation")(cfg)
+    if isinstance(d, tuple):                    # the optimiser module before its split
+        N, M, note = d
+        return N, M, cfg.optimise.closing_time_max, [note] if note else []
+    return d.nodes, d.substeps, d.t_limit, list(d.notes)
+
+
 def model_config(cfg: Config, values: dict) -> Config:
     """The config of a scenario's model: ``cfg`` with its non-design keys set."""
     from .evaluate import with_values
@@ -226,7 +240,7 @@ class ScenarioNLP:
         for s in range(self.S):
             i = self.offset(s)
             lbx[i] = max(o.closing_time_min if t_lo is None else t_lo[s], T_FLOOR)
-            ubx[i] = o.closing_time_max if t_hi is None else t_hi[s]
+            ubx[i] = t_limit(cfg) if t_hi is None else t_hi[s]
             th = slice(i + 1, i + 1 + 2 * N, 2)
             thd = slice(i + 2, i + 2 + 2 * N, 2)
             lbx[th], ubx[th] = st.theta_closed, st.theta0

@@ -1,0 +1,159 @@
+"""Robust design: the scenario NLP's answer checked corner by corner against the adaptive
+reference (simulated here, independently of the optimiser's own verification), its yield
+against the nominal optimum's on the same samples, the interior worst-case search, the
+mean objective, and the report of a tolerance box no design can meet."""
+
+from __future__ import annotations
+
+import itertools
+import json
+
+import numpy as np
+import pytest
+
+from softclose import cli
+from softclose.config import default_config
+from softclose.model import LidModel
+from softclose.problem import CONSTRAINT_TOL, DESIGN_KEYS, VERIFY_RTOL, objective
+from softclose.reference import Reference
+from softclose.robust import optimise_robust, tolerance_analysis
+from softclose.robust import design as D
+from softclose.robust.box import box_of
+from softclose.robust.evaluate import evaluate
+
+SPREADS = {"design.spring_k": 0.10, "design.damper_c": 0.20, "mass.lid": 0.05}
+
+
+@pytest.fixture(scope="module")
+def robust():
+    return optimise_robust(default_config())
+
+
+def _corner_config(cfg, design, signs):
+    """The lid of one corner of the default box: the drawn design with its spring and
+    damper off by ±10 % and ±20 %, the lid mass by ±5 %."""
+    sk, sc, sm = signs
+    k, c = design["spring_k"], design["damper_c"]
+    return cfg.update({"design.spring_k": k * (1 + sk * SPREADS["design.spring_k"]),
+                       "design.spring_rest_length": design["spring_rest_length"],
+                       "design.damper_c": c * (1 + sc * SPREADS["design.damper_c"]),
+                       "mass.lid": cfg.mass.lid * (1 + sm * SPREADS["mass.lid"])})
+
+
+def test_every_corner_holds_in_the_adaptive_reference(robust):
+    cfg = default_config()
+    o = cfg.optimise
+    assert robust.success, robust.message
+    worst = 0.0
+    for signs in itertools.product((-1, 1), repeat=3):
+        c = _corner_config(cfg, robust.design, signs)
+        model = LidModel(c)
+        r = Reference(model).simulate(model.params())
+        assert r.closed, signs
+        assert o.closing_time_min <= r.closing_time <= o.closing_time_max * (1 + 1e-6), signs
+        assert r.holding_moment >= o.holding_moment_min - CONSTRAINT_TOL, signs
+        assert r.theta_min >= c.stroke.theta_closed - 1e-12, signs
+        if r.theta_dot_max is not None:
+            assert r.theta_dot_max <= CONSTRAINT_TOL, signs
+        assert model.theta_ddot(c.stroke.theta0, 0.0) <= 0.0       # moves down at release
+        worst = max(worst, objective(o, r.impact_theta_dot, r.peak_tip_speed))
+    # the worst case is a corner here: the NLP's worst-case J is the reference's
+    assert robust.objective == pytest.approx(worst, rel=VERIFY_RTOL)
+    # and the nominal design alone misses: its spring + 10 %, damper + 20 % corner is too slow
+    nom = robust.nominal["design"]
+    model = LidModel(_corner_config(cfg, nom, (1, 1, -1)))
+    r = Reference(model).simulate(model.params())
+    assert not r.closed or r.closing_time > o.closing_time_max
+
+
+def test_yields_on_the_same_samples(robust):
+    y, n = robust.yield_result, robust.yield_result.samples
+    assert y.yield_ >= default_config().tolerance.required_yield
+    assert robust.nominal_yield.yield_ < 0.6 < y.yield_
+    assert robust.nominal_yield.samples == n == default_config().tolerance.samples
+    # the nominal design's yield is the tolerance analysis of that design on the same draw
+    again = tolerance_analysis(default_config(), design=robust.nominal["design"], samples=n,
+                               seed=0, reference=0)
+    assert again.yield_ == robust.nominal["yield"]
+    assert again.failures == robust.nominal["failures"]
+
+
+def test_robust_json_keys(robust):
+    j = json.loads(json.dumps(robust.to_json(), allow_nan=False))
+    for key in ("success", "design", "objective", "closing_time", "impact_theta_dot",
+                "verification", "yield", "yield_ci", "samples", "scenarios", "nominal"):
+        assert key in j, key
+    assert set(j["design"]) == set(DESIGN_KEYS)
+    assert {"design", "yield", "yield_ci"} <= set(j["nominal"])
+    assert j["yield_ci"][0] <= j["yield"] <= j["yield_ci"][1]
+    assert len(j["scenarios"]) == 9 and j["scenarios"][0]["label"] == "nominal"
+    assert all(s["verified"] for s in j["scenarios"])
+    df = robust.to_frame()
+    assert len(df) == 9 and "mass.lid" in df.columns
+
+
+def test_interior_search_recovers_a_missing_worst_case():
+    """Without its worst corner in the scenario set, the first solve violates that corner;
+    the Monte Carlo search and local ascent must find it, add it and re-solve."""
+    cfg = default_config()
+    box = box_of(cfg)
+    missing = (1.0, 1.0, -1.0)          # spring +10 %, damper +20 %, lid -5 %: slowest
+    scen = [s for s in D._initial_scenarios(box) if s.z != missing]
+    N, M, _, _ = D.discretise(cfg)
+    start, _ = D._start_design(cfg, box, np.array([s.z for s in scen]))
+    rounds: list = []
+    prob, run = D._solve_box(cfg, 1.0, scen, N, M, start, 0, [], rounds, _Quiet())
+    assert run.success
+    assert len(rounds) >= 2 and rounds[0]["search"]["violating"] > 0
+    added = [s.z for s in prob.scenarios if s.origin.startswith("Monte Carlo")]
+    assert added and max(np.max(np.abs(np.subtract(z, missing))) for z in added[-1:]) < 1e-2
+    assert rounds[-1]["search"]["violating"] == 0
+    design = dict(zip(DESIGN_KEYS, map(float, run.design)))
+    c = cfg.with_design(**design)
+    b = box_of(c)
+    cols = evaluate(c, b.keys, b.values(np.array([missing])))
+    assert cols["feasible"][0]
+    assert cols["closing_time"][0] <= cfg.optimise.closing_time_max * (1 + 1e-6)
+
+
+class _Quiet:
+    def update(self, *a, **k):
+        pass
+
+
+def test_mean_objective_minimises_the_mean():
+    cfg = default_config().update({"tolerance.robust_objective": "mean"})
+    mean = optimise_robust(cfg, samples=2000)
+    assert mean.success, mean.message
+    Js = [s["objective"] for s in mean.scenarios]
+    assert mean.objective == pytest.approx(np.mean(Js), rel=1e-12)
+    # the worst-case design is feasible for the mean problem, so its mean J is no better
+    worst = optimise_robust(default_config(), samples=2000)
+    Jw = [s["objective"] for s in worst.scenarios]
+    assert mean.objective <= np.mean(Jw) * (1 + 1e-6)
+    assert max(Js) >= worst.objective * (1 - 1e-6)
+
+
+def test_no_design_over_the_box_is_reported_with_what_would_do(capsys):
+    """A closing-time window of 0.7..0.9 s cannot hold with the damper ±20 %: closing time
+    roughly scales with the damper, and 0.9/0.7 < 1.2/0.8."""
+    args = ["optimise", "--robust", "--json", "--set", "optimise.closing_time_min=0.7",
+            "--set", "optimise.closing_time_max=0.9", "--set", "tolerance.samples=1000"]
+    rc = cli.main(args)
+    out, err = capsys.readouterr()
+    assert rc == 3
+    assert err.startswith("softclose: error: no design meets every constraint over the "
+                          "tolerance box") and err.count("\n") == 1
+    j = json.loads(out)
+    inf = j["infeasibility"]
+    assert inf["constraint"] in ("closing_time_max", "closing_time_min")
+    assert "damper_c" in inf["scenario"] and 0 < inf["feasible_scale"] < 1
+    assert "by" in inf["detail"] and "spreads up to" in j["message"]
+    # the spreads it names can be met: the robust problem at that scale has a solution
+    scale = inf["feasible_scale"]
+    cfg = default_config().update({"optimise.closing_time_min": 0.7,
+                                   "optimise.closing_time_max": 0.9,
+                                   **{f"tolerance.{k}": v * scale for k, v in SPREADS.items()},
+                                   "tolerance.samples": 1000})
+    ok = optimise_robust(cfg)
+    assert ok.success, ok.message
