@@ -74,10 +74,10 @@ class SensitivityResult:
                              "ST_conf": d["ST_conf"][k]})
         return pd.DataFrame(rows)
 
-    def plot(self):
+    def plot(self, title: str | None = None):
         """Bars of S1 and ST with their intervals, one panel per output (a Figure)."""
         from ..figures.robust import plot_sobol
-        return plot_sobol(self)
+        return plot_sobol(self, title)
 
 
 def _sub_box(box, idx):
