@@ -17,9 +17,9 @@ robust=True)``):
    bounds are corrected for the NLP's own discretisation error.
 4. **Interior worst cases**: the worst case need not be a corner. After each solve a Monte
    Carlo pass (uniform in the box, C kernel) looks for samples that break a constraint or
-   exceed the worst-case objective; the worst of them join the scenarios and the NLP is
-   re-solved from the previous answer, until none is found ("local reduction", Zagorowska et
-   al., arXiv 2204.14145).
+   exceed the worst-case objective; the worst two, each improved by a local ascent in the
+   box, join the scenarios and the NLP is re-solved from the previous answer's primal point,
+   until none is found ("local reduction", Zagorowska et al., arXiv 2204.14145).
 5. **Verification**: every scenario is re-simulated by the adaptive reference (CVODES on the
    exact equations) with every constraint checked; the yield of the robust design and of the
    nominal optimum are estimated on the same Monte Carlo samples of the configured
@@ -483,9 +483,11 @@ def _solve_box(cfg: Config, scale: float, scenarios: list, N: int, M: int, start
         bigger.t_hi = problem.t_hi + [t_limit(cfg)] * len(new)
         bigger.t_lo = problem.t_lo + [max(cfg.optimise.closing_time_min, T_FLOOR)] * len(new)
         x0, _ = bigger.initial(run.design, run)
-        r2 = bigger.solve(x0, run.J_ref, run.extended_lam(bigger.nlp))
+        # from the previous answer's primal point: with the new scenarios' multipliers
+        # unknown, Ipopt's warm-start mode took 3x the iterations in tests (54 against 17)
+        r2 = bigger.solve(x0, run.J_ref)
         if not r2.success:
-            r2 = bigger.solve(x0, run.J_ref)
+            r2 = bigger.solve(x0, run.J_ref, run.extended_lam(bigger.nlp))
         rounds.append({"scenarios": len(scen), "status": r2.r["status"],
                        "iterations": r2.r["iterations"], "solve_time": r2.r["time"],
                        "build_time": bigger.build_time})
