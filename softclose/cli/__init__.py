@@ -53,7 +53,7 @@ def _error(msg: str, code: int, as_json: bool) -> int:
 
 
 def _interrupted() -> int:
-    print("softclose: interrupted (Ctrl-C); nothing more was computed", file=sys.stderr)
+    print("softclose: interrupted (Ctrl-C); what was finished is kept", file=sys.stderr)
     return 130
 
 
@@ -81,10 +81,15 @@ def main(argv: list[str] | None = None) -> int:
     if interrupt.interrupted():       # swallowed by a solver, and the command ran to its end
         return _interrupted()
     from ..jsonio import dumps
-    if args.json:
-        print(dumps(outcome.payload))
-    elif outcome.text:
-        print(outcome.text)
+    try:
+        if args.json:
+            print(dumps(outcome.payload))
+        elif outcome.text:
+            print(outcome.text)
+        sys.stdout.flush()
+    except BrokenPipeError:  # the reader went away (``softclose ... | head``): not an error
+        import os
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
     if outcome.error:
         print(f"softclose: error: {outcome.error.splitlines()[0]}", file=sys.stderr)
     return outcome.exit_code
