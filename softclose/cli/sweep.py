@@ -260,7 +260,6 @@ def _sweep_run(cfg, args, space, fmt, chunk, out: Path, m: dict, dask) -> Outcom
 
 def _import_outputs() -> None:
     with contextlib.suppress(Exception):
-        import pandas  # noqa: F401  (pyarrow imports it on its first numpy conversion)
         import pyarrow.csv  # noqa: F401
         import pyarrow.parquet  # noqa: F401
 

@@ -358,7 +358,7 @@ def save_maps(figs: dict, out) -> list:
     with matplotlib.rc_context({"savefig.bbox": "standard"}):
         for name, fig in figs.items():
             path = Path(out) / f"{name}.png"
-            fig.savefig(path, dpi=DPI, pil_kwargs={"compress_level": 3})
+            fig.savefig(path, dpi=DPI, pil_kwargs={"compress_level": 1})
             plt.close(fig)
             paths.append(path)
     return paths
