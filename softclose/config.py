@@ -225,7 +225,9 @@ def _in_range(key: str, name: str, value: Any) -> None:
     for i, x in enumerate(value if isinstance(value, tuple) else (value,)):
         if not lo <= x <= hi:
             which = f"{name}[{i}]" if isinstance(value, tuple) else name
-            raise ConfigError(f"{which}: {x:g}{' ' + unit if unit else ''} is outside the "
+            shown = f"{x:g}" if isinstance(x, float) or abs(x) < 10 ** 15 else \
+                f"{str(x)[:4]}...({len(str(abs(x)))} digits)"
+            raise ConfigError(f"{which}: {shown}{' ' + unit if unit else ''} is outside the "
                               f"admissible range {_fmt_range(key)}")
 
 
@@ -482,6 +484,9 @@ def _set_raw(raw: dict[str, Any], key: str, value: Any, origin: str) -> None:
     current = table.get(name)
     if current is None:
         current = default if default is not None else _derived_default(raw, section, name)
+    if not isinstance(current, (list, tuple)):   # set to a scalar earlier: no component i
+        raise ConfigError(f"{origin}: {section}.{name} is {_fmt(current)}, not a list of "
+                          "numbers; set the whole vector first")
     current = list(current)
     i = int(index)
     if i >= len(current):

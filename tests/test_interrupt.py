@@ -1,0 +1,203 @@
+"""Ctrl-C anywhere ends a command with one line and exit code 130, and keeps what was finished
+(issue 15) -- tested with a real SIGINT in a ``softclose`` subprocess.
+
+A small driver runs ``softclose.cli.main`` in the subprocess while a watcher thread looks at
+the main thread's stack every 2 ms; once the stack has been inside the named place for 30 ms
+(an Ipopt solve, a CVODES reference integration, the C stroke kernel, a matplotlib figure)
+it sends SIGINT to its own process, so the signal lands exactly there. The sweep test instead
+waits for the first finished chunk on disk, then interrupts from outside, as a terminal would.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+DRIVER = r'''
+import os, signal, sys, threading, time
+where, stamp, argv = sys.argv[1], sys.argv[2], sys.argv[3:]
+sep = os.sep
+
+
+def inside(frames):
+    """frames: (file, function) from the top of the main thread's stack down."""
+    files = [f for f, _ in frames]
+    top = files[0] if files else ""
+    if "<module>" in [n for _, n in frames[:-1]]:      # importing a module: not there yet
+        return False
+    if where == "ipopt":
+        return top.endswith(sep.join(("casadi", "casadi.py"))) and \
+            any(sep.join(("softclose", "optimise", "")) in f for f in files)
+    if where == "cvodes":
+        return top.endswith(sep.join(("casadi", "casadi.py"))) and \
+            any(f.endswith(sep.join(("softclose", "reference.py"))) for f in files)
+    if where == "kernel":
+        return any(f.endswith(sep.join(("softclose", "native.py"))) and n == "run_strokes"
+                   for f, n in frames)
+    if where == "figure":
+        return sep.join(("matplotlib", "")) in top and \
+            any(sep.join(("softclose", "figures", "")) in f and n.startswith(("plot_", "save"))
+                for f, n in frames)
+    raise SystemExit(f"unknown place {where}")
+
+
+def stacks():
+    """(file, function) lists of the main thread's stack, then of every other thread's."""
+    me, main_id = threading.get_ident(), threading.main_thread().ident
+    out = []
+    for ident, f in sorted(sys._current_frames().items(), key=lambda kv: kv[0] != main_id):
+        frames = []
+        while f is not None and ident != me:
+            frames.append((f.f_code.co_filename, f.f_code.co_name))
+            f = f.f_back
+        out.append(frames)
+    return out
+
+
+def watch():
+    since = None
+    while True:
+        all_stacks = stacks()
+        # the kernel may run in worker threads; every other place is in the main thread
+        if any(inside(fr) for fr in (all_stacks if where == "kernel" else all_stacks[:1])):
+            since = since or time.monotonic()
+            if time.monotonic() - since > 0.03:
+                with open(stamp, "w") as fh:
+                    fh.write(repr(time.monotonic()))
+                os.kill(os.getpid(), signal.SIGINT)
+                return
+        else:
+            since = None
+        time.sleep(0.002)
+
+
+threading.Thread(target=watch, daemon=True).start()
+from softclose.cli import main
+code = main(argv)
+with open(stamp + ".end", "w") as fh:
+    fh.write(repr(time.monotonic()))
+sys.exit(code)
+'''
+
+
+def _env():
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
+    return env
+
+
+def interrupt_at(where: str, argv: list[str], tmp_path: Path, timeout: float = 300):
+    """Run ``softclose argv`` and Ctrl-C it once its stack is at ``where``: (exit code,
+    stderr, seconds from the signal to the end of main)."""
+    driver = tmp_path / "driver.py"
+    driver.write_text(DRIVER)
+    stamp = tmp_path / "stamp"
+    proc = subprocess.run([sys.executable, str(driver), where, str(stamp), *argv],
+                          capture_output=True, text=True, timeout=timeout, env=_env(),
+                          cwd=tmp_path)
+    assert stamp.exists(), (f"softclose {' '.join(argv)} ended (exit {proc.returncode}) "
+                            f"before reaching {where}; stderr:\n{proc.stderr[-2000:]}")
+    end = Path(str(stamp) + ".end")
+    latency = float(end.read_text()) - float(stamp.read_text()) if end.exists() else None
+    return proc.returncode, proc.stderr, latency
+
+
+def assert_one_line_130(code: int, stderr: str, what: str) -> None:
+    lines = [ln for ln in stderr.splitlines() if ln.strip()]
+    assert "Traceback" not in stderr, f"{what}: traceback\n{stderr[-3000:]}"
+    assert code == 130, f"{what}: exit code {code}, expected 130\n{stderr[-3000:]}"
+    assert len(lines) == 1 and "interrupted" in lines[0], \
+        f"{what}: expected one line saying it was interrupted, got:\n{stderr[-3000:]}"
+
+
+def test_ctrl_c_during_an_ipopt_solve(tmp_path):
+    """CasADi swallows a KeyboardInterrupt raised inside Ipopt (the solve ends with
+    NonIpopt_Exception_Thrown): the multistart must still stop, at once."""
+    code, err, latency = interrupt_at(
+        "ipopt", ["optimise", "--set", "optimise.starts=60"], tmp_path)
+    assert_one_line_130(code, err, "optimise interrupted in Ipopt")
+    assert latency is not None and latency < 5.0, f"took {latency} s to stop"
+
+
+def test_ctrl_c_during_a_reference_integration(tmp_path):
+    """CVODES turns the interrupt into a RuntimeError ('rhs failed: KeyboardInterrupt'),
+    which the reference reports as a numerical failure: it must be exit 130, not 3."""
+    code, err, latency = interrupt_at(
+        "cvodes", ["optimise", "--set", "optimise.starts=1"], tmp_path)
+    assert_one_line_130(code, err, "optimise interrupted in its verification")
+    assert latency is not None and latency < 5.0, f"took {latency} s to stop"
+
+
+#: a lid that a spring holds open: every stroke runs to t_max (20 s, 10^4 steps)
+_LONG_STROKES = ["--set", "design.spring_k=2000", "--set", "design.spring_rest_length=0.1",
+                 "--set", "stroke.t_max=20"]
+
+
+@pytest.mark.parametrize("spreads", [["--set", "tolerance.mass.lid=0"], []],
+                         ids=["one kernel batch", "batches per lid mass"])
+def test_ctrl_c_during_a_stroke_batch(tmp_path, spreads):
+    """Interrupted while the C kernel runs a Monte Carlo batch (worker threads, ctypes): the
+    calls in progress finish, the queued ones are dropped, the command stops (a toleranced
+    lid mass batches the strokes per mass: that loop must stop too)."""
+    code, err, latency = interrupt_at(
+        "kernel", ["yield", "--samples", "20000", *_LONG_STROKES, *spreads], tmp_path)
+    assert_one_line_130(code, err, "yield interrupted in the stroke kernel")
+    assert latency is not None and latency < 10.0, f"took {latency:.1f} s to stop"
+
+
+def _png_complete(path: Path) -> bool:
+    data = path.read_bytes()
+    return data.startswith(b"\x89PNG\r\n\x1a\n") and data.endswith(b"IEND\xaeB`\x82")
+
+
+def test_ctrl_c_during_a_figure(tmp_path):
+    """Interrupted while matplotlib draws: exit 130, and every file left is whole (the
+    trajectory CSV written before the figure is kept)."""
+    out = tmp_path / "out"
+    code, err, _ = interrupt_at("figure", ["simulate", "--out", str(out)], tmp_path)
+    assert_one_line_130(code, err, "simulate --out interrupted in a figure")
+    csv = list(out.glob("*.csv"))
+    assert csv and all(f.stat().st_size > 0 for f in csv), "the finished trajectory is lost"
+    broken = [f.name for f in out.glob("*.png") if not _png_complete(f)]
+    assert not broken, f"partly written figures left behind: {broken}"
+
+
+def test_ctrl_c_during_a_sweep_keeps_finished_chunks(tmp_path):
+    """A real SIGINT from outside once the first chunk is on disk: exit 130, the finished
+    chunks stay (readable, whole), and the folder says the sweep is unfinished."""
+    pq = pytest.importorskip("pyarrow.parquet")
+    out = tmp_path / "sweep"
+    argv = [sys.executable, "-m", "softclose", "sweep", "--grid",
+            "design.spring_k=0:5000:600", "--grid", "design.damper_c=0:5000:600",
+            "--format", "parquet", "--chunk", "4000", "--out", str(out)]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=_env(), cwd=tmp_path)
+    deadline = time.monotonic() + 240
+    parts = []
+    while time.monotonic() < deadline and proc.poll() is None:
+        parts = [p for p in out.rglob("*.parquet") if p.is_file()]
+        if parts:
+            break
+        time.sleep(0.01)
+    assert proc.poll() is None, "the sweep ended before its first chunk could be interrupted"
+    assert parts, "no chunk was written within 240 s"
+    proc.send_signal(signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=120)
+    assert "Traceback" not in stderr, stderr[-3000:]
+    assert proc.returncode == 130, f"exit {proc.returncode}\n{stderr[-3000:]}"
+    assert len([ln for ln in stderr.splitlines() if ln.strip()]) <= 1, stderr
+    parts = [p for p in out.rglob("*.parquet") if p.is_file()]
+    assert parts, "the finished chunks were not kept"
+    rows = sum(pq.read_table(p).num_rows for p in parts)
+    assert 0 < rows < 600 * 600 and rows % 4000 == 0, rows
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest.get("complete") is False
