@@ -19,7 +19,7 @@ Lower layers for scripts that need them: :class:`LidModel`, :class:`Simulator`,
 from .config import Config, default_config, load_config
 from .errors import ConfigError, NumericalError, SoftcloseError
 from .model import LidModel
-from .optimise import front, optimise
+from .optimiser import front, optimise
 from .reference import Reference
 from .simulate import Simulator, simulate
 from .stroke import StrokeResult, StrokeStatus

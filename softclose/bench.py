@@ -83,6 +83,9 @@ SPEED_TARGETS = {
     "run": {"max_s": 0.5e-3},
     "cli_simulate": {"max_s": 0.3},
     "sweep_40000": {"min_per_s": 20000.0},
+    "robust_optimise": {"max_s": 5.0},
+    "yield_1e5": {"max_s": 1.0},
+    "sobol_1024": {"max_s": 2.0},
 }
 #: modules that ``softclose simulate`` must not import at start-up (they are imported lazily)
 HEAVY_MODULES = ("pandas", "pyarrow", "scipy", "SALib", "dask", "matplotlib")
@@ -517,39 +520,26 @@ def later_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
         rows.append(_not_measured("sweep_40000", what,
                                   "not measured: softclose.sweep.sweep(cfg, axes) is not "
                                   "available yet"))
-    opt = _public("softclose", "optimise", ("robust",))
-    robust = _public("softclose.robust", "optimise_robust")
+    from .optimiser import optimise
+    from .robust import sensitivity as sens
+    from .robust import tolerance_analysis as ta
     what = "robust optimisation over the [tolerance] box"
     if quick:
         rows.append(_not_measured("robust_optimise", what, "not run with --quick"))
-    elif opt is not None:
-        timed("robust_optimise", what + ": softclose.optimise(cfg, robust=True)",
-              lambda: opt(cfg, robust=True), 1)
-    elif robust is not None:
-        timed("robust_optimise", what + ": softclose.robust.optimise_robust(cfg)",
-              lambda: robust(cfg), 1)
     else:
-        rows.append(_not_measured("robust_optimise", what, "not measured: "
-                                  "softclose.optimise(cfg, robust=True) is not available yet"))
-    ta = _public("softclose.robust", "tolerance_analysis", ("samples",))
-    sens = _public("softclose.robust", "sensitivity", ("samples",))
+        timed("robust_optimise", what + ": softclose.optimise(cfg, robust=True)",
+              lambda: optimise(cfg, robust=True), 1)
     what_mc = "Monte Carlo yield: tolerance_analysis(cfg, samples=100000)"
     what_s = "Sobol indices: sensitivity(cfg, samples=1024)"
-    at, note = _nominal_optimum(cfg) if (ta or sens) else (None, "")
-    if ta is None:
-        rows.append(_not_measured("yield_1e5", what_mc, "not measured: "
-                                  "softclose.robust.tolerance_analysis is not available yet"))
-    elif quick:
+    at, note = _nominal_optimum(cfg)
+    if quick:
         rows.append(_not_measured("yield_1e5", what_mc, "not run with --quick"))
     elif at is None:
         rows.append(_not_measured("yield_1e5", what_mc, note))
     else:
         timed("yield_1e5", what_mc, lambda: ta(at, samples=100000), rep, count=100000,
               unit="samples", note=note)
-    if sens is None:
-        rows.append(_not_measured("sobol_1024", what_s, "not measured: "
-                                  "softclose.robust.sensitivity is not available yet"))
-    elif at is None:
+    if at is None:
         rows.append(_not_measured("sobol_1024", what_s, note))
     else:
         timed("sobol_1024", what_s, lambda: sens(at, samples=1024), rep, note=note)
@@ -563,11 +553,9 @@ def _not_measured(key, what, note, repeats=0) -> dict:
 
 def _nominal_optimum(cfg: Config):
     """(cfg with the nominal optimum's design, note), or (None, why not)."""
-    opt = _public("softclose.optimise", "optimise")
-    if opt is None:
-        return None, "not measured: no optimum to analyse (softclose.optimise.optimise missing)"
+    from .optimiser import optimise
     try:
-        r = opt(cfg)
+        r = optimise(cfg)
     except Exception as exc:  # reported in the table
         return None, f"not measured: optimise(cfg) failed ({type(exc).__name__}: {exc})"
     if not getattr(r, "success", False) or not getattr(r, "design", None):
@@ -590,9 +578,7 @@ def optimiser_study(cfg: Config, quick: bool = False, log=None) -> tuple[list, s
     when the optimiser's ``solve`` is not available.
     """
     log = log or (lambda *a: None)
-    solve = _public("softclose.optimise", "solve", ("nodes", "substeps"))
-    if solve is None:
-        return [], "optimiser section skipped: softclose.optimise.solve is not available"
+    from .optimiser import solve
     nodes = (5, 10, 20) if quick else OPT_NODES
     subs = (1, 4) if quick else OPT_SUBSTEPS
     ref = Reference(LidModel(cfg), TRUTH_TOL)

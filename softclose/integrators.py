@@ -7,7 +7,7 @@ A method is a Butcher tableau (``A``, ``b``, ``c``) plus a ``kind`` and its stat
   designs on the tabulated coefficients of the equation of motion;
 - :func:`casadi_step`, a CasADi Function of one step of the exact equation of motion
   (tests compare it with the kernel's step; the optimiser has its own RK4 sub-step on
-  Chebyshev series of the geometry, :mod:`softclose.optimise.nlp`).
+  Chebyshev series of the geometry, :mod:`softclose.optimiser.nlp`).
 
 Kinds: ``explicit`` (A strictly lower triangular), ``implicit`` (full A, solved by
 Newton's method), ``symplectic_euler`` (Euler-Cromer: velocity first, then position with

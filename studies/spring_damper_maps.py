@@ -27,7 +27,7 @@ import numpy as np
 import softclose
 from softclose.figures import save
 from softclose.jsonio import dumps
-from softclose.optimise import optimise
+from softclose.optimiser import optimise
 from softclose.sweep import sweep
 
 OUT = Path(__file__).resolve().parent / "out" / "spring_damper_maps"

@@ -25,7 +25,7 @@ import numpy as np
 import pytest
 
 from softclose.cli import main
-from softclose.optimise import OptimiseResult, get_nlp, optimise, solve, verify
+from softclose.optimiser import OptimiseResult, get_nlp, optimise, solve, verify
 from softclose.problem import (DESIGN_KEYS, METRIC_KEYS, agreement_tolerance, objective)
 from softclose.simulate import Simulator
 

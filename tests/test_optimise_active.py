@@ -9,7 +9,7 @@ import json
 import pytest
 
 from softclose.cli import main
-from softclose.optimise import optimise
+from softclose.optimiser import optimise
 
 
 def active(r) -> dict:

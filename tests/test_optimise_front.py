@@ -12,7 +12,7 @@ import pytest
 
 from softclose.cli import main
 from softclose.errors import ConfigError
-from softclose.optimise import FrontResult, front, optimise
+from softclose.optimiser import FrontResult, front, optimise
 from softclose.problem import METRIC_KEYS
 
 TIMES = (0.5, 1.0, 2.0)

@@ -12,7 +12,7 @@ import pytest
 
 from softclose.cli import main
 from softclose.errors import ConfigError, NumericalError
-from softclose.optimise import H_MAX, MAX_STEPS, discretisation, optimise
+from softclose.optimiser import H_MAX, MAX_STEPS, discretisation, optimise
 
 
 def test_closing_time_beyond_t_max_is_clamped(cfg):
@@ -25,7 +25,7 @@ def test_closing_time_beyond_t_max_is_clamped(cfg):
     same = discretisation(cfg.replace(optimise={"closing_time_max": 5.0}))
     assert (same.nodes, same.substeps) == (d.nodes, d.substeps)
     # and the NLP's bound on T is t_max
-    from softclose.optimise import get_nlp
+    from softclose.optimiser import get_nlp
     nlp = get_nlp(c, d.nodes, d.substeps)
     assert nlp.bounds(c)[1][3] == 5.0
 
@@ -60,7 +60,7 @@ def test_starts_are_bounded(cfg):
 
 
 def test_casadi_exception_becomes_numerical_error(cfg, monkeypatch, capsys):
-    from softclose.optimise import optimiser
+    from softclose.optimiser import optimiser
 
     def broken(*a, **k):
         raise RuntimeError("Error in Function::call for 'softclose_ms' [IpoptInterface]")

@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 from softclose.config import default_config
 from softclose.model import LidModel
-from softclose.optimise import optimise
+from softclose.optimiser import optimise
 from softclose.problem import (DESIGN_KEYS, ERROR_KEYS, METRIC_KEYS, VERIFY_RTOL,
                                agreement_tolerance, target)
 from softclose.reference import Reference

@@ -39,7 +39,7 @@ def run_optimise(cfg, args) -> Outcome:
     out = prepare_out(args.out)
     if args.robust:
         return _run_robust(cfg, args, out)
-    from ..optimise import optimise
+    from ..optimiser import optimise
     res = optimise(cfg, progress=interactive(args))
     payload = res.to_json()
     files = []
@@ -61,7 +61,7 @@ def _run_robust(cfg, args, out) -> Outcome:
     if robust_outcome is not None:
         return robust_outcome(cfg, args)
     from ..jsonio import dumps
-    from ..optimise import optimise
+    from ..optimiser import optimise
     res = optimise(cfg, robust=True, progress=interactive(args))
     payload = res.to_json()
     try:
@@ -176,7 +176,7 @@ def format_result(res) -> str:
 def parse_closing_times(text: str):
     """``START:STOP:COUNT`` (linear) or ``START:STOP:COUNT:log`` -> array of closing times."""
     import numpy as np
-    from ..optimise.pareto import MAX_POINTS
+    from ..optimiser.pareto import MAX_POINTS
     parts = str(text).split(":")
     bad = f"--closing-times {text}: "
     if len(parts) not in (3, 4) or (len(parts) == 4 and parts[3] != "log"):
@@ -199,7 +199,7 @@ def parse_closing_times(text: str):
 def run_pareto(cfg, args) -> Outcome:
     out = prepare_out(args.out)
     times = parse_closing_times(args.closing_times)
-    from ..optimise import front
+    from ..optimiser import front
     fr = front(cfg, times, progress=interactive(args))
     payload = fr.to_json()
     files = []

@@ -46,8 +46,7 @@ from ..problem import DESIGN_KEYS, METRIC_KEYS, PARAM_KEYS, VERIFY_RTOL, describ
 from .analysis import YieldResult, analyse_samples
 from .box import Box, box_of
 from .evaluate import evaluate, simulator, slow_keys
-from .nlp import (T_FLOOR, ScenarioNLP, discretise, get_scenario_nlp, model_config,
-                  optimiser_piece, t_limit)
+from .nlp import (T_FLOOR, ScenarioNLP, discretise, get_scenario_nlp, model_config, t_limit)
 from .stats import CI_METHOD, margins
 from .verify import reference_check
 
@@ -454,7 +453,8 @@ def _search(cfg: Config, scale: float, run: _Run, seed: int, n: int) -> tuple[li
 # -- the whole procedure --------------------------------------------------------------------------
 def _nominal(cfg: Config) -> dict:
     """The nominal optimum (no tolerances), for the start and the comparison."""
-    res = optimiser_piece("optimise")(cfg, verify=False)
+    from ..optimiser import optimise
+    res = optimise(cfg, verify=False)
     return {"success": bool(res.success), "design": res.design, "objective": res.objective,
             "message": res.message}
 

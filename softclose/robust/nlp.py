@@ -49,27 +49,6 @@ WARM_OPTIONS = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
                 "ipopt.warm_start_slack_bound_push": 1e-9}
 
 
-#: where the nominal optimiser's pieces live (its package after the split, else its module)
-_OPTIMISER_MODULES = ("softclose.optimise.nlp", "softclose.optimise.verify",
-                      "softclose.optimise.solve", "softclose.optimise")
-
-
-def optimiser_piece(name: str):
-    """A function of the nominal optimiser (``get_model``, ``get_nlp``, ``discretisation``,
-    ``verify_design``, ``optimise``), wherever its package keeps it."""
-    import importlib
-    import types
-    for mod_name in _OPTIMISER_MODULES:
-        try:
-            mod = importlib.import_module(mod_name)
-        except ImportError:
-            continue
-        f = getattr(mod, name, None)
-        if f is not None and not isinstance(f, types.ModuleType):
-            return f
-    raise ImportError(f"softclose.optimise has no {name}")
-
-
 def t_limit(cfg: Config) -> float:
     """The largest closing time the NLP allows: a stroke must close within stroke.t_max."""
     return min(cfg.optimise.closing_time_max, cfg.stroke.t_max)
@@ -77,7 +56,8 @@ def t_limit(cfg: Config) -> float:
 
 def discretise(cfg: Config) -> tuple[int, int, float, list[str]]:
     """(N, M, closing-time limit, notes) of the nominal optimiser's discretisation."""
-    d = optimiser_piece("discretisation")(cfg)
+    from ..optimiser.nlp import discretisation
+    d = discretisation(cfg)
     if isinstance(d, tuple):                    # the optimiser module before its split
         N, M, note = d
         return N, M, cfg.optimise.closing_time_max, [note] if note else []
@@ -92,13 +72,10 @@ def model_config(cfg: Config, values: dict) -> Config:
 
 def interval_of(cfg_model: Config, nodes: int, substeps: int):
     """(model, shooting-interval Function) of a scenario's model: the nominal optimiser's."""
-    try:
-        make = optimiser_piece("interval_function")
-    except ImportError:
-        nlp = optimiser_piece("get_nlp")(cfg_model, nodes, substeps)
-        return nlp.model, nlp.interval
-    model = optimiser_piece("get_model")(cfg_model)
-    return model, make(model, substeps)
+    from ..optimiser.cache import get_model
+    from ..optimiser.nlp import interval_function
+    model = get_model(cfg_model)
+    return model, interval_function(model, substeps)
 
 
 class ScenarioNLP:

@@ -18,8 +18,8 @@ from .evaluate import with_values
 
 
 def _verify_design():
-    from .nlp import optimiser_piece
-    return optimiser_piece("verify_design")
+    from ..optimiser.verify import verify_design
+    return verify_design
 
 
 def point_config(cfg: Config, keys, x) -> Config:

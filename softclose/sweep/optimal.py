@@ -13,9 +13,9 @@ design keys (:data:`softclose.problem.DESIGN_KEYS`) are refused -- the optimiser
 How the points are solved. The grid's points are numbered in C order (the last key varies
 fastest) and cut into *segments*: runs of at most :data:`SEGMENT` neighbouring points along
 the last key. The first point of a segment is solved by the multistart optimiser
-(:func:`softclose.optimise.optimise`, ``optimise.starts`` starts from a coarse sweep of
+(:func:`softclose.optimiser.optimise`, ``optimise.starts`` starts from a coarse sweep of
 the design box); every next point starts from its neighbour's optimum (its design and
-states, the continuation of :func:`softclose.optimise.front`, with the best point of a
+states, the continuation of :func:`softclose.optimiser.front`, with the best point of a
 coarse sweep of its own problem solved too when that beats the warm answer), and falls back
 to the multistart optimiser when the warm solve does not give a verified answer. Every
 point is polished and verified by the adaptive reference like ``softclose optimise``'s
@@ -138,9 +138,9 @@ def _segment(cfg_dict: dict, keys: list[str], ids, X, robust: bool):
 def _optimum(cfg, prev) -> tuple[Any, str]:
     """cfg's verified optimum: warm from ``prev`` (a neighbour's result) when there is one,
     with the multistart optimiser as the fallback; (result, how it was started)."""
-    from ..optimise import optimise
+    from ..optimiser import optimise
     if prev is not None:
-        from ..optimise.pareto import _continue as continue_from
+        from ..optimiser.pareto import _continue as continue_from
         warm = continue_from(cfg, prev)
         if warm.success:
             return warm, "warm"

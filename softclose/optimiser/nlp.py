@@ -23,12 +23,12 @@ The equation of motion depends on theta only through seven geometric functions
 Chebyshev series fitted on the stroke's angles ±3° to machine precision
 (:class:`ChebyshevFit`). One RK4 sub-step is then ~730 operations instead of ~4200, and the
 exact Hessian is cheap. Everything reported is re-checked on the exact equations by the
-adaptive reference (:mod:`softclose.optimise.verify`).
+adaptive reference (:mod:`softclose.optimiser.verify`).
 
 Every number that can change between solves (theta0, theta_closed, weights, rotary damper,
 time grid) is an NLP parameter, and closing-time bounds, design bounds and
 holding_moment_min are bounds: one NLP per geometry and (N, M) serves multistart, warm
-re-solves and Pareto fronts (:func:`softclose.optimise.cache.get_nlp`).
+re-solves and Pareto fronts (:func:`softclose.optimiser.cache.get_nlp`).
 """
 
 from __future__ import annotations
@@ -325,7 +325,7 @@ class Run:
 class ShootingNLP:
     """The multiple-shooting NLP of one geometry with N intervals of M RK4 sub-steps each.
 
-    Built once (:func:`softclose.optimise.cache.get_nlp` caches it per geometry and
+    Built once (:func:`softclose.optimiser.cache.get_nlp` caches it per geometry and
     discretisation); :meth:`solve` takes the bounds and parameters of one problem, so
     changing closing_time_max, weights, design bounds or holding_moment_min never rebuilds
     anything.
