@@ -214,7 +214,7 @@ def _edges(c: np.ndarray, log: bool) -> np.ndarray:
     return np.exp(e) if log else e
 
 
-def _panel(fig, ax, v: _View, q: str, feas: np.ndarray) -> None:
+def _panel(fig, ax, v: _View, q: str, feas: np.ndarray, cax) -> None:
     from matplotlib.colors import BoundaryNorm
     name, u = QUANTITIES[q]
     Z = np.asarray(v.Z[q], float)
@@ -225,7 +225,7 @@ def _panel(fig, ax, v: _View, q: str, feas: np.ndarray) -> None:
         norm = BoundaryNorm(levels, 256, extend="neither")
         Zm = np.ma.masked_where(~ok, np.clip(Z, levels[0], levels[-1]))
         pm = ax.pcolormesh(xe, ye, Zm.T, cmap="viridis", norm=norm)
-        cb = fig.colorbar(pm, ax=ax, spacing="uniform")
+        cb = fig.colorbar(pm, cax=cax, spacing="uniform")
         ticks = _ticks(levels, logl)
         cb.set_ticks(ticks)
         cb.set_ticklabels([f"{t:g}" for t in ticks])
@@ -238,6 +238,8 @@ def _panel(fig, ax, v: _View, q: str, feas: np.ndarray) -> None:
                                 linestyles="solid")
                 if cs.allsegs and any(len(s) for s in cs.allsegs):
                     ax.clabel(cs, inline=True, fontsize=7, fmt=lambda t: f"{t:g}")
+    else:
+        cax.set_visible(False)                      # nothing feasible to colour
     ax.set_title(name, fontsize=10, y=1.0, pad=4)  # a fixed place: no overlap search
 
 
@@ -286,12 +288,17 @@ def _legend(fig, present, best_label):
 
 def _map(v: _View, res):
     from matplotlib.ticker import MaxNLocator
-    # axes not shared (sharing costs a tick-label search per draw): the same edges anyway
-    fig, axs = plt.subplots(2, 2, figsize=(11, 8.6))
+    # a fixed grid of panels and colour bars (no axes stealing room for a colour bar); the
+    # axes are not shared (sharing costs a tick-label search per draw): the same edges anyway
+    fig = plt.figure(figsize=(11, 8.6))
+    gs = fig.add_gridspec(2, 5, width_ratios=[1, 0.045, 0.3, 1, 0.045], left=0.08,
+                          right=0.93, bottom=0.12, top=0.89, wspace=0.05, hspace=0.14)
+    axs = np.array([[fig.add_subplot(gs[i, 3 * j]) for j in range(2)] for i in range(2)])
+    caxs = [fig.add_subplot(gs[i, 3 * j + 1]) for i in range(2) for j in range(2)]
     feas = v.cat == -1
     present: list[str] = []
-    for ax, q in zip(axs.ravel(), QUANTITIES):
-        _panel(fig, ax, v, q, feas)
+    for ax, cax, q in zip(axs.ravel(), caxs, QUANTITIES):
+        _panel(fig, ax, v, q, feas, cax)
         _infeasible(ax, v, present)
         if v.best is not None:
             ax.plot(*v.best, marker="*", color="red", mec="white", ms=16, ls="none")
@@ -318,7 +325,6 @@ def _map(v: _View, res):
     _legend(fig, present, best_label)
     fig.suptitle(f"Sweep maps; infeasible designs grey or hatched by reason\n{v.note}",
                  fontsize=10)
-    fig.subplots_adjust(left=0.08, right=0.97, bottom=0.12, top=0.89, wspace=0.12, hspace=0.14)
     return fig
 
 
