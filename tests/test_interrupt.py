@@ -36,7 +36,8 @@ def inside(frames):
         return False
     if where == "ipopt":
         return top.endswith(sep.join(("casadi", "casadi.py"))) and \
-            any(sep.join(("softclose", "optimise", "")) in f for f in files)
+            any(sep.join(("softclose", "optimis")) in f and "solve" in n   # optimise(r)/
+                for f, n in frames)
     if where == "cvodes":
         return top.endswith(sep.join(("casadi", "casadi.py"))) and \
             any(f.endswith(sep.join(("softclose", "reference.py"))) for f in files)
