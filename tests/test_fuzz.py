@@ -436,7 +436,8 @@ COUNTS: dict = {"cases": defaultdict(Counter), "values": defaultdict(Counter),
 
 
 def _count(command: str, values, outcome: str, seconds: float, warned) -> None:
-    kind = values[0][1] if len(values) == 1 else f"combination of {len(values)}"
+    kind = values[0][1] if len(values) == 1 else \
+        f"combination of {len(values)}" if values else "command options only"
     COUNTS["cases"][kind][outcome] += 1
     for _, vkind, _ in values:
         COUNTS["values"][vkind][outcome] += 1
