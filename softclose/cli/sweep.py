@@ -223,9 +223,8 @@ def _sweep_run(cfg, args, space, fmt, chunk, out: Path, m: dict, dask) -> Outcom
     stages = dict(res.stages)
     files: list[Path] = []
     interrupted = res.interrupted
-    # the maps: a forked child starts drawing (the larger half) while the table is written
-    child = 0
-    pid = 0 if interrupted else _fork_maps(res, out, child)
+    # the maps: forked children start drawing them while the table is written
+    pids, processes = ([], 1) if interrupted else _fork_maps(res, out)
     try:
         if parquet:
             files.append(out / store.DATASET)
@@ -237,16 +236,13 @@ def _sweep_run(cfg, args, space, fmt, chunk, out: Path, m: dict, dask) -> Outcom
             stages["csv"] = time.perf_counter() - tw
         if not interrupted:
             tm = time.perf_counter()
-            files += _finish_maps(res, out, pid, child)
-            pid = 0
+            files += _finish_maps(res, out, pids, processes)
             store.write_manifest(out, m, complete=True)
             stages["maps"] = time.perf_counter() - tm
     except KeyboardInterrupt:            # the table is whole; resuming draws the maps
         interrupted = True
     finally:
-        if pid:
-            with contextlib.suppress(ChildProcessError):
-                os.waitpid(pid, 0)
+        _reap(pids)
     resume = f"softclose sweep --resume {shlex.quote(str(out))}" if interrupted else None
     stages["total"] = time.perf_counter() - t0
     files.append(out / store.MANIFEST)
@@ -274,47 +270,59 @@ def _maps_count(res) -> int:
     return 1 if multi == 1 else min(multi * (multi - 1) // 2, 15)
 
 
-def _fork_maps(res, out: Path, part: int) -> int:
-    """Fork a child that draws maps ``part::2`` (matplotlib is single-threaded: two
-    processes draw twice as fast); its pid, or 0 when there is one core or nothing to draw."""
+def _fork_maps(res, out: Path) -> tuple[list[int], int]:
+    """Fork the children that draw the maps while this process writes the table: as many
+    as cores (matplotlib is single-threaded; this process draws a share too, so the table's
+    few tenths of a second overlap the drawing). Map ``i`` is drawn by process
+    ``i % (children + 1)``, this process being the last. Returns (pids, processes)."""
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
-    if not hasattr(os, "fork") or cores < 2 or _maps_count(res) <= part:
-        return 0
-    pid = os.fork()
-    if pid == 0:
-        code = 1
-        try:
-            from ..figures.sweep import map_names, plot_maps, save_maps
-            save_maps(plot_maps(res, only=map_names(res)[part::2]), out)
-            code = 0
-        except BaseException:  # noqa: BLE001  (the parent draws what is missing)
-            pass
-        finally:
-            os._exit(code)
-    return pid
+    count = _maps_count(res)
+    children = min(cores, count) if hasattr(os, "fork") and cores >= 2 else 0
+    pids: list[int] = []
+    for part in range(children):
+        pid = os.fork()
+        if pid == 0:
+            code = 1
+            try:
+                from ..figures.sweep import map_names, plot_maps, save_maps
+                save_maps(plot_maps(res, only=map_names(res)[part::children + 1]), out)
+                code = 0
+            except BaseException:  # noqa: BLE001  (the parent draws what is missing)
+                pass
+            finally:
+                os._exit(code)
+        pids.append(pid)
+    return pids, children + 1
 
 
-def _finish_maps(res, out: Path, pid: int, part: int) -> list[Path]:
-    """Draw the maps the child (``pid``, drawing ``part::2``) does not; wait for it, and
-    draw its share here if it failed."""
+def _finish_maps(res, out: Path, pids: list[int], processes: int) -> list[Path]:
+    """Draw this process's share of the maps, wait for the children, and draw the share
+    of any child that failed."""
     from ..figures.sweep import map_names, plot_maps, save_maps
     names = map_names(res)
-    theirs = names[part::2] if pid else []
-    save_maps(plot_maps(res, only=[n for n in names if n not in theirs]), out)
-    if pid and os.waitpid(pid, 0)[1] != 0:
-        save_maps(plot_maps(res, only=theirs), out)
+    save_maps(plot_maps(res, only=names[processes - 1::processes]), out)
+    failed = [part for part, pid in enumerate(pids) if os.waitpid(pid, 0)[1] != 0]
+    pids.clear()
+    for part in failed:
+        save_maps(plot_maps(res, only=names[part::processes]), out)
     return [out / f"{n}.png" for n in names]
 
 
-def write_maps(res, out: Path, parallel: bool = True) -> list[Path]:
-    """Draw and save the maps of ``res`` in ``out`` (two processes when ``parallel``)."""
-    pid = _fork_maps(res, out, 0) if parallel else 0
-    try:
-        return _finish_maps(res, out, pid, 0)
-    except BaseException:
-        if pid:
+def _reap(pids: list[int]) -> None:
+    for pid in pids:
+        with contextlib.suppress(ChildProcessError):
             os.waitpid(pid, 0)
-        raise
+    pids.clear()
+
+
+def write_maps(res, out: Path, parallel: bool = True) -> list[Path]:
+    """Draw and save the maps of ``res`` in ``out`` (in several processes when
+    ``parallel``)."""
+    pids, processes = _fork_maps(res, out) if parallel else ([], 1)
+    try:
+        return _finish_maps(res, out, pids, processes)
+    finally:
+        _reap(pids)
 
 
 def _text(res, payload: dict, files, resume) -> str:
