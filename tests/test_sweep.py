@@ -328,3 +328,26 @@ def test_binned_summary_is_the_best_over_the_other_keys(design_sweep):
             row = res.row(int(ids[cell]))
             assert row["objective"] == b.grid(g, "objective")[cell]
             assert row["peak_tip_speed"] == b.grid(g, "peak_tip_speed")[cell]
+
+
+def test_maps_drawn_here_when_a_drawing_process_fails(tmp_path, monkeypatch):
+    """The maps are drawn in forked processes; what a failed one did not draw is drawn by
+    the command itself."""
+    import os
+
+    import softclose.figures.sweep as fs
+    from softclose.cli.sweep import write_maps
+    parent = os.getpid()
+    real = fs.save_maps
+
+    def failing_in_children(figs, out):
+        if os.getpid() != parent:
+            raise RuntimeError("a drawing process fails")
+        return real(figs, out)
+    monkeypatch.setattr(fs, "save_maps", failing_in_children)
+    res = sweep(default_config(), {"design.spring_k": [0.0, 800, 1600],
+                                   "design.damper_c": [0.0, 500, 1000],
+                                   "design.spring_rest_length": [0.05, 0.07]})
+    files = write_maps(res, tmp_path)
+    assert sorted(f.name for f in files) == sorted(p.name for p in tmp_path.glob("*.png"))
+    assert len(files) == 3 and all(f.stat().st_size > 10_000 for f in files)
