@@ -206,6 +206,9 @@ RANGES: dict[str, tuple[float, float, str]] = {
 #: most fixed steps one stroke may take (stroke.t_max / simulate.step): bounds its loop
 #: (rk4 ~0.1 us, radau5 ~0.5 us a step; 60 s at 1.2 us or 5 s at 0.1 us)
 STEP_BUDGET = 5e7
+#: most rows of a stroke's trajectory (simulate --out: CSV, figures; ~0.8 GB of memory and
+#: 150 MB of CSV at 1e6 rows)
+TRAJECTORY_BUDGET = 1_000_000
 #: most RK4 steps in the optimiser's NLP (optimise.nodes x optimise.substeps)
 NLP_BUDGET = 2000
 #: most fixed steps of a batch of strokes (designs x STEP_BUDGET-bounded steps per stroke):

@@ -19,8 +19,8 @@ from dataclasses import replace
 import numpy as np
 
 from . import native
-from .config import RANGES, STEP_BUDGET, Config, default_config
-from .errors import NumericalError
+from .config import RANGES, STEP_BUDGET, TRAJECTORY_BUDGET, Config, default_config
+from .errors import ConfigError, NumericalError
 from .integrators import Method, get_method
 from .model import LidModel
 from .problem import ERROR_KEYS, target
@@ -141,6 +141,7 @@ class Simulator:
         st = self.cfg.stroke
         design = np.r_[p, self.energy_tol(p[None, :])]
         if trajectory:
+            self._check_trajectory_size(design)
             out, traj = native.run_stroke_trajectory(self.table, self.method, self.step,
                                                      st.t_max, st.theta0, st.theta_closed, design)
         else:
@@ -153,6 +154,28 @@ class Simulator:
         if trajectory and res.ok:
             res = replace(res, trajectory=self.derive_trajectory(traj, p))
         return res
+
+    def _check_trajectory_size(self, design) -> None:
+        """Refuse a trajectory of more than TRAJECTORY_BUDGET rows (one a step: to the closing,
+        or to t_max for a lid that does not close), counted by a stroke without one."""
+        st = self.cfg.stroke
+        if st.t_max / self.step + 2 <= TRAJECTORY_BUDGET:
+            return
+        out = native.run_strokes(self.table, self.method, self.step, st.t_max, st.theta0,
+                                 st.theta_closed, design[None, :], threads=1)[0]
+        closed = StrokeStatus(int(out[0])) is StrokeStatus.CLOSED
+        steps = int(out[native.OUT_FIELDS.index("steps")]) if closed else \
+            int(math.ceil(st.t_max / self.step))
+        rows = steps + 2                       # the release, each step, the closing or t_max
+        if rows > TRAJECTORY_BUDGET:
+            h = self.step * rows / TRAJECTORY_BUDGET * (1 - 1e-9)
+            h = math.ceil(h / 10 ** (e := math.floor(math.log10(h)) - 1)) * 10 ** e
+            fix = f"use simulate.step >= {h:.2g} s" + ("" if closed else
+                                                        " or a shorter stroke.t_max")
+            raise ConfigError(
+                f"simulate.step: the trajectory at {self.step:g} s would have {rows} rows "
+                f"({'to the closing' if closed else 'to stroke.t_max'}), above the budget of "
+                f"{TRAJECTORY_BUDGET:g} for tables and figures; {fix}")
 
     def _result(self, out, p) -> StrokeResult:
         status = StrokeStatus(int(out[0]))

@@ -42,6 +42,7 @@ import warnings
 from collections import Counter, defaultdict
 from pathlib import Path
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, Phase, given, reject, settings
 from hypothesis import strategies as st
@@ -769,3 +770,32 @@ def test_stress_designs_admitted():
     from softclose.config import default_config
     for case in stress.stress_cases(fast=False):
         default_config().replace(**case.overrides)     # raises ConfigError if refused
+
+
+@pytest.mark.parametrize("sets,rows", [
+    (["simulate.step=1e-6", "design.spring_k=2000", "design.spring_rest_length=0.1"],
+     "5000002 rows (to stroke.t_max)"),                  # held open: runs to t_max
+    (["simulate.step=1e-7"], "1491481 rows (to the closing)"),
+])
+def test_trajectory_budget(sets, rows, tmp_path):
+    """``simulate --out`` keeps one row a step: a trajectory above TRAJECTORY_BUDGET rows is
+    refused in one line with the step that fits (5e7 rows would take 40 GB and 30 minutes),
+    and that step fits."""
+    import re
+    argv = ["simulate", "--out", str(tmp_path / "a")]
+    for s in sets:
+        argv += ["--set", s]
+    rc, _, stderr, _ = run_inprocess(argv, 60.0, " ".join(argv))
+    assert rc == 2 and f"would have {rows}, above the budget of 1e+06" in stderr, stderr
+    step = float(re.search(r"use simulate\.step >= (\S+) s", stderr).group(1))
+    # that step fits (checked without writing a million rows): no refusal, and its stroke
+    # has at most the budget's rows
+    from softclose.config import TRAJECTORY_BUDGET
+    from softclose.simulate import Simulator
+    cfg = load_config(None, sets + [f"simulate.step={step}"])
+    sim = Simulator(cfg)
+    p = sim.model.params()
+    sim._check_trajectory_size(np.r_[p, sim.energy_tol(p[None, :])])
+    r = sim.run(estimate_error=False)
+    steps = r.steps if r.closed else math.ceil(cfg.stroke.t_max / step)
+    assert steps + 2 <= TRAJECTORY_BUDGET
