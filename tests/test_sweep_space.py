@@ -173,3 +173,18 @@ def test_json_errors_are_strict_json(capsys, tmp_path):
                  "--out", str(tmp_path / "o")]) == 2
     out, _ = capsys.readouterr()
     assert json.loads(out)["exit_code"] == 2
+
+
+def test_step_budget_is_checked_before_any_work(capsys, tmp_path):
+    """Designs x steps a stroke is bounded (config.BATCH_STEP_BUDGET), at the smallest swept
+    step: a sweep that would run for days is refused at once."""
+    cfg = default_config().update({"simulate.step": 1e-6})          # 5e6 steps a stroke
+    axes = {"design.spring_k": np.linspace(0, 2000, 200), "design.damper_c": np.linspace(0, 1, 100)}
+    with pytest.raises(ConfigError, match="above the budget"):
+        sweep(cfg, axes)                                              # 2e4 x 5e6 = 1e11
+    with pytest.raises(ConfigError, match="above the budget"):
+        sample(default_config(), {"simulate.step": (1e-6, 1e-3, "log")}, 20_000)
+    out = tmp_path / "o"
+    _refused(capsys, ["sweep", "--grid", "design.spring_k=0:2000:100", "--grid",
+                      "simulate.step=[1e-6, 0.002]", "--grid", "design.damper_c=0:1:100",
+                      "--out", str(out)], "above the budget", folder=out)

@@ -153,6 +153,9 @@ def run(cfg, args) -> Outcome:
         if space is None:
             raise ConfigError("--grid: give at least one KEY=START:STOP:COUNT "
                               "(or --sample N with --range)")
+        if not args.optimise:
+            from ..sweep.space import check_budget
+            check_budget(cfg, space, "--sample" if space.kind == "sample" else "--grid")
         fmt, chunk = args.format or "csv", args.chunk or CHUNK
         out = prepare_out(args.out)
         old = store.read_manifest(out)

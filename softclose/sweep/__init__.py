@@ -50,7 +50,10 @@ def sweep(cfg, axes: dict, *, progress: bool = False, threads: int | None = None
     (``result.interrupted``). Bad keys or values raise :class:`~softclose.errors.ConfigError`.
     """
     from .run import run
-    return run(cfg, make_grid(axes, cfg), progress=progress, threads=threads, chunk=chunk)
+    from .space import check_budget
+    grid = make_grid(axes, cfg)
+    check_budget(cfg, grid)
+    return run(cfg, grid, progress=progress, threads=threads, chunk=chunk)
 
 
 def sample(cfg, ranges: dict, n: int, *, sampler: str = "sobol", seed: int = 0,
@@ -62,7 +65,9 @@ def sample(cfg, ranges: dict, n: int, *, sampler: str = "sobol", seed: int = 0,
     hypercube) or "random"; ``seed`` makes the draw reproducible. Otherwise as :func:`sweep`.
     """
     from .run import run
+    from .space import check_budget
     space = make_sample(ranges, n, sampler, seed, cfg)
+    check_budget(cfg, space)
     return run(cfg, space, progress=progress, threads=threads, chunk=chunk)
 
 

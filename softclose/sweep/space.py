@@ -380,6 +380,27 @@ def make_sample(ranges, n, sampler: str = "sobol", seed: int = 0, cfg=None,
     return Sample(ranges, int(n), sampler, int(seed))
 
 
+def check_budget(cfg, space, what: str = "the sweep") -> None:
+    """Refuse (ConfigError) a sweep whose strokes could take more fixed steps in all than
+    :data:`softclose.config.BATCH_STEP_BUDGET` (designs x t_max / step, at the smallest
+    swept step and the longest swept t_max)."""
+    from ..config import check_batch
+    if cfg is None:
+        return
+    values = {}
+    for key, pick in (("simulate.step", min), ("stroke.t_max", max)):
+        if key in space.keys:
+            j = space.keys.index(key)
+            v = space.values[j] if space.kind == "grid" else \
+                (space.ranges[j].lo, space.ranges[j].hi)
+            values[key] = float(pick(v))
+    try:
+        worst = cfg.update(values) if values else cfg
+    except ConfigError:      # e.g. a step above t_max: such designs are refused one by one
+        worst = cfg
+    check_batch(worst, space.n, what)
+
+
 def space_from_spec(spec: dict):
     """The :class:`Grid` or :class:`Sample` of a manifest's ``spec()``."""
     if spec.get("kind") == "grid":
