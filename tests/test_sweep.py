@@ -283,7 +283,8 @@ def test_ctrl_c_keeps_finished_chunks(tmp_path, monkeypatch):
             raise KeyboardInterrupt
         return orig(self, P, threads)
     monkeypatch.setattr(Simulator, "run_batch", flaky)
-    axes = {"design.spring_k": np.linspace(0, 1000, 20), "design.damper_c": np.linspace(0, 3000, 10)}
+    axes = {"design.spring_k": np.linspace(0, 1000, 20),
+            "design.damper_c": np.linspace(0, 3000, 10)}
     res = sweep(default_config(), axes, chunk=50)
     assert res.interrupted and not res.success and res.computed == 100
     assert np.array_equal(res.columns["id"], np.arange(100))

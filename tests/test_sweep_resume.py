@@ -20,7 +20,8 @@ from softclose.cli import main
 from softclose.sweep import store
 
 ROOT = Path(__file__).resolve().parents[1]
-GRID = ["--grid", "design.spring_k=500:9500:30", "--grid", "design.spring_rest_length=0.05:0.09:25",
+GRID = ["--grid", "design.spring_k=500:9500:30",
+        "--grid", "design.spring_rest_length=0.05:0.09:25",
         "--grid", "design.damper_c=100:4000:[N]"]
 
 

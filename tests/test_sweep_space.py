@@ -179,7 +179,8 @@ def test_step_budget_is_checked_before_any_work(capsys, tmp_path):
     """Designs x steps a stroke is bounded (config.BATCH_STEP_BUDGET), at the smallest swept
     step: a sweep that would run for days is refused at once."""
     cfg = default_config().update({"simulate.step": 1e-6})          # 5e6 steps a stroke
-    axes = {"design.spring_k": np.linspace(0, 2000, 200), "design.damper_c": np.linspace(0, 1, 100)}
+    axes = {"design.spring_k": np.linspace(0, 2000, 200),
+            "design.damper_c": np.linspace(0, 1, 100)}
     with pytest.raises(ConfigError, match="above the budget"):
         sweep(cfg, axes)                                              # 2e4 x 5e6 = 1e11
     with pytest.raises(ConfigError, match="above the budget"):

@@ -92,9 +92,9 @@ class Grid:
 
     def spec(self) -> dict:
         """Plain values that define the grid (for the manifest of a resumable sweep)."""
+        logs = self.log or (False,) * len(self.keys)
         return {"kind": "grid", "axes": [{"key": k, "values": v.tolist(), "log": bool(g)}
-                                         for k, v, g in zip(self.keys, self.values,
-                                                            self.log or (False,) * len(self.keys))]}
+                                         for k, v, g in zip(self.keys, self.values, logs)]}
 
     def describe(self) -> list[str]:
         return [f"{k} ({len(v)} values, {v.min():.6g} .. {v.max():.6g}"
