@@ -425,7 +425,7 @@ def work_seconds(command: str, cfg, argv: list[str]) -> float:
 #: cannot wait for it): it is drawn again
 MAX_CASE_SECONDS = 900.0
 #: a refusal must come this fast
-REFUSAL_SECONDS = 30.0
+REFUSAL_SECONDS = 15.0
 
 
 def _reject_constant(name):
@@ -480,12 +480,13 @@ def run_subprocess(argv: list[str], limit: float, shown: str):
 
 
 def run_case(command: str, values, out_dir: Path, as_json: bool,
-             opts: list[str] = ()) -> int:
-    """Run one case and check everything the module docstring promises."""
+             opts: list[str] = (), defaults: bool = True) -> int:
+    """Run one case and check everything the module docstring promises (``defaults``: the
+    command's options not in ``opts`` get the values of OPTIONS)."""
     base, _cost = COMMANDS[command]
     opts = list(opts)
     for opt, (default, _) in OPTIONS.get(command, {}).items():
-        if not _option(opts, opt):
+        if defaults and not _option(opts, opt):
             opts.append(f"{opt}={default}")
     if command == "sweep" and not _option(opts, "--grid"):
         opts.append("--grid=design.spring_k=0:2000:3")
@@ -627,24 +628,37 @@ def test_issue_inputs(command, values, opts, out_root):
         assert rc == 2
 
 
-#: batches within every other bound whose strokes x steps exceed the batch budget
+#: batches within every other bound whose strokes x steps exceed the batch budget: at the
+#: smallest step (5e7 steps a stroke), or a sample count from [tolerance] (1e9 strokes)
+_SMALLEST_STEP = [("simulate.step", "edge", "1e-07")]
 BUDGET_CASES = [
-    ("sweep", ["--grid", "design.spring_k=0:2000:5000", "--grid", "design.damper_c=0:2000:4000"]),
-    ("yield", ["--samples", "10000000"]),
-    ("sensitivity", ["--samples", str(2 ** 20)]),
+    ("sweep", ["--grid", "design.spring_k=0:2000:5000", "--grid", "design.damper_c=0:2000:4000"],
+     _SMALLEST_STEP),
+    ("yield", ["--samples", "10000000"], _SMALLEST_STEP),
+    ("sensitivity", ["--samples", str(2 ** 20)], _SMALLEST_STEP),
+    ("yield", [], [("tolerance.samples", "huge", "1000000000")]),
+    ("optimise --robust", [], [("tolerance.samples", "huge", "1000000000")]),
 ]
 
 
-@pytest.mark.parametrize("command,opts", BUDGET_CASES, ids=[c for c, _ in BUDGET_CASES])
-def test_batch_budget(command, opts, out_root):
-    """Designs x steps per stroke is bounded: at the smallest step (5e7 steps a stroke) these
-    batches would run for days; they must be refused at once, naming what to change (run
-    in a subprocess, killed after 30 s)."""
+@pytest.mark.parametrize("command,opts,values", BUDGET_CASES,
+                         ids=[f"{c} {' '.join(o)} {v[0][0]}={v[0][2]}"[:70]
+                              for c, o, v in BUDGET_CASES])
+def test_batch_budget(command, opts, values, out_root):
+    """Designs x steps per stroke is bounded: these batches would run for days; they must be
+    refused at once, naming what to change (run in a subprocess, killed after 15 s)."""
     if command not in AVAILABLE:
         pytest.skip(f"softclose {command} is not registered in this build")
-    values = [("simulate.step", "edge", "1e-07")]
+    if command == "optimise --robust":   # samples of the yield estimate: also a batch
+        cfg = load_config(None, [f"{k}={t}" for k, _, t in values])
+        assert cfg.tolerance.samples * steps_per_stroke(cfg) > BATCH_STEP_BUDGET
+        rc, _, stderr, _ = run_subprocess(
+            ["optimise", "--robust", *[a for k, _, t in values for a in ("--set", f"{k}={t}")]],
+            REFUSAL_SECONDS, f"softclose optimise --robust {values}")
+        assert rc == 2, stderr
+        return
     assert run_case(command, values, out_root / f"budget-{command}", as_json=False,
-                    opts=opts) == 2
+                    opts=opts, defaults=False) == 2
 
 
 @pytest.mark.parametrize("command", list(COMMANDS))
