@@ -1,30 +1,61 @@
 """softclose: design soft-closing paper-bin lids on a four-bar linkage.
 
-The public API (each takes a :class:`Config` and plain Python values, writes no file, prints
-nothing unless ``progress=True``, and returns an immutable result with ``.success``,
-``.message``, ``.to_frame()``, ``.to_json()`` and ``.plot()``):
+The public API. Each function takes a :class:`Config` and plain Python values, writes no
+file, prints nothing unless ``progress=True``, and returns an immutable result with
+``.success``, ``.message``, ``.to_frame()`` (a pandas DataFrame whose columns are the JSON
+keys), ``.to_json()`` and ``.plot()`` (a matplotlib Figure):
 
 - :func:`simulate` -- one closing stroke, every metric with its estimated accuracy;
-- :func:`optimise` -- the soft-close design (multiple shooting + Ipopt), verified by an
-  independent adaptive simulation; ``robust=True`` designs for the ``[tolerance]`` box;
+- :func:`optimise` -- the soft-close design (multiple shooting + Ipopt), every reported metric
+  verified by an independent adaptive simulation; ``robust=True`` designs for the
+  ``[tolerance]`` box;
 - :func:`front` -- the verified Pareto front of the objective against ``closing_time_max``;
-- :func:`sweep` -- metrics over a grid (or sample) of any numeric config keys;
-- :func:`tolerance_analysis`, :func:`sensitivity` -- Monte Carlo yield and Sobol indices;
-- :func:`load_config`, :func:`default_config`, :meth:`Config.set` -- configs.
+- :func:`sweep` / :func:`sample` -- metrics over a grid or a quasi-random sample of any
+  numeric config keys;
+- :func:`tolerance_analysis`, :func:`sensitivity` -- Monte Carlo yield and Sobol indices of a
+  design under ``[tolerance]``;
+- :func:`load_config`, :func:`default_config`; ``cfg.set("mass.lid", 0.6)`` changes one key.
 
 Lower layers for scripts that need them: :class:`LidModel`, :class:`Simulator`,
-:class:`Reference`, :mod:`softclose.problem`.
+:class:`Reference`, :mod:`softclose.problem` (design keys, metrics and units, objective,
+constraints, accuracy targets). The feature packages are :mod:`softclose.optimiser`,
+:mod:`softclose.sweeps` and :mod:`softclose.robust`; they are imported on first use, so
+``import softclose`` stays light.
 """
+
+from importlib import import_module
 
 from .config import Config, default_config, load_config
 from .errors import ConfigError, NumericalError, SoftcloseError
 from .model import LidModel
-from .optimiser import front, optimise
 from .reference import Reference
 from .simulate import Simulator, simulate
 from .stroke import StrokeResult, StrokeStatus
 
-__all__ = ["simulate", "optimise", "front", "load_config", "default_config", "Config", "StrokeResult",
-           "StrokeStatus", "ConfigError", "NumericalError", "SoftcloseError", "LidModel",
-           "Reference", "Simulator"]
+#: public functions and result types of the feature packages, imported on first use
+_LAZY = {
+    "optimise": "optimiser", "front": "optimiser", "OptimiseResult": "optimiser",
+    "FrontResult": "optimiser",
+    "sweep": "sweeps", "sample": "sweeps", "SweepResult": "sweeps",
+    "tolerance_analysis": "robust", "sensitivity": "robust", "RobustResult": "robust",
+    "YieldResult": "robust", "SensitivityResult": "robust",
+}
+
+__all__ = ["simulate", "optimise", "front", "sweep", "sample", "tolerance_analysis",
+           "sensitivity", "load_config", "default_config", "Config", "StrokeResult",
+           "StrokeStatus", "OptimiseResult", "FrontResult", "SweepResult", "RobustResult",
+           "YieldResult", "SensitivityResult", "ConfigError", "NumericalError",
+           "SoftcloseError", "LidModel", "Reference", "Simulator"]
 __version__ = "0.2.0"
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        value = getattr(import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'softclose' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))

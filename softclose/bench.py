@@ -28,8 +28,6 @@ writes the files, :mod:`softclose.figures.bench` draws it.
 from __future__ import annotations
 
 import datetime
-import importlib
-import inspect
 import json
 import math
 import os
@@ -453,23 +451,6 @@ def _env() -> dict:
     return env
 
 
-def _public(module: str, name: str, needs: tuple = ()):
-    """``module.name`` if it exists and takes the keyword arguments ``needs``, else None."""
-    try:
-        fn = getattr(importlib.import_module(module), name, None)
-    except ImportError:
-        return None
-    if not callable(fn):
-        return None
-    try:
-        params = inspect.signature(fn).parameters
-    except (TypeError, ValueError):
-        return fn
-    if any(p.kind is p.VAR_KEYWORD for p in params.values()):
-        return fn
-    return fn if all(k in params for k in needs) else None
-
-
 def sweep_axes() -> dict[str, np.ndarray]:
     """The 40,000-design grid of the sweep throughput entry (:data:`SWEEP_GRID`)."""
     return {k: np.linspace(a, b, n) for k, (a, b, n) in SWEEP_GRID.items()}
@@ -507,19 +488,14 @@ def later_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
         return out[-1]
 
     rep = 1 if quick else 3
-    sweep = _public("softclose.sweep", "sweep")
+    from .sweeps import sweep
     n_grid = int(np.prod([n for _, _, n in SWEEP_GRID.values()]))
     what = f"sweep(cfg, axes): the {n_grid:,}-design grid k × l0 × c, in-process"
-    if sweep is not None and "out" not in inspect.signature(sweep).parameters:
-        axes = sweep_axes()
-        res = timed("sweep_40000", what, lambda: sweep(cfg, axes), rep, count=n_grid)
-        if res is not None and getattr(res, "designs_per_second", None):
-            rows[-1]["note"] = (f"the result's own designs_per_second (evaluation only): "
-                                f"{res.designs_per_second:,.0f}")
-    else:
-        rows.append(_not_measured("sweep_40000", what,
-                                  "not measured: softclose.sweep.sweep(cfg, axes) is not "
-                                  "available yet"))
+    axes = sweep_axes()
+    res = timed("sweep_40000", what, lambda: sweep(cfg, axes), rep, count=n_grid)
+    if res is not None:
+        rows[-1]["note"] = (f"the result's own designs_per_second (evaluation only): "
+                            f"{res.designs_per_second or 0:,.0f}")
     from .optimiser import optimise
     from .robust import sensitivity as sens
     from .robust import tolerance_analysis as ta

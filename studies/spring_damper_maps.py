@@ -28,7 +28,7 @@ import softclose
 from softclose.figures import save
 from softclose.jsonio import dumps
 from softclose.optimiser import optimise
-from softclose.sweep import sweep
+from softclose.sweeps import sweep
 
 OUT = Path(__file__).resolve().parent / "out" / "spring_damper_maps"
 #: the swept config keys and the optimiser's design key of each

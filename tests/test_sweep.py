@@ -17,9 +17,9 @@ from softclose.config import default_config
 from softclose.errors import ConfigError
 from softclose.problem import METRIC_KEYS
 from softclose.simulate import Simulator
-from softclose.sweep import columns, recompute, sweep
-from softclose.sweep import store
-from softclose.sweep.space import parse_grid
+from softclose.sweeps import columns, recompute, sweep
+from softclose.sweeps import store
+from softclose.sweeps.space import parse_grid
 
 ROOT = Path(__file__).resolve().parents[1]
 GRID = ["design.spring_k=0:2000:9", "design.damper_c=0:5000:9",

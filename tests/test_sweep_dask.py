@@ -14,9 +14,9 @@ import pytest
 distributed = pytest.importorskip("distributed")
 
 from softclose.cli import main  # noqa: E402
-from softclose.sweep import make_grid  # noqa: E402
-from softclose.sweep.distributed import mapper  # noqa: E402
-from softclose.sweep.run import run  # noqa: E402
+from softclose.sweeps import make_grid  # noqa: E402
+from softclose.sweeps.distributed import mapper  # noqa: E402
+from softclose.sweeps.run import run  # noqa: E402
 
 #: a grid with a non-design key (one simulator per lid mass) and some infeasible designs
 GRID = ["--grid", "design.spring_k=500:9500:8", "--grid",

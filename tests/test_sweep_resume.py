@@ -17,7 +17,7 @@ import pandas as pd
 import pytest
 
 from softclose.cli import main
-from softclose.sweep import store
+from softclose.sweeps import store
 
 ROOT = Path(__file__).resolve().parents[1]
 GRID = ["--grid", "design.spring_k=500:9500:30",

@@ -14,16 +14,14 @@ and the maps (``map_<k1>__<k2>.png`` per pair of keys, ``profile_<k>.png`` for o
 Ctrl-C keeps every finished chunk, prints the resume command and exits 130; ``--resume DIR``
 computes only the missing chunks and refuses a folder of another sweep, naming what differs.
 
-Hooks for the scale-out modules (absent in a build without them: exit 2):
-``softclose.sweep.distributed.mapper(address, threads)`` -- a context manager giving a
-mapper (see :mod:`softclose.sweep.run`); ``softclose.sweep.optimal.command(cfg, args,
-space, out)`` -- the ``--optimise`` command, returning an :class:`Outcome`.
+Scale-out: ``--dask`` runs the chunks through ``softclose.sweeps.distributed.mapper(address,
+threads)`` (see :mod:`softclose.sweeps.run`); ``--optimise`` calls
+``softclose.sweeps.optimal.optimise_grid`` and writes its table and maps.
 """
 
 from __future__ import annotations
 
 import contextlib
-import importlib
 import os
 import shlex
 import signal
@@ -31,7 +29,7 @@ import threading
 import time
 from pathlib import Path
 
-from .common import Outcome, add_common, interactive, prepare_out
+from .common import Outcome, add_common, interactive, prepare_out, wrote
 
 
 def register(sub) -> None:
@@ -68,19 +66,9 @@ def register(sub) -> None:
     p.set_defaults(run=run)
 
 
-def _module(name: str, option: str):
-    try:
-        return importlib.import_module(f"softclose.sweep.{name}")
-    except ModuleNotFoundError as exc:
-        if exc.name not in (f"softclose.sweep.{name}",):
-            raise
-        from ..errors import ConfigError
-        raise ConfigError(f"{option}: not available in this build") from None
-
-
 def _space(cfg, args):
     from ..errors import ConfigError
-    from ..sweep.space import make_sample, parse_grid, parse_range
+    from ..sweeps.space import make_sample, parse_grid, parse_range
     if args.grid and args.sample is not None:
         raise ConfigError("--grid and --sample: give one of them (a grid or a sample)")
     if args.ranges and args.sample is None:
@@ -105,8 +93,8 @@ def _resume_spec(cfg, args):
     """The sweep to finish: the folder's manifest, checked against what was asked."""
     from ..config import from_dict
     from ..errors import ConfigError
-    from ..sweep import store
-    from ..sweep.space import space_from_spec
+    from ..sweeps import store
+    from ..sweeps.space import space_from_spec
     folder = Path(args.resume)
     if args.out is not None and Path(args.out).resolve() != folder.resolve():
         raise ConfigError(f"--out {args.out} and --resume {args.resume}: a sweep is resumed "
@@ -133,16 +121,17 @@ def _resume_spec(cfg, args):
 
 def run(cfg, args) -> Outcome:
     from ..errors import ConfigError
-    from ..sweep import store
-    from ..sweep.chunks import CHUNK
+    from ..sweeps import store
+    from ..sweeps.chunks import CHUNK
     if args.chunk is not None and args.chunk < 1:
         raise ConfigError(f"--chunk: must be a positive number of designs, got {args.chunk}")
     if args.threads is not None and args.threads < 1:
         raise ConfigError(f"--threads: must be at least 1, got {args.threads}")
-    dask = _module("distributed", "--dask") if args.dask else None
+    from ..sweeps import distributed, optimal as optimal_grid
+    dask = distributed if args.dask else None
     if args.robust and not args.optimise:
         raise ConfigError("--robust: only with --optimise (the robust design at every point)")
-    optimal = _module("optimal", "--optimise") if args.optimise else None
+    optimal = optimal_grid if args.optimise else None
     if args.resume:
         cfg, space, fmt, chunk, out, old = _resume_spec(cfg, args)
         m = store.manifest(cfg, space, chunk, fmt)
@@ -154,7 +143,7 @@ def run(cfg, args) -> Outcome:
             raise ConfigError("--grid: give at least one KEY=START:STOP:COUNT "
                               "(or --sample N with --range)")
         if not args.optimise:
-            from ..sweep.space import check_budget
+            from ..sweeps.space import check_budget
             check_budget(cfg, space, "--sample" if space.kind == "sample" else "--grid")
         fmt, chunk = args.format or "csv", args.chunk or CHUNK
         out = prepare_out(args.out)
@@ -164,7 +153,7 @@ def run(cfg, args) -> Outcome:
                               f"--resume {args.out}, or choose another folder")
         m = store.manifest(cfg, space, chunk, fmt)
     if optimal is not None:
-        return optimal.command(cfg, args, space, out)
+        return _optimal_grid(cfg, args, space, out)
     if not args.resume and old is not None:
         store.clear(out)                 # a finished earlier sweep is replaced
     store.write_manifest(out, m, complete=False)
@@ -193,9 +182,9 @@ def _sweep(cfg, args, space, fmt, chunk, out: Path, m: dict, dask) -> Outcome:
 
 
 def _sweep_run(cfg, args, space, fmt, chunk, out: Path, m: dict, dask) -> Outcome:
-    from ..sweep import store
-    from ..sweep.run import _no_interrupt
-    from ..sweep.run import run as run_sweep
+    from ..sweeps import store
+    from ..sweeps.run import _no_interrupt
+    from ..sweeps.run import run as run_sweep
     t0 = time.perf_counter()
     parquet = fmt == "parquet"
     keys = list(space.keys)
@@ -350,3 +339,68 @@ def _text(res, payload: dict, files, resume) -> str:
     if resume:
         lines.append(f"  interrupted: the finished chunks are kept; resume with: {resume}")
     return "\n".join(lines)
+
+
+def _optimal_text(res) -> str:
+    """The table as text: one line per point (up to 40 points), else the ranges."""
+    import numpy as np
+    keys = list(res.keys)
+    head = (f"optimal {'robust ' if res.robust else ''}design over {', '.join(keys)}: "
+            f"{res.verified} of {res.points} points verified, {res.seconds:.1f} s "
+            f"({res.where})")
+    lines = [head]
+    c = res.columns
+    if res.points <= 40:
+        w = [max(len(k), 9) for k in keys]
+        lines.append("  " + "  ".join(f"{k:>{n}}" for k, n in zip(keys, w))
+                     + f"  {'spring_k':>9}  {'rest_len':>8}  {'damper_c':>9}  {'objective':>9}"
+                       "  verified  start")
+        for i in range(res.points):
+            vals = "  ".join(f"{c[k][i]:>{n}.5g}" for k, n in zip(keys, w))
+            if np.isfinite(c["objective"][i]):
+                des = (f"{c['spring_k'][i]:>9.6g}  {c['spring_rest_length'][i]:>8.5g}  "
+                       f"{c['damper_c'][i]:>9.6g}  {c['objective'][i]:>9.6g}")
+            else:
+                des = f"{'—':>9}  {'—':>8}  {'—':>9}  {'—':>9}"
+            lines.append(f"  {vals}  {des}  {'yes' if c['success'][i] else 'NO':>8}  "
+                         f"{c['start'][i]}")
+    else:
+        ok = c["success"]
+        for k, u in (("spring_k", "N/m"), ("spring_rest_length", "m"),
+                     ("damper_c", "N s/m"), ("objective", "")):
+            v = c[k][ok]
+            if v.size:
+                lines.append(f"  {k}: {v.min():.6g} .. {v.max():.6g} {u}".rstrip())
+    if not res.success and not res.interrupted:
+        lines.append(f"  {res.message}")
+    return "\n".join(lines)
+
+
+def _optimal_grid(cfg, args, space, out):
+    """``softclose sweep --optimise --grid KEY=... [--dask ADDRESS|local:N] [--robust]
+    --out DIR``: the table (``optimal.csv`` or, with ``--format parquet``,
+    ``optimal.parquet``) and the maps (``optimal.png``) in DIR. Exit 0 when every point is
+    verified, 3 when some point has no verified optimum (the table says which and why),
+    130 after Ctrl-C (the finished points are written)."""
+    from ..errors import ConfigError
+    from ..sweeps.optimal import FIGURE, optimise_grid, write_table
+    if getattr(args, "resume", None):
+        raise ConfigError("--resume: not with --optimise (an optimal grid is not resumed; "
+                          "run it again)")
+    if getattr(space, "kind", "grid") != "grid":
+        raise ConfigError("--optimise: needs a grid of non-design keys (--grid KEY=...), "
+                          "not --sample")
+    robust = bool(getattr(args, "robust", False))
+    res = optimise_grid(cfg, space, dask=getattr(args, "dask", None), robust=robust,
+                        progress=interactive(args))
+    files = [write_table(res, out, getattr(args, "format", None) or "csv")]
+    if not res.interrupted and res.verified:
+        from ..figures import save
+        files.append(save(res.plot(), Path(out) / FIGURE))
+    payload = res.to_json()
+    payload["files"] = [str(f) for f in files]
+    code = 130 if res.interrupted else 0 if res.success else 3
+    text = _optimal_text(res) + wrote(files)
+    if res.interrupted:
+        text += "\n  interrupted: the finished points are in the table"
+    return Outcome(payload, text, code, tuple(files), error=res.message if code == 3 else None)

@@ -12,7 +12,7 @@ feasible design starred. Which designs a map shows is stated in its title:
 
 One swept key gives profiles (the four quantities against the key). Drawing does not
 depend on the size of the sweep: a slice longer than :data:`MAX_CELLS` per axis is
-thinned, and the binned summary has at most :data:`softclose.sweep.tally.MAX_BINS` bins
+thinned, and the binned summary has at most :data:`softclose.sweeps.tally.MAX_BINS` bins
 per key; there are no per-cell Python loops.
 """
 
@@ -95,7 +95,7 @@ class _View:
 
 def _views_from_columns(res) -> list[_View]:
     """Slices through the best feasible design of a grid held in memory."""
-    from ..sweep.tally import categorise
+    from ..sweeps.tally import categorise
     space, cols = res.space, res.columns
     shape = space.shape
     full = {q: np.asarray(cols[q], float).reshape(shape) for q in QUANTITIES}
@@ -248,7 +248,7 @@ def _infeasible(ax, v: _View, present: list) -> None:
     hatch lines of one contourf per hatched category present, on the cell grid padded by
     half a cell); cells with no design (binned summaries) stay white."""
     from matplotlib.colors import ListedColormap
-    from ..sweep.tally import CATEGORIES
+    from ..sweeps.tally import CATEGORIES
     xe, ye = _edges(v.centres[0], v.logs[0]), _edges(v.centres[1], v.logs[1])
     cat = np.asarray(v.cat)
     bad = cat >= 0

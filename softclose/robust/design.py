@@ -508,7 +508,6 @@ def _initial_scenarios(box: Box) -> list[Scenario]:
 
 def _scenario_report(cfg, problem: _Problem, run: _Run, verify: bool) -> tuple[list, bool]:
     """Per scenario: its values, the NLP's metrics and the reference's verdict."""
-    o, st = cfg.optimise, cfg.stroke
     box_d = box_of(cfg, dict(zip(DESIGN_KEYS, run.design)), scale=problem.scale)
     out, ok_all = [], True
     worst = int(np.argmax(run.J))

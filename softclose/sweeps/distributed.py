@@ -13,8 +13,8 @@ Where the work runs is one string, ``dask`` (``--dask`` on the command line):
   import this version of softclose.
 
 What is sent is plain values, never CasADi objects (they do not pickle): the task function is
-importable (:func:`softclose.sweep.chunks.evaluate_chunk`,
-:func:`softclose.sweep.optimal.solve_segment`) and its arguments are a config dict, key names
+importable (:func:`softclose.sweeps.chunks.evaluate_chunk`,
+:func:`softclose.sweeps.optimal.solve_segment`) and its arguments are a config dict, key names
 and numpy arrays; each worker process builds (and caches) its own simulator or NLP from the
 config. The results are therefore the same numbers as the local run's, whatever the number
 of workers.
@@ -251,7 +251,7 @@ def _raise_task_error(exc, label: str, tag) -> None:
 
 # -- the sweep's chunks --------------------------------------------------------------------
 def _chunk_task(cfg_dict: dict, keys: list[str], ids, X, threads: int | None = None) -> dict:
-    """One sweep chunk on a worker: :func:`softclose.sweep.chunks.evaluate_chunk` with
+    """One sweep chunk on a worker: :func:`softclose.sweeps.chunks.evaluate_chunk` with
     ``threads`` kernel threads (default: as many as the worker has)."""
     from .chunks import evaluate_chunk
     if threads is None:
@@ -265,12 +265,12 @@ def _chunk_task(cfg_dict: dict, keys: list[str], ids, X, threads: int | None = N
 
 @contextlib.contextmanager
 def mapper(dask, threads: int | None = None):
-    """A mapper for :func:`softclose.sweep.run.run` that evaluates the chunks on Dask.
+    """A mapper for :func:`softclose.sweeps.run.run` that evaluates the chunks on Dask.
 
     ``dask`` is ``"local:N"``, a scheduler address or a ``distributed.Client``; the
     connection is made on entry (an unreachable address is a ConfigError here, before any
     work) and closed on exit. The mapper sends each chunk as plain values
-    ``(cfg_dict, keys, ids, X)`` to :func:`softclose.sweep.chunks.evaluate_chunk` on a
+    ``(cfg_dict, keys, ids, X)`` to :func:`softclose.sweeps.chunks.evaluate_chunk` on a
     worker (``threads`` kernel threads there; default: the worker's threads) and yields
     ``(c, columns)`` as chunks finish::
 

@@ -1,7 +1,7 @@
 """Design-space sweeps: the metrics of every design of a grid or a sample.
 
 >>> from softclose import default_config
->>> from softclose.sweep import sweep, sample
+>>> from softclose.sweeps import sweep, sample
 >>> r = sweep(default_config(), {"design.spring_k": np.linspace(500, 9500, 40),
 ...                              "design.damper_c": [100, 1000, 4000]})
 >>> r.best, r.to_frame(), r.plot()
@@ -26,7 +26,7 @@ sequence -- so any row can be computed again alone (:func:`recompute`).
 Neither writes a file nor prints anything unless ``progress=True``. The work is cut into
 chunks of :data:`CHUNK` designs, each evaluated by :func:`evaluate_chunk` from plain values
 (the config as a dict, the keys, the ids, the swept values), so the same function runs in
-this process or in a worker (:mod:`softclose.sweep.run` describes the mapper interface);
+this process or in a worker (:mod:`softclose.sweeps.run` describes the mapper interface);
 the command line adds Parquet output chunk by chunk, resume, and the maps.
 """
 

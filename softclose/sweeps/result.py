@@ -18,7 +18,7 @@ class SweepResult:
     ``columns`` holds the rows (one per design, sorted by ``id``) as read-only numpy arrays
     named as in :meth:`to_frame`; it is None for a sweep streamed to a Parquet dataset
     (``dataset``, read back by :meth:`to_frame`). ``bins`` is the binned summary the maps of
-    any sweep can be drawn from (:class:`softclose.sweep.tally.Bins`); ``fixed`` the values
+    any sweep can be drawn from (:class:`softclose.sweeps.tally.Bins`); ``fixed`` the values
     of the design keys that were not swept (from the config). After Ctrl-C
     (``interrupted``) only the finished chunks are present: ``computed < points``.
     """

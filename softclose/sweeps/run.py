@@ -2,12 +2,12 @@
 
 A *mapper* is any callable ``mapper(cfg_dict, keys, tasks, threads)`` that evaluates the
 ``tasks`` -- an iterator of ``(c, ids, X)``: chunk number, design ids, swept values -- with
-:func:`softclose.sweep.chunks.evaluate_chunk` and yields ``(c, columns)`` as chunks finish,
+:func:`softclose.sweeps.chunks.evaluate_chunk` and yields ``(c, columns)`` as chunks finish,
 in any order. :func:`local_map` evaluates them one after the other in this process (the
 kernel uses its threads); a distributed mapper sends the same plain values to workers.
 
-For each finished chunk the runner updates the :class:`~softclose.sweep.tally.Tally` and
-the :class:`~softclose.sweep.tally.Bins`, hands the rows to a ``sink`` (a Parquet part
+For each finished chunk the runner updates the :class:`~softclose.sweeps.tally.Tally` and
+the :class:`~softclose.sweeps.tally.Bins`, hands the rows to a ``sink`` (a Parquet part
 file) and/or keeps them in memory, and advances the progress line. Ctrl-C stops it between
 chunks: every finished chunk is kept and the result says ``interrupted``.
 """

@@ -1,7 +1,7 @@
 """An optimal design at every point of a grid over non-design config keys.
 
 >>> from softclose import default_config
->>> from softclose.sweep.optimal import optimise_grid
+>>> from softclose.sweeps.optimal import optimise_grid
 >>> r = optimise_grid(default_config(), {"mass.lid": [0.4, 0.5, 0.6]})
 >>> r.to_frame()       # mass.lid, spring_k, spring_rest_length, damper_c, objective, ...
 >>> r.plot()           # the optimal design and objective over the grid
@@ -60,7 +60,7 @@ REFUSED = "--optimise picks the design; sweep only non-design keys"
 
 # -- the grid ------------------------------------------------------------------------------
 def check_grid(cfg, axes) -> Any:
-    """The :class:`softclose.sweep.space.Grid` of ``axes`` (a dict ``{key: values}`` or a
+    """The :class:`softclose.sweeps.space.Grid` of ``axes`` (a dict ``{key: values}`` or a
     Grid), refusing design keys and oversized grids with a one-line ConfigError."""
     from .space import Grid, make_grid
     grid = axes if isinstance(axes, Grid) else make_grid(axes, cfg, "axes")
@@ -409,66 +409,3 @@ def write_table(res: OptimalGridResult, out, fmt: str = "csv") -> Path:
         pcsv.write_csv(table, tmp, pcsv.WriteOptions(quoting_style="needed"))
     tmp.replace(path)
     return path
-
-
-def format_text(res: OptimalGridResult) -> str:
-    """The table as text: one line per point (up to 40 points), else the ranges."""
-    keys = list(res.keys)
-    head = (f"optimal {'robust ' if res.robust else ''}design over {', '.join(keys)}: "
-            f"{res.verified} of {res.points} points verified, {res.seconds:.1f} s "
-            f"({res.where})")
-    lines = [head]
-    c = res.columns
-    if res.points <= 40:
-        w = [max(len(k), 9) for k in keys]
-        lines.append("  " + "  ".join(f"{k:>{n}}" for k, n in zip(keys, w))
-                     + f"  {'spring_k':>9}  {'rest_len':>8}  {'damper_c':>9}  {'objective':>9}"
-                       "  verified  start")
-        for i in range(res.points):
-            vals = "  ".join(f"{c[k][i]:>{n}.5g}" for k, n in zip(keys, w))
-            if np.isfinite(c["objective"][i]):
-                des = (f"{c['spring_k'][i]:>9.6g}  {c['spring_rest_length'][i]:>8.5g}  "
-                       f"{c['damper_c'][i]:>9.6g}  {c['objective'][i]:>9.6g}")
-            else:
-                des = f"{'—':>9}  {'—':>8}  {'—':>9}  {'—':>9}"
-            lines.append(f"  {vals}  {des}  {'yes' if c['success'][i] else 'NO':>8}  "
-                         f"{c['start'][i]}")
-    else:
-        ok = c["success"]
-        for k, u in (("spring_k", "N/m"), ("spring_rest_length", "m"),
-                     ("damper_c", "N s/m"), ("objective", "")):
-            v = c[k][ok]
-            if v.size:
-                lines.append(f"  {k}: {v.min():.6g} .. {v.max():.6g} {u}".rstrip())
-    if not res.success and not res.interrupted:
-        lines.append(f"  {res.message}")
-    return "\n".join(lines)
-
-
-def command(cfg, args, space, out):
-    """``softclose sweep --optimise --grid KEY=... [--dask ADDRESS|local:N] [--robust]
-    --out DIR``: the table (``optimal.csv`` or, with ``--format parquet``,
-    ``optimal.parquet``) and the maps (``optimal.png``) in DIR. Exit 0 when every point is
-    verified, 3 when some point has no verified optimum (the table says which and why),
-    130 after Ctrl-C (the finished points are written)."""
-    from ..cli.common import Outcome, interactive, wrote
-    if getattr(args, "resume", None):
-        raise ConfigError("--resume: not with --optimise (an optimal grid is not resumed; "
-                          "run it again)")
-    if getattr(space, "kind", "grid") != "grid":
-        raise ConfigError("--optimise: needs a grid of non-design keys (--grid KEY=...), "
-                          "not --sample")
-    robust = bool(getattr(args, "robust", False))
-    res = optimise_grid(cfg, space, dask=getattr(args, "dask", None), robust=robust,
-                        progress=interactive(args))
-    files = [write_table(res, out, getattr(args, "format", None) or "csv")]
-    if not res.interrupted and res.verified:
-        from ..figures import save
-        files.append(save(res.plot(), Path(out) / FIGURE))
-    payload = res.to_json()
-    payload["files"] = [str(f) for f in files]
-    code = 130 if res.interrupted else 0 if res.success else 3
-    text = format_text(res) + wrote(files)
-    if res.interrupted:
-        text += "\n  interrupted: the finished points are in the table"
-    return Outcome(payload, text, code, tuple(files), error=res.message if code == 3 else None)
