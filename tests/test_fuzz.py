@@ -689,6 +689,7 @@ SUBPROCESS_SAMPLE = [
     ["simulate", "--set", "design.damper_c=nan", "--json"],
     ["simulate", "--set", "design.spring_k=" + "9" * 400],
     ["sweep", "--grid", "design.spring_k=nan:1:3", "--out", "{out}"],
+    ["sweep", "--grid=geometry.assembly[0]=2.0:10.0:1000000000000", "--out", "{out}"],
 ]
 
 
