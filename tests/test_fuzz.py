@@ -3,7 +3,9 @@ command, with values of every kind and magnitude (issue 15).
 
 Values are drawn by kind -- zero, negative, tiny, huge (1e300), NaN, +-inf, strings, booleans,
 vectors of the wrong length, integers beyond the floats, values inside the admissible range,
-on its edges and just outside it -- one to three keys per case. Every run must
+on its edges and just outside it -- one to three keys per case, and now and then a drawn value
+of the command's own options (``--theta-deg``, ``--samples``, ``--closing-times``, a ``--grid``
+over any key). Every run must
 
 - end with exit code 0, 2 or 3 (never an exception out of ``main``: a traceback in a shell);
 - on exit 2 or 3, say so in exactly one stderr line starting ``softclose: error:``;
@@ -15,7 +17,7 @@ on its edges and just outside it -- one to three keys per case. Every run must
   stroke, the optimiser's starts x grid), enforced by an alarm (and a hard faulthandler exit
   if a compiled loop never returns).
 
-Two profiles: the default run draws a fast sample (about a minute on one core; the costly
+Two profiles: the default run draws a fast sample (~670 cases in about 30 s; the costly
 commands -- pareto, optimise --robust, bench -- get only values the config refuses, and the
 work-size keys are kept to the refused kinds for the optimisers); ``-m fuzz`` runs the long
 profile (every kind everywhere, more cases). Cases are counted by kind and outcome; the
