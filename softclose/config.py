@@ -214,6 +214,8 @@ NLP_BUDGET = 2000
 #: most fixed steps of a batch of strokes (designs x STEP_BUDGET-bounded steps per stroke):
 #: 20 million designs at the default step; see :func:`check_batch`
 BATCH_STEP_BUDGET = 5e10
+#: most Monte Carlo samples of a tolerance analysis (10^7: ~2 min of strokes at the defaults)
+MAX_TOLERANCE_SAMPLES = 10_000_000
 
 
 def _fmt_range(key: str) -> str:
@@ -603,6 +605,9 @@ def _tolerance(table: Any, values: dict[str, dict[str, Any]]) -> Tolerance:
     opts = {}
     for name, (kind, default) in TOLERANCE_OPTIONS.items():
         opts[name] = _check(f"tolerance.{name}", kind, table.get(name, default))
+    if opts["samples"] > MAX_TOLERANCE_SAMPLES:
+        raise ConfigError(f"tolerance.samples: {opts['samples']} is outside the admissible "
+                          f"range 1..{MAX_TOLERANCE_SAMPLES:g}")
     if not 0 < opts["required_yield"] <= 1:
         raise ConfigError(f"tolerance.required_yield: must lie in (0, 1], got "
                           f"{opts['required_yield']}")

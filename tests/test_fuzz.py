@@ -633,15 +633,16 @@ def test_issue_inputs(command, values, opts, out_root):
 
 
 #: batches within every other bound whose strokes x steps exceed the batch budget: at the
-#: smallest step (5e7 steps a stroke), or a sample count from [tolerance] (1e9 strokes)
+#: smallest step (5e7 steps a stroke), or the largest [tolerance] sample count at a small step
 _SMALLEST_STEP = [("simulate.step", "edge", "1e-07")]
 BUDGET_CASES = [
     ("sweep", ["--grid", "design.spring_k=0:2000:5000", "--grid", "design.damper_c=0:2000:4000"],
      _SMALLEST_STEP),
     ("yield", ["--samples", "10000000"], _SMALLEST_STEP),
     ("sensitivity", ["--samples", str(2 ** 20)], _SMALLEST_STEP),
-    ("yield", [], [("tolerance.samples", "huge", "1000000000")]),
-    ("optimise --robust", [], [("tolerance.samples", "huge", "1000000000")]),
+    ("yield", [], [("tolerance.samples", "edge", "10000000"), ("simulate.step", "edge", "1e-06")]),
+    ("optimise --robust", [], [("tolerance.samples", "edge", "10000000"),
+                               ("simulate.step", "edge", "1e-06")]),
 ]
 
 

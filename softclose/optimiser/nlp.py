@@ -363,7 +363,7 @@ class ShootingNLP:
         # the largest sub-step speed or Hermite maximum: the NLP's own peak tip speed
         self._peak = ca.Function("peak", [w, P], [ca.mmax(sp)])
         nlp = {"x": w, "f": J / Jref, "g": ca.vertcat(*g_all.values()), "p": P}
-        self.ipopt_options = {"print_time": False, "show_eval_warnings": False,
+        self.ipopt_options = {"print_time": False, "show_eval_warnings": False, "calc_lam_p": False,
                               "ipopt.print_level": 0, "ipopt.sb": "yes",
                               "ipopt.tol": tol, "ipopt.max_iter": max_iter,
                               "ipopt.hessian_approximation": hessian,

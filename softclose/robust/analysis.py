@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..config import Config
+from ..config import Config, check_batch
 from ..problem import DESIGN_KEYS, design_of, params_of
 from .box import Box, box_of
 from .evaluate import evaluate
@@ -168,6 +168,7 @@ def tolerance_analysis(cfg: Config, *, samples: int | None = None, seed: int = 0
     if design:
         cfg = cfg.with_design(**{k: design[k] for k in DESIGN_KEYS if k in design})
     box = box_of(cfg)
-    n = samples or cfg.tolerance.samples
-    z = box.draw(int(n), seed)
+    n = int(samples or cfg.tolerance.samples)
+    check_batch(cfg, n, "--samples" if samples else "tolerance.samples")
+    z = box.draw(n, seed)
     return analyse_samples(cfg, box, z, seed=seed, reference=reference, t0=t0)

@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..config import Config
+from ..config import Config, check_batch
 from ..errors import NumericalError
 from ..problem import DESIGN_KEYS, METRIC_KEYS, PARAM_KEYS, VERIFY_RTOL, describe, objective
 from .analysis import YieldResult, analyse_samples
@@ -546,6 +546,7 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     from ..progress import Progress
     t_start = time.perf_counter()
     tol = cfg.tolerance
+    check_batch(cfg, int(samples or tol.samples), "--samples" if samples else "tolerance.samples")
     times: dict = {}
     notes: list = []
     rounds: list = []

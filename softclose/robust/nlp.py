@@ -149,7 +149,7 @@ class ScenarioNLP:
         self.nw = int(w.numel())
         self.J_fn = ca.Function("J", [w, P], [ca.vertcat(*J)])
         nlp = {"x": w, "f": f_obj, "g": ca.vertcat(*g), "p": P}
-        self.options = {"print_time": False, "show_eval_warnings": False,
+        self.options = {"print_time": False, "show_eval_warnings": False, "calc_lam_p": False,
                         "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": tol,
                         "ipopt.max_iter": o.max_iter,
                         "ipopt.hessian_approximation": o.hessian,

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..config import Config
+from ..config import Config, check_batch
 from ..errors import ConfigError
 from ..problem import DESIGN_KEYS, design_of, params_of
 from .box import box_of
@@ -110,6 +110,7 @@ def sensitivity(cfg: Config, *, samples: int = 1024, seed: int = 0,
         raise ConfigError("tolerance: no key has a spread at this design (a relative spread of "
                           "a zero value is zero); give one, e.g. --set tolerance.mass.lid=0.05")
     box = _sub_box(full, live)
+    check_batch(cfg, int(samples) * (box.dim + 2), f"--samples {samples}")
     fixed = [k for j, k in enumerate(full.keys) if j not in live]
     keys = list(box.keys)
     if box.distribution == "uniform":

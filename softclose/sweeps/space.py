@@ -30,6 +30,8 @@ from ..errors import ConfigError
 SAMPLERS = ("sobol", "lhs", "random")
 #: the largest number of designs accepted (ids are int64; part files hold them on disk)
 MAX_DESIGNS = 1_000_000_000
+#: most values of one grid key (10^7 values: 80 MB; the product is bounded by MAX_DESIGNS)
+MAX_AXIS_VALUES = 10_000_000
 
 
 def _readonly(a) -> np.ndarray:
@@ -191,6 +193,9 @@ def parse_grid_spec(spec: str, cfg=None) -> tuple[str, np.ndarray, bool]:
             raise ConfigError(f"{option} {spec!r}: COUNT must be a positive integer, "
                               f"got {n.strip()!r}")
         count = int(n)
+        if count > MAX_AXIS_VALUES:   # before any array is built
+            raise ConfigError(f"{option} {spec!r}: COUNT = {count} is more than "
+                              f"{MAX_AXIS_VALUES:,} values of one key; use fewer")
         if mode not in (None, "log"):
             raise ConfigError(f"{option} {spec!r}: the fourth field may only be 'log', "
                               f"got {mode!r}")
