@@ -674,9 +674,6 @@ def _box_summary(box: Box) -> dict:
 
 
 # -- no robust design: which constraint, where, by how much, and what spreads would do ------------
-REASON_CONSTRAINT = {"not closed": "closed", "too slow": "closing_time_max",
-                     "too fast": "closing_time_min", "not held shut": "holding_moment_min",
-                     "rebound": "no_rebound"}
 
 
 def _violation(cols: dict, i: int, o) -> tuple[str, str]:
