@@ -93,3 +93,24 @@ def test_progress_on_a_terminal_only(cfg, monkeypatch, capsys):
     assert main(["optimise", "--json", "--set", "optimise.starts=2"]) == 0
     captured = capsys.readouterr()
     assert captured.err == "" and json.loads(captured.out)["success"] is True
+
+
+@pytest.mark.parametrize("solver", ["ma86", "ma97"])
+def test_missing_hsl_solver_is_refused_in_a_real_process(solver):
+    """Ipopt's failed load of ma86/ma97 used to crash the process at exit (signal 11): the
+    solver is refused before Ipopt is called, and the process ends with exit 2."""
+    import subprocess
+    import sys
+    from softclose.optimiser.nlp import check_linear_solver
+    try:
+        check_linear_solver(solver)
+        pytest.skip("the HSL library is installed here")
+    except Exception:
+        pass
+    run = subprocess.run([sys.executable, "-m", "softclose", "optimise", "--set",
+                          f'optimise.linear_solver="{solver}"'], capture_output=True, text=True,
+                         timeout=120)
+    assert run.returncode == 2, run.stderr
+    assert run.stderr.strip().splitlines() == [
+        f'softclose: error: optimise.linear_solver: "{solver}" needs the HSL library (libhsl '
+        'or libcoinhsl), which is not installed here; use "mumps"']

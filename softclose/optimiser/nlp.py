@@ -287,6 +287,29 @@ def discretisation(cfg, nodes: int | None = None, substeps: int | None = None) -
     return Discretisation(N, M, t_limit, tuple(notes))
 
 
+def check_linear_solver(name: str) -> None:
+    """ConfigError unless Ipopt can load the linear solver ``name``.
+
+    MUMPS ships with CasADi's Ipopt. The HSL solvers (ma27, ma57, ma86, ma97) live in a
+    separate library (``libhsl``/``libcoinhsl``) that Ipopt loads at run time; asking for one
+    that is not installed must be refused here, before Ipopt is called: a failed load of
+    ma86/ma97 leaves Ipopt in a state that crashes the process at exit.
+    """
+    if name == "mumps":
+        return
+    import ctypes
+    import ctypes.util
+    for lib in ("hsl", "coinhsl"):
+        for candidate in filter(None, (ctypes.util.find_library(lib), f"lib{lib}.so")):
+            try:
+                ctypes.CDLL(candidate)
+                return
+            except OSError:
+                continue
+    raise ConfigError(f"optimise.linear_solver: \"{name}\" needs the HSL library (libhsl or "
+                      "libcoinhsl), which is not installed here; use \"mumps\"")
+
+
 def check_options(run: "Run", cfg) -> None:
     """ConfigError when Ipopt refused an option of cfg (e.g. a linear solver that this Ipopt
     build does not have)."""
@@ -334,6 +357,7 @@ class ShootingNLP:
     def __init__(self, model, nodes: int, substeps: int, hessian: str = "exact",
                  linear_solver: str = "mumps", max_iter: int = 500, tol: float = 1e-10):
         t0 = time.perf_counter()
+        check_linear_solver(linear_solver)
         self.model, self.N, self.M = model, nodes, substeps
         N, M = nodes, substeps
         self.fit = ChebyshevFit(model)

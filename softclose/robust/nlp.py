@@ -149,6 +149,8 @@ class ScenarioNLP:
         self.nw = int(w.numel())
         self.J_fn = ca.Function("J", [w, P], [ca.vertcat(*J)])
         nlp = {"x": w, "f": f_obj, "g": ca.vertcat(*g), "p": P}
+        from ..optimiser.nlp import check_linear_solver
+        check_linear_solver(o.linear_solver)
         self.options = {"print_time": False, "show_eval_warnings": False, "calc_lam_p": False,
                         "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": tol,
                         "ipopt.max_iter": o.max_iter,
