@@ -280,3 +280,17 @@ def test_sobol_counts_strokes_that_do_not_close(capsys):
     for out in ("closing_time", "impact_theta_dot"):
         assert set(j[out]) == {"S1", "ST", "S1_conf", "ST_conf"}
         assert set(j[out]["S1"]) == {"design.spring_k", "design.damper_c", "mass.lid"}
+
+
+def test_sensitivity_ignores_a_spread_below_floating_point_resolution():
+    """Found by the fuzz test: a spread of 2e-98 on a 0.06 m value leaves lo == hi; that key
+    is held fixed (listed as such), the others get their indices, and no SALib error escapes."""
+    import softclose
+    cfg = softclose.default_config().update(
+        {"design.spring_k": 1914.7, "design.spring_rest_length": 0.079257,
+         "design.damper_c": 2087.75, "tolerance.geometry.pivot_b[0]": 2.03e-98})
+    res = softclose.sensitivity(cfg, samples=16)
+    js = res.to_json()
+    names = set(js["closing_time"]["S1"])
+    assert names == {"design.spring_k", "design.damper_c", "mass.lid"}
+    assert "geometry.pivot_b[0]" not in names

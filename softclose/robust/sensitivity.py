@@ -105,10 +105,13 @@ def sensitivity(cfg: Config, *, samples: int = 1024, seed: int = 0,
     if design:
         cfg = cfg.with_design(**{k: design[k] for k in DESIGN_KEYS if k in design})
     full = box_of(cfg)
-    live = [j for j in range(full.dim) if full.half[j] > 0]
+    # a key varies only if its interval is wider than the value's floating-point resolution
+    # (a spread of 1e-98 leaves lo == hi, which SALib rightly refuses)
+    live = [j for j in range(full.dim) if full.lo[j] < full.hi[j]]
     if not live:
         raise ConfigError("tolerance: no key has a spread at this design (a relative spread of "
-                          "a zero value is zero); give one, e.g. --set tolerance.mass.lid=0.05")
+                          "a zero value is zero, and one below the value's floating-point "
+                          "resolution is none); give one, e.g. --set tolerance.mass.lid=0.05")
     box = _sub_box(full, live)
     check_batch(cfg, int(samples) * (box.dim + 2), f"--samples {samples}")
     fixed = [k for j, k in enumerate(full.keys) if j not in live]
@@ -140,8 +143,8 @@ def sensitivity(cfg: Config, *, samples: int = 1024, seed: int = 0,
     nc = int((~closed).sum())
     msgs = []
     if fixed:
-        msgs.append(f"{', '.join(fixed)}: no spread at this design (relative spread of a zero "
-                    "value), left out")
+        msgs.append(f"{', '.join(fixed)}: no spread at this design (a relative spread of a zero "
+                    "value, or one below the value's floating-point resolution), left out")
     if nc:
         msgs.append(f"{nc} of {len(X)} strokes did not close; {CENSORING}")
     msg = "; ".join(msgs)
