@@ -76,7 +76,6 @@ def active_set(nlp: ShootingNLP, cfg, run: Run, t_limit: float) -> tuple[Active,
     if run.lam_x is None:
         return ()
     o, st = cfg.optimise, cfg.stroke
-    lbx, ubx = run.bounds[0], run.bounds[1]
     Jr, lam_x, lam_g = run.J_ref, run.lam_x, run.lam_g
     out = []
     for i, key in enumerate(DESIGN_KEYS):
