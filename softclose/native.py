@@ -344,11 +344,20 @@ class CoefficientTable:
             dm = np.broadcast_to(np.asarray(lid_mass, float), th.shape) - self.lid_mass
             dm = np.where(np.isfinite(dm), dm, 0.0)
             if np.any(dm != 0):
-                r = self.mass_derivative[i]
-                dc = r[..., 0] + s * (r[..., 1] + s * (r[..., 2] + s * r[..., 3]))
                 c = c.copy()
-                c[:, :4] += dm[:, None] * dc
+                c[:, :4] += dm[:, None] * self._mass_slope(i, s)
         return c
+
+    def _mass_slope(self, i: np.ndarray, s: np.ndarray) -> np.ndarray:
+        r = self.mass_derivative[i]
+        return r[..., 0] + s * (r[..., 1] + s * (r[..., 2] + s * r[..., 3]))
+
+    def mass_slope(self, theta: float) -> np.ndarray:
+        """d(M, dM, Vg, dVg)/d(lid mass) at one angle (shape (4,)), as :meth:`evaluate`
+        uses it."""
+        x = np.clip((np.array([theta]) - self.lo) / self.h, 0, self.ncell)
+        i = np.minimum(x.astype(int), self.ncell - 1)
+        return self._mass_slope(i, (x - i)[:, None])[0]
 
 
 def _lid_masses(designs: np.ndarray, table: CoefficientTable) -> np.ndarray | None:
@@ -442,12 +451,30 @@ def kernel_step(table, method, design, h, x0) -> np.ndarray:
     return x1
 
 
+def _coefficients(table: CoefficientTable, theta, n: int, lid_mass=None) -> np.ndarray:
+    """:meth:`CoefficientTable.evaluate` for ``n`` rows at ``theta`` (scalar or one per row).
+    At one angle the cell is looked up once and its row broadcast -- the same arithmetic per
+    row as evaluating each row, so the same numbers -- instead of gathering n copies."""
+    th = np.asarray(theta, float)
+    if th.ndim:
+        return table.evaluate(np.broadcast_to(th, (n,)), lid_mass)
+    c = np.broadcast_to(table.evaluate(th[None]), (n, table.cc.shape[1]))
+    if lid_mass is None:
+        return c
+    dm = np.broadcast_to(np.asarray(lid_mass, float), (n,)) - table.lid_mass
+    dm = np.where(np.isfinite(dm), dm, 0.0)
+    if not np.any(dm != 0):
+        return c
+    c = c.copy()
+    c[:, :4] += dm[:, None] * table.mass_slope(float(th))
+    return c
+
+
 def potential_energy(table: CoefficientTable, theta, P, lid_mass=None) -> np.ndarray:
     """V = Vg + k (l - l0)^2 / 2 (J) at ``theta`` (scalar or one per row) for rows of
     P = (k, l0, ...), at ``lid_mass`` (scalar, one per row, or None: the table's mass)."""
     P = np.atleast_2d(np.asarray(P, float))
-    th = np.broadcast_to(np.asarray(theta, float), (len(P),))
-    c = table.evaluate(th, lid_mass)
+    c = _coefficients(table, theta, len(P), lid_mass)
     return c[:, 2] + 0.5 * P[:, 0] * (c[:, 4] - P[:, 1]) ** 2
 
 
@@ -456,8 +483,7 @@ def holding_moments(table: CoefficientTable, theta_closed: float, P,
     """dV/dtheta at ``theta_closed`` (N m, > 0 presses the lid shut) for rows of
     P = (k, l0, ...), from the table, at ``lid_mass`` (scalar, one per row, or None)."""
     P = np.atleast_2d(np.asarray(P, float))
-    th = np.full(len(P), float(theta_closed))
-    c = table.evaluate(th, lid_mass)
+    c = _coefficients(table, float(theta_closed), len(P), lid_mass)
     return c[:, 3] + P[:, 0] * (c[:, 4] - P[:, 1]) * c[:, 5]
 
 
@@ -475,11 +501,13 @@ def not_closed_reasons(out) -> np.ndarray:
         status, reason, theta = (a[:, _COL[k]] for k in ("status", "stop_reason", "stop_theta"))
     text = np.full(status.shape, "", dtype=object)
     open_ = status == 1
-    deg = np.char.mod("%.1f", np.where(np.isfinite(theta), np.degrees(theta), 0.0))
     for code, head in ((1, "cannot reach the rim: energy below the barrier at theta = "),
                        (2, "held open at theta = ")):
-        m = open_ & (reason == code)
-        text[m] = np.char.add(np.char.add(head, deg[m]), " deg").astype(object)
+        m = np.nonzero(open_ & (reason == code))[0]
+        if len(m):   # (only these rows are formatted: a batch is mostly closed strokes)
+            t = theta[m]
+            deg = np.char.mod("%.1f", np.where(np.isfinite(t), np.degrees(t), 0.0))
+            text[m] = np.char.add(np.char.add(head, deg), " deg").astype(object)
     text[open_ & (reason == 0)] = ("still moving towards the rim at t_max "
                                    "(too slow to close in time)")
     return text
