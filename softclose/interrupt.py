@@ -20,7 +20,9 @@ simulation would be reported as a numerical failure (exit 3).
 - while an interrupt is pending, drops what the solvers write to ``sys.stderr``, so that the
   only line left is the command line's own.
 
-:func:`check` lets a long loop stop at a safe point (between solves, between chunks).
+:func:`check` lets a long loop stop at a safe point (between solves, between chunks);
+:func:`sigint_handler` swaps the SIGINT handler for a block (the sweep wants Python's plain
+KeyboardInterrupt, Dask's local worker processes are started with SIGINT ignored).
 """
 
 from __future__ import annotations
@@ -71,6 +73,24 @@ class _QuietStderr:
 
     def __getattr__(self, name):
         return getattr(self._stream, name)
+
+
+@contextlib.contextmanager
+def sigint_handler(handler):
+    """Handle SIGINT with ``handler`` (a function, ``signal.SIG_IGN``, ``signal.SIG_DFL`` or
+    ``signal.default_int_handler``) inside the block, then restore the handler it replaced.
+
+    A no-op outside the main thread: only the main thread may set signal handlers (and only
+    it receives signals), so a block run in another thread keeps whatever is there.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 @contextlib.contextmanager
@@ -134,4 +154,4 @@ def guard():
             sys.stderr = stderr
 
 
-__all__ = ["guard", "interrupted", "check", "RESEND"]
+__all__ = ["guard", "interrupted", "check", "sigint_handler", "RESEND"]

@@ -202,3 +202,40 @@ def test_ctrl_c_during_a_sweep_keeps_finished_chunks(tmp_path):
     assert 0 < rows < 600 * 600 and rows % 4000 == 0, rows
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest.get("complete") is False
+
+
+def test_sigint_handler_swaps_for_the_block_and_restores():
+    """The handler is in place inside the block (a real SIGINT is ignored under SIG_IGN,
+    raises KeyboardInterrupt under Python's default handler), the previous one is back
+    afterwards -- also when the block raises -- and another thread leaves it alone."""
+    import threading
+
+    from softclose.interrupt import sigint_handler
+
+    def mine(signum, frame):
+        raise AssertionError("the swapped-out handler ran")
+
+    previous = signal.signal(signal.SIGINT, mine)
+    try:
+        with sigint_handler(signal.SIG_IGN):
+            assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.01)                   # handlers run here: ignored
+        assert signal.getsignal(signal.SIGINT) is mine
+        with pytest.raises(KeyboardInterrupt):
+            with sigint_handler(signal.default_int_handler):
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(1.0)                # the KeyboardInterrupt ends the wait
+        assert signal.getsignal(signal.SIGINT) is mine
+        seen = []
+
+        def elsewhere():
+            with sigint_handler(signal.SIG_IGN):
+                seen.append(signal.getsignal(signal.SIGINT))
+
+        t = threading.Thread(target=elsewhere)
+        t.start()
+        t.join()
+        assert seen == [mine]
+    finally:
+        signal.signal(signal.SIGINT, previous)

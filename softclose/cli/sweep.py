@@ -160,20 +160,13 @@ def run(cfg, args) -> Outcome:
     return _sweep(cfg, args, space, fmt, chunk, out, m, dask)
 
 
-@contextlib.contextmanager
 def _plain_ctrl_c():
     """Ctrl-C as Python's plain KeyboardInterrupt while the sweep runs: the runner catches
     it between chunks, keeps what is finished and the command reports it (exit 130). (The
     command line's own handler, made for solvers that swallow the interrupt, would keep
     re-sending it; the sweep calls no such solver.)"""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    old = signal.signal(signal.SIGINT, signal.default_int_handler)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, old)
+    from ..interrupt import sigint_handler
+    return sigint_handler(signal.default_int_handler)
 
 
 def _sweep(cfg, args, space, fmt, chunk, out: Path, m: dict, dask) -> Outcome:

@@ -123,22 +123,15 @@ def connect(dask) -> Iterator[Any]:
         client.close()
 
 
-@contextlib.contextmanager
 def _workers_ignore_ctrl_c():
     """Start local worker processes with SIGINT ignored (they inherit it): Ctrl-C in a
     terminal reaches the whole process group, and only this process should act on it (it
     cancels the tasks and closes the cluster); otherwise every worker prints a traceback.
     A Ctrl-C during the second or so of start-up is therefore not seen."""
     import signal
-    import threading
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, old)
+
+    from ..interrupt import sigint_handler
+    return sigint_handler(signal.SIG_IGN)
 
 
 def _check_workers(client, where: str) -> None:
