@@ -157,3 +157,44 @@ def test_no_design_over_the_box_is_reported_with_what_would_do(capsys):
                                    "tolerance.samples": 1000})
     ok = optimise_robust(cfg)
     assert ok.success, ok.message
+
+
+def _png_whole(path) -> bool:
+    data = path.read_bytes()
+    return data.startswith(b"\x89PNG\r\n\x1a\n") and data.endswith(b"IEND\xaeB`\x82")
+
+
+def test_yield_and_sensitivity_write_their_table_and_figure(tmp_path, capsys):
+    """``--out DIR``: yield_samples.csv + yield_histograms.png and sobol.csv + sobol.png, in
+    that order in the JSON's file list; the tables hold the numbers the command reports
+    (the yield is the feasible fraction of the written samples, the same as a run in this
+    process with the same seed; the Sobol table has the reported indices)."""
+    import pandas as pd
+    design = ["--set", "design.spring_k=1700", "--set", "design.damper_c=3000",
+              "--set", "design.spring_rest_length=0.07925707423701324"]
+    out = tmp_path / "yield"
+    rc = cli.main(["yield", "--json", "--samples", "300", "--seed", "5", "--out", str(out),
+                   *design])
+    j = json.loads(capsys.readouterr()[0])
+    assert rc == 0
+    assert j["files"] == [str(out / "yield_samples.csv"), str(out / "yield_histograms.png")]
+    df = pd.read_csv(out / "yield_samples.csv")
+    assert len(df) == 300 and df["feasible"].mean() == pytest.approx(j["yield"], abs=0)
+    cfg = default_config().update({"design.spring_k": 1700, "design.damper_c": 3000,
+                                   "design.spring_rest_length": 0.07925707423701324})
+    here = tolerance_analysis(cfg, samples=300, seed=5).to_frame()
+    assert list(df.columns) == list(here.columns)
+    np.testing.assert_allclose(df["closing_time"], here["closing_time"], rtol=1e-15)
+    assert _png_whole(out / "yield_histograms.png")
+
+    out = tmp_path / "sobol"
+    rc = cli.main(["sensitivity", "--json", "--samples", "16", "--out", str(out), *design])
+    j = json.loads(capsys.readouterr()[0])
+    assert rc == 0
+    assert j["files"] == [str(out / "sobol.csv"), str(out / "sobol.png")]
+    df = pd.read_csv(out / "sobol.csv")
+    assert len(df) == 2 * 3
+    for row in df.itertuples():
+        for s in ("S1", "ST", "S1_conf", "ST_conf"):
+            assert getattr(row, s) == pytest.approx(j[row.output][s][row.key], rel=1e-15)
+    assert _png_whole(out / "sobol.png")

@@ -1,5 +1,5 @@
-"""What every command shares: the outcome type, the common options, the output folder check
-and the metrics table."""
+"""What every command shares: the outcome type, the common options, the output folder check,
+the metrics table and the writing of a result's table and figure."""
 
 from __future__ import annotations
 
@@ -90,6 +90,21 @@ def format_metrics(m: dict) -> str:
         out.append(f"  ({m['method']}, step {m['step']:g} s, {m['steps']} steps; "
                    "± = estimated distance from the converged answer)")
     return "\n".join(out)
+
+
+def write_outputs(out: Path, csv_name: str, frame, fig_name: str, plot) -> list[Path]:
+    """Write a result's table and figure in ``out``: ``frame`` (a pandas DataFrame, e.g.
+    the result's ``to_frame()``) as ``out/csv_name`` without the index, then the figure
+    ``plot()`` draws as ``out/fig_name`` (:func:`softclose.figures.save`). Returns the two
+    paths, table first.
+
+    The figure is drawn only once the table is on disk, so that a failure or a Ctrl-C while
+    matplotlib draws still leaves the numbers.
+    """
+    from ..figures import save
+    table = Path(out) / csv_name
+    frame.to_csv(table, index=False)
+    return [table, save(plot(), Path(out) / fig_name)]
 
 
 def wrote(files) -> str:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 
-from .common import Outcome, add_common, add_out, prepare_out, wrote
+from .common import Outcome, add_common, add_out, prepare_out, write_outputs, wrote
 
 
 def register(sub) -> None:
@@ -112,10 +112,8 @@ def run_yield(cfg, args) -> Outcome:
         lines.append(f"  note: {r.message}")
     files = []
     if out is not None:
-        from ..figures import save
-        path = out / "yield_samples.csv"
-        r.to_frame().to_csv(path, index=False)
-        files = [path, save(r.plot(), out / "yield_histograms.png")]
+        files = write_outputs(out, "yield_samples.csv", r.to_frame(),
+                              "yield_histograms.png", r.plot)
         payload["files"] = [str(f) for f in files]
     code = 0 if r.success else 3
     return Outcome(payload, "\n".join(lines) + wrote(files), code, tuple(files),
@@ -145,10 +143,7 @@ def run_sensitivity(cfg, args) -> Outcome:
                     else ""))
     files = []
     if out is not None:
-        from ..figures import save
-        path = out / "sobol.csv"
-        r.to_frame().to_csv(path, index=False)
-        files = [path, save(r.plot(), out / "sobol.png")]
+        files = write_outputs(out, "sobol.csv", r.to_frame(), "sobol.png", r.plot)
         payload["files"] = [str(f) for f in files]
     return Outcome(payload, "\n".join(lines) + wrote(files), 0, tuple(files))
 
