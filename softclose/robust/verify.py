@@ -3,7 +3,10 @@
 Each point of the tolerance box is a config of its own (lid mass, geometry ...) and a
 parameter vector; :func:`reference_check` runs the optimiser's verification
 (``verify_design``: CVODES on the exact equation, every constraint of the problem, theta'
-on a fine grid for rebounds) on it and compares with the fast kernel's numbers.
+on a fine grid for rebounds) on it and compares with the fast kernel's numbers, or with
+the numbers a solver claims for that point (the scenario NLP's own closing time, impact
+speed, peak tip speed, holding moment and objective), each to
+:func:`softclose.problem.agreement_tolerance` (the objective to ``VERIFY_RTOL``).
 """
 
 from __future__ import annotations
@@ -13,7 +16,8 @@ import math
 import numpy as np
 
 from ..config import Config
-from ..problem import DESIGN_KEYS, METRIC_KEYS, design_of, params_of
+from ..problem import (DESIGN_KEYS, METRIC_KEYS, VERIFY_RTOL, agreement_tolerance, design_of,
+                       params_of)
 from .evaluate import with_values
 
 
@@ -27,10 +31,37 @@ def point_config(cfg: Config, keys, x) -> Config:
     return with_values(cfg, {k: float(v) for k, v in zip(keys, np.atleast_1d(x))})
 
 
+#: the metrics a solver's claims are compared on (those the scenario NLP has of its own)
+CLAIMED = ("closing_time", "impact_theta_dot", "peak_tip_speed", "holding_moment")
+
+
+def agreement(claims: dict, reference: dict) -> dict:
+    """Each claimed number (:data:`CLAIMED` and ``objective``) against the reference's:
+    {key: {optimiser, reference, difference, tolerance, ok}}. A metric agrees within
+    :func:`softclose.problem.agreement_tolerance`, the objective within VERIFY_RTOL
+    (relative); a number the reference does not have (a lid that does not close) disagrees."""
+    out = {}
+    for k in CLAIMED + ("objective",):
+        a = claims.get(k)
+        if a is None:
+            continue
+        b = reference.get(k)
+        if b is None or not math.isfinite(a) or not math.isfinite(b):
+            out[k] = {"optimiser": a, "reference": b, "difference": None, "tolerance": None,
+                      "ok": False}
+            continue
+        tol = VERIFY_RTOL * abs(b) if k == "objective" else agreement_tolerance(k, b)
+        out[k] = {"optimiser": float(a), "reference": float(b), "difference": float(a - b),
+                  "tolerance": float(tol), "ok": bool(abs(a - b) <= tol)}
+    return out
+
+
 def reference_check(cfg: Config, keys, x, label: str = "", kernel: dict | None = None,
-                    objective: float | None = None) -> dict:
+                    objective: float | None = None, claims: dict | None = None) -> dict:
     """The adaptive reference at one point of the box: its metrics, whether every
-    constraint holds, and (with ``kernel``, the fast path's metrics there) the differences."""
+    constraint holds, (with ``kernel``, the fast path's metrics there) the differences, and
+    (with ``claims``, a solver's own metrics and objective there) their :func:`agreement`
+    with the reference (``agreement``, ``agreement_ok``)."""
     c = point_config(cfg, keys, x)
     design = design_of(params_of(c))
     ver = _verify_design()(c, design, None, objective)
@@ -44,6 +75,9 @@ def reference_check(cfg: Config, keys, x, label: str = "", kernel: dict | None =
     out["ok"] = bool(ver.get("constraints_ok"))
     if objective is not None and ver.get("objective_relative_difference") is not None:
         out["objective_relative_difference"] = ver["objective_relative_difference"]
+    if claims is not None:
+        out["agreement"] = agreement(claims, out["reference"])
+        out["agreement_ok"] = all(a["ok"] for a in out["agreement"].values())
     if kernel is not None:
         out["kernel"] = {k: kernel.get(k) for k in METRIC_KEYS + ("objective",)}
         diff = {}
@@ -57,4 +91,4 @@ def reference_check(cfg: Config, keys, x, label: str = "", kernel: dict | None =
     return out
 
 
-__all__ = ["reference_check", "point_config", "DESIGN_KEYS"]
+__all__ = ["reference_check", "agreement", "point_config", "DESIGN_KEYS"]
