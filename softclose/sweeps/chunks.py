@@ -9,14 +9,19 @@ result depends on nothing but its arguments.
 
 How a chunk is evaluated (metric only, batched):
 
-- rows are grouped by their non-design values; each group gets the config with those
-  values (validated as if from a file) and a simulator (model + coefficient table, about
-  0.1 s, cached: groups that differ only in ``optimise.*`` keys share one);
+- rows are grouped by their values of the keys that change the model (neither design keys
+  nor ``mass.lid``); each group gets the config with those values (validated as if from a
+  file) and a simulator (model + coefficient table, about 0.1 s, cached: groups that differ
+  only in ``optimise.*`` keys share one);
 - a group whose values the config or the model refuse (a loop that cannot close, a toggle
   on the stroke) gets status ``invalid`` and the one-line reason -- the sweep goes on;
 - the design keys (``design.spring_k``, ``design.spring_rest_length``, ``design.damper_c``,
-  ``design.rotary_damper_c``) go into the kernel's parameter rows, and the group's strokes
-  run as one batch in the C kernel (threads, nothing kept per step);
+  ``design.rotary_damper_c``) go into the kernel's parameter rows, a swept ``mass.lid``
+  into its per-stroke lid-mass column (the tabulated coefficients are affine in the lid
+  mass, :mod:`softclose.native`: one table serves every mass, and a row at the table's own
+  mass gives the same bits as without the column), and the group's strokes run as one
+  batch in the C kernel (threads, nothing kept per step); a lid mass the config refuses
+  makes that row ``invalid`` with the config's one-line reason;
 - the objective and the feasibility come from :mod:`softclose.problem` (never restated);
   a stroke the method cannot integrate carries the simulator's diagnosis as its reason.
 """
@@ -37,6 +42,8 @@ CHUNK = 16384
 PARAM_COLUMNS = {f"design.{k}": i for i, k in enumerate(PARAM_KEYS)}
 #: status of a design whose config values were refused
 INVALID = "invalid"
+#: the config key that goes into the kernel's per-stroke lid-mass column
+LID_MASS = "mass.lid"
 #: the columns of a chunk (and of every sweep table) around the swept keys
 HEAD = ("id",)
 TAIL = METRIC_KEYS + ("objective", "feasible", "status", "reason")
@@ -119,7 +126,8 @@ def evaluate_chunk(cfg_dict: dict, keys: list[str], ids: np.ndarray, X: np.ndarr
     for j, k in enumerate(keys):
         if k in PARAM_COLUMNS:
             P[:, PARAM_COLUMNS[k]] = X[:, j]
-    other = [j for j, k in enumerate(keys) if k not in PARAM_COLUMNS]
+    jm = keys.index(LID_MASS) if LID_MASS in keys else None
+    other = [j for j, k in enumerate(keys) if k not in PARAM_COLUMNS and j != jm]
     if other:
         uniq, inv = np.unique(X[:, other], axis=0, return_inverse=True)
         inv = np.asarray(inv).ravel()
@@ -137,15 +145,65 @@ def evaluate_chunk(cfg_dict: dict, keys: list[str], ids: np.ndarray, X: np.ndarr
             out["status"][rows] = INVALID
             out["reason"][rows] = str(exc).splitlines()[0]
             continue
-        _store(out, rows, sim.run_batch(P[rows], threads=threads), cfg, sim, P[rows])
+        masses = None
+        if jm is not None:
+            refused = lid_mass_refusals(cfg, X[rows, jm])
+            bad = refused != ""
+            out["status"][rows[bad]] = INVALID
+            out["reason"][rows[bad]] = refused[bad]
+            rows = rows[~bad]
+            masses = X[rows, jm]
+            if len(rows) == 0:
+                continue
+        res = sim.run_batch(P[rows], threads=threads) if masses is None else \
+            sim.run_batch(P[rows], threads=threads, lid_mass=masses)
+        _store(out, rows, res, cfg, sim, P[rows], masses)
+    return out
+
+
+def lid_mass_refusals(cfg, masses: np.ndarray) -> np.ndarray:
+    """Why ``cfg`` refuses each lid mass in ``masses`` (its one-line message; "" where
+    ``cfg.update({"mass.lid": m})`` accepts it), without a config per value.
+
+    The config's checks that involve ``mass.lid`` -- a positive number within
+    ``RANGES["mass.lid"]``, and the ``[tolerance]`` spreads of ``mass.lid`` and of the
+    ``mass.inertia_lid`` derived from it, which refuse masses below a bound -- each accept
+    an interval of masses. So the masses inside the range are accepted when the smallest and
+    the largest of them are; otherwise (never for the default [tolerance]) each distinct
+    value is tried. Each refused value is tried for its message, exactly as the config
+    words it.
+    """
+    from ..config import RANGES
+    from ..errors import SoftcloseError
+
+    def refusal(m: float) -> str:
+        try:
+            cfg.update({LID_MASS: float(m)})
+        except SoftcloseError as exc:
+            return str(exc).splitlines()[0]
+        return ""
+
+    m = np.asarray(masses, float)
+    lo, hi, _ = RANGES[LID_MASS]
+    with np.errstate(invalid="ignore"):
+        inside = np.isfinite(m) & (m > 0) & (m >= lo) & (m <= hi)
+    try_each = ~inside
+    if inside.any() and (refusal(m[inside].min()) or refusal(m[inside].max())):
+        try_each[:] = True
+    out = np.full(len(m), "", dtype=object)
+    if try_each.any():
+        u, inv = np.unique(m[try_each], return_inverse=True)
+        out[try_each] = np.array([refusal(v) for v in u], dtype=object)[np.asarray(inv).ravel()]
     return out
 
 
 _STATUS_TEXT = np.array([StrokeStatus(s).text for s in range(len(StrokeStatus))], dtype=object)
 
 
-def _store(out: dict, rows: np.ndarray, res: dict, cfg, sim, P: np.ndarray) -> None:
-    """Fill ``rows`` of ``out`` from a kernel batch ``res`` of the group's config ``cfg``."""
+def _store(out: dict, rows: np.ndarray, res: dict, cfg, sim, P: np.ndarray,
+           masses: np.ndarray | None = None) -> None:
+    """Fill ``rows`` of ``out`` from a kernel batch ``res`` of the group's config ``cfg``
+    (``masses``: the rows' lid masses, None for the config's own)."""
     status = np.asarray(res["status"], int)
     ok = (status == StrokeStatus.CLOSED) | (status == StrokeStatus.NOT_CLOSED)
     closed = status == StrokeStatus.CLOSED
@@ -162,10 +220,26 @@ def _store(out: dict, rows: np.ndarray, res: dict, cfg, sim, P: np.ndarray) -> N
     for i in np.nonzero(~ok)[0]:  # the method could not integrate it: say why, with the remedy
         s = StrokeStatus(int(status[i]))
         reason[i] = ("not closed (the lid swung beyond the stroke range)"
-                     if s is StrokeStatus.LEFT_RANGE else sim.diagnose(s, P[i]))
+                     if s is StrokeStatus.LEFT_RANGE else
+                     _at_mass(cfg, sim, None if masses is None else masses[i]).diagnose(s, P[i]))
     out["status"][rows] = _STATUS_TEXT[np.clip(status, 0, len(_STATUS_TEXT) - 1)]
     out["reason"][rows] = reason
     out["feasible"][rows] = reason == ""
 
 
-__all__ = ["evaluate_chunk", "columns", "CHUNK", "INVALID", "PARAM_COLUMNS", "empty"]
+def _at_mass(cfg, sim, mass: float | None):
+    """The simulator of ``cfg`` at lid mass ``mass`` (``sim`` itself at its table's mass):
+    a diagnosis (the stable step) needs the model at the row's own mass. Built only for a
+    stroke the method could not integrate, so a sample over ``mass.lid`` pays a model
+    build per such stroke, not per design."""
+    from ..errors import SoftcloseError
+    if mass is None or mass == sim.table.lid_mass:
+        return sim
+    try:
+        return _simulator(cfg.update({LID_MASS: float(mass)}))
+    except SoftcloseError:  # its own table is refused (a toggle): diagnose on the group's
+        return sim
+
+
+__all__ = ["evaluate_chunk", "columns", "CHUNK", "INVALID", "PARAM_COLUMNS", "LID_MASS",
+           "empty", "lid_mass_refusals"]
