@@ -1,12 +1,19 @@
 """Sweeps on Dask (a LocalCluster of two worker processes on this machine): the same rows as
 the local run, a worker killed mid-sweep loses and doubles nothing, an unreachable scheduler
-is one line and exit 2 within seconds."""
+is one line and exit 2 within seconds and writes nothing, a scheduler or all workers killed
+mid-sweep keep the finished chunks for a resume."""
 
 from __future__ import annotations
 
+import contextlib
+import json
 import logging
+import os
+import subprocess
+import sys
 import time
 from collections import Counter
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -113,3 +120,163 @@ def test_unreachable_scheduler_is_one_line_and_exit_2(tmp_path, capsys):
     assert main(["sweep", "--grid", "design.spring_k=[1000, 2000]", "--out", str(tmp_path / "b"),
                  "--dask", "local:0"]) == 2
     assert "local:N" in capsys.readouterr().err
+
+
+def test_unreachable_scheduler_leaves_out_as_it_was(tmp_path, capsys, monkeypatch):
+    """The connection comes before anything is written: a new folder is not left behind,
+    and a folder holding a finished sweep keeps it whole (manifest complete, table
+    unchanged), so the next plain run into it works. (The refusal itself, with its 5 s
+    timeout, is the test above: here the timeout is 1 s.)"""
+    from softclose.sweeps import distributed as D
+    monkeypatch.setattr(D, "CONNECT_TIMEOUT", 1.0)
+    grid = ["--grid", "design.spring_k=[1000, 2000]"]
+    new = tmp_path / "new"
+    assert main(["sweep", *grid, "--out", str(new), "--dask", "tcp://127.0.0.1:1"]) == 2
+    assert not new.exists()
+    done = tmp_path / "done"
+    assert main(["sweep", *grid, "--out", str(done)]) == 0
+    before = {p.name: p.read_bytes() for p in done.iterdir() if p.is_file()}
+    assert {"manifest.json", "sweep.csv"} <= set(before)
+    capsys.readouterr()
+    code = main(["sweep", "--grid", "design.spring_k=[3000, 4000]", "--out", str(done),
+                 "--dask", "tcp://127.0.0.1:1"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "tcp://127.0.0.1:1" in err[0]
+    assert {p.name: p.read_bytes() for p in done.iterdir() if p.is_file()} == before
+    assert main(["sweep", "--grid", "design.spring_k=[3000, 4000]", "--out", str(done)]) == 0
+    assert "3000" in (done / "sweep.csv").read_text()
+
+
+# -- a cluster that dies mid-sweep ------------------------------------------------------------
+ROOT = Path(__file__).resolve().parents[1]
+
+#: runs ``softclose sweep`` and SIGKILLs the given processes (the scheduler, or every worker)
+#: as soon as the second chunk is back; a cluster without workers is given up after 1 s
+DRIVER = r'''
+import os, signal, sys
+pids, argv = [int(p) for p in sys.argv[1].split(",")], sys.argv[2:]
+import softclose.sweeps.distributed as D
+D.NO_WORKERS_TIMEOUT = 1.0
+plain = D.map_tasks
+
+
+def killing(*args, **kwargs):
+    for n, item in enumerate(plain(*args, **kwargs), 1):
+        if n == 2:
+            for pid in pids:
+                os.kill(pid, signal.SIGKILL)
+        yield item
+
+
+D.map_tasks = killing
+from softclose.cli import main
+sys.exit(main(argv))
+'''
+
+#: 4800 designs in 24 chunks of 200 (three lid masses: three simulators per worker)
+BIG = ["--grid", "design.spring_k=500:9500:40", "--grid", "design.damper_c=100:4000:40",
+       "--grid", "mass.lid=[0.4, 0.5, 0.6]", "--chunk", "200"]
+
+
+def _env():
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
+    return env
+
+
+@pytest.fixture
+def processes(tmp_path):
+    """A scheduler and two worker processes (no nannies: a killed worker stays dead)."""
+    info = tmp_path / "scheduler.json"
+    quiet = dict(stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=_env())
+    sched = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host",
+                              "127.0.0.1", "--port", "0", "--no-dashboard", "--scheduler-file",
+                              str(info)], **quiet)
+    procs = [sched]
+    try:
+        deadline = time.monotonic() + 60
+        while not info.exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        address = json.loads(info.read_text())["address"]
+        procs += [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker",
+                                    address, "--nthreads", "1", "--no-nanny",
+                                    "--no-dashboard"], **quiet) for _ in range(2)]
+        with distributed.Client(address, timeout=30) as client:
+            client.wait_for_workers(2, timeout=60)
+        yield address, sched, procs[1:]
+    finally:
+        for p in procs:
+            p.kill()
+            p.wait()
+
+
+@pytest.mark.parametrize("dies", ["scheduler", "workers"])
+def test_a_cluster_that_dies_mid_sweep_keeps_the_finished_chunks(tmp_path, capsys, processes,
+                                                                 dies):
+    """SIGKILL the scheduler (or both workers) once two chunks are back: exit 3 with one
+    line that names the scheduler and the resume command, the finished chunks are in
+    sweep.csv, and the resumed sweep (here, without Dask) is byte for byte the local run."""
+    address, sched, workers = processes
+    out = tmp_path / "sweep"
+    driver = tmp_path / "driver.py"
+    driver.write_text(DRIVER)
+    pids = [sched.pid] if dies == "scheduler" else [w.pid for w in workers]
+    proc = subprocess.run([sys.executable, str(driver), ",".join(map(str, pids)), "sweep",
+                           *BIG, "--out", str(out), "--dask", address],
+                          capture_output=True, text=True, timeout=240, env=_env(),
+                          cwd=tmp_path)
+    err = [ln for ln in proc.stderr.splitlines() if ln.strip()]
+    assert "Traceback" not in proc.stderr, proc.stderr[-3000:]
+    assert proc.returncode == 3, f"exit {proc.returncode}\n{proc.stderr[-3000:]}"
+    assert len(err) == 1 and err[0].startswith("softclose: error: "), proc.stderr
+    assert address in err[0] and f"softclose sweep --resume {out}" in err[0], err[0]
+    assert ("connection" if dies == "scheduler" else "every Dask worker") in err[0], err[0]
+    assert json.loads((out / "manifest.json").read_text())["complete"] is False
+    ids = np.loadtxt(out / "sweep.csv", delimiter=",", skiprows=1, usecols=0, dtype=np.int64)
+    assert 2 * 200 <= ids.size < 4800 and np.unique(ids).size == ids.size
+    assert set(Counter((ids // 200).tolist()).values()) == {200}     # whole chunks only
+    assert main(["sweep", "--resume", str(out)]) == 0
+    assert main(["sweep", *BIG, "--out", str(tmp_path / "local")]) == 0
+    assert (out / "sweep.csv").read_text() == (tmp_path / "local" / "sweep.csv").read_text()
+
+
+def test_an_address_where_something_else_listens_is_one_line_and_exit_2(tmp_path, capsys):
+    """A port where another server listens: one that accepts and says nothing (Dask's
+    handshake would wait for ever) and one that greets in its own protocol (Dask would read
+    the greeting as a frame length). Both are exit 2 naming the address, within 10 s, and
+    write nothing."""
+    import socket
+    import threading
+
+    def serve(greeting: bytes):
+        srv = socket.create_server(("127.0.0.1", 0))
+        held = []
+
+        def accept():
+            with contextlib.suppress(OSError):
+                while True:
+                    conn, _ = srv.accept()
+                    held.append(conn)
+                    if greeting:
+                        conn.sendall(greeting)
+
+        threading.Thread(target=accept, daemon=True).start()
+        return srv, held, f"tcp://127.0.0.1:{srv.getsockname()[1]}"
+
+    for greeting, says in ((b"", "did not answer as a Dask scheduler"),
+                           (b"SSH-2.0-OpenSSH_9.6\r\n" * 4, "is not a Dask scheduler")):
+        srv, held, address = serve(greeting)
+        try:
+            out = tmp_path / f"out{len(greeting)}"
+            t0 = time.perf_counter()
+            code = main(["sweep", "--grid", "design.spring_k=[1000, 2000]", "--out", str(out),
+                         "--dask", address])
+            elapsed = time.perf_counter() - t0
+        finally:
+            srv.close()
+            for conn in held:
+                conn.close()
+        err = capsys.readouterr().err.strip().splitlines()
+        assert code == 2 and elapsed < 10.0, (code, elapsed)
+        assert len(err) == 1 and address in err[0] and says in err[0], err
+        assert not out.exists()

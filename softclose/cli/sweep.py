@@ -146,6 +146,7 @@ def run(cfg, args) -> Outcome:
             from ..sweeps.space import check_budget
             check_budget(cfg, space, "--sample" if space.kind == "sample" else "--grid")
         fmt, chunk = args.format or "csv", args.chunk or CHUNK
+        fresh = not Path(args.out).exists()
         out = prepare_out(args.out)
         old = store.read_manifest(out)
         if old is not None and not old.get("complete"):
@@ -154,10 +155,16 @@ def run(cfg, args) -> Outcome:
         m = store.manifest(cfg, space, chunk, fmt)
     if optimal is not None:
         return _optimal_grid(cfg, args, space, out)
-    if not args.resume and old is not None:
-        store.clear(out)                 # a finished earlier sweep is replaced
-    store.write_manifest(out, m, complete=False)
-    return _sweep(cfg, args, space, fmt, chunk, out, m, dask)
+    # the folder is written (an earlier finished sweep cleared, the manifest) once a --dask
+    # cluster answers: a scheduler that does not leaves --out as it was
+    try:
+        return _sweep(cfg, args, space, fmt, chunk, out, m, dask,
+                      replace=not args.resume and old is not None)
+    except BaseException:
+        if not args.resume and fresh:    # nothing came of it: no empty folder left behind
+            with contextlib.suppress(OSError):
+                out.rmdir()
+        raise
 
 
 def _plain_ctrl_c():
@@ -169,12 +176,14 @@ def _plain_ctrl_c():
     return sigint_handler(signal.default_int_handler)
 
 
-def _sweep(cfg, args, space, fmt, chunk, out: Path, m: dict, dask) -> Outcome:
+def _sweep(cfg, args, space, fmt, chunk, out: Path, m: dict, dask,
+           replace: bool = False) -> Outcome:
     with _plain_ctrl_c():
-        return _sweep_run(cfg, args, space, fmt, chunk, out, m, dask)
+        return _sweep_run(cfg, args, space, fmt, chunk, out, m, dask, replace)
 
 
-def _sweep_run(cfg, args, space, fmt, chunk, out: Path, m: dict, dask) -> Outcome:
+def _sweep_run(cfg, args, space, fmt, chunk, out: Path, m: dict, dask,
+               replace: bool = False) -> Outcome:
     from ..sweeps import store
     from ..sweeps.run import _no_interrupt
     from ..sweeps.run import run as run_sweep
@@ -190,7 +199,6 @@ def _sweep_run(cfg, args, space, fmt, chunk, out: Path, m: dict, dask) -> Outcom
             done = ()
     else:
         done = ()
-    sink = store.ParquetSink(out, keys) if parquet else None
     # the table and plotting libraries are imported while the kernel runs (its threads
     # leave the interpreter free), so that neither the table nor the maps wait for them
     prefetch = threading.Thread(target=_import_outputs, name="softclose-imports", daemon=True)
@@ -198,7 +206,11 @@ def _sweep_run(cfg, args, space, fmt, chunk, out: Path, m: dict, dask) -> Outcom
     ctx = dask.mapper(args.dask, args.threads) if dask is not None else \
         contextlib.nullcontext(None)
     try:
-        with ctx as mapper:
+        with ctx as mapper:              # connected: only now is the folder written
+            if replace:
+                store.clear(out)         # a finished earlier sweep is replaced
+            store.write_manifest(out, m, complete=False)
+            sink = store.ParquetSink(out, keys) if parquet else None
             res = run_sweep(cfg, space, progress=interactive(args), threads=args.threads,
                             chunk=chunk, keep=not parquet, sink=sink, done=done,
                             mapper=mapper,
@@ -236,6 +248,10 @@ def _sweep_run(cfg, args, space, fmt, chunk, out: Path, m: dict, dask) -> Outcom
                    files=[str(f) for f in files])
     payload["interrupted"] = interrupted
     text = _text(res, payload, files, resume)
+    lost = getattr(mapper, "lost", None)     # the Dask cluster stopped working mid-sweep
+    if lost is not None:
+        payload["error"] = error = f"{lost}; the finished chunks are kept, resume with: {resume}"
+        return Outcome(payload, text, lost.exit_code, tuple(files), error=error)
     return Outcome(payload, text, 130 if interrupted else 0, tuple(files))
 
 

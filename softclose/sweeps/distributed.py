@@ -23,10 +23,13 @@ A worker that is lost while it holds a task (killed, out of memory, its node pre
 that task rescheduled by the Dask scheduler on another worker; :func:`map_tasks` yields every
 task's result exactly once, releases it at once (so a lost worker never forces finished work
 to be redone) and keeps a bounded number of tasks in flight, so a sweep of millions of
-designs streams. A task that kills workers repeatedly (``distributed.KilledWorker``) is a
-:class:`~softclose.errors.NumericalError` naming it. Progress is the caller's own line
-(:class:`softclose.progress.Progress`, fed as results arrive from ``as_completed``): Dask's
-``progress`` does not combine with ``as_completed`` (dask/distributed#2423).
+designs streams. A cluster that stops working in the middle -- the scheduler lost, every
+worker gone for :data:`NO_WORKERS_TIMEOUT` seconds, a task that kills worker after worker
+(``distributed.KilledWorker``) -- is a :class:`ClusterLost` (a
+:class:`~softclose.errors.NumericalError`) saying so; the sweep's mapper ends there, so that
+the runner keeps every finished chunk and the sweep can be resumed. Progress is the caller's
+own line (:class:`softclose.progress.Progress`, fed as results arrive from ``as_completed``):
+Dask's ``progress`` does not combine with ``as_completed`` (dask/distributed#2423).
 """
 
 from __future__ import annotations
@@ -34,6 +37,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import re
+import threading
 import time
 import uuid
 from collections.abc import Callable, Iterable, Iterator
@@ -43,11 +47,24 @@ from ..errors import ConfigError, NumericalError, SoftcloseError
 
 #: seconds to wait for a scheduler to answer before the address is refused
 CONNECT_TIMEOUT = 5.0
+#: seconds more given to the handshake with a server that accepted the connection
+HANDSHAKE_GRACE = 3.0
 #: tasks kept in flight per worker thread (enough to keep every worker busy while results
 #: travel back; few enough that a long sweep's inputs are not all held by the scheduler)
 IN_FLIGHT_PER_THREAD = 3
 #: the largest local cluster (``local:N``) accepted
 MAX_LOCAL_WORKERS = 512
+#: seconds a cluster that had workers may go without any (all lost, none restarted) while
+#: tasks wait, before the run stops with :class:`ClusterLost`
+NO_WORKERS_TIMEOUT = 60.0
+#: seconds between looks at a cluster while no result is ready
+POLL = 0.01
+#: the loggers in this process that narrate a lost scheduler or worker (reconnection
+#: attempts, keys rescheduled, the tracebacks of result transfers cut off, which Dask's
+#: event loop reports through tornado): :class:`ClusterLost` says it in one line instead
+_QUIET_LOGGERS = ("distributed.client", "distributed.scheduler", "distributed.core",
+                  "distributed.comm", "distributed.batched", "distributed.utils",
+                  "tornado.application")
 
 _LOCAL = re.compile(r"^\s*local\s*:\s*(\S*)\s*$")
 
@@ -72,6 +89,12 @@ def parse_dask(spec: str) -> tuple[str, int | None]:
     return address, None
 
 
+class ClusterLost(NumericalError):
+    """The cluster stopped working in the middle of a run: the scheduler was lost, every
+    worker is gone, or a task ended every worker that ran it. The results yielded before
+    are good (a sweep keeps them and can be resumed); the message says what happened."""
+
+
 def _import_distributed():
     try:
         import distributed
@@ -93,9 +116,16 @@ def connect(dask) -> Iterator[Any]:
     is used as it is and left open. A local cluster is closed on exit."""
     distributed = _import_distributed()
     if isinstance(dask, distributed.Client):
-        yield dask
+        with _quiet_dask_logs():
+            yield dask
         return
     where, n = parse_dask(dask)
+    with _quiet_dask_logs():
+        yield from _connect(distributed, where, n)
+
+
+def _connect(distributed, where: str, n: int | None) -> Iterator[Any]:
+    """The Client of :func:`connect` for a local cluster of ``n`` processes or an address."""
     if where == "local":
         with _workers_ignore_ctrl_c():
             cluster = distributed.LocalCluster(
@@ -110,17 +140,62 @@ def connect(dask) -> Iterator[Any]:
         finally:
             cluster.close()
         return
-    try:
-        client = distributed.Client(where, timeout=CONNECT_TIMEOUT)
-    except (OSError, ValueError, TimeoutError) as exc:
-        why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise ConfigError(f"--dask {where}: no Dask scheduler answered ({why}); start one "
-                          "(`dask scheduler`) or give its address") from None
+    client = _client(distributed, where)
     try:
         _check_workers(client, where)
         yield client
     finally:
         client.close()
+
+
+def _client(distributed, where: str):
+    """``distributed.Client(where)``, or a ConfigError naming the address within
+    :data:`CONNECT_TIMEOUT` + :data:`HANDSHAKE_GRACE` seconds. Dask bounds the TCP connection
+    by its timeout but not the handshake that follows, so on a port where another server
+    listens (a web server, the dashboard) the Client would wait for ever, or read that
+    server's greeting as a frame length: the Client is made in a thread that is given up
+    on, and whatever it raises is one line."""
+    made: dict = {}
+
+    def attempt():
+        try:
+            made["client"] = distributed.Client(where, timeout=CONNECT_TIMEOUT)
+        except Exception as exc:  # noqa: BLE001 - reported below, as one line
+            made["error"] = exc
+
+    t = threading.Thread(target=attempt, name="softclose-dask-connect", daemon=True)
+    t.start()
+    t.join(CONNECT_TIMEOUT + HANDSHAKE_GRACE)
+    if t.is_alive():
+        raise ConfigError(f"--dask {where}: something listens there but did not answer as a "
+                          f"Dask scheduler within {CONNECT_TIMEOUT + HANDSHAKE_GRACE:g} s; "
+                          "give the scheduler's address (port 8786 unless set otherwise)")
+    exc = made.get("error")
+    if exc is None:
+        return made["client"]
+    why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    if isinstance(exc, (OSError, ValueError, TimeoutError)):
+        raise ConfigError(f"--dask {where}: no Dask scheduler answered ({why}); start one "
+                          "(`dask scheduler`) or give its address") from None
+    raise ConfigError(f"--dask {where}: what answered there is not a Dask scheduler "
+                      f"({type(exc).__name__}); give the scheduler's address (port 8786 "
+                      "unless set otherwise)") from None
+
+
+@contextlib.contextmanager
+def _quiet_dask_logs():
+    """Hold back Dask's own narration of a lost scheduler or worker (ERROR and WARNING lines
+    with tracebacks on stderr) while connected: a failure is reported once, as a
+    :class:`ClusterLost` or a ConfigError."""
+    loggers = [logging.getLogger(name) for name in _QUIET_LOGGERS]
+    levels = [lg.level for lg in loggers]
+    for lg in loggers:
+        lg.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        for lg, level in zip(loggers, levels):
+            lg.setLevel(level)
 
 
 def _workers_ignore_ctrl_c():
@@ -165,8 +240,11 @@ def map_tasks(client, fn: Callable, tasks: Iterable[tuple[Any, tuple]],
     ``tasks`` is consumed lazily: at most :data:`IN_FLIGHT_PER_THREAD` tasks per worker
     thread are submitted ahead (the count follows the cluster as it grows or shrinks). A
     task whose worker is lost is rerun by the scheduler; its result is yielded once. An
-    exception raised by ``fn`` is re-raised here (a ConfigError stays one); the tasks still
-    queued are cancelled however the iteration ends (exhausted, an error, Ctrl-C, close()).
+    exception raised by ``fn`` is re-raised here (a ConfigError stays one). A cluster that
+    stops working -- the scheduler lost, no worker left for :data:`NO_WORKERS_TIMEOUT`
+    seconds after there were some, a task that ends every worker that runs it -- raises
+    :class:`ClusterLost` (the results yielded before are good). The tasks still queued are
+    cancelled however the iteration ends (exhausted, an error, Ctrl-C, close()).
     """
     distributed = _import_distributed()
     run = uuid.uuid4().hex[:12]
@@ -174,12 +252,44 @@ def map_tasks(client, fn: Callable, tasks: Iterable[tuple[Any, tuple]],
     pending: dict = {}                       # future -> tag
     ac = distributed.as_completed(with_results=True, raise_errors=False)
     asked = [-1e9, 0]                        # (when, threads)
+    had_workers = [False]
+    workerless = [None]                      # since when the cluster has had no worker
+    finished = [0]
 
     def threads() -> int:
         now = time.perf_counter()
         if now - asked[0] > 1.0:
-            asked[:] = [now, workers_of(client)[1]]
+            try:
+                asked[:] = [now, workers_of(client)[1]]
+            except Exception as exc:  # noqa: BLE001 - any failure here: the scheduler is gone
+                raise ClusterLost(f"the Dask scheduler {_address(client)} stopped answering "
+                                  f"after {finished[0]} {label}s ({type(exc).__name__})"
+                                  ) from None
         return asked[1]
+
+    def disconnected() -> ClusterLost | None:
+        if getattr(client, "status", "running") == "running":
+            return None
+        return ClusterLost(f"the connection to the Dask scheduler {_address(client)} was "
+                           f"lost after {finished[0]} {label}s")
+
+    def watch() -> None:
+        """While no result is ready: give up on a lost scheduler, or on a cluster that has
+        lost every worker."""
+        lost = disconnected()
+        if lost is not None:
+            raise lost
+        if threads() > 0:
+            had_workers[0], workerless[0] = True, None
+            return
+        if not had_workers[0]:               # none yet (a cluster still starting): wait
+            return
+        now = time.perf_counter()
+        workerless[0] = workerless[0] or now
+        if now - workerless[0] > NO_WORKERS_TIMEOUT:
+            raise ClusterLost(f"every Dask worker of {_address(client)} was lost after "
+                              f"{finished[0]} {label}s and none came back within "
+                              f"{NO_WORKERS_TIMEOUT:g} s")
 
     def top_up() -> None:
         cap = max(IN_FLIGHT_PER_THREAD * max(threads(), 1), 2)
@@ -195,6 +305,9 @@ def map_tasks(client, fn: Callable, tasks: Iterable[tuple[Any, tuple]],
     try:
         top_up()
         while pending:
+            while not ac.has_ready():
+                watch()
+                time.sleep(POLL)
             fut, result = next(ac)
             if fut not in pending:           # yielded twice (never expected): once only
                 continue
@@ -202,10 +315,12 @@ def map_tasks(client, fn: Callable, tasks: Iterable[tuple[Any, tuple]],
             if fut.status == "error":
                 _raise_task_error(result, label, tag)
             if fut.status == "cancelled":
-                raise NumericalError(f"Dask cancelled the {label} {_describe(tag)} (the "
-                                     "scheduler restarted or the cluster closed); run again")
+                raise disconnected() or ClusterLost(
+                    f"Dask cancelled the {label} {_describe(tag)} after {finished[0]} "
+                    f"{label}s (the scheduler restarted or the cluster closed)")
             fut.release()                    # the result is ours: the cluster may forget it
             del fut
+            finished[0] += 1
             top_up()                         # keep the workers busy while we digest it
             yield tag, result
     finally:
@@ -228,13 +343,18 @@ def _describe(tag) -> str:
     return f"{tag}"
 
 
+def _address(client) -> str:
+    """The scheduler's address, for a message."""
+    return str(getattr(getattr(client, "scheduler", None), "address", None) or "scheduler")
+
+
 def _raise_task_error(exc, label: str, tag) -> None:
     distributed = _import_distributed()
     if isinstance(exc, distributed.KilledWorker):
-        raise NumericalError(
+        raise ClusterLost(
             f"the Dask {label} {_describe(tag)} ended every worker that ran it "
-            f"({type(exc).__name__}); look at the workers' logs (memory, crashes) and run the "
-            "sweep again, or without --dask") from None
+            f"({type(exc).__name__}); look at the workers' logs (memory, crashes), or run it "
+            "without --dask") from None
     if isinstance(exc, SoftcloseError):
         raise exc
     if isinstance(exc, BaseException):
@@ -256,6 +376,25 @@ def _chunk_task(cfg_dict: dict, keys: list[str], ids, X, threads: int | None = N
     return evaluate_chunk(cfg_dict, keys, ids, X, threads=threads)
 
 
+class _Mapper:
+    """The sweep's mapper on a connected client (see :func:`mapper`). A :class:`ClusterLost`
+    ends its iteration quietly -- the runner then keeps the chunks finished so far, as after
+    Ctrl-C -- and is left in :attr:`lost` for the caller to report."""
+
+    def __init__(self, client, threads: int | None):
+        self.client, self.threads = client, threads
+        self.lost: ClusterLost | None = None
+
+    def __call__(self, cfg_dict: dict, keys: list, tasks, _threads=None):
+        keys, threads = list(keys), self.threads
+        try:
+            yield from map_tasks(self.client, _chunk_task,
+                                 ((c, (cfg_dict, keys, ids, X, threads))
+                                  for c, ids, X in tasks), label="chunk")
+        except ClusterLost as exc:
+            self.lost = exc
+
+
 @contextlib.contextmanager
 def mapper(dask, threads: int | None = None):
     """A mapper for :func:`softclose.sweeps.run.run` that evaluates the chunks on Dask.
@@ -265,17 +404,18 @@ def mapper(dask, threads: int | None = None):
     work) and closed on exit. The mapper sends each chunk as plain values
     ``(cfg_dict, keys, ids, X)`` to :func:`softclose.sweeps.chunks.evaluate_chunk` on a
     worker (``threads`` kernel threads there; default: the worker's threads) and yields
-    ``(c, columns)`` as chunks finish::
+    ``(c, columns)`` as chunks finish. If the cluster stops working it stops yielding: the
+    run ends as an interrupted one (every finished chunk kept) and the mapper's ``lost``
+    holds the :class:`ClusterLost` that says why (None otherwise)::
 
         with mapper("local:2") as m:
             result = run(cfg, space, mapper=m)
+        if m.lost:
+            ...   # result.interrupted: report m.lost, resume later
     """
     with connect(dask) as client:
-        def dask_map(cfg_dict: dict, keys: list, tasks, _threads=None):
-            keys = list(keys)
-            yield from map_tasks(client, _chunk_task,
-                                 ((c, (cfg_dict, keys, ids, X, threads))
-                                  for c, ids, X in tasks), label="chunk")
-        yield dask_map
+        yield _Mapper(client, threads)
 
-__all__ = ["mapper", "connect", "map_tasks", "parse_dask", "workers_of", "CONNECT_TIMEOUT"]
+
+__all__ = ["mapper", "connect", "map_tasks", "parse_dask", "workers_of", "ClusterLost",
+           "CONNECT_TIMEOUT", "NO_WORKERS_TIMEOUT"]
