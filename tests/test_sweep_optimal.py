@@ -114,3 +114,37 @@ def test_command_line_writes_the_table_and_the_map(tmp_path, capsys):
                                        '"damper_c"', '"objective"']
     assert len(lines) == 2 and float(lines[1].split(",")[4]) == row["objective"]
     assert (out / "optimal.png").stat().st_size > 10_000
+
+
+def test_a_cluster_lost_mid_grid_keeps_the_finished_points(cfg, tmp_path, monkeypatch, capsys):
+    """The Dask cluster stops after the first segment: that segment's points are kept in the
+    table (verified as usual), the rest are "not computed", and the command says why with
+    exit 3 (not 130: nobody pressed Ctrl-C)."""
+    import contextlib
+
+    from softclose.sweeps import distributed, optimal
+
+    @contextlib.contextmanager
+    def fake_connect(dask):
+        yield None
+
+    def failing_map(client, fn, tasks, label="task"):
+        tasks = iter(tasks)
+        tag, args = next(tasks)
+        yield tag, fn(*args)[:1]           # one point came back, then the cluster went
+        raise distributed.ClusterLost("--dask tcp://x:1: the scheduler was lost")
+
+    monkeypatch.setattr(distributed, "connect", fake_connect)
+    monkeypatch.setattr(distributed, "map_tasks", failing_map)
+    res = optimal.optimise_grid(cfg, {"mass.lid": [0.5, 0.6]}, dask="tcp://x:1")
+    assert res.lost.endswith("the scheduler was lost")
+    assert list(res.columns["success"]) == [True, False]
+    assert res.columns["message"][1] == "not computed"
+    assert res.columns["objective"][0] == pytest.approx(0.0228995, rel=1e-5)
+    assert not res.success and "1 finished points of 2 are kept" in res.message
+    code = main(["sweep", "--optimise", "--grid", "mass.lid=[0.5, 0.6]", "--dask", "tcp://x:1",
+                 "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 3 and len(err) == 1 and "the scheduler was lost" in err[0]
+    rows = (tmp_path / "o" / "optimal.csv").read_text().splitlines()
+    assert len(rows) == 3 and "not computed" in rows[2]

@@ -408,8 +408,8 @@ def _optimal_grid(cfg, args, space, out):
         files.append(save(res.plot(), Path(out) / FIGURE))
     payload = res.to_json()
     payload["files"] = [str(f) for f in files]
-    code = 130 if res.interrupted else 0 if res.success else 3
+    code = 3 if res.lost else 130 if res.interrupted else 0 if res.success else 3
     text = _optimal_text(res) + wrote(files)
-    if res.interrupted:
+    if res.interrupted and not res.lost:
         text += "\n  interrupted: the finished points are in the table"
     return Outcome(payload, text, code, tuple(files), error=res.message if code == 3 else None)

@@ -33,6 +33,7 @@ workers, because the cut into segments depends on the grid only.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import threading
 import time
@@ -43,7 +44,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ..errors import ConfigError, SoftcloseError
+from ..errors import ConfigError, NumericalError, SoftcloseError
 from ..problem import DESIGN_KEYS, METRIC_KEYS
 
 #: most neighbouring points (along the last key) solved one from the other in one task
@@ -224,6 +225,7 @@ def optimise_grid(cfg, axes, *, dask=None, robust: bool = False, progress: bool 
     t0 = time.perf_counter()
     where = "local"
     interrupted = False
+    lost = ""
     bar = Progress(grid.n, "optimal grid", enabled=progress, unit="")
     try:
         if dask is None:
@@ -244,10 +246,15 @@ def optimise_grid(cfg, axes, *, dask=None, robust: bool = False, progress: bool 
                     bar.update(len(rows), force=True)
     except KeyboardInterrupt:
         interrupted = True
+    except NumericalError as exc:        # the Dask cluster stopped (ClusterLost): keep the rows
+        if type(exc).__name__ != "ClusterLost":
+            raise
+        lost = str(exc) if len(rows) < grid.n else ""   # (lost after the last point: no harm)
     finally:
         bar.close()
-    return OptimalGridResult.from_rows(grid, rows, time.perf_counter() - t0, where,
-                                       bool(robust), interrupted)
+    res = OptimalGridResult.from_rows(grid, rows, time.perf_counter() - t0, where,
+                                      bool(robust), interrupted)
+    return dataclasses.replace(res, lost=lost) if lost else res
 
 
 @dataclass(frozen=True, eq=False)
@@ -272,6 +279,8 @@ class OptimalGridResult:
     where: str = "local"
     robust: bool = False
     interrupted: bool = False
+    #: why the Dask cluster stopped before every point was done ("" if it did not)
+    lost: str = ""
 
     def __post_init__(self):
         cols = {}
@@ -345,6 +354,9 @@ class OptimalGridResult:
     def message(self) -> str:
         if self.success:
             return ""
+        if self.lost:
+            done = self.points - int(np.sum(self.columns["message"] == "not computed"))
+            return f"{self.lost}; the {done} finished points of {self.points} are kept"
         bad = np.nonzero(~self.columns["success"])[0]
         first = int(bad[0])
         where = ", ".join(f"{k} = {self.columns[k][first]:.6g}" for k in self.keys)
@@ -376,7 +388,7 @@ class OptimalGridResult:
             "success": self.success, "message": self.message, "keys": list(self.keys),
             "axes": {k: a for k, a in zip(self.keys, self.axes)}, "points": self.points,
             "verified": self.verified, "robust": self.robust, "where": self.where,
-            "seconds": self.seconds, "interrupted": self.interrupted,
+            "seconds": self.seconds, "interrupted": self.interrupted, "lost": self.lost or None,
             "rows": [self.row(i) for i in range(self.points)]})
 
     def plot(self):
