@@ -233,38 +233,46 @@ class Simulator:
                          f"{where}")
         return est, None
 
-    def _jacobians(self, p):
-        """Linearised (theta, theta') Jacobian entries at rest along the stroke."""
+    def _jacobians(self, p, lid_mass=None):
+        """Linearised (theta, theta') Jacobian entries at rest along the stroke (at
+        ``lid_mass``, kg; None: the table's own)."""
         th = np.linspace(self.cfg.stroke.theta_closed, self.cfg.stroke.theta0, 41)
         k, l0, cd, cr = p
         eps = 1e-6
-        cp, cm, c = self.table.evaluate(th + eps), self.table.evaluate(th - eps), \
-            self.table.evaluate(th)
+        cp, cm, c = (self.table.evaluate(x, lid_mass) for x in (th + eps, th - eps, th))
         Q = lambda cc: -(cc[:, 3] + k * (cc[:, 4] - l0) * cc[:, 5]) / cc[:, 0]  # noqa: E731
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
             return (Q(cp) - Q(cm)) / (2 * eps), -(cd * c[:, 6] + cr) / c[:, 0]
 
-    def max_rate(self, p) -> float:
+    def max_rate(self, p, lid_mass=None) -> float:
         """max |lambda| of the linearised stroke (1/s): what limits an explicit step
         (inf when the linearisation overflows)."""
-        a, b = self._jacobians(p)
+        a, b = self._jacobians(p, lid_mass)
         with np.errstate(over="ignore", invalid="ignore"):
             disc = np.sqrt((b * b + 4 * a).astype(complex))
             lam = np.abs(np.r_[(b + disc) / 2, (b - disc) / 2])
         return float(np.max(lam)) if np.all(np.isfinite(lam)) else math.inf
 
-    def diagnose(self, status: StrokeStatus, p) -> str:
-        """A one-line report of why a stroke failed and what to change."""
+    def diagnose(self, status: StrokeStatus, p, lid_mass=None) -> str:
+        """A one-line report of why a stroke failed and what to change (``lid_mass``: the
+        stroke ran at that lid mass, kg, through the table's lid-mass column)."""
         m, h = self.method, self.step
         st = self.cfg.stroke
         status = StrokeStatus(status)
-        if status is StrokeStatus.LEFT_RANGE and self.model.theta_ddot(st.theta0, 0.0, p) > 0:
+        if lid_mass is None or lid_mass == self.table.lid_mass:
+            lid_mass = None
+            a0 = self.model.theta_ddot(st.theta0, 0.0, p) \
+                if status is StrokeStatus.LEFT_RANGE else 0.0
+        else:
+            c = self.table.evaluate([st.theta0], lid_mass)[0]
+            a0 = -(c[3] + p[0] * (c[4] - p[1]) * c[5]) / c[0]
+        if status is StrokeStatus.LEFT_RANGE and a0 > 0:
             return (f"the lid does not close: released at stroke.theta0_deg = {st.theta0_deg} deg "
-                    f"it is pushed open (theta'' = {self.model.theta_ddot(st.theta0, 0.0, p):.4g} "
+                    f"it is pushed open (theta'' = {a0:.4g} "
                     "rad/s^2 > 0 at release) and swings away from the rim; lower theta0_deg or "
                     "change the spring (spring_k, spring_rest_length)")
         if not status.ok:
-            h_ok = self.stable_step(p)
+            h_ok = self.stable_step(p, lid_mass)
             if h_ok >= h:  # linearly stable: the step is too coarse for the stroke itself
                 return (f"{m.name} at step {h:g} s cannot integrate this design ({status}): the "
                         f"step is too coarse to resolve the stroke; use a simulate.step at least "
@@ -288,10 +296,10 @@ class Simulator:
                     f"{hint}{alt}")
         return status.text
 
-    def stable_step(self, p) -> float:
+    def stable_step(self, p, lid_mass=None) -> float:
         """Largest step at which the linearised stroke is stable (bisection on the step);
         0.0 when none down to 1e-12 s is, or the linearisation is not finite."""
-        f_th, f_v = self._jacobians(p)
+        f_th, f_v = self._jacobians(p, lid_mass)
         if not (np.all(np.isfinite(f_th)) and np.all(np.isfinite(f_v))):
             return 0.0
         Js = [np.array([[0.0, 1.0], [a, b]]) for a, b in zip(f_th, f_v)]

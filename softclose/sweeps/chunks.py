@@ -221,24 +221,10 @@ def _store(out: dict, rows: np.ndarray, res: dict, cfg, sim, P: np.ndarray,
         s = StrokeStatus(int(status[i]))
         reason[i] = ("not closed (the lid swung beyond the stroke range)"
                      if s is StrokeStatus.LEFT_RANGE else
-                     _at_mass(cfg, sim, None if masses is None else masses[i]).diagnose(s, P[i]))
+                     sim.diagnose(s, P[i], None if masses is None else float(masses[i])))
     out["status"][rows] = _STATUS_TEXT[np.clip(status, 0, len(_STATUS_TEXT) - 1)]
     out["reason"][rows] = reason
     out["feasible"][rows] = reason == ""
-
-
-def _at_mass(cfg, sim, mass: float | None):
-    """The simulator of ``cfg`` at lid mass ``mass`` (``sim`` itself at its table's mass):
-    a diagnosis (the stable step) needs the model at the row's own mass. Built only for a
-    stroke the method could not integrate, so a sample over ``mass.lid`` pays a model
-    build per such stroke, not per design."""
-    from ..errors import SoftcloseError
-    if mass is None or mass == sim.table.lid_mass:
-        return sim
-    try:
-        return _simulator(cfg.update({LID_MASS: float(mass)}))
-    except SoftcloseError:  # its own table is refused (a toggle): diagnose on the group's
-        return sim
 
 
 __all__ = ["evaluate_chunk", "columns", "CHUNK", "INVALID", "PARAM_COLUMNS", "LID_MASS",
