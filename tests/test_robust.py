@@ -236,3 +236,96 @@ def test_every_scenario_reports_its_own_peak(robust, weight_peak_tip):
         assert s["verified"] and all(a["ok"] for a in s["agreement"].values()), s["label"]
     # the worst-case objective is the largest scenario J, each with its own peak
     assert res.objective == max(s["objective"] for s in res.scenarios)
+
+
+# -- more keys than MAX_CORNERS corners: the NLP starts from a subset, every corner checked --
+
+#: five toleranced keys (32 corners > MAX_CORNERS) at small spreads, all kernel columns
+#: (a rotary damper of 0.004 N m s/rad ± 50 %)
+MANY = {"design.spring_k": 0.03, "design.damper_c": 0.05, "mass.lid": 0.03,
+        "design.spring_rest_length": 0.01, "design.rotary_damper_c": 0.5}
+
+
+def _many_config():
+    return default_config().update({"design.rotary_damper_c": 0.004,
+                                    **{f"tolerance.{k}": v for k, v in MANY.items()}})
+
+
+def _corner_columns(cfg, design):
+    """Every corner of cfg's box at ``design``, simulated whole in the kernel (no early
+    cut), enumerated here independently of the optimiser's own corner check."""
+    c = cfg.with_design(**design)
+    b = box_of(c)
+    Z = np.array(list(itertools.product((-1.0, 1.0), repeat=b.dim)))
+    assert np.all(b.half > 0)
+    return evaluate(c, b.keys, b.nominal + b.half * Z)
+
+
+@pytest.mark.parametrize("d", range(1, 16))
+def test_fractional_factorial_is_orthogonal(d):
+    """Resolution >= III: every column balanced, every pair orthogonal (X^T X = n I), n the
+    smallest power of two above d, no two runs alike."""
+    X = D.fractional_factorial(d)
+    n = len(X)
+    assert X.shape == (n, d) and n == 2 ** int(np.ceil(np.log2(d + 1)))
+    assert set(np.unique(X)) == {-1.0, 1.0}
+    assert np.array_equal(X.T @ X, n * np.eye(d))
+    assert len({tuple(r) for r in X}) == n
+
+
+def test_many_keys_start_from_a_few_corners_and_every_corner_holds():
+    cfg = _many_config()
+    d = len(MANY)
+    assert 2 ** d > D.MAX_CORNERS
+    res = optimise_robust(cfg, samples=1000)
+    assert res.success, res.message
+    S = len(res.scenarios)
+    assert S == res.solver["scenarios"] == res.corner_check["scenarios"] < 2 ** d + 1
+    assert res.corner_check["corners"] == 2 ** d and res.corner_check["breaking"] == []
+    assert any(f"{S} scenarios instead of {2 ** d + 1}" in n for n in res.notes)
+    assert all(s["verified"] for s in res.scenarios)
+    # every corner of the box, simulated here: closes in the window, holds shut, no rebound
+    o = cfg.optimise
+    cols = _corner_columns(cfg, res.design)
+    assert np.all(cols["feasible"]), cols["reason"]
+    assert np.all(cols["closing_time"] <= o.closing_time_max * (1 + 1e-6))
+    assert np.all(cols["holding_moment"] >= o.holding_moment_min - CONSTRAINT_TOL)
+    # and the worst-case J is the worst corner's (kernel, default step: ~1e-6)
+    assert res.objective == pytest.approx(np.max(cols["objective"]), rel=VERIFY_RTOL)
+
+
+def test_corner_check_adds_the_corners_a_subset_misses():
+    """From the nominal lid alone, the Monte Carlo search and the corner check must add the
+    binding corners until every one of the 32 holds; the NLP never gets all of them."""
+    cfg = _many_config()
+    box = box_of(cfg)
+    N, M, _, _ = D.discretise(cfg)
+    nominal = [D.Scenario(tuple([0.0] * box.dim), "nominal")]
+    start, _ = D._start_design(cfg, box, np.array([s.z for s in D._initial_scenarios(
+        box, cfg, [[1914.7, 0.079257, 2087.75]])]))
+    rounds: list = []
+    prob, run = D._solve_box(cfg, 1.0, nominal, N, M, start, 0, [], rounds, _Quiet())
+    assert run.success
+    first = rounds[0]["corner_check"]
+    assert first["violating"] > 0 and first["added"]
+    assert any(s.origin.startswith("corner check") for s in prob.scenarios)
+    assert len(prob.scenarios) < 2 ** box.dim + 1
+    last = rounds[-1]["corner_check"]
+    assert last["violating"] == 0 and not last["added"]
+    cols = _corner_columns(cfg, dict(zip(DESIGN_KEYS, map(float, run.design))))
+    assert np.all(cols["feasible"]), cols["reason"]
+
+
+def test_too_many_slow_keys_are_refused(capsys):
+    """Each corner check simulates all 2^d corners; keys that need a model per value make
+    that 2^d models: more than MAX_SLOW_KEYS of them are refused before any work."""
+    keys = ["mass.crank_oa", "mass.crank_bc", "mass.gravity", "geometry.crank_oa",
+            "geometry.crank_bc", "geometry.lid_length", "geometry.pivot_b[0]",
+            "geometry.pivot_b[1]", "geometry.lid_c[0]"]
+    assert len(keys) > D.MAX_SLOW_KEYS
+    args = ["optimise", "--robust"]
+    for k in keys:
+        args += ["--set", f"tolerance.{k}=0.001"]
+    assert cli.main(args) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "need a model per value" in err and "at most 8" in err

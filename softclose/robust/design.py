@@ -5,7 +5,10 @@ robust=True)``):
 
 1. **Scenarios**: the nominal lid and the 2^d corners of the ``[tolerance]`` box (d
    toleranced keys; spring and damper spreads are relative to the design, so they move
-   with it).
+   with it). With more than :data:`MAX_CORNERS` corners (d > 4) the NLP would grow with
+   2^d: it starts instead from the nominal lid and the corners worst for each constraint
+   (and the objective) at the start design, found by simulating every corner in the C
+   kernel (:func:`_initial_scenarios`); see 4 for how the others are guaranteed.
 2. **Start**: a coarse sweep of the design box in the C kernel, each design judged over all
    scenarios; the design with the best worst-case objective that meets every constraint in
    every scenario (else the least violating one).
@@ -22,13 +25,17 @@ robust=True)``):
    Carlo pass (uniform in the box, C kernel) looks for samples that break a constraint or
    exceed the worst-case objective; the worst two, each improved by a local ascent in the
    box, join the scenarios and the NLP is re-solved from the previous answer's primal point,
-   until none is found ("local reduction", Zagorowska et al., arXiv 2204.14145).
+   until none is found ("local reduction", Zagorowska et al., arXiv 2204.14145). In the
+   same pass all 2^d corners are simulated in the kernel (:func:`_check_corners`) and every
+   violating corner not yet a scenario joins too, so that, whatever subset the NLP started
+   from, every corner of the box closes within the window and holds shut at the answer
+   (``corner_check`` in the result; a corner still violating fails the result).
 5. **Verification**: every scenario is re-simulated by the adaptive reference (CVODES on the
    exact equations) with every constraint checked, and the NLP's own numbers of it (closing
    time, impact speed, peak tip speed, holding moment, J) compared with the reference's
-   (``scenarios[i].agreement``; a scenario is ``verified`` when both hold); the yield of the robust design and of the
-   nominal optimum are estimated on the same Monte Carlo samples of the configured
-   distribution (:mod:`softclose.robust.analysis`). When the yield falls short of
+   (``scenarios[i].agreement``; a scenario is ``verified`` when both hold); the yield of
+   the robust design and of the nominal optimum are estimated on the same Monte Carlo
+   samples of the configured distribution (:mod:`softclose.robust.analysis`). When the yield falls short of
    ``required_yield`` (a normal distribution has tails beyond the 3-sigma box), the box is
    widened by 15 % and the design re-solved, at most three times.
 
@@ -39,6 +46,7 @@ fraction of them for which the scenario NLP still has a solution, by bisection).
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 from dataclasses import dataclass, field
@@ -46,8 +54,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..config import Config, check_batch
-from ..errors import NumericalError
-from ..problem import DESIGN_KEYS, METRIC_KEYS, PARAM_KEYS, VERIFY_RTOL, describe, objective
+from ..errors import ConfigError, NumericalError
+from ..problem import (DESIGN_KEYS, METRIC_KEYS, PARAM_KEYS, VERIFY_RTOL, describe, design_of,
+                       objective, params_of)
 from .analysis import YieldResult, analyse_samples
 from .box import Box, box_of
 from .evaluate import evaluate, simulator, slow_keys
@@ -56,6 +65,18 @@ from .nlp import (T_FLOOR, ScenarioNLP, discretise, get_scenario_nlp, model_conf
 from .stats import CI_METHOD, margins
 from .verify import reference_check
 
+#: most corners of the box that enter the scenario NLP all together (d <= 4 keys). Each
+#: scenario adds 2N + 2 variables and a copy of every constraint to the NLP, and one
+#: reference re-simulation: with five keys tolerance (33 scenarios) one solve took 2.4 s
+#: and a warm re-solve up to 10 s, against 0.5 s for the default nine. Beyond it the NLP
+#: starts from the corners that matter (:func:`_initial_scenarios`) and every one of the
+#: 2^d corners is simulated in the kernel after each solve instead (:func:`_check_corners`:
+#: 2^d strokes, milliseconds), the violating ones joining the scenarios.
+MAX_CORNERS = 16
+#: most toleranced keys of a robust optimisation (each corner check is 2^d strokes: 65536
+#: at most, ~1 s), and most of them that need a model per value (2^8 models, ~10 s a check)
+MAX_KEYS = 16
+MAX_SLOW_KEYS = 8
 #: Monte Carlo samples of each interior worst-case search (uniform in the box)
 CHECK_SAMPLES = 4096
 #: the same when a toleranced key needs a model per sample (geometry, crank masses ...)
@@ -116,6 +137,10 @@ class RobustResult:
     infeasibility: dict | None = None
     notes: tuple = ()
     times: dict = field(default_factory=dict)
+    #: every corner of the box simulated in the kernel at the design: corners, violating,
+    #: worst_margin, breaking (labels of corners outside the NLP that break a constraint),
+    #: in_nlp (corners among the scenarios), scenarios (how many the NLP had)
+    corner_check: dict | None = None
 
     @property
     def yield_(self) -> float | None:
@@ -148,6 +173,8 @@ class RobustResult:
             "box": self.box, "box_scale": self.box_scale,
             "rounds": self.rounds, "problem": self.problem, "solver": self.solver,
             "times": self.times})
+        if self.corner_check is not None:
+            out["corner_check"] = self.corner_check
         if self.infeasibility is not None:
             out["infeasibility"] = self.infeasibility
         if self.notes:
@@ -411,9 +438,12 @@ def _polish(problem: _Problem, run: _Run, notes: list) -> tuple[_Problem, _Run]:
                 changed = True
         if not changed:
             break
-        r2 = problem.solve(run.r["x"], run.J_ref, (run.r["lam_x"], run.r["lam_g"]))
+        # from the previous primal point (Ipopt's warm-start mode with the multipliers took
+        # 54 iterations and 10.7 s against 11 and 1.8 s with five keys tolerance; 6 against
+        # 10 iterations, the same time, on the default problem)
+        r2 = problem.solve(run.r["x"], run.J_ref)
         if not r2.success:
-            r2 = problem.solve(run.r["x"], run.J_ref)
+            r2 = problem.solve(run.r["x"], run.J_ref, (run.r["lam_x"], run.r["lam_g"]))
             if not r2.success:
                 break
         run = r2
@@ -424,15 +454,17 @@ def _polish(problem: _Problem, run: _Run, notes: list) -> tuple[_Problem, _Run]:
 
 # -- interior worst cases -------------------------------------------------------------------------
 def _scores(cfg: Config, c: Config, box_d: Box, z: np.ndarray, Jmax: float,
-            cut: bool = True):
+            cut: bool = True, cols: dict | None = None):
     """(score, margin) of unit points z at the design of ``c``: the score is the worst
     relative constraint violation (-margin; for a lid that does not close, 10 + the lowest
     angle it reached, so that lids stopping higher score higher) or, in worst-case mode,
     the objective's excess over the worst scenario's, scaled so that an excess of OBJ_RTOL
     scores like a violation of MC_TOL. ``cut``: strokes end shortly after the closing-time
-    limit (fast; later closings count as not closed)."""
+    limit (fast; later closings count as not closed); ``cols``: their kernel columns, if
+    already simulated."""
     t_end = 1.05 * t_limit(cfg) + 0.05 if cut else None
-    cols = evaluate(c, box_d.keys, box_d.values(z), t_end=t_end)
+    if cols is None:
+        cols = evaluate(c, box_d.keys, box_d.values(z), t_end=t_end)
     m = margins(cols, cfg.optimise)
     th = np.nan_to_num(np.asarray(cols["theta_min"], float), nan=10.0)
     score = np.where(np.isfinite(m), -m, 10.0 + th)
@@ -496,7 +528,8 @@ def _nominal(cfg: Config) -> dict:
 
 def _solve_box(cfg: Config, scale: float, scenarios: list, N: int, M: int, start,
                seed: int, notes: list, rounds: list, bar) -> tuple[_Problem, _Run | None]:
-    """Solve over ``scenarios``, then add interior worst cases until none is found."""
+    """Solve over ``scenarios``, then add interior worst cases and violating corners until
+    none is found (the corner check only adds corners that are not yet scenarios)."""
     problem = _Problem(cfg, scale, scenarios, N, M)
     x0, J_ref = problem.initial(start)
     run = problem.solve(x0, J_ref)
@@ -510,13 +543,17 @@ def _solve_box(cfg: Config, scale: float, scenarios: list, N: int, M: int, start
         bar.update(min(2 + k, 8), f"searching the box ({len(problem.scenarios)} scenarios)")
         n_check = SLOW_CHECK_SAMPLES if slow_keys(cfg.tolerance.keys) else CHECK_SAMPLES
         new, info = _search(cfg, scale, run, seed + 1 + k, n_check)
-        rounds[-1].update(search=info)
-        if not new:
+        corners, cinfo = _check_corners(cfg, scale, run,
+                                        [s.z for s in problem.scenarios] + list(new))
+        rounds[-1].update(search=info, corner_check=cinfo)
+        if not new and not corners:
             break
-        scen = problem.scenarios + [Scenario(z, f"Monte Carlo, round {k + 1}") for z in new]
+        scen = problem.scenarios + [Scenario(z, f"Monte Carlo, round {k + 1}") for z in new] \
+            + [Scenario(z, f"corner check, round {k + 1}") for z in corners]
+        n_new = len(new) + len(corners)
         bigger = _Problem(cfg, scale, scen, problem.N, problem.M)
-        bigger.t_hi = problem.t_hi + [t_limit(cfg)] * len(new)
-        bigger.t_lo = problem.t_lo + [max(cfg.optimise.closing_time_min, T_FLOOR)] * len(new)
+        bigger.t_hi = problem.t_hi + [t_limit(cfg)] * n_new
+        bigger.t_lo = problem.t_lo + [max(cfg.optimise.closing_time_min, T_FLOOR)] * n_new
         x0, _ = bigger.initial(run.design, run)
         # from the previous answer's primal point: with the new scenarios' multipliers
         # unknown, Ipopt's warm-start mode took 3x the iterations in tests (54 against 17)
@@ -530,15 +567,152 @@ def _solve_box(cfg: Config, scale: float, scenarios: list, N: int, M: int, start
             return bigger, r2
         problem, run = _polish(bigger, r2, notes)
     else:
-        notes.append(f"the interior search still found violating samples after {MAX_ROUNDS} "
-                     "rounds")
+        notes.append(f"the interior search and corner check still found violating points "
+                     f"after {MAX_ROUNDS} rounds")
     return problem, run
 
 
-def _initial_scenarios(box: Box) -> list[Scenario]:
+def fractional_factorial(d: int) -> np.ndarray:
+    """A regular two-level fractional factorial of resolution >= III in d factors: (n, d)
+    of ±1 with n = 2^m the smallest power of two above d.
+
+    Columns are the m base factors of the full 2^m factorial, then their products, highest
+    order first (4 factors: A, B, C, ABC, resolution IV). Distinct products are never equal
+    or opposite, so no main effect is aliased with another: every key is at each level in
+    half the runs and every pair of keys in all four combinations (X^T X = n I), and the
+    mean over the runs of any function additive in the keys is the full factorial's.
+    """
+    if d <= 0:
+        return np.zeros((1, 0))
+    m = max(1, math.ceil(math.log2(d + 1)))
+    base = np.array(list(itertools.product((-1.0, 1.0), repeat=m)))
+    ones = [1 << i for i in range(m)]
+    rest = sorted((u for u in range(1, 1 << m) if u not in ones),
+                  key=lambda u: (-bin(u).count("1"), u))
+    cols = [np.prod(base[:, [i for i in range(m) if u >> i & 1]], axis=1)
+            for u in (ones + rest)[:d]]
+    return np.column_stack(cols)
+
+
+def _corner_columns(cfg: Config, scale: float, design):
+    """(box at ``design``, its corners Z (2^d, d), the kernel's columns of every corner)."""
+    box_d = box_of(cfg, dict(zip(DESIGN_KEYS, map(float, design))), scale=scale)
+    Z = box_d.corners()
+    c = cfg.with_design(**dict(zip(DESIGN_KEYS, map(float, design))))
+    return box_d, Z, evaluate(c, box_d.keys, box_d.values(Z), t_end=1.05 * t_limit(cfg) + 0.05)
+
+
+def _worst_corners(cfg: Config, scale: float, design) -> list[tuple[tuple, str]]:
+    """The corners of the box worst for each constraint, and for the objective in
+    worst-case mode, at ``design``: (z, why) for each distinct one.
+
+    Every corner is simulated in the kernel (2^d strokes: what one NLP scenario costs
+    buys thousands of them), so the worst corner is exact at the design, not a first-order
+    guess: the slowest (a lid that does not close counts as slowest, the one stopping
+    highest first), the fastest (when closing_time_min > 0), the weakest holding moment,
+    the one closest to rebounding (only when one rebounds), the largest J.
+    """
+    _, Z, cols = _corner_columns(cfg, scale, design)
+    out: dict = {}
+    for why, v in _badness(cfg, cols).items():
+        z = tuple(map(float, Z[int(np.argmax(v))]))
+        out[z] = f"{out[z]}, {why}" if z in out else why
+    return list(out.items())
+
+
+def _badness(cfg: Config, cols: dict) -> dict:
+    """How bad each stroke of ``cols`` is for each constraint (and the objective in
+    worst-case mode): larger is worse (see :func:`_worst_corners`)."""
+    o = cfg.optimise
+    closed = np.asarray(cols["closed"], bool)
+    ct = np.asarray(cols["closing_time"], float)
+    th = np.nan_to_num(np.asarray(cols["theta_min"], float), nan=10.0)
+    worst = {"slowest": np.where(closed, ct, 1e3 + th),
+             "weakest holding moment": np.nan_to_num(-np.asarray(cols["holding_moment"], float),
+                                                     nan=-np.inf)}
+    if o.closing_time_min > 0:
+        worst["fastest"] = np.where(closed, -ct, -np.inf)
+    tdm = np.nan_to_num(np.asarray(cols["theta_dot_max"], float), nan=-np.inf)
+    if np.any(tdm > 0):
+        worst["rebound"] = tdm
+    if cfg.tolerance.robust_objective == "worst":
+        J = np.asarray(cols["objective"], float)
+        if np.any(np.isfinite(J)):
+            worst["largest J"] = np.where(np.isfinite(J), J, -np.inf)
+    return worst
+
+
+def _initial_scenarios(box: Box, cfg: Config | None = None, designs=(),
+                       scale: float = 1.0) -> list[Scenario]:
+    """The scenarios the NLP starts from: the nominal lid and every corner of the box when
+    there are at most :data:`MAX_CORNERS` of them (or no ``cfg`` is given).
+
+    Beyond, the nominal lid and, at each of ``designs``, the corners worst for each
+    constraint and for the objective (:func:`_worst_corners`); in mean mode also a
+    resolution-III fraction of the corners (:func:`fractional_factorial`, 8 or 16 runs),
+    so that the mean objective is not an average over worst cases only.
+
+    Why these: each constraint that binds in a robust design is set by one extreme lid (the
+    slowest closes last, the weakest spring holds least, one lid has the worst J), and the
+    scenario NLP needs exactly those; the other corners only cost size. Which corner is
+    worst can change as the NLP moves the design: the corner check after every solve
+    (:func:`_check_corners`) adds any that then violates, so the result still holds at
+    every corner. (A fraction or a first-order model would guess the worst corners; the
+    kernel simulates them all for less than one NLP scenario costs.)
+    """
     out = [Scenario(tuple([0.0] * box.dim), "nominal")]
-    out += [Scenario(tuple(map(float, z)), "corner") for z in box.corners()] if box.dim else []
+    if not box.dim:
+        return out
+    if 2 ** box.dim <= MAX_CORNERS or cfg is None:
+        return out + [Scenario(tuple(map(float, z)), "corner") for z in box.corners()]
+    seen = {out[0].z}
+    for design in designs:
+        for z, why in _worst_corners(cfg, scale, design):
+            if z not in seen:
+                seen.add(z)
+                out.append(Scenario(z, f"corner ({why})"))
+    if cfg.tolerance.robust_objective == "mean":
+        for z in fractional_factorial(box.dim):
+            z = tuple(map(float, z))
+            if z not in seen:
+                seen.add(z)
+                out.append(Scenario(z, "corner (fractional factorial)"))
     return out
+
+
+def _check_corners(cfg: Config, scale: float, run: "_Run", have=()) -> tuple[list, dict]:
+    """Every corner of the box at the design of ``run``, in the kernel. A corner violates
+    when it breaks a constraint by more than MC_TOL or, in worst-case mode, its J exceeds
+    the worst scenario's by more than OBJ_RTOL (as in :func:`_scores`). Returns the
+    violating corners to add -- among those not in ``have`` (unit points), the most
+    violating one and the worst for each constraint and the objective (:func:`_badness`):
+    at most six a round, so that a poor design (say the nominal optimum, where most
+    corners fail) does not bring all 2^d corners into the NLP at once -- and a summary
+    (``breaking``: every corner outside ``have`` that breaks a constraint)."""
+    design = dict(zip(DESIGN_KEYS, map(float, run.design)))
+    box_d = box_of(cfg, design, scale=scale)
+    Z = box_d.corners() if box_d.dim else np.zeros((0, 0))
+    if not len(Z):
+        return [], {"corners": 0, "violating": 0, "breaking": [], "added": []}
+    c = cfg.with_design(**design)
+    cols = evaluate(c, box_d.keys, box_d.values(Z), t_end=1.05 * t_limit(cfg) + 0.05)
+    score, m = _scores(cfg, c, box_d, Z, float(np.max(run.J)), cols=cols)
+    H = np.array([h for h in have if len(h) == box_d.dim]).reshape(-1, box_d.dim)
+    outside = np.array([not len(H) or np.min(np.max(np.abs(H - z), axis=1)) > 1e-6
+                        for z in Z])
+    bad = (score > MC_TOL) & outside
+    picks = []
+    if bad.any():
+        crit = {"most violating": score, **_badness(cfg, cols)}
+        for v in crit.values():
+            i = int(np.argmax(np.where(bad, v, -np.inf)))
+            if bad[i] and i not in picks:
+                picks.append(i)
+    breaking = [box_d.label(Z[i]) for i in np.nonzero(outside & (m < -MC_TOL))[0]]
+    return [tuple(map(float, Z[i])) for i in picks], {
+        "corners": int(len(Z)), "violating": int(np.sum(score > MC_TOL)),
+        "worst_margin": float(np.min(m)) if np.all(np.isfinite(m)) else -math.inf,
+        "breaking": breaking, "added": [box_d.label(Z[i]) for i in picks]}
 
 
 def _scenario_report(cfg, problem: _Problem, run: _Run, verify: bool) -> tuple[list, bool]:
@@ -560,9 +734,10 @@ def _scenario_report(cfg, problem: _Problem, run: _Run, verify: bool) -> tuple[l
                  "worst": s == worst}
         if verify:
             # the NLP's own numbers of this scenario against the reference's
-            chk = reference_check(cfg.with_design(**dict(zip(DESIGN_KEYS, map(float, run.design)))),
-                                  box_d.keys, box_d.values(z)[0], entry["label"], None,
-                                  float(run.J[s]), claims={**metrics, "objective": entry["objective"]})
+            c_d = cfg.with_design(**dict(zip(DESIGN_KEYS, map(float, run.design))))
+            chk = reference_check(c_d, box_d.keys, box_d.values(z)[0], entry["label"], None,
+                                  float(run.J[s]),
+                                  claims={**metrics, "objective": entry["objective"]})
             entry["reference"] = chk.get("reference")
             entry["constraints"] = chk.get("constraints")
             entry["agreement"] = chk.get("agreement")
@@ -572,6 +747,22 @@ def _scenario_report(cfg, problem: _Problem, run: _Run, verify: bool) -> tuple[l
             ok_all &= entry["verified"]
         out.append(entry)
     return out, ok_all
+
+
+def check_keys(cfg: Config) -> None:
+    """ConfigError unless the robust optimiser can check every corner of cfg's box: at
+    most :data:`MAX_KEYS` toleranced keys, :data:`MAX_SLOW_KEYS` of them needing a model
+    per value."""
+    keys = [s.key for s in cfg.tolerance.spreads]
+    if len(keys) > MAX_KEYS:
+        raise ConfigError(f"tolerance: {len(keys)} toleranced keys; optimise --robust checks "
+                          f"all 2^d corners of the box and takes at most {MAX_KEYS} keys "
+                          "(softclose yield and sensitivity take any number)")
+    slow = slow_keys(keys)
+    if len(slow) > MAX_SLOW_KEYS:
+        raise ConfigError(f"tolerance: {len(slow)} toleranced keys need a model per value "
+                          f"({', '.join(slow[:3])}, ...); optimise --robust checks all 2^d "
+                          f"corners of the box and takes at most {MAX_SLOW_KEYS} of them")
 
 
 def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None = None,
@@ -585,6 +776,7 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     t_start = time.perf_counter()
     tol = cfg.tolerance
     check_batch(cfg, int(samples or tol.samples), "--samples" if samples else "tolerance.samples")
+    check_keys(cfg)
     times: dict = {}
     notes: list = []
     rounds: list = []
@@ -607,13 +799,17 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     problem = run = yres = None
     for attempt in range(MAX_WIDEN + 1):
         box_s = box_of(cfg, scale=scale)
-        scenarios = _initial_scenarios(box_s)
-        bar.update(1, f"start ({len(scenarios)} scenarios)")
+        bar.update(1, "start")
         t0 = time.perf_counter()
         if run is None:
-            start, start_info = _start_design(cfg, box_s, np.array([s.z for s in scenarios]))
+            # the sweep judges designs on the corners worst at the nominal optimum (all
+            # corners when they are few), the NLP starts from those worst at its start
+            ref = nominal["design"] or design_of(params_of(cfg))
+            first = _initial_scenarios(box_s, cfg, [[ref[k] for k in DESIGN_KEYS]], scale)
+            start, start_info = _start_design(cfg, box_s, np.array([s.z for s in first]))
         else:
             start = run.design
+        scenarios = _initial_scenarios(box_s, cfg, [start], scale)
         times["start"] = times.get("start", 0.0) + time.perf_counter() - t0
         t0 = time.perf_counter()
         problem, run = _solve_box(cfg, scale, scenarios, N, M, start, seed, notes, rounds, bar)
@@ -667,6 +863,20 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     metrics = dict(nom["metrics"])
     metrics.update({k: None for k in METRIC_KEYS if k not in metrics})
     J_obj = float(np.max(run.J)) if tol.robust_objective == "worst" else float(np.mean(run.J))
+    # every corner of the box at the answer, in the kernel (the scenarios' corners are the
+    # reference's to judge): the guarantee when the NLP did not have them all
+    t0 = time.perf_counter()
+    _, corner_check = _check_corners(cfg, scale, run, [sc.z for sc in problem.scenarios])
+    times["corner_check"] = time.perf_counter() - t0
+    n_corners = 2 ** box_s.dim if box_s.dim else 0
+    in_nlp = sum(1 for sc in problem.scenarios if sc.z and all(abs(v) == 1.0 for v in sc.z))
+    corner_check.update(in_nlp=in_nlp, scenarios=len(problem.scenarios))
+    if n_corners > MAX_CORNERS:
+        notes.append(f"{len(problem.scenarios)} scenarios instead of {n_corners + 1}: the "
+                     f"nominal lid, {in_nlp} of the {n_corners} corners and "
+                     f"{len(problem.scenarios) - 1 - in_nlp} interior points; all {n_corners} "
+                     f"corners simulated in the kernel at the design, "
+                     f"{len(corner_check['breaking'])} outside the NLP break a constraint")
     verification = None
     if verify:
         worst = [s for s in scen if s["worst"]][0]
@@ -689,6 +899,11 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
         msgs.append("the adaptive reference does not confirm " +
                     (f"the scenarios {', '.join(bad)}" if bad else
                      "the worst-case objective (raise optimise.substeps)"))
+    if corner_check["breaking"]:
+        ok = False
+        b = corner_check["breaking"]
+        msgs.append(f"{len(b)} corners of the tolerance box break a constraint at the design "
+                    f"in the kernel ({'; '.join(b[:3])}{' ...' if len(b) > 3 else ''})")
     if not yres.meets_required:
         ok = False
         msgs.append(f"the Monte Carlo yield {yres.yield_:.4f} stays below the required "
@@ -704,7 +919,7 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     return RobustResult(ok, "; ".join(msgs), run.r["status"], design, J_obj, metrics=metrics,
                         scenarios=scen, verification=verification, yield_result=yres,
                         nominal=nominal_json, nominal_yield=nyield, notes=tuple(notes),
-                        times=times, **base)
+                        times=times, corner_check=corner_check, **base)
 
 
 def _box_summary(box: Box) -> dict:
@@ -740,16 +955,26 @@ def _diagnose(cfg: Config, run: _Run, problem: _Problem, N: int, M: int, seed: i
     violation at the full spreads of the best design found."""
     o = cfg.optimise
     lo, hi, best = 0.0, 1.0, None
+    subset = 2 ** problem.box.dim > MAX_CORNERS
+
+    def holds(a, design) -> bool:
+        """With a subset of the corners as scenarios, a design counts only if every corner
+        holds in the kernel."""
+        if not subset:
+            return True
+        _, _, cols = _corner_columns(cfg, a, design)
+        return bool(np.all(margins(cols, o) >= -MC_TOL))
+
     for _ in range(6):
         a = 0.5 * (lo + hi)
         box_a = box_of(cfg, scale=a)
-        scen = _initial_scenarios(box_a)
         try:
+            scen = _initial_scenarios(box_a, cfg, [run.design], a)
             start, info_a = _start_design(cfg, box_a, np.array([s.z for s in scen]))
         except NumericalError:
             hi = a
             continue
-        if info_a["robust_feasible"]:          # a sweep design meets everything: feasible
+        if info_a["robust_feasible"] and holds(a, start):   # a sweep design meets everything
             lo, best = a, start
             continue
         try:
@@ -758,7 +983,7 @@ def _diagnose(cfg: Config, run: _Run, problem: _Problem, N: int, M: int, seed: i
             ra = pa.solve(x0, J_ref)
         except NumericalError:
             ra = None
-        if ra is not None and ra.success:
+        if ra is not None and ra.success and holds(a, ra.design):
             lo, best = a, ra.design
         else:
             hi = a
