@@ -857,8 +857,12 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     times["verification"] = time.perf_counter() - t0
     design = dict(zip(DESIGN_KEYS, map(float, run.design)))
     nom = scen[0]
-    metrics = dict(nom["metrics"])
-    metrics.update({k: None for k in METRIC_KEYS if k not in metrics})
+    # the reported metrics are the adaptive reference's at the nominal scenario when it was
+    # verified (as the nominal optimiser reports them; the NLP's own sit in `scenarios`), else
+    # the NLP's, with what it does not compute as None
+    ref = nom.get("reference") or {}
+    metrics = ({k: ref.get(k) for k in METRIC_KEYS} if ref else
+               {k: nom["metrics"].get(k) for k in METRIC_KEYS})
     J_obj = float(np.max(run.J)) if tol.robust_objective == "worst" else float(np.mean(run.J))
     # every corner of the box at the answer, in the kernel (the scenarios' corners are the
     # reference's to judge): the guarantee when the NLP did not have them all
