@@ -179,6 +179,11 @@ def format_robust(res) -> str:
                          f" (ref {rt:.5f})" if rt is not None else
                          f"    {s['label']:<48} T = {s['metrics']['closing_time']:.5f} s")
             lines[-1] += f", J = {s['objective']:.5g}, {ok}{mark}"
+    cc = res.corner_check
+    if cc:
+        lines.append(f"  corner check (the kernel at every corner of the box): {cc['corners']} "
+                     f"corners, {cc['in_nlp']} of them scenarios of the NLP; "
+                     f"{len(cc['breaking'])} outside the NLP break a constraint")
     if res.yield_result is not None:
         lines.append("  Monte Carlo, both designs on the same samples:")
         lines += ["  " + x for x in format_yield(res.yield_result, "robust design")]
