@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 
 from ..errors import ConfigError
-from .common import Outcome, add_common, add_out, interactive, prepare_out, wrote
+from .common import Outcome, add_common, add_out, interactive, prepare_out, write_outputs, wrote
 
 #: the default closing times of ``pareto`` (s)
 PARETO_DEFAULT = "0.3:3:10:log"
@@ -204,11 +204,7 @@ def run_pareto(cfg, args) -> Outcome:
     payload = fr.to_json()
     files = []
     if out is not None:
-        from ..figures import save
-        frame = fr.to_frame()
-        path = out / "pareto.csv"
-        frame.to_csv(path, index=False)
-        files = [path, save(fr.plot(), out / "pareto.png")]
+        files = write_outputs(out, "pareto.csv", fr.to_frame(), "pareto.png", fr.plot)
         payload["files"] = [str(f) for f in files]
     text = format_front(fr) + wrote(files)
     return Outcome(payload, text, 0 if fr.success else 3, tuple(files),
