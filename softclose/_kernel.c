@@ -56,6 +56,12 @@
  * lanes are SIMD vectors, and every coefficient of a cell comes from one Horner evaluation
  * of its row of pieces -- the same IEEE operations, in the same order, as the scalar code,
  * so both paths give the same numbers bit for bit (no FMA contraction: none is enabled).
+ * On that path the lanes' hot state stays in arrays between steps (Soa), the new nodes come
+ * out as vectors (Nodes), and the common case of the bookkeeping after a step -- no event,
+ * no turning point, no peak to refine -- is done with vector compares and blends
+ * (after_steps_vec); a lane that needs more runs the scalar lane_after_step. About half of a
+ * step was this plumbing around the Runge-Kutta arithmetic (38.5 against 19-20 ns a
+ * lane-step for the bare SIMD stages on creeping lids); it is now ~31 ns.
  *
  * No Python API is used by the solver; the module init only lets setuptools build it.
  */
@@ -89,6 +95,8 @@ typedef struct {
     const double *dcc; /* the same layout: their derivative w.r.t. the lid mass (0 for l, dl,
                         * dd, tau), or NULL */
     const double *rng; /* ncell * NRNG: ranges of some pieces over each whole cell (or NULL) */
+    const int *crit;   /* the cells where l' may vanish (R_LCRIT), ascending (with rng) */
+    int ncrit;
     int ncell;
     double lo, h, inv_h, m0;
 } Table;
@@ -362,8 +370,12 @@ static void l_extremes(const Table *T, double a, double b, double *lmin, double 
     int i0 = (int)floor((a - T->lo) / T->h), i1 = (int)floor((b - T->lo) / T->h);
     if (i0 < 0) i0 = 0;
     if (i1 > T->ncell - 1) i1 = T->ncell - 1;
-    for (int i = i0; i <= i1; i++) {
-        if (T->rng && T->rng[(size_t)i * NRNG + R_LCRIT] == 0.0) continue; /* l monotone */
+    /* with the cell ranges, only the cells where l' may vanish (the others: l monotone) */
+    int nc = T->crit ? T->ncrit : i1 - i0 + 1, c0 = 0;
+    while (T->crit && c0 < nc && T->crit[c0] < i0) c0++;
+    for (int c = c0; c < nc; c++) {
+        int i = T->crit ? T->crit[c] : i0 + c;
+        if (i > i1) break;
         double q[4] = {CQ(T->cc, i, 0, C_L), CQ(T->cc, i, 1, C_L), CQ(T->cc, i, 2, C_L),
                        CQ(T->cc, i, 3, C_L)};
         /* roots of q1 + 2 q2 s + 3 q3 s^2 */
@@ -891,6 +903,14 @@ ALWAYS void cells4(const Table *T, v4 th, const double **b, v4 *s, int *bad)
 }
 
 ALWAYS v4 ld4(const double *a) { v4 v; memcpy(&v, a, sizeof v); return v; }
+ALWAYS v4 abs4(v4 x)
+{
+    v4l mask = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL, 0x7fffffffffffffffLL,
+                0x7fffffffffffffffLL};
+    return (v4)((v4l)x & mask);
+}
+
+ALWAYS v4 sel4(v4l m, v4 x, v4 y) { return (v4)((m & (v4l)x) | (~m & (v4l)y)); } /* m ? x : y */
 
 #if defined(__clang__) || (defined(__GNUC__) && __GNUC__ >= 12)
 #define SHUF(a, b, i, j, k, l) __builtin_shufflevector(a, b, i, j, k, l)
@@ -945,8 +965,10 @@ ALWAYS v4 rhs4(const Table *T, const Par4 *P, v4 th, v4 thd, int *bad)
     return N / c[C_M];
 }
 
-/* node_eval() of the lanes: theta'', tip speed, its rate, energy, potential */
-ALWAYS void node4(const Table *T, const Par4 *P, v4 th, v4 thd, Node *nd)
+/* node_eval() of the lanes: theta'', tip speed, its rate, energy, potential, as vectors
+ * (ok: 1 inside the table, 0 outside) -- the same operations as node_eval() lane by lane */
+ALWAYS void node4(const Table *T, const Par4 *P, v4 th, v4 thd, v4 *a, v4 *g, v4 *dg, v4 *Ev,
+                  v4 *Vv, v4 *ok)
 {
     v4 c[NC], s;
     const double *b[VW];
@@ -958,19 +980,21 @@ ALWAYS void node4(const Table *T, const Par4 *P, v4 th, v4 thd, Node *nd)
     v4 N = -dVg - P->k * (l - P->l0) * dl - 0.5 * dM * thd * thd - damp * thd;
     v4 acc = N / M;
     v4 dl0 = l - P->l0;
-    v4 E = 0.5 * M * thd * thd + Vg + 0.5 * P->k * dl0 * dl0;
-    v4 V = Vg + 0.5 * P->k * dl0 * dl0;
-    for (int q = 0; q < VW; q++) {
-        double sq = s[q], t = thd[q];
-        double dtau = DCUB(b[q], C_TAU, sq, T->inv_h);
-        double sg = t >= 0 ? 1.0 : -1.0;
-        nd[q].ok = !bad[q];
-        nd[q].a = acc[q];
-        nd[q].g = tau[q] * fabs(t);
-        nd[q].dg = sg * (dtau * t * t + tau[q] * acc[q]);
-        nd[q].E = E[q];
-        nd[q].V = V[q];
-    }
+    *Ev = 0.5 * M * thd * thd + Vg + 0.5 * P->k * dl0 * dl0;
+    *Vv = Vg + 0.5 * P->k * dl0 * dl0;
+    /* d tau / d theta (DCUB) from each lane's cubic of tau */
+    v4 q1 = {b[0][NC + C_TAU], b[1][NC + C_TAU], b[2][NC + C_TAU], b[3][NC + C_TAU]};
+    v4 q2 = {b[0][2 * NC + C_TAU], b[1][2 * NC + C_TAU], b[2][2 * NC + C_TAU],
+             b[3][2 * NC + C_TAU]};
+    v4 q3 = {b[0][3 * NC + C_TAU], b[1][3 * NC + C_TAU], b[2][3 * NC + C_TAU],
+             b[3][3 * NC + C_TAU]};
+    v4 dtau = (q1 + s * (2.0 * q2 + s * 3.0 * q3)) * T->inv_h;
+    v4 one = {1.0, 1.0, 1.0, 1.0}, zero = {0.0, 0.0, 0.0, 0.0};
+    v4 sg = sel4(thd >= zero, one, -one);
+    *a = acc;
+    *g = tau * abs4(thd);
+    *dg = sg * (dtau * thd * thd + tau * acc);
+    *ok = (v4){bad[0] ? 0.0 : 1.0, bad[1] ? 0.0 : 1.0, bad[2] ? 0.0 : 1.0, bad[3] ? 0.0 : 1.0};
 }
 
 /* theta'' only, from the six coefficients it needs (the scalar hot path) */
@@ -1025,22 +1049,59 @@ ALWAYS void explicit_scalar(const Table *T, const Method *m, const int s, Lane *
     }
 }
 
+/* The hot state of the lane slots as arrays (structure of arrays): the vector path keeps it
+ * here between steps, so a step's inputs are vector loads and the common case of the
+ * bookkeeping after a step is a few vector compares and blends (after_steps_vec). A lane that
+ * needs the scalar code (an event, a turning point, a peak to refine, an early-exit check,
+ * a failure) is copied into its Lane (soa_in), handled there, and copied back (soa_out). */
+typedef struct {
+    double th[LANES], thd[LANES], a[LANES], t[LANES], n[LANES], peak[LANES], th_min[LANES],
+        th_max[LANES], Vlo[LANES], Vhi[LANES], thd_max[LANES], Emax[LANES], gain[LANES],
+        gp[LANES], g[LANES], dg[LANES], E[LANES], thp[LANES], thdp[LANES], hp[LANES],
+        E0[LANES], e_tol[LANES], early[LANES], floor_[LANES];
+} Soa;
+
+/* the new nodes of the lane slots (node4 per group): ok 1 inside the table, 0 outside,
+ * -1 where the step crossed theta_closed (the event is the scalar code's) */
+typedef struct { double a[LANES], g[LANES], dg[LANES], E[LANES], V[LANES], ok[LANES]; } Nodes;
+
+ALWAYS void soa_in(const Soa *S, Lane *L, int k)
+{
+    L->th = S->th[k]; L->thd = S->thd[k]; L->a = S->a[k]; L->t = S->t[k]; L->n = (long)S->n[k];
+    L->peak = S->peak[k]; L->th_min = S->th_min[k]; L->th_max = S->th_max[k];
+    L->Vlo = S->Vlo[k]; L->Vhi = S->Vhi[k]; L->thd_max = S->thd_max[k]; L->Emax = S->Emax[k];
+    L->gain = S->gain[k]; L->gp = S->gp[k]; L->g = S->g[k]; L->dg = S->dg[k]; L->E = S->E[k];
+    L->thp = S->thp[k]; L->thdp = S->thdp[k]; L->hp = S->hp[k];
+}
+
+ALWAYS void soa_out(Soa *S, const Lane *L, int k)
+{
+    S->th[k] = L->th; S->thd[k] = L->thd; S->a[k] = L->a; S->t[k] = L->t; S->n[k] = (double)L->n;
+    S->peak[k] = L->peak; S->th_min[k] = L->th_min; S->th_max[k] = L->th_max;
+    S->Vlo[k] = L->Vlo; S->Vhi[k] = L->Vhi; S->thd_max[k] = L->thd_max; S->Emax[k] = L->Emax;
+    S->gain[k] = L->gain; S->gp[k] = L->gp; S->g[k] = L->g; S->dg[k] = L->dg; S->E[k] = L->E;
+    S->thp[k] = L->thp; S->thdp[k] = L->thdp; S->hp[k] = L->hp;
+    S->E0[k] = L->E0; S->e_tol[k] = L->e_tol; S->early[k] = L->early ? 1.0 : 0.0;
+    S->floor_[k] = L->floor_;
+}
+
+ALWAYS void st4(double *a, v4 v) { memcpy(a, &v, sizeof v); }
+
 /* one explicit RK step of every lane slot, as NG vectors of VW lanes (slot g VW + q is
  * element q of vector g; idle slots compute from whatever state they hold, look-ups
  * outside the table are caught, and their results are discarded), then the new nodes;
  * the groups are independent, so their dependent chains overlap; s is a literal at the
  * hot call. P: the lanes' parameters as vectors (kept up to date by lane_start). */
-ALWAYS void explicit_lanes(const Table *T, const Method *m, const int s, const Lane *lanes,
+ALWAYS void explicit_lanes(const Table *T, const Method *m, const int s, const Soa *S,
                            const Par4 *P, const double *hh, double *y0, double *y1, int *st,
-                           Node *nd, double thc)
+                           Nodes *nd, double thc)
 {
     v4 th[NG], thd[NG], h[NG], K0[NG][SMAX], K1[NG][SMAX];
-    for (int g = 0; g < NG; g++)
-        for (int q = 0; q < VW; q++) {
-            const Lane *L = &lanes[g * VW + q];
-            th[g][q] = L->th; thd[g][q] = L->thd; h[g][q] = hh[g * VW + q]; K1[g][0][q] = L->a;
-            st[g * VW + q] = 0;
-        }
+    for (int g = 0; g < NG; g++) {
+        th[g] = ld4(S->th + g * VW); thd[g] = ld4(S->thd + g * VW); h[g] = ld4(hh + g * VW);
+        K1[g][0] = ld4(S->a + g * VW);
+        for (int q = 0; q < VW; q++) st[g * VW + q] = 0;
+    }
     for (int g = 0; g < NG; g++) K0[g][0] = thd[g];
     for (int i = 1; i < s; i++) {
         int bad[NG][VW];
@@ -1065,14 +1126,98 @@ ALWAYS void explicit_lanes(const Table *T, const Method *m, const int s, const L
             z0 += h[g] * m->b[i] * K0[g][i]; z1 += h[g] * m->b[i] * K1[g][i];
         }
         /* the new nodes (a lane that closed, failed or left the table ignores its node) */
-        v4 zs = z0;
-        for (int q = 0; q < VW; q++) {
-            y0[g * VW + q] = z0[q]; y1[g * VW + q] = z1[q];
-            if (!(z0[q] > thc)) zs[q] = th[g][q]; /* keep the look-up inside the table */
+        const int b = g * VW;
+        st4(y0 + b, z0); st4(y1 + b, z1);
+        v4l ev = ~(z0 > (v4){thc, thc, thc, thc});
+        v4 zs = sel4(ev, th[g], z0); /* keep the look-up inside the table */
+        v4 a, gg, dg, E, V, ok;
+        node4(T, P + g, zs, z1, &a, &gg, &dg, &E, &V, &ok);
+        st4(nd->a + b, a); st4(nd->g + b, gg); st4(nd->dg + b, dg); st4(nd->E + b, E);
+        st4(nd->V + b, V);
+        st4(nd->ok + b, sel4(ev, ok * 0.0 - 1.0, ok)); /* lane_after_step sees the event */
+    }
+}
+
+/* lane_after_step() for the active slots of the vector path. A lane whose step takes none
+ * of that function's special branches (closing event, failure, a peak to refine, a turning
+ * point, an unstable energy rise) gets the same updates as vector blends, in the same
+ * order and with the same operations, so its state is the scalar code's bit for bit; a lane
+ * whose early-exit trigger fires then goes through lane_try_exit as it would there. Every
+ * other lane (and every lane of a trajectory run: `scalar`) runs lane_after_step itself. */
+ALWAYS void after_steps_vec(const Table *T, const Method *m, Lane *lanes, Soa *S, int *used,
+                            const double *hh, const double *y0, const double *y1,
+                            const int *st, const Nodes *nd, double thc, double dt,
+                            double t_max, long *traj_len, int scalar)
+{
+    const double inv_dt = 1.0 / dt; /* (as lane_start's) */
+    const v4 zero = {0.0, 0.0, 0.0, 0.0}, one = {1.0, 1.0, 1.0, 1.0};
+    const v4 inf = {INFINITY, INFINITY, INFINITY, INFINITY}, c4 = zero + thc;
+    for (int g = 0; g < NG; g++) {
+        const int b = g * VW;
+        v4l f = {0, 0, 0, 0}, trig = {0, 0, 0, 0};
+        v4 th = ld4(S->th + b), thd = ld4(S->thd + b);
+        if (!scalar) {
+            v4 h = ld4(hh + b), z0 = ld4(y0 + b), z1 = ld4(y1 + b);
+            v4 a1 = ld4(nd->a + b), g1 = ld4(nd->g + b), dg1 = ld4(nd->dg + b);
+            v4 E1 = ld4(nd->E + b), V1 = ld4(nd->V + b);
+            v4l ok = (v4l){-(long long)(used[b] && !st[b]), -(long long)(used[b + 1] && !st[b + 1]),
+                           -(long long)(used[b + 2] && !st[b + 2]),
+                           -(long long)(used[b + 3] && !st[b + 3])}
+                     & (ld4(nd->ok + b) == one);
+            v4 n = ld4(S->n + b), gg = ld4(S->g + b), gp = ld4(S->gp + b), E = ld4(S->E + b);
+            v4l refine = ((n + one) > one) & (gg >= gp) & (gg > g1);
+            v4l turn = ((thd < zero) & (z1 >= zero)) | ((thd > zero) & (z1 <= zero));
+            f = ok & (abs4(z0) < inf) & (abs4(z1) < inf) & (z0 > c4) & ~refine & ~turn
+                & (abs4(E1) < inf) & ~((E1 - ld4(S->E0 + b)) > ld4(S->e_tol + b));
+            v4 peak = ld4(S->peak + b), thmin = ld4(S->th_min + b), thmax = ld4(S->th_max + b);
+            v4 Vlo = ld4(S->Vlo + b), Vhi = ld4(S->Vhi + b), thdmax = ld4(S->thd_max + b);
+            v4 Emax = ld4(S->Emax + b), gain = ld4(S->gain + b), dE = E1 - E;
+            v4l lo = f & (z0 < thmin), hi = f & (z0 > thmax);
+            st4(S->peak + b, sel4(f & (g1 > peak), g1, peak));
+            thmin = sel4(lo, z0, thmin); Vlo = sel4(lo, V1, Vlo);
+            thmax = sel4(hi, z0, thmax); Vhi = sel4(hi, V1, Vhi);
+            st4(S->th_min + b, thmin); st4(S->Vlo + b, Vlo);
+            st4(S->th_max + b, thmax); st4(S->Vhi + b, Vhi);
+            st4(S->thd_max + b, sel4(f & (z1 > thdmax), z1, thdmax));
+            st4(S->Emax + b, sel4(f & (E1 > Emax), E1, Emax));
+            st4(S->gain + b, sel4(f & (dE > gain), dE, gain));
+            st4(S->gp + b, sel4(f, gg, gp));
+            st4(S->thp + b, sel4(f, th, ld4(S->thp + b)));
+            st4(S->thdp + b, sel4(f, thd, ld4(S->thdp + b)));
+            st4(S->hp + b, sel4(f, h, ld4(S->hp + b)));
+            st4(S->g + b, sel4(f, g1, gg));
+            st4(S->dg + b, sel4(f, dg1, ld4(S->dg + b)));
+            st4(S->a + b, sel4(f, a1, ld4(S->a + b)));
+            st4(S->E + b, sel4(f, E1, E));
+            v4 t = ld4(S->t + b);
+            st4(S->t + b, sel4(f, t + h, t));
+            st4(S->n + b, sel4(f, n + one, n));
+            st4(S->th + b, sel4(f, z0, th));
+            st4(S->thd + b, sel4(f, z1, thd));
+            v4l fixed = (z0 == th) & (z1 == thd);
+            trig = f & (ld4(S->early + b) != zero) & (fixed | ((E1 < Vlo) & (E1 < Vhi)));
+            /* lane_try_exit's first test, as it would make it: a lane whose energy with its
+             * margin still reaches a visited end returns at once, nothing changed */
+            v4 left = ((v4){t_max, t_max, t_max, t_max} - (t + h)) * inv_dt + 1.0;
+            v4 Eh = E1 + 2.0 * left * ld4(S->gain + b) + ld4(S->floor_ + b);
+            trig &= fixed | ((Eh < Vlo) & (Eh < Vhi));
         }
-        node4(T, P + g, zs, z1, nd + g * VW);
-        for (int q = 0; q < VW; q++)
-            if (!(z0[q] > thc)) nd[g * VW + q].ok = -1; /* lane_after_step sees the event */
+        for (int q = 0; q < VW; q++) {
+            const int k = b + q;
+            if (!used[k] || (f[q] && !trig[q])) continue;
+            Lane *L = &lanes[k];
+            soa_in(S, L, k);
+            Node node = {nd->a[k], nd->g[k], nd->dg[k], nd->E[k], nd->V[k], (int)nd->ok[k]};
+            int over = f[q] ? lane_try_exit(T, L, thc, th[q], thd[q])
+                            : lane_after_step(T, m, L, hh[k], y0[k], y1[k], st[k], thc, &node);
+            if (over) {
+                lane_finish(T, L, thc, t_max);
+                if (traj_len) *traj_len = L->nt;
+                used[k] = 0;
+            } else {
+                soa_out(S, L, k);
+            }
+        }
     }
 }
 
@@ -1090,16 +1235,34 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
     int nlanes = traj ? 1 : LANES;
     const int s = m->s;
     double hh[LANES] = {0};
+    Soa S; /* the hot lane state of the vector path (see Soa) */
+    const int fv = vec && m->kind == 0;
     memset(lanes, 0, sizeof lanes);
     memset(P, 0, sizeof P);
+    memset(&S, 0, sizeof S);
     for (;;) {
         int act[LANES], na = 0;
-        for (int k = 0; k < nlanes; k++) {
+        if (fv && nlanes == LANES) { /* the common case: every slot busy, none at t_max */
+            const v4 dtv = {dt, dt, dt, dt}, tmv = {t_max, t_max, t_max, t_max};
+            const double eps = 1e-15 * t_max;
+            int all = 1;
+            for (int k = 0; k < LANES; k++) all &= used[k] != 0;
+            for (int g = 0; all && g < NG; g++) {
+                v4 t = ld4(S.t + g * VW), h = sel4(dtv < tmv - t, dtv, tmv - t);
+                v4l okv = (t < tmv) & (h > (v4){eps, eps, eps, eps});
+                st4(hh + g * VW, h);
+                for (int q = 0; q < VW; q++) all &= okv[q] != 0;
+            }
+            if (all) na = LANES; /* (act is not used by the vector path) */
+        }
+        for (int k = 0; na < LANES && k < nlanes; k++) {
             for (;;) {
                 if (used[k]) {
                     Lane *L = &lanes[k];
-                    double h = dt < t_max - L->t ? dt : t_max - L->t;
-                    if (L->t < t_max && h > 1e-15 * t_max) { hh[k] = h; break; }
+                    double tk = fv ? S.t[k] : L->t;
+                    double h = dt < t_max - tk ? dt : t_max - tk;
+                    if (tk < t_max && h > 1e-15 * t_max) { hh[k] = h; break; }
+                    if (fv) soa_in(&S, L, k);
                     lane_finish(T, L, thc, t_max); /* ran to t_max without closing */
                     if (traj_len) *traj_len = L->nt;
                     used[k] = 0;
@@ -1120,6 +1283,8 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
                     lane_finish(T, L, thc, t_max);
                     if (traj_len) *traj_len = L->nt;
                     used[k] = 0;
+                } else if (fv) {
+                    soa_out(&S, L, k);
                 }
                 next++;
             }
@@ -1129,11 +1294,11 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
         /* the step of every active lane; results by slot */
         double y0[LANES], y1[LANES];
         int st[LANES];
-        Node nd[LANES], *ndp = NULL;
+        Node *ndp = NULL;
+        Nodes nd;
         if (m->kind == 0 && vec) { /* explicit RK, lanes as vectors, first stage: the node */
-            ndp = nd;
-            if (s == 4) explicit_lanes(T, m, 4, lanes, P, hh, y0, y1, st, nd, thc);
-            else explicit_lanes(T, m, s, lanes, P, hh, y0, y1, st, nd, thc);
+            if (s == 4) explicit_lanes(T, m, 4, &S, P, hh, y0, y1, st, &nd, thc);
+            else explicit_lanes(T, m, s, &S, P, hh, y0, y1, st, &nd, thc);
         } else if (m->kind == 0) { /* explicit RK, lane by lane */
             if (s == 4) explicit_scalar(T, m, 4, lanes, act, na, hh, y0, y1, st);
             else explicit_scalar(T, m, s, lanes, act, na, hh, y0, y1, st);
@@ -1151,6 +1316,11 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
                 Lane *L = &lanes[k];
                 st[k] = step(T, m, &L->p, hh[k], L->th, L->thd, &y0[k], &y1[k]);
             }
+        }
+        if (fv) {
+            after_steps_vec(T, m, lanes, &S, used, hh, y0, y1, st, &nd, thc, dt, t_max,
+                            traj_len, traj != NULL);
+            continue;
         }
         for (int q = 0; q < na; q++) {
             int k = act[q];
@@ -1213,6 +1383,7 @@ static void run(const Table *T, const Method *m, double dt, double t_max, double
 static void make(const double *tab_meta, const double *cc, const double *dcc,
                  const double *rng, const double *tableau, Table *T, Method *m)
 {
+    T->crit = NULL; T->ncrit = 0;
     T->cc = cc; T->dcc = dcc; T->rng = rng; T->ncell = (int)tab_meta[0]; T->lo = tab_meta[1];
     T->h = tab_meta[2]; T->m0 = tab_meta[3];
     T->inv_h = 1.0 / T->h;
@@ -1227,13 +1398,29 @@ static void make(const double *tab_meta, const double *cc, const double *dcc,
 
 /* strokes for n designs (rows of `design`, ncol columns: k, l0, c, c_rot, e_tol[, m_lid]);
  * out: n x NOUT */
+/* the list of cells where l' may vanish (T->crit), from the cell ranges; NULL (all cells
+ * are searched) without them or if memory is short. The caller frees it. */
+static int *critical_cells(Table *T)
+{
+    if (!T->rng) return NULL;
+    int *crit = malloc(sizeof(int) * (size_t)(T->ncell > 0 ? T->ncell : 1));
+    if (!crit) return NULL;
+    int nc = 0;
+    for (int i = 0; i < T->ncell; i++)
+        if (T->rng[(size_t)i * NRNG + R_LCRIT] != 0.0) crit[nc++] = i;
+    T->crit = crit; T->ncrit = nc;
+    return crit;
+}
+
 void sc_strokes(const double *tab_meta, const double *cc, const double *dcc,
                 const double *rng, const double *tableau, double dt, double t_max, double th0,
                 double thc, long n, long ncol, const double *design, long early, double *out)
 {
     Table T; Method m;
     make(tab_meta, cc, dcc, rng, tableau, &T, &m);
+    int *crit = critical_cells(&T);
     run(&T, &m, dt, t_max, th0, thc, n, (int)ncol, design, (int)early, out, NULL, 0, NULL);
+    free(crit);
 }
 
 /* one stroke with its trajectory */
@@ -1244,9 +1431,11 @@ void sc_stroke_traj(const double *tab_meta, const double *cc, const double *dcc,
 {
     Table T; Method m;
     make(tab_meta, cc, dcc, rng, tableau, &T, &m);
+    int *crit = critical_cells(&T);
     *traj_len = 0;
     run(&T, &m, dt, t_max, th0, thc, 1, (int)ncol, design, (int)early, out, traj, traj_cap,
         traj_len);
+    free(crit);
 }
 
 /* one step (for tests): x1 = step(x0, h); design = (k, l0, c, c_rot, e_tol, m_lid) */

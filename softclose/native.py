@@ -506,8 +506,8 @@ def not_closed_reasons(out) -> np.ndarray:
         m = np.nonzero(open_ & (reason == code))[0]
         if len(m):   # (only these rows are formatted: a batch is mostly closed strokes)
             t = theta[m]
-            deg = np.char.mod("%.1f", np.where(np.isfinite(t), np.degrees(t), 0.0))
-            text[m] = np.char.add(np.char.add(head, deg), " deg").astype(object)
+            deg = np.where(np.isfinite(t), np.degrees(t), 0.0).tolist()
+            text[m] = [f"{head}{d:.1f} deg" for d in deg]
     text[open_ & (reason == 0)] = ("still moving towards the rim at t_max "
                                    "(too slow to close in time)")
     return text
