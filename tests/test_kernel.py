@@ -125,3 +125,24 @@ def test_design_rows_need_five_or_six_columns(cfg, sim):
     with pytest.raises(ConfigError, match="5 or 6 columns"):
         native.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
                            st.theta_closed, np.ones((2, 4)))
+
+
+def test_one_angle_looked_up_once_gives_each_row_s_own_numbers(cfg, sim):
+    """potential_energy / holding_moments at one angle broadcast that angle's coefficients
+    (and lid-mass slope) instead of looking the angle up per row: bit for bit the numbers of
+    the per-row evaluation, with and without lid masses (NaN: the table's own)."""
+    tab = sim.table
+    rng = np.random.default_rng(3)
+    n = 500
+    P = np.column_stack([rng.uniform(0, 1e4, n), rng.uniform(0.04, 0.1, n),
+                         rng.uniform(0, 5e3, n), np.zeros(n)])
+    m = rng.uniform(0.3, 0.9, n)
+    m[::7] = np.nan
+    m[::11] = tab.lid_mass
+    for th in (cfg.stroke.theta0, cfg.stroke.theta_closed, 0.3):
+        for lm in (None, m, 0.7):
+            c = tab.evaluate(np.full(n, th), lm)     # per row
+            V = c[:, 2] + 0.5 * P[:, 0] * (c[:, 4] - P[:, 1]) ** 2
+            H = c[:, 3] + P[:, 0] * (c[:, 4] - P[:, 1]) * c[:, 5]
+            assert np.array_equal(native.potential_energy(tab, th, P, lm), V)
+            assert np.array_equal(native.holding_moments(tab, th, P, lm), H)
