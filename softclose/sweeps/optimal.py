@@ -37,15 +37,17 @@ import dataclasses
 import math
 import threading
 import time
-import types
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
 import numpy as np
 
-from ..errors import ConfigError, NumericalError, SoftcloseError
+from ..errors import ConfigError, SoftcloseError
 from ..problem import DESIGN_KEYS, METRIC_KEYS
+from .distributed import ClusterLost
+from .result import readonly_columns
+from .space import _readonly
 
 #: most neighbouring points (along the last key) solved one from the other in one task
 SEGMENT = 8
@@ -246,9 +248,7 @@ def optimise_grid(cfg, axes, *, dask=None, robust: bool = False, progress: bool 
                     bar.update(len(rows), force=True)
     except KeyboardInterrupt:
         interrupted = True
-    except NumericalError as exc:        # the Dask cluster stopped (ClusterLost): keep the rows
-        if type(exc).__name__ != "ClusterLost":
-            raise
+    except ClusterLost as exc:           # the Dask cluster stopped: keep the rows
         lost = str(exc) if len(rows) < grid.n else ""   # (lost after the last point: no harm)
     finally:
         bar.close()
@@ -283,18 +283,8 @@ class OptimalGridResult:
     lost: str = ""
 
     def __post_init__(self):
-        cols = {}
-        for k, v in self.columns.items():
-            v = np.array(v)
-            v.setflags(write=False)
-            cols[k] = v
-        object.__setattr__(self, "columns", types.MappingProxyType(cols))
-        axes = []
-        for a in self.axes:
-            a = np.array(a, float)
-            a.setflags(write=False)
-            axes.append(a)
-        object.__setattr__(self, "axes", tuple(axes))
+        object.__setattr__(self, "columns", readonly_columns(self.columns))
+        object.__setattr__(self, "axes", tuple(_readonly(a) for a in self.axes))
         object.__setattr__(self, "keys", tuple(self.keys))
 
     @classmethod

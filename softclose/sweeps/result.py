@@ -11,6 +11,16 @@ import numpy as np
 from .chunks import columns as column_names
 
 
+def readonly_columns(columns: Mapping) -> Mapping[str, np.ndarray]:
+    """A result's table frozen: a read-only mapping of its columns as read-only arrays."""
+    cols = {}
+    for k, v in columns.items():
+        v = np.asarray(v)
+        v.setflags(write=False)
+        cols[k] = v
+    return types.MappingProxyType(cols)
+
+
 @dataclass(frozen=True, eq=False)
 class SweepResult:
     """Metrics, objective and feasibility of every design of a grid or sample.
@@ -40,12 +50,7 @@ class SweepResult:
 
     def __post_init__(self):
         if self.columns is not None:
-            cols = {}
-            for k, v in self.columns.items():
-                v = np.asarray(v)
-                v.setflags(write=False)
-                cols[k] = v
-            object.__setattr__(self, "columns", types.MappingProxyType(cols))
+            object.__setattr__(self, "columns", readonly_columns(self.columns))
         object.__setattr__(self, "reasons", types.MappingProxyType(dict(self.reasons)))
         object.__setattr__(self, "stages", types.MappingProxyType(dict(self.stages)))
         object.__setattr__(self, "fixed", types.MappingProxyType(dict(self.fixed)))
