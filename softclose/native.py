@@ -335,18 +335,29 @@ class CoefficientTable:
         """Interpolated coefficients at angles ``theta`` (shape (len, NC)), for the lid mass
         ``lid_mass`` (scalar or one per angle; None or NaN: the table's own mass)."""
         th = np.atleast_1d(np.asarray(theta, float))
-        x = np.clip((th - self.lo) / self.h, 0, self.ncell)
-        i = np.minimum(x.astype(int), self.ncell - 1)
-        s = (x - i)[:, None]
+        i, s = self._cell(th)
         q = self.cc[i]
         c = q[..., 0] + s * (q[..., 1] + s * (q[..., 2] + s * q[..., 3]))
-        if lid_mass is not None:
-            dm = np.broadcast_to(np.asarray(lid_mass, float), th.shape) - self.lid_mass
-            dm = np.where(np.isfinite(dm), dm, 0.0)
-            if np.any(dm != 0):
-                c = c.copy()
-                c[:, :4] += dm[:, None] * self._mass_slope(i, s)
+        dm = self.mass_offsets(lid_mass, th.shape)
+        if dm is not None:
+            c = c.copy()
+            c[:, :4] += dm[:, None] * self._mass_slope(i, s)
         return c
+
+    def _cell(self, th: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Cells of the angles ``th`` and their local variables s in [0, 1] (a column)."""
+        x = np.clip((th - self.lo) / self.h, 0, self.ncell)
+        i = np.minimum(x.astype(int), self.ncell - 1)
+        return i, (x - i)[:, None]
+
+    def mass_offsets(self, lid_mass, shape) -> np.ndarray | None:
+        """``lid_mass`` (scalar or per row; None or NaN: the table's own) less the table's
+        mass, broadcast to ``shape``; None when every row is at the table's mass."""
+        if lid_mass is None:
+            return None
+        dm = np.broadcast_to(np.asarray(lid_mass, float), shape) - self.lid_mass
+        dm = np.where(np.isfinite(dm), dm, 0.0)
+        return dm if np.any(dm != 0) else None
 
     def _mass_slope(self, i: np.ndarray, s: np.ndarray) -> np.ndarray:
         r = self.mass_derivative[i]
@@ -355,9 +366,7 @@ class CoefficientTable:
     def mass_slope(self, theta: float) -> np.ndarray:
         """d(M, dM, Vg, dVg)/d(lid mass) at one angle (shape (4,)), as :meth:`evaluate`
         uses it."""
-        x = np.clip((np.array([theta]) - self.lo) / self.h, 0, self.ncell)
-        i = np.minimum(x.astype(int), self.ncell - 1)
-        return self._mass_slope(i, (x - i)[:, None])[0]
+        return self._mass_slope(*self._cell(np.array([theta], float)))[0]
 
 
 def _lid_masses(designs: np.ndarray, table: CoefficientTable) -> np.ndarray | None:
@@ -459,11 +468,8 @@ def _coefficients(table: CoefficientTable, theta, n: int, lid_mass=None) -> np.n
     if th.ndim:
         return table.evaluate(np.broadcast_to(th, (n,)), lid_mass)
     c = np.broadcast_to(table.evaluate(th[None]), (n, table.cc.shape[1]))
-    if lid_mass is None:
-        return c
-    dm = np.broadcast_to(np.asarray(lid_mass, float), (n,)) - table.lid_mass
-    dm = np.where(np.isfinite(dm), dm, 0.0)
-    if not np.any(dm != 0):
+    dm = table.mass_offsets(lid_mass, (n,))
+    if dm is None:
         return c
     c = c.copy()
     c[:, :4] += dm[:, None] * table.mass_slope(float(th))
