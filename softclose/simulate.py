@@ -70,6 +70,12 @@ def spectral_radius(method: Method, J: np.ndarray, h: float) -> float:
         return float(np.max(np.abs(np.linalg.eigvals(S))))
 
 
+def _rest_theta_ddot(c: np.ndarray, k, l0) -> np.ndarray:
+    """theta'' at rest, -V'(theta) / M, from coefficient rows ``c`` (CoefficientTable.evaluate)
+    for the spring (k, l0)."""
+    return -(c[:, 3] + k * (c[:, 4] - l0) * c[:, 5]) / c[:, 0]
+
+
 def _round_down(x: float) -> float:
     """x rounded down to 3 significant digits (a recommendation must not round up)."""
     if not (math.isfinite(x) and x > 0):
@@ -240,9 +246,9 @@ class Simulator:
         k, l0, cd, cr = p
         eps = 1e-6
         cp, cm, c = (self.table.evaluate(x, lid_mass) for x in (th + eps, th - eps, th))
-        Q = lambda cc: -(cc[:, 3] + k * (cc[:, 4] - l0) * cc[:, 5]) / cc[:, 0]  # noqa: E731
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            return (Q(cp) - Q(cm)) / (2 * eps), -(cd * c[:, 6] + cr) / c[:, 0]
+            return ((_rest_theta_ddot(cp, k, l0) - _rest_theta_ddot(cm, k, l0)) / (2 * eps),
+                    -(cd * c[:, 6] + cr) / c[:, 0])
 
     def max_rate(self, p, lid_mass=None) -> float:
         """max |lambda| of the linearised stroke (1/s): what limits an explicit step
@@ -259,14 +265,13 @@ class Simulator:
         m, h = self.method, self.step
         st = self.cfg.stroke
         status = StrokeStatus(status)
-        if lid_mass is None or lid_mass == self.table.lid_mass:
+        if lid_mass == self.table.lid_mass:
             lid_mass = None
-            a0 = self.model.theta_ddot(st.theta0, 0.0, p) \
-                if status is StrokeStatus.LEFT_RANGE else 0.0
-        else:
-            c = self.table.evaluate([st.theta0], lid_mass)[0]
-            a0 = -(c[3] + p[0] * (c[4] - p[1]) * c[5]) / c[0]
-        if status is StrokeStatus.LEFT_RANGE and a0 > 0:
+        a0 = 0.0   # theta'' at release: the model's, or at another lid mass the table's
+        if status is StrokeStatus.LEFT_RANGE:
+            a0 = (self.model.theta_ddot(st.theta0, 0.0, p) if lid_mass is None else
+                  float(_rest_theta_ddot(self.table.evaluate([st.theta0], lid_mass), *p[:2])[0]))
+        if a0 > 0:
             return (f"the lid does not close: released at stroke.theta0_deg = {st.theta0_deg} deg "
                     f"it is pushed open (theta'' = {a0:.4g} "
                     "rad/s^2 > 0 at release) and swings away from the rim; lower theta0_deg or "
