@@ -627,7 +627,8 @@ static int classify(const Table *T, const Par *p, double th, double Eh, double t
  * ("lanes"): their RK stages are independent, so the CPU overlaps the table look-ups and
  * divisions of one lane with those of the others instead of waiting on one dependent
  * chain. Each lane's bookkeeping after a step (event, peak, energy) is the scalar code of
- * one stroke; a finished lane is refilled with the next design. Results do not depend on
+ * one stroke (on the vector path its common case in vector form, see SPEED at the top); a
+ * finished lane is refilled with the next design. Results do not depend on
  * the lane count. The method's first explicit stage at a node is the theta'' already
  * computed there (FSAL), and the tip speed, its rate, theta'' and the energy at a node
  * come from one table look-up. */
@@ -1296,12 +1297,15 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
         /* the step of every active lane; results by slot */
         double y0[LANES], y1[LANES];
         int st[LANES];
-        Node *ndp = NULL;
-        Nodes nd;
-        if (m->kind == 0 && vec) { /* explicit RK, lanes as vectors, first stage: the node */
+        if (fv) { /* explicit RK, lanes as vectors, first stage: the node */
+            Nodes nd;
             if (s == 4) explicit_lanes(T, m, 4, &S, P, hh, y0, y1, st, &nd, thc);
             else explicit_lanes(T, m, s, &S, P, hh, y0, y1, st, &nd, thc);
-        } else if (m->kind == 0) { /* explicit RK, lane by lane */
+            after_steps_vec(T, m, lanes, &S, used, hh, y0, y1, st, &nd, thc, dt, t_max,
+                            traj_len, traj != NULL);
+            continue;
+        }
+        if (m->kind == 0) { /* explicit RK, lane by lane */
             if (s == 4) explicit_scalar(T, m, 4, lanes, act, na, hh, y0, y1, st);
             else explicit_scalar(T, m, s, lanes, act, na, hh, y0, y1, st);
         } else if (m->kind == 2) { /* symplectic Euler from the node's theta'' */
@@ -1319,15 +1323,9 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
                 st[k] = step(T, m, &L->p, hh[k], L->th, L->thd, &y0[k], &y1[k]);
             }
         }
-        if (fv) {
-            after_steps_vec(T, m, lanes, &S, used, hh, y0, y1, st, &nd, thc, dt, t_max,
-                            traj_len, traj != NULL);
-            continue;
-        }
         for (int q = 0; q < na; q++) {
             int k = act[q];
-            if (lane_after_step(T, m, &lanes[k], hh[k], y0[k], y1[k], st[k], thc,
-                                ndp ? &ndp[k] : NULL)) {
+            if (lane_after_step(T, m, &lanes[k], hh[k], y0[k], y1[k], st[k], thc, NULL)) {
                 lane_finish(T, &lanes[k], thc, t_max);
                 if (traj_len) *traj_len = lanes[k].nt;
                 used[k] = 0;
