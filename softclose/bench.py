@@ -45,7 +45,7 @@ from . import native
 from .config import Config
 from .integrators import METHODS
 from .model import LidModel
-from .problem import PARAM_KEYS, RELATIVE, TARGETS, objective, params_of
+from .problem import RELATIVE, TARGETS, objective, params_of
 from .reference import Reference
 from .simulate import Simulator
 
@@ -490,12 +490,14 @@ def later_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
 
     rep = 1 if quick else 3
     from .sweeps import sweep
+    from .sweeps.chunks import PARAM_COLUMNS
+    from .sweeps.space import make_grid
     n_grid = int(np.prod([n for _, _, n in SWEEP_GRID.values()]))
     axes = sweep_axes()
     sim = Simulator(cfg)
+    grid = make_grid(axes)            # the sweep's own designs, in its order
     P = np.tile(params_of(cfg), (n_grid, 1))
-    for j, g in enumerate(np.meshgrid(*axes.values(), indexing="ij")):
-        P[:, PARAM_KEYS.index(list(axes)[j].split(".")[1])] = g.ravel()
+    P[:, [PARAM_COLUMNS[k] for k in grid.keys]] = grid.points(np.arange(n_grid))
     sim.run_batch(P[:1000])                             # warm-up: threads up
     timed("kernel_40000", f"Simulator.run_batch: the {n_grid:,} strokes of that grid, "
           "all cores", lambda: sim.run_batch(P), rep, count=n_grid,
