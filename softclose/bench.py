@@ -45,7 +45,7 @@ from . import native
 from .config import Config
 from .integrators import METHODS
 from .model import LidModel
-from .problem import RELATIVE, TARGETS, objective, params_of
+from .problem import PARAM_COLUMNS, RELATIVE, TARGETS, objective, params_of
 from .reference import Reference
 from .simulate import Simulator
 
@@ -490,7 +490,6 @@ def later_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
 
     rep = 1 if quick else 3
     from .sweeps import sweep
-    from .sweeps.chunks import PARAM_COLUMNS
     from .sweeps.space import make_grid
     n_grid = int(np.prod([n for _, _, n in SWEEP_GRID.values()]))
     axes = sweep_axes()

@@ -31,6 +31,11 @@ import numpy as np
 DESIGN_KEYS = ("spring_k", "spring_rest_length", "damper_c")
 #: the stroke kernels' parameter vector p, in order
 PARAM_KEYS = DESIGN_KEYS + ("rotary_damper_c",)
+#: config keys of the parameter vector p = (k, l0, c, c_rot), by column
+PARAM_COLUMNS = {f"design.{k}": i for i, k in enumerate(PARAM_KEYS)}
+#: the config key the kernels also take per stroke, beside p (their lid-mass column: the
+#: tabulated coefficients are affine in the lid mass)
+LID_MASS = "mass.lid"
 #: scale of each design variable in the NLP, so that the scaled values are of order one
 SCALES = np.array([1000.0, 0.1, 1000.0])
 

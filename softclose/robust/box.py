@@ -25,10 +25,7 @@ import numpy as np
 
 from ..config import Config, Tolerance, to_dict
 from ..errors import ConfigError
-from ..problem import DESIGN_KEYS, PARAM_KEYS
-
-#: config keys of the kernel's parameter vector p = (k, l0, c, c_rot), by column
-PARAM_COLUMNS = {f"design.{k}": i for i, k in enumerate(PARAM_KEYS)}
+from ..problem import DESIGN_KEYS
 
 
 def config_value(cfg: Config, key: str) -> float:

@@ -24,8 +24,7 @@ import numpy as np
 
 from ..config import Config
 from ..errors import SoftcloseError
-from ..problem import METRIC_KEYS, infeasibility, objective, params_of
-from .box import PARAM_COLUMNS
+from ..problem import LID_MASS, METRIC_KEYS, PARAM_COLUMNS, infeasibility, objective, params_of
 
 #: the kernel's output columns kept per sample
 COLUMNS = METRIC_KEYS + ("theta_dot_max", "theta_min", "status", "objective", "reason", "feasible")
@@ -34,7 +33,7 @@ _SIMS: dict = {}
 
 def slow_keys(keys) -> list[str]:
     """The keys that need a model per distinct value (neither design nor lid mass)."""
-    return [k for k in keys if k not in PARAM_COLUMNS and k != "mass.lid"]
+    return [k for k in keys if k not in PARAM_COLUMNS and k != LID_MASS]
 
 
 def with_values(cfg: Config, values: dict[str, float]) -> Config:
@@ -101,7 +100,7 @@ def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
     for j, k in enumerate(keys):
         if k in PARAM_COLUMNS:
             P[:, PARAM_COLUMNS[k]] = X[:, j]
-        elif k == "mass.lid":
+        elif k == LID_MASS:
             masses = X[:, j].copy()
         else:
             other.append(j)

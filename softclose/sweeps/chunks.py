@@ -33,17 +33,13 @@ from collections import OrderedDict
 
 import numpy as np
 
-from ..problem import METRIC_KEYS, PARAM_KEYS, infeasibility, objective
+from ..problem import LID_MASS, METRIC_KEYS, PARAM_COLUMNS, PARAM_KEYS, infeasibility, objective
 from ..stroke import StrokeStatus
 
 #: designs per chunk: the unit of progress, of Ctrl-C and resume, and of a Parquet part file
 CHUNK = 16384
-#: config keys that go into the kernel's parameter rows, with their column
-PARAM_COLUMNS = {f"design.{k}": i for i, k in enumerate(PARAM_KEYS)}
 #: status of a design whose config values were refused
 INVALID = "invalid"
-#: the config key that goes into the kernel's per-stroke lid-mass column
-LID_MASS = "mass.lid"
 #: the columns of a chunk (and of every sweep table) around the swept keys
 HEAD = ("id",)
 TAIL = METRIC_KEYS + ("objective", "feasible", "status", "reason")
