@@ -18,8 +18,6 @@ the kernel status, the objective and the reason it is infeasible ("" if feasible
 
 from __future__ import annotations
 
-import inspect
-
 import numpy as np
 
 from ..config import Config
@@ -53,34 +51,6 @@ def simulator(cfg: Config, t_end: float | None = None):
             _SIMS.clear()
         _SIMS[key] = Simulator(cfg)
     return _SIMS[key]
-
-
-def kernel_has_lid_mass(sim) -> bool:
-    """True when the kernel takes a per-stroke lid mass (no model per mass needed)."""
-    return "lid_mass" in inspect.signature(sim.run_batch).parameters
-
-
-def _run(sim, P: np.ndarray, masses: np.ndarray | None, threads: int | None) -> dict:
-    """One kernel batch; ``masses`` (one per row) go into the kernel's lid-mass column."""
-    if masses is None:
-        return sim.run_batch(P, threads=threads)
-    if kernel_has_lid_mass(sim):
-        return sim.run_batch(P, lid_mass=masses, threads=threads)
-    from .. import native
-    st, tab = sim.cfg.stroke, sim.table
-    # the instability flag of Simulator.energy_tol (5 % of the energy the stroke releases),
-    # at each row's own lid mass
-    E0 = native.potential_energy(tab, st.theta0, P, masses)
-    Vc = native.potential_energy(tab, st.theta_closed, P, masses)
-    scale = np.maximum(np.abs(E0 - Vc), 1e-6 * (np.abs(E0) + np.abs(Vc)) + 1e-12)
-    designs = np.column_stack([P, 0.05 * scale, masses])
-    out = native.run_strokes(tab, sim.method, sim.step, st.t_max, st.theta0, st.theta_closed,
-                             designs, threads)
-    res = {name: out[:, i] for i, name in enumerate(native.OUT_FIELDS)}
-    res["status"] = out[:, 0].astype(int)
-    res["closed"] = res["status"] == 0
-    res["holding_moment"] = native.holding_moments(tab, st.theta_closed, P, masses)
-    return res
 
 
 def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
@@ -120,7 +90,8 @@ def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
         except SoftcloseError as exc:   # a sampled geometry that cannot close its loop
             where = ", ".join(f"{k} = {v:g}" for k, v in vals.items())
             raise type(exc)(f"tolerance box: at {where} {str(exc).splitlines()[0]}") from None
-        out = _run(sim, P[rows], None if masses is None else masses[rows], threads)
+        out = sim.run_batch(P[rows], threads=threads,
+                            lid_mass=None if masses is None else masses[rows])
         status = np.asarray(out["status"], int)
         ok = (status == 0) | (status == 1)
         for k in METRIC_KEYS[1:] + ("theta_dot_max", "theta_min"):
