@@ -245,7 +245,7 @@ def _start_design(cfg: Config, box: Box, Z: np.ndarray,
     axes = [np.linspace(*getattr(o, k), n) for k, n in zip(DESIGN_KEYS, shape)]
     G = np.array(np.meshgrid(*axes, indexing="ij")).reshape(3, -1).T
     keys, X = _scenario_rows(box, G, Z, cfg.design.rotary_damper_c)
-    cols = evaluate(cfg, keys, X, t_end=1.05 * t_limit(cfg) + 0.05)
+    cols = evaluate(cfg, keys, X, t_end=_t_end(cfg))
     S = len(Z)
     m = margins(cols, o).reshape(len(G), S)
     J = np.asarray(cols["objective"], float).reshape(len(G), S)
@@ -463,7 +463,7 @@ def _scores(cfg: Config, c: Config, box_d: Box, z: np.ndarray, Jmax: float,
     scores like a violation of MC_TOL. ``cut``: strokes end shortly after the closing-time
     limit (fast; later closings count as not closed); ``cols``: their kernel columns, if
     already simulated."""
-    t_end = 1.05 * t_limit(cfg) + 0.05 if cut else None
+    t_end = _t_end(cfg) if cut else None
     if cols is None:
         cols = evaluate(c, box_d.keys, box_d.values(z), t_end=t_end)
     m = margins(cols, cfg.optimise)
@@ -596,11 +596,21 @@ def fractional_factorial(d: int) -> np.ndarray:
 
 
 def _corner_columns(cfg: Config, scale: float, design):
-    """(box at ``design``, its corners Z (2^d, d), the kernel's columns of every corner)."""
-    box_d = box_of(cfg, dict(zip(DESIGN_KEYS, map(float, design))), scale=scale)
+    """(box at ``design``, its corners Z (2^d, d), cfg with ``design``, the kernel's columns
+    of every corner); a box without a dimension has no corners (Z empty, columns None)."""
+    design = dict(zip(DESIGN_KEYS, map(float, design)))
+    box_d = box_of(cfg, design, scale=scale)
+    c = cfg.with_design(**design)
+    if not box_d.dim:
+        return box_d, np.zeros((0, 0)), c, None
     Z = box_d.corners()
-    c = cfg.with_design(**dict(zip(DESIGN_KEYS, map(float, design))))
-    return box_d, Z, evaluate(c, box_d.keys, box_d.values(Z), t_end=1.05 * t_limit(cfg) + 0.05)
+    return box_d, Z, c, evaluate(c, box_d.keys, box_d.values(Z), t_end=_t_end(cfg))
+
+
+def _t_end(cfg: Config) -> float:
+    """Where the kernel may cut a stroke in the robust searches: anything slower is
+    infeasible anyway (the closing window ends before it), with a margin."""
+    return 1.05 * t_limit(cfg) + 0.05
 
 
 def _worst_corners(cfg: Config, scale: float, design) -> list[tuple[tuple, str]]:
@@ -613,7 +623,7 @@ def _worst_corners(cfg: Config, scale: float, design) -> list[tuple[tuple, str]]
     highest first), the fastest (when closing_time_min > 0), the weakest holding moment,
     the one closest to rebounding (only when one rebounds), the largest J.
     """
-    _, Z, cols = _corner_columns(cfg, scale, design)
+    _, Z, _, cols = _corner_columns(cfg, scale, design)
     out: dict = {}
     for why, v in _badness(cfg, cols).items():
         z = tuple(map(float, Z[int(np.argmax(v))]))
@@ -690,13 +700,9 @@ def _check_corners(cfg: Config, scale: float, run: "_Run", have=()) -> tuple[lis
     at most six a round, so that a poor design (say the nominal optimum, where most
     corners fail) does not bring all 2^d corners into the NLP at once -- and a summary
     (``breaking``: every corner outside ``have`` that breaks a constraint)."""
-    design = dict(zip(DESIGN_KEYS, map(float, run.design)))
-    box_d = box_of(cfg, design, scale=scale)
-    Z = box_d.corners() if box_d.dim else np.zeros((0, 0))
+    box_d, Z, c, cols = _corner_columns(cfg, scale, run.design)
     if not len(Z):
         return [], {"corners": 0, "violating": 0, "breaking": [], "added": []}
-    c = cfg.with_design(**design)
-    cols = evaluate(c, box_d.keys, box_d.values(Z), t_end=1.05 * t_limit(cfg) + 0.05)
     score, m = _scores(cfg, c, box_d, Z, float(np.max(run.J)), cols=cols)
     H = np.array([h for h in have if len(h) == box_d.dim]).reshape(-1, box_d.dim)
     outside = np.array([not len(H) or np.min(np.max(np.abs(H - z), axis=1)) > 1e-6
@@ -963,7 +969,7 @@ def _diagnose(cfg: Config, run: _Run, problem: _Problem, N: int, M: int, seed: i
         holds in the kernel."""
         if not subset:
             return True
-        _, _, cols = _corner_columns(cfg, a, design)
+        _, _, _, cols = _corner_columns(cfg, a, design)
         return bool(np.all(margins(cols, o) >= -MC_TOL))
 
     for _ in range(6):
