@@ -84,6 +84,15 @@ def _profile(ax, res, free, Z, ok, ylabel) -> None:
     Z, ok = np.ravel(Z), np.ravel(ok)
     good = np.where(ok & np.isfinite(Z), Z, np.nan)
     ax.plot(x, good, "o-", color="C0", lw=2, ms=5, label="verified optimum")
+    # no offset notation, and a value constant to solver tolerance (a design key at its bound)
+    # is drawn flat in a window of +-0.5 %, not stretched into a trend of its last digits
+    ax.ticklabel_format(axis="y", useOffset=False)
+    v = good[np.isfinite(good)]
+    if v.size:
+        mid, span = 0.5 * (v.max() + v.min()), v.max() - v.min()
+        floor = 1e-3 * abs(mid)
+        if 0 < floor and span < floor:
+            ax.set_ylim(mid - 5 * floor, mid + 5 * floor)
     if (~ok).any():
         lo = np.nanmin(good) if np.isfinite(good).any() else 0.0
         ax.plot(x[~ok], np.full(int((~ok).sum()), lo), "x", color="red", ms=9, mew=2,
