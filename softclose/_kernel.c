@@ -887,8 +887,9 @@ ALWAYS int lane_after_step(const Table *T, const Method *m, Lane *L, double h, d
 typedef struct { v4 k, l0, c, cr; double dm[VW]; int any; } Par4;
 
 /* lane q's cell of the angles th: its base pointer and local variable s;
- * bad[q] = 1 outside the table (then cell 0, and the result is discarded) */
-ALWAYS void cells4(const Table *T, v4 th, const double **b, v4 *s, int *bad)
+ * okm: all bits set in the lanes inside the table (outside: cell 0, the result is
+ * discarded) */
+ALWAYS void cells4(const Table *T, v4 th, const double **b, v4 *s, v4l *okm)
 {
     v4 x = (th - T->lo) * T->inv_h;
     v4 zero = {0.0, 0.0, 0.0, 0.0}, top = zero + (double)T->ncell;
@@ -899,10 +900,8 @@ ALWAYS void cells4(const Table *T, v4 th, const double **b, v4 *s, int *bad)
     v4i over = ii > last;
     ii = (ii & ~over) | (last & over);
     *s = xs - __builtin_convertvector(ii, v4);
-    for (int q = 0; q < VW; q++) {
-        bad[q] = !ok[q];
-        b[q] = T->cc + (size_t)ii[q] * 4 * NC;
-    }
+    *okm = ok;
+    for (int q = 0; q < VW; q++) b[q] = T->cc + (size_t)ii[q] * 4 * NC;
 }
 
 ALWAYS v4 ld4(const double *a) { v4 v; memcpy(&v, a, sizeof v); return v; }
@@ -934,12 +933,12 @@ ALWAYS void transpose4(const v4 *r, v4 *c)
 
 /* the NC coefficients of the lanes at th as columns c[j] (four lanes each): each lane's
  * cubic pieces are evaluated as rows (Horner in s, as CUB), mass-corrected where dm != 0,
- * then transposed; bad[q] = 1 where th is outside the table */
+ * then transposed; okm as cells4's */
 ALWAYS void coef4(const Table *T, const Par4 *P, v4 th, v4 *c, const double **b, v4 *s,
-                  int *bad)
+                  v4l *okm)
 {
     v4 lo[VW], hi[VW];
-    cells4(T, th, b, s, bad);
+    cells4(T, th, b, s, okm);
     for (int q = 0; q < VW; q++) {
         const double *r = b[q];
         double sq = (*s)[q];
@@ -956,12 +955,12 @@ ALWAYS void coef4(const Table *T, const Par4 *P, v4 th, v4 *c, const double **b,
     transpose4(hi, c + 4);
 }
 
-/* theta'' of the lanes (as rhs()) */
-ALWAYS v4 rhs4(const Table *T, const Par4 *P, v4 th, v4 thd, int *bad)
+/* theta'' of the lanes (as rhs()); okm as cells4's */
+ALWAYS v4 rhs4(const Table *T, const Par4 *P, v4 th, v4 thd, v4l *okm)
 {
     v4 c[NC], s;
     const double *b[VW];
-    coef4(T, P, th, c, b, &s, bad);
+    coef4(T, P, th, c, b, &s, okm);
     v4 damp = P->c * c[C_DD] + P->cr;
     v4 N = -c[C_DVG] - P->k * (c[C_L] - P->l0) * c[C_DL] - 0.5 * c[C_DM] * thd * thd
            - damp * thd;
@@ -975,8 +974,8 @@ ALWAYS void node4(const Table *T, const Par4 *P, v4 th, v4 thd, v4 *a, v4 *g, v4
 {
     v4 c[NC], s;
     const double *b[VW];
-    int bad[VW];
-    coef4(T, P, th, c, b, &s, bad);
+    v4l okm;
+    coef4(T, P, th, c, b, &s, &okm);
     v4 M = c[C_M], dM = c[C_DM], Vg = c[C_VG], dVg = c[C_DVG], l = c[C_L], dl = c[C_DL],
        dd = c[C_DD], tau = c[C_TAU];
     v4 damp = P->c * dd + P->cr;
@@ -997,7 +996,7 @@ ALWAYS void node4(const Table *T, const Par4 *P, v4 th, v4 thd, v4 *a, v4 *g, v4
     *a = acc;
     *g = tau * abs4(thd);
     *dg = sg * (dtau * thd * thd + tau * acc);
-    *ok = (v4){bad[0] ? 0.0 : 1.0, bad[1] ? 0.0 : 1.0, bad[2] ? 0.0 : 1.0, bad[3] ? 0.0 : 1.0};
+    *ok = sel4(okm, one, zero);
 }
 
 /* theta'' only, from the six coefficients it needs (the scalar hot path) */
@@ -1107,7 +1106,7 @@ ALWAYS void explicit_lanes(const Table *T, const Method *m, const int s, const S
     }
     for (int g = 0; g < NG; g++) K0[g][0] = thd[g];
     for (int i = 1; i < s; i++) {
-        int bad[NG][VW];
+        v4l okm[NG];
         for (int g = 0; g < NG; g++) {
             v4 z0 = th[g], z1 = thd[g];
             for (int j = 0; j < i; j++) {
@@ -1117,11 +1116,14 @@ ALWAYS void explicit_lanes(const Table *T, const Method *m, const int s, const S
                 }
             }
             K0[g][i] = z1;
-            K1[g][i] = rhs4(T, P + g, z0, z1, bad[g]);
+            K1[g][i] = rhs4(T, P + g, z0, z1, &okm[g]);
         }
-        for (int g = 0; g < NG; g++)
-            for (int q = 0; q < VW; q++)
-                if (bad[g][q]) { K1[g][i][q] = NAN; st[g * VW + q] = S_RANGE; }
+        for (int g = 0; g < NG; g++) {
+            v4l bad = ~okm[g];
+            if (bad[0] | bad[1] | bad[2] | bad[3])
+                for (int q = 0; q < VW; q++)
+                    if (bad[q]) { K1[g][i][q] = NAN; st[g * VW + q] = S_RANGE; }
+        }
     }
     for (int g = 0; g < NG; g++) {
         v4 z0 = th[g], z1 = thd[g];

@@ -414,9 +414,13 @@ def run_strokes(table: CoefficientTable, method: Method, step: float, t_max: flo
         work(0, n)
     else:
         # more chunks than threads: strokes differ in length (a slammed lid takes 150 steps,
-        # a creeping one runs to t_max), so equal halves would leave one core idle
-        chunks = max(threads, min(32 * threads, n // 64))
-        bounds = np.linspace(0, n, chunks + 1).astype(int)
+        # a creeping one runs to t_max), so equal halves would leave one core idle; each
+        # chunk a quarter of a thread's share of what is left (at least 64 rows), so the
+        # last ones are short and the threads finish together
+        bounds = [0]
+        while bounds[-1] < n:
+            left = n - bounds[-1]
+            bounds.append(bounds[-1] + min(left, max(64, left // (4 * threads))))
         with ThreadPoolExecutor(threads) as ex:
             list(ex.map(lambda ab: work(*ab), zip(bounds[:-1], bounds[1:])))
     return out
@@ -510,10 +514,12 @@ def not_closed_reasons(out) -> np.ndarray:
     for code, head in ((1, "cannot reach the rim: energy below the barrier at theta = "),
                        (2, "held open at theta = ")):
         m = np.nonzero(open_ & (reason == code))[0]
-        if len(m):   # (only these rows are formatted: a batch is mostly closed strokes)
+        if len(m):   # each distinct angle formatted once (many rows share their well)
             t = theta[m]
-            deg = np.where(np.isfinite(t), np.degrees(t), 0.0).tolist()
-            text[m] = [f"{head}{d:.1f} deg" for d in deg]
+            deg, at = np.unique(np.where(np.isfinite(t), np.degrees(t), 0.0),
+                                return_inverse=True)
+            words = np.array([f"{head}{d:.1f} deg" for d in deg.tolist()], dtype=object)
+            text[m] = words[np.asarray(at).ravel()]
     text[open_ & (reason == 0)] = ("still moving towards the rim at t_max "
                                    "(too slow to close in time)")
     return text

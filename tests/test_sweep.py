@@ -138,6 +138,15 @@ def test_feasibility_reasons(design_sweep):
     assert np.all(np.char.startswith(c["reason"][~closed].astype(str), "not closed"))
     assert np.all(c["reason"][slow & ~loose] == "too slow") and slow.any()
     assert loose.any() and (~closed).any() and feas.any()
+    # a stroke that stays open says why, as the kernel classifies it (its well or barrier)
+    sim = Simulator(default_config())
+    open_ = np.flatnonzero(c["status"] == "not closed")
+    P = np.column_stack([c["design.spring_k"][open_], c["design.spring_rest_length"][open_],
+                         c["design.damper_c"][open_], np.zeros(len(open_))])
+    why = sim.run_batch(P)["reason"]
+    assert np.all(why != "") and any(w.startswith("held open at theta = ") for w in why)
+    assert list(c["reason"][open_]) == [f"not closed ({w})" for w in why]
+    assert res.reasons["not closed"] == (~closed).sum()
     # the best point is feasible and has the least objective among feasible rows
     b = res.best
     assert b["feasible"]
@@ -208,6 +217,19 @@ def test_result_is_immutable(design_sweep):
     with pytest.raises(AttributeError):
         res.points = 3
     assert res.success and res.message == "" and res.computed == res.points == 405
+
+
+def test_result_pickles_and_stays_read_only(design_sweep):
+    """A result can be sent to another process (the command sends it to the maps' drawer)."""
+    import pickle
+    res, _, _ = design_sweep
+    back = pickle.loads(pickle.dumps(res))
+    for k, v in res.columns.items():
+        assert np.array_equal(back.columns[k], v, equal_nan=v.dtype.kind == "f"), k
+    assert dict(back.best) == dict(res.best) and dict(back.reasons) == dict(res.reasons)
+    assert back.space.keys == res.space.keys and back.points == res.points
+    with pytest.raises(ValueError):
+        back.columns["objective"][0] = 0.0
 
 
 def test_chunking_does_not_change_rows():
@@ -329,6 +351,30 @@ def test_binned_summary_is_the_best_over_the_other_keys(design_sweep):
             row = res.row(int(ids[cell]))
             assert row["objective"] == b.grid(g, "objective")[cell]
             assert row["peak_tip_speed"] == b.grid(g, "peak_tip_speed")[cell]
+
+
+def test_command_draws_the_maps_when_its_drawer_fails(tmp_path, monkeypatch):
+    """The command forks a drawer (matplotlib imported while the kernel runs) and sends it
+    the result; if it fails, the command draws every map itself."""
+    import os
+
+    import softclose.figures.sweep as fs
+    parent = os.getpid()
+    real = fs.save_maps
+    drawn_here = []
+
+    def failing_in_children(figs, out):
+        if os.getpid() != parent:
+            raise RuntimeError("a drawing process fails")
+        drawn_here.extend(figs)
+        return real(figs, out)
+    monkeypatch.setattr(fs, "save_maps", failing_in_children)
+    argv = ["sweep", "--out", str(tmp_path), "--json"]
+    for g in GRID:
+        argv += ["--grid", g]
+    assert main(argv) == 0
+    pngs = sorted(p.name for p in tmp_path.glob("*.png"))
+    assert len(pngs) == 3 and sorted(f"{n}.png" for n in drawn_here) == pngs
 
 
 def test_maps_drawn_here_when_a_drawing_process_fails(tmp_path, monkeypatch):

@@ -22,7 +22,6 @@ threads)`` (see :mod:`softclose.sweeps.run`); ``--optimise`` calls
 from __future__ import annotations
 
 import contextlib
-import os
 import shlex
 import signal
 import threading
@@ -30,6 +29,7 @@ import time
 from pathlib import Path
 
 from .common import Outcome, add_common, interactive, prepare_out, wrote
+from .maps import Drawer, write_maps
 
 
 def register(sub) -> None:
@@ -199,131 +199,81 @@ def _sweep_run(cfg, args, space, fmt, chunk, out: Path, m: dict, dask,
             done = ()
     else:
         done = ()
-    # the table and plotting libraries are imported while the kernel runs (its threads
-    # leave the interpreter free), so that neither the table nor the maps wait for them
-    prefetch = threading.Thread(target=_import_outputs, name="softclose-imports", daemon=True)
-    prefetch.start()
-    ctx = dask.mapper(args.dask, args.threads) if dask is not None else \
-        contextlib.nullcontext(None)
+    # the maps' process imports matplotlib on the core the start-up leaves idle (see
+    # softclose.cli.maps); the table's library is imported while the kernel runs (its
+    # threads leave the interpreter free)
+    drawer = Drawer.start()
     try:
-        with ctx as mapper:              # connected: only now is the folder written
-            if replace:
-                store.clear(out)         # a finished earlier sweep is replaced
-            store.write_manifest(out, m, complete=False)
-            sink = store.ParquetSink(out, keys) if parquet else None
-            res = run_sweep(cfg, space, progress=interactive(args), threads=args.threads,
-                            chunk=chunk, keep=not parquet, sink=sink, done=done,
-                            mapper=mapper,
-                            dataset=str(out / store.DATASET) if parquet else None)
+        prefetch = threading.Thread(target=_import_outputs, args=(parquet, drawer is None),
+                                    name="softclose-imports", daemon=True)
+        prefetch.start()
+        ctx = dask.mapper(args.dask, args.threads) if dask is not None else \
+            contextlib.nullcontext(None)
+        try:
+            with ctx as mapper:              # connected: only now is the folder written
+                if replace:
+                    store.clear(out)         # a finished earlier sweep is replaced
+                store.write_manifest(out, m, complete=False)
+                sink = store.ParquetSink(out, keys) if parquet else None
+                res = run_sweep(cfg, space, progress=interactive(args), threads=args.threads,
+                                chunk=chunk, keep=not parquet, sink=sink, done=done,
+                                mapper=mapper,
+                                dataset=str(out / store.DATASET) if parquet else None)
+        finally:
+            prefetch.join()                  # before any fork: no import half done
+        stages = dict(res.stages)
+        files: list[Path] = []
+        interrupted = res.interrupted
+        maps = not interrupted and res.computed > 0
+        if drawer is not None and maps:
+            drawer.draw(res, out)            # it draws while the table is written
+        try:
+            if parquet:
+                files.append(out / store.DATASET)
+            else:
+                tw = time.perf_counter()
+                # the finished chunks are written whatever happens (a second Ctrl-C waits)
+                with _no_interrupt(reraise=not interrupted):
+                    files.append(store.write_csv(res.columns, keys, out / store.CSV))
+                stages["csv"] = time.perf_counter() - tw
+            if not interrupted:
+                tm = time.perf_counter()
+                names = drawer.finish() if drawer is not None and maps else None
+                if names is not None:
+                    files += [out / f"{n}.png" for n in names]
+                elif maps:                   # no drawer, or it failed: draw them here
+                    files += write_maps(res, out)
+                store.write_manifest(out, m, complete=True)
+                stages["maps"] = time.perf_counter() - tm
+        except KeyboardInterrupt:            # the table is whole; resuming draws the maps
+            interrupted = True
+        resume = f"softclose sweep --resume {shlex.quote(str(out))}" if interrupted else None
+        stages["total"] = time.perf_counter() - t0
+        files.append(out / store.MANIFEST)
+        payload = res.to_json()
+        payload.update(stages=stages, format=fmt, out=str(out), resume=resume,
+                       files=[str(f) for f in files])
+        payload["interrupted"] = interrupted
+        text = _text(res, payload, files, resume)
+        lost = getattr(mapper, "lost", None)     # the Dask cluster stopped working mid-sweep
+        if lost is not None:
+            error = f"{lost}; the finished chunks are kept, resume with: {resume}"
+            payload["error"] = error
+            return Outcome(payload, text, lost.exit_code, tuple(files), error=error)
+        return Outcome(payload, text, 130 if interrupted else 0, tuple(files))
     finally:
-        prefetch.join()                  # before any fork: no import half done
-    stages = dict(res.stages)
-    files: list[Path] = []
-    interrupted = res.interrupted
-    # the maps: forked children start drawing them while the table is written
-    pids, processes = ([], 1) if interrupted else _fork_maps(res, out)
-    try:
-        if parquet:
-            files.append(out / store.DATASET)
-        else:
-            tw = time.perf_counter()
-            # the finished chunks are written whatever happens (a second Ctrl-C waits)
-            with _no_interrupt(reraise=not interrupted):
-                files.append(store.write_csv(res.columns, keys, out / store.CSV))
-            stages["csv"] = time.perf_counter() - tw
-        if not interrupted:
-            tm = time.perf_counter()
-            files += _finish_maps(res, out, pids, processes)
-            store.write_manifest(out, m, complete=True)
-            stages["maps"] = time.perf_counter() - tm
-    except KeyboardInterrupt:            # the table is whole; resuming draws the maps
-        interrupted = True
-    finally:
-        _reap(pids)
-    resume = f"softclose sweep --resume {shlex.quote(str(out))}" if interrupted else None
-    stages["total"] = time.perf_counter() - t0
-    files.append(out / store.MANIFEST)
-    payload = res.to_json()
-    payload.update(stages=stages, format=fmt, out=str(out), resume=resume,
-                   files=[str(f) for f in files])
-    payload["interrupted"] = interrupted
-    text = _text(res, payload, files, resume)
-    lost = getattr(mapper, "lost", None)     # the Dask cluster stopped working mid-sweep
-    if lost is not None:
-        payload["error"] = error = f"{lost}; the finished chunks are kept, resume with: {resume}"
-        return Outcome(payload, text, lost.exit_code, tuple(files), error=error)
-    return Outcome(payload, text, 130 if interrupted else 0, tuple(files))
+        if drawer is not None:
+            drawer.cancel()
 
 
-def _import_outputs() -> None:
+def _import_outputs(parquet: bool, plotting: bool) -> None:
     with contextlib.suppress(Exception):
-        import pyarrow.csv  # noqa: F401
-        import pyarrow.parquet  # noqa: F401
-
-        from ..figures import sweep  # noqa: F401  (matplotlib)
-
-
-def _maps_count(res) -> int:
-    """How many maps the result has (without importing matplotlib)."""
-    if res.computed == 0:
-        return 0
-    multi = sum(1 for n in res.space.shape if n >= 2) if res.kind == "grid" else len(res.keys)
-    return 1 if multi == 1 else min(multi * (multi - 1) // 2, 15)
-
-
-def _fork_maps(res, out: Path) -> tuple[list[int], int]:
-    """Fork the children that draw the maps while this process writes the table: as many
-    as cores (matplotlib is single-threaded; this process draws a share too, so the table's
-    few tenths of a second overlap the drawing). Map ``i`` is drawn by process
-    ``i % (children + 1)``, this process being the last. Returns (pids, processes)."""
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
-    count = _maps_count(res)
-    children = min(cores, count) if hasattr(os, "fork") and cores >= 2 else 0
-    pids: list[int] = []
-    for part in range(children):
-        pid = os.fork()
-        if pid == 0:
-            code = 1
-            try:
-                from ..figures.sweep import map_names, plot_maps, save_maps
-                save_maps(plot_maps(res, only=map_names(res)[part::children + 1]), out)
-                code = 0
-            except BaseException:  # noqa: BLE001  (the parent draws what is missing)
-                pass
-            finally:
-                os._exit(code)
-        pids.append(pid)
-    return pids, children + 1
-
-
-def _finish_maps(res, out: Path, pids: list[int], processes: int) -> list[Path]:
-    """Draw this process's share of the maps, wait for the children, and draw the share
-    of any child that failed."""
-    from ..figures.sweep import map_names, plot_maps, save_maps
-    names = map_names(res)
-    save_maps(plot_maps(res, only=names[processes - 1::processes]), out)
-    failed = [part for part, pid in enumerate(pids) if os.waitpid(pid, 0)[1] != 0]
-    pids.clear()
-    for part in failed:
-        save_maps(plot_maps(res, only=names[part::processes]), out)
-    return [out / f"{n}.png" for n in names]
-
-
-def _reap(pids: list[int]) -> None:
-    for pid in pids:
-        with contextlib.suppress(ChildProcessError):
-            os.waitpid(pid, 0)
-    pids.clear()
-
-
-def write_maps(res, out: Path, parallel: bool = True) -> list[Path]:
-    """Draw and save the maps of ``res`` in ``out`` (in several processes when
-    ``parallel``)."""
-    pids, processes = _fork_maps(res, out) if parallel else ([], 1)
-    try:
-        return _finish_maps(res, out, pids, processes)
-    finally:
-        _reap(pids)
+        if parquet:
+            import pyarrow.parquet  # noqa: F401
+        else:
+            import pyarrow.csv  # noqa: F401
+        if plotting:
+            from ..figures import sweep  # noqa: F401  (matplotlib)
 
 
 def _text(res, payload: dict, files, resume) -> str:

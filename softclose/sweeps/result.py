@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import types
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any, Mapping
 
 import numpy as np
@@ -56,6 +56,15 @@ class SweepResult:
         object.__setattr__(self, "fixed", types.MappingProxyType(dict(self.fixed)))
         if self.best is not None:
             object.__setattr__(self, "best", types.MappingProxyType(dict(self.best)))
+
+    def __reduce__(self):
+        """Pickled as its fields, the read-only mappings as dicts (frozen again when
+        loaded): a result can be sent to another process."""
+        state = {f.name: getattr(self, f.name) for f in fields(self)}
+        for k in ("columns", "reasons", "stages", "fixed", "best"):
+            if state[k] is not None:
+                state[k] = dict(state[k])
+        return (_from_fields, (state,))
 
     # -- what it is -------------------------------------------------------------------------
     @property
@@ -135,6 +144,10 @@ class SweepResult:
         ``profile_<k>`` for one swept key): see :mod:`softclose.figures.sweep`."""
         from ..figures.sweep import plot_maps
         return plot_maps(self)
+
+
+def _from_fields(state: dict) -> SweepResult:
+    return SweepResult(**state)
 
 
 __all__ = ["SweepResult"]

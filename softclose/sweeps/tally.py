@@ -41,8 +41,9 @@ def categorise(status: np.ndarray, reason: np.ndarray) -> np.ndarray:
         out[m] = code
         known |= m
     rest = np.flatnonzero(~known)
-    if rest.size:   # e.g. "not closed (the lid swung ...)", a stroke's diagnosis
-        nc = np.array([str(r).startswith("not closed") for r in reason[rest]], bool)
+    if rest.size:   # e.g. "not closed (held open at ...)", a stroke's diagnosis
+        closed_not = {r: str(r).startswith("not closed") for r in set(reason[rest].tolist())}
+        nc = np.array([closed_not[r] for r in reason[rest].tolist()], bool)
         out[rest[nc]] = REASONS.index("not closed")
     out[np.asarray(status, dtype=object) == "invalid"] = CATEGORIES.index("invalid")
     return out

@@ -1,0 +1,180 @@
+"""The maps of ``softclose sweep`` as files, drawn by other processes while this one works.
+
+matplotlib takes about a third of a second of CPU to import, and each map about as much to
+draw; the kernel and the table need this process. So the command forks a *drawer* as soon
+as it starts (:meth:`Drawer.start`): on the core the start-up leaves idle, it imports
+matplotlib and waits. When the sweep is done the command sends it the result
+(:meth:`Drawer.draw`, a pickle through a pipe, written by a thread so that the table is
+written meanwhile); the drawer forks helpers so that there are as many drawing processes as
+cores plus one (the command writes the table meanwhile), each drawing a share of the maps.
+:meth:`Drawer.finish` waits for it and says whether every map was saved; if not (or where a
+process cannot be forked) the command draws them itself (:func:`write_maps`).
+
+The drawer ignores Ctrl-C (the command handles it: :meth:`Drawer.cancel` ends the drawer and
+its helpers) and leaves when its pipe closes without a result: an interrupted sweep draws no
+maps.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import pickle
+import signal
+import threading
+from pathlib import Path
+
+
+def _cores() -> int:
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else \
+        (os.cpu_count() or 1)
+
+
+def _draw_share(res, out, names: list[str]) -> None:
+    from ..figures.sweep import plot_maps, save_maps
+    if names:
+        save_maps(plot_maps(res, only=names), out)
+
+
+def _draw_in_processes(res, out: Path, processes: int) -> list[str]:
+    """Draw the maps of ``res`` in ``processes`` processes: this one and forked helpers
+    (map ``i`` by process ``i % processes``, this one last); a helper that fails has its
+    share drawn here. Returns the maps' file stems."""
+    from ..figures.sweep import map_names
+    names = map_names(res)
+    processes = max(1, min(processes, len(names)))
+    pids = []
+    for part in range(processes - 1):
+        pid = os.fork()
+        if pid == 0:
+            code = 1
+            try:
+                _draw_share(res, out, names[part::processes])
+                code = 0
+            except BaseException:  # noqa: BLE001  (the parent draws what is missing)
+                pass
+            finally:
+                os._exit(code)
+        pids.append(pid)
+    try:
+        _draw_share(res, out, names[processes - 1::processes])
+    finally:
+        failed = [part for part, pid in enumerate(pids) if os.waitpid(pid, 0)[1] != 0]
+    for part in failed:
+        _draw_share(res, out, names[part::processes])
+    return names
+
+
+class Drawer:
+    """A process forked early that imports matplotlib, then draws the maps it is sent."""
+
+    def __init__(self, pid: int, fd: int, back: int):
+        self.pid, self._fd, self._back = pid, fd, back
+        self._writer: threading.Thread | None = None
+
+    @classmethod
+    def start(cls) -> "Drawer | None":
+        """Fork the drawer; None where there is no ``fork`` or a single core (the command
+        then draws the maps itself)."""
+        if not hasattr(os, "fork") or _cores() < 2:
+            return None
+        r, w = os.pipe()                               # the result, to the drawer
+        br, bw = os.pipe()                             # the stems of the maps it saved, back
+        try:
+            pid = os.fork()
+        except OSError:
+            for fd in (r, w, br, bw):
+                os.close(fd)
+            return None
+        if pid == 0:                                   # the drawer
+            code = 1
+            try:
+                os.close(w)
+                os.close(br)
+                os.setpgid(0, 0)                       # its own group: cancel() ends it all
+                signal.signal(signal.SIGINT, signal.SIG_IGN)
+                from ..figures import sweep  # noqa: F401  (matplotlib, while the kernel runs)
+                with os.fdopen(r, "rb") as f:
+                    data = f.read()
+                if data:                               # (none: nothing to draw)
+                    res, out = pickle.loads(data)
+                    names = _draw_in_processes(res, Path(out), _cores() + 1)
+                    with os.fdopen(bw, "w") as f:
+                        f.write("\n".join(names))
+                code = 0
+            except BaseException:  # noqa: BLE001  (the command draws the maps itself)
+                pass
+            finally:
+                os._exit(code)
+        os.close(r)
+        os.close(bw)
+        with contextlib.suppress(OSError):
+            os.setpgid(pid, pid)                       # (set on both sides: no race)
+        return cls(pid, w, br)
+
+    def draw(self, res, out: Path) -> None:
+        """Send the result; the drawer starts drawing as soon as it has read it (a thread
+        writes it, so the caller goes on meanwhile)."""
+        data = pickle.dumps((res, str(out)), protocol=pickle.HIGHEST_PROTOCOL)
+        fd, self._fd = self._fd, None
+
+        def send():
+            try:
+                with os.fdopen(fd, "wb") as f:
+                    f.write(data)
+            except OSError:                            # the drawer is gone: finish() says so
+                pass
+        self._writer = threading.Thread(target=send, name="softclose-maps", daemon=True)
+        self._writer.start()
+
+    def finish(self) -> list[str] | None:
+        """Wait for the drawer: the stems of the maps it saved, None if it failed."""
+        if self._writer is not None:
+            self._writer.join()
+        self._close()
+        back, self._back = self._back, None
+        names = ""
+        if back is not None:
+            with contextlib.suppress(OSError), os.fdopen(back, "r") as f:
+                names = f.read()
+        ok = self._wait()
+        return [n for n in names.split("\n") if n] if ok else None
+
+    def cancel(self) -> None:
+        """Nothing (more) to draw -- interrupted, or an error: the drawer and its helpers
+        leave."""
+        self._close()
+        if self._back is not None:
+            with contextlib.suppress(OSError):
+                os.close(self._back)
+            self._back = None
+        if self.pid is not None and self._writer is not None:   # it may be drawing
+            with contextlib.suppress(OSError):
+                os.killpg(self.pid, signal.SIGTERM)
+        self._wait()
+
+    def _close(self) -> None:
+        fd, self._fd = self._fd, None
+        if fd is not None:                             # nothing was sent: it leaves
+            with contextlib.suppress(OSError):
+                os.close(fd)
+
+    def _wait(self) -> bool:
+        if self.pid is None:
+            return False
+        try:
+            status = os.waitpid(self.pid, 0)[1]
+        except ChildProcessError:
+            status = 1
+        self.pid = None
+        return status == 0
+
+
+def write_maps(res, out: Path, parallel: bool = True) -> list[Path]:
+    """Draw and save the maps of ``res`` in ``out`` here (in forked processes when
+    ``parallel``: as many as cores plus this one)."""
+    processes = _cores() + 1 if parallel and hasattr(os, "fork") else 1
+    return [Path(out) / f"{n}.png" for n in _draw_in_processes(res, Path(out), processes)]
+
+
+__all__ = ["Drawer", "write_maps"]
