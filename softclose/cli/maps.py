@@ -1,18 +1,18 @@
 """The maps of ``softclose sweep`` as files, drawn by other processes while this one works.
 
 matplotlib takes about a third of a second of CPU to import, and each map about as much to
-draw; the kernel and the table need this process. So the command forks a *drawer* as soon
-as it starts (:meth:`Drawer.start`): on the core the start-up leaves idle, it imports
-matplotlib and waits. When the sweep is done the command sends it the result
-(:meth:`Drawer.draw`, a pickle through a pipe, written by a thread so that the table is
-written meanwhile); the drawer forks helpers so that there are as many drawing processes as
-cores plus one (the command writes the table meanwhile), each drawing a share of the maps.
-:meth:`Drawer.finish` waits for it and says whether every map was saved; if not (or where a
-process cannot be forked) the command draws them itself (:func:`write_maps`).
+draw; the kernel and the table need this process. So the command line forks a *drawer* as
+soon as it reads as a sweep (:func:`start_early`, before parsing): on the core the start-up
+leaves idle, it imports matplotlib and waits. When the sweep is done the command sends it
+the result (:meth:`Drawer.draw`, a pickle through a pipe, written by a thread so that the
+table is written meanwhile); the drawer forks helpers so that there are as many drawing
+processes as cores plus one, each drawing a share of the maps. :meth:`Drawer.finish` waits
+for it and returns the maps it saved; if it failed (or where no process can be forked) the
+command draws them itself (:func:`write_maps`).
 
-The drawer ignores Ctrl-C (the command handles it: :meth:`Drawer.cancel` ends the drawer and
-its helpers) and leaves when its pipe closes without a result: an interrupted sweep draws no
-maps.
+The drawer runs in its own process group, writes nothing to the terminal and ignores
+Ctrl-C: the command handles it, and :meth:`Drawer.cancel` (an interrupted sweep, an error,
+bad input) ends the drawer and its helpers at once. An interrupted sweep draws no maps.
 """
 
 from __future__ import annotations
@@ -93,6 +93,9 @@ class Drawer:
                 os.close(br)
                 os.setpgid(0, 0)                       # its own group: cancel() ends it all
                 signal.signal(signal.SIGINT, signal.SIG_IGN)
+                quiet = os.open(os.devnull, os.O_WRONLY)  # (not a foreground process: it
+                os.dup2(quiet, 1)                         # never writes to the terminal)
+                os.dup2(quiet, 2)
                 from ..figures import sweep  # noqa: F401  (matplotlib, while the kernel runs)
                 with os.fdopen(r, "rb") as f:
                     data = f.read()
@@ -141,14 +144,14 @@ class Drawer:
         return [n for n in names.split("\n") if n] if ok else None
 
     def cancel(self) -> None:
-        """Nothing (more) to draw -- interrupted, or an error: the drawer and its helpers
-        leave."""
+        """Nothing (more) to draw -- interrupted, an error, or a command that draws no maps:
+        the drawer and its helpers leave at once."""
         self._close()
         if self._back is not None:
             with contextlib.suppress(OSError):
                 os.close(self._back)
             self._back = None
-        if self.pid is not None and self._writer is not None:   # it may be drawing
+        if self.pid is not None:
             with contextlib.suppress(OSError):
                 os.killpg(self.pid, signal.SIGTERM)
         self._wait()
@@ -170,6 +173,33 @@ class Drawer:
         return status == 0
 
 
+#: the drawer forked by :func:`start_early`, until the command takes it
+_early: Drawer | None = None
+
+
+def start_early(argv: list[str]) -> None:
+    """Fork the drawer as soon as the command line reads as a sweep that draws maps (before
+    the arguments are even parsed: more of matplotlib's import overlaps the start-up)."""
+    global _early
+    if argv[:1] == ["sweep"] and not {"-h", "--help", "--optimise"} & set(argv):
+        _early = Drawer.start()
+
+
+def take_drawer() -> Drawer | None:
+    """The drawer of this command: the one forked early, else a new one."""
+    global _early
+    drawer, _early = _early, None
+    return drawer if drawer is not None else Drawer.start()
+
+
+def cancel_early() -> None:
+    """End a drawer forked early that the command did not take (bad input, an error)."""
+    global _early
+    drawer, _early = _early, None
+    if drawer is not None:
+        drawer.cancel()
+
+
 def write_maps(res, out: Path, parallel: bool = True) -> list[Path]:
     """Draw and save the maps of ``res`` in ``out`` here (in forked processes when
     ``parallel``: as many as cores plus this one)."""
@@ -177,4 +207,4 @@ def write_maps(res, out: Path, parallel: bool = True) -> list[Path]:
     return [Path(out) / f"{n}.png" for n in _draw_in_processes(res, Path(out), processes)]
 
 
-__all__ = ["Drawer", "write_maps"]
+__all__ = ["Drawer", "write_maps", "start_early", "take_drawer", "cancel_early"]

@@ -29,7 +29,7 @@ import time
 from pathlib import Path
 
 from .common import Outcome, add_common, interactive, prepare_out, wrote
-from .maps import Drawer, write_maps
+from .maps import take_drawer, write_maps
 
 
 def register(sub) -> None:
@@ -202,7 +202,7 @@ def _sweep_run(cfg, args, space, fmt, chunk, out: Path, m: dict, dask,
     # the maps' process imports matplotlib on the core the start-up leaves idle (see
     # softclose.cli.maps); the table's library is imported while the kernel runs (its
     # threads leave the interpreter free)
-    drawer = Drawer.start()
+    drawer = take_drawer()
     try:
         prefetch = threading.Thread(target=_import_outputs, args=(parquet, drawer is None),
                                     name="softclose-imports", daemon=True)
