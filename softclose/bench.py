@@ -82,6 +82,8 @@ SPEED_TARGETS = {
     "cli_simulate": {"max_s": 0.3},
     "kernel_40000": {"min_per_s": 100000.0},
     "sweep_40000": {"min_per_s": 20000.0},
+    "sweep_cli_40000": {"min_per_s": 20000.0},
+    "sweep_maps": {"max_s": 1.0},
     "robust_optimise": {"max_s": 5.0},
     "yield_1e5_robust": {"max_s": 1.0},
     "sobol_1024": {"max_s": 2.0},
@@ -458,8 +460,9 @@ def sweep_axes() -> dict[str, np.ndarray]:
 
 
 def later_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
-    """Sweep throughput on the 40,000-design grid, robust optimisation, Monte Carlo yield
-    of 1e5 samples and Sobol indices at N = 1024, each through its public function.
+    """Sweep throughput on the 40,000-design grid (the kernel, the in-process sweep, and
+    the command line end to end with its CSV and maps), robust optimisation, Monte Carlo
+    yield of 1e5 samples and Sobol indices at N = 1024, each through its public function.
 
     Yield and Sobol indices are measured at the nominal optimum (``softclose.optimise``'s
     design): the default config's own design has no spring and no damper, so relative
@@ -506,6 +509,7 @@ def later_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
     if res is not None:
         rows[-1]["note"] = (f"the result's own designs_per_second (evaluation only): "
                             f"{res.designs_per_second or 0:,.0f}")
+    _cli_sweep_rows(cfg, rows, n_grid, timed, 1 if quick else 5)
     from .optimiser import optimise
     from .robust import sensitivity as sens
     from .robust import tolerance_analysis as ta
@@ -545,6 +549,41 @@ def later_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
     else:
         timed("sobol_1024", what_s, lambda: sens(at, samples=1024), rep, note=note)
     return rows
+
+
+def _cli_sweep_rows(cfg: Config, rows: list, n_grid: int, timed, repeats: int) -> None:
+    """``softclose sweep`` over :data:`SWEEP_GRID` end to end (a fresh interpreter, the CSV
+    and the three maps, start-up included; the default config), and its maps stage (from
+    the command's ``--json`` stages: after the table is evaluated until every map is
+    saved)."""
+    import tempfile
+
+    from .config import default_config, to_dict
+    what = (f"softclose sweep --grid ... --out DIR: the {n_grid:,}-design grid with its CSV "
+            "and maps, fresh interpreter, end to end")
+    what_maps = "the maps of that command (3 maps; its `maps` stage)"
+    if to_dict(cfg) != to_dict(default_config()):
+        for key, w in (("sweep_cli_40000", what), ("sweep_maps", what_maps)):
+            rows.append(_not_measured(key, w, "the command line runs the default config"))
+        return
+    grid = [f"--grid={k}={a:g}:{b:g}:{n}" for k, (a, b, n) in SWEEP_GRID.items()]
+    maps: list[float] = []
+    with tempfile.TemporaryDirectory() as tmp:
+        def run():
+            out = Path(tmp) / f"run{len(maps)}"
+            r = subprocess.run([sys.executable, "-m", "softclose", "sweep", *grid, "--out",
+                                str(out), "--json"], capture_output=True, text=True,
+                               env=_env())
+            if r.returncode != 0:
+                raise RuntimeError(f"exit {r.returncode}: {r.stderr.strip()[-300:]}")
+            maps.append(json.loads(r.stdout)["stages"]["maps"])
+        timed("sweep_cli_40000", what, run, repeats, count=n_grid,
+              note="CSV and 3 maps; the maps are drawn by processes forked at start-up")
+    if maps:
+        rows.append(_speed_row("sweep_maps", what_maps, statistics.median(maps), len(maps),
+                               note=f"{min(maps):.2f}–{max(maps):.2f} s; drawn from the "
+                                    "slices through the best design: no larger for a "
+                                    "larger sweep"))
 
 
 def _not_measured(key, what, note, repeats=0) -> dict:

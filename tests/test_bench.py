@@ -135,6 +135,26 @@ def test_speed_row_targets():
     assert bench._speed_row("table", "table", 1.0, 1)["met"] is None
 
 
+def test_command_line_sweep_rows(monkeypatch):
+    """The end-to-end row times `softclose sweep` over the bench grid and reads its maps
+    stage from the command's JSON; a non-default config is not timed (the command line
+    runs the default config)."""
+    from softclose.config import default_config
+    rows, calls = [], []
+
+    def timed(key, what, fn, repeats, count=None, unit="designs", note=""):
+        calls.append((key, repeats, count))
+        rows.append(bench._speed_row(key, what, 1.6, repeats, note, count=count))
+
+    bench._cli_sweep_rows(default_config().update({"mass.lid": 0.6}), rows, 40000, timed, 3)
+    assert not calls and [r["key"] for r in rows] == ["sweep_cli_40000", "sweep_maps"]
+    assert all(r["median_s"] is None and "default config" in r["note"] for r in rows)
+    rows.clear()
+    bench._cli_sweep_rows(default_config(), rows, 40000, timed, 3)
+    assert calls == [("sweep_cli_40000", 3, 40000)] and rows[0]["rate"] == 25000
+    assert rows[0]["met"] is True and rows[0]["target"] == {"min_per_s": 20000.0}
+
+
 def test_sweep_grid_has_40000_designs():
     axes = bench.sweep_axes()
     assert [len(v) for v in axes.values()] == [40, 40, 25]
