@@ -43,19 +43,8 @@ def _draw_in_processes(res, out: Path, processes: int) -> list[str]:
     from ..figures.sweep import map_names
     names = map_names(res)
     processes = max(1, min(processes, len(names)))
-    pids = []
-    for part in range(processes - 1):
-        pid = os.fork()
-        if pid == 0:
-            code = 1
-            try:
-                _draw_share(res, out, names[part::processes])
-                code = 0
-            except BaseException:  # noqa: BLE001  (the parent draws what is missing)
-                pass
-            finally:
-                os._exit(code)
-        pids.append(pid)
+    pids = [_fork(lambda part=part: _draw_share(res, out, names[part::processes]))
+            for part in range(processes - 1)]
     try:
         _draw_share(res, out, names[processes - 1::processes])
     finally:
@@ -63,6 +52,22 @@ def _draw_in_processes(res, out: Path, processes: int) -> list[str]:
     for part in failed:
         _draw_share(res, out, names[part::processes])
     return names
+
+
+def _fork(work) -> int:
+    """Fork a child that runs ``work()`` and leaves: exit status 0 when it returned, 1 when
+    it raised (its parent then does that work itself). Returns the child's pid."""
+    pid = os.fork()
+    if pid == 0:
+        code = 1
+        try:
+            work()
+            code = 0
+        except BaseException:  # noqa: BLE001  (reported by the exit status)
+            pass
+        finally:
+            os._exit(code)
+    return pid
 
 
 class Drawer:
@@ -80,35 +85,29 @@ class Drawer:
             return None
         r, w = os.pipe()                               # the result, to the drawer
         br, bw = os.pipe()                             # the stems of the maps it saved, back
+
+        def drawer():
+            os.close(w)
+            os.close(br)
+            os.setpgid(0, 0)                           # its own group: cancel() ends it all
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+            quiet = os.open(os.devnull, os.O_WRONLY)   # (not a foreground process: it never
+            os.dup2(quiet, 1)                          # writes to the terminal)
+            os.dup2(quiet, 2)
+            from ..figures import sweep  # noqa: F401  (matplotlib, while the kernel runs)
+            with os.fdopen(r, "rb") as f:
+                data = f.read()
+            if data:                                   # (none: nothing to draw)
+                res, out = pickle.loads(data)
+                names = _draw_in_processes(res, Path(out), _cores() + 1)
+                with os.fdopen(bw, "w") as f:
+                    f.write("\n".join(names))
         try:
-            pid = os.fork()
+            pid = _fork(drawer)
         except OSError:
             for fd in (r, w, br, bw):
                 os.close(fd)
             return None
-        if pid == 0:                                   # the drawer
-            code = 1
-            try:
-                os.close(w)
-                os.close(br)
-                os.setpgid(0, 0)                       # its own group: cancel() ends it all
-                signal.signal(signal.SIGINT, signal.SIG_IGN)
-                quiet = os.open(os.devnull, os.O_WRONLY)  # (not a foreground process: it
-                os.dup2(quiet, 1)                         # never writes to the terminal)
-                os.dup2(quiet, 2)
-                from ..figures import sweep  # noqa: F401  (matplotlib, while the kernel runs)
-                with os.fdopen(r, "rb") as f:
-                    data = f.read()
-                if data:                               # (none: nothing to draw)
-                    res, out = pickle.loads(data)
-                    names = _draw_in_processes(res, Path(out), _cores() + 1)
-                    with os.fdopen(bw, "w") as f:
-                        f.write("\n".join(names))
-                code = 0
-            except BaseException:  # noqa: BLE001  (the command draws the maps itself)
-                pass
-            finally:
-                os._exit(code)
         os.close(r)
         os.close(bw)
         with contextlib.suppress(OSError):
