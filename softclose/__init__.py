@@ -34,7 +34,7 @@ from .stroke import StrokeResult, StrokeStatus
 
 #: public functions and result types of the feature packages, imported on first use
 _LAZY = {
-    "optimise": "optimiser", "front": "optimiser", "OptimiseResult": "optimiser",
+    "front": "optimiser", "OptimiseResult": "optimiser",
     "FrontResult": "optimiser",
     "sweep": "sweeps", "sample": "sweeps", "SweepResult": "sweeps",
     "tolerance_analysis": "robust", "sensitivity": "robust", "RobustResult": "robust",
@@ -47,6 +47,20 @@ __all__ = ["simulate", "optimise", "front", "sweep", "sample", "tolerance_analys
            "YieldResult", "SensitivityResult", "ConfigError", "NumericalError",
            "SoftcloseError", "LidModel", "Reference", "Simulator"]
 __version__ = "0.2.0"
+
+
+def optimise(cfg: Config, *, robust: bool = False, progress: bool = False, **options):
+    """The soft-close design of ``cfg``, verified: :func:`softclose.optimiser.optimise`
+    (``options``: ``starts``, ``verify``, ``nodes``, ``substeps``), or with ``robust=True``
+    the design for the ``[tolerance]`` box, :func:`softclose.robust.optimise_robust`."""
+    if robust:
+        if options:
+            raise TypeError(f"optimise(robust=True): no option {', '.join(sorted(options))} "
+                            "(the robust design takes its settings from [tolerance])")
+        from .robust import optimise_robust
+        return optimise_robust(cfg, progress=progress)
+    from .optimiser import optimise as nominal
+    return nominal(cfg, progress=progress, **options)
 
 
 def __getattr__(name: str):

@@ -510,7 +510,7 @@ def later_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
         rows[-1]["note"] = (f"the result's own designs_per_second (evaluation only): "
                             f"{res.designs_per_second or 0:,.0f}")
     _cli_sweep_rows(cfg, rows, n_grid, timed, 1 if quick else 5)
-    from .optimiser import optimise
+    from .robust import optimise_robust
     from .robust import sensitivity as sens
     from .robust import tolerance_analysis as ta
     what = "robust optimisation over the [tolerance] box"
@@ -519,7 +519,7 @@ def later_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
         rows.append(_not_measured("robust_optimise", what, "not run with --quick"))
     else:
         rob = timed("robust_optimise", what + ": softclose.optimise(cfg, robust=True)",
-                    lambda: optimise(cfg, robust=True), 1)
+                    lambda: optimise_robust(cfg), 1)
     what_mc = "Monte Carlo yield: tolerance_analysis(cfg, samples=100000)"
     what_s = "Sobol indices: sensitivity(cfg, samples=1024)"
     at, note = _nominal_optimum(cfg)

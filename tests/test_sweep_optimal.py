@@ -12,7 +12,7 @@ import pytest
 from softclose.cli import main
 from softclose.errors import ConfigError
 from softclose.model import LidModel
-from softclose.optimiser import optimise
+from softclose import optimise
 from softclose.sweeps.optimal import optimise_grid, segments
 
 MASSES = [0.4, 0.5, 0.6]

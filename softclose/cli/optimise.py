@@ -61,8 +61,8 @@ def _run_robust(cfg, args, out) -> Outcome:
     if robust_outcome is not None:
         return robust_outcome(cfg, args)
     from ..jsonio import dumps
-    from ..optimiser import optimise
-    res = optimise(cfg, robust=True, progress=interactive(args))
+    from ..robust import optimise_robust
+    res = optimise_robust(cfg, progress=interactive(args))
     payload = res.to_json()
     try:
         from .robust import format_robust

@@ -185,7 +185,7 @@ def guarded(fn):
 
 
 @guarded
-def optimise(cfg, *, robust: bool = False, starts: int | None = None, verify: bool = True,
+def optimise(cfg, *, starts: int | None = None, verify: bool = True,
              progress: bool = False, nodes: int | None = None,
              substeps: int | None = None) -> OptimiseResult:
     """Solve cfg's soft-close problem from several starts; the best answer, verified.
@@ -198,16 +198,9 @@ def optimise(cfg, *, robust: bool = False, starts: int | None = None, verify: bo
     reference's (objective to 1e-3 relative). Infeasible problems and solver failures are
     reported in the result, never raised. ``progress=True`` draws the starts on a terminal.
 
-    ``robust=True`` designs for the ``[tolerance]`` box instead
-    (:func:`softclose.robust.optimise_robust`).
+    The design for the ``[tolerance]`` box is :func:`softclose.robust.optimise_robust`
+    (which builds on this one; ``softclose.optimise(cfg, robust=True)`` calls it).
     """
-    if robust:
-        try:
-            from ..robust import optimise_robust
-        except ImportError:
-            raise ConfigError("optimise(robust=True): robust design (softclose.robust) is not "
-                              "available in this build") from None
-        return optimise_robust(cfg, progress=progress)
     t_start = time.perf_counter()
     n_starts = check_problem(cfg, starts)
     o = cfg.optimise
