@@ -219,6 +219,15 @@ def test_result_is_immutable(design_sweep):
     assert res.success and res.message == "" and res.computed == res.points == 405
 
 
+def test_a_lost_cluster_is_a_failed_result_that_says_why(design_sweep):
+    import dataclasses
+    res, _, _ = design_sweep
+    lost = dataclasses.replace(res, lost="the Dask scheduler tcp://h:8786 was lost")
+    assert not lost.success and lost.message.startswith("the Dask scheduler tcp://h:8786")
+    assert "405 of 405 designs" in lost.message and lost.to_json()["lost"] == lost.lost
+    assert res.success and res.lost is None
+
+
 def test_result_pickles_and_stays_read_only(design_sweep):
     """A result can be sent to another process (the command sends it to the maps' drawer)."""
     import pickle

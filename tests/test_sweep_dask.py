@@ -73,6 +73,20 @@ def test_a_running_scheduler_by_its_address(cfg, cluster):
     _same_rows(run(cfg, grid, chunk=8), remote)
 
 
+def test_public_sweep_and_sample_take_the_same_dask_option(cfg, cluster):
+    """``softclose.sweep(..., dask=...)`` and ``sample(..., dask=...)`` (a Client, or an
+    address) give the local rows; the result says nothing was lost."""
+    from softclose import sample, sweep
+    lc, client = cluster
+    axes = {"design.spring_k": np.linspace(500, 9500, 12), "mass.lid": [0.4, 0.6]}
+    remote = sweep(cfg, axes, chunk=8, dask=client)
+    assert remote.success and remote.lost is None and remote.to_json()["lost"] is None
+    _same_rows(sweep(cfg, axes, chunk=8), remote)
+    ranges = {"design.spring_k": (500, 9500), "design.damper_c": (10, 4000, "log")}
+    _same_rows(sample(cfg, ranges, 64, chunk=16),
+               sample(cfg, ranges, 64, chunk=16, dask=lc.scheduler_address))
+
+
 def test_a_worker_lost_mid_sweep_loses_and_doubles_nothing(cfg, cluster):
     """Kill one worker process after the first chunk comes back: the scheduler reruns its
     task elsewhere, every id arrives exactly once and the rows equal the local run's."""

@@ -41,34 +41,49 @@ from .space import SAMPLERS, Grid, Range, Sample, make_grid, make_sample, parse_
 
 
 def sweep(cfg, axes: dict, *, progress: bool = False, threads: int | None = None,
-          chunk: int = CHUNK) -> SweepResult:
+          chunk: int = CHUNK, dask=None) -> SweepResult:
     """Metrics, objective and feasibility at every point of the full-factorial grid
     ``axes`` = ``{config key: 1-D values}``.
 
-    ``threads``: kernel threads (default: the usable cores, at most 8). ``progress=True``
-    draws a progress line on a terminal. Ctrl-C returns the finished chunks
-    (``result.interrupted``). Bad keys or values raise :class:`~softclose.errors.ConfigError`.
+    ``threads``: kernel threads (default: the usable cores, at most 8; on Dask, per task).
+    ``dask``: run the chunks on a Dask cluster -- ``"local:N"`` (N worker processes here), a
+    scheduler address or a ``distributed.Client`` (the command line's ``--dask``); the rows
+    are the same as here. ``progress=True`` draws a progress line on a terminal. Ctrl-C
+    returns the finished chunks (``result.interrupted``); so does a cluster that stops
+    working (``result.lost`` says why). Bad keys or values, and a scheduler that does not
+    answer, raise :class:`~softclose.errors.ConfigError`.
     """
-    from .run import run
     from .space import check_budget
     grid = make_grid(axes, cfg)
     check_budget(cfg, grid)
-    return run(cfg, grid, progress=progress, threads=threads, chunk=chunk)
+    return _run(cfg, grid, progress, threads, chunk, dask)
+
+
+def _run(cfg, space, progress, threads, chunk, dask) -> SweepResult:
+    """Run ``space`` here, or on Dask (a lost cluster: the finished chunks, and why)."""
+    import dataclasses
+
+    from .run import run
+    if dask is None:
+        return run(cfg, space, progress=progress, threads=threads, chunk=chunk)
+    from .distributed import mapper
+    with mapper(dask, threads) as m:
+        res = run(cfg, space, progress=progress, threads=threads, chunk=chunk, mapper=m)
+    return dataclasses.replace(res, lost=str(m.lost)) if m.lost is not None else res
 
 
 def sample(cfg, ranges: dict, n: int, *, sampler: str = "sobol", seed: int = 0,
            progress: bool = False, threads: int | None = None,
-           chunk: int = CHUNK) -> SweepResult:
+           chunk: int = CHUNK, dask=None) -> SweepResult:
     """``n`` designs drawn in ``ranges`` = ``{key: (lo, hi)}`` or ``(lo, hi, "log")``.
 
     ``sampler``: "sobol" (scrambled; ``n`` a power of 2 keeps its balance), "lhs" (Latin
     hypercube) or "random"; ``seed`` makes the draw reproducible. Otherwise as :func:`sweep`.
     """
-    from .run import run
     from .space import check_budget
     space = make_sample(ranges, n, sampler, seed, cfg)
     check_budget(cfg, space)
-    return run(cfg, space, progress=progress, threads=threads, chunk=chunk)
+    return _run(cfg, space, progress, threads, chunk, dask)
 
 
 def recompute(cfg, space, ids, *, threads: int | None = None) -> dict[str, np.ndarray]:

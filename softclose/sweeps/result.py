@@ -30,7 +30,8 @@ class SweepResult:
     (``dataset``, read back by :meth:`to_frame`). ``bins`` is the binned summary the maps of
     any sweep can be drawn from (:class:`softclose.sweeps.tally.Bins`); ``fixed`` the values
     of the design keys that were not swept (from the config). After Ctrl-C
-    (``interrupted``) only the finished chunks are present: ``computed < points``.
+    (``interrupted``) only the finished chunks are present: ``computed < points``; so too
+    when a Dask cluster stopped working, and ``lost`` says why.
     """
 
     space: Any
@@ -47,6 +48,7 @@ class SweepResult:
     columns: Mapping[str, np.ndarray] | None = field(default=None, repr=False)
     dataset: str | None = None
     fixed: Mapping[str, float] = field(default_factory=dict)
+    lost: str | None = None
 
     def __post_init__(self):
         if self.columns is not None:
@@ -80,10 +82,13 @@ class SweepResult:
     def success(self) -> bool:
         """Every design was computed (a design that fails is a row with its status and
         reason, not a failure of the sweep)."""
-        return self.computed == self.points and not self.interrupted
+        return self.computed == self.points and not self.interrupted and not self.lost
 
     @property
     def message(self) -> str:
+        if self.lost:
+            return (f"{self.lost}; {self.computed} of {self.points} designs computed "
+                    "(the finished chunks are kept)")
         if self.interrupted or self.computed < self.points:
             return (f"interrupted: {self.computed} of {self.points} designs computed "
                     "(the finished chunks are kept)")
@@ -133,6 +138,7 @@ class SweepResult:
             "kind": self.kind, "keys": list(self.keys), "space": self.space.describe(),
             "points": self.points, "computed": self.computed, "feasible": self.feasible,
             "infeasible_reasons": dict(self.reasons), "interrupted": self.interrupted,
+            "lost": self.lost,
             "success": self.success, "message": self.message,
             "seconds": self.seconds, "designs_per_second": rate,
             "stages": dict(self.stages), "chunk": self.chunk, "fixed": dict(self.fixed),
