@@ -59,9 +59,11 @@
  * On that path the lanes' hot state stays in arrays between steps (Soa), the new nodes come
  * out as vectors (Nodes), and the common case of the bookkeeping after a step -- no event,
  * no turning point, no peak to refine -- is done with vector compares and blends
- * (after_steps_vec); a lane that needs more runs the scalar lane_after_step. About half of a
- * step was this plumbing around the Runge-Kutta arithmetic (38.5 against 19-20 ns a
- * lane-step for the bare SIMD stages on creeping lids); it is now ~31 ns.
+ * (after_steps_vec), with the early exit's first two tests (the energy margin, the count-down
+ * after a failed speed bound); a lane that needs more runs the scalar lane_after_step. About
+ * half of a step was this plumbing around the Runge-Kutta arithmetic (38.5 against 19-20 ns
+ * a lane-step for the bare SIMD stages on creeping lids); it is now ~30 ns. The table-range
+ * test of a lookup stays a vector mask.
  *
  * No Python API is used by the solver; the module init only lets setuptools build it.
  */
@@ -1060,7 +1062,7 @@ typedef struct {
     double th[LANES], thd[LANES], a[LANES], t[LANES], n[LANES], peak[LANES], th_min[LANES],
         th_max[LANES], Vlo[LANES], Vhi[LANES], thd_max[LANES], Emax[LANES], gain[LANES],
         gp[LANES], g[LANES], dg[LANES], E[LANES], thp[LANES], thdp[LANES], hp[LANES],
-        E0[LANES], e_tol[LANES], early[LANES], floor_[LANES];
+        E0[LANES], e_tol[LANES], early[LANES], floor_[LANES], wait[LANES];
 } Soa;
 
 /* the new nodes of the lane slots (node4 per group): ok 1 inside the table, 0 outside,
@@ -1073,7 +1075,7 @@ ALWAYS void soa_in(const Soa *S, Lane *L, int k)
     L->peak = S->peak[k]; L->th_min = S->th_min[k]; L->th_max = S->th_max[k];
     L->Vlo = S->Vlo[k]; L->Vhi = S->Vhi[k]; L->thd_max = S->thd_max[k]; L->Emax = S->Emax[k];
     L->gain = S->gain[k]; L->gp = S->gp[k]; L->g = S->g[k]; L->dg = S->dg[k]; L->E = S->E[k];
-    L->thp = S->thp[k]; L->thdp = S->thdp[k]; L->hp = S->hp[k];
+    L->thp = S->thp[k]; L->thdp = S->thdp[k]; L->hp = S->hp[k]; L->wait = (int)S->wait[k];
 }
 
 ALWAYS void soa_out(Soa *S, const Lane *L, int k)
@@ -1084,7 +1086,7 @@ ALWAYS void soa_out(Soa *S, const Lane *L, int k)
     S->gain[k] = L->gain; S->gp[k] = L->gp; S->g[k] = L->g; S->dg[k] = L->dg; S->E[k] = L->E;
     S->thp[k] = L->thp; S->thdp[k] = L->thdp; S->hp[k] = L->hp;
     S->E0[k] = L->E0; S->e_tol[k] = L->e_tol; S->early[k] = L->early ? 1.0 : 0.0;
-    S->floor_[k] = L->floor_;
+    S->floor_[k] = L->floor_; S->wait[k] = (double)L->wait;
 }
 
 ALWAYS void st4(double *a, v4 v) { memcpy(a, &v, sizeof v); }
@@ -1206,6 +1208,11 @@ ALWAYS void after_steps_vec(const Table *T, const Method *m, Lane *lanes, Soa *S
             v4 left = ((v4){t_max, t_max, t_max, t_max} - (t + h)) * inv_dt + 1.0;
             v4 Eh = E1 + 2.0 * left * ld4(S->gain + b) + ld4(S->floor_ + b);
             trig &= fixed | ((Eh < Vlo) & (Eh < Vhi));
+            /* and its second: a lane still waiting after a failed speed bound counts down */
+            v4 wait = ld4(S->wait + b);
+            v4l down = trig & ~fixed & (wait > zero);
+            st4(S->wait + b, sel4(down, wait - one, wait));
+            trig &= ~down;
         }
         for (int q = 0; q < VW; q++) {
             const int k = b + q;
