@@ -1213,6 +1213,8 @@ ALWAYS void after_steps_vec(const Table *T, const Method *m, Lane *lanes, Soa *S
             v4l down = trig & ~fixed & (wait > zero);
             st4(S->wait + b, sel4(down, wait - one, wait));
             trig &= ~down;
+            v4l need = ~f | trig;
+            if (!(need[0] | need[1] | need[2] | need[3])) continue; /* all four: common case */
         }
         for (int q = 0; q < VW; q++) {
             const int k = b + q;
