@@ -386,6 +386,27 @@ def test_command_draws_the_maps_when_its_drawer_fails(tmp_path, monkeypatch):
     assert len(pngs) == 3 and sorted(f"{n}.png" for n in drawn_here) == pngs
 
 
+def test_a_drawer_that_takes_too_long_is_ended(design_sweep, tmp_path, monkeypatch):
+    """The command waits for its drawer at most a timeout, then ends it (the command then
+    draws the maps itself); a drawer sent nothing leaves on its own, having drawn nothing."""
+    import os
+    import time
+
+    import softclose.cli.maps as maps
+    res, _, _ = design_sweep
+    d = maps.Drawer.start()
+    assert d is not None and d.finish() == []            # nothing sent (2 cores here)
+    monkeypatch.setattr(maps, "_draw_in_processes", lambda *a: time.sleep(60))
+    d = maps.Drawer.start()                              # (forked with the slow drawing)
+    d.draw(res, tmp_path)
+    pid, t = d.pid, time.monotonic()
+    assert d.finish(timeout=0.5) is None                 # ended after the timeout
+    assert time.monotonic() - t < 5 and d.pid is None
+    with pytest.raises(ChildProcessError):               # reaped: no zombie left
+        os.waitpid(pid, os.WNOHANG)
+    assert not list(tmp_path.glob("*.png"))
+
+
 def test_maps_drawn_here_when_a_drawing_process_fails(tmp_path, monkeypatch):
     """The maps are drawn in forked processes; what a failed one did not draw is drawn by
     the command itself."""

@@ -20,9 +20,16 @@ from __future__ import annotations
 import contextlib
 import os
 import pickle
+import select
 import signal
 import threading
+import time
 from pathlib import Path
+
+#: seconds the command waits for its drawer before it ends it and draws the maps itself
+#: (drawing takes about 0.4 s a map; matplotlib's first use on a machine builds its font
+#: cache, tens of seconds)
+DRAWER_TIMEOUT = 300.0
 
 
 def _cores() -> int:
@@ -129,17 +136,34 @@ class Drawer:
         self._writer = threading.Thread(target=send, name="softclose-maps", daemon=True)
         self._writer.start()
 
-    def finish(self) -> list[str] | None:
-        """Wait for the drawer: the stems of the maps it saved, None if it failed."""
+    def finish(self, timeout: float = DRAWER_TIMEOUT) -> list[str] | None:
+        """Wait for the drawer: the stems of the maps it saved; None if it failed or took
+        longer than ``timeout`` seconds (then it is ended)."""
+        deadline = time.monotonic() + timeout
         if self._writer is not None:
-            self._writer.join()
+            self._writer.join(timeout)
         self._close()
         back, self._back = self._back, None
-        names = ""
+        chunks: list[bytes] = []
+        late = False
         if back is not None:
-            with contextlib.suppress(OSError), os.fdopen(back, "r") as f:
-                names = f.read()
+            try:
+                while True:                            # its answer, then end of file
+                    left = deadline - time.monotonic()
+                    if left <= 0 or not select.select([back], [], [], left)[0]:
+                        late = True
+                        break
+                    data = os.read(back, 65536)
+                    if not data:
+                        break
+                    chunks.append(data)
+            finally:
+                os.close(back)
+        if late:                                       # too long: end it (and its helpers)
+            self.cancel()
+            return None
         ok = self._wait()
+        names = b"".join(chunks).decode()
         return [n for n in names.split("\n") if n] if ok else None
 
     def cancel(self) -> None:
