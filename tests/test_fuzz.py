@@ -393,6 +393,22 @@ def strokes_of(command: str, cfg, argv: list[str]) -> int:
     return 0
 
 
+def _refinement_seconds(o) -> float:
+    """The optimiser's refinement at the same cost per grid step: when the answer disagrees
+    with its simulation it re-solves with the sub-steps doubled, up to MAX_REFINE times and
+    within MAX_STEPS steps (softclose.optimiser.polish.refine). A degenerate geometry (a
+    lid 0.1 mm long) takes all of them: 70-80 s at 10 nodes x 4 sub-steps, bounded."""
+    from softclose.optimiser.nlp import MAX_STEPS
+    from softclose.optimiser.polish import MAX_REFINE
+    seconds, m = 0.0, o.substeps
+    for _ in range(MAX_REFINE):
+        if 2 * o.nodes * m > MAX_STEPS:
+            break
+        m *= 2
+        seconds += o.nodes * m * 0.1
+    return seconds
+
+
 def work_seconds(command: str, cfg, argv: list[str]) -> float:
     """Seconds a run of ``command`` on ``cfg`` may take: a floor for start-up plus its work
     at generous per-step costs (the machine is shared; the point is to catch a run whose
@@ -401,6 +417,7 @@ def work_seconds(command: str, cfg, argv: list[str]) -> float:
     o = cfg.optimise
     stroke = 3e-6 * steps                          # h and h/2 for the estimate, radau5 worst
     grid = o.starts * o.nodes * o.substeps * 0.1   # an NLP: ~10 ms a grid step a start
+    refine = _refinement_seconds(o)                # (`optimise`'s polish of its answer)
     batch = strokes_of(command, cfg, argv) * stroke
     if command == "state":
         return 30.0
@@ -409,7 +426,7 @@ def work_seconds(command: str, cfg, argv: list[str]) -> float:
     if command == "sweep":
         return 60.0 + 2 * batch
     if command == "optimise":
-        return 60.0 + grid + 20 * stroke
+        return 60.0 + grid + refine + 20 * stroke
     if command == "pareto":
         spec = (_option(argv, "--closing-times") or ["0.3:3:10"])[-1].split(":")
         count = spec[2] if len(spec) > 2 else "10"
