@@ -214,11 +214,8 @@ def _store(out: dict, rows: np.ndarray, res: dict, cfg, sim, P: np.ndarray,
     reason = infeasibility(cfg.optimise, closed, res["closing_time"], res["holding_moment"],
                            res["theta_dot_max"])
     why = np.asarray(res["reason"], dtype=object)   # why an open stroke stays open
-    nc = np.nonzero((status == StrokeStatus.NOT_CLOSED) & (why != ""))[0]
-    if len(nc):  # "not closed (held open at theta = 1.1 deg)": each distinct text once
-        u, at = np.unique(why[nc].astype(str), return_inverse=True)
-        reason[nc] = np.array([f"not closed ({w})" for w in u.tolist()],
-                              dtype=object)[np.asarray(at).ravel()]
+    nc = (status == StrokeStatus.NOT_CLOSED) & (why != "")
+    reason[nc] = "not closed (" + why[nc] + ")"     # "not closed (held open at ...)"
     for i in np.nonzero(~ok)[0]:  # the method could not integrate it: say why, with the remedy
         s = StrokeStatus(int(status[i]))
         reason[i] = ("not closed (the lid swung beyond the stroke range)"
