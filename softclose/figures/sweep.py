@@ -286,13 +286,25 @@ def _legend(fig, present, best_label):
                    frameon=False)
 
 
+def _title(head: str, note: str, width: int) -> tuple[str, int]:
+    """The figure's title: ``head`` and the note, each line of it wrapped at ``width``
+    characters (a sample's note names every free key's range); and how many lines wrapping
+    added."""
+    import textwrap
+    lines = [head] + [w for line in note.split("\n") for w in textwrap.wrap(line, width)]
+    return "\n".join(lines), len(lines) - 1 - len(note.split("\n"))
+
+
 def _map(v: _View, res):
     from matplotlib.ticker import MaxNLocator
     # a fixed grid of panels and colour bars (no axes stealing room for a colour bar); the
     # axes are not shared (sharing costs a tick-label search per draw): the same edges anyway
+    title, extra = _title("Sweep maps; infeasible designs grey or hatched by reason", v.note,
+                          140)
     fig = plt.figure(figsize=(11, 8.6))
     gs = fig.add_gridspec(2, 5, width_ratios=[1, 0.045, 0.3, 1, 0.045], left=0.08,
-                          right=0.93, bottom=0.12, top=0.89, wspace=0.05, hspace=0.14)
+                          right=0.93, bottom=0.12, top=0.89 - 0.017 * extra, wspace=0.05,
+                          hspace=0.14)
     axs = np.array([[fig.add_subplot(gs[i, 3 * j]) for j in range(2)] for i in range(2)])
     caxs = [fig.add_subplot(gs[i, 3 * j + 1]) for i in range(2) for j in range(2)]
     feas = v.cat == -1
@@ -323,8 +335,7 @@ def _map(v: _View, res):
     best_label = (f"best feasible design (J = {res.best['objective']:.4g})"
                   if res.best is not None else None)
     _legend(fig, present, best_label)
-    fig.suptitle(f"Sweep maps; infeasible designs grey or hatched by reason\n{v.note}",
-                 fontsize=10)
+    fig.suptitle(title, fontsize=10)
     return fig
 
 
@@ -347,8 +358,10 @@ def _profile(v: _View, res):
     for ax in axs[1]:
         ax.set_xlabel(label(key))
     axs[0, 0].legend(fontsize=8)
-    fig.suptitle(f"Sweep over {key}\n{v.note}", fontsize=10)
-    fig.subplots_adjust(left=0.08, right=0.97, bottom=0.09, top=0.87, wspace=0.25, hspace=0.12)
+    title, extra = _title(f"Sweep over {key}", v.note, 125)
+    fig.suptitle(title, fontsize=10)
+    fig.subplots_adjust(left=0.08, right=0.97, bottom=0.09, top=0.87 - 0.02 * extra,
+                        wspace=0.25, hspace=0.12)
     return fig
 
 
