@@ -252,19 +252,28 @@ def map_tasks(client, fn: Callable, tasks: Iterable[tuple[Any, tuple]],
     pending: dict = {}                       # future -> tag
     ac = distributed.as_completed(with_results=True, raise_errors=False)
     asked = [-1e9, 0]                        # (when, threads)
+    silent = [None]                          # since when the scheduler's polls have failed
     had_workers = [False]
     workerless = [None]                      # since when the cluster has had no worker
     finished = [0]
 
     def threads() -> int:
+        """The cluster's worker threads, asked at most once a second. One failed poll is
+        not a lost scheduler (distributed can fail a call on a passing comm state; the
+        client's status says when the connection is really gone, see disconnected()); a
+        scheduler whose polls keep failing for CONNECT_TIMEOUT seconds is."""
         now = time.perf_counter()
         if now - asked[0] > 1.0:
             try:
                 asked[:] = [now, workers_of(client)[1]]
-            except Exception as exc:  # noqa: BLE001 - any failure here: the scheduler is gone
-                raise ClusterLost(f"the Dask scheduler {_address(client)} stopped answering "
-                                  f"after {finished[0]} {label}s ({type(exc).__name__})"
-                                  ) from None
+                silent[0] = None
+            except Exception as exc:  # noqa: BLE001 - any failure: ask again in a second
+                silent[0] = silent[0] or now
+                if now - silent[0] > CONNECT_TIMEOUT:
+                    raise ClusterLost(f"the Dask scheduler {_address(client)} stopped "
+                                      f"answering after {finished[0]} {label}s "
+                                      f"({type(exc).__name__})") from None
+                asked[0] = now               # (the last count stands meanwhile)
         return asked[1]
 
     def disconnected() -> ClusterLost | None:
