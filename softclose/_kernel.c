@@ -12,8 +12,9 @@
  * their accuracy is that of the method itself; the same for the peak tip speed and the
  * lowest angle of a stroke that turns back. Nothing is integrated past the event.
  *
- * A design row is (k, l0, c, c_rot, e_tol[, m_lid]): m_lid (kg, NaN = the table's own
- * mass m0) selects the lid mass. M, dM, Vg and dVg are affine in the lid's mass, so the
+ * A design row is (k, l0, c, c_rot, e_tol[, m_lid]) (LAYOUT): the
+ * parameters of the machine elements (see THE MACHINE ELEMENTS below), then e_tol, then
+ * m_lid (kg, NaN = the table's own mass m0), which selects the lid mass. M, dM, Vg and dVg are affine in the lid's mass, so the
  * coefficients of a row are c(m0) + (m_lid - m0) dc/dm, with dc/dm from a second table
  * (four coefficients per cell); a row at m0 never touches it (bit-identical results).
  *
@@ -72,11 +73,20 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define KERNEL_ABI 2 /* bumped when the exported signatures or outputs change */
+#define KERNEL_ABI 3 /* bumped when the exported signatures or outputs change */
 #define NC 8 /* M, dM, Vg, dVg, l, dl, dd, tau */
 enum { C_M, C_DM, C_VG, C_DVG, C_L, C_DL, C_DD, C_TAU };
 #define NMASS 4 /* M, dM, Vg, dVg: the coefficients that depend on the lid's mass */
+/* the table of element columns added since the seed (tabulated when a row needs them): a
+ * row of NX values per power; which element's column is which: THE MACHINE ELEMENTS */
+#define NX 4
 #define SMAX 4
+/* every layout constant the Python side shares, checked there when the kernel is loaded */
+static const char LAYOUT[] =
+    "abi=3;cc=M,dM,Vg,dVg,l,dl,dd,tau;mass=M,dM,Vg,dVg;xcc=-,-,-,-;"
+    "row=spring_k,spring_rest_length,damper_c,rotary_damper_c,energy_tol,lid_mass;out=status,closing_time,impact_theta_dot,impact_tip_speed,"
+    "peak_tip_speed,min_spring_length,max_spring_length,steps,energy_rise,theta_min,"
+    "theta_dot_max,theta_max,stop_reason,stop_theta,stop_time;nrng=18";
 
 /* outputs per design */
 enum { O_STATUS, O_TIME, O_THD, O_TIP, O_PEAK, O_LMIN, O_LMAX, O_NSTEP, O_EDRIFT, O_THMIN,
@@ -97,6 +107,7 @@ typedef struct {
     const double *dcc; /* the same layout: their derivative w.r.t. the lid mass (0 for l, dl,
                         * dd, tau), or NULL */
     const double *rng; /* ncell * NRNG: ranges of some pieces over each whole cell (or NULL) */
+    const double *xcc; /* ncell * 4 * NX: the element columns' pieces (X_*), or NULL */
     const int *crit;   /* the cells where l' may vanish (R_LCRIT), ascending (with rng) */
     int ncrit;
     int ncell;
@@ -108,6 +119,7 @@ typedef struct {
 enum { R_TAU = 0, R_M = 2, R_VG = 4, R_L = 6, R_DVG = 8, R_DL = 10, R_MID = 12, R_LCRIT = 16,
        NRNG = 18 };
 #define CQ(base, i, e, j) ((base)[((size_t)(i) * 4 + (e)) * NC + (j)])
+#define XQ(base, i, e, j) ((base)[((size_t)(i) * 4 + (e)) * NX + (j)])
 
 /* lanes of the stroke loop are advanced as NG SIMD vectors of VW (see the stroke loop) */
 #ifndef NG
@@ -130,8 +142,104 @@ typedef struct {
     double A[SMAX][SMAX], b[SMAX], c[SMAX];
 } Method;
 
-/* dm = m_lid - m0: 0 for a row at the table's mass */
-typedef struct { double k, l0, c, cr, dm; } Par;
+/* ===== THE MACHINE ELEMENTS: every force law of the kernel, stated once ====================
+ * The laws of softclose/elements (the registry), on the tabulated columns of each element's
+ * coordinate q(theta) (its q, q' = dq/dtheta, or q'^2). A conservative element has a
+ * potential V(q) and a tension T(q) = dV/dq, and adds T q' to the slope dV/dtheta; a damper
+ * has a viscous coefficient B and adds B q'^2 to the damping on theta'. With them
+ *     M th'' = -(slope) - 1/2 M' th'^2 - (damping) th',     E = M th'^2 / 2 + V,
+ * and dE/dt = -(damping) th'^2 <= 0, which the early exit relies on (dampers only dissipate).
+ *
+ *   element   coordinate q       columns          law
+ *   gravity   its potential      Vg, dVg (+ mass) V = q, T = 1
+ *   spring    |D - E|            l, dl            V = k (q - l0)^2 / 2, T = k (q - l0)
+ *   dashpot   |C - O|            dd = q'^2        B = c
+ *   rotary    theta              (q' = 1)         B = c_rot
+ *
+ * The laws are macros over numbers, so the scalar code (double) and the SIMD lanes (v4) use
+ * the same operations in the same order. For the early exit every conservative law also
+ * states the least potential and the range of its slope term over a piece where q and q'
+ * lie in given ranges (law_linear_bounds): the bound of the reachable speeds is built from
+ * them (speed_piece_ok).
+ *
+ * Everything the kernel knows of the elements is in this section: the design row's columns
+ * (D_*), the parameters of a row (Par) and of a group of lanes (Par4), how a row is read
+ * (ELEM_READ) and copied into its lane (ELEM_LANE), which element columns the extra table
+ * holds (X_*), and the laws. The elements of the seed's table (gravity, spring, dashpot,
+ * rotary damper) are summed by ELEM_SLOPE ...; those of an extra table (none yet) by
+ * ELEM_SLOPE_X ..., added where a row has them (Par.x; Par4.anyx for a group). */
+
+/* the design-row columns: the elements' parameters (in the registry's order), e_tol, m_lid */
+enum { D_K, D_L0, D_C, D_CR, D_ETOL, D_MLID, NDESIGN };
+
+/* one row's element parameters (SI); dm = m_lid - m0: 0 for a row at the table's mass;
+ * x: the row has an element of the extra table */
+typedef struct { double k, l0, c, cr, dm; int x; } Par;
+/* the lanes' parameters as vectors; any: a lane at another lid mass; anyx: a lane with
+ * element columns (its element terms are added for every lane of the group: the others
+ * add a zero) */
+typedef struct { v4 k, l0, c, cr; double dm[VW]; int any, anyx; } Par4;
+/* read a design row d into p (not dm) */
+#define ELEM_READ(p, d) do { \
+        (p)->k = (d)[D_K]; (p)->l0 = (d)[D_L0]; (p)->c = (d)[D_C]; (p)->cr = (d)[D_CR]; \
+        (p)->x = 0; \
+    } while (0)
+/* copy row p into lane q of the group G (then G->anyx |= p->x) */
+#define ELEM_LANE(G, q, p) do { \
+        (G)->k[q] = (p)->k; (G)->l0[q] = (p)->l0; (G)->c[q] = (p)->c; (G)->cr[q] = (p)->cr; \
+    } while (0)
+#define LAW_LINEAR_T(k, q0, q) ((k) * ((q) - (q0)))                  /* T = dV/dq */
+#define LAW_LINEAR_V(k, q0, q) (0.5 * (k) * ((q) - (q0)) * ((q) - (q0)))
+/* d/dtheta of T q' (for the implicit methods' Jacobian): k (q'^2 + (q - q0) q'') */
+#define LAW_LINEAR_DSLOPE(k, q0, q, dq_th, dq, ddq) ((k) * ((dq_th) * (dq) + ((q) - (q0)) * (ddq)))
+
+/* the slope dV/dtheta of gravity and the spring, from the coefficient values c[] (numbers
+ * or lanes); a row with element columns (has x) adds the torsion spring's term from x[] */
+#define ELEM_SLOPE(P, cv) ((cv)[C_DVG] + LAW_LINEAR_T((P)->k, (P)->l0, (cv)[C_L]) * (cv)[C_DL])
+#define ELEM_SLOPE_X(P, x) 0.0
+/* the potential V of gravity and the spring (then + ELEM_POTENTIAL_X); the energy is the
+ * kinetic energy KE plus the same potentials, summed in this order */
+#define ELEM_POTENTIAL(P, cv) ((cv)[C_VG] + LAW_LINEAR_V((P)->k, (P)->l0, (cv)[C_L]))
+#define ELEM_ENERGY(P, cv, KE) ((KE) + (cv)[C_VG] + LAW_LINEAR_V((P)->k, (P)->l0, (cv)[C_L]))
+#define ELEM_POTENTIAL_X(P, x) 0.0
+/* the damping on theta': the dashpot and the rotary damper */
+#define ELEM_DAMPING(P, cv) ((P)->c * (cv)[C_DD] + (P)->cr)
+/* d/dtheta of the slope and of the damping (values c, x; their derivatives dc, dx) */
+#define ELEM_DSLOPE(P, cv, dcv) \
+    ((dcv)[C_DVG] + LAW_LINEAR_DSLOPE((P)->k, (P)->l0, (cv)[C_L], (dcv)[C_L], (cv)[C_DL], (dcv)[C_DL]))
+#define ELEM_DSLOPE_X(P, x, dx) 0.0
+#define ELEM_DDAMPING(P, dcv) ((P)->c * (dcv)[C_DD])
+/* does the row dissipate (the early exit's condition)? */
+#define ELEM_DISSIPATES(P) ((P)->c > 0 || (P)->cr > 0)
+#define ELEM_DAMPERS_VALID(P) ((P)->c >= 0 && (P)->cr >= 0)
+/* the size of the springs' potential terms (the energy's rounding scale) */
+#define ELEM_SIZE(P, cv) (fabs((cv)[C_VG]) + 0.5 * fabs((P)->k) * ((cv)[C_L] - (P)->l0) \
+                          * ((cv)[C_L] - (P)->l0))
+#define ELEM_SIZE_X(P, x) fabs(ELEM_POTENTIAL_X(P, x))
+
+/* a linear law on q in [qlo, qhi] with q' in [dlo, dhi]: its least potential and the range
+ * [slo, shi] of its slope term T q' */
+static inline void law_linear_bounds(double k, double q0, double qlo, double qhi, double dlo,
+                                     double dhi, double *Vmin, double *slo, double *shi)
+{
+    double d = q0 < qlo ? qlo - q0 : (q0 > qhi ? q0 - qhi : 0.0);
+    *Vmin = 0.5 * k * d * d;
+    double e1 = qlo - q0, e2 = qhi - q0;
+    double x1 = e1 * dlo, x2 = e1 * dhi, x3 = e2 * dlo, x4 = e2 * dhi;
+    double plo = MIN2(MIN2(x1, x2), MIN2(x3, x4)), phi = MAX2(MAX2(x1, x2), MAX2(x3, x4));
+    *slo = k * plo; *shi = k * phi;
+}
+
+static void cubic_range(const double *q, double s0, double s1, double *lo, double *hi);
+
+/* the extra table's conservative elements over cell i, s in [s0, s1]: their least potential
+ * and slope range (from the ranges of their columns' cubic pieces), added to V1 and [slo, shi] */
+static void elem_bounds_x(const double *xcc, const Par *p, int i, double s0, double s1,
+                          double *V1, double *slo, double *shi)
+{
+    (void)xcc; (void)p; (void)i; (void)s0; (void)s1; (void)V1; (void)slo; (void)shi;
+}
+/* ===== (end of the machine elements) ======================================================== */
 
 /* index of the table cell holding th and the local variable s in [0, 1]; -1 outside */
 static inline int cell_index(const Table *T, double th, double *s)
@@ -149,9 +257,26 @@ static inline int cell_index(const Table *T, double th, double *s)
 #define DCUB(q, j, s, ih) (((q)[NC + (j)] + (s) * (2.0 * (q)[2 * NC + (j)] \
                            + (s) * 3.0 * (q)[3 * NC + (j)])) * (ih))
 
+#define XCUB(q, j, s) ((q)[j] + (s) * ((q)[NX + (j)] + (s) * ((q)[2 * NX + (j)] \
+                       + (s) * (q)[3 * NX + (j)])))
+#define XDCUB(q, j, s, ih) (((q)[NX + (j)] + (s) * (2.0 * (q)[2 * NX + (j)] \
+                            + (s) * 3.0 * (q)[3 * NX + (j)])) * (ih))
+
+/* the element columns x[NX] (and their theta-derivatives dx, may be NULL) in cell i at s */
+static inline void xtab_eval(const Table *T, int i, double s, double *x, double *dx)
+{
+    const double *q = T->xcc + (size_t)i * 4 * NX;
+    for (int j = 0; j < NX; j++) {
+        x[j] = XCUB(q, j, s);
+        if (dx) dx[j] = XDCUB(q, j, s, T->inv_h);
+    }
+}
+
 /* coefficient values v[NC] and theta-derivatives dv[NC] (dv may be NULL) of the row p
- * (p may be NULL: the table's own mass) */
-static inline int tab_eval(const Table *T, const Par *p, double th, double *v, double *dv)
+ * (p may be NULL: the table's own mass), and -- when x is not NULL and the row has them --
+ * the element columns x[NX] and their derivatives dx */
+static inline int tab_eval_x(const Table *T, const Par *p, double th, double *v, double *dv,
+                             double *x, double *dx)
 {
     double s;
     int i = cell_index(T, th, &s);
@@ -161,6 +286,7 @@ static inline int tab_eval(const Table *T, const Par *p, double th, double *v, d
         v[j] = CUB(q, j, s);
         if (dv) dv[j] = DCUB(q, j, s, T->inv_h);
     }
+    if (x && p && p->x) xtab_eval(T, i, s, x, dx);
     if (p && p->dm != 0.0) {
         const double *r = T->dcc + (size_t)i * 4 * NC;
         for (int j = 0; j < NMASS; j++) {
@@ -171,17 +297,24 @@ static inline int tab_eval(const Table *T, const Par *p, double th, double *v, d
     return 0;
 }
 
+static inline int tab_eval(const Table *T, const Par *p, double th, double *v, double *dv)
+{
+    return tab_eval_x(T, p, th, v, dv, NULL, NULL);
+}
+
 /* theta'' and, if J != NULL, J = (d th''/d th, d th''/d th') */
 static inline int rhs(const Table *T, const Par *p, double th, double thd, double *thdd, double *J)
 {
-    double v[NC], dv[NC];
-    if (tab_eval(T, p, th, v, J ? dv : NULL)) return 1;
-    double damp = p->c * v[C_DD] + p->cr;
-    double N = -v[C_DVG] - p->k * (v[C_L] - p->l0) * v[C_DL] - 0.5 * v[C_DM] * thd * thd - damp * thd;
+    double v[NC], dv[NC], x[NX], dx[NX];
+    if (tab_eval_x(T, p, th, v, J ? dv : NULL, x, J ? dx : NULL)) return 1;
+    double damp = ELEM_DAMPING(p, v), slope = ELEM_SLOPE(p, v);
+    if (p->x) slope += ELEM_SLOPE_X(p, x);
+    double N = -slope - 0.5 * v[C_DM] * thd * thd - damp * thd;
     *thdd = N / v[C_M];
     if (J) {
-        double Nth = -dv[C_DVG] - p->k * (dv[C_L] * v[C_DL] + (v[C_L] - p->l0) * dv[C_DL])
-                     - 0.5 * dv[C_DM] * thd * thd - p->c * dv[C_DD] * thd;
+        double dslope = ELEM_DSLOPE(p, v, dv);
+        if (p->x) dslope += ELEM_DSLOPE_X(p, x, dx);
+        double Nth = -dslope - 0.5 * dv[C_DM] * thd * thd - ELEM_DDAMPING(p, dv) * thd;
         J[0] = (Nth - *thdd * dv[C_M]) / v[C_M];
         J[1] = (-v[C_DM] * thd - damp) / v[C_M];
     }
@@ -194,16 +327,21 @@ static inline void potential_at(const Table *T, const Par *p, int i, double s, d
                                 double *dV)
 {
     const double *q = T->cc + (size_t)i * 4 * NC;
-    double Vg = CUB(q, C_VG, s), l = CUB(q, C_L, s);
-    double dVg = dV ? CUB(q, C_DVG, s) : 0.0, dl = dV ? CUB(q, C_DL, s) : 0.0;
+    double c[NC], x[NX] = {0};
+    c[C_VG] = CUB(q, C_VG, s); c[C_L] = CUB(q, C_L, s);
+    c[C_DVG] = dV ? CUB(q, C_DVG, s) : 0.0; c[C_DL] = dV ? CUB(q, C_DL, s) : 0.0;
     if (p->dm != 0.0) {
         const double *r = T->dcc + (size_t)i * 4 * NC;
-        Vg += p->dm * CUB(r, C_VG, s);
-        if (dV) dVg += p->dm * CUB(r, C_DVG, s);
+        c[C_VG] += p->dm * CUB(r, C_VG, s);
+        if (dV) c[C_DVG] += p->dm * CUB(r, C_DVG, s);
     }
-    double dl0 = l - p->l0;
-    *V = Vg + 0.5 * p->k * dl0 * dl0;
-    if (dV) *dV = dVg + p->k * dl0 * dl;
+    *V = ELEM_POTENTIAL(p, c);
+    if (dV) *dV = ELEM_SLOPE(p, c);
+    if (p->x) {
+        xtab_eval(T, i, s, x, NULL);
+        *V += ELEM_POTENTIAL_X(p, x);
+        if (dV) *dV += ELEM_SLOPE_X(p, x);
+    }
 }
 
 static inline int potential(const Table *T, const Par *p, double th, double *V, double *dV)
@@ -447,8 +585,10 @@ static int speed_piece_ok(const Table *T, const Par *p, int i, double s0, double
 {
     if (--*budget < 0) return 0;
     double q[4], glo, ghi, llo, lhi, dglo, dghi, dllo, dlhi, tlo, thi, Mlo, Mhi, v[NC];
+    double x[NX] = {0};
     const double *R = depth == 0 && p->dm == 0.0 && T->rng ? T->rng + (size_t)i * NRNG : NULL;
-    double sm = 0.5 * (s0 + s1), hw = 0.5 * (s1 - s0) * T->h;
+    /* (with R, the middle values are the whole cell's: its middle is where x is read) */
+    double sm = R ? 0.5 : 0.5 * (s0 + s1), hw = 0.5 * (s1 - s0) * T->h;
     if (R) { /* the whole cell's precomputed ranges (a superset of [s0, s1]) */
         glo = R[R_VG]; ghi = R[R_VG + 1]; llo = R[R_L]; lhi = R[R_L + 1];
         dglo = R[R_DVG]; dghi = R[R_DVG + 1]; dllo = R[R_DL]; dlhi = R[R_DL + 1];
@@ -464,13 +604,14 @@ static int speed_piece_ok(const Table *T, const Par *p, int i, double s0, double
         piece(T, p, i, C_TAU, q); cubic_range(q, s0, s1, &tlo, &thi);
         piece(T, p, i, C_M, q); cubic_range(q, s0, s1, &Mlo, &Mhi);
     }
-    double dlm = v[C_L] - p->l0, Vm = v[C_VG] + 0.5 * p->k * dlm * dlm;
-    double d = p->l0 < llo ? llo - p->l0 : (p->l0 > lhi ? p->l0 - lhi : 0.0);
-    double V1 = glo + 0.5 * p->k * d * d;
-    double e1 = llo - p->l0, e2 = lhi - p->l0; /* (l - l0) dl over the box */
-    double x1 = e1 * dllo, x2 = e1 * dlhi, x3 = e2 * dllo, x4 = e2 * dlhi;
-    double plo = MIN2(MIN2(x1, x2), MIN2(x3, x4)), phi = MAX2(MAX2(x1, x2), MAX2(x3, x4));
-    double slo = dglo + p->k * plo, shi = dghi + p->k * phi;
+    /* V at the middle, and the springs' least potential and slope range over the piece */
+    double Vm = ELEM_POTENTIAL(p, v);
+    if (p->x) { xtab_eval(T, i, sm, x, NULL); Vm += ELEM_POTENTIAL_X(p, x); }
+    double Vsp, sslo, sshi;
+    law_linear_bounds(p->k, p->l0, llo, lhi, dllo, dlhi, &Vsp, &sslo, &sshi);
+    double V1 = glo + Vsp;
+    double slo = dglo + sslo, shi = dghi + sshi;
+    if (p->x) elem_bounds_x(T->xcc, p, i, s0, s1, &V1, &slo, &shi);
     double smax = MAX2(fabs(slo), fabs(shi));
     double V2 = Vm - smax * hw;
     double Vlow = MAX2(V1, V2);
@@ -666,16 +807,23 @@ static inline int node_eval(const Table *T, const Par *p, double th, double thd,
         Vg += p->dm * CUB(r, C_VG, s); dVg += p->dm * CUB(r, C_DVG, s);
     }
     double dtau = DCUB(q, C_TAU, s, T->inv_h);
-    double damp = p->c * dd + p->cr;
-    double N = -dVg - p->k * (l - p->l0) * dl - 0.5 * dM * thd * thd - damp * thd;
+    double c[NC], x[NX];
+    c[C_VG] = Vg; c[C_DVG] = dVg; c[C_L] = l; c[C_DL] = dl; c[C_DD] = dd;
+    double damp = ELEM_DAMPING(p, c), slope = ELEM_SLOPE(p, c);
+    double Vn = ELEM_POTENTIAL(p, c), En = ELEM_ENERGY(p, c, 0.5 * M * thd * thd);
+    if (p->x) {
+        xtab_eval(T, i, s, x, NULL);
+        slope += ELEM_SLOPE_X(p, x);
+        Vn += ELEM_POTENTIAL_X(p, x); En += ELEM_POTENTIAL_X(p, x);
+    }
+    double N = -slope - 0.5 * dM * thd * thd - damp * thd;
     double acc = N / M;
     double sg = thd >= 0 ? 1.0 : -1.0;
     *a = acc;
     *g = tau * fabs(thd);
     *dg = sg * (dtau * thd * thd + tau * acc);
-    double dl0 = l - p->l0;
-    *E = 0.5 * M * thd * thd + Vg + 0.5 * p->k * dl0 * dl0;
-    *V = Vg + 0.5 * p->k * dl0 * dl0;
+    *E = En;
+    *V = Vn;
     return 0;
 }
 
@@ -692,9 +840,10 @@ static int lane_start(const Table *T, Lane *L, const double *d, int ncol, double
                       double th0, double dt, double t_max, int early, double *traj,
                       long traj_cap)
 {
-    L->p.k = d[0]; L->p.l0 = d[1]; L->p.c = d[2]; L->p.cr = d[3]; L->e_tol = d[4];
+    ELEM_READ(&L->p, d);
+    L->e_tol = d[D_ETOL];
     L->p.dm = 0.0;
-    if (ncol > 5 && isfinite(d[5]) && d[5] != T->m0) L->p.dm = d[5] - T->m0;
+    if (ncol > D_MLID && isfinite(d[D_MLID]) && d[D_MLID] != T->m0) L->p.dm = d[D_MLID] - T->m0;
     L->out = out;
     L->t = 0.0; L->th = th0; L->thd = 0.0; L->th_min = th0; L->th_max = th0;
     L->thp = th0; L->thdp = 0.0; L->hp = 0.0;
@@ -703,21 +852,22 @@ static int lane_start(const Table *T, Lane *L, const double *d, int ncol, double
     L->status = S_OPEN; L->reason = R_NONE; L->stop_theta = NAN; L->wait = 0;
     L->gain = 0.0; L->t_max = t_max; L->dt = dt; L->inv_dt = 1.0 / dt;
     /* the energy rule needs dissipation (c dd + c_rot > 0 on the stroke) */
-    L->early = early && (L->p.c > 0 || L->p.cr > 0) && L->p.c >= 0 && L->p.cr >= 0;
+    L->early = early && ELEM_DISSIPATES(&L->p) && ELEM_DAMPERS_VALID(&L->p);
     for (int j = 0; j < NOUT; j++) out[j] = NAN;
     lane_record(L);
     double E0, V0;
-    if ((L->p.dm != 0.0 && !T->dcc)
+    if ((L->p.dm != 0.0 && !T->dcc) || (L->p.x && !T->xcc)
         || node_eval(T, &L->p, th0, 0.0, &L->a, &L->g, &L->dg, &E0, &V0) || !isfinite(E0)) {
         L->E0 = L->Emax = NAN; L->status = S_RANGE; return 1;
     }
     L->E0 = L->Emax = L->E = E0;
     L->Vlo = L->Vhi = V0;
     { /* rounding scale of the energy: the size of its terms */
-        double v[NC];
-        tab_eval(T, &L->p, th0, v, NULL);
-        double dl0 = v[C_L] - L->p.l0;
-        L->floor_ = 1e-12 * (fabs(v[C_VG]) + 0.5 * fabs(L->p.k) * dl0 * dl0 + fabs(E0));
+        double v[NC] = {0}, x[NX] = {0};
+        tab_eval_x(T, &L->p, th0, v, NULL, x, NULL);
+        double size = ELEM_SIZE(&L->p, v);
+        if (L->p.x) size += ELEM_SIZE_X(&L->p, x);
+        L->floor_ = 1e-12 * (size + fabs(E0));
     }
     return 0;
 }
@@ -886,8 +1036,6 @@ ALWAYS int lane_after_step(const Table *T, const Method *m, Lane *L, double h, d
  * stroke bit for bit; what changes is that the dependent chain of one stage (cell look-up,
  * Horner, division) is shared by the lanes instead of being waited for lane by lane. */
 
-typedef struct { v4 k, l0, c, cr; double dm[VW]; int any; } Par4;
-
 /* lane q's cell of the angles th: its base pointer and local variable s;
  * okm: all bits set in the lanes inside the table (outside: cell 0, the result is
  * discarded) */
@@ -957,15 +1105,27 @@ ALWAYS void coef4(const Table *T, const Par4 *P, v4 th, v4 *c, const double **b,
     transpose4(hi, c + 4);
 }
 
+/* the element columns of the lanes (cells b, local variables s from coef4) as columns x[j] */
+ALWAYS void xcoef4(const Table *T, const double *const *b, v4 s, v4 *x)
+{
+    v4 r[VW];
+    for (int q = 0; q < VW; q++) {
+        const double *xr = T->xcc + (size_t)((b[q] - T->cc) / NC) * NX;
+        double sq = s[q];
+        r[q] = ld4(xr) + sq * (ld4(xr + NX) + sq * (ld4(xr + 2 * NX) + sq * ld4(xr + 3 * NX)));
+    }
+    transpose4(r, x);
+}
+
 /* theta'' of the lanes (as rhs()); okm as cells4's */
 ALWAYS v4 rhs4(const Table *T, const Par4 *P, v4 th, v4 thd, v4l *okm)
 {
     v4 c[NC], s;
     const double *b[VW];
     coef4(T, P, th, c, b, &s, okm);
-    v4 damp = P->c * c[C_DD] + P->cr;
-    v4 N = -c[C_DVG] - P->k * (c[C_L] - P->l0) * c[C_DL] - 0.5 * c[C_DM] * thd * thd
-           - damp * thd;
+    v4 damp = ELEM_DAMPING(P, c), slope = ELEM_SLOPE(P, c);
+    if (P->anyx) { v4 x[NX]; xcoef4(T, b, s, x); slope += ELEM_SLOPE_X(P, x); }
+    v4 N = -slope - 0.5 * c[C_DM] * thd * thd - damp * thd;
     return N / c[C_M];
 }
 
@@ -978,14 +1138,19 @@ ALWAYS void node4(const Table *T, const Par4 *P, v4 th, v4 thd, v4 *a, v4 *g, v4
     const double *b[VW];
     v4l okm;
     coef4(T, P, th, c, b, &s, &okm);
-    v4 M = c[C_M], dM = c[C_DM], Vg = c[C_VG], dVg = c[C_DVG], l = c[C_L], dl = c[C_DL],
-       dd = c[C_DD], tau = c[C_TAU];
-    v4 damp = P->c * dd + P->cr;
-    v4 N = -dVg - P->k * (l - P->l0) * dl - 0.5 * dM * thd * thd - damp * thd;
+    v4 M = c[C_M], dM = c[C_DM], tau = c[C_TAU];
+    v4 damp = ELEM_DAMPING(P, c), slope = ELEM_SLOPE(P, c);
+    v4 En = ELEM_ENERGY(P, c, 0.5 * M * thd * thd), Vn = ELEM_POTENTIAL(P, c);
+    if (P->anyx) {
+        v4 x[NX];
+        xcoef4(T, b, s, x);
+        slope += ELEM_SLOPE_X(P, x);
+        En += ELEM_POTENTIAL_X(P, x); Vn += ELEM_POTENTIAL_X(P, x);
+    }
+    v4 N = -slope - 0.5 * dM * thd * thd - damp * thd;
     v4 acc = N / M;
-    v4 dl0 = l - P->l0;
-    *Ev = 0.5 * M * thd * thd + Vg + 0.5 * P->k * dl0 * dl0;
-    *Vv = Vg + 0.5 * P->k * dl0 * dl0;
+    *Ev = En;
+    *Vv = Vn;
     /* d tau / d theta (DCUB) from each lane's cubic of tau */
     v4 q1 = {b[0][NC + C_TAU], b[1][NC + C_TAU], b[2][NC + C_TAU], b[3][NC + C_TAU]};
     v4 q2 = {b[0][2 * NC + C_TAU], b[1][2 * NC + C_TAU], b[2][2 * NC + C_TAU],
@@ -1015,8 +1180,11 @@ ALWAYS int rhs_fast(const Table *T, const Par *p, double th, double thd, double 
         M += p->dm * CUB(r, C_M, s); dM += p->dm * CUB(r, C_DM, s);
         dVg += p->dm * CUB(r, C_DVG, s);
     }
-    double damp = p->c * dd + p->cr;
-    double N = -dVg - p->k * (l - p->l0) * dl - 0.5 * dM * thd * thd - damp * thd;
+    double c[NC];
+    c[C_DVG] = dVg; c[C_L] = l; c[C_DL] = dl; c[C_DD] = dd;
+    double damp = ELEM_DAMPING(p, c), slope = ELEM_SLOPE(p, c);
+    if (p->x) { double x[NX]; xtab_eval(T, i, s, x, NULL); slope += ELEM_SLOPE_X(p, x); }
+    double N = -slope - 0.5 * dM * thd * thd - damp * thd;
     *thdd = N / M;
     return 0;
 }
@@ -1289,10 +1457,13 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
                                       out + NOUT * next, th0, dt, t_max, early, traj, traj_cap);
                 Par4 *G = &P[k / VW];
                 int q = k % VW;
-                G->k[q] = L->p.k; G->l0[q] = L->p.l0; G->c[q] = L->p.c; G->cr[q] = L->p.cr;
+                ELEM_LANE(G, q, &L->p);
                 G->dm[q] = L->p.dm;
-                G->any = 0;
-                for (int e = 0; e < VW; e++) G->any |= G->dm[e] != 0.0;
+                G->any = 0; G->anyx = 0;
+                for (int e = 0; e < VW; e++) {
+                    G->any |= G->dm[e] != 0.0;
+                    G->anyx |= lanes[k - q + e].p.x && used[k - q + e];
+                }
                 if (over) {
                     lane_finish(T, L, thc, t_max);
                     if (traj_len) *traj_len = L->nt;
@@ -1392,10 +1563,12 @@ static void run(const Table *T, const Method *m, double dt, double t_max, double
  * NRNG (see the Table) or NULL */
 
 static void make(const double *tab_meta, const double *cc, const double *dcc,
-                 const double *rng, const double *tableau, Table *T, Method *m)
+                 const double *xcc, const double *rng, const double *tableau, Table *T,
+                 Method *m)
 {
     T->crit = NULL; T->ncrit = 0;
-    T->cc = cc; T->dcc = dcc; T->rng = rng; T->ncell = (int)tab_meta[0]; T->lo = tab_meta[1];
+    T->cc = cc; T->dcc = dcc; T->xcc = xcc; T->rng = rng;
+    T->ncell = (int)tab_meta[0]; T->lo = tab_meta[1];
     T->h = tab_meta[2]; T->m0 = tab_meta[3];
     T->inv_h = 1.0 / T->h;
     m->kind = (int)tableau[0]; m->s = (int)tableau[1];
@@ -1424,11 +1597,12 @@ static int *critical_cells(Table *T)
 }
 
 void sc_strokes(const double *tab_meta, const double *cc, const double *dcc,
-                const double *rng, const double *tableau, double dt, double t_max, double th0,
-                double thc, long n, long ncol, const double *design, long early, double *out)
+                const double *xcc, const double *rng, const double *tableau, double dt,
+                double t_max, double th0, double thc, long n, long ncol, const double *design,
+                long early, double *out)
 {
     Table T; Method m;
-    make(tab_meta, cc, dcc, rng, tableau, &T, &m);
+    make(tab_meta, cc, dcc, xcc, rng, tableau, &T, &m);
     int *crit = critical_cells(&T);
     run(&T, &m, dt, t_max, th0, thc, n, (int)ncol, design, (int)early, out, NULL, 0, NULL);
     free(crit);
@@ -1436,12 +1610,12 @@ void sc_strokes(const double *tab_meta, const double *cc, const double *dcc,
 
 /* one stroke with its trajectory */
 void sc_stroke_traj(const double *tab_meta, const double *cc, const double *dcc,
-                    const double *rng, const double *tableau, double dt, double t_max,
-                    double th0, double thc, long ncol, const double *design, long early,
-                    double *out, double *traj, long traj_cap, long *traj_len)
+                    const double *xcc, const double *rng, const double *tableau, double dt,
+                    double t_max, double th0, double thc, long ncol, const double *design,
+                    long early, double *out, double *traj, long traj_cap, long *traj_len)
 {
     Table T; Method m;
-    make(tab_meta, cc, dcc, rng, tableau, &T, &m);
+    make(tab_meta, cc, dcc, xcc, rng, tableau, &T, &m);
     int *crit = critical_cells(&T);
     *traj_len = 0;
     run(&T, &m, dt, t_max, th0, thc, 1, (int)ncol, design, (int)early, out, traj, traj_cap,
@@ -1449,22 +1623,28 @@ void sc_stroke_traj(const double *tab_meta, const double *cc, const double *dcc,
     free(crit);
 }
 
-/* one step (for tests): x1 = step(x0, h); design = (k, l0, c, c_rot, e_tol, m_lid) */
-int sc_step(const double *tab_meta, const double *cc, const double *dcc, const double *tableau,
-            const double *design, double h, const double *x0, double *x1)
+/* one step (for tests): x1 = step(x0, h); design: a full row (ROW_LAYOUT, with m_lid) */
+int sc_step(const double *tab_meta, const double *cc, const double *dcc, const double *xcc,
+            const double *tableau, const double *design, double h, const double *x0,
+            double *x1)
 {
     Table T; Method m;
-    make(tab_meta, cc, dcc, NULL, tableau, &T, &m);
-    Par p = {design[0], design[1], design[2], design[3], 0.0};
-    if (isfinite(design[5]) && design[5] != T.m0) {
+    make(tab_meta, cc, dcc, xcc, NULL, tableau, &T, &m);
+    Par p;
+    ELEM_READ(&p, design);
+    p.dm = 0.0;
+    if (p.x && !xcc) return S_RANGE;
+    if (isfinite(design[D_MLID]) && design[D_MLID] != T.m0) {
         if (!dcc) return S_RANGE;
-        p.dm = design[5] - T.m0;
+        p.dm = design[D_MLID] - T.m0;
     }
     return step(&T, &m, &p, h, x0[0], x0[1], &x1[0], &x1[1]);
 }
 
 int sc_nout(void) { return NOUT; }
 int sc_abi(void) { return KERNEL_ABI; }
+/* every layout constant shared with softclose/native.py, as one string (checked at load) */
+const char *sc_layout(void) { return LAYOUT; }
 
 static struct PyModuleDef moddef = {PyModuleDef_HEAD_INIT, "_kernel",
                                     "softclose C stroke kernel (used through ctypes)", -1, NULL};

@@ -45,7 +45,7 @@ from . import native
 from .config import Config
 from .integrators import METHODS
 from .model import LidModel
-from .problem import PARAM_COLUMNS, RELATIVE, TARGETS, objective, params_of
+from .problem import PARAM_COLUMNS, RELATIVE, TARGETS, as_params, objective, params_of
 from .reference import Reference
 from .simulate import Simulator
 
@@ -111,7 +111,7 @@ def designs_for(cfg: Config, quick: bool = False) -> dict[str, np.ndarray]:
     for i, (k, v) in enumerate(SPRING_DASHPOT.items()):
         if quick and i >= QUICK_DESIGNS:
             break
-        out[k] = np.array(v, float)
+        out[k] = as_params(v)
     return out
 
 
@@ -142,7 +142,7 @@ def kernel_times(sim: Simulator, p: np.ndarray, repeats: int = 5,
     by the batch size.
     """
     st = sim.cfg.stroke
-    row = np.r_[p, sim.energy_tol(p[None, :])]
+    row = np.r_[native.kernel_rows(as_params(p)), sim.energy_tol(p[None, :])]
 
     def call(n):
         d = np.repeat(row[None, :], n, axis=0)

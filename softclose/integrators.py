@@ -89,11 +89,13 @@ def get_method(name: str) -> Method:
             from None
 
 
-def casadi_step(method: Method, ode: ca.Function, nx: int = 2, np_: int = 4) -> ca.Function:
-    """One step ``x1 = F(x0, p, h)`` of ``method`` on ``ode(x, p)``, as a CasADi Function.
+def casadi_step(method: Method, ode: ca.Function) -> ca.Function:
+    """One step ``x1 = F(x0, p, h)`` of ``method`` on ``ode(x, p)``, as a CasADi Function
+    (x and p of the sizes ``ode`` takes).
 
     Implicit methods solve their stage equations with a CasADi Newton rootfinder.
     """
+    nx, np_ = ode.size1_in(0), ode.size1_in(1)
     x0, p, h = ca.SX.sym("x0", nx), ca.SX.sym("p", np_), ca.SX.sym("h")
     if method.kind == "symplectic_euler":
         a = ode(x0, p)[1]

@@ -5,9 +5,11 @@
 that the loop closes without a toggle from the assembly angle over every angle the stroke
 visits, and builds the CasADi functions the rest of softclose calls:
 
-- ``ode(x, p) -> x'`` with x = (theta, theta'), p = (k, l0, c, c_rot) (SX, cheap);
+- ``ode(x, p) -> x'`` with x = (theta, theta') and p the parameter vector of
+  :data:`softclose.elements.PARAMS` (k, l0, c, c_rot, then the elements added since) (SX, cheap);
 - ``coeffs(theta) -> (M, dM, Vg, dVg, l, dl, dd, tau)`` and their theta-derivatives, which the
-  fast kernels tabulate;
+  fast kernels tabulate, and ``xcoeffs`` the same for the columns of the elements added
+  since the seed (:data:`softclose.dynamics.EXTRA_COEFFS`);
 - kinematics, energy and (built only on first use) the Newton-Euler reactions.
 """
 
@@ -20,9 +22,11 @@ import casadi as ca
 import numpy as np
 
 from . import dynamics as dyn
+from . import elements
 from .config import Config
 from .errors import ConfigError
 from .kinematics import branch_of, closure, points, velocity_loop
+from .problem import as_params
 
 #: |u| above which the linkage counts as "at a toggle": acos|u| < 0.81 deg, i.e. the crank
 #: angles phi of the two assemblies (phi = arg w +- acos u) less than 1.6 deg apart
@@ -38,6 +42,14 @@ MARGIN_OPEN_DEG = 30.0
 
 def _wrap(a):
     return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+def model_key(cfg: Config) -> tuple:
+    """What a model depends on: geometry, masses, the stroke's angles and the element choices
+    that change its structure (:func:`softclose.elements.structure`). Equal keys, equal
+    models: every cache of models, tables and NLPs is keyed by it."""
+    return (cfg.geometry, cfg.mass, cfg.stroke.theta0_deg, cfg.stroke.theta_closed_deg,
+            elements.structure(cfg))
 
 
 class LidModel:
@@ -185,43 +197,51 @@ class LidModel:
 
     # -- CasADi functions ------------------------------------------------------------
     def _build(self):
-        geo, mass, s = self.geo, self.mass, self.sigma
+        s = self.sigma
         th, thd = ca.SX.sym("theta"), ca.SX.sym("theta_dot")
-        x, p = ca.vertcat(th, thd), ca.SX.sym("p", 4)
-        cf = dyn.coefficients(th, geo, mass, s)
+        x, p = ca.vertcat(th, thd), ca.SX.sym("p", len(elements.PARAMS))
+        cf = dyn.coefficients(th, self.cfg, s)
         self._cf_expr = cf
         tdd = dyn.theta_ddot(cf, thd, p)
         self.ode = ca.Function("ode", [x, p], [ca.vertcat(thd, tdd)], ["x", "p"], ["xdot"])
         vec = ca.vertcat(*[cf[k] for k in dyn.COEFFS])
         self.coeffs = ca.Function("coeffs", [th], [vec, ca.jacobian(vec, th)],
                                   ["theta"], ["c", "dc"])
+        xvec = ca.vertcat(*[cf[k] for k in dyn.EXTRA_COEFFS])
+        self.xcoeffs = ca.Function("xcoeffs", [th], [xvec, ca.jacobian(xvec, th)],
+                                   ["theta"], ["c", "dc"])
         self.energy_fn = ca.Function("energy", [x, p], [dyn.energy(cf, thd, p)])
         self.power_fn = ca.Function("power", [x, p], [dyn.damper_power(cf, thd, p)])
-        phi, gamma, u = closure(th, geo, s)
-        pts = points(th, phi, gamma, geo)
-        phi_d, gamma_d = velocity_loop(th, phi, gamma, thd, geo)
+        phi, gamma, u = closure(th, self.geo, s)
+        pts = points(th, phi, gamma, self.geo)
+        phi_d, gamma_d = velocity_loop(th, phi, gamma, thd, self.geo)
         v_T = ca.jacobian(pts["T"], th) * thd
         self.kin = ca.Function(
             "kin", [x], [phi, gamma, phi_d, gamma_d, v_T, pts["A"], pts["C"], pts["E"],
                          pts["T"], pts["G1"]],
             ["x"], ["phi", "gamma", "phi_dot", "gamma_dot", "v_T", "A", "C", "E", "T", "G1"])
-        # the holding moment dV/dtheta (gravity + spring), as a function of theta and p
-        self.dV = ca.Function("dV", [th, p], [cf["dVg"] + p[0] * (cf["l"] - p[1]) * cf["dl"]])
+        # the holding moment dV/dtheta (gravity + springs), as a function of theta and p
+        self.dV = ca.Function("dV", [th, p], [dyn.slope(cf["coords"], elements.params(p))])
+        # every element's coordinate and its theta-derivative: {name: Function theta -> (q, q')}
+        self.coordinate_fns = {e: ca.Function(f"q_{e}", [th], [c.q, c.dq])
+                               for e, c in cf["coords"].items()}
 
     @cached_property
     def newton_euler(self) -> ca.Function:
         """(theta, theta', p) -> z = (R_O, R_A, R_B, R_C, theta''): built on first use."""
-        th, thd, p = ca.SX.sym("theta"), ca.SX.sym("theta_dot"), ca.SX.sym("p", 4)
-        A, b = dyn.newton_euler_system(th, thd, p, self.geo, self.mass, self.sigma)
+        npar = len(elements.PARAMS)
+        th, thd, p = ca.SX.sym("theta"), ca.SX.sym("theta_dot"), ca.SX.sym("p", npar)
+        A, b = dyn.newton_euler_system(th, thd, p, self.cfg, self.sigma)
         sys = ca.Function("ne_sys", [th, thd, p], [A, b])
-        thm, thdm, pm = ca.MX.sym("theta"), ca.MX.sym("theta_dot"), ca.MX.sym("p", 4)
+        thm, thdm, pm = ca.MX.sym("theta"), ca.MX.sym("theta_dot"), ca.MX.sym("p", npar)
         Am, bm = sys(thm, thdm, pm)
         return ca.Function("newton_euler", [thm, thdm, pm], [ca.solve(Am, bm)])
 
     # -- conveniences (numbers in, numbers out) ----------------------------------------
     def params(self, design=None) -> np.ndarray:
+        """The parameter vector p of ``design`` (a [design] section; default: the config's)."""
         d = design if design is not None else self.cfg.design
-        return np.array([d.spring_k, d.spring_rest_length, d.damper_c, d.rotary_damper_c])
+        return np.array([getattr(d, name) for name in elements.PARAM_NAMES], float)
 
     def closure(self, theta: float) -> tuple[float, float]:
         """(phi, gamma) in radians on this model's branch."""
@@ -229,17 +249,17 @@ class LidModel:
         return float(out[0]), float(out[1])
 
     def theta_ddot(self, theta: float, theta_dot: float, p=None) -> float:
-        p = self.params() if p is None else p
+        p = self.params() if p is None else as_params(p)
         return float(self.ode(ca.vertcat(theta, theta_dot), p)[1])
 
     def holding_moment(self, p=None) -> float:
         """dV/dtheta at theta_closed (N m); > 0 presses the lid onto the rim."""
-        p = self.params() if p is None else p
+        p = self.params() if p is None else as_params(p)
         return float(self.dV(self.cfg.stroke.theta_closed, p))
 
     def state(self, theta: float, theta_dot: float, p=None) -> dict:
         """Every quantity of SPEC §7 ``state`` at one state (SI units, radians)."""
-        p = self.params() if p is None else p
+        p = self.params() if p is None else as_params(p)
         x = ca.vertcat(theta, theta_dot)
         k = self.kin(x)
         z = np.asarray(self.newton_euler(theta, theta_dot, p)).ravel()

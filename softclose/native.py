@@ -1,16 +1,23 @@
 """The compiled stroke kernel (``_kernel.c``) and the coefficient table it reads.
 
 "Skip what a scene doesn't need": with the geometry fixed, the equation of motion
-depends on theta only through eight coefficients (:data:`softclose.dynamics.COEFFS`), so
+depends on theta only through coefficients (:data:`softclose.dynamics.COEFFS`: the inertia,
+the seed's elements' columns, the tip's lever; and, when a stroke has one of the elements
+added since, their columns :data:`softclose.dynamics.EXTRA_COEFFS` in a second table), so
 no closure is solved per step. :class:`CoefficientTable` evaluates them and their exact
 theta-derivatives (CasADi AD) on a uniform grid once, as cubic Hermite pieces; the
 interpolation error is measured at every cell midpoint and kept in ``max_rel_error``.
 
 Design rows
 -----------
-:func:`run_strokes` integrates one stroke per row of a float array with 5 or 6 columns::
+:func:`run_strokes` integrates one stroke per row of a float array (:data:`DESIGN_COLUMNS`)::
 
-    k (N/m), l0 (m), c (N s/m), c_rot (N m s/rad), energy_tol (J)[, lid_mass (kg)]
+    the parameter vector p (:data:`softclose.elements.PARAMS`: k (N/m), l0 (m), c (N s/m),
+    c_rot (N m s/rad), then the elements' added since), energy_tol (J)[, lid_mass (kg)]
+
+The kernel takes p in SI (an angle given in degrees in radians: :func:`kernel_rows`
+converts); its laws are the registry's (:mod:`softclose.elements`), stated once in the
+element section of ``_kernel.c``.
 
 ``energy_tol`` is the energy rise that flags the stroke unstable (and the margin of the
 early exit, below). ``lid_mass`` is the lid's mass for that row; NaN, or a missing column,
@@ -23,8 +30,9 @@ model rebuild. A row at the table's mass never reads that table (bit-identical r
 
 Early exit -- why it is exact
 -----------------------------
-With V = Vg + k (l - l0)^2 / 2 and E = M theta'^2 / 2 + V, the equation of motion gives
-dE/dt = -(c dd + c_rot) theta'^2 <= 0: the dampers only dissipate. So at every later time
+With V the elements' potential (gravity and the springs) and E = M theta'^2 / 2 + V, the
+equation of motion gives dE/dt = -(damping) theta'^2 <= 0 (c dd + c_rot): the dampers only
+dissipate. So at every later time
 t' >= t, V(theta(t')) <= E(t') <= E(t), and since theta is continuous it stays in the
 connected component R(t) of {theta : V(theta) <= E(t)} that contains theta(t); its tip
 speed tau |theta'| = tau sqrt(2 (E - V) / M) is at most G(t) = max over R(t) of
@@ -86,7 +94,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .dynamics import COEFFS
+from . import elements
+from .dynamics import COEFFS, EXTRA_COEFFS
 from .errors import ConfigError, NumericalError
 from .integrators import Method
 
@@ -99,11 +108,20 @@ STATUS = {0: "closed", 1: "not closed", 2: "unstable", 3: "left the tabulated ra
           4: "non-finite", 5: "implicit solve failed"}
 #: ``stop_reason`` codes: why a stroke does not close (0: it closed, failed, or is undecided)
 STOP_REASONS = {0: "", 1: "energy below the barrier", 2: "held open"}
-#: the design-row columns, in order (the last one is optional)
-DESIGN_COLUMNS = ("spring_k", "spring_rest_length", "damper_c", "rotary_damper_c",
-                  "energy_tol", "lid_mass")
+#: the design-row columns, in order: the parameter vector (SI), then energy_tol and the
+#: optional lid_mass
+DESIGN_COLUMNS = tuple(q.name.removesuffix("_deg") for q in elements.PARAMS) + (
+    "energy_tol", "lid_mass")
+#: the SI factor of each parameter column (an angle given in degrees: pi/180)
+_SI = np.array([q.si for q in elements.PARAMS])
 #: version of the exported C signatures; a built extension reporting another is not used
-KERNEL_ABI = 2
+KERNEL_ABI = 3
+#: element columns per row of the extra table (the kernel's NX: its columns, then zeros)
+NX = 4
+#: every layout constant this module shares with the kernel (``sc_layout()`` must equal it)
+LAYOUT = (f"abi={KERNEL_ABI};cc={','.join(COEFFS)};mass={','.join(COEFFS[:4])};"
+          f"xcc={','.join(EXTRA_COEFFS + ('-',) * (NX - len(EXTRA_COEFFS)))};"
+          f"row={','.join(DESIGN_COLUMNS)};out={','.join(OUT_FIELDS)};nrng=18")
 
 _lib = None
 _lock = threading.Lock()
@@ -164,17 +182,45 @@ def load():
         lib = ctypes.CDLL(str(path))
         dp, lp = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_long)
         d, l = ctypes.c_double, ctypes.c_long
-        lib.sc_strokes.argtypes = [dp, dp, dp, dp, dp, d, d, d, d, l, l, dp, l, dp]
+        lib.sc_strokes.argtypes = [dp, dp, dp, dp, dp, dp, d, d, d, d, l, l, dp, l, dp]
         lib.sc_strokes.restype = None
-        lib.sc_stroke_traj.argtypes = [dp, dp, dp, dp, dp, d, d, d, d, l, dp, l, dp, dp, l, lp]
+        lib.sc_stroke_traj.argtypes = [dp, dp, dp, dp, dp, dp, d, d, d, d, l, dp, l, dp, dp, l,
+                                       lp]
         lib.sc_stroke_traj.restype = None
-        lib.sc_step.argtypes = [dp, dp, dp, dp, dp, d, dp, dp]
+        lib.sc_step.argtypes = [dp, dp, dp, dp, dp, dp, d, dp, dp]
         lib.sc_step.restype = ctypes.c_int
-        if lib.sc_nout() != len(OUT_FIELDS) or lib.sc_abi() != KERNEL_ABI:
-            raise NumericalError("the stroke kernel does not match softclose/native.py; "
-                                 "reinstall softclose")
+        check_layout(lib)
         _lib = lib
         return lib
+
+
+def check_layout(lib) -> None:
+    """NumericalError (one line, naming the first difference) unless the kernel's layout --
+    ABI, table columns, element columns, row and output columns, range columns -- is this
+    module's :data:`LAYOUT`: a mismatch is a clear error, never wrong numbers."""
+    try:
+        lib.sc_layout.restype = ctypes.c_char_p
+        theirs = lib.sc_layout().decode()
+    except AttributeError:
+        theirs = f"abi={lib.sc_abi()}"
+    if lib.sc_nout() == len(OUT_FIELDS) and theirs == LAYOUT:
+        return
+    ours = dict(part.split("=", 1) for part in LAYOUT.split(";"))
+    got = dict(part.split("=", 1) for part in theirs.split(";") if "=" in part)
+    what = next((f"{k}: the kernel has {got.get(k)!r}, softclose/native.py {v!r}"
+                 for k, v in ours.items() if got.get(k) != v), "the output width")
+    raise NumericalError(f"the stroke kernel does not match softclose/native.py ({what}); "
+                         "reinstall softclose (pip install .)")
+
+
+def kernel_rows(P: np.ndarray) -> np.ndarray:
+    """Rows of the parameter vector in the kernel's units (SI: an angle in degrees becomes
+    radians); the columns already in SI are passed through untouched."""
+    P = np.array(P, float)
+    scale = _SI != 1.0
+    if scale.any():
+        P[..., scale] = P[..., scale] * _SI[scale]
+    return P
 
 
 def _ptr(a: np.ndarray | None):
@@ -220,7 +266,7 @@ def _cell_ranges(cc: np.ndarray) -> np.ndarray:
     """Per cell (the kernel's NRNG columns): ranges of tau, M, Vg, l, dVg, dl over the whole
     cell, then Vg, l, tau, M at its middle (for the early exit's tip-speed bound), then a
     flag: may the spring length have an extremum inside the cell."""
-    M, _, Vg, dVg, l, dl, _, tau = range(8)
+    M, Vg, dVg, l, dl, tau = (COEFFS.index(n) for n in ("M", "Vg", "dVg", "l", "dl", "tau"))
     out = np.empty((len(cc), 18))
     for col, j in zip(range(0, 12, 2), (tau, M, Vg, l, dVg, dl)):
         out[:, col], out[:, col + 1] = _cubic_ranges(cc[:, j])
@@ -243,9 +289,11 @@ def _cell_ranges(cc: np.ndarray) -> np.ndarray:
     return out
 
 
-def _pieces(model, nodes: np.ndarray, h: float) -> np.ndarray:
-    """Cubic Hermite pieces (ncell, NC, 4) in the local variable s in [0, 1]."""
-    v, dv = (np.asarray(a) for a in model.coeffs.map(len(nodes))(nodes))  # (NC, n+1) each
+def _pieces(model, nodes: np.ndarray, h: float, fn=None) -> np.ndarray:
+    """Cubic Hermite pieces (ncell, NC, 4) in the local variable s in [0, 1] of the
+    coefficients (or of ``fn``'s: theta -> (values, theta-derivatives))."""
+    fn = fn or model.coeffs
+    v, dv = (np.asarray(a) for a in fn.map(len(nodes))(nodes))  # (NC, n+1) each
     f0, f1, d0, d1 = v[:, :-1], v[:, 1:], dv[:, :-1] * h, dv[:, 1:] * h
     cc = np.stack([f0, d0, 3 * (f1 - f0) - 2 * d0 - d1, 2 * (f0 - f1) + d0 + d1], axis=-1)
     return np.ascontiguousarray(cc.transpose(1, 0, 2)), v
@@ -359,6 +407,53 @@ class CoefficientTable:
         dm = np.where(np.isfinite(dm), dm, 0.0)
         return dm if np.any(dm != 0) else None
 
+    @cached_property
+    def extra(self) -> np.ndarray:
+        """The element columns of the extra table (:data:`softclose.dynamics.EXTRA_COEFFS`,
+        those of the elements added since the seed) as cubic pieces on the same cells,
+        (ncell, len(EXTRA_COEFFS), 4): built on first use, when a stroke has such an element
+        (their interpolation error is measured like the table's, ``max_rel_error_extra``)."""
+        nodes = np.linspace(self.lo, self.hi, self.ncell + 1)
+        xc, v = _pieces(self.model, nodes, self.h, self.model.xcoeffs)
+        mid = 0.5 * (nodes[:-1] + nodes[1:])
+        exact = np.asarray(self.model.xcoeffs.map(self.ncell)(mid)[0])
+        interp = (xc[:, :, 0] + 0.5 * xc[:, :, 1] + 0.25 * xc[:, :, 2] + 0.125 * xc[:, :, 3]).T
+        scale = np.maximum(np.abs(v).max(axis=1, keepdims=True), 1e-300)
+        self.max_rel_error_extra = float((np.abs(interp - exact) / scale).max())
+        if not np.all(np.isfinite(xc)):
+            raise NumericalError("an element's tabulated coordinate is not finite on the "
+                                 "stroke range; the geometry is at or near a toggle position")
+        return xc
+
+    @cached_property
+    def extra_kernel(self) -> np.ndarray:
+        """:attr:`extra` in the kernel's layout (ncell, 4, NX), zero-padded to NX columns."""
+        x = np.zeros((self.ncell, NX, 4))
+        x[:, :len(EXTRA_COEFFS)] = self.extra
+        return _kernel_layout(x)
+
+    def rows(self, theta, n: int, lid_mass=None) -> np.ndarray:
+        """:meth:`evaluate` for ``n`` rows at ``theta`` (scalar or one per row). At one angle
+        the cell is looked up once and its row broadcast -- the same arithmetic per row as
+        evaluating each row, so the same numbers -- instead of gathering n copies."""
+        th = np.asarray(theta, float)
+        if th.ndim:
+            return self.evaluate(np.broadcast_to(th, (n,)), lid_mass)
+        c = np.broadcast_to(self.evaluate(th[None]), (n, self.cc.shape[1]))
+        dm = self.mass_offsets(lid_mass, (n,))
+        if dm is None:
+            return c
+        c = c.copy()
+        c[:, :4] += dm[:, None] * self.mass_slope(float(th))
+        return c
+
+    def rows_extra(self, theta, n: int) -> np.ndarray:
+        """The element columns of the extra table at ``theta`` (scalar or one per row), n rows."""
+        th = np.broadcast_to(np.atleast_1d(np.asarray(theta, float)), (n,))
+        i, s = self._cell(th)
+        q = self.extra[i]
+        return q[..., 0] + s * (q[..., 1] + s * (q[..., 2] + s * q[..., 3]))
+
     def _mass_slope(self, i: np.ndarray, s: np.ndarray) -> np.ndarray:
         r = self.mass_derivative[i]
         return r[..., 0] + s * (r[..., 1] + s * (r[..., 2] + s * r[..., 3]))
@@ -369,14 +464,22 @@ class CoefficientTable:
         return self._mass_slope(*self._cell(np.array([theta], float)))[0]
 
 
+_NP = len(elements.PARAMS)
+
+
+def _extra(designs: np.ndarray, table: CoefficientTable) -> np.ndarray | None:
+    """The extra table in the kernel's layout if any row has an element of it, else None."""
+    return table.extra_kernel if elements.needs_extra(designs[:, :_NP]) else None
+
+
 def _lid_masses(designs: np.ndarray, table: CoefficientTable) -> np.ndarray | None:
     """Validate the optional lid-mass column; the derivative table if any row needs it."""
-    if designs.shape[1] == 5:
+    if designs.shape[1] == _NP + 1:
         return None
-    if designs.shape[1] != 6:
-        raise ConfigError(f"design rows: expected 5 or 6 columns ({', '.join(DESIGN_COLUMNS)}), "
-                          f"got {designs.shape[1]}")
-    m = designs[:, 5]
+    if designs.shape[1] != _NP + 2:
+        raise ConfigError(f"design rows: expected {_NP + 1} or {_NP + 2} columns "
+                          f"({', '.join(DESIGN_COLUMNS)}), got {designs.shape[1]}")
+    m = designs[:, _NP + 1]
     given = ~np.isnan(m)
     if np.any(given & ~(np.isfinite(m) & (m > 0))):
         bad = m[given & ~(np.isfinite(m) & (m > 0))][0]
@@ -389,14 +492,16 @@ def _lid_masses(designs: np.ndarray, table: CoefficientTable) -> np.ndarray | No
 def run_strokes(table: CoefficientTable, method: Method, step: float, t_max: float,
                 theta0: float, theta_closed: float, designs: np.ndarray,
                 threads: int | None = None, early_exit: bool = True) -> np.ndarray:
-    """Metrics of strokes for the design rows ``designs`` (see the module doc: 5 or 6
-    columns). ``early_exit=False`` integrates every open stroke to ``t_max``.
+    """Metrics of strokes for the design rows ``designs`` (see the module doc: the kernel's
+    rows, SI, with or without the lid-mass column). ``early_exit=False`` integrates every
+    open stroke to ``t_max``.
 
     Returns an array (n, len(OUT_FIELDS)). Work is split across threads.
     """
     lib = load()
     designs = np.ascontiguousarray(np.atleast_2d(designs), float)
     dcc = _lid_masses(designs, table)
+    xcc = _extra(designs, table)
     cc, ranges = table.cc_kernel, table.cell_ranges      # held here while C reads them
     n, ncol = designs.shape
     out = np.empty((n, len(OUT_FIELDS)))
@@ -406,9 +511,9 @@ def run_strokes(table: CoefficientTable, method: Method, step: float, t_max: flo
     threads = max(1, min(threads, n // 64 or 1))
 
     def work(a, b):
-        lib.sc_strokes(_ptr(table.meta), _ptr(cc), _ptr(dcc), _ptr(ranges), _ptr(tab), step, t_max,
-                       theta0, theta_closed, b - a, ncol, _ptr(designs[a:b]), int(early_exit),
-                       _ptr(out[a:b]))
+        lib.sc_strokes(_ptr(table.meta), _ptr(cc), _ptr(dcc), _ptr(xcc), _ptr(ranges),
+                       _ptr(tab), step, t_max, theta0, theta_closed, b - a, ncol,
+                       _ptr(designs[a:b]), int(early_exit), _ptr(out[a:b]))
 
     if threads == 1:
         work(0, n)
@@ -436,65 +541,35 @@ def run_stroke_trajectory(table, method, step, t_max, theta0, theta_closed, desi
     lib = load()
     design = np.ascontiguousarray(np.atleast_1d(design), float)
     dcc = _lid_masses(design[None, :], table)
+    xcc = _extra(design[None, :], table)
     cc, ranges = table.cc_kernel, table.cell_ranges
     cap = int(math.ceil(t_max / step)) + 3
     traj = np.empty((cap, 3))
     out = np.empty(len(OUT_FIELDS))
     nt = ctypes.c_long(0)
     tab = method.packed()
-    lib.sc_stroke_traj(_ptr(table.meta), _ptr(cc), _ptr(dcc), _ptr(ranges), _ptr(tab),
-                       step, t_max, theta0, theta_closed, len(design), _ptr(design),
+    lib.sc_stroke_traj(_ptr(table.meta), _ptr(cc), _ptr(dcc), _ptr(xcc), _ptr(ranges),
+                       _ptr(tab), step, t_max, theta0, theta_closed, len(design), _ptr(design),
                        int(early_exit), _ptr(out), _ptr(traj), cap, ctypes.byref(nt))
     return out, traj[:nt.value].copy()
 
 
-def kernel_step(table, method, design, h, x0) -> np.ndarray:
-    """One step of the kernel (for tests); ``design`` = (k, l0, c, c_rot[, e_tol, lid_mass])."""
+def kernel_step(table, method, p, h, x0, lid_mass=None) -> np.ndarray:
+    """One step of the kernel (for tests); ``p`` the parameter vector (config units),
+    ``lid_mass`` None for the table's own."""
     lib = load()
     x1 = np.empty(2)
-    design = np.asarray(design, float)
-    mass = design[5] if len(design) > 5 else np.nan
-    d = np.ascontiguousarray(np.r_[design[:4], 0.0, mass], float)
+    mass = np.nan if lid_mass is None else float(lid_mass)
+    from .problem import as_params
+    d = np.ascontiguousarray(np.r_[kernel_rows(as_params(p)), 0.0, mass], float)
     dcc = _lid_masses(d[None, :], table)
+    xcc = _extra(d[None, :], table)
     cc, tab, x0 = table.cc_kernel, method.packed(), np.ascontiguousarray(x0, float)
-    st = lib.sc_step(_ptr(table.meta), _ptr(cc), _ptr(dcc), _ptr(tab), _ptr(d), h, _ptr(x0),
-                     _ptr(x1))
+    st = lib.sc_step(_ptr(table.meta), _ptr(cc), _ptr(dcc), _ptr(xcc), _ptr(tab), _ptr(d), h,
+                     _ptr(x0), _ptr(x1))
     if st:
         raise NumericalError(f"kernel step failed: {STATUS.get(st, st)}")
     return x1
-
-
-def _coefficients(table: CoefficientTable, theta, n: int, lid_mass=None) -> np.ndarray:
-    """:meth:`CoefficientTable.evaluate` for ``n`` rows at ``theta`` (scalar or one per row).
-    At one angle the cell is looked up once and its row broadcast -- the same arithmetic per
-    row as evaluating each row, so the same numbers -- instead of gathering n copies."""
-    th = np.asarray(theta, float)
-    if th.ndim:
-        return table.evaluate(np.broadcast_to(th, (n,)), lid_mass)
-    c = np.broadcast_to(table.evaluate(th[None]), (n, table.cc.shape[1]))
-    dm = table.mass_offsets(lid_mass, (n,))
-    if dm is None:
-        return c
-    c = c.copy()
-    c[:, :4] += dm[:, None] * table.mass_slope(float(th))
-    return c
-
-
-def potential_energy(table: CoefficientTable, theta, P, lid_mass=None) -> np.ndarray:
-    """V = Vg + k (l - l0)^2 / 2 (J) at ``theta`` (scalar or one per row) for rows of
-    P = (k, l0, ...), at ``lid_mass`` (scalar, one per row, or None: the table's mass)."""
-    P = np.atleast_2d(np.asarray(P, float))
-    c = _coefficients(table, theta, len(P), lid_mass)
-    return c[:, 2] + 0.5 * P[:, 0] * (c[:, 4] - P[:, 1]) ** 2
-
-
-def holding_moments(table: CoefficientTable, theta_closed: float, P,
-                    lid_mass=None) -> np.ndarray:
-    """dV/dtheta at ``theta_closed`` (N m, > 0 presses the lid shut) for rows of
-    P = (k, l0, ...), from the table, at ``lid_mass`` (scalar, one per row, or None)."""
-    P = np.atleast_2d(np.asarray(P, float))
-    c = _coefficients(table, float(theta_closed), len(P), lid_mass)
-    return c[:, 3] + P[:, 0] * (c[:, 4] - P[:, 1]) * c[:, 5]
 
 
 def not_closed_reasons(out) -> np.ndarray:

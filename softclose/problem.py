@@ -5,8 +5,9 @@ Every feature reads this module -- the optimiser, sweeps, verification, robust d
 benchmark -- and none restates it.
 
 - **Design** (:data:`DESIGN_KEYS`): the spring stiffness, its rest length and the damper;
-  the stroke kernels take them, with the rotary damper, as one parameter vector
-  ``p = (k, l0, c, c_rot)`` (:data:`PARAM_KEYS`, :func:`params_of`).
+  the stroke kernels take them, with every other element's per-stroke values, as one
+  parameter vector ``p = (k, l0, c, c_rot, ...)`` (:data:`PARAM_KEYS`, stated by the element
+  registry, :data:`softclose.elements.PARAMS`; :func:`params_of`).
 - **Metrics** (:data:`METRICS`): the quantities of one closing stroke, with units.
 - **Objective**: ``J = weight_impact · impact_theta_dot² + weight_peak_tip · peak_tip_speed²``
   (:func:`objective`).
@@ -27,10 +28,14 @@ from typing import Any
 
 import numpy as np
 
+from .config.schema import KEYS
+from .elements import PARAM_NAMES
+
 #: the design variables the optimiser picks (config section [design], bounds in [optimise])
 DESIGN_KEYS = ("spring_k", "spring_rest_length", "damper_c")
-#: the stroke kernels' parameter vector p, in order
-PARAM_KEYS = DESIGN_KEYS + ("rotary_damper_c",)
+#: the stroke kernels' parameter vector p, in order (the element registry's)
+PARAM_KEYS = PARAM_NAMES
+assert PARAM_KEYS[:len(DESIGN_KEYS)] == DESIGN_KEYS
 #: config keys of the parameter vector p = (k, l0, c, c_rot), by column
 PARAM_COLUMNS = {f"design.{k}": i for i, k in enumerate(PARAM_KEYS)}
 #: the config key the kernels also take per stroke, beside p (their lid-mass column: the
@@ -62,14 +67,12 @@ METRICS = (
 )
 METRIC_KEYS = tuple(m.key for m in METRICS)
 
-#: units of the metrics, the objective and the design variables (config keys by full name)
+#: units of the metrics, the objective and the design values (by name and by full config key)
 UNITS: dict[str, str] = {
     **{m.key: m.unit for m in METRICS},
     "objective": "",
-    "spring_k": "N/m", "spring_rest_length": "m", "damper_c": "N s/m",
-    "rotary_damper_c": "N m s/rad",
-    "design.spring_k": "N/m", "design.spring_rest_length": "m", "design.damper_c": "N s/m",
-    "design.rotary_damper_c": "N m s/rad",
+    **{k.name: k.unit for k in KEYS if k.section == "design"},
+    **{k.full: k.unit for k in KEYS if k.section == "design"},
 }
 
 #: the named constraints of the design problem
@@ -93,14 +96,50 @@ CONSTRAINT_TOL = 1e-7
 
 
 def params_of(cfg, design: dict | None = None) -> np.ndarray:
-    """The parameter vector (k, l0, c, c_rot) of ``cfg``'s design, with ``design`` (a dict
-    of some :data:`DESIGN_KEYS`) taking precedence."""
-    d = cfg.design
-    p = np.array([d.spring_k, d.spring_rest_length, d.damper_c, d.rotary_damper_c], float)
-    for i, k in enumerate(DESIGN_KEYS):
-        if design is not None and k in design:
-            p[i] = float(design[k])
-    return p
+    """The parameter vector p (:data:`PARAM_KEYS`) of ``cfg``'s design, with ``design`` (a
+    dict of some of its keys) taking precedence."""
+    d = dict(design or {})
+    return np.array([float(d[k]) if k in d else float(getattr(cfg.design, k))
+                     for k in PARAM_KEYS])
+
+
+#: the parameters' defaults (the elements added since the seed: absent)
+PARAM_DEFAULTS = np.array([next(k.default for k in KEYS if k.full == f"design.{name}")
+                           for name in PARAM_KEYS], float)
+
+
+def as_params(p) -> np.ndarray:
+    """A parameter vector (or rows of them) as a float array of every parameter: a shorter
+    vector -- the seed's four (k, l0, c, c_rot), say -- gets the others from their defaults,
+    which leave the elements added since absent."""
+    p = np.asarray(p, float)
+    n = p.shape[-1] if p.ndim else 0
+    if n == len(PARAM_KEYS):
+        return p
+    if not 0 < n < len(PARAM_KEYS):
+        raise ValueError(f"a parameter vector has {len(PARAM_KEYS)} values "
+                         f"({', '.join(PARAM_KEYS)}), got {n}")
+    rest = np.broadcast_to(PARAM_DEFAULTS[n:], p.shape[:-1] + (len(PARAM_KEYS) - n,))
+    return np.concatenate([p, rest], axis=-1)
+
+
+def with_designs(cfg, D) -> np.ndarray:
+    """Parameter vectors of ``cfg``'s design with the design variables (:data:`DESIGN_KEYS`)
+    taken from ``D``: one vector for a design (k, l0, c), rows for an array of them."""
+    D = np.asarray(D, float)
+    P = np.tile(params_of(cfg), (len(np.atleast_2d(D)), 1))
+    P[:, :len(DESIGN_KEYS)] = np.atleast_2d(D)[:, :len(DESIGN_KEYS)]
+    return P if D.ndim == 2 else P[0]
+
+
+def param_rows(cfg, n: int, keys=(), X=None) -> np.ndarray:
+    """n rows of the parameter vector of ``cfg``'s design, with the columns of the config
+    keys ``keys`` that are parameters (:data:`PARAM_COLUMNS`) set from the columns of X."""
+    P = np.tile(params_of(cfg), (n, 1))
+    for j, k in enumerate(keys):
+        if k in PARAM_COLUMNS:
+            P[:, PARAM_COLUMNS[k]] = X[:, j]
+    return P
 
 
 def design_of(p) -> dict:

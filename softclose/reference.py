@@ -15,8 +15,10 @@ import math
 import casadi as ca
 import numpy as np
 
+from . import elements
 from .dynamics import COEFFS
 from .errors import NumericalError
+from .problem import as_params
 from .stroke import StrokeResult, StrokeStatus
 
 _L = COEFFS.index("l")  # spring length among the model's coefficients
@@ -29,7 +31,8 @@ class Reference:
         self.model = model
         self.tol = tol if tol is not None else model.cfg.simulate.reference_tol
         self.grid_step = grid_step
-        x, p, tau = ca.SX.sym("x", 2), ca.SX.sym("p", 4), ca.SX.sym("tau")
+        x, tau = ca.SX.sym("x", 2), ca.SX.sym("tau")
+        p = ca.SX.sym("p", len(elements.PARAMS))
         f = model.ode(x, p)
         opts = {"abstol": self.tol, "reltol": self.tol, "max_num_steps": 200000}
         dae = {"x": x, "p": ca.vertcat(p, tau), "ode": tau * f}
@@ -80,7 +83,7 @@ class Reference:
         of CVODES raises :class:`~softclose.errors.NumericalError`.
         """
         m, st = self.model, self.model.cfg.stroke
-        p = m.params() if p is None else np.asarray(p, float)
+        p = m.params() if p is None else as_params(p)
         thc, t_max, dt = st.theta_closed, st.t_max, self.grid_step
         x = np.array([st.theta0, 0.0])
         t, peak, th_min, th_max = 0.0, 0.0, st.theta0, st.theta0

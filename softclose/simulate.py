@@ -18,12 +18,13 @@ from dataclasses import replace
 
 import numpy as np
 
-from . import native
+from . import native, statics
 from .config import RANGES, STEP_BUDGET, TRAJECTORY_BUDGET, Config, default_config
 from .errors import ConfigError, NumericalError
 from .integrators import Method, get_method
 from .model import LidModel
-from .problem import ERROR_KEYS, target
+from .dynamics import COEFFS
+from .problem import ERROR_KEYS, as_params, target
 from .stroke import StrokeResult, StrokeStatus, none_if_nan
 
 DEFAULT_STEP = default_config().simulate.step
@@ -70,12 +71,6 @@ def spectral_radius(method: Method, J: np.ndarray, h: float) -> float:
         return float(np.max(np.abs(np.linalg.eigvals(S))))
 
 
-def _rest_theta_ddot(c: np.ndarray, k, l0) -> np.ndarray:
-    """theta'' at rest, -V'(theta) / M, from coefficient rows ``c`` (CoefficientTable.evaluate)
-    for the spring (k, l0)."""
-    return -(c[:, 3] + k * (c[:, 4] - l0) * c[:, 5]) / c[:, 0]
-
-
 def _round_down(x: float) -> float:
     """x rounded down to 3 significant digits (a recommendation must not round up)."""
     if not (math.isfinite(x) and x > 0):
@@ -106,14 +101,15 @@ class Simulator:
     def energy_tol(self, P: np.ndarray, lid_mass=None) -> np.ndarray:
         """Energy rise that flags an unstable stroke: 5 % of the energy to be released."""
         st = self.cfg.stroke
-        E0 = native.potential_energy(self.table, st.theta0, P, lid_mass)
-        Vc = native.potential_energy(self.table, st.theta_closed, P, lid_mass)
+        E0 = statics.potential_energy(self.table, st.theta0, P, lid_mass)
+        Vc = statics.potential_energy(self.table, st.theta_closed, P, lid_mass)
         scale = np.maximum(np.abs(E0 - Vc), 1e-6 * (np.abs(E0) + np.abs(Vc)) + 1e-12)
         return 0.05 * scale
 
     def run_batch(self, P, threads: int | None = None, lid_mass=None,
                   early_exit: bool = True) -> dict:
-        """Metrics for rows of P = (k, l0, c, c_rot): a dict of arrays (the metric keys,
+        """Metrics for rows of P (the parameter vector, :data:`softclose.problem.PARAM_KEYS`):
+        a dict of arrays (the metric keys,
         ``status`` as :class:`~softclose.stroke.StrokeStatus` codes, ``reason`` why an open
         stroke did not close, and the kernel's other outputs).
 
@@ -122,11 +118,11 @@ class Simulator:
         stroke as soon as the energy proves it can no longer close and its metrics can no
         longer change (see :mod:`softclose.native`); the metrics are the same either way.
         """
-        P = np.atleast_2d(np.asarray(P, float))
+        P = as_params(np.atleast_2d(np.asarray(P, float)))
         st = self.cfg.stroke
         m = None if lid_mass is None else \
             np.broadcast_to(np.asarray(lid_mass, float), (len(P),)).copy()
-        cols = [P, self.energy_tol(P, m)] + ([m] if m is not None else [])
+        cols = [native.kernel_rows(P), self.energy_tol(P, m)] + ([m] if m is not None else [])
         out = native.run_strokes(self.table, self.method, self.step, st.t_max, st.theta0,
                                  st.theta_closed, np.column_stack(cols), threads,
                                  early_exit=early_exit)
@@ -139,13 +135,14 @@ class Simulator:
 
     def holding_moments(self, P: np.ndarray, lid_mass=None) -> np.ndarray:
         """dV/dtheta at theta_closed (N m) for rows of P."""
-        return native.holding_moments(self.table, self.cfg.stroke.theta_closed, P, lid_mass)
+        return statics.holding_moments(self.table, self.cfg.stroke.theta_closed, as_params(P),
+                                       lid_mass)
 
     # -- one stroke ------------------------------------------------------------------
     def run(self, p=None, trajectory: bool = False, estimate_error: bool = True) -> StrokeResult:
-        p = self.model.params() if p is None else np.asarray(p, float)
+        p = self.model.params() if p is None else as_params(p)
         st = self.cfg.stroke
-        design = np.r_[p, self.energy_tol(p[None, :])]
+        design = np.r_[native.kernel_rows(p), self.energy_tol(p[None, :])]
         if trajectory:
             self._check_trajectory_size(design)
             out, traj = native.run_stroke_trajectory(self.table, self.method, self.step,
@@ -243,17 +240,12 @@ class Simulator:
         """Linearised (theta, theta') Jacobian entries at rest along the stroke (at
         ``lid_mass``, kg; None: the table's own)."""
         th = np.linspace(self.cfg.stroke.theta_closed, self.cfg.stroke.theta0, 41)
-        k, l0, cd, cr = p
-        eps = 1e-6
-        cp, cm, c = (self.table.evaluate(x, lid_mass) for x in (th + eps, th - eps, th))
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            return ((_rest_theta_ddot(cp, k, l0) - _rest_theta_ddot(cm, k, l0)) / (2 * eps),
-                    -(cd * c[:, 6] + cr) / c[:, 0])
+        return statics.rest_jacobian(self.table, th, p, lid_mass)
 
     def max_rate(self, p, lid_mass=None) -> float:
         """max |lambda| of the linearised stroke (1/s): what limits an explicit step
         (inf when the linearisation overflows)."""
-        a, b = self._jacobians(p, lid_mass)
+        a, b = self._jacobians(as_params(p), lid_mass)
         with np.errstate(over="ignore", invalid="ignore"):
             disc = np.sqrt((b * b + 4 * a).astype(complex))
             lam = np.abs(np.r_[(b + disc) / 2, (b - disc) / 2])
@@ -265,12 +257,14 @@ class Simulator:
         m, h = self.method, self.step
         st = self.cfg.stroke
         status = StrokeStatus(status)
+        p = as_params(p)
         if lid_mass == self.table.lid_mass:
             lid_mass = None
         a0 = 0.0   # theta'' at release: the model's, or at another lid mass the table's
         if status is StrokeStatus.LEFT_RANGE:
             a0 = (self.model.theta_ddot(st.theta0, 0.0, p) if lid_mass is None else
-                  float(_rest_theta_ddot(self.table.evaluate([st.theta0], lid_mass), *p[:2])[0]))
+                  float(statics.rest_theta_ddot(self.table, st.theta0, np.asarray(p)[None, :],
+                                                lid_mass)[0]))
         if a0 > 0:
             return (f"the lid does not close: released at stroke.theta0_deg = {st.theta0_deg} deg "
                     f"it is pushed open (theta'' = {a0:.4g} "
@@ -304,7 +298,7 @@ class Simulator:
     def stable_step(self, p, lid_mass=None) -> float:
         """Largest step at which the linearised stroke is stable (bisection on the step);
         0.0 when none down to 1e-12 s is, or the linearisation is not finite."""
-        f_th, f_v = self._jacobians(p, lid_mass)
+        f_th, f_v = self._jacobians(as_params(p), lid_mass)
         if not (np.all(np.isfinite(f_th)) and np.all(np.isfinite(f_v))):
             return 0.0
         Js = [np.array([[0.0, 1.0], [a, b]]) for a, b in zip(f_th, f_v)]
@@ -344,7 +338,7 @@ class Simulator:
             "t": traj[:, 0], "theta": traj[:, 1], "theta_dot": traj[:, 2],
             "theta_ddot": xdot[1], "phi": np.asarray(kin[0]).ravel(),
             "gamma": np.asarray(kin[1]).ravel(), "tip_speed": np.hypot(v_T[0], v_T[1]),
-            "spring_length": cf[:, 4], "energy": energy,
+            "spring_length": cf[:, COEFFS.index("l")], "energy": energy,
         }
 
 

@@ -19,6 +19,7 @@ import pytest
 from softclose.config import default_config, from_dict
 from softclose.model import LidModel
 from softclose.reference import Reference
+from softclose.problem import as_params
 from softclose.simulate import Simulator
 
 #: the second geometry of the test suite (SPEC §6 keys); assembly computed below
@@ -181,7 +182,7 @@ def body_motion(model, theta, theta_dot, theta_ddot):
 
 def external_forces(model, pos, vel, theta_dot, p):
     """Spring force at E, dashpot force at C (both on the lid) and the rotary moment (SPEC §2)."""
-    k, l0, c, c_rot = p
+    k, l0, c, c_rot = p[:4]
     r_ED = pos["D"] - pos["E"]
     l = float(np.hypot(*r_ED))
     F_s = k * (l - l0) * r_ED / l
@@ -242,7 +243,7 @@ def random_states(model, n, seed, thd_max=6.0):
     for _ in range(n):
         th = rng.uniform(lo + 0.01, hi - 0.01)
         thd = rng.uniform(-thd_max, thd_max)
-        p = np.array([rng.uniform(100, 5000), rng.uniform(0.02, 0.12),
-                      rng.uniform(10, 3000), rng.uniform(0.001, 0.05)])
+        p = as_params([rng.uniform(100, 5000), rng.uniform(0.02, 0.12),
+                       rng.uniform(10, 3000), rng.uniform(0.001, 0.05)])
         out.append((th, thd, p))
     return out

@@ -17,6 +17,7 @@ from softclose import cli
 from softclose.config import default_config, from_dict, load_config, to_dict
 from softclose.errors import ConfigError
 from softclose.model import LidModel
+from softclose.problem import as_params
 
 SPEC6 = {
     "geometry": {"lid_length": 0.5, "crank_oa": 0.045, "crank_bc": 0.08,
@@ -182,7 +183,7 @@ def test_default_step_meets_targets():
     cfg = default_config()
     assert cfg.simulate.step == 0.002
     model = LidModel(cfg)
-    p = np.array([1e4, 0.02, 5000.0, 0.0])
+    p = as_params([1e4, 0.02, 5000.0, 0.0])
     r, R = Simulator(cfg, model).run(p), Reference(model).simulate(p)
     assert abs(r.closing_time - R.closing_time) <= 1e-7
     assert abs(r.impact_theta_dot - R.impact_theta_dot) <= 1e-6

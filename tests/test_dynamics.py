@@ -20,15 +20,16 @@ import pytest
 
 from conftest import (body_motion, external_forces, body_residuals, np_energy,
                       random_states)
+from softclose.problem import as_params
 
 SPEC_THETA_DDOT = -28.5296   # rad/s^2, SPEC §8 (published to 1e-4)
 
 
 def test_spec8_theta_ddot_at_release(model):
-    tdd = model.theta_ddot(math.radians(18.0), 0.0, np.zeros(4))
+    tdd = model.theta_ddot(math.radians(18.0), 0.0, as_params(np.zeros(4)))
     assert abs(tdd - SPEC_THETA_DDOT) <= 1e-4
     # Newton-Euler gives the same number
-    z = np.asarray(model.newton_euler(math.radians(18.0), 0.0, np.zeros(4))).ravel()
+    z = np.asarray(model.newton_euler(math.radians(18.0), 0.0, as_params(np.zeros(4)))).ravel()
     assert z[8] == pytest.approx(tdd, rel=1e-12)
 
 
@@ -70,7 +71,7 @@ def test_reactions_at_rest_without_elements_are_statics_plus_inertia(model):
     """At release (theta' = 0, no spring/damper) the whole mechanism: sum of external forces
     = sum m_i a_Gi (the internal pins A, C cancel)."""
     th = math.radians(18.0)
-    p = np.zeros(4)
+    p = as_params(np.zeros(4))
     z = np.asarray(model.newton_euler(th, 0.0, p)).ravel()
     pos, vel, acc = body_motion(model, th, 0.0, z[8])
     m = model.mass
@@ -86,7 +87,7 @@ def energy_rate():
 
     def get(model):
         if id(model) not in cache:
-            x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 4)
+            x, p = ca.SX.sym("x", 2), ca.SX.sym("p", len(as_params(np.zeros(4))))
             E = model.energy_fn(x, p)
             xdot = model.ode(x, p)
             dEdt = ca.jtimes(E, x, xdot)
@@ -112,7 +113,7 @@ def test_energy_rate_without_damping_is_zero(geometry_case, energy_rate):
     cfg, model = geometry_case
     f = energy_rate(model)
     for th, thd, p in random_states(model, 10, seed=15):
-        p = np.array([p[0], p[1], 0.0, 0.0])
+        p = as_params([p[0], p[1], 0.0, 0.0])
         dEdt, P, scale = (float(v) for v in f([th, thd], p))
         assert P == 0.0
         assert abs(dEdt) < 1e-12 * scale
@@ -144,10 +145,10 @@ def test_energy_function_is_kinetic_plus_potential(geometry_case):
 def test_holding_moment_is_dV_dtheta_at_closed(geometry_case):
     cfg, model = geometry_case
     thc = cfg.stroke.theta_closed
-    for p in (np.zeros(4), np.array([800.0, 0.08, 30.0, 0.0]), np.array([3000.0, 0.03, 0, 0])):
+    for p in (as_params(np.zeros(4)), as_params([800.0, 0.08, 30.0, 0.0]), as_params([3000.0, 0.03, 0, 0])):
         h = 1e-4
         V = lambda th: np_energy(model, th, 0.0, p)  # noqa: E731
         dV = (V(thc - 2 * h) - 8 * V(thc - h) + 8 * V(thc + h) - V(thc + 2 * h)) / (12 * h)
         assert model.holding_moment(p) == pytest.approx(dV, rel=1e-7, abs=1e-9)
     if model.cfg is cfg and cfg.geometry.crank_oa == 0.045:
-        assert model.holding_moment(np.zeros(4)) > 0   # gravity alone presses the lid shut
+        assert model.holding_moment(as_params(np.zeros(4))) > 0   # gravity alone presses the lid shut

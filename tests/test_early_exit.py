@@ -22,6 +22,7 @@ import pytest
 
 from softclose import native
 from softclose.reference import Reference
+from softclose.problem import as_params
 from softclose.simulate import Simulator
 
 #: the columns that must not depend on the early exit: the SPEC 4 metrics, the visited
@@ -33,7 +34,7 @@ COL = {name: i for i, name in enumerate(native.OUT_FIELDS)}
 
 
 def designs_of(sim, P):
-    return np.column_stack([P, sim.energy_tol(P)])
+    return np.column_stack([native.kernel_rows(P), sim.energy_tol(P)])
 
 
 def strokes(sim, D, early=True):
@@ -46,7 +47,7 @@ def grid_designs():
     """spring_k 500..9500 x spring_rest_length 0.05..0.09 x damper_c 100..4000 (288)."""
     k, l0, c = np.linspace(500, 9500, 8), np.linspace(0.05, 0.09, 6), np.linspace(100, 4000, 6)
     K, L, C = np.meshgrid(k, l0, c, indexing="ij")
-    return np.column_stack([K.ravel(), L.ravel(), C.ravel(), np.zeros(K.size)])
+    return as_params(np.column_stack([K.ravel(), L.ravel(), C.ravel(), np.zeros(K.size)]))
 
 
 def exited(out, t_max):
@@ -158,14 +159,14 @@ def test_closed_agrees_with_reference_incl_closing_boundary(cfg):
     rows = []
     for l0, c, rel in ((0.075, 20.0, 1e-4), (0.075, 300.0, 1e-4), (0.09, 100.0, 1e-3),
                        (0.06, 800.0, 1e-3)):
-        kb = boundary(sim, np.array([0.0, l0, c, 0.0]), 0, 500.0, 9500.0)
+        kb = boundary(sim, as_params([0.0, l0, c, 0.0]), 0, 500.0, 9500.0)
         rows += [[kb * (1 - rel), l0, c, 0.0], [kb * (1 + rel), l0, c, 0.0]]
-    kb = boundary(sim, np.array([0.0, 0.07, 2000.0, 0.0]), 0, 500.0, 9500.0)   # creeper
+    kb = boundary(sim, as_params([0.0, 0.07, 2000.0, 0.0]), 0, 500.0, 9500.0)   # creeper
     rows += [[kb * (1 - 2e-3), 0.07, 2000.0, 0.0], [kb * (1 + 2e-3), 0.07, 2000.0, 0.0]]
     rng = np.random.default_rng(14)
     G = grid_designs()
-    rows += list(G[rng.choice(len(G), 20, replace=False)])
-    R = np.array(rows)
+    rows += list(G[rng.choice(len(G), 20, replace=False), :4])
+    R = as_params(np.array(rows))
     b = sim.run_batch(R)
     assert 8 < int(b["closed"].sum()) < 22
     ex = (b["status"] == 1) & (b["stop_time"] < 1.0 - 1e-9)
@@ -194,7 +195,7 @@ def test_held_open_at_the_equilibrium(sim, model):
     """A strong spring holds the lid open: the reason names the equilibrium, where V' = 0
     (the model's dV, not the table) and V'' > 0, and the lid comes to rest there."""
     st = sim.cfg.stroke
-    p = np.array([6000.0, 0.07, 1000.0, 0.0])
+    p = as_params([6000.0, 0.07, 1000.0, 0.0])
     D = designs_of(sim, p[None, :])
     on = strokes(sim, D)[0]
     assert on[COL["status"]] == 1 and on[COL["stop_reason"]] == 2
@@ -223,7 +224,7 @@ def test_barrier_between_the_lid_and_the_rim(cfg):
     st = cfg_b.stroke
     l0 = float(sim.table.evaluate([st.theta0])[0, 4])  # at rest length at release
     for c in (0.0, 50.0):
-        p = np.array([5e6, l0, c, 0.0])
+        p = as_params([5e6, l0, c, 0.0])
         out = strokes(sim, designs_of(sim, p[None, :]))[0]
         assert out[COL["status"]] == 1 and out[COL["stop_reason"]] == 1
         th = out[COL["stop_theta"]]
@@ -254,7 +255,9 @@ _SCALAR_RUN = """
 import json, sys, numpy as np
 from softclose import native
 from softclose.config import default_config
+from softclose.problem import as_params
 from softclose.simulate import Simulator
+from softclose.problem import as_params
 sim = Simulator(default_config()); st = sim.cfg.stroke
 D = np.array(json.loads(sys.stdin.read()))
 out = native.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0, st.theta_closed, D)

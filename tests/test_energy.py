@@ -16,8 +16,9 @@ import pytest
 
 from softclose.model import LidModel
 from softclose.simulate import Simulator
+from softclose.problem import as_params
 
-HELD_OPEN = np.array([2200.0, 0.09, 0.0, 0.0])
+HELD_OPEN = as_params([2200.0, 0.09, 0.0, 0.0])
 
 
 @pytest.fixture(scope="module")

@@ -50,7 +50,7 @@ from hypothesis import HealthCheck, Phase, given, reject, settings
 from hypothesis import strategies as st
 
 from softclose.cli import build_parser, main
-from softclose.config import (_SCHEMA, BATCH_STEP_BUDGET, RANGES, TOLERANCE_OPTIONS,
+from softclose.config import (SCHEMA, BATCH_STEP_BUDGET, RANGES, TOLERANCE_OPTIONS,
                               load_config, steps_per_stroke)
 from softclose.errors import ConfigError
 
@@ -115,7 +115,7 @@ _VEC_LEN = {"vec2": 2, "vec3": 3, "bounds": 2}
 def _keys() -> list[tuple[str, str]]:
     """(full key, kind) of every config key, vector component and tolerance entry."""
     out = []
-    for section, fields in _SCHEMA.items():
+    for section, fields in SCHEMA.items():
         for key, (kind, _default) in fields.items():
             name = f"{section}.{key}"
             out.append((name, kind))
@@ -144,7 +144,7 @@ def _default(key: str):
     section, name = _base(key).split(".", 1)
     if section == "tolerance":
         return TOLERANCE_OPTIONS.get(name, ("", 0.1))[1]
-    return _SCHEMA[section][name][1]
+    return SCHEMA[section][name][1]
 
 
 # -- values ---------------------------------------------------------------------------------
@@ -748,7 +748,7 @@ _COMPANIONS = {
 
 
 def _edge_config(key: str, value):
-    kind = _SCHEMA[key.split(".")[0]][key.split(".")[1]][0]
+    kind = SCHEMA[key.split(".")[0]][key.split(".")[1]][0]
     n = _VEC_LEN.get(kind)
     raw = {key: [value] * n if n else value}
     return raw, kind

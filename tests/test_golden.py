@@ -4,7 +4,10 @@ before the element registry (tests/data/make_golden.py, run at commit b33652c).
 Kernel strokes (every method, with and without per-row lid masses), holding moments, single
 strokes with their error estimates and a trajectory, the adaptive reference, Newton-Euler
 states and the NLP's Chebyshev series, on two geometries: the same to 1e-12 relative (most
-are the same bit for bit; the tolerance admits a reordered sum). The optimiser's and the
+are the same bit for bit; the tolerance admits a reordered sum: the dashpot's tabulated
+(dl_d/dtheta)^2 is now the derivative of its coordinate's length, which rounds differently
+from the explicit e_OC . dC/dtheta of b33652c; a series coefficient is compared relative to
+its series' largest). The adaptive reference is held to 1e-10, its own accuracy. The optimiser's and the
 robust optimiser's answers: to their own convergence tolerance (1e-8 relative).
 """
 
@@ -32,12 +35,17 @@ def now():
     return mod.compute()
 
 
-def _same(a, b, rtol):
+def _same(a, b, rtol, per=None):
+    """a equals b to ``rtol`` relative to each value, or (``per``: the axes to take the
+    largest over) relative to the largest value of its series -- for the pieces of a table or
+    a Chebyshev series, whose high-order coefficients are rounding-sized."""
     a, b = np.asarray(a, float), np.asarray(b, float)
     assert a.shape == b.shape
     nan = np.isnan(a)
     assert np.array_equal(nan, np.isnan(b))
     scale = np.maximum(np.abs(a), np.abs(b))
+    if per is not None:
+        scale = np.broadcast_to(scale.max(axis=per, keepdims=True), scale.shape)
     bad = np.abs(a - b) > rtol * scale + 1e-300
     bad &= ~nan
     assert not bad.any(), (f"{int(bad.sum())} values differ, worst relative "
@@ -58,7 +66,10 @@ def test_strokes_references_states_unchanged(golden, now):
         if key in ("optimise", "robust"):
             continue
         try:
-            _same(now[key], golden[key], 1e-12)
+            per = (1,) if key.endswith("chebyshev") else (0, 2) if key.endswith("cc") else None
+            # the adaptive reference: to its own accuracy (CVODES at 1e-12 locates a turning
+            # point to ~1e-11: a rounding-sized change of the equation moves it that much)
+            _same(now[key], golden[key], 1e-10 if key.endswith("reference") else 1e-12, per)
         except AssertionError as exc:
             raise AssertionError(f"{key}: {exc}") from None
         if key.endswith(("rk4", "euler_cromer", "gauss4", "radau5", "rk4_masses")):

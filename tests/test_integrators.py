@@ -13,6 +13,7 @@ from softclose import native
 from softclose.integrators import METHODS, casadi_step, get_method
 from softclose.reference import Reference
 from softclose.simulate import Simulator, amplification
+from softclose.problem import as_params
 
 
 def _tab(m):
@@ -83,8 +84,8 @@ def test_casadi_step_matches_kernel_step(model, sim, name, h):
     worst = 0.0
     for _ in range(8):
         x0 = np.array([rng.uniform(lo + 0.1, hi - 0.1), rng.uniform(-5, 0.5)])
-        p = np.array([rng.uniform(0, 3000), rng.uniform(0.02, 0.12), rng.uniform(0, 300),
-                      rng.uniform(0, 0.02)])
+        p = as_params([rng.uniform(0, 3000), rng.uniform(0.02, 0.12), rng.uniform(0, 300),
+                       rng.uniform(0, 0.02)])
         x1_ca = np.asarray(F(x0, p, h)).ravel()
         x1_c = native.kernel_step(sim.table, m, p, h, x0)
         # relative to the size of the step's increment (and of x)
@@ -97,7 +98,7 @@ def test_casadi_step_matches_kernel_step(model, sim, name, h):
 
 # -- convergence orders ---------------------------------------------------------------------
 #: spring + dashpot + rotary damper, closing in 0.173 s with |theta'| 3.38 rad/s at impact
-ORDER_DESIGN = np.array([800.0, 0.08, 30.0, 0.005])
+ORDER_DESIGN = as_params([800.0, 0.08, 30.0, 0.005])
 #: steps fitted per method: the errors there are 1e-10..1e-6, far above the 1e-14
 #: reference's ~1e-12 and the table's ~1e-11
 ORDER_STEPS = {

@@ -11,18 +11,20 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from softclose import native
+from softclose import native, statics
 from softclose.errors import ConfigError
 from softclose.model import LidModel
 from softclose.simulate import Simulator
+from softclose.problem import as_params
 
 COL = {name: i for i, name in enumerate(native.OUT_FIELDS)}
 
 
 def designs(cfg, sim_at_mass, P, mass):
-    """Rows (k, l0, c, c_rot, energy_tol, lid_mass); energy_tol as the simulator at that
-    mass sets it (the unstable-stroke threshold depends on the mass too)."""
-    return np.column_stack([P, sim_at_mass.energy_tol(P), np.full(len(P), mass)])
+    """Kernel rows (the parameter vector, energy_tol, lid_mass); energy_tol as the simulator
+    at that mass sets it (the unstable-stroke threshold depends on the mass too)."""
+    return np.column_stack([native.kernel_rows(P), sim_at_mass.energy_tol(P),
+                            np.full(len(P), mass)])
 
 
 def sample_designs(cfg, n=24, seed=8):
@@ -32,7 +34,7 @@ def sample_designs(cfg, n=24, seed=8):
     P[0] = [cfg.design.spring_k, cfg.design.spring_rest_length, cfg.design.damper_c,
             cfg.design.rotary_damper_c]
     P[1] = [1914.7, 0.079257, 2087.75, 0.0]          # the default problem's optimum
-    return P
+    return as_params(P)
 
 
 @pytest.mark.parametrize("inertia", [None, 0.02])
@@ -60,7 +62,7 @@ def test_lid_mass_column_matches_a_model_at_that_mass(cfg, mass, inertia):
         ok = np.isin(ref["status"], (0, 1))
         assert np.abs(out[ok, COL[key]] - ref[key][ok]).max() < 1e-10, key
     # the holding moment from the table at theta_closed, at that mass
-    hm = native.holding_moments(sim.table, st.theta_closed, P, mass)
+    hm = statics.holding_moments(sim.table, st.theta_closed, P, mass)
     assert np.abs(hm - ref["holding_moment"]).max() < 1e-10
     assert hm[0] == pytest.approx(other.model.holding_moment(P[0]), abs=1e-10)
     # and the mass changes the answer (the test can fail)
@@ -83,7 +85,7 @@ def test_mass_derivative_is_exact(cfg, sim):
 def test_row_at_table_mass_is_bit_identical(cfg, sim):
     st = cfg.stroke
     P = sample_designs(cfg, 40, seed=3)
-    D = np.column_stack([P, sim.energy_tol(P)])
+    D = np.column_stack([native.kernel_rows(P), sim.energy_tol(P)])
     run = lambda X: native.run_strokes(sim.table, sim.method, sim.step, st.t_max,  # noqa: E731
                                        st.theta0, st.theta_closed, X)
     plain = run(D)
@@ -102,9 +104,9 @@ def test_kernel_step_with_a_lid_mass(cfg, sim):
     """One kernel step at mass m equals the step of the table built at m."""
     m = 0.62
     other = Simulator(cfg.replace(mass={"lid": m}))
-    p = np.array([1500.0, 0.07, 900.0, 0.002])
+    p = as_params([1500.0, 0.07, 900.0, 0.002])
     x0 = np.array([0.2, -1.5])
-    a = native.kernel_step(sim.table, sim.method, np.r_[p, 0.0, m], 2e-3, x0)
+    a = native.kernel_step(sim.table, sim.method, p, 2e-3, x0, lid_mass=m)
     b = native.kernel_step(other.table, other.method, p, 2e-3, x0)
     assert np.allclose(a, b, rtol=1e-13, atol=1e-15)
     assert not np.allclose(a, native.kernel_step(sim.table, sim.method, p, 2e-3, x0),
@@ -114,28 +116,29 @@ def test_kernel_step_with_a_lid_mass(cfg, sim):
 @pytest.mark.parametrize("bad", [0.0, -0.3, np.inf])
 def test_bad_lid_mass_is_refused(cfg, sim, bad):
     st = cfg.stroke
-    D = np.array([[1000.0, 0.07, 500.0, 0.0, 1e-3, bad]])
+    D = np.array([[1000.0, 0.07, 500.0, 0.0, 0.0, 0.0, 1e-3, bad]])
     with pytest.raises(ConfigError, match="lid_mass"):
         native.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
                            st.theta_closed, D)
 
 
-def test_design_rows_need_five_or_six_columns(cfg, sim):
+def test_design_rows_need_their_columns(cfg, sim):
     st = cfg.stroke
-    with pytest.raises(ConfigError, match="5 or 6 columns"):
+    n = len(native.DESIGN_COLUMNS)
+    with pytest.raises(ConfigError, match=f"expected {n - 1} or {n} columns"):
         native.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
                            st.theta_closed, np.ones((2, 4)))
 
 
 def test_one_angle_looked_up_once_gives_each_row_s_own_numbers(cfg, sim):
-    """potential_energy / holding_moments at one angle broadcast that angle's coefficients
+    """statics at one angle broadcast that angle's coefficients
     (and lid-mass slope) instead of looking the angle up per row: bit for bit the numbers of
     the per-row evaluation, with and without lid masses (NaN: the table's own)."""
     tab = sim.table
     rng = np.random.default_rng(3)
     n = 500
-    P = np.column_stack([rng.uniform(0, 1e4, n), rng.uniform(0.04, 0.1, n),
-                         rng.uniform(0, 5e3, n), np.zeros(n)])
+    P = as_params(np.column_stack([rng.uniform(0, 1e4, n), rng.uniform(0.04, 0.1, n),
+                                   rng.uniform(0, 5e3, n), np.zeros(n)]))
     m = rng.uniform(0.3, 0.9, n)
     m[::7] = np.nan
     m[::11] = tab.lid_mass
@@ -144,5 +147,24 @@ def test_one_angle_looked_up_once_gives_each_row_s_own_numbers(cfg, sim):
             c = tab.evaluate(np.full(n, th), lm)     # per row
             V = c[:, 2] + 0.5 * P[:, 0] * (c[:, 4] - P[:, 1]) ** 2
             H = c[:, 3] + P[:, 0] * (c[:, 4] - P[:, 1]) * c[:, 5]
-            assert np.array_equal(native.potential_energy(tab, th, P, lm), V)
-            assert np.array_equal(native.holding_moments(tab, th, P, lm), H)
+            assert np.array_equal(statics.potential_energy(tab, th, P, lm), V)
+            assert np.array_equal(statics.holding_moments(tab, th, P, lm), H)
+
+
+def test_the_kernel_s_layout_is_checked_at_load():
+    """Every layout constant shared with the C side (columns, rows, outputs, range columns)
+    is compared when the kernel is loaded: a mismatch is a one-line error naming it."""
+    lib = native.load()
+    native.check_layout(lib)                                  # the built kernel agrees
+
+    class Other:                                              # a kernel of another layout
+        def __init__(self, layout):
+            self.sc_layout = lambda: layout.encode()
+            self.sc_nout = lambda: len(native.OUT_FIELDS)
+            self.sc_abi = lambda: native.KERNEL_ABI
+
+    wrong = native.LAYOUT.replace("row=spring_k,", "row=k,")
+    with pytest.raises(native.NumericalError, match="row: the kernel has 'k,spring_rest"):
+        native.check_layout(Other(wrong))
+    with pytest.raises(native.NumericalError, match="nrng"):
+        native.check_layout(Other(native.LAYOUT.replace("nrng=18", "nrng=17")))

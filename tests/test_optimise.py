@@ -28,6 +28,7 @@ from softclose.cli import main
 from softclose.optimiser import OptimiseResult, get_nlp, optimise, solve, verify
 from softclose.problem import (DESIGN_KEYS, METRIC_KEYS, agreement_tolerance, objective)
 from softclose.simulate import Simulator
+from softclose.problem import as_params
 
 J_DEFAULT = 0.0228995
 DESIGN_DEFAULT = {"spring_k": 1914.7, "spring_rest_length": 0.079257, "damper_c": 2087.75}
@@ -186,7 +187,7 @@ def test_nlp_equation_of_motion_is_the_model(cfg, model):
     st = cfg.stroke
     for _ in range(20):
         x = [rng.uniform(st.theta_closed, st.theta0), rng.uniform(-5, 0)]
-        p = [rng.uniform(0, 1e4), rng.uniform(0.02, 0.12), rng.uniform(0, 5e3), 0.0]
+        p = as_params([rng.uniform(0, 1e4), rng.uniform(0.02, 0.12), rng.uniform(0, 5e3), 0.0])
         a = np.asarray(nlp.f(x, p)).ravel()
         b = np.asarray(model.ode(x, p)).ravel()
         assert np.allclose(a, b, rtol=1e-11, atol=1e-11 * (1 + abs(b[1])))
@@ -195,7 +196,7 @@ def test_nlp_equation_of_motion_is_the_model(cfg, model):
 def test_interior_peak_is_caught_between_substeps(cfg, model):
     """The peak tip speed of the NLP is the maximum of the stroke, not of its sample points."""
     nlp = get_nlp(cfg, nodes=5, substeps=2)  # coarse on purpose: 10 steps over 1 s
-    p = np.array([1900.0, 0.079, 2090.0, 0.0])
+    p = as_params([1900.0, 0.079, 2090.0, 0.0])
     T = 1.0
     x = ca.DM([cfg.stroke.theta0, 0.0])
     sample_max, interp_max = 0.0, 0.0

@@ -22,6 +22,7 @@ from softclose.model import LidModel
 from softclose.reference import Reference
 from softclose.problem import METRIC_KEYS
 from softclose.simulate import Simulator
+from softclose.problem import as_params
 
 TOL = {"closing_time": 1e-7, "impact_theta_dot": 1e-6}
 REL_TIP = 1e-6
@@ -118,7 +119,7 @@ def test_never_closes_peak_and_spring_extremes(short, p):
 
 def test_spring_extremes_of_a_lid_that_opens_first(short):
     c, m, s, R = short
-    p = np.array([2600.0, 0.09, 0.0, 0.0])          # pushes at theta0: swings up to ~19.2 deg
+    p = as_params([2600.0, 0.09, 0.0, 0.0])          # pushes at theta0: swings up to ~19.2 deg
     r = s.run(p, trajectory=True)
     assert r.ok and not r.closed
     tr = Simulator(c, m, "gauss4", 2.5e-4).run(p, trajectory=True).trajectory
@@ -132,7 +133,7 @@ def test_spring_extremes_of_a_lid_that_opens_first(short):
 
 def test_lid_pushed_open_beyond_the_table(short):
     c, m, s, R = short
-    p = np.array([3000.0, 0.09, 0.0, 0.0])
+    p = as_params([3000.0, 0.09, 0.0, 0.0])
     r = s.run(p)
     RR = R.simulate(p)
     assert not RR.closed and np.isfinite(RR.peak_tip_speed)
@@ -156,7 +157,7 @@ def stiff_reference(ref):
 
     def get(c_damp):
         if c_damp not in cache:
-            cache[c_damp] = ref.simulate(np.array([0.0, 0.05, c_damp, 0.0]))
+            cache[c_damp] = ref.simulate(as_params([0.0, 0.05, c_damp, 0.0]))
         return cache[c_damp]
     return get
 
@@ -180,7 +181,7 @@ def _true_peak(ref, p, t_lo, t_hi, n=400):
 
 @pytest.mark.parametrize("c_damp", [1e5, 1e6])
 def test_stiff_damper_default_integrator(cfg, model, stiff_reference, c_damp):
-    p = np.array([0.0, 0.05, c_damp, 0.0])
+    p = as_params([0.0, 0.05, c_damp, 0.0])
     s = Simulator(cfg, model)           # the default: rk4 at the default step
     r = s.run(p)
     _finite_or_none(r)
@@ -209,7 +210,7 @@ def test_stiff_damper_radau5(cfg, model, stiff_reference, c_damp):
     """radau5 at the default step: finite, not closed, and within its own error estimate of
     the reference (peak: the estimate is ~3e-5 relative at c = 1e6, where the peak sits in
     the first 3 ms); the spring extremes to 1e-9 m."""
-    p = np.array([0.0, 0.05, c_damp, 0.0])
+    p = as_params([0.0, 0.05, c_damp, 0.0])
     r = Simulator(cfg, model, "radau5").run(p)
     RR = stiff_reference(c_damp)
     assert r.ok, r.message
@@ -223,13 +224,13 @@ def test_stiff_damper_radau5(cfg, model, stiff_reference, c_damp):
 
 def test_stiff_radau5_converges_to_the_true_peak(cfg, model, ref):
     """c = 1e6 at step 1e-4: the peak to 1e-6 of dense reference-flow samples."""
-    p = np.array([0.0, 0.05, 1e6, 0.0])
+    p = as_params([0.0, 0.05, 1e6, 0.0])
     r = Simulator(cfg, model, "radau5", 1e-4).run(p)
     assert r.peak_tip_speed == pytest.approx(_true_peak(ref, p, 1e-3, 4e-3, 60), rel=1e-6)
 
 
 def test_reference_peak_is_the_true_peak_when_it_comes_early(ref, stiff_reference):
-    p = np.array([0.0, 0.05, 1e6, 0.0])
+    p = as_params([0.0, 0.05, 1e6, 0.0])
     true_peak = _true_peak(ref, p, 1e-3, 4e-3, 60)
     assert stiff_reference(1e6).peak_tip_speed == pytest.approx(true_peak, rel=1e-8)
 
@@ -251,7 +252,7 @@ def test_stiff_cli_reports_or_handles(capsys):
 # -- the error estimate, metric-only runs, batches --------------------------------------------
 def test_error_estimate_bounds_the_actual_error(cfg, model):
     """At a coarse step the Richardson estimate is of the size of the true error."""
-    p = np.array([800.0, 0.08, 30.0, 0.005])
+    p = as_params([800.0, 0.08, 30.0, 0.005])
     R = Reference(model, tol=1e-14).simulate(p)
     for name, h in (("rk4", 0.008), ("gauss4", 0.008), ("radau5", 0.016)):
         r = Simulator(cfg, model, name, h).run(p)
@@ -262,9 +263,9 @@ def test_error_estimate_bounds_the_actual_error(cfg, model):
 
 
 def test_metric_only_runs_keep_no_trajectory(sim):
-    r = sim.run(np.array([500.0, 0.03, 100.0, 0.0]))
+    r = sim.run(as_params([500.0, 0.03, 100.0, 0.0]))
     assert r.trajectory is None and r.ok
-    r2 = sim.run(np.array([500.0, 0.03, 100.0, 0.0]), trajectory=True)
+    r2 = sim.run(as_params([500.0, 0.03, 100.0, 0.0]), trajectory=True)
     tr = r2.trajectory
     assert tr is not None
     assert tr["t"][-1] == pytest.approx(r2.closing_time, abs=1e-15)

@@ -90,8 +90,7 @@ def test_state_reactions_are_self_consistent(capsys, tmp_path, which, theta_deg,
         argv += ["--config", str(_write_toml(tmp_path / "second.toml", cfg2))]
     argv += [f"--set=design.{k}={v!r}" for k, v in design.items()]
     s = run_json(capsys, argv)
-    p = np.array([design.get("spring_k", 0.0), design.get("spring_rest_length", 0.05),
-                  design.get("damper_c", 0.0), design.get("rotary_damper_c", 0.0)])
+    p = mdl.params(mdl.cfg.replace(design=design).design)
     assert s["theta_ddot"] == pytest.approx(mdl.theta_ddot(s["theta"], theta_dot, p), rel=1e-12)
     dF, dM, scale = _whole_mechanism_residuals(mdl, s, p)
     assert np.abs(dF).max() < 1e-7 * scale

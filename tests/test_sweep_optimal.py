@@ -14,6 +14,7 @@ from softclose.errors import ConfigError
 from softclose.model import LidModel
 from softclose import optimise
 from softclose.sweeps.optimal import optimise_grid, segments
+from softclose.problem import as_params
 
 MASSES = [0.4, 0.5, 0.6]
 
@@ -56,8 +57,8 @@ def test_the_spring_carries_the_heavier_lid(cfg, local):
     for m, k, l0, hm in zip(MASSES, f["spring_k"], f["spring_rest_length"],
                             f["holding_moment"]):
         model = LidModel(cfg.update({"mass.lid": m}))
-        g = float(model.dV(th, [0.0, l0, 0.0, 0.0]))            # gravity alone
-        total = float(model.dV(th, [k, l0, 0.0, 0.0]))
+        g = float(model.dV(th, as_params([0.0, l0, 0.0, 0.0])))            # gravity alone
+        total = float(model.dV(th, as_params([k, l0, 0.0, 0.0])))
         assert total == pytest.approx(hm, abs=1e-9)             # the verified metric
         assert hm == pytest.approx(cfg.optimise.holding_moment_min, abs=1e-7)
         spring.append(g - total)                                 # the moment the spring holds

@@ -8,16 +8,12 @@ new problem -- other bounds, weights, closing-time limits -- reuses it.
 
 from __future__ import annotations
 
-from ..model import LidModel
+from ..model import LidModel, model_key
 from ..simulate import Simulator
-from .nlp import ShootingNLP
+from .nlp import ShootingNLP, nlp_elements
 
 _MODELS: dict = {}
 _NLPS: dict = {}
-
-
-def model_key(cfg) -> tuple:
-    return (cfg.geometry, cfg.mass, cfg.stroke.theta0_deg, cfg.stroke.theta_closed_deg)
 
 
 def get_model(cfg) -> LidModel:
@@ -30,7 +26,8 @@ def get_model(cfg) -> LidModel:
 
 def nlp_key(cfg, nodes: int | None = None, substeps: int | None = None) -> tuple:
     o = cfg.optimise
-    return model_key(cfg) + (nodes or o.nodes, substeps or o.substeps, o.hessian,
+    return model_key(cfg) + (tuple(e.name for e in nlp_elements(cfg)),
+                             nodes or o.nodes, substeps or o.substeps, o.hessian,
                              o.linear_solver, o.max_iter)
 
 
@@ -44,7 +41,7 @@ def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None) -> Shoot
     key = nlp_key(cfg, nodes, substeps)
     if key not in _NLPS:
         nlp = ShootingNLP(get_model(cfg), key[-5], key[-4], o.hessian, o.linear_solver,
-                          o.max_iter)
+                          o.max_iter, els=nlp_elements(cfg))
         nlp.key = key
         _NLPS[key] = nlp
     return _NLPS[key]

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from ..problem import DESIGN_KEYS, design_of
+from ..problem import DESIGN_KEYS, design_of, with_designs
 from .cache import stroke_simulator
 from .nlp import T_FLOOR, Run, ShootingNLP
 from .starts import initial_guess
@@ -29,7 +29,7 @@ def extreme_sweep_designs(cfg, count: int, sense: float, sim) -> np.ndarray:
     o = cfg.optimise
     axes = [np.linspace(*getattr(o, k), n) for k, n in zip(DESIGN_KEYS, (6, 5, 5))]
     G = np.array(np.meshgrid(*axes, indexing="ij")).reshape(3, -1).T
-    r = sim.run_batch(np.column_stack([G, np.full(len(G), cfg.design.rotary_damper_c)]))
+    r = sim.run_batch(with_designs(cfg, G))
     T = np.where(r["closed"] & (r["holding_moment"] >= o.holding_moment_min),
                  sense * r["closing_time"], np.inf)
     return G[np.argsort(T)[:count]]
@@ -49,7 +49,7 @@ def diagnose(cfg, nlp: ShootingNLP, runs: list[Run]) -> tuple[str, dict]:
     # 1. the holding moment is linear in k for fixed l0: its maximum over the box is at a corner
     model = nlp.model
     corners = [(k, l0) for k in o.spring_k for l0 in o.spring_rest_length]
-    hm = [(model.holding_moment(np.array([k, l0, 0.0, 0.0])), k, l0) for k, l0 in corners]
+    hm = [(model.holding_moment(with_designs(cfg, [k, l0, 0.0])), k, l0) for k, l0 in corners]
     hmax, kb, lb = max(hm)
     info["largest_holding_moment"] = {"value": hmax, "spring_k": kb, "spring_rest_length": lb}
     if hmax < o.holding_moment_min:
@@ -74,7 +74,7 @@ def diagnose(cfg, nlp: ShootingNLP, runs: list[Run]) -> tuple[str, dict]:
         if best is None:
             continue
         d, T, _, _ = nlp.unpack(best.x)
-        rs = sim.run(np.r_[d, cfg.design.rotary_damper_c], estimate_error=False)
+        rs = sim.run(with_designs(cfg, d), estimate_error=False)
         T_sim = rs.closing_time if rs.closed else T
         dd = design_of(d)
         info[f"{name}_stroke"] = {"closing_time": T_sim, "design": dd}

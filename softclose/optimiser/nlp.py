@@ -18,14 +18,18 @@ s is only an epigraph variable: with ``weight_peak_tip = 0`` nothing pins it, so
 optimiser's own peak tip speed is never read from s but from the sub-step speeds and their
 Hermite maxima at the solution (:meth:`ShootingNLP.peak`).
 
-The equation of motion depends on theta only through seven geometric functions
-(-dVg/M, -l dl/M, dl/M, -dd/M, -dM/(2M), -1/M and tau = |dT/dtheta|); in the NLP they are
-Chebyshev series fitted on the stroke's angles ±3° to machine precision
-(:class:`ChebyshevFit`). One RK4 sub-step is then ~730 operations instead of ~4200, and the
+The equation of motion is theta'' = a0(theta) + a1(theta) theta' + a2(theta) theta'^2 with
+every element's law affine in its parameters (:mod:`softclose.elements.base`):
+a0 = sum over the conservative elements of a_e (-q_e'/M) + b_e (-q_e q_e'/M) (T_e = a_e + b_e q),
+a1 = sum over the dampers of B_e (-q_e'^2/M), a2 = -M'/(2M). So it depends on theta only
+through a few geometric functions (for the seed's elements -dVg/M, -dl/M, -l dl/M, -dd/M,
+-1/M, -dM/(2M), and tau = |dT/dtheta|); in the NLP they are Chebyshev series fitted on the
+stroke's angles ±3° to machine precision (:class:`ChebyshevFit`). One RK4 sub-step is then ~730 operations instead of ~4200, and the
 exact Hessian is cheap. Everything reported is re-checked on the exact equations by the
 adaptive reference (:mod:`softclose.optimiser.verify`).
 
-Every number that can change between solves (theta0, theta_closed, weights, rotary damper,
+Every number that can change between solves (theta0, theta_closed, weights, the parameters
+that are not design variables -- the rotary damper, those of the elements added since --, the
 time grid) is an NLP parameter, and closing-time bounds, design bounds and
 holding_moment_min are bounds: one NLP per geometry and (N, M) serves multistart, warm
 re-solves and Pareto fronts (:func:`softclose.optimiser.cache.get_nlp`).
@@ -40,18 +44,21 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from .. import elements
 from ..config import NLP_BUDGET
 from ..dynamics import coefficients
 from ..errors import ConfigError
-from ..problem import DESIGN_KEYS, SCALES
+from ..problem import DESIGN_KEYS, PARAM_KEYS, SCALES
 
 #: margin (deg) beyond the stroke over which the Chebyshev series are fitted
 FIT_MARGIN_DEG = 3.0
 #: Ipopt return statuses that count as converged
 CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+#: the parameters of p that are not design variables: NLP parameters
+FIXED_PARAMS = PARAM_KEYS[len(DESIGN_KEYS):]
 #: NLP parameters, in order (then the time grid: the fractions of T of the N intervals)
 NLP_PARAMS = ("theta0", "theta_closed", "weight_impact", "weight_peak_tip", "weight_time",
-              "rotary_damper_c", "J_ref")
+              *FIXED_PARAMS, "J_ref")
 J_INDEX = NLP_PARAMS.index("J_ref")
 #: Ipopt options of the cold solver and of the warm re-solve (same NLP functions)
 COLD_OPTIONS = {"ipopt.mu_strategy": "adaptive"}
@@ -73,22 +80,49 @@ MAX_STEPS = NLP_BUDGET
 
 
 # -- the geometric functions as Chebyshev series -----------------------------------------
-class ChebyshevFit:
-    """The seven geometric functions of theta (and tau') as Chebyshev series on [lo, hi].
+def nlp_elements(cfg) -> tuple:
+    """The elements the NLP carries: the seed's always, the others when they act in ``cfg``
+    (an element that exerts no force adds nothing but series to fit)."""
+    acting = elements.acting(cfg)
+    return tuple(e for e in elements.ELEMENTS if e.table == "base" or e in acting)
 
-    The degree is raised until the series match the exact CasADi expressions to ``tol``
-    (relative to each function's largest value) on a 2001-point grid: degree 14 and a
-    maximal relative error ~4e-15 for the default geometry (``max_rel_error``).
+
+def series_terms(els) -> list[tuple[str, str, str]]:
+    """(name, element, what) of the geometric functions of the equation of motion carried by
+    the elements ``els``: per conservative element "b" (-q q'/M; not for gravity, whose T
+    is constant) and "a" (-q'/M), per damper "B" (-q'^2/M); summed in this order."""
+    out = []
+    for e in els:
+        if e in elements.SPRINGS:
+            if e.name != "gravity":
+                out.append((f"{e.name}:b", e.name, "b"))
+            out.append((f"{e.name}:a", e.name, "a"))
+        if e in elements.DAMPERS:
+            out.append((f"{e.name}:B", e.name, "B"))
+    return out
+
+
+class ChebyshevFit:
+    """The geometric functions of theta (and tau') as Chebyshev series on [lo, hi].
+
+    :attr:`names` lists them: the elements' series (:func:`series_terms`), then "inertia"
+    (-M'/(2M)), "tau" and "dtau". The degree is raised until the series match the exact
+    CasADi expressions to ``tol`` (relative to each function's largest value) on a 2001-point
+    grid: degree 14 and a maximal relative error ~4e-15 for the default geometry
+    (``max_rel_error``).
     """
 
-    NAMES = ("g_grav", "g_kl", "g_kl0", "g_c", "g_dM", "g_rot", "tau", "dtau")
-
-    def __init__(self, model, tol: float = 1e-13, max_degree: int = 64):
+    def __init__(self, model, tol: float = 1e-13, max_degree: int = 64, els=None):
         th = ca.SX.sym("theta")
-        cf = coefficients(th, model.geo, model.mass, model.sigma)
-        M = cf["M"]
-        g = ca.vertcat(-cf["dVg"] / M, -cf["l"] * cf["dl"] / M, cf["dl"] / M, -cf["dd"] / M,
-                       -0.5 * cf["dM"] / M, -1.0 / M, cf["tau"])
+        cf = coefficients(th, model.cfg, model.sigma)
+        M, co = cf["M"], cf["coords"]
+        self.elements = tuple(els if els is not None else nlp_elements(model.cfg))
+        terms = series_terms(self.elements)
+        what = {"a": lambda c: -c.dq / M, "b": lambda c: -c.q * c.dq / M,
+                "B": lambda c: -c.dq2 / M}
+        funcs = [what[w](co[e]) for _, e, w in terms] + [-0.5 * cf["dM"] / M, cf["tau"]]
+        self.names = tuple(n for n, _, _ in terms) + ("inertia", "tau", "dtau")
+        g = ca.vertcat(*funcs)
         self.exact = ca.Function("g_exact", [th], [ca.cse(g)])
         # the stroke's angles with a margin for overshooting stages and iterates (the
         # series extrapolate smoothly beyond it), within the range where the loop closes
@@ -109,9 +143,13 @@ class ChebyshevFit:
                          / scale)
             if err < tol:
                 break
-        dtau = np.polynomial.chebyshev.chebder(C[6]) * 2 / (hi - lo)
+        dtau = np.polynomial.chebyshev.chebder(C[-1]) * 2 / (hi - lo)
         C = np.vstack([C, np.r_[dtau, 0.0]])
         self.coef, self.degree, self.max_rel_error = C, n, float(err)
+
+    def series(self, name: str) -> ca.DM:
+        """The Chebyshev coefficients of one function (by its name in :attr:`names`)."""
+        return ca.DM(self.coef[self.names.index(name)])
 
     def _u(self, theta):
         return (2 * theta - (self.lo + self.hi)) / (self.hi - self.lo)
@@ -156,28 +194,35 @@ def interval_function(model, substeps: int, fit: ChebyshevFit | None = None,
     """One shooting interval of ``substeps`` RK4 sub-steps on ``model``'s equation of motion
     (its Chebyshev series): ``interval(x0, q, h) -> (x1, theta, theta_dot, speed)``.
 
-    ``q`` = (k, l0, c, c_rot), ``h`` the sub-step; ``theta``/``theta_dot`` are the states
+    ``q`` the parameter vector (:data:`softclose.problem.PARAM_KEYS`), ``h`` the sub-step;
+    ``theta``/``theta_dot`` are the states
     after sub-steps 1..M-1, ``speed`` the tip speeds after each sub-step followed by the
     Hermite maxima inside each. With ``with_ode`` also returns the ODE ``f(x, q)``.
     """
     fit = fit or ChebyshevFit(model)
     M = substeps
     nb = fit.degree + 1
-    C = [ca.DM(row) for row in fit.coef]
     # theta'' = a0(theta) + a1(theta) theta' + a2(theta) theta'^2; the series of a0 and a1
-    # are combined from the design once per interval, not at every evaluation
-    x0, q, h = ca.SX.sym("x0", 2), ca.SX.sym("q", 4), ca.SX.sym("h")
-    k, l0, c, crot = q[0], q[1], q[2], q[3]
-    cq = ca.vertcat(C[0] + k * C[1] + k * l0 * C[2], c * C[3] + crot * C[5])
+    # are combined from the parameters once per interval, not at every evaluation: each
+    # element's law gives the coefficients of its series (a_e, b_e of T = a + b q; B_e)
+    x0, q, h = ca.SX.sym("x0", 2), ca.SX.sym("q", len(PARAM_KEYS)), ca.SX.sym("h")
+    P = elements.params(q)
+    a0, a1 = [], []
+    for name, e, what in series_terms(fit.elements):
+        el = elements.BY_NAME[e]
+        coef = el.viscous(P) if what == "B" else el.affine(P)["ab".index(what)]
+        (a1 if what == "B" else a0).append(coef * fit.series(name))
+    cq = ca.vertcat(sum(a0[1:], a0[0]), sum(a1[1:], a1[0]))
     xs, cs = ca.SX.sym("x", 2), ca.SX.sym("cq", 2 * nb)
     B = fit.basis(xs[0])
     acc = (ca.dot(cs[:nb], B) + ca.dot(cs[nb:], B) * xs[1]
-           + ca.dot(C[4], B) * xs[1] ** 2)
+           + ca.dot(fit.series("inertia"), B) * xs[1] ** 2)
     f_c = ca.Function("f_c", [xs, cs], [ca.vertcat(xs[1], acc)])
     f = ca.Function("f", [xs, q], [f_c(xs, cq)])     # the ODE, for reporting
     th = ca.SX.sym("th")
     Bt = fit.basis(th)
-    tau = ca.Function("tau", [th], [ca.dot(C[6], Bt), ca.dot(C[7], Bt)])
+    tau = ca.Function("tau", [th], [ca.dot(fit.series("tau"), Bt),
+                                    ca.dot(fit.series("dtau"), Bt)])
 
     def speed(x, xdot):  # |v_T| = -tau theta' (theta' <= 0), and h d|v_T|/dt
         t, dt = tau(x[0])
@@ -221,7 +266,7 @@ def interval_function(model, substeps: int, fit: ChebyshevFit | None = None,
         fx0 = f_c(x0, cq)
         start = ca.Function("start", [x0, q, h], [ca.vertcat(x0, fx0, *speed(x0, fx0)), cq])
         accum = step.mapaccum("substeps", M)
-        x0m, qm, hm = ca.MX.sym("x0", 2), ca.MX.sym("q", 4), ca.MX.sym("h")
+        x0m, qm, hm = ca.MX.sym("x0", 2), ca.MX.sym("q", len(PARAM_KEYS)), ca.MX.sym("h")
         a0, cqm = start(x0m, qm, hm)
         _, Y = accum(a0, ca.repmat(cqm, 1, M), ca.repmat(hm, 1, M))
         outs = [Y[0:2, M - 1], Y[0, :M - 1].T, Y[1, :M - 1].T,
@@ -355,20 +400,22 @@ class ShootingNLP:
     """
 
     def __init__(self, model, nodes: int, substeps: int, hessian: str = "exact",
-                 linear_solver: str = "mumps", max_iter: int = 500, tol: float = 1e-10):
+                 linear_solver: str = "mumps", max_iter: int = 500, tol: float = 1e-10,
+                 els=None):
         t0 = time.perf_counter()
         check_linear_solver(linear_solver)
         self.model, self.N, self.M = model, nodes, substeps
         N, M = nodes, substeps
-        self.fit = ChebyshevFit(model)
+        self.fit = ChebyshevFit(model, els=els)
         self.interval, self.f = interval_function(model, substeps, self.fit, with_ode=True)
         # the NLP: MX graph over the SX interval, mapped over the N intervals
         d, T, X, s = ca.MX.sym("d", 3), ca.MX.sym("T"), ca.MX.sym("X", 2, N), ca.MX.sym("s")
         npar = len(NLP_PARAMS)
         P = ca.MX.sym("P", npar + N)
-        theta0, thc, wi, wp, wt, crot_p, Jref = (P[i] for i in range(npar))
+        theta0, thc, wi, wp, wt = (P[i] for i in range(5))
+        fixed, Jref = P[5:5 + len(FIXED_PARAMS)], P[J_INDEX]
         grid = P[npar:]
-        design = ca.vertcat(d * ca.DM(SCALES), crot_p)
+        design = ca.vertcat(d * ca.DM(SCALES), fixed)
         Xs = ca.horzcat(ca.vertcat(theta0, 0), X[:, :N - 1])
         xe, a, b, sp = self.interval.map(N)(Xs, ca.repmat(design, 1, N), T * grid.T / M)
         g_all = {"continuity": ca.vec(xe - X),                  # = 0
@@ -452,8 +499,9 @@ class ShootingNLP:
         """NLP parameters of ``cfg``'s problem (``weights`` overrides the objective's)."""
         o, st = cfg.optimise, cfg.stroke
         wi, wp = (o.weight_impact, o.weight_peak_tip) if weights is None else weights
-        return np.r_[st.theta0, st.theta_closed, wi, wp, weight_time,
-                     cfg.design.rotary_damper_c, J_ref, self.time_grid()]
+        fixed = [getattr(cfg.design, k) for k in FIXED_PARAMS]
+        return np.r_[st.theta0, st.theta_closed, wi, wp, weight_time, fixed, J_ref,
+                     self.time_grid()]
 
     def time_grid(self) -> np.ndarray:
         """Fractions of T of the N intervals: uniform.

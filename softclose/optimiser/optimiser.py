@@ -14,7 +14,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..errors import ConfigError, NumericalError, SoftcloseError
-from ..problem import DESIGN_KEYS, SCALES, UNITS, describe, design_of
+from ..problem import DESIGN_KEYS, SCALES, UNITS, describe, design_of, with_designs
 from ..progress import Progress
 from .cache import get_nlp, has_nlp, stroke_simulator
 from .diagnose import diagnose
@@ -53,7 +53,7 @@ def claims(nlp: ShootingNLP, cfg, run: Run) -> tuple[dict, dict, float]:
     d, T, X, _ = nlp.unpack(run.x)
     st = cfg.stroke
     model = nlp.model
-    p = np.r_[d, cfg.design.rotary_damper_c]
+    p = with_designs(cfg, d)
     thd = float(X[1, -1])
     vT = np.asarray(model.kin(np.array([st.theta_closed, thd]))[4]).ravel()
     lmin, lmax = get_checker(cfg).spring_extremes(st.theta_closed, st.theta0)

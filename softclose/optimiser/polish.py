@@ -15,7 +15,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..problem import ERROR_KEYS, agreement_tolerance, objective
+from ..problem import ERROR_KEYS, agreement_tolerance, objective, with_designs
 from .cache import get_nlp
 from .nlp import MAX_STEPS, T_FLOOR, Run, ShootingNLP
 
@@ -74,7 +74,7 @@ def refine(cfg, nlp: ShootingNLP, run: Run, sim, notes: list) -> tuple[ShootingN
     never beyond :data:`MAX_STEPS` steps; verification judges the result either way)."""
     for _ in range(MAX_REFINE):
         d = nlp.unpack(run.x)[0]
-        rs = sim.run(np.r_[d, cfg.design.rotary_damper_c], estimate_error=False)
+        rs = sim.run(with_designs(cfg, d), estimate_error=False)
         if not rs.closed:
             return nlp, run
         why = off(cfg, nlp, run, rs)
@@ -111,7 +111,7 @@ def tighten(cfg, nlp: ShootingNLP, run: Run, sim, t_limit: float, notes: list) -
     lo, hi = t_lo, t_hi
     for _ in range(MAX_TIGHTEN):
         d, T, _, _ = nlp.unpack(run.x)
-        rs = sim.run(np.r_[d, cfg.design.rotary_damper_c], estimate_error=False)
+        rs = sim.run(with_designs(cfg, d), estimate_error=False)
         if not rs.closed:
             return run
         Ts = rs.closing_time

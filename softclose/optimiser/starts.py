@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..problem import DESIGN_KEYS, objective
+from .. import statics
+from ..dynamics import COEFFS
+from ..problem import DESIGN_KEYS, objective, with_designs
 from .cache import stroke_simulator
 from .nlp import T_FLOOR, ShootingNLP
 
@@ -33,11 +35,11 @@ def sweep_starts(cfg, count: int, t_limit: float, sim=None,
     sim = sim or stroke_simulator(cfg, sweep_time(cfg, t_limit))
     axes = [np.linspace(*getattr(o, k), n) for k, n in zip(DESIGN_KEYS, shape)]
     G = np.array(np.meshgrid(*axes, indexing="ij")).reshape(3, -1).T
-    P = np.column_stack([G, np.full(len(G), cfg.design.rotary_damper_c)])
+    P = with_designs(cfg, G)
     r = sim.run_batch(P)
     st = cfg.stroke
-    c0 = sim.table.evaluate([st.theta0])[0]
-    release = -(c0[3] + G[:, 0] * (c0[4] - G[:, 1]) * c0[5])   # M theta'' at release
+    release = -statics.slopes(sim.table, st.theta0, P)         # M theta'' at release
+    dVg0 = sim.table.evaluate([st.theta0])[0][COEFFS.index("dVg")]  # gravity's alone
     T = np.where(r["closed"], r["closing_time"], np.inf)
     J = objective(o, r["impact_theta_dot"], r["peak_tip_speed"])
     # violation measure (relative), 0 when feasible: ranks the infeasible points too
@@ -46,7 +48,7 @@ def sweep_starts(cfg, count: int, t_limit: float, sim=None,
                 + np.maximum(o.closing_time_min - T, 0) / max(t_limit, 1e-9)
                 + np.maximum(o.holding_moment_min - r["holding_moment"], 0)
                 / max(abs(o.holding_moment_min), 1e-3)
-                + np.maximum(release, 0) / max(abs(c0[3]), 1e-6)
+                + np.maximum(release, 0) / max(abs(dVg0), 1e-6)
                 + np.maximum(r["theta_dot_max"], 0))
     viol = np.where(np.isfinite(viol), viol, 1e3)
     feasible = viol == 0
@@ -76,7 +78,7 @@ def initial_guess(nlp: ShootingNLP, cfg, design, sim, p: np.ndarray,
     (closing time clipped into [closing_time_min, t_max]): (w0, the stroke's objective)."""
     o, st = cfg.optimise, cfg.stroke
     frac = np.minimum(np.cumsum(nlp.grid_of(p)), 1.0)   # node times / T
-    q = np.r_[np.asarray(design, float)[:3], cfg.design.rotary_damper_c]
+    q = with_designs(cfg, np.asarray(design, float)[:3])
     r = sim.run(q, trajectory=True, estimate_error=False)
     N = nlp.N
     J0 = None

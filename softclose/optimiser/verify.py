@@ -21,10 +21,9 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from ..dynamics import coefficients
 from ..errors import NumericalError
 from ..problem import (CONSTRAINT_TOL, DESIGN_KEYS, METRIC_KEYS, UNITS, VERIFY_RTOL,
-                       agreement_tolerance, objective)
+                       PARAM_KEYS, agreement_tolerance, objective, params_of)
 from ..stroke import StrokeResult
 from .cache import get_model
 
@@ -46,15 +45,14 @@ class Checker:
         from ..reference import Reference
         self.model = model
         self.reference = Reference(model, grid_step=VERIFY_GRID)
-        x, p, tau = ca.SX.sym("x", 2), ca.SX.sym("p", 4), ca.SX.sym("tau")
+        x, tau = ca.SX.sym("x", 2), ca.SX.sym("tau")
+        p = ca.SX.sym("p", len(PARAM_KEYS))
         tol = min(1e-10, model.cfg.simulate.reference_tol * 100)
         grid = list(np.linspace(0.0, 1.0, REBOUND_GRID + 1)[1:])
         dae = {"x": x, "p": ca.vertcat(p, tau), "ode": tau * model.ode(x, p)}
         self._grid_flow = ca.integrator("check_grid", "cvodes", dae, 0.0, grid,
                                         {"abstol": tol, "reltol": tol, "max_num_steps": 200000})
-        th = ca.SX.sym("theta")
-        cf = coefficients(th, model.geo, model.mass, model.sigma)
-        self._l = ca.Function("l", [th], [cf["l"]])
+        self._l = model.coordinate_fns["spring"]
 
     def theta_dot_max(self, p, T) -> float:
         """max theta' over (0, T] of the exact equation (CVODES on a fine grid)."""
@@ -65,7 +63,7 @@ class Checker:
     def spring_extremes(self, a: float, b: float) -> tuple[float, float]:
         """min and max of the spring length over theta in [a, b] (grid + parabola)."""
         g = np.linspace(a, b, 2001)
-        lv = np.asarray(self._l.map(len(g))(g)).ravel()
+        lv = np.asarray(self._l.map(len(g))(g)[0]).ravel()
         out = []
         for sgn in (1, -1):
             i = int(np.argmin(sgn * lv))
@@ -204,7 +202,7 @@ def verify(cfg, design: dict, claims: dict | None = None,
     o, st = cfg.optimise, cfg.stroke
     chk = get_checker(cfg)
     model = chk.model
-    p = np.array([design[k] for k in DESIGN_KEYS] + [cfg.design.rotary_damper_c], float)
+    p = params_of(cfg, design)
     method = (f"CVODES (adaptive BDF) on the exact equation, tolerance "
               f"{chk.reference.tol:g}")
     t0 = time.perf_counter()

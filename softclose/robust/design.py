@@ -56,7 +56,7 @@ import numpy as np
 from ..config import Config, check_batch
 from ..errors import ConfigError, NumericalError
 from ..problem import (DESIGN_KEYS, METRIC_KEYS, PARAM_KEYS, VERIFY_RTOL, describe, design_of,
-                       objective, params_of)
+                       objective, params_of, with_designs)
 from .analysis import YieldResult, analyse_samples
 from .box import Box, box_of
 from .evaluate import evaluate, simulator, slow_keys
@@ -209,8 +209,9 @@ class RobustResult:
 
 # -- scenarios ------------------------------------------------------------------------------------
 def _maps(box: Box, z) -> tuple[np.ndarray, np.ndarray, dict]:
-    """(a, b, model values) of the point z: p = a * (k, l0, c, c_rot) + b, model keys."""
-    a, b, values = np.ones(4), np.zeros(4), {}
+    """(a, b, model values) of the point z: p = a * p_design + b (the parameter vector,
+    PARAM_KEYS), model keys."""
+    a, b, values = np.ones(len(PARAM_KEYS)), np.zeros(len(PARAM_KEYS)), {}
     for j, key in enumerate(box.keys):
         name = key.removeprefix("design.")
         if name in PARAM_KEYS:
@@ -225,16 +226,15 @@ def _maps(box: Box, z) -> tuple[np.ndarray, np.ndarray, dict]:
     return a, b, values
 
 
-def _scenario_rows(box: Box, designs: np.ndarray, Z: np.ndarray, rot: float):
+def _scenario_rows(box: Box, designs: np.ndarray, Z: np.ndarray, cfg: Config):
     """Evaluation rows of every design (G, 3) in every scenario (S, d): (keys, X (G S, .))."""
     keys = [f"design.{k}" for k in PARAM_KEYS] + [k for k in box.keys
                                                    if not k.startswith("design.")]
     rows = []
-    for d in designs:
-        q = np.r_[d, rot]
+    for q in with_designs(cfg, np.atleast_2d(designs)):
         for z in Z:
             a, b, vals = _maps(box, z)
-            rows.append(np.r_[a * q + b, [vals[k] for k in keys[4:]]])
+            rows.append(np.r_[a * q + b, [vals[k] for k in keys[len(PARAM_KEYS):]]])
     return keys, np.array(rows)
 
 
@@ -244,7 +244,7 @@ def _start_design(cfg: Config, box: Box, Z: np.ndarray,
     o = cfg.optimise
     axes = [np.linspace(*getattr(o, k), n) for k, n in zip(DESIGN_KEYS, shape)]
     G = np.array(np.meshgrid(*axes, indexing="ij")).reshape(3, -1).T
-    keys, X = _scenario_rows(box, G, Z, cfg.design.rotary_damper_c)
+    keys, X = _scenario_rows(box, G, Z, cfg)
     cols = evaluate(cfg, keys, X, t_end=_t_end(cfg))
     S = len(Z)
     m = margins(cols, o).reshape(len(G), S)
@@ -308,7 +308,7 @@ class _Problem:
                 self.design_lb[DESIGN_KEYS.index(name)] = box.spreads[j]
 
     def param(self, design) -> np.ndarray:
-        return np.r_[np.asarray(design, float)[:3], self.cfg.design.rotary_damper_c]
+        return with_designs(self.cfg, np.asarray(design, float)[:3])
 
     def scenario_params(self, design, s: int) -> np.ndarray:
         a, b, _ = self.maps[s]

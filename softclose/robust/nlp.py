@@ -4,8 +4,8 @@ A *scenario* is one point of the tolerance box: a model (geometry and masses: a 
 with another lid mass has its own model and its own Chebyshev fit of the equation of
 motion) and a map from the drawn design to the parameters the lid really has,
 
-    p_s = a_s * (k, l0, c, c_rot) + b_s          (elementwise; a_s = 1 + relative deviation,
-                                                  b_s = absolute deviation)
+    p_s = a_s * p + b_s       (p the parameter vector (k, l0, c, c_rot, ...), elementwise;
+                               a_s = 1 + relative deviation, b_s = absolute deviation)
 
 The design d (scaled as in the nominal NLP) is shared; every scenario has its own closing
 time T_s, shooting states X_s at the N nodes and peak-speed bound s_s, and its own copy of
@@ -41,11 +41,14 @@ import casadi as ca
 import numpy as np
 
 from ..config import Config
-from ..problem import SCALES
+from ..problem import DESIGN_KEYS, PARAM_KEYS, SCALES
+
+#: the parameters of p that are not design variables: NLP parameters
+FIXED = PARAM_KEYS[len(DESIGN_KEYS):]
+NP = len(PARAM_KEYS)
 
 #: NLP parameters before the time grid and the scenario maps
-PARAMS = ("theta0", "theta_closed", "weight_impact", "weight_peak_tip", "rotary_damper_c",
-          "J_ref")
+PARAMS = ("theta0", "theta_closed", "weight_impact", "weight_peak_tip", *FIXED, "J_ref")
 #: smallest closing time a scenario may take (s)
 T_FLOOR = 1e-3
 #: per-scenario constraint groups, in order
@@ -104,12 +107,20 @@ def model_config(cfg: Config, values: dict) -> Config:
     return with_values(cfg, {k: v for k, v in values.items() if not k.startswith("design.")})
 
 
+def _model_key(cfg: Config) -> tuple:
+    """A scenario model's key: the model's, and the elements the NLP carries."""
+    from ..model import model_key
+    from ..optimiser.nlp import nlp_elements
+    return model_key(cfg) + (tuple(e.name for e in nlp_elements(cfg)),)
+
+
 def interval_of(cfg_model: Config, nodes: int, substeps: int):
     """(model, shooting-interval Function) of a scenario's model: the nominal optimiser's."""
     from ..optimiser.cache import get_model
-    from ..optimiser.nlp import interval_function
+    from ..optimiser.nlp import ChebyshevFit, interval_function, nlp_elements
     model = get_model(cfg_model)
-    return model, interval_function(model, substeps)
+    fit = ChebyshevFit(model, els=nlp_elements(cfg_model))
+    return model, interval_function(model, substeps, fit)
 
 
 class ScenarioNLP:
@@ -129,7 +140,7 @@ class ScenarioNLP:
         # one interval Function per distinct model
         keys, self.model_index, funcs, models = [], [], [], []
         for c in model_cfgs:
-            key = (c.geometry, c.mass, c.stroke.theta0_deg, c.stroke.theta_closed_deg)
+            key = _model_key(c)
             if key not in keys:
                 keys.append(key)
                 model, f = interval_of(c, N, M)
@@ -139,16 +150,17 @@ class ScenarioNLP:
         self.models = models
         self.scenario_models = [models[i] for i in self.model_index]
         npar = len(PARAMS)
-        P = ca.MX.sym("P", npar + N + 8 * S)
-        theta0, thc, wi, wp, crot, Jref = (P[i] for i in range(npar))
+        P = ca.MX.sym("P", npar + N + 2 * NP * S)
+        theta0, thc, wi, wp = (P[i] for i in range(4))
+        fixed, Jref = P[4:4 + len(FIXED)], P[npar - 1]
         grid = P[npar:npar + N]
-        A = ca.reshape(P[npar + N:npar + N + 4 * S], 4, S)
-        B = ca.reshape(P[npar + N + 4 * S:], 4, S)
+        A = ca.reshape(P[npar + N:npar + N + NP * S], NP, S)
+        B = ca.reshape(P[npar + N + NP * S:], NP, S)
         d, t = ca.MX.sym("d", 3), ca.MX.sym("t")
         T = [ca.MX.sym(f"T{s}") for s in range(S)]
         X = [ca.MX.sym(f"X{s}", 2, N) for s in range(S)]
         pk = [ca.MX.sym(f"s{s}") for s in range(S)]
-        q = ca.vertcat(d * ca.DM(SCALES), crot)
+        q = ca.vertcat(d * ca.DM(SCALES), fixed)
         ps = [A[:, s] * q + B[:, s] for s in range(S)]
         # the shooting intervals, one map per model over all of its scenarios' intervals
         outs: list = [None] * S
@@ -239,7 +251,7 @@ class ScenarioNLP:
         A = np.concatenate([np.asarray(a, float) for a, _ in maps])
         B = np.concatenate([np.asarray(b, float) for _, b in maps])
         return np.r_[st.theta0, st.theta_closed, o.weight_impact, o.weight_peak_tip,
-                     cfg.design.rotary_damper_c, J_ref, time_grid(self.N), A, B]
+                     [getattr(cfg.design, k) for k in FIXED], J_ref, time_grid(self.N), A, B]
 
     def bounds(self, cfg: Config, t_hi: list[float] | None = None,
                t_lo: list[float] | None = None, design_lb=None):
@@ -331,7 +343,7 @@ def get_scenario_nlp(cfg: Config, model_cfgs: list[Config], nodes: int, substeps
                      robust_objective: str) -> tuple[ScenarioNLP, bool]:
     """The ScenarioNLP of these scenario models (cached); (nlp, was it cached)."""
     o = cfg.optimise
-    key = (tuple((c.geometry, c.mass, c.stroke.theta0_deg, c.stroke.theta_closed_deg)
+    key = (tuple(_model_key(c)
                  for c in model_cfgs), nodes, substeps, robust_objective, o.hessian,
            o.linear_solver, o.max_iter)
     if key in _NLPS:

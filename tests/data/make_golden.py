@@ -27,13 +27,18 @@ GEOMETRY2 = {"crank_oa": 0.05, "crank_bc": 0.09, "pivot_b": [0.065, 0.02],
 
 
 def designs(n: int, seed: int) -> np.ndarray:
-    """Random rows (k, l0, c, c_rot) over and a little beyond the design box."""
+    """Random rows (k, l0, c, c_rot) over and a little beyond the design box, as parameter
+    vectors (the elements added since the seed at zero)."""
     rng = np.random.default_rng(seed)
     P = np.column_stack([rng.uniform(0, 12000, n), rng.uniform(0.02, 0.12, n),
                          rng.uniform(0, 6000, n), rng.uniform(0, 1.0, n)])
     P[: n // 8, 2:] = 0.0          # undamped rows (run to t_max, no early exit)
     P[n // 8: n // 4, 0] = 0.0     # no spring
-    return P
+    try:
+        from softclose.problem import PARAM_KEYS
+    except ImportError:
+        return P
+    return np.c_[P, np.zeros((n, len(PARAM_KEYS) - 4))]
 
 
 def compute() -> dict[str, np.ndarray]:
@@ -50,7 +55,7 @@ def compute() -> dict[str, np.ndarray]:
         sim = Simulator(c)
         out[f"{tag}_table_cc"] = sim.table.cc
         P = designs(400, 7 if tag == "g1" else 8)
-        out[f"{tag}_P"] = P
+        out[f"{tag}_P"] = P[:, :4]
         for method in ("rk4", "euler_cromer", "gauss4", "radau5"):
             s = Simulator(c, model=sim.model, integrator=method)
             r = s.run_batch(P)
@@ -95,7 +100,14 @@ def compute() -> dict[str, np.ndarray]:
                            *[v for k in "OABC" for v in s["reactions"][k]]])
         out[f"{tag}_states"] = np.array(states)
         fit = ChebyshevFit(sim.model)
-        out[f"{tag}_chebyshev"] = fit.coef
+        if hasattr(fit, "names"):   # named series (since the element registry): the rows
+            # of the layout of b33652c, g_grav, g_kl, g_kl0 = +dl/M, g_c, g_dM, g_rot, tau, dtau
+            row = {n: fit.coef[i] for i, n in enumerate(fit.names)}
+            out[f"{tag}_chebyshev"] = np.array([
+                row["gravity:a"], row["spring:b"], -row["spring:a"], row["dashpot:B"],
+                row["inertia"], row["rotary:B"], row["tau"], row["dtau"]])
+        else:
+            out[f"{tag}_chebyshev"] = fit.coef
     # the optimiser and the robust optimiser on the defaults
     res = softclose.optimise(cfg)
     out["optimise"] = np.r_[[res.design[k] for k in ("spring_k", "spring_rest_length",

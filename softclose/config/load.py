@@ -1,0 +1,272 @@
+"""Loading a config: TOML file + ``--set`` overrides -> an immutable, validated :class:`Config`.
+
+Every key is optional. Each section is a frozen dataclass whose fields are the section's key
+records (:mod:`softclose.config.schema`); loading checks each value against its record's
+kind and admissible range, derives the missing derived defaults, checks the work a config
+asks for (steps per stroke, the optimiser's grid) and raises :class:`ConfigError` with a
+one-line message naming the key. Geometry that cannot be assembled is checked by the model
+(:mod:`softclose.kinematics`), which also raises ``ConfigError``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Iterable
+
+from ..errors import ConfigError
+from .schema import BY_NAME, KEYS, RANGES, SCHEMA, SECTION_TYPES, SECTIONS
+from .tolerance import Tolerance, read_tolerance
+from .values import check, fmt, in_range, number
+
+#: most fixed steps one stroke may take (stroke.t_max / simulate.step): bounds its loop
+#: (rk4 ~0.1 us, radau5 ~0.5 us a step; 60 s at 1.2 us or 5 s at 0.1 us)
+STEP_BUDGET = 5e7
+#: most rows of a stroke's trajectory (simulate --out: CSV, figures; ~0.8 GB of memory and
+#: 150 MB of CSV at 1e6 rows)
+TRAJECTORY_BUDGET = 1_000_000
+#: most RK4 steps in the optimiser's NLP (optimise.nodes x optimise.substeps)
+NLP_BUDGET = 2000
+#: most fixed steps of a batch of strokes (designs x STEP_BUDGET-bounded steps per stroke):
+#: 20 million designs at the default step; see :func:`check_batch`
+BATCH_STEP_BUDGET = 5e10
+
+
+def steps_per_stroke(cfg: "Config") -> int:
+    """The most fixed steps one stroke of ``cfg`` can take (ceil(t_max / step))."""
+    return int(math.ceil(cfg.stroke.t_max / cfg.simulate.step * (1 - 1e-12)))
+
+
+def check_batch(cfg: "Config", strokes: int, what: str = "the batch",
+                budget: float = BATCH_STEP_BUDGET) -> None:
+    """Refuse (ConfigError, one line) a batch of ``strokes`` strokes whose steps could exceed
+    ``budget``: designs x steps per stroke bounds every batch loop (sweeps, samples)."""
+    steps = steps_per_stroke(cfg)
+    if strokes * steps > budget:
+        raise ConfigError(
+            f"{what}: {strokes} strokes of up to {steps} steps (stroke.t_max / simulate.step) is "
+            f"{strokes * steps:.3g} steps, above the budget of {budget:g}; use fewer points, a "
+            "larger simulate.step or a shorter stroke.t_max")
+
+
+@dataclass(frozen=True)
+class Config:
+    geometry: Geometry
+    mass: Mass
+    design: Design
+    stroke: Stroke
+    simulate: Simulate
+    optimise: Optimise
+    tolerance: "Tolerance"
+    raw: dict = dataclasses.field(default_factory=dict, repr=False, compare=False)
+
+    def replace(self, **sections: dict[str, Any]) -> "Config":
+        """A copy with keys changed, e.g. ``cfg.replace(design={"spring_k": 300.0})``.
+
+        Values are validated exactly as if they came from a file.
+        """
+        raw = {k: dict(v) for k, v in self.raw.items()}
+        for section, values in sections.items():
+            raw.setdefault(section, {}).update(values)
+        return from_dict(raw)
+
+    def set(self, key: str, value: Any) -> "Config":
+        """A copy with one key changed: ``cfg.set("mass.lid", 0.6)``,
+        ``cfg.set("geometry.pivot_b[0]", 0.062)`` (validated as if from a file)."""
+        return self.update({key: value})
+
+    def update(self, values: dict[str, Any]) -> "Config":
+        """A copy with several keys changed, by their full names (``section.key`` or
+        ``section.key[i]``), e.g. ``cfg.update({"mass.lid": 0.6, "design.damper_c": 900})``."""
+        if not values:
+            return self
+        raw = {k: dict(v) for k, v in self.raw.items()}
+        for key, value in values.items():
+            if not isinstance(key, str):
+                raise ConfigError(f"config key {key!r}: expected a string like 'mass.lid'")
+            _set_raw(raw, key, value.item() if hasattr(value, "item") else value,
+                     origin=f"{key}")
+        return from_dict(raw)
+
+    def with_design(self, **values) -> "Config":
+        """A copy with some ``[design]`` values changed, by name (validated); None leaves a
+        value as it is: ``cfg.with_design(spring_k=300.0, damper_c=None)``."""
+        return self.replace(design={k: v for k, v in values.items() if v is not None})
+
+
+def from_dict(raw: dict[str, Any]) -> Config:
+    """Build a validated :class:`Config` from a nested dict (a parsed TOML file)."""
+    if not isinstance(raw, dict):
+        raise ConfigError("config: expected a table of sections")
+    for section, table in raw.items():
+        if section == "tolerance":
+            continue                     # its keys are config keys: checked by read_tolerance
+        if section not in SCHEMA:
+            raise ConfigError(f"unknown config section [{section}] "
+                              f"(known: {', '.join(SCHEMA)})")
+        if not isinstance(table, dict):
+            raise ConfigError(f"[{section}]: expected a table of keys, got {fmt(table)}")
+        for key in table:
+            if key not in SCHEMA[section]:
+                raise ConfigError(f"unknown config key {section}.{key} "
+                                  f"(known in [{section}]: {', '.join(SCHEMA[section])})")
+    values: dict[str, dict[str, Any]] = {s: {} for s in SECTIONS}
+    for k in KEYS:
+        v = raw.get(k.section, {}).get(k.name, k.default)
+        values[k.section][k.name] = None if v is None else check(k.full, k.kind, v)
+        if v is not None and k.full in RANGES:
+            in_range(k.full, k.full, values[k.section][k.name])
+    for k in KEYS:                       # derived defaults, from the checked values
+        if values[k.section][k.name] is None:
+            values[k.section][k.name] = k.derive(values)
+
+    s = values["stroke"]
+    if not s["theta0_deg"] > s["theta_closed_deg"]:
+        raise ConfigError(f"stroke.theta0_deg: the release angle ({s['theta0_deg']}) must lie "
+                          f"above stroke.theta_closed_deg ({s['theta_closed_deg']})")
+    if values["simulate"]["step"] >= s["t_max"]:
+        raise ConfigError(f"simulate.step: {values['simulate']['step']} s is not smaller than "
+                          f"stroke.t_max = {s['t_max']} s")
+    steps = s["t_max"] / values["simulate"]["step"]
+    if steps > STEP_BUDGET * (1 + 1e-9):
+        raise ConfigError(f"simulate.step: {values['simulate']['step']:g} s over stroke.t_max = "
+                          f"{s['t_max']:g} s is {steps:.3g} steps a stroke, above the budget of "
+                          f"{STEP_BUDGET:g}; use a larger simulate.step or a shorter stroke.t_max")
+    o = values["optimise"]
+    if o["closing_time_min"] >= o["closing_time_max"]:
+        raise ConfigError(f"optimise.closing_time_min: {o['closing_time_min']} must be below "
+                          f"optimise.closing_time_max = {o['closing_time_max']}")
+    if o["closing_time_min"] >= s["t_max"]:   # a closing_time_max past t_max cannot bind: fine
+        raise ConfigError(f"optimise.closing_time_min: {o['closing_time_min']:g} s is not below "
+                          f"stroke.t_max = {s['t_max']:g} s, so no simulated stroke can meet it")
+    if o["nodes"] * o["substeps"] > NLP_BUDGET:
+        raise ConfigError(f"optimise.nodes x optimise.substeps: {o['nodes']} x {o['substeps']} "
+                          f"= {o['nodes'] * o['substeps']} RK4 steps in the optimisation problem, "
+                          f"above the budget of {NLP_BUDGET}; use fewer nodes or substeps")
+    if o["spring_rest_length"][0] <= 0:
+        raise ConfigError(f"optimise.spring_rest_length: lower bound must be positive, "
+                          f"got {o['spring_rest_length'][0]}")
+    for key in ("spring_k", "damper_c"):
+        if o[key][0] < 0:
+            raise ConfigError(f"optimise.{key}: lower bound must be non-negative, got {o[key][0]}")
+    sections = {name: SECTION_TYPES[name](**values[name]) for name in SECTIONS}
+    tolerance = read_tolerance(raw.get("tolerance", {}), values)
+    return Config(**sections, tolerance=tolerance, raw={k: dict(v) for k, v in raw.items()})
+
+
+def to_dict(cfg: Config) -> dict[str, dict[str, Any]]:
+    """The config as a nested dict of plain values (lists for vectors)."""
+    out = {}
+    for name in SECTIONS:
+        sec = getattr(cfg, name)
+        out[name] = {f.name: (list(v) if isinstance(v := getattr(sec, f.name), tuple) else v)
+                     for f in dataclasses.fields(sec)}
+    out["tolerance"] = cfg.tolerance.to_dict()
+    return out
+
+
+
+
+def parse_value(text: str) -> Any:
+    """Read a command-line value as a TOML value; a bare word is a string."""
+    try:
+        return tomllib.loads(f"v = {text.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        word = text.strip()
+        if re.fullmatch(r"[A-Za-z_][\w\-]*", word):
+            return word
+        raise ConfigError(f"cannot read {text.strip()!r} as a value (use TOML syntax: "
+                          f"1e4, true, [0.06, 0.015], \"rk4\")") from None
+
+
+def apply_override(raw: dict[str, Any], text: str) -> None:
+    """Apply one ``section.key=value`` or ``section.key[i]=value`` override to ``raw``."""
+    if "=" not in text:
+        raise ConfigError(f"--set {text!r}: expected section.key=value or section.key[i]=value")
+    key, value_text = text.split("=", 1)
+    _set_raw(raw, key.strip(), parse_value(value_text), origin=f"--set {text!r}")
+
+
+_KEY = re.compile(r"^([A-Za-z_]\w*)\.([A-Za-z_]\w*)(?:\[(\d+)\])?$")
+
+
+def _set_raw(raw: dict[str, Any], key: str, value: Any, origin: str) -> None:
+    """Set ``section.key`` or ``section.key[i]`` (or ``tolerance.<config key>``) in ``raw``."""
+    if key.startswith("tolerance."):  # tolerance.<config key> = spread
+        raw.setdefault("tolerance", {})[key[len("tolerance."):].strip().strip('"')] = value
+        return
+    m = _KEY.match(key)
+    if not m:
+        raise ConfigError(f"{origin}: expected section.key=value or section.key[i]=value")
+    section, name, index = m.groups()
+    if section not in SCHEMA:
+        raise ConfigError(f"{origin}: unknown config section [{section}]")
+    if name not in SCHEMA[section]:
+        raise ConfigError(f"{origin}: unknown config key {section}.{name}")
+    table = raw.setdefault(section, {})
+    if index is None:
+        table[name] = value
+        return
+    kind, default = SCHEMA[section][name]
+    if kind not in ("vec2", "vec3", "bounds"):
+        raise ConfigError(f"{origin}: {section}.{name} is not a vector")
+    current = table.get(name)
+    if current is None:
+        current = default if default is not None else _derived_default(raw, section, name)
+    if not isinstance(current, (list, tuple)):   # set to a scalar earlier: no component i
+        raise ConfigError(f"{origin}: {section}.{name} is {fmt(current)}, not a list of "
+                          "numbers; set the whole vector first")
+    current = list(current)
+    i = int(index)
+    if i >= len(current):
+        raise ConfigError(f"{origin}: {section}.{name} has {len(current)} components")
+    current[i] = value
+    table[name] = current
+
+
+def _derived_default(raw: dict[str, Any], section: str, key: str) -> list[float]:
+    """A derived vector default (lid_g, lid_tip) from the raw values it depends on: the keys
+    of its section as given (or their defaults), checked as numbers."""
+    given, known, errors = raw.get(section, {}), {}, []
+    for k in KEYS:
+        if k.section == section and k.kind in ("pos", "nonneg", "real") and \
+                (k.name in given or k.default is not None):
+            try:
+                known[k.name] = number(k.full, given.get(k.name, k.default))
+            except ConfigError as exc:
+                errors.append(exc)
+    try:
+        return list(BY_NAME[f"{section}.{key}"].derive({section: known}))
+    except KeyError:                    # what it derives from is not a number: say so
+        raise errors[0] from None
+
+
+def read_toml(path: str | Path) -> dict[str, Any]:
+    """Parse a TOML config file; unreadable or malformed files raise ConfigError."""
+    p = Path(path)
+    try:
+        text = p.read_text()
+    except OSError as exc:
+        raise ConfigError(f"--config {path}: cannot read the file ({exc.strerror})") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"--config {path}: not valid TOML ({exc})") from None
+
+
+def load_config(path: str | Path | None = None, overrides: Iterable[str] = ()) -> Config:
+    """Load the config: defaults, then the TOML file at ``path``, then ``overrides``."""
+    raw = read_toml(path) if path is not None else {}
+    for text in overrides:
+        apply_override(raw, text)
+    return from_dict(raw)
+
+
+def default_config() -> Config:
+    return from_dict({})
+
+

@@ -1,0 +1,190 @@
+"""Every config key, one record each (:class:`softclose.keys.Key`), and the views read from them.
+
+The linkage's own keys (lengths, masses, the stroke, the integrator, the optimiser's settings
+and the ``[tolerance]`` options) are recorded here; each machine element records its keys in
+its unit (:mod:`softclose.elements`). :data:`KEYS` is all of them, in the order of the
+sections and, within a section, the linkage's keys first, then the elements' in the
+registry's order. Everything else is derived from the records: :data:`SCHEMA` (kind and
+default per section and key), :data:`RANGES` (admissible magnitudes), :data:`DEFAULT_SPREADS`
+(``[tolerance]`` defaults), the frozen section classes (:data:`SECTION_TYPES`) and the key
+tables of the docs (:mod:`softclose.config.docs`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+from .. import elements
+from ..keys import Key
+
+INTEGRATORS = ("rk4", "euler_cromer", "gauss4", "radau5")
+HESSIANS = ("exact", "limited-memory")
+#: the sections of a config, in order; "tolerance" holds spreads and their options
+SECTIONS = ("geometry", "mass", "design", "stroke", "simulate", "optimise")
+
+
+def _half_length(v):
+    return (v["geometry"]["lid_length"] / 2, 0.015)
+
+
+def _rod(mass_key, length):
+    return lambda v: v["mass"][mass_key] * length(v) ** 2 / 12
+
+
+_L = lambda v: v["geometry"]["lid_length"]  # noqa: E731
+
+CORE: tuple[Key, ...] = (
+    # [geometry]
+    Key("geometry", "lid_length", "pos", 0.500, "m",
+        "lid length L (sets the defaults of `lid_g`, `lid_tip`, `mass.inertia_lid`)",
+        lo=1e-4, hi=10.0),
+    Key("geometry", "crank_oa", "pos", 0.045, "m", "length l2 of crank OA", lo=1e-4, hi=10.0),
+    Key("geometry", "crank_bc", "pos", 0.080, "m", "length l3 of crank BC", lo=1e-4, hi=10.0),
+    Key("geometry", "pivot_b", "vec2", (0.060, 0.015), "m", "ground pivot B (world)",
+        lo=-10.0, hi=10.0),
+    Key("geometry", "lid_c", "vec2", (0.012, 0.013), "m", "pin C, lid frame, from A",
+        lo=-10.0, hi=10.0),
+    Key("geometry", "lid_g", "vec2", None, "m", "lid centre of mass G1, lid frame, from A",
+        lo=-10.0, hi=10.0, derived="[L/2, 0.015]", derive=_half_length),
+    Key("geometry", "lid_tip", "vec2", None, "m", "lid tip T, lid frame, from A",
+        lo=-10.0, hi=10.0, derived="[L, 0.0]", derive=lambda v: (_L(v), 0.0)),
+    Key("geometry", "assembly", "vec3", (18.0, 108.6655, 146.8855), "deg",
+        "[theta, phi, gamma]: theta is where the branch is entered (the loop must close "
+        "there); phi, gamma select the branch by their side", lo=-360.0, hi=360.0),
+    # [mass]
+    Key("mass", "lid", "pos", 0.5, "kg", "lid mass m1", lo=1e-4, hi=1e3, spread=0.05),
+    Key("mass", "crank_oa", "pos", 0.05, "kg", "crank OA mass m2", lo=1e-4, hi=1e3),
+    Key("mass", "crank_bc", "pos", 0.05, "kg", "crank BC mass m3", lo=1e-4, hi=1e3),
+    Key("mass", "inertia_lid", "pos", None, "kg m^2", "lid moment of inertia about G1",
+        lo=1e-15, hi=1e4, derived="m1 L²/12", derive=_rod("lid", _L)),
+    Key("mass", "inertia_oa", "pos", None, "kg m^2", "crank OA inertia about its midpoint",
+        lo=1e-15, hi=1e4, derived="m2 l2²/12",
+        derive=_rod("crank_oa", lambda v: v["geometry"]["crank_oa"])),
+    Key("mass", "inertia_bc", "pos", None, "kg m^2", "crank BC inertia about its midpoint",
+        lo=1e-15, hi=1e4, derived="m3 l3²/12",
+        derive=_rod("crank_bc", lambda v: v["geometry"]["crank_bc"])),
+    # [stroke]
+    Key("stroke", "theta0_deg", "real", 18.0, "deg",
+        "release angle (must exceed `theta_closed_deg`)", lo=-360.0, hi=360.0),
+    Key("stroke", "theta_closed_deg", "real", 0.0, "deg", "closed angle (the rim)",
+        lo=-360.0, hi=360.0),
+    Key("stroke", "t_max", "pos", 5.0, "s", "longest simulated time", lo=1e-6, hi=60.0),
+    # [simulate]
+    Key("simulate", "integrator", "str:" + ",".join(INTEGRATORS), "rk4", "",
+        "fixed-step method: `rk4` (classical Runge–Kutta, order 4), `euler_cromer` "
+        "(symplectic Euler, order 1), `gauss4` (Gauss–Legendre, implicit, order 4), `radau5` "
+        "(Radau IIA, implicit, L-stable, order 5)"),
+    Key("simulate", "step", "pos", 0.002, "s",
+        "step size (below `t_max`); the cheapest rk4 step meeting the accuracy targets on the "
+        "benchmark designs", lo=1e-7, hi=1.0),
+    Key("simulate", "reference_tol", "pos", 1e-12, "",
+        "relative and absolute tolerance of the adaptive reference (CVODES)",
+        lo=1e-14, hi=1e-3),
+    # [optimise]
+    Key("optimise", "closing_time_max", "pos", 1.0, "s", "latest allowed closing time",
+        lo=1e-3, hi=60.0, note="a limit past `stroke.t_max` is clamped to it"),
+    Key("optimise", "closing_time_min", "nonneg", 0.0, "s",
+        "earliest allowed closing time (below the maximum)", lo=0.0, hi=60.0,
+        note="below `stroke.t_max`"),
+    Key("optimise", "holding_moment_min", "real", 0.1, "N m", "least holding moment",
+        lo=-1e6, hi=1e6),
+    Key("optimise", "weight_impact", "nonneg", 1.0, "s²", "weight of impact_theta_dot² in J",
+        lo=0.0, hi=1e6),
+    Key("optimise", "weight_peak_tip", "nonneg", 0.1, "s²/m²",
+        "weight of peak_tip_speed² in J", lo=0.0, hi=1e6),
+    Key("optimise", "spring_k", "bounds", (0.0, 10000.0), "N/m", "bounds of spring_k",
+        lo=0.0, hi=1e7),
+    Key("optimise", "spring_rest_length", "bounds", (0.02, 0.12), "m",
+        "bounds of spring_rest_length (lower > 0)", lo=1e-4, hi=10.0),
+    Key("optimise", "damper_c", "bounds", (0.0, 5000.0), "N s/m", "bounds of damper_c",
+        lo=0.0, hi=1e7),
+    Key("optimise", "nodes", "int+", 10, "", "shooting intervals N", lo=1, hi=1000,
+        note="with nodes × substeps ≤ 2000"),
+    Key("optimise", "substeps", "int+", 4, "", "RK4 sub-steps per interval M", lo=1, hi=1000),
+    Key("optimise", "hessian", "str:" + ",".join(HESSIANS), "exact", "",
+        "`exact` or `limited-memory` (Ipopt)"),
+    Key("optimise", "linear_solver", "str:mumps,ma27,ma57,ma86,ma97", "mumps", "",
+        "Ipopt linear solver: `mumps`, `ma27`, `ma57`, `ma86`, `ma97`"),
+    Key("optimise", "starts", "int+", 6, "", "number of starting designs (multistart)",
+        lo=1, hi=100),
+    Key("optimise", "max_iter", "int+", 500, "", "Ipopt iteration limit per start",
+        lo=1, hi=10000),
+)
+
+#: the options of the [tolerance] section (every other key there names a toleranced key)
+TOLERANCE_KEYS: tuple[Key, ...] = (
+    Key("tolerance", "distribution", "str:uniform,normal", "uniform", "",
+        "`uniform` over nominal ± spread, or `normal` with spread = 3 sigma"),
+    Key("tolerance", "required_yield", "real", 0.99, "",
+        "fraction of produced lids that must meet every constraint", lo=0.0, hi=1.0,
+        note="above 0"),
+    Key("tolerance", "samples", "int+", 10000, "", "Monte Carlo samples of a yield estimate",
+        lo=1, hi=10_000_000),
+    Key("tolerance", "robust_objective", "str:worst,mean", "worst", "",
+        "what the robust optimiser minimises over the scenarios: `worst` case or `mean`"),
+)
+
+
+def _ordered(keys) -> tuple[Key, ...]:
+    return tuple(k for s in SECTIONS for k in keys if k.section == s)
+
+
+#: every config key of the sections, one record each
+KEYS: tuple[Key, ...] = _ordered(CORE + elements.KEYS)
+BY_NAME: dict[str, Key] = {k.full: k for k in KEYS + TOLERANCE_KEYS}
+#: kind and default per section and key: {section: {name: (kind, default)}}
+SCHEMA: dict[str, dict[str, tuple[str, Any]]] = {
+    s: {k.name: (k.kind, k.default) for k in KEYS if k.section == s} for s in SECTIONS}
+#: admissible magnitudes: full key -> (lowest, highest, unit), both ends included, SI units
+#: (angles in degrees). They are wide -- a jewellery box to a car boot -- and they exist
+#: because physics bounds every value: without them a 1e300 m lid overflows the inertia, a
+#: spring of 1e300 N/m on a 2 kg m^2 lid overflows the linearisation, and an angle of 1e300
+#: deg makes the toggle scan unbounded. Vector keys: every component; ``bounds`` keys: both
+#: ends. Checked on load after the kind (sign, type), so a negative length still reads "must
+#: be positive". Derived defaults (lid_g, lid_tip, the inertias) always fall inside.
+RANGES: dict[str, tuple[float, float, str]] = {k.full: k.range for k in KEYS
+                                                if k.range is not None}
+#: spreads given unless the [tolerance] section says otherwise (relative): the design's
+#: first, then the lid's (the order of the tolerance box's axes and of its samples' columns)
+DEFAULT_SPREADS: dict[str, float] = {
+    k.full: k.spread for s in ("design", "mass", "geometry", "stroke") for k in KEYS
+    if k.section == s and k.spread is not None}
+#: the [tolerance] options: name -> (kind, default)
+TOLERANCE_OPTIONS: dict[str, tuple[str, Any]] = {k.name: (k.kind, k.default)
+                                                 for k in TOLERANCE_KEYS}
+#: the sections whose values are physical quantities of the lid and may carry a tolerance
+TOLERANCE_SECTIONS = ("geometry", "mass", "design", "stroke")
+
+
+def _stroke_angles(cls):
+    cls.theta0 = property(lambda self: math.radians(self.theta0_deg))
+    cls.theta_closed = property(lambda self: math.radians(self.theta_closed_deg))
+    return cls
+
+
+def _section_type(section: str):
+    """The frozen dataclass of one section, its fields the section's keys in order."""
+    name = section.capitalize()
+    cls = dataclasses.make_dataclass(
+        name, [(k.name, Any) for k in KEYS if k.section == section], frozen=True,
+        namespace={"__doc__": f"The checked values of the [{section}] section."})
+    cls.__module__ = __name__            # (so that configs pickle: the class is found here)
+    return _stroke_angles(cls) if section == "stroke" else cls
+
+
+#: the section classes, by section
+SECTION_TYPES = {s: _section_type(s) for s in SECTIONS}
+Geometry, Mass, Design, Stroke, Simulate, Optimise = (SECTION_TYPES[s] for s in SECTIONS)
+
+
+def numeric_keys() -> list[str]:
+    """Every scalar key (and vector component) a sweep may vary."""
+    out = []
+    for k in KEYS:
+        if k.kind in ("pos", "nonneg", "real"):
+            out.append(k.full)
+        elif k.kind in ("vec2", "vec3"):
+            out += [f"{k.full}[{i}]" for i in range(k.size)]
+    return out

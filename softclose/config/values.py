@@ -1,0 +1,81 @@
+"""Checking one value against its key's kind and admissible range (one-line errors)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from ..errors import ConfigError
+from .schema import RANGES
+
+
+def fmt(v: Any) -> str:
+    """A value as a message shows it (a string quoted, so that "500" reads as text)."""
+    if isinstance(v, str):
+        return repr(v)
+    return str(v)
+
+
+def fmt_range(key: str) -> str:
+    lo, hi, unit = RANGES[key]
+    return f"{lo:g}..{hi:g}" + (f" {unit}" if unit else "")
+
+
+def in_range(key: str, name: str, value: Any) -> None:
+    """ConfigError (one line: key, value, admissible range) when ``value`` (a number or each
+    number of a vector) lies outside ``RANGES[key]``; ``name`` is how the message names it."""
+    lo, hi, unit = RANGES[key]
+    for i, x in enumerate(value if isinstance(value, tuple) else (value,)):
+        if not lo <= x <= hi:
+            which = f"{name}[{i}]" if isinstance(value, tuple) else name
+            shown = f"{x:g}" if isinstance(x, float) or abs(x) < 10 ** 15 else \
+                f"{str(x)[:4]}...({len(str(abs(x)))} digits)"
+            raise ConfigError(f"{which}: {shown}{' ' + unit if unit else ''} is outside the "
+                              f"admissible range {fmt_range(key)}")
+
+
+def number(key: str, v: Any) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise ConfigError(f"{key}: expected a number, got {fmt(v)}")
+    try:
+        x = float(v)
+    except OverflowError:           # an integer beyond the floats (TOML allows any length)
+        raise ConfigError(f"{key}: {str(v)[:12]}... is too large a number") from None
+    if not math.isfinite(x):
+        raise ConfigError(f"{key}: expected a finite number, got {fmt(v)}")
+    return x
+
+
+def check(key: str, kind: str, v: Any) -> Any:
+    """Validate one value against its kind; return it normalised."""
+    if kind in ("pos", "nonneg", "real"):
+        x = number(key, v)
+        if kind == "pos" and not x > 0:
+            raise ConfigError(f"{key}: must be positive, got {fmt(v)}")
+        if kind == "nonneg" and x < 0:
+            raise ConfigError(f"{key}: must be non-negative, got {fmt(v)}")
+        return x
+    if kind in ("vec2", "vec3", "bounds"):
+        n = 3 if kind == "vec3" else 2
+        if not isinstance(v, (list, tuple)) or len(v) != n:
+            raise ConfigError(f"{key}: expected a list of {n} numbers, got {fmt(v)}")
+        xs = tuple(number(f"{key}[{i}]", x) for i, x in enumerate(v))
+        if kind == "bounds" and xs[0] > xs[1]:
+            raise ConfigError(f"{key}: lower bound {xs[0]} exceeds upper bound {xs[1]}")
+        return xs
+    if kind == "int+":
+        if isinstance(v, bool) or not isinstance(v, int):
+            raise ConfigError(f"{key}: expected a whole number, got {fmt(v)}")
+        if v < 1:
+            raise ConfigError(f"{key}: must be at least 1, got {v}")
+        return v
+    if kind == "bool":
+        if not isinstance(v, bool):
+            raise ConfigError(f"{key}: expected true or false, got {fmt(v)}")
+        return v
+    if kind.startswith("str:"):
+        choices = kind[4:].split(",")
+        if not isinstance(v, str) or v not in choices:
+            raise ConfigError(f"{key}: expected one of {', '.join(choices)}; got {fmt(v)}")
+        return v
+    raise AssertionError(kind)

@@ -1,0 +1,75 @@
+"""The machine elements: one home per element (the registry).
+
+Every force on the linkage is one :class:`~softclose.elements.base.Element` of
+:data:`ELEMENTS` (the contract is :mod:`softclose.elements.base`; where each acts,
+:mod:`softclose.elements.coordinates`). The reduced equation, Newton-Euler with pin
+reactions, the statics (holding moment, release check, equilibria), the CasADi model, the
+coefficient table and the kernel's parameter rows, the adaptive reference and the
+optimisers' dynamics all sum over this list; the config keys of each element come from it
+too. The kernel states the same laws once, in the element section of ``_kernel.c``, and
+``softclose.native`` checks at load time that both sides agree on the columns and rows.
+
+To add an element: write its unit (a subclass with its keys, parameters, coordinate and law),
+add it to :data:`ELEMENTS`, add its law to ``_kernel.c``'s element section, and test it.
+"""
+
+from __future__ import annotations
+
+from ..keys import Key
+from .base import Element, Param, Params
+from .dampers import Dashpot, RotaryDamper
+from .gravity import Gravity
+from .springs import Spring
+
+#: every element, in the order their contributions are summed (gravity first, then the
+#: springs, then the dampers: the order of the seed's equation, so its sums are unchanged)
+ELEMENTS: tuple[Element, ...] = (Gravity(), Spring(), Dashpot(), RotaryDamper())
+BY_NAME = {e.name: e for e in ELEMENTS}
+#: the seed's elements, whose parameters come first in p: (k, l0, c, c_rot)
+SEED = ("spring", "dashpot", "rotary")
+#: the per-stroke parameters: the columns of the parameter vector p. The seed's four come
+#: first, then those of the elements added since, in the order of :data:`ELEMENTS`.
+PARAMS: tuple[Param, ...] = tuple(q for name in SEED for q in BY_NAME[name].params) + tuple(
+    q for e in ELEMENTS if e.name not in SEED for q in e.params)
+#: their names (``design`` keys without the section)
+PARAM_NAMES: tuple[str, ...] = tuple(q.name for q in PARAMS)
+#: the config keys every element owns
+KEYS: tuple[Key, ...] = tuple(k for e in ELEMENTS for k in e.keys)
+#: the elements whose force is conservative (a law T(q)) and those that are viscous (B)
+SPRINGS = tuple(e for e in ELEMENTS if e.affine.__func__ is not Element.affine)
+DAMPERS = tuple(e for e in ELEMENTS if e.viscous.__func__ is not Element.viscous)
+
+
+def params(p) -> Params:
+    """The parameter vector (or rows) p as named SI values: ``params(p)["spring_k"]``."""
+    return Params(p, PARAMS)
+
+
+def structure(cfg) -> tuple:
+    """The element choices that change the model itself (not a per-stroke value): part of
+    every cache key of a model, its table or an NLP."""
+    return tuple(x for e in ELEMENTS for x in e.structure(cfg))
+
+
+#: the elements in the kernel's table of element columns (tabulated when a stroke needs it)
+EXTRA = tuple(e for e in ELEMENTS if e.table == "extra")
+
+
+def acting(cfg, extra_values: dict | None = None) -> tuple[Element, ...]:
+    """The elements that exert a force with ``cfg``'s design (and ``extra_values``, a dict
+    of design values that vary, e.g. swept or freed: their largest magnitude)."""
+    values = {q.name: getattr(cfg.design, q.name) for q in PARAMS}
+    values.update(extra_values or {})
+    return tuple(e for e in ELEMENTS if bool(e.acts(values)))
+
+
+def needs_extra(P) -> bool:
+    """Does any row of P (parameter vectors) have an acting element of the extra table?"""
+    import numpy as np
+    P = np.atleast_2d(np.asarray(P, float))
+    values = {q.name: P[:, i] for i, q in enumerate(PARAMS)}
+    return any(bool(np.any(e.acts(values))) for e in EXTRA)
+
+
+__all__ = ["ELEMENTS", "BY_NAME", "EXTRA", "needs_extra", "PARAMS", "PARAM_NAMES", "KEYS", "SPRINGS", "DAMPERS",
+           "Element", "Param", "Params", "params", "structure", "acting"]

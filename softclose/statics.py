@@ -1,0 +1,73 @@
+"""Statics over the coefficient table: the one dV/dtheta, applied to rows of designs.
+
+:func:`softclose.dynamics.slope` states dV/dtheta once, as a sum over the machine elements;
+this module evaluates it (and V, and the damping) from the tabulated columns of a
+:class:`~softclose.native.CoefficientTable` for many designs at once: the holding moment at
+the rim, the energy a stroke releases, theta'' at rest (the release check, the equilibria and
+the linearisation of the stability check). The CasADi model's ``dV`` is the same sum on exact
+expressions.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import elements
+from .dynamics import COEFFS, EXTRA_COEFFS, coordinates_of_columns, damping, potential, slope
+from .problem import as_params
+
+
+def columns(table, theta, n: int, lid_mass=None, extra: bool = False) -> dict:
+    """The named columns at ``theta`` (scalar or one per row) for ``n`` rows at ``lid_mass``,
+    with the element columns of the extra table when ``extra``."""
+    c = table.rows(theta, n, lid_mass)
+    out = {name: c[:, j] for j, name in enumerate(COEFFS)}
+    if extra:
+        x = table.rows_extra(theta, n)
+        out.update({name: x[:, j] for j, name in enumerate(EXTRA_COEFFS)})
+    return out
+
+
+def _at(table, theta, P, lid_mass):
+    P = as_params(np.atleast_2d(np.asarray(P, float)))
+    cols = columns(table, theta, len(P), lid_mass, elements.needs_extra(P))
+    return cols, coordinates_of_columns(cols), elements.params(P)
+
+
+def potential_energy(table, theta, P, lid_mass=None) -> np.ndarray:
+    """V (J) at ``theta`` (scalar or one per row) for rows of P, at ``lid_mass`` (scalar, one
+    per row, or None: the table's mass)."""
+    _, co, Pn = _at(table, theta, P, lid_mass)
+    return potential(co, Pn)
+
+
+def slopes(table, theta, P, lid_mass=None) -> np.ndarray:
+    """dV/dtheta (N m) at ``theta`` for rows of P; at theta_closed, > 0 presses the lid shut."""
+    _, co, Pn = _at(table, theta, P, lid_mass)
+    return slope(co, Pn)
+
+
+def holding_moments(table, theta_closed: float, P, lid_mass=None) -> np.ndarray:
+    """dV/dtheta at ``theta_closed`` (N m, > 0 presses the lid shut) for rows of P."""
+    return slopes(table, float(theta_closed), P, lid_mass)
+
+
+def rest_theta_ddot(table, theta, P, lid_mass=None) -> np.ndarray:
+    """theta'' at rest, -V'(theta) / M, at ``theta`` (one per row, or a scalar) for rows of P:
+    > 0 pushes the lid open."""
+    cols, co, Pn = _at(table, theta, P, lid_mass)
+    return -slope(co, Pn) / cols["M"]
+
+
+def rest_jacobian(table, theta, p, lid_mass=None) -> tuple[np.ndarray, np.ndarray]:
+    """The linearised (theta, theta') Jacobian entries at rest at the angles ``theta`` for
+    one design p: d theta''/d theta (central difference of -V'/M) and d theta''/d theta'
+    (-damping / M)."""
+    theta = np.asarray(theta, float)
+    P = np.tile(np.asarray(p, float), (len(theta), 1))
+    eps = 1e-6
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        a = (rest_theta_ddot(table, theta + eps, P, lid_mass)
+             - rest_theta_ddot(table, theta - eps, P, lid_mass)) / (2 * eps)
+        cols, co, Pn = _at(table, theta, P, lid_mass)
+        return a, -damping(co, Pn) / cols["M"]

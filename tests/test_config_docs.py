@@ -1,0 +1,45 @@
+"""The docs' key tables are the key records: docs/model.md holds exactly what
+``python -m softclose.config.docs`` generates, and every record is complete."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from softclose import elements
+from softclose.config import KEYS, RANGES, SCHEMA, TOLERANCE_KEYS, default_config, docs
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_model_md_key_tables_are_generated_from_the_records():
+    text = (ROOT / "docs" / "model.md").read_text()
+    assert docs.replace_block(text) == text, (
+        "docs/model.md's key tables differ from the key records; run "
+        "`python -m softclose.config.docs --write docs/model.md`")
+
+
+@pytest.mark.parametrize("key", KEYS + TOLERANCE_KEYS, ids=lambda k: k.full)
+def test_every_key_is_documented_and_ranged(key):
+    assert key.doc, f"{key.full}: no doc line"
+    if key.kind in ("pos", "nonneg", "real", "vec2", "vec3", "bounds"):
+        assert key.range is not None, f"{key.full}: a number without an admissible range"
+        assert key.unit or key.section in ("optimise", "tolerance", "simulate"), key.full
+    if key.default is None:
+        assert key.derive is not None and key.derived, f"{key.full}: no rule for its default"
+
+
+def test_element_keys_are_in_the_config_and_its_tables():
+    cfg = default_config()
+    table = docs.tables()
+    for e in elements.ELEMENTS:
+        for k in e.keys:
+            assert k.name in SCHEMA[k.section]
+            assert hasattr(getattr(cfg, k.section), k.name)
+            assert f"| `{k.name}` |" in table
+            if k.range:
+                assert RANGES[k.full] == k.range
+    # every parameter of p is a design key with its default
+    for q in elements.PARAMS:
+        assert getattr(cfg.design, q.name) == next(k.default for k in KEYS if k.full == q.key)
