@@ -12,7 +12,7 @@
  * their accuracy is that of the method itself; the same for the peak tip speed and the
  * lowest angle of a stroke that turns back. Nothing is integrated past the event.
  *
- * A design row is (k, l0, c, c_rot, e_tol[, m_lid]) (LAYOUT): the
+ * A design row is (k, l0, c, c_rot, k_t, psi_free, e_tol[, m_lid]) (LAYOUT): the
  * parameters of the machine elements (see THE MACHINE ELEMENTS below), then e_tol, then
  * m_lid (kg, NaN = the table's own mass m0), which selects the lid mass. M, dM, Vg and dVg are affine in the lid's mass, so the
  * coefficients of a row are c(m0) + (m_lid - m0) dc/dm, with dc/dm from a second table
@@ -83,8 +83,9 @@ enum { C_M, C_DM, C_VG, C_DVG, C_L, C_DL, C_DD, C_TAU };
 #define SMAX 4
 /* every layout constant the Python side shares, checked there when the kernel is loaded */
 static const char LAYOUT[] =
-    "abi=3;cc=M,dM,Vg,dVg,l,dl,dd,tau;mass=M,dM,Vg,dVg;xcc=-,-,-,-;"
-    "row=spring_k,spring_rest_length,damper_c,rotary_damper_c,energy_tol,lid_mass;out=status,closing_time,impact_theta_dot,impact_tip_speed,"
+    "abi=3;cc=M,dM,Vg,dVg,l,dl,dd,tau;mass=M,dM,Vg,dVg;xcc=psi,dpsi,-,-;"
+    "row=spring_k,spring_rest_length,damper_c,rotary_damper_c,torsion_k,torsion_free_angle,"
+    "energy_tol,lid_mass;out=status,closing_time,impact_theta_dot,impact_tip_speed,"
     "peak_tip_speed,min_spring_length,max_spring_length,steps,energy_rise,theta_min,"
     "theta_dot_max,theta_max,stop_reason,stop_theta,stop_time;nrng=18";
 
@@ -153,6 +154,7 @@ typedef struct {
  *   element   coordinate q       columns          law
  *   gravity   its potential      Vg, dVg (+ mass) V = q, T = 1
  *   spring    |D - E|            l, dl            V = k (q - l0)^2 / 2, T = k (q - l0)
+ *   torsion   psi at its pivot   psi, dpsi (x)    V = k_t (q - psi0)^2 / 2, T = k_t (q - psi0)
  *   dashpot   |C - O|            dd = q'^2        B = c
  *   rotary    theta              (q' = 1)         B = c_rot
  *
@@ -166,27 +168,30 @@ typedef struct {
  * (D_*), the parameters of a row (Par) and of a group of lanes (Par4), how a row is read
  * (ELEM_READ) and copied into its lane (ELEM_LANE), which element columns the extra table
  * holds (X_*), and the laws. The elements of the seed's table (gravity, spring, dashpot,
- * rotary damper) are summed by ELEM_SLOPE ...; those of an extra table (none yet) by
- * ELEM_SLOPE_X ..., added where a row has them (Par.x; Par4.anyx for a group). */
+ * rotary damper) are summed by ELEM_SLOPE ...; those of the extra table (the torsion spring)
+ * by ELEM_SLOPE_X ..., added where a row has them (Par.x; Par4.anyx for a group). */
 
 /* the design-row columns: the elements' parameters (in the registry's order), e_tol, m_lid */
-enum { D_K, D_L0, D_C, D_CR, D_ETOL, D_MLID, NDESIGN };
+enum { D_K, D_L0, D_C, D_CR, D_KT, D_PSI0, D_ETOL, D_MLID, NDESIGN };
+/* the extra table's columns: the torsion spring's psi and dpsi at its pivot */
+enum { X_PSI, X_DPSI };
 
 /* one row's element parameters (SI); dm = m_lid - m0: 0 for a row at the table's mass;
  * x: the row has an element of the extra table */
-typedef struct { double k, l0, c, cr, dm; int x; } Par;
+typedef struct { double k, l0, c, cr, kt, psi0, dm; int x; } Par;
 /* the lanes' parameters as vectors; any: a lane at another lid mass; anyx: a lane with
- * element columns (its element terms are added for every lane of the group: the others
- * add a zero) */
-typedef struct { v4 k, l0, c, cr; double dm[VW]; int any, anyx; } Par4;
+ * element columns (its element terms are added for every lane of the group: the others add
+ * a zero, k_t = 0) */
+typedef struct { v4 k, l0, c, cr, kt, psi0; double dm[VW]; int any, anyx; } Par4;
 /* read a design row d into p (not dm) */
 #define ELEM_READ(p, d) do { \
         (p)->k = (d)[D_K]; (p)->l0 = (d)[D_L0]; (p)->c = (d)[D_C]; (p)->cr = (d)[D_CR]; \
-        (p)->x = 0; \
+        (p)->kt = (d)[D_KT]; (p)->psi0 = (d)[D_PSI0]; (p)->x = (p)->kt != 0.0; \
     } while (0)
 /* copy row p into lane q of the group G (then G->anyx |= p->x) */
 #define ELEM_LANE(G, q, p) do { \
         (G)->k[q] = (p)->k; (G)->l0[q] = (p)->l0; (G)->c[q] = (p)->c; (G)->cr[q] = (p)->cr; \
+        (G)->kt[q] = (p)->kt; (G)->psi0[q] = (p)->psi0; \
     } while (0)
 #define LAW_LINEAR_T(k, q0, q) ((k) * ((q) - (q0)))                  /* T = dV/dq */
 #define LAW_LINEAR_V(k, q0, q) (0.5 * (k) * ((q) - (q0)) * ((q) - (q0)))
@@ -196,18 +201,19 @@ typedef struct { v4 k, l0, c, cr; double dm[VW]; int any, anyx; } Par4;
 /* the slope dV/dtheta of gravity and the spring, from the coefficient values c[] (numbers
  * or lanes); a row with element columns (has x) adds the torsion spring's term from x[] */
 #define ELEM_SLOPE(P, cv) ((cv)[C_DVG] + LAW_LINEAR_T((P)->k, (P)->l0, (cv)[C_L]) * (cv)[C_DL])
-#define ELEM_SLOPE_X(P, x) 0.0
+#define ELEM_SLOPE_X(P, x) (LAW_LINEAR_T((P)->kt, (P)->psi0, (x)[X_PSI]) * (x)[X_DPSI])
 /* the potential V of gravity and the spring (then + ELEM_POTENTIAL_X); the energy is the
  * kinetic energy KE plus the same potentials, summed in this order */
 #define ELEM_POTENTIAL(P, cv) ((cv)[C_VG] + LAW_LINEAR_V((P)->k, (P)->l0, (cv)[C_L]))
 #define ELEM_ENERGY(P, cv, KE) ((KE) + (cv)[C_VG] + LAW_LINEAR_V((P)->k, (P)->l0, (cv)[C_L]))
-#define ELEM_POTENTIAL_X(P, x) 0.0
+#define ELEM_POTENTIAL_X(P, x) LAW_LINEAR_V((P)->kt, (P)->psi0, (x)[X_PSI])
 /* the damping on theta': the dashpot and the rotary damper */
 #define ELEM_DAMPING(P, cv) ((P)->c * (cv)[C_DD] + (P)->cr)
 /* d/dtheta of the slope and of the damping (values c, x; their derivatives dc, dx) */
 #define ELEM_DSLOPE(P, cv, dcv) \
     ((dcv)[C_DVG] + LAW_LINEAR_DSLOPE((P)->k, (P)->l0, (cv)[C_L], (dcv)[C_L], (cv)[C_DL], (dcv)[C_DL]))
-#define ELEM_DSLOPE_X(P, x, dx) 0.0
+#define ELEM_DSLOPE_X(P, x, dx) \
+    LAW_LINEAR_DSLOPE((P)->kt, (P)->psi0, (x)[X_PSI], (dx)[X_PSI], (x)[X_DPSI], (dx)[X_DPSI])
 #define ELEM_DDAMPING(P, dcv) ((P)->c * (dcv)[C_DD])
 /* does the row dissipate (the early exit's condition)? */
 #define ELEM_DISSIPATES(P) ((P)->c > 0 || (P)->cr > 0)
@@ -237,7 +243,13 @@ static void cubic_range(const double *q, double s0, double s1, double *lo, doubl
 static void elem_bounds_x(const double *xcc, const Par *p, int i, double s0, double s1,
                           double *V1, double *slo, double *shi)
 {
-    (void)xcc; (void)p; (void)i; (void)s0; (void)s1; (void)V1; (void)slo; (void)shi;
+    double xq[4], qlo, qhi, dlo, dhi, V, lo, hi;
+    for (int e = 0; e < 4; e++) xq[e] = xcc[((size_t)i * 4 + e) * NX + X_PSI];
+    cubic_range(xq, s0, s1, &qlo, &qhi);
+    for (int e = 0; e < 4; e++) xq[e] = xcc[((size_t)i * 4 + e) * NX + X_DPSI];
+    cubic_range(xq, s0, s1, &dlo, &dhi);
+    law_linear_bounds(p->kt, p->psi0, qlo, qhi, dlo, dhi, &V, &lo, &hi);
+    *V1 += V; *slo += lo; *shi += hi;
 }
 /* ===== (end of the machine elements) ======================================================== */
 

@@ -19,11 +19,12 @@ from ..keys import Key
 from .base import Element, Param, Params
 from .dampers import Dashpot, RotaryDamper
 from .gravity import Gravity
-from .springs import Spring
+from .springs import Spring, TorsionSpring
 
 #: every element, in the order their contributions are summed (gravity first, then the
 #: springs, then the dampers: the order of the seed's equation, so its sums are unchanged)
-ELEMENTS: tuple[Element, ...] = (Gravity(), Spring(), Dashpot(), RotaryDamper())
+ELEMENTS: tuple[Element, ...] = (Gravity(), Spring(), TorsionSpring(), Dashpot(),
+                                 RotaryDamper())
 BY_NAME = {e.name: e for e in ELEMENTS}
 #: the seed's elements, whose parameters come first in p: (k, l0, c, c_rot)
 SEED = ("spring", "dashpot", "rotary")

@@ -1,14 +1,16 @@
-"""Springs: a linear spring on a length.
+"""Springs: a linear spring on a length, a torsion spring at a pivot.
 
-The law on its coordinate q: ``V = 1/2 k (q - q0)^2``, ``T = k (q - q0)`` (affine: a = -k q0,
-b = k), valid everywhere.
+Both are the same law on their coordinate q: ``V = 1/2 k (q - q0)^2``, ``T = k (q - q0)``
+(affine: a = -k q0, b = k), valid everywhere.
 """
 
 from __future__ import annotations
 
+import math
+
 from ..keys import Key
 from .base import Element, Param
-from .coordinates import Length
+from .coordinates import PIVOTS, Length, PivotAngle
 
 
 class _Linear(Element):
@@ -46,3 +48,31 @@ class Spring(_Linear):
 
     def coordinate(self, cfg):
         return Length("E", "lid_e", "spring_anchor")
+
+
+class TorsionSpring(_Linear):
+    name = "torsion"
+    doc = ("torsion spring at a pivot: a moment -k_t (psi - psi_free) on the relative "
+           "rotation psi of the two bodies it joins")
+    rate, free = "torsion_k", "torsion_free_angle_deg"
+    keys = (
+        Key("design", "torsion_k", "nonneg", 0.0, "N m/rad", "torsion spring rate k_t (>= 0)",
+            lo=0.0, hi=1e5),
+        Key("design", "torsion_free_angle_deg", "real", 0.0, "deg",
+            "torsion spring's free angle psi_free: the pivot's relative angle (measured as "
+            "geometry.assembly gives the cranks) where it is unloaded", lo=-360.0, hi=360.0),
+        Key("design", "torsion_pivot", "str:" + ",".join(p for p in PIVOTS if p != "lid"), "O",
+            "", "pivot of the torsion spring: O (crank OA, psi = phi), B (crank BC, gamma), "
+            "A (lid on OA, theta - phi), C (lid on BC, theta - gamma)"),
+    )
+    params = (Param("torsion_k"), Param("torsion_free_angle_deg", math.pi / 180))
+    columns = (("psi", "q"), ("dpsi", "dq"))
+    table = "extra"
+
+    def coordinate(self, cfg):
+        return PivotAngle(cfg.design.torsion_pivot)
+
+    def structure(self, cfg):
+        return (cfg.design.torsion_pivot,)
+
+    acting_params = ("torsion_k",)

@@ -7,8 +7,9 @@ one degree of freedom.  The augmented equations
     M q'' + Phi_q^T lambda = Q,     Phi_q q'' = gamma_c
 
 are solved for q'' (and the multipliers), from which theta'' = q''[2].  Q holds gravity on all
-three bodies, the spring E-D, the dashpot C-O and the rotary damper on the lid.  Nothing here is
-shared with the reduced model in softclose.model.
+three bodies, the spring E-D, the dashpot C-O, the rotary damper on the lid and a torsion spring
+at one of the pins (a moment on the two bodies' relative angle, read off q).  Nothing here is
+shared with the reduced model in softclose.model or the element registry.
 """
 
 from __future__ import annotations
@@ -46,7 +47,13 @@ class LidParameters:
     l0: float = 0.05
     c: float = 0.0
     c_rot: float = 0.0
+    kt: float = 0.0                  # torsion spring rate (N m/rad)
+    psi0: float = 0.0                # its free angle (rad)
+    pivot: str = "O"                 # O, B, A or C
 
+
+#: the torsion spring's pin: (body a, body b) with psi = angle(a) - angle(b); -1 = ground
+_PINS = {"O": (1, -1), "B": (2, -1), "A": (0, 1), "C": (0, 2)}
 
 def read_parameters(cfg) -> LidParameters:
     """Build the parameters from a Config-like object (attribute access; assembly in degrees)."""
@@ -57,7 +64,8 @@ def read_parameters(cfg) -> LidParameters:
         assembly=tuple(np.radians(G.assembly)),
         m1=m.lid, m2=m.crank_oa, m3=m.crank_bc, J1=m.inertia_lid, J2=m.inertia_oa,
         J3=m.inertia_bc, g=m.gravity,
-        k=d.spring_k, l0=d.spring_rest_length, c=d.damper_c, c_rot=d.rotary_damper_c)
+        k=d.spring_k, l0=d.spring_rest_length, c=d.damper_c, c_rot=d.rotary_damper_c,
+        kt=d.torsion_k, psi0=np.radians(d.torsion_free_angle_deg), pivot=d.torsion_pivot)
 
 
 def default_parameters(**design) -> LidParameters:
@@ -129,7 +137,22 @@ def evaluate_applied_forces(p: LidParameters, q: np.ndarray, qd: np.ndarray) -> 
     ld_dot = e_OC @ velocity_of_point(q, qd, 0, s_C)
     add_point_force(Q, q, 0, s_C, -p.c * ld_dot * e_OC)
     add_moment(Q, 0, -p.c_rot * qd[2])
+    if p.kt:
+        a, b = _PINS[p.pivot]
+        angle = lambda i: q[3 * i + 2] if i >= 0 else 0.0  # noqa: E731
+        ref = _pin_angle(p.assembly, a, b)
+        d = angle(a) - angle(b) - ref
+        psi = ref + np.arctan2(np.sin(d), np.cos(d))     # within half a turn of the assembly's
+        moment = -p.kt * (psi - p.psi0)
+        add_moment(Q, a, moment)
+        if b >= 0:
+            add_moment(Q, b, -moment)
     return Q
+
+
+def _pin_angle(assembly, a: int, b: int) -> float:
+    """The pin's relative angle at the assembly (theta, phi, gamma of bodies 0, 1, 2)."""
+    return (assembly[a] if a >= 0 else 0.0) - (assembly[b] if b >= 0 else 0.0)
 
 
 def solve_lid_accelerations(p: LidParameters, theta: float, theta_dot: float):
