@@ -43,7 +43,7 @@ import numpy as np
 
 from . import native
 from .config import Config
-from .integrators import METHODS
+from .integrators import METHODS, SEED
 from .model import LidModel
 from .problem import PARAM_COLUMNS, RELATIVE, TARGETS, objective, params_of
 from .reference import Reference
@@ -55,8 +55,6 @@ METRICS = tuple(TARGETS)
 TRUTH_TOL = 1e-14
 #: the adaptive reference's own line in the work-precision table
 REFERENCE_TOLS = (1e-6, 1e-8, 1e-10, 1e-12)
-#: the seed notebook's method and step
-SEED = ("euler_cromer", 1e-3)
 
 _HIGH = (2e-2, 1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4)
 #: steps of each method (the configured default step is always added to its method)
