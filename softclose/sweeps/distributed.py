@@ -14,7 +14,7 @@ Where the work runs is one string, ``dask`` (``--dask`` on the command line):
 
 What is sent is plain values, never CasADi objects (they do not pickle): the task function is
 importable (:func:`softclose.sweeps.chunks.evaluate_chunk`,
-:func:`softclose.sweeps.optimal.solve_segment`) and its arguments are a config dict, key names
+:func:`softclose.optimal_grid.solve_segment`) and its arguments are a config dict, key names
 and numpy arrays; each worker process builds (and caches) its own simulator or NLP from the
 config. The results are therefore the same numbers as the local run's, whatever the number
 of workers.
