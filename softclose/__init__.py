@@ -31,6 +31,7 @@ from .model import LidModel
 from .reference import Reference
 from .simulate import Simulator, simulate
 from .stroke import StrokeResult, StrokeStatus
+from .version import __version__  # noqa: F401  (re-exported)
 
 #: public functions and result types of the feature packages, imported on first use
 _LAZY = {
@@ -46,7 +47,6 @@ __all__ = ["simulate", "optimise", "front", "sweep", "sample", "tolerance_analys
            "StrokeStatus", "OptimiseResult", "FrontResult", "SweepResult", "RobustResult",
            "YieldResult", "SensitivityResult", "ConfigError", "NumericalError",
            "SoftcloseError", "LidModel", "Reference", "Simulator"]
-__version__ = "0.2.0"
 
 
 def optimise(cfg: Config, *, robust: bool = False, progress: bool = False, **options):

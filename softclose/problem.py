@@ -215,3 +215,26 @@ def describe(cfg) -> dict[str, Any]:
             "holding_moment_min": o.holding_moment_min, "weight_impact": o.weight_impact,
             "weight_peak_tip": o.weight_peak_tip,
             "bounds": {k: list(getattr(o, k)) for k in DESIGN_KEYS}}
+
+
+#: categories of an infeasible design: the problem's reasons, then invalid config values,
+#: then strokes the method could not integrate
+CATEGORIES = REASONS + ("invalid", "not integrated")
+
+
+def categorise(status: np.ndarray, reason: np.ndarray) -> np.ndarray:
+    """Category code per row: -1 feasible, else an index into :data:`CATEGORIES`."""
+    reason = np.asarray(reason, dtype=object)
+    out = np.full(len(reason), CATEGORIES.index("not integrated"), np.int64)
+    known = np.zeros(len(reason), bool)
+    for code, r in ((-1, ""),) + tuple(enumerate(REASONS)):   # the common cases, vectorised
+        m = reason == r
+        out[m] = code
+        known |= m
+    rest = np.flatnonzero(~known)
+    if rest.size:   # e.g. "not closed (held open at ...)", a stroke's diagnosis
+        closed_not = {r: str(r).startswith("not closed") for r in set(reason[rest].tolist())}
+        nc = np.array([closed_not[r] for r in reason[rest].tolist()], bool)
+        out[rest[nc]] = REASONS.index("not closed")
+    out[np.asarray(status, dtype=object) == "invalid"] = CATEGORIES.index("invalid")
+    return out

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from softclose import bench
+from softclose.bench import later
 from softclose.cli import main
 from softclose.cli.bench import default_text, work_precision_markdown
 from softclose.config import default_config
@@ -127,12 +128,12 @@ def test_figure_legend_names_the_configured_default(wp):
 
 
 def test_speed_row_targets():
-    r = bench._speed_row("cli_simulate", "cli", 0.25, 3)
+    r = bench.speed_row("cli_simulate", "cli", 0.25, 3)
     assert r["target"] == {"max_s": 0.3} and r["met"] is True
-    assert bench._speed_row("cli_simulate", "cli", 0.31, 3)["met"] is False
-    s = bench._speed_row("sweep_40000", "sweep", 2.5, 1, count=40000)
+    assert bench.speed_row("cli_simulate", "cli", 0.31, 3)["met"] is False
+    s = bench.speed_row("sweep_40000", "sweep", 2.5, 1, count=40000)
     assert s["rate"] == 16000 and s["met"] is False
-    assert bench._speed_row("table", "table", 1.0, 1)["met"] is None
+    assert bench.speed_row("table", "table", 1.0, 1)["met"] is None
 
 
 def test_command_line_sweep_rows(monkeypatch):
@@ -144,13 +145,13 @@ def test_command_line_sweep_rows(monkeypatch):
 
     def timed(key, what, fn, repeats, count=None, unit="designs", note=""):
         calls.append((key, repeats, count))
-        rows.append(bench._speed_row(key, what, 1.6, repeats, note, count=count))
+        rows.append(bench.speed_row(key, what, 1.6, repeats, note, count=count))
 
-    bench._cli_sweep_rows(default_config().update({"mass.lid": 0.6}), rows, 40000, timed, 3)
+    later._cli_sweep_rows(default_config().update({"mass.lid": 0.6}), rows, 40000, timed, 3)
     assert not calls and [r["key"] for r in rows] == ["sweep_cli_40000", "sweep_maps"]
     assert all(r["median_s"] is None and "default config" in r["note"] for r in rows)
     rows.clear()
-    bench._cli_sweep_rows(default_config(), rows, 40000, timed, 3)
+    later._cli_sweep_rows(default_config(), rows, 40000, timed, 3)
     assert calls == [("sweep_cli_40000", 3, 40000)] and rows[0]["rate"] == 25000
     assert rows[0]["met"] is True and rows[0]["target"] == {"min_per_s": 20000.0}
 

@@ -18,9 +18,10 @@ from softclose.problem import (CONSTRAINT_TOL, DESIGN_KEYS, VERIFY_RTOL, agreeme
                                objective)
 from softclose.reference import Reference
 from softclose.robust import optimise_robust, tolerance_analysis
-from softclose.robust import design as D
+from softclose.robust import policy, scenarios, solve
 from softclose.robust.box import box_of
 from softclose.robust.evaluate import evaluate
+from softclose.robust.nlp import discretise
 
 SPREADS = {"design.spring_k": 0.10, "design.damper_c": 0.20, "mass.lid": 0.05}
 
@@ -99,11 +100,11 @@ def test_interior_search_recovers_a_missing_worst_case():
     cfg = default_config()
     box = box_of(cfg)
     missing = (1.0, 1.0, -1.0)          # spring +10 %, damper +20 %, lid -5 %: slowest
-    scen = [s for s in D._initial_scenarios(box) if s.z != missing]
-    N, M, _, _ = D.discretise(cfg)
-    start, _ = D._start_design(cfg, box, np.array([s.z for s in scen]))
+    scen = [s for s in scenarios.initial_scenarios(box) if s.z != missing]
+    N, M, _, _ = discretise(cfg)
+    start, _ = solve.start_design(cfg, box, np.array([s.z for s in scen]))
     rounds: list = []
-    prob, run = D._solve_box(cfg, 1.0, scen, N, M, start, 0, [], rounds, _Quiet())
+    prob, run = solve.solve_box(cfg, 1.0, scen, N, M, start, 0, [], rounds, _Quiet())
     assert run.success
     assert len(rounds) >= 2 and rounds[0]["search"]["violating"] > 0
     added = [s.z for s in prob.scenarios if s.origin.startswith("Monte Carlo")]
@@ -265,7 +266,7 @@ def _corner_columns(cfg, design):
 def test_fractional_factorial_is_orthogonal(d):
     """Resolution >= III: every column balanced, every pair orthogonal (X^T X = n I), n the
     smallest power of two above d, no two runs alike."""
-    X = D.fractional_factorial(d)
+    X = scenarios.fractional_factorial(d)
     n = len(X)
     assert X.shape == (n, d) and n == 2 ** int(np.ceil(np.log2(d + 1)))
     assert set(np.unique(X)) == {-1.0, 1.0}
@@ -276,7 +277,7 @@ def test_fractional_factorial_is_orthogonal(d):
 def test_many_keys_start_from_a_few_corners_and_every_corner_holds():
     cfg = _many_config()
     d = len(MANY)
-    assert 2 ** d > D.MAX_CORNERS
+    assert 2 ** d > policy.MAX_CORNERS
     res = optimise_robust(cfg, samples=1000)
     assert res.success, res.message
     S = len(res.scenarios)
@@ -299,12 +300,12 @@ def test_corner_check_adds_the_corners_a_subset_misses():
     binding corners until every one of the 32 holds; the NLP never gets all of them."""
     cfg = _many_config()
     box = box_of(cfg)
-    N, M, _, _ = D.discretise(cfg)
-    nominal = [D.Scenario(tuple([0.0] * box.dim), "nominal")]
-    start, _ = D._start_design(cfg, box, np.array([s.z for s in D._initial_scenarios(
+    N, M, _, _ = discretise(cfg)
+    nominal = [scenarios.Scenario(tuple([0.0] * box.dim), "nominal")]
+    start, _ = solve.start_design(cfg, box, np.array([s.z for s in scenarios.initial_scenarios(
         box, cfg, [[1914.7, 0.079257, 2087.75]])]))
     rounds: list = []
-    prob, run = D._solve_box(cfg, 1.0, nominal, N, M, start, 0, [], rounds, _Quiet())
+    prob, run = solve.solve_box(cfg, 1.0, nominal, N, M, start, 0, [], rounds, _Quiet())
     assert run.success
     first = rounds[0]["corner_check"]
     assert first["violating"] > 0 and first["added"]
@@ -322,7 +323,7 @@ def test_too_many_slow_keys_are_refused(capsys):
     keys = ["mass.crank_oa", "mass.crank_bc", "mass.gravity", "geometry.crank_oa",
             "geometry.crank_bc", "geometry.lid_length", "geometry.pivot_b[0]",
             "geometry.pivot_b[1]", "geometry.lid_c[0]"]
-    assert len(keys) > D.MAX_SLOW_KEYS
+    assert len(keys) > policy.MAX_SLOW_KEYS
     args = ["optimise", "--robust"]
     for k in keys:
         args += ["--set", f"tolerance.{k}=0.001"]

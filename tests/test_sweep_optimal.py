@@ -13,7 +13,7 @@ from softclose.cli import main
 from softclose.errors import ConfigError
 from softclose.model import LidModel
 from softclose import optimise
-from softclose.sweeps.optimal import optimise_grid, segments
+from softclose.optimal_grid import optimise_grid, segments
 from softclose.problem import as_params
 
 MASSES = [0.4, 0.5, 0.6]
@@ -123,7 +123,8 @@ def test_a_cluster_lost_mid_grid_keeps_the_finished_points(cfg, tmp_path, monkey
     exit 3 (not 130: nobody pressed Ctrl-C)."""
     import contextlib
 
-    from softclose.sweeps import distributed, optimal
+    from softclose import optimal_grid
+    from softclose.sweeps import distributed
 
     @contextlib.contextmanager
     def fake_connect(dask):
@@ -137,7 +138,7 @@ def test_a_cluster_lost_mid_grid_keeps_the_finished_points(cfg, tmp_path, monkey
 
     monkeypatch.setattr(distributed, "connect", fake_connect)
     monkeypatch.setattr(distributed, "map_tasks", failing_map)
-    res = optimal.optimise_grid(cfg, {"mass.lid": [0.5, 0.6]}, dask="tcp://x:1")
+    res = optimal_grid.optimise_grid(cfg, {"mass.lid": [0.5, 0.6]}, dask="tcp://x:1")
     assert res.lost.endswith("the scheduler was lost")
     assert list(res.columns["success"]) == [True, False]
     assert res.columns["message"][1] == "not computed"

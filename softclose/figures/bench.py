@@ -5,6 +5,9 @@ The configured default (``cfg.simulate.integrator`` at ``cfg.simulate.step``) is
 diamond; when the designs of a run put a different setting cheapest, that one is a hollow
 square of its own ("cheapest meeting the targets on these designs"), so that a quick run
 never passes its cheapest setting off as the default.
+
+The figures are handed the benchmark's data (``wp``: a :class:`softclose.bench.WorkPrecision`;
+the optimiser's rows; the seed's report) and import none of its logic.
 """
 
 from __future__ import annotations
@@ -13,8 +16,7 @@ import math
 
 import numpy as np
 
-from ..bench import SEED, WorkPrecision
-from ..integrators import METHODS
+from ..integrators import METHODS, SEED
 from ..problem import RELATIVE, TARGETS
 from . import plt
 
@@ -88,7 +90,7 @@ def _legend(fig, handles, ncol):
                loc="lower center", ncol=ncol, fontsize=9, frameon=False)
 
 
-def plot_work_precision(wp: WorkPrecision):
+def plot_work_precision(wp):
     """Error against run time per stroke, log-log, one line per method; rows = designs,
     columns = :data:`FIG_METRICS`.
 
@@ -143,7 +145,7 @@ def plot_work_precision(wp: WorkPrecision):
     return fig
 
 
-def plot_error_vs_step(wp: WorkPrecision, metric: str = "impact_theta_dot"):
+def plot_error_vs_step(wp, metric: str = "impact_theta_dot"):
     """Error of ``metric`` against the step, one panel per design (2 columns), with the
     fitted orders in each panel's title; the configured default (diamond), the cheapest
     setting on these designs (square, if different) and the seed's method (star) are

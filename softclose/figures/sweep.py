@@ -22,6 +22,7 @@ import re
 
 import numpy as np
 
+from ..problem import CATEGORIES, categorise
 from . import plt
 
 #: the quantities of a map, their labels and units
@@ -95,7 +96,6 @@ class _View:
 
 def _views_from_columns(res) -> list[_View]:
     """Slices through the best feasible design of a grid held in memory."""
-    from ..sweeps.tally import categorise
     space, cols = res.space, res.columns
     shape = space.shape
     full = {q: np.asarray(cols[q], float).reshape(shape) for q in QUANTITIES}
@@ -248,7 +248,6 @@ def _infeasible(ax, v: _View, present: list) -> None:
     hatch lines of one contourf per hatched category present, on the cell grid padded by
     half a cell); cells with no design (binned summaries) stay white."""
     from matplotlib.colors import ListedColormap
-    from ..sweeps.tally import CATEGORIES
     xe, ye = _edges(v.centres[0], v.logs[0]), _edges(v.centres[1], v.logs[1])
     cat = np.asarray(v.cat)
     bad = cat >= 0

@@ -1,4 +1,4 @@
-"""Figures of an optimal grid (:class:`softclose.sweeps.optimal.OptimalGridResult`): the
+"""Figures of an optimal grid (:class:`softclose.optimal_grid.OptimalGridResult`): the
 optimal spring_k, spring_rest_length, damper_c and objective over the grid -- maps over two
 keys, profiles over one. Points without a verified optimum are marked, never drawn as data.
 """

@@ -120,4 +120,3 @@ def continue_from(cfg, prev: OptimiseResult) -> OptimiseResult:
     return finish(cfg, nlp, best, disc, verify=True, polish=True, notes=notes, **base)
 
 
-_continue = continue_from      # the name softclose.sweeps.optimal imports (to be moved)

@@ -11,11 +11,16 @@
 
 The modules: :mod:`.box` (the box and its samples), :mod:`.evaluate` (samples -> strokes in the
 C kernel), :mod:`.stats`, :mod:`.analysis`, :mod:`.sensitivity`, :mod:`.nlp` (the scenario
-NLP), :mod:`.design` (the robust optimiser), :mod:`.verify` (adaptive reference checks).
+NLP), :mod:`.verify` (adaptive reference checks); the robust optimiser: :mod:`.design` (its
+procedure, step by step), :mod:`.policy` (its limits and tolerances), :mod:`.scenarios` (the
+points of the box the NLP holds), :mod:`.solve` (the NLP solved over one box),
+:mod:`.worst_cases` (interior search and corner check), :mod:`.infeasible` (why no design),
+:mod:`.result`.
 """
 
 from .analysis import YieldResult, tolerance_analysis
-from .design import RobustResult, optimise_robust
+from .design import optimise_robust
+from .result import RobustResult
 from .sensitivity import SensitivityResult, sensitivity
 
 __all__ = ["tolerance_analysis", "sensitivity", "optimise_robust", "YieldResult",

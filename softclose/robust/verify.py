@@ -6,7 +6,8 @@ parameter vector; :func:`reference_check` runs the optimiser's verification
 on a fine grid for rebounds) on it and compares with the fast kernel's numbers, or with
 the numbers a solver claims for that point (the scenario NLP's own closing time, impact
 speed, peak tip speed, holding moment and objective), each to
-:func:`softclose.problem.agreement_tolerance` (the objective to ``VERIFY_RTOL``).
+:func:`softclose.problem.agreement_tolerance` (the objective to ``VERIFY_RTOL``);
+:func:`scenario_report` does so for every scenario of a robust design.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import numpy as np
 from ..config import Config
 from ..problem import (DESIGN_KEYS, METRIC_KEYS, VERIFY_RTOL, agreement_tolerance, design_of,
                        params_of)
+from .box import box_of
 from .evaluate import with_values
 
 
@@ -91,4 +93,39 @@ def reference_check(cfg: Config, keys, x, label: str = "", kernel: dict | None =
     return out
 
 
-__all__ = ["reference_check", "agreement", "point_config", "DESIGN_KEYS"]
+def scenario_report(cfg, problem, run, verify: bool) -> tuple[list, bool]:
+    """Per scenario: its values, the NLP's metrics and the reference's verdict (``problem``
+    and ``run``: a :class:`softclose.robust.solve.Problem` and its solve)."""
+    box_d = box_of(cfg, dict(zip(DESIGN_KEYS, run.design)), scale=problem.scale)
+    out, ok_all = [], True
+    worst = int(np.argmax(run.J))
+    for s, sc in enumerate(problem.scenarios):
+        z = np.asarray(sc.z)
+        T, X, _ = run.states[s]
+        p = problem.scenario_params(run.design, s)
+        model = problem.nlp.scenario_models[s]
+        metrics = {"closed": True, "closing_time": T, "impact_theta_dot": float(X[1, -1]),
+                   "peak_tip_speed": float(run.peaks[s]),
+                   "holding_moment": model.holding_moment(p)}
+        entry = {"label": box_d.label(z), "origin": sc.origin,
+                 "values": {k: float(v) for k, v in zip(box_d.keys, box_d.values(z)[0])},
+                 "z": list(map(float, z)), "metrics": metrics, "objective": float(run.J[s]),
+                 "worst": s == worst}
+        if verify:
+            # the NLP's own numbers of this scenario against the reference's
+            c_d = cfg.with_design(**dict(zip(DESIGN_KEYS, map(float, run.design))))
+            chk = reference_check(c_d, box_d.keys, box_d.values(z)[0], entry["label"], None,
+                                  float(run.J[s]),
+                                  claims={**metrics, "objective": entry["objective"]})
+            entry["reference"] = chk.get("reference")
+            entry["constraints"] = chk.get("constraints")
+            entry["agreement"] = chk.get("agreement")
+            entry["verified"] = bool(chk.get("ok")) and bool(chk.get("agreement_ok"))
+            if "error" in chk:
+                entry["error"] = chk["error"]
+            ok_all &= entry["verified"]
+        out.append(entry)
+    return out, ok_all
+
+
+__all__ = ["reference_check", "agreement", "point_config", "scenario_report", "DESIGN_KEYS"]

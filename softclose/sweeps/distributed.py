@@ -14,7 +14,7 @@ Where the work runs is one string, ``dask`` (``--dask`` on the command line):
 
 What is sent is plain values, never CasADi objects (they do not pickle): the task function is
 importable (:func:`softclose.sweeps.chunks.evaluate_chunk`,
-:func:`softclose.sweeps.optimal.solve_segment`) and its arguments are a config dict, key names
+:func:`softclose.optimal_grid.solve_segment`) and its arguments are a config dict, key names
 and numpy arrays; each worker process builds (and caches) its own simulator or NLP from the
 config. The results are therefore the same numbers as the local run's, whatever the number
 of workers.
@@ -106,8 +106,8 @@ def _import_distributed():
 
 def _worker_version() -> str:
     """Run on each worker: the softclose version it imports (checks that it can)."""
-    import softclose
-    return softclose.__version__
+    from ..version import __version__
+    return __version__
 
 
 @contextlib.contextmanager
@@ -211,7 +211,7 @@ def _workers_ignore_ctrl_c():
 
 def _check_workers(client, where: str) -> None:
     """The workers present must import this softclose (same version): say so if not."""
-    import softclose
+    from ..version import __version__
     try:
         versions = client.run(_worker_version, on_error="return")
     except Exception as exc:  # noqa: BLE001 - a scheduler that fails here is unusable
@@ -221,9 +221,9 @@ def _check_workers(client, where: str) -> None:
         if isinstance(v, BaseException):
             raise ConfigError(f"--dask {where}: worker {worker} cannot import softclose "
                               f"({type(v).__name__}: {v}); install it on the workers")
-        if v != softclose.__version__:
+        if v != __version__:
             raise ConfigError(f"--dask {where}: worker {worker} has softclose {v}, this "
-                              f"process {softclose.__version__}; install the same version")
+                              f"process {__version__}; install the same version")
 
 
 def workers_of(client) -> tuple[int, int]:

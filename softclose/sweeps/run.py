@@ -23,9 +23,10 @@ from typing import Callable, Iterable, Iterator
 import numpy as np
 
 from ..errors import ConfigError
+from ..problem import categorise
 from .chunks import CHUNK, PARAM_COLUMNS, columns, empty, evaluate_chunk
 from .result import SweepResult
-from .tally import Bins, Tally, categorise
+from .tally import Bins, Tally
 
 #: most designs a result keeps in memory (larger sweeps: stream them to a Parquet dataset)
 MAX_IN_MEMORY = 20_000_000

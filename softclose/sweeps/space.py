@@ -34,7 +34,7 @@ MAX_DESIGNS = 1_000_000_000
 MAX_AXIS_VALUES = 10_000_000
 
 
-def _readonly(a) -> np.ndarray:
+def readonly(a) -> np.ndarray:
     a = np.array(a, float)
     a.setflags(write=False)
     return a
@@ -126,7 +126,7 @@ def make_grid(axes: dict, cfg=None, option: str = "axes") -> Grid:
             raise ConfigError(f"{option} {key}: a value is repeated")
         check_values(cfg, key, v, f"{option} {key}")
         keys.append(key)
-        values.append(_readonly(v))
+        values.append(readonly(v))
         log.append(_geometric(v))
     grid = Grid(tuple(keys), tuple(values), tuple(log))
     if grid.n > MAX_DESIGNS:
@@ -226,7 +226,7 @@ def parse_grid(specs: list[str], cfg=None) -> Grid:
         if key in keys:
             raise ConfigError(f"--grid {spec!r}: {key} is swept twice")
         keys.append(key)
-        values.append(_readonly(v))
+        values.append(readonly(v))
         logs.append(log)
     grid = Grid(tuple(keys), tuple(values), tuple(logs))
     if grid.n > MAX_DESIGNS:
@@ -410,7 +410,7 @@ def space_from_spec(spec: dict):
     """The :class:`Grid` or :class:`Sample` of a manifest's ``spec()``."""
     if spec.get("kind") == "grid":
         axes = spec["axes"]
-        return Grid(tuple(a["key"] for a in axes), tuple(_readonly(a["values"]) for a in axes),
+        return Grid(tuple(a["key"] for a in axes), tuple(readonly(a["values"]) for a in axes),
                     tuple(bool(a.get("log", False)) for a in axes))
     if spec.get("kind") == "sample":
         return Sample(tuple(Range(r["key"], float(r["lo"]), float(r["hi"]), bool(r["log"]))

@@ -44,7 +44,7 @@ def kernel_hash() -> str | None:
 
 def manifest(cfg, space, chunk: int, fmt: str) -> dict:
     """Plain values that identify a sweep (JSON round-tripped, so they compare exactly)."""
-    from .. import __version__
+    from ..version import __version__
     from ..config import to_dict
     from ..jsonio import jsonable
     m = {"softclose_sweep": LAYOUT, "version": __version__, "kernel": kernel_hash(),

@@ -18,35 +18,14 @@ import math
 
 import numpy as np
 
-from ..problem import REASONS
+from ..problem import CATEGORIES
 
-#: categories of an infeasible design: the problem's reasons, then invalid config values,
-#: then strokes the method could not integrate
-CATEGORIES = REASONS + ("invalid", "not integrated")
 #: metrics kept per cell (what the maps show besides the objective)
 MAPPED = ("impact_theta_dot", "peak_tip_speed", "closing_time")
 #: most bins per key
 MAX_BINS = 120
 #: most pairs of keys kept (the first keys' pairs)
 MAX_PAIRS = 15
-
-
-def categorise(status: np.ndarray, reason: np.ndarray) -> np.ndarray:
-    """Category code per row: -1 feasible, else an index into :data:`CATEGORIES`."""
-    reason = np.asarray(reason, dtype=object)
-    out = np.full(len(reason), CATEGORIES.index("not integrated"), np.int64)
-    known = np.zeros(len(reason), bool)
-    for code, r in ((-1, ""),) + tuple(enumerate(REASONS)):   # the common cases, vectorised
-        m = reason == r
-        out[m] = code
-        known |= m
-    rest = np.flatnonzero(~known)
-    if rest.size:   # e.g. "not closed (held open at ...)", a stroke's diagnosis
-        closed_not = {r: str(r).startswith("not closed") for r in set(reason[rest].tolist())}
-        nc = np.array([closed_not[r] for r in reason[rest].tolist()], bool)
-        out[rest[nc]] = REASONS.index("not closed")
-    out[np.asarray(status, dtype=object) == "invalid"] = CATEGORIES.index("invalid")
-    return out
 
 
 class Tally:
@@ -194,4 +173,4 @@ class Bins:
         return np.asarray(v).reshape(c["shape"] + v.shape[1:])
 
 
-__all__ = ["Tally", "Bins", "CATEGORIES", "MAPPED", "categorise", "row_of"]
+__all__ = ["Tally", "Bins", "CATEGORIES", "MAPPED", "row_of"]

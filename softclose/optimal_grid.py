@@ -1,7 +1,7 @@
 """An optimal design at every point of a grid over non-design config keys.
 
 >>> from softclose import default_config
->>> from softclose.sweeps.optimal import optimise_grid
+>>> from softclose.optimal_grid import optimise_grid
 >>> r = optimise_grid(default_config(), {"mass.lid": [0.4, 0.5, 0.6]})
 >>> r.to_frame()       # mass.lid, spring_k, spring_rest_length, damper_c, objective, ...
 >>> r.plot()           # the optimal design and objective over the grid
@@ -43,11 +43,11 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ..errors import ConfigError, SoftcloseError
-from ..problem import DESIGN_KEYS, METRIC_KEYS
-from .distributed import ClusterLost
-from .result import readonly_columns
-from .space import _readonly
+from .errors import ConfigError, SoftcloseError
+from .problem import DESIGN_KEYS, METRIC_KEYS
+from .sweeps.distributed import ClusterLost
+from .sweeps.result import readonly_columns
+from .sweeps.space import readonly
 
 #: most neighbouring points (along the last key) solved one from the other in one task
 SEGMENT = 8
@@ -65,7 +65,7 @@ REFUSED = "--optimise picks the design; sweep only non-design keys"
 def check_grid(cfg, axes) -> Any:
     """The :class:`softclose.sweeps.space.Grid` of ``axes`` (a dict ``{key: values}`` or a
     Grid), refusing design keys and oversized grids with a one-line ConfigError."""
-    from .space import Grid, make_grid
+    from .sweeps.space import Grid, make_grid
     grid = axes if isinstance(axes, Grid) else make_grid(axes, cfg, "axes")
     for key in grid.keys:
         if key.startswith("design.") and key.split(".", 1)[1] in DESIGN_KEYS:
@@ -107,7 +107,7 @@ _SOLVING = threading.Lock()
 
 def _segment(cfg_dict: dict, keys: list[str], ids, X, robust: bool):
     """The rows of :func:`solve_segment`, yielded as each point is finished."""
-    from ..config import from_dict
+    from .config import from_dict
     base = from_dict(cfg_dict)
     keys = list(keys)
     X = np.asarray(X, float).reshape(len(ids), len(keys))
@@ -141,9 +141,8 @@ def _segment(cfg_dict: dict, keys: list[str], ids, X, robust: bool):
 def _optimum(cfg, prev) -> tuple[Any, str]:
     """cfg's verified optimum: warm from ``prev`` (a neighbour's result) when there is one,
     with the multistart optimiser as the fallback; (result, how it was started)."""
-    from ..optimiser import optimise
+    from .optimiser import continue_from, optimise
     if prev is not None:
-        from ..optimiser.pareto import _continue as continue_from
         warm = continue_from(cfg, prev)
         if warm.success:
             return warm, "warm"
@@ -155,7 +154,7 @@ def _optimum(cfg, prev) -> tuple[Any, str]:
 
 
 def _robust(cfg):
-    from ..robust import optimise_robust
+    from .robust import optimise_robust
     return optimise_robust(cfg, verify=True)
 
 
@@ -214,7 +213,7 @@ def optimise_grid(cfg, axes, *, dask=None, robust: bool = False, progress: bool 
     (``interrupted``). A point that cannot be solved is reported in the table
     (``success`` False, ``message``), never raised.
     """
-    from ..progress import Progress
+    from .progress import Progress
     grid = check_grid(cfg, axes)
     if isinstance(segment, bool) or not isinstance(segment, (int, np.integer)) or segment < 1:
         raise ConfigError(f"segment: expected a whole number >= 1, got {segment!r}")
@@ -239,7 +238,7 @@ def optimise_grid(cfg, axes, *, dask=None, robust: bool = False, progress: bool 
                                    f"{'verified' if r['success'] else 'NOT verified'}",
                                    force=True)
         else:
-            from .distributed import connect, map_tasks
+            from .sweeps.distributed import connect, map_tasks
             where = dask if isinstance(dask, str) else "client"
             with connect(dask) as client:
                 for _, out in map_tasks(client, solve_segment, tasks, label="segment"):
@@ -284,7 +283,7 @@ class OptimalGridResult:
 
     def __post_init__(self):
         object.__setattr__(self, "columns", readonly_columns(self.columns))
-        object.__setattr__(self, "axes", tuple(_readonly(a) for a in self.axes))
+        object.__setattr__(self, "axes", tuple(readonly(a) for a in self.axes))
         object.__setattr__(self, "keys", tuple(self.keys))
 
     @classmethod
@@ -356,7 +355,7 @@ class OptimalGridResult:
 
     def row(self, i: int) -> dict:
         """The row of grid point ``i`` (plain values; NaN as None)."""
-        from ..jsonio import jsonable
+        from .jsonio import jsonable
         return jsonable({k: v[i] for k, v in self.columns.items()})
 
     def grid(self, name: str) -> np.ndarray:
@@ -373,7 +372,7 @@ class OptimalGridResult:
         return pd.DataFrame({k: self.columns[k] for k in names})
 
     def to_json(self) -> dict:
-        from ..jsonio import jsonable
+        from .jsonio import jsonable
         return jsonable({
             "success": self.success, "message": self.message, "keys": list(self.keys),
             "axes": {k: a for k, a in zip(self.keys, self.axes)}, "points": self.points,
@@ -384,7 +383,7 @@ class OptimalGridResult:
     def plot(self):
         """Maps (two or more keys) or profiles (one key) of the optimal spring_k,
         spring_rest_length, damper_c and objective: a matplotlib Figure."""
-        from ..figures.sweep_optimal import plot_optimal_grid
+        from .figures.sweep_optimal import plot_optimal_grid
         return plot_optimal_grid(self)
 
 

@@ -1,0 +1,121 @@
+"""The whole benchmark (:func:`run`): work precision, speed, optimiser, with the machine, the
+date, the commit and the load it ran under (:class:`BenchResult`).
+"""
+
+from __future__ import annotations
+
+import datetime
+import os
+import platform
+import subprocess
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..config import Config
+from ..problem import RELATIVE, TARGETS
+from .later import optimiser_study
+from .precision import WorkPrecision, work_precision
+from .calls import speed
+from .timing import SPEED_TARGETS
+
+def machine() -> str:
+    """CPU, cores, OS, Python, NumPy and CasADi versions of this machine."""
+    cpu = platform.processor() or ""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    import casadi
+    return (f"{cpu}, {os.cpu_count()} cores; {platform.system()} {platform.release()}; "
+            f"Python {platform.python_version()}, NumPy {np.__version__}, "
+            f"CasADi {casadi.__version__}")
+
+
+def commit() -> str | None:
+    """The git commit of this source tree (with "+dirty" if it has changes), if known."""
+    root = Path(__file__).resolve().parents[2]
+    try:
+        h = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, text=True,
+                           capture_output=True, timeout=10)
+        if h.returncode != 0:
+            return None
+        d = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=root,
+                           text=True, capture_output=True, timeout=10)
+        return h.stdout.strip() + ("+dirty" if d.stdout.strip() else "")
+    except (OSError, subprocess.SubprocessError):
+        return None
+
+
+@dataclass(frozen=True)
+class BenchResult:
+    """Everything one benchmark run measured (see the module docstring)."""
+
+    machine: str
+    date: str
+    commit: str | None
+    quick: bool
+    work_precision: WorkPrecision
+    speed: tuple
+    optimiser: tuple
+    optimiser_note: str
+    elapsed: float
+    config: dict = field(default_factory=dict)
+    load: tuple = ()  # 1-minute load average at the start and at the end of the run
+
+    @property
+    def default(self) -> dict:
+        return self.work_precision.default
+
+    @property
+    def success(self) -> bool:
+        return True
+
+    def to_json(self) -> dict:
+        from ..jsonio import jsonable
+        return jsonable({"machine": self.machine, "date": self.date, "commit": self.commit,
+                         "quick": self.quick, "targets": dict(TARGETS),
+                         "relative": list(RELATIVE), "speed_targets": SPEED_TARGETS,
+                         "default": self.default,
+                         "work_precision": self.work_precision.to_json(),
+                         "speed": list(self.speed), "optimiser": list(self.optimiser),
+                         "optimiser_note": self.optimiser_note, "elapsed": self.elapsed,
+                         "load": list(self.load), "config": self.config})
+
+
+def run(cfg: Config, quick: bool = False, log=None, cli: bool = True,
+        optimiser: bool = True, later: bool = True) -> BenchResult:
+    """The whole benchmark: work precision, speed, optimiser (see the module docstring)."""
+    log = log or (lambda *a: None)
+    t0 = time.perf_counter()
+    load0 = _load()
+    log("work precision ...")
+    wp = work_precision(cfg, quick=quick, log=log)
+    log("speed ...")
+    sp = speed(cfg, quick=quick, cli=cli, later=later, log=log)
+    log("optimiser ...")
+    opt, note = optimiser_study(cfg, quick=quick, log=log) if optimiser else \
+        ([], "optimiser section not run")
+    return BenchResult(machine=machine(),
+                       date=datetime.datetime.now().astimezone().isoformat(timespec="seconds"),
+                       commit=commit(), quick=quick, work_precision=wp, speed=tuple(sp),
+                       optimiser=tuple(opt), optimiser_note=note,
+                       elapsed=time.perf_counter() - t0,
+                       config={"integrator": cfg.simulate.integrator,
+                               "step": cfg.simulate.step,
+                               "nodes": cfg.optimise.nodes,
+                               "substeps": cfg.optimise.substeps},
+                       load=(load0, _load()))
+
+
+def _load() -> float | None:
+    """The 1-minute load average (None where the OS does not give it)."""
+    try:
+        return os.getloadavg()[0]
+    except (AttributeError, OSError):
+        return None

@@ -1,0 +1,110 @@
+"""Speed of the user-facing calls: model build, one stroke (with and without its error
+estimate), the raw kernel, a batch, the reference, ``softclose simulate`` end to end in a
+fresh interpreter and which heavy modules its start-up imports (:func:`speed`), and the
+later features' entries (:mod:`softclose.bench.later`).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+from .. import native
+from ..config import Config
+from ..model import LidModel
+from ..reference import Reference
+from ..simulate import Simulator
+from .later import later_entries
+from .timing import fresh_env, kernel_times, median_time, speed_row
+
+#: modules that ``softclose simulate`` must not import at start-up (they are imported lazily)
+HEAVY_MODULES = ("pandas", "pyarrow", "scipy", "SALib", "dask", "matplotlib")
+
+
+def speed(cfg: Config, quick: bool = False, cli: bool = True, later: bool = True,
+          log=None) -> list[dict]:
+    """Run times (median of repeats) of model build, one stroke, the kernel, the reference,
+    the CLI start-up, and (``later``) the sweep / robust / yield / Sobol entries."""
+    log = log or (lambda *a: None)
+    rows = []
+
+    def add(row):
+        rows.append(row)
+        log(f"  {row['what']}: {row['median_s'] * 1e3:.3f} ms")
+    r = 3 if quick else 9
+    add(speed_row("model", "LidModel(cfg) (symbolic model, CasADi)",
+                  median_time(lambda: LidModel(cfg), r), r))
+    model = LidModel(cfg)
+    add(speed_row("table", "Simulator(cfg, model) (coefficient table)",
+                  median_time(lambda: Simulator(cfg, model=model), r), r))
+    sim = Simulator(cfg, model=model)
+    p = model.params()
+    n = 50 if quick else 300
+    add(speed_row("run", "Simulator.run(p, estimate_error=False)",
+                  median_time(lambda: sim.run(p, estimate_error=False), n, warmup=5), n,
+                  f"{sim.method.name}, step {sim.step:g} s"))
+    add(speed_row("run_estimate", "Simulator.run(p) (with the h/2 error estimate)",
+                  median_time(lambda: sim.run(p), n // 3, warmup=3), n // 3))
+    st = cfg.stroke
+    d1 = np.r_[p, sim.energy_tol(p[None, :])][None, :]
+    add(speed_row("kernel_call", "raw kernel call native.run_strokes (1 design, 1 thread)",
+                  median_time(lambda: native.run_strokes(sim.table, sim.method, sim.step,
+                                                         st.t_max, st.theta0,
+                                                         st.theta_closed, d1, threads=1),
+                              n, warmup=5), n))
+    add(speed_row("kernel_stroke", "kernel time per stroke (batch, 1 thread)",
+                  kernel_times(sim, p, 7)[0], 7))
+    rng = np.random.default_rng(0)
+    B = 2000
+    lo = [getattr(cfg.optimise, k)[0] for k in ("spring_k", "spring_rest_length", "damper_c")]
+    hi = [getattr(cfg.optimise, k)[1] for k in ("spring_k", "spring_rest_length", "damper_c")]
+    P = np.column_stack([rng.uniform(lo, hi, (B, 3)), np.zeros(B)])
+    rb = 3 if quick else 5
+    tb = median_time(lambda: sim.run_batch(P), rb)
+    add(speed_row("batch", f"Simulator.run_batch, {B} random designs of the design box, "
+                  "all cores", tb, rb, f"{os.cpu_count()} threads", count=B))
+    ref = Reference(model)
+    rr = 2 if quick else 5
+    add(speed_row("reference", f"Reference(model).simulate(p) (CVODES, tol {ref.tol:g})",
+                  median_time(lambda: ref.simulate(p), rr), rr))
+    if cli:
+        rc = 5 if quick else 9
+        heavy = startup_imports(["simulate", "--json"])
+        note = ("imports none of " + ", ".join(HEAVY_MODULES) if not heavy else
+                "imports " + ", ".join(heavy) + " at start-up")
+        add(speed_row("cli_simulate", "`python -m softclose simulate --json` end to end "
+                      "(fresh interpreter)", cli_time(["simulate", "--json"], rc), rc, note))
+    if later:
+        rows.extend(later_entries(cfg, quick=quick, log=log))
+    return rows
+
+
+def cli_time(argv: list[str], repeats: int) -> float:
+    """Median wall time of ``python -m softclose ARGV`` in a fresh interpreter, in s."""
+    cmd = [sys.executable, "-m", "softclose", *argv]
+    env = fresh_env()
+
+    def run():
+        r = subprocess.run(cmd, capture_output=True, env=env, text=True)
+        if r.returncode != 0:
+            raise RuntimeError(f"softclose {' '.join(argv)} failed: {r.stderr.strip()}")
+    return median_time(run, repeats)
+
+
+def startup_imports(argv: list[str], modules=HEAVY_MODULES) -> list[str]:
+    """Which of ``modules`` a fresh interpreter has imported after
+    ``softclose.cli.main(argv)`` (the command's own start-up and run)."""
+    code = ("import io, json, sys, contextlib\n"
+            "from softclose.cli import main\n"
+            "with contextlib.redirect_stdout(io.StringIO()):\n"
+            f"    main({list(argv)!r})\n"
+            f"print(json.dumps([m for m in {list(modules)!r} if m in sys.modules]))\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       env=fresh_env())
+    if r.returncode != 0:
+        raise RuntimeError(f"softclose {' '.join(argv)} failed: {r.stderr.strip()[-300:]}")
+    return json.loads(r.stdout.strip().splitlines()[-1])

@@ -1,0 +1,237 @@
+"""The later features' entries of the benchmark, each through its public function: sweep
+throughput on the 40,000-design grid (the kernel, the in-process sweep, the command line end
+to end), robust optimisation, Monte Carlo yield and Sobol indices (:func:`later_entries`);
+and the optimiser's shooting intervals N and sub-steps against the error of the optimal
+objective and the solve time (:func:`optimiser_study`).
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..config import Config
+from ..model import LidModel
+from ..problem import PARAM_COLUMNS, objective, params_of
+from ..reference import Reference
+from ..simulate import Simulator
+from .precision import TRUTH_TOL
+from .timing import fresh_env, not_measured, speed_row
+
+#: a later entry is repeated (up to its repeat count) only while its runs took less than this
+LATER_BUDGET_S = 30.0
+#: the 40,000-design grid of the sweep throughput entry
+SWEEP_GRID = {"design.spring_k": (500.0, 9500.0, 40),
+              "design.spring_rest_length": (0.05, 0.09, 40),
+              "design.damper_c": (100.0, 4000.0, 25)}
+
+#: optimiser settings of the N / sub-steps study
+OPT_NODES = (5, 10, 20, 40)
+OPT_SUBSTEPS = (1, 2, 4)
+
+
+def sweep_axes() -> dict[str, np.ndarray]:
+    """The 40,000-design grid of the sweep throughput entry (:data:`SWEEP_GRID`)."""
+    return {k: np.linspace(a, b, n) for k, (a, b, n) in SWEEP_GRID.items()}
+
+
+def later_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
+    """Sweep throughput on the 40,000-design grid (the kernel, the in-process sweep, and
+    the command line end to end with its CSV and maps), robust optimisation, Monte Carlo
+    yield of 1e5 samples and Sobol indices at N = 1024, each through its public function.
+
+    Yield and Sobol indices are measured at the nominal optimum (``softclose.optimise``'s
+    design): the default config's own design has no spring and no damper, so relative
+    spreads of spring_k and damper_c would be zero there. A function that does not exist
+    yet gives a row with a note; ``quick`` skips the two longest (robust optimisation and
+    the Monte Carlo run) with a note. Each entry is the median of up to 3 runs (1 with
+    ``quick``), fewer when the runs so far took :data:`LATER_BUDGET_S` or more.
+    """
+    log = log or (lambda *a: None)
+    rows = []
+
+    def timed(key, what, fn, repeats, count=None, unit="designs", note=""):
+        out, ts = [], []
+        try:
+            while len(ts) < repeats and (not ts or sum(ts) < LATER_BUDGET_S):
+                t = time.perf_counter()
+                out.append(fn())
+                ts.append(time.perf_counter() - t)
+        except Exception as exc:  # reported in the table, the bench goes on
+            rows.append(not_measured(key, what, f"failed: {type(exc).__name__}: "
+                                                f"{str(exc).splitlines()[0]}", repeats))
+            log(f"  {what}: failed ({exc})")
+            return None
+        t = statistics.median(ts)
+        rows.append(speed_row(key, what, t, len(ts), note, count=count, unit=unit))
+        log(f"  {what}: {t:.3f} s")
+        return out[-1]
+
+    rep = 1 if quick else 3
+    from ..sweeps import sweep
+    from ..sweeps.space import make_grid
+    n_grid = int(np.prod([n for _, _, n in SWEEP_GRID.values()]))
+    axes = sweep_axes()
+    sim = Simulator(cfg)
+    grid = make_grid(axes)            # the sweep's own designs, in its order
+    P = np.tile(params_of(cfg), (n_grid, 1))
+    P[:, [PARAM_COLUMNS[k] for k in grid.keys]] = grid.points(np.arange(n_grid))
+    sim.run_batch(P[:1000])                             # warm-up: threads up
+    timed("kernel_40000", f"Simulator.run_batch: the {n_grid:,} strokes of that grid, "
+          "all cores", lambda: sim.run_batch(P), rep, count=n_grid,
+          note="closing and not closing alike; a lid that creeps open runs to t_max")
+    what = f"sweep(cfg, axes): the {n_grid:,}-design grid k × l0 × c, in-process"
+    res = timed("sweep_40000", what, lambda: sweep(cfg, axes), rep, count=n_grid)
+    if res is not None:
+        rows[-1]["note"] = (f"the result's own designs_per_second (evaluation only): "
+                            f"{res.designs_per_second or 0:,.0f}")
+    _cli_sweep_rows(cfg, rows, n_grid, timed, 1 if quick else 5)
+    from ..robust import optimise_robust
+    from ..robust import sensitivity as sens
+    from ..robust import tolerance_analysis as ta
+    what = "robust optimisation over the [tolerance] box"
+    rob = None
+    if quick:
+        rows.append(not_measured("robust_optimise", what, "not run with --quick"))
+    else:
+        rob = timed("robust_optimise", what + ": softclose.optimise(cfg, robust=True)",
+                    lambda: optimise_robust(cfg), 1)
+    what_mc = "Monte Carlo yield: tolerance_analysis(cfg, samples=100000)"
+    what_s = "Sobol indices: sensitivity(cfg, samples=1024)"
+    at, note = _nominal_optimum(cfg)
+    # the Monte Carlo pass of the robust design (what `optimise --robust` checks), then the
+    # nominal optimum's on its box: 12 % of its lids creep open and run to t_max (their
+    # metrics change until then), which is why it takes longer
+    if rob is None or not getattr(rob, "design", None):
+        rows.append(not_measured("yield_1e5_robust", what_mc + ", the robust design",
+                                 "not run with --quick" if quick else "no robust design"))
+    else:
+        c_rob = cfg.with_design(**rob.design)
+        ta(c_rob, samples=1000)                         # warm-up: its tables built
+        timed("yield_1e5_robust", what_mc + ", the robust design",
+              lambda: ta(c_rob, samples=100000, reference=0), rep, count=100000,
+              unit="samples", note="the Monte Carlo pass (kernel, yield, interval, "
+              "percentiles); the adaptive reference checks of the report are not in it")
+    if quick:
+        rows.append(not_measured("yield_1e5", what_mc, "not run with --quick"))
+    elif at is None:
+        rows.append(not_measured("yield_1e5", what_mc, note))
+    else:
+        timed("yield_1e5", what_mc + ", the nominal optimum", lambda: ta(at, samples=100000),
+              rep, count=100000, unit="samples", note=note + "; with its 3 adaptive "
+              "reference checks; no target of its own (see the robust design's row)")
+    if at is None:
+        rows.append(not_measured("sobol_1024", what_s, note))
+    else:
+        timed("sobol_1024", what_s, lambda: sens(at, samples=1024), rep, note=note)
+    return rows
+
+
+def _cli_sweep_rows(cfg: Config, rows: list, n_grid: int, timed, repeats: int) -> None:
+    """``softclose sweep`` over :data:`SWEEP_GRID` end to end (a fresh interpreter, the CSV
+    and the three maps, start-up included; the default config), and its maps stage (from
+    the command's ``--json`` stages: after the table is evaluated until every map is
+    saved)."""
+    import tempfile
+
+    from ..config import default_config, to_dict
+    what = (f"softclose sweep --grid ... --out DIR: the {n_grid:,}-design grid with its CSV "
+            "and maps, fresh interpreter, end to end")
+    what_maps = "the maps of that command (3 maps; its `maps` stage)"
+    if to_dict(cfg) != to_dict(default_config()):
+        for key, w in (("sweep_cli_40000", what), ("sweep_maps", what_maps)):
+            rows.append(not_measured(key, w, "the command line runs the default config"))
+        return
+    grid = [f"--grid={k}={a:g}:{b:g}:{n}" for k, (a, b, n) in SWEEP_GRID.items()]
+    maps: list[float] = []
+    with tempfile.TemporaryDirectory() as tmp:
+        def run():
+            out = Path(tmp) / f"run{len(maps)}"
+            r = subprocess.run([sys.executable, "-m", "softclose", "sweep", *grid, "--out",
+                                str(out), "--json"], capture_output=True, text=True,
+                               env=fresh_env())
+            if r.returncode != 0:
+                raise RuntimeError(f"exit {r.returncode}: {r.stderr.strip()[-300:]}")
+            maps.append(json.loads(r.stdout)["stages"]["maps"])
+        timed("sweep_cli_40000", what, run, repeats, count=n_grid,
+              note="CSV and 3 maps; the maps are drawn by processes forked at start-up")
+    if maps:
+        rows.append(speed_row("sweep_maps", what_maps, statistics.median(maps), len(maps),
+                              note=f"{min(maps):.2f}–{max(maps):.2f} s; drawn from the "
+                                   "slices through the best design: no larger for a "
+                                   "larger sweep"))
+
+
+def _nominal_optimum(cfg: Config):
+    """(cfg with the nominal optimum's design, note), or (None, why not)."""
+    from ..optimiser import optimise
+    try:
+        r = optimise(cfg)
+    except Exception as exc:  # reported in the table
+        return None, f"not measured: optimise(cfg) failed ({type(exc).__name__}: {exc})"
+    if not getattr(r, "success", False) or not getattr(r, "design", None):
+        return None, "not measured: optimise(cfg) found no design to analyse"
+    d = r.design
+    return cfg.with_design(**{k: d[k] for k in ("spring_k", "spring_rest_length",
+                                                 "damper_c")}), \
+        (f"at the nominal optimum k = {d['spring_k']:.5g} N/m, l0 = "
+         f"{d['spring_rest_length']:.5g} m, c = {d['damper_c']:.5g} N s/m")
+
+
+# -- optimiser ---------------------------------------------------------------------------
+def optimiser_study(cfg: Config, quick: bool = False, log=None) -> tuple[list, str]:
+    """N and sub-steps against the error of the optimal objective and the solve time.
+
+    The error is measured against the best estimate of the continuous optimum: the
+    objective that the adaptive reference gives at the design of the finest setting.
+    Each row also carries the discretisation error at its own design,
+    |J_N - J_reference(design_N)|. Returns (rows, note); rows is empty with a note
+    when the optimiser's ``solve`` is not available.
+    """
+    log = log or (lambda *a: None)
+    from ..optimiser import solve
+    nodes = (5, 10, 20) if quick else OPT_NODES
+    subs = (1, 4) if quick else OPT_SUBSTEPS
+    ref = Reference(LidModel(cfg), TRUTH_TOL)
+    rows = []
+    for n in nodes:
+        for s in subs:
+            try:
+                t = time.perf_counter()
+                r = solve(cfg, nodes=n, substeps=s)
+                wall = time.perf_counter() - t
+            except Exception as exc:  # reported in the table, the bench goes on
+                rows.append({"nodes": n, "substeps": s, "success": False,
+                             "message": f"{type(exc).__name__}: {str(exc).splitlines()[0]}"})
+                continue
+            if not r.success or r.design is None or r.objective is None:
+                rows.append({"nodes": n, "substeps": s, "success": False,
+                             "message": str(getattr(r, "message", "") or "not solved")})
+                continue
+            d = r.design
+            rr = ref.simulate(params_of(cfg, d))
+            J_ref = objective(cfg.optimise, rr.impact_theta_dot, rr.peak_tip_speed)
+            rows.append({"nodes": n, "substeps": s, "success": True,
+                         "objective": float(r.objective), "objective_reference": J_ref,
+                         "discretisation_error": None if J_ref is None else
+                         abs(float(r.objective) - J_ref),
+                         "solve_time": float(getattr(r, "solve_time", 0.0) or wall),
+                         "build_time": float(getattr(r, "build_time", 0.0) or 0.0),
+                         "wall_time": wall,
+                         "spring_k": d["spring_k"], "spring_rest_length": d["spring_rest_length"],
+                         "damper_c": d["damper_c"], "message": ""})
+            log(f"  N={n} substeps={s}: J={r.objective:.6g} in {wall:.2f} s")
+    ok = [r for r in rows if r.get("success") and r.get("objective_reference") is not None]
+    if ok:
+        finest = max(ok, key=lambda r: (r["nodes"] * r["substeps"], r["nodes"]))
+        J_star = finest["objective_reference"]
+        for r in rows:
+            r["J_star"] = J_star
+            r["objective_error"] = abs(r["objective"] - J_star) if "objective" in r else None
+    return rows, ""

@@ -1,0 +1,99 @@
+"""How the benchmark times things: the median (and least) wall time of repeated calls, the C
+kernel's time per stroke, and one row of the speed table with the target it is held to
+(:data:`SPEED_TARGETS`).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .. import native
+from ..problem import as_params
+from ..simulate import Simulator
+
+#: speed targets (from the issues): "max_s" -- at most this many seconds; "min_per_s" --
+#: at least this many items per second. Rows without an entry have no target.
+SPEED_TARGETS = {
+    "model": {"max_s": 1.0},
+    "run": {"max_s": 0.5e-3},
+    "cli_simulate": {"max_s": 0.3},
+    "kernel_40000": {"min_per_s": 100000.0},
+    "sweep_40000": {"min_per_s": 20000.0},
+    "sweep_cli_40000": {"min_per_s": 20000.0},
+    "sweep_maps": {"max_s": 1.0},
+    "robust_optimise": {"max_s": 5.0},
+    "yield_1e5_robust": {"max_s": 1.0},
+    "sobol_1024": {"max_s": 2.0},
+}
+
+
+def time_stats(fn, repeats: int, warmup: int = 1) -> tuple[float, float]:
+    """(median, min) wall time of ``fn()`` over ``repeats`` calls after ``warmup`` calls, s."""
+    for _ in range(warmup):
+        fn()
+    ts = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        fn()
+        ts.append(time.perf_counter() - t)
+    return statistics.median(ts), min(ts)
+
+
+def median_time(fn, repeats: int, warmup: int = 1) -> float:
+    """Median wall time of ``fn()`` over ``repeats`` calls (after ``warmup`` calls), in s."""
+    return time_stats(fn, repeats, warmup)[0]
+
+
+def kernel_times(sim: Simulator, p: np.ndarray, repeats: int = 5,
+                 target: float = 3e-3) -> tuple[float, float]:
+    """(median, min) run time of one stroke in the C kernel (one thread), in s.
+
+    A batch of identical strokes is sized so one call takes about ``target`` seconds, which
+    makes the Python call overhead negligible; the times of ``repeats`` calls are divided
+    by the batch size.
+    """
+    st = sim.cfg.stroke
+    row = np.r_[native.kernel_rows(as_params(p)), sim.energy_tol(p[None, :])]
+
+    def call(n):
+        d = np.repeat(row[None, :], n, axis=0)
+        return lambda: native.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
+                                          st.theta_closed, d, threads=1)
+    t1 = time_stats(call(1), 3)[1]
+    n = int(min(max(1, target / max(t1, 1e-7)), 4000))
+    med, low = time_stats(call(n), repeats)
+    return med / n, low / n
+
+
+def speed_row(key, what, seconds, repeats, note="", count=None, unit="designs") -> dict:
+    """One speed row: median seconds; ``count`` items per call gives a rate (per second)."""
+    rate = count / seconds if count and seconds > 0 else None
+    tgt = SPEED_TARGETS.get(key)
+    met = None
+    if tgt and "max_s" in tgt:
+        met = seconds <= tgt["max_s"]
+    elif tgt and "min_per_s" in tgt and rate is not None:
+        met = rate >= tgt["min_per_s"]
+    return {"key": key, "what": what, "median_s": seconds, "repeats": repeats,
+            "rate": rate, "unit": unit if count else "", "target": tgt, "met": met,
+            "note": note}
+
+
+def not_measured(key, what, note, repeats=0) -> dict:
+    """A row of something not measured, with why (``note``)."""
+    return {**speed_row(key, what, math.nan, repeats), "median_s": None, "met": None,
+            "note": note}
+
+
+def fresh_env() -> dict:
+    """The environment of a fresh interpreter that imports this copy of softclose."""
+    root = str(Path(__file__).resolve().parents[2])
+    env = dict(os.environ)
+    env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    return env

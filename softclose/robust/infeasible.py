@@ -1,0 +1,112 @@
+"""No robust design: which constraint fails, in which scenario, by how much, and what spreads
+would do (:func:`diagnose`).
+
+The spreads' scale is bisected (each trial solved as the robust optimiser solves the full
+box: start sweep, scenario NLP, every corner in the kernel when the NLP had a subset), and the
+worst violation at the full spreads of the best design found is reported.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..config import Config
+from ..errors import NumericalError
+from ..problem import DESIGN_KEYS
+from .box import box_of
+from .evaluate import evaluate
+from .policy import MAX_CORNERS, MC_TOL
+from .scenarios import corner_columns, initial_scenarios
+from .solve import Problem, Run, start_design
+from .stats import margins
+
+
+def _violation(cols: dict, i: int, o) -> tuple[str, str]:
+    """(constraint, 'by how much') of sample i."""
+    reason = cols["reason"][i]
+    ct, hm = cols["closing_time"][i], cols["holding_moment"][i]
+    if reason == "too slow":
+        return "closing_time_max", (f"closes in {ct:.4g} s > closing_time_max = "
+                                    f"{o.closing_time_max:g} s "
+                                    f"(by {ct - o.closing_time_max:.3g} s)")
+    if reason == "too fast":
+        return "closing_time_min", (f"closes in {ct:.4g} s < closing_time_min = "
+                                    f"{o.closing_time_min:g} s "
+                                    f"(by {o.closing_time_min - ct:.3g} s)")
+    if reason == "not held shut":
+        return "holding_moment_min", (f"holding moment {hm:.4g} N m < holding_moment_min = "
+                                      f"{o.holding_moment_min:g} N m (by "
+                                      f"{o.holding_moment_min - hm:.3g} N m)")
+    if reason == "rebound":
+        return "no_rebound", f"rebounds (theta' reaches {cols['theta_dot_max'][i]:.3g} rad/s)"
+    return "closed", "does not close within stroke.t_max"
+
+
+def diagnose(cfg: Config, run: Run, problem: Problem, N: int, M: int, seed: int):
+    """Why the scenario NLP has no solution: bisection on the spreads' scale, then the worst
+    violation at the full spreads of the best design found."""
+    o = cfg.optimise
+    lo, hi, best = 0.0, 1.0, None
+    subset = 2 ** problem.box.dim > MAX_CORNERS
+
+    def holds(a, design) -> bool:
+        """With a subset of the corners as scenarios, a design counts only if every corner
+        holds in the kernel."""
+        if not subset:
+            return True
+        _, _, _, cols = corner_columns(cfg, a, design)
+        return bool(np.all(margins(cols, o) >= -MC_TOL))
+
+    for _ in range(6):
+        a = 0.5 * (lo + hi)
+        box_a = box_of(cfg, scale=a)
+        try:
+            scen = initial_scenarios(box_a, cfg, [run.design], a)
+            start, info_a = start_design(cfg, box_a, np.array([s.z for s in scen]))
+        except NumericalError:
+            hi = a
+            continue
+        if info_a["robust_feasible"] and holds(a, start):   # a sweep design meets everything
+            lo, best = a, start
+            continue
+        try:
+            pa = Problem(cfg, a, scen, N, M)
+            x0, J_ref = pa.initial(start)
+            ra = pa.solve(x0, J_ref)
+        except NumericalError:
+            ra = None
+        if ra is not None and ra.success and holds(a, ra.design):
+            lo, best = a, ra.design
+        else:
+            hi = a
+    design = best if best is not None else run.design
+    box1 = box_of(cfg, dict(zip(DESIGN_KEYS, design)))
+    Z = box1.corners()
+    c = cfg.with_design(**dict(zip(DESIGN_KEYS, map(float, design))))
+    cols = evaluate(c, box1.keys, box1.values(Z))
+    m = margins(cols, o)
+    i = int(np.argmin(m))
+    info = {"feasible_scale": lo if best is not None else 0.0,
+            "design_tried": dict(zip(DESIGN_KEYS, map(float, design)))}
+    parts = []
+    if m[i] < 0:
+        constraint, amount = _violation(cols, i, o)
+        label = box1.label(Z[i])
+        info.update(constraint=constraint, scenario=label, detail=amount)
+        ds = ", ".join(f"{k} = {v:.5g}" for k, v in info["design_tried"].items())
+        parts.append(f"at the best design found ({ds}) the scenario {label} {amount}")
+    else:
+        if run.violations:
+            info["nlp_violations"] = max(run.violations,
+                                         key=lambda v: max(v.values(), default=0.0))
+        parts.append(f"Ipopt stopped with {run.r['status']}")
+    if best is not None:
+        spreads = ", ".join(f"{s.key} ±{s.value * lo * (100 if s.relative else 1):.3g}"
+                            f"{' %' if s.relative else ''}" for s in cfg.tolerance.spreads)
+        info["feasible_spreads"] = {s.key: s.value * lo for s in cfg.tolerance.spreads}
+        parts.append(f"a robust design exists for spreads up to x{lo:.2f} of the configured "
+                     f"ones ({spreads})")
+    else:
+        parts.append("no robust design was found even for spreads of x0.02 of the configured "
+                     "ones: check that the nominal problem has a solution (softclose optimise)")
+    return "no design meets every constraint over the tolerance box: " + "; ".join(parts), info

@@ -1,0 +1,112 @@
+"""The robust optimiser's result: the robust design, its scenarios, its verification and its
+yield beside the nominal optimum's (:class:`RobustResult`), and the box it was designed for
+(:func:`box_summary`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from ..problem import METRIC_KEYS
+from .analysis import YieldResult
+from .box import Box
+from .stats import CI_METHOD
+
+
+@dataclass(frozen=True)
+class RobustResult:
+    """The robust design, its scenarios, its verification and its yield beside the nominal
+    optimum's. A failure is reported in it (``success`` False, ``message``), never raised."""
+
+    success: bool
+    message: str
+    status: str
+    design: dict | None
+    objective: float | None
+    robust_objective: str
+    metrics: dict | None
+    scenarios: list
+    verification: dict | None
+    yield_result: YieldResult | None
+    nominal: dict
+    nominal_yield: YieldResult | None
+    box: dict
+    box_scale: float
+    rounds: list
+    problem: dict
+    solver: dict
+    infeasibility: dict | None = None
+    notes: tuple = ()
+    times: dict = field(default_factory=dict)
+    #: every corner of the box simulated in the kernel at the design: corners, violating,
+    #: worst_margin, breaking (labels of corners outside the NLP that break a constraint),
+    #: in_nlp (corners among the scenarios), scenarios (how many the NLP had)
+    corner_check: dict | None = None
+
+    @property
+    def yield_(self) -> float | None:
+        return None if self.yield_result is None else self.yield_result.yield_
+
+    @property
+    def yield_ci(self) -> tuple | None:
+        return None if self.yield_result is None else self.yield_result.yield_ci
+
+    def to_json(self) -> dict:
+        from ..jsonio import jsonable
+        out = {"success": self.success, "status": self.status, "message": self.message,
+               "design": self.design, "objective": self.objective,
+               "robust_objective": self.robust_objective}
+        for k in METRIC_KEYS:
+            out[k] = None if self.metrics is None else self.metrics.get(k)
+        y = self.yield_result
+        out.update({
+            "verification": self.verification,
+            "yield": None if y is None else y.yield_,
+            "yield_ci": None if y is None else list(y.yield_ci),
+            "ci_method": CI_METHOD,
+            "required_yield": None if y is None else y.required_yield,
+            "samples": None if y is None else y.samples,
+            "distribution": None if y is None else y.distribution,
+            "percentiles": None if y is None else y.percentiles,
+            "failures": None if y is None else y.failures,
+            "scenarios": self.scenarios,
+            "nominal": self.nominal,
+            "box": self.box, "box_scale": self.box_scale,
+            "rounds": self.rounds, "problem": self.problem, "solver": self.solver,
+            "times": self.times})
+        if self.corner_check is not None:
+            out["corner_check"] = self.corner_check
+        if self.infeasibility is not None:
+            out["infeasibility"] = self.infeasibility
+        if self.notes:
+            out["notes"] = list(self.notes)
+        return jsonable(out)
+
+    def to_frame(self):
+        """One row per scenario: the toleranced values, the NLP's metrics, the reference's
+        verdict."""
+        import pandas as pd
+        rows = []
+        for s in self.scenarios:
+            row = {"scenario": s["label"], "origin": s["origin"], **s["values"]}
+            row.update({k: s.get("metrics", {}).get(k) for k in METRIC_KEYS})
+            row["objective"] = s.get("objective")
+            row["verified"] = s.get("verified")
+            rows.append(row)
+        return pd.DataFrame(rows)
+
+    def plot(self):
+        """Histograms of closing time and impact speed, nominal against robust design, over
+        the same samples (a Figure)."""
+        from ..figures.robust import plot_yield
+        if self.yield_result is None:
+            raise ValueError("no robust design: nothing to plot")
+        ys = [y for y in (self.nominal_yield, self.yield_result) if y is not None]
+        labels = (["nominal optimum"] if self.nominal_yield is not None else []) + \
+            ["robust design"]
+        return plot_yield(ys, labels)
+
+
+def box_summary(box: Box) -> dict:
+    """The box as plain values: each toleranced key's spread and whether it is relative."""
+    return {k: {"spread": s, "relative": r} for k, s, r in zip(box.keys, box.spreads, box.relative)}
