@@ -40,6 +40,8 @@ def jsonable(x: Any) -> Any:
         return jsonable(x.to_json())
     if dataclasses.is_dataclass(x) and not isinstance(x, type):
         return jsonable(dataclasses.asdict(x))
+    if hasattr(x, "_asdict") and not isinstance(x, type):     # a config section
+        return jsonable(x._asdict())
     return x
 
 

@@ -14,8 +14,7 @@ of 2 or 3 numbers), ``"bounds"`` (two numbers lo <= hi), ``"int+"`` (a whole num
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any, Callable, NamedTuple
 
 #: kinds whose value is one number (sweepable, may carry a tolerance)
 SCALAR_KINDS = ("pos", "nonneg", "real")
@@ -23,8 +22,7 @@ SCALAR_KINDS = ("pos", "nonneg", "real")
 VECTOR_KINDS = {"vec2": 2, "vec3": 3, "bounds": 2}
 
 
-@dataclass(frozen=True)
-class Key:
+class Key(NamedTuple):
     """One config key.
 
     ``default`` None means derived: ``derive(values)`` computes it from the other checked

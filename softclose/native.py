@@ -81,14 +81,9 @@ variable ``SC_SCALAR=1`` selects).
 from __future__ import annotations
 
 import ctypes
-import hashlib
 import math
 import os
-import subprocess
-import sysconfig
-import tempfile
 import threading
-from concurrent.futures import ThreadPoolExecutor
 from functools import cached_property
 from pathlib import Path
 
@@ -130,12 +125,16 @@ _COL = {name: i for i, name in enumerate(OUT_FIELDS)}
 
 
 def _compile_fallback() -> Path:
+    import hashlib  # (what only a source checkout needs is imported here, not at start-up)
     src = _SRC.read_bytes()
     tag = hashlib.sha256(src).hexdigest()[:16]
     cache = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "softclose"
     lib = cache / f"_kernel_{tag}.so"
     if lib.exists():
         return lib
+    import subprocess
+    import sysconfig
+    import tempfile
     cache.mkdir(parents=True, exist_ok=True)
     cc = os.environ.get("CC", "cc")
     inc = sysconfig.get_paths()["include"]
@@ -526,6 +525,7 @@ def run_strokes(table: CoefficientTable, method: Method, step: float, t_max: flo
         while bounds[-1] < n:
             left = n - bounds[-1]
             bounds.append(bounds[-1] + min(left, max(64, left // (4 * threads))))
+        from concurrent.futures import ThreadPoolExecutor
         with ThreadPoolExecutor(threads) as ex:
             list(ex.map(lambda ab: work(*ab), zip(bounds[:-1], bounds[1:])))
     return out

@@ -65,7 +65,7 @@ def assembly_for(geometry: dict, theta_deg: float = 18.0):
 
     from .kinematics import branch_of, closure
     g0 = default_config().geometry
-    geo = SimpleNamespace(**{**dataclasses.asdict(g0), **geometry})
+    geo = SimpleNamespace(**{**g0._asdict(), **geometry})
     th0, phi0, gamma0 = g0.assembly
     sigma = branch_of(math.radians(phi0), math.radians(gamma0))
     phi, gamma, u = (float(v) for v in closure(ca.DM(math.radians(theta_deg)), geo, sigma))

@@ -163,8 +163,8 @@ def to_dict(cfg: Config) -> dict[str, dict[str, Any]]:
     out = {}
     for name in SECTIONS:
         sec = getattr(cfg, name)
-        out[name] = {f.name: (list(v) if isinstance(v := getattr(sec, f.name), tuple) else v)
-                     for f in dataclasses.fields(sec)}
+        out[name] = {k: (list(v) if isinstance(v, tuple) else v)
+                     for k, v in sec._asdict().items()}
     out["tolerance"] = cfg.tolerance.to_dict()
     return out
 

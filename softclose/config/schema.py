@@ -12,7 +12,6 @@ tables of the docs (:mod:`softclose.config.docs`).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from typing import Any
 
@@ -158,20 +157,66 @@ TOLERANCE_OPTIONS: dict[str, tuple[str, Any]] = {k.name: (k.kind, k.default)
 TOLERANCE_SECTIONS = ("geometry", "mass", "design", "stroke")
 
 
-def _stroke_angles(cls):
-    cls.theta0 = property(lambda self: math.radians(self.theta0_deg))
-    cls.theta_closed = property(lambda self: math.radians(self.theta_closed_deg))
-    return cls
+class Section:
+    """The checked values of one config section: attributes by key name, immutable, equal
+    and hashed by value (so configs key caches), picklable."""
+
+    __slots__ = ()
+    _section = ""
+    _fields: tuple[str, ...] = ()
+
+    def __init__(self, **values):
+        for name in self._fields:
+            object.__setattr__(self, name, values.pop(name))
+        if values:
+            raise TypeError(f"[{self._section}] has no key {', '.join(values)}")
+
+    def __setattr__(self, name, value):
+        raise AttributeError(f"[{self._section}] is immutable: use cfg.set(...)")
+
+    def _asdict(self) -> dict[str, Any]:
+        return {name: getattr(self, name) for name in self._fields}
+
+    def _values(self) -> tuple:
+        return tuple(getattr(self, name) for name in self._fields)
+
+    def __eq__(self, other):
+        return type(other) is type(self) and other._values() == self._values()
+
+    def __hash__(self):
+        return hash((self._section, self._values()))
+
+    def __repr__(self):
+        return f"{type(self).__name__}(" + ", ".join(
+            f"{k}={v!r}" for k, v in self._asdict().items()) + ")"
+
+    def __reduce__(self):
+        return (_section, (self._section, self._asdict()))
+
+
+class _StrokeAngles:
+    __slots__ = ()
+
+    @property
+    def theta0(self) -> float:
+        return math.radians(self.theta0_deg)
+
+    @property
+    def theta_closed(self) -> float:
+        return math.radians(self.theta_closed_deg)
 
 
 def _section_type(section: str):
-    """The frozen dataclass of one section, its fields the section's keys in order."""
-    name = section.capitalize()
-    cls = dataclasses.make_dataclass(
-        name, [(k.name, Any) for k in KEYS if k.section == section], frozen=True,
-        namespace={"__doc__": f"The checked values of the [{section}] section."})
-    cls.__module__ = __name__            # (so that configs pickle: the class is found here)
-    return _stroke_angles(cls) if section == "stroke" else cls
+    """The class of one section, its fields the section's keys in order."""
+    fields = tuple(k.name for k in KEYS if k.section == section)
+    bases = (_StrokeAngles, Section) if section == "stroke" else (Section,)
+    return type(section.capitalize(), bases, {
+        "__slots__": fields, "_fields": fields, "_section": section, "__module__": __name__,
+        "__doc__": f"The checked values of the [{section}] section."})
+
+
+def _section(section: str, values: dict) -> Section:
+    return SECTION_TYPES[section](**values)
 
 
 #: the section classes, by section

@@ -41,15 +41,14 @@ state.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from ..keys import Key
 
 
-@dataclass(frozen=True)
-class Param:
+class Param(NamedTuple):
     """A per-stroke parameter of an element: its ``design`` key and the factor to SI."""
 
     name: str

@@ -23,7 +23,7 @@ moment)``; bodies are "lid", "oa", "bc" (the ground takes no equation).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import casadi as ca
 
@@ -34,8 +34,7 @@ PIVOTS = {"lid": ("lid", "ground"), "O": ("oa", "ground"), "B": ("bc", "ground")
           "A": ("lid", "oa"), "C": ("lid", "bc")}
 
 
-@dataclass
-class Pose:
+class Pose(NamedTuple):
     """The linkage at theta: angles, named points (world), and the config's sections."""
 
     theta: object
@@ -49,8 +48,7 @@ class Pose:
         return {"lid": self.theta, "oa": self.phi, "bc": self.gamma, "ground": 0.0}[body]
 
 
-@dataclass(frozen=True)
-class Length:
+class Length(NamedTuple):
     """``q = |P - G|``: P a lid point (``lid_key``: a ``geometry`` key in the lid frame from
     A), G a ground point (``ground_key``, or the fixed ``ground`` when no key)."""
 
@@ -73,8 +71,7 @@ class Length:
         return [("lid", self.point, force * r / ca.norm_2(r))]
 
 
-@dataclass(frozen=True)
-class PivotAngle:
+class PivotAngle(NamedTuple):
     """``q = psi``, the relative rotation at ``pivot`` (one of :data:`PIVOTS`)."""
 
     pivot: str
@@ -99,8 +96,7 @@ class PivotAngle:
                 if body != "ground"]
 
 
-@dataclass(frozen=True)
-class Weights:
+class Weights(NamedTuple):
     """Gravity's coordinate: ``q = g (m1 y_G1 + m2 y_G2 + m3 y_G3)`` (J)."""
 
     def value(self, pose: Pose):
