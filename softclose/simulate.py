@@ -26,6 +26,7 @@ from .model import LidModel
 from .dynamics import COEFFS
 from .problem import ERROR_KEYS, as_params, target
 from .stroke import StrokeResult, StrokeStatus, none_if_nan
+from .table import CoefficientTable
 
 DEFAULT_STEP = default_config().simulate.step
 #: largest relative interpolation error of the coefficient table that is accepted
@@ -88,7 +89,7 @@ class Simulator:
         self.model = model or LidModel(cfg)
         self.method = get_method(integrator or cfg.simulate.integrator)
         self.step = step or cfg.simulate.step
-        self.table = native.CoefficientTable(self.model)
+        self.table = CoefficientTable(self.model)
         if self.table.max_rel_error > TABLE_TOL:
             raise NumericalError(
                 f"the linkage passes close to a toggle position (transmission angle "

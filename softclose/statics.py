@@ -2,7 +2,7 @@
 
 :func:`softclose.dynamics.slope` states dV/dtheta once, as a sum over the machine elements;
 this module evaluates it (and V, and the damping) from the tabulated columns of a
-:class:`~softclose.native.CoefficientTable` for many designs at once: the holding moment at
+:class:`~softclose.table.CoefficientTable` for many designs at once: the holding moment at
 the rim, the energy a stroke releases, theta'' at rest (the release check, the equilibria and
 the linearisation of the stability check). The CasADi model's ``dV`` is the same sum on exact
 expressions.
