@@ -12,7 +12,7 @@
  * their accuracy is that of the method itself; the same for the peak tip speed and the
  * lowest angle of a stroke that turns back. Nothing is integrated past the event.
  *
- * A design row is (k, l0, c, c_rot, k_t, psi_free, e_tol[, m_lid]) (LAYOUT): the
+ * A design row is (k, l0, c, c_rot, s, F0, k_t, psi_free, e_tol[, m_lid]) (LAYOUT): the
  * parameters of the machine elements (see THE MACHINE ELEMENTS below), then e_tol, then
  * m_lid (kg, NaN = the table's own mass m0), which selects the lid mass. M, dM, Vg and dVg are affine in the lid's mass, so the
  * coefficients of a row are c(m0) + (m_lid - m0) dc/dm, with dc/dm from a second table
@@ -84,8 +84,8 @@ enum { C_M, C_DM, C_VG, C_DVG, C_L, C_DL, C_DD, C_TAU };
 /* every layout constant the Python side shares, checked there when the kernel is loaded */
 static const char LAYOUT[] =
     "abi=3;cc=M,dM,Vg,dVg,l,dl,dd,tau;mass=M,dM,Vg,dVg;xcc=psi,dpsi,-,-;"
-    "row=spring_k,spring_rest_length,damper_c,rotary_damper_c,torsion_k,torsion_free_angle,"
-    "energy_tol,lid_mass;out=status,closing_time,impact_theta_dot,impact_tip_speed,"
+    "row=spring_k,spring_rest_length,damper_c,rotary_damper_c,spring_kind,spring_preload,"
+    "torsion_k,torsion_free_angle,energy_tol,lid_mass;out=status,closing_time,impact_theta_dot,impact_tip_speed,"
     "peak_tip_speed,min_spring_length,max_spring_length,steps,energy_rise,theta_min,"
     "theta_dot_max,theta_max,stop_reason,stop_theta,stop_time;nrng=18";
 
@@ -153,7 +153,8 @@ typedef struct {
  *
  *   element   coordinate q       columns          law
  *   gravity   its potential      Vg, dVg (+ mass) V = q, T = 1
- *   spring    |D - E|            l, dl            V = k (q - l0)^2 / 2, T = k (q - l0)
+ *   spring    |D - E|            l, dl            V = k (q - l0)^2 / 2 + F q, T = F + k (q - l0)
+ *                                                (F = s F0: its kind's sign times its preload)
  *   torsion   psi at its pivot   psi, dpsi (x)    V = k_t (q - psi0)^2 / 2, T = k_t (q - psi0)
  *   dashpot   |C - O|            dd = q'^2        B = c
  *   rotary    theta              (q' = 1)         B = c_rot
@@ -172,46 +173,56 @@ typedef struct {
  * by ELEM_SLOPE_X ..., added where a row has them (Par.x; Par4.anyx for a group). */
 
 /* the design-row columns: the elements' parameters (in the registry's order), e_tol, m_lid */
-enum { D_K, D_L0, D_C, D_CR, D_KT, D_PSI0, D_ETOL, D_MLID, NDESIGN };
+enum { D_K, D_L0, D_C, D_CR, D_KIND, D_F0, D_KT, D_PSI0, D_ETOL, D_MLID, NDESIGN };
 /* the extra table's columns: the torsion spring's psi and dpsi at its pivot */
 enum { X_PSI, X_DPSI };
 
-/* one row's element parameters (SI); dm = m_lid - m0: 0 for a row at the table's mass;
- * x: the row has an element of the extra table */
-typedef struct { double k, l0, c, cr, kt, psi0, dm; int x; } Par;
+/* one row's element parameters (SI); F: the spring's signed preload s F0; dm = m_lid - m0: 0
+ * for a row at the table's mass; x: the row has an element of the extra table */
+typedef struct { double k, l0, F, c, cr, kt, psi0, dm; int x; } Par;
 /* the lanes' parameters as vectors; any: a lane at another lid mass; anyx: a lane with
  * element columns (its element terms are added for every lane of the group: the others add
  * a zero, k_t = 0) */
-typedef struct { v4 k, l0, c, cr, kt, psi0; double dm[VW]; int any, anyx; } Par4;
+typedef struct { v4 k, l0, F, c, cr, kt, psi0; double dm[VW]; int any, anyx; } Par4;
 /* read a design row d into p (not dm) */
 #define ELEM_READ(p, d) do { \
         (p)->k = (d)[D_K]; (p)->l0 = (d)[D_L0]; (p)->c = (d)[D_C]; (p)->cr = (d)[D_CR]; \
+        (p)->F = (d)[D_KIND] * (d)[D_F0]; \
         (p)->kt = (d)[D_KT]; (p)->psi0 = (d)[D_PSI0]; (p)->x = (p)->kt != 0.0; \
     } while (0)
 /* copy row p into lane q of the group G (then G->anyx |= p->x) */
 #define ELEM_LANE(G, q, p) do { \
         (G)->k[q] = (p)->k; (G)->l0[q] = (p)->l0; (G)->c[q] = (p)->c; (G)->cr[q] = (p)->cr; \
+        (G)->F[q] = (p)->F; \
         (G)->kt[q] = (p)->kt; (G)->psi0[q] = (p)->psi0; \
     } while (0)
 #define LAW_LINEAR_T(k, q0, q) ((k) * ((q) - (q0)))                  /* T = dV/dq */
 #define LAW_LINEAR_V(k, q0, q) (0.5 * (k) * ((q) - (q0)) * ((q) - (q0)))
 /* d/dtheta of T q' (for the implicit methods' Jacobian): k (q'^2 + (q - q0) q'') */
 #define LAW_LINEAR_DSLOPE(k, q0, q, dq_th, dq, ddq) ((k) * ((dq_th) * (dq) + ((q) - (q0)) * (ddq)))
+/* the same with a preload F (a constant tension): T = F + k (q - q0), V = k (q - q0)^2 / 2 + F q */
+#define LAW_PRELOADED_T(k, q0, F, q) ((F) + LAW_LINEAR_T(k, q0, q))
+#define LAW_PRELOADED_V(k, q0, F, q) (LAW_LINEAR_V(k, q0, q) + (F) * (q))
+#define LAW_PRELOADED_DSLOPE(k, q0, F, q, dq_th, dq, ddq) \
+    (LAW_LINEAR_DSLOPE(k, q0, q, dq_th, dq, ddq) + (F) * (ddq))
 
 /* the slope dV/dtheta of gravity and the spring, from the coefficient values c[] (numbers
  * or lanes); a row with element columns (has x) adds the torsion spring's term from x[] */
-#define ELEM_SLOPE(P, cv) ((cv)[C_DVG] + LAW_LINEAR_T((P)->k, (P)->l0, (cv)[C_L]) * (cv)[C_DL])
+#define ELEM_SLOPE(P, cv) \
+    ((cv)[C_DVG] + LAW_PRELOADED_T((P)->k, (P)->l0, (P)->F, (cv)[C_L]) * (cv)[C_DL])
 #define ELEM_SLOPE_X(P, x) (LAW_LINEAR_T((P)->kt, (P)->psi0, (x)[X_PSI]) * (x)[X_DPSI])
 /* the potential V of gravity and the spring (then + ELEM_POTENTIAL_X); the energy is the
  * kinetic energy KE plus the same potentials, summed in this order */
-#define ELEM_POTENTIAL(P, cv) ((cv)[C_VG] + LAW_LINEAR_V((P)->k, (P)->l0, (cv)[C_L]))
-#define ELEM_ENERGY(P, cv, KE) ((KE) + (cv)[C_VG] + LAW_LINEAR_V((P)->k, (P)->l0, (cv)[C_L]))
+#define ELEM_POTENTIAL(P, cv) ((cv)[C_VG] + LAW_PRELOADED_V((P)->k, (P)->l0, (P)->F, (cv)[C_L]))
+#define ELEM_ENERGY(P, cv, KE) \
+    ((KE) + (cv)[C_VG] + LAW_PRELOADED_V((P)->k, (P)->l0, (P)->F, (cv)[C_L]))
 #define ELEM_POTENTIAL_X(P, x) LAW_LINEAR_V((P)->kt, (P)->psi0, (x)[X_PSI])
 /* the damping on theta': the dashpot and the rotary damper */
 #define ELEM_DAMPING(P, cv) ((P)->c * (cv)[C_DD] + (P)->cr)
 /* d/dtheta of the slope and of the damping (values c, x; their derivatives dc, dx) */
 #define ELEM_DSLOPE(P, cv, dcv) \
-    ((dcv)[C_DVG] + LAW_LINEAR_DSLOPE((P)->k, (P)->l0, (cv)[C_L], (dcv)[C_L], (cv)[C_DL], (dcv)[C_DL]))
+    ((dcv)[C_DVG] + LAW_PRELOADED_DSLOPE((P)->k, (P)->l0, (P)->F, (cv)[C_L], (dcv)[C_L], \
+                                         (cv)[C_DL], (dcv)[C_DL]))
 #define ELEM_DSLOPE_X(P, x, dx) \
     LAW_LINEAR_DSLOPE((P)->kt, (P)->psi0, (x)[X_PSI], (dx)[X_PSI], (x)[X_DPSI], (dx)[X_DPSI])
 #define ELEM_DDAMPING(P, dcv) ((P)->c * (dcv)[C_DD])
@@ -220,7 +231,7 @@ typedef struct { v4 k, l0, c, cr, kt, psi0; double dm[VW]; int any, anyx; } Par4
 #define ELEM_DAMPERS_VALID(P) ((P)->c >= 0 && (P)->cr >= 0)
 /* the size of the springs' potential terms (the energy's rounding scale) */
 #define ELEM_SIZE(P, cv) (fabs((cv)[C_VG]) + 0.5 * fabs((P)->k) * ((cv)[C_L] - (P)->l0) \
-                          * ((cv)[C_L] - (P)->l0))
+                          * ((cv)[C_L] - (P)->l0) + fabs((P)->F * (cv)[C_L]))
 #define ELEM_SIZE_X(P, x) fabs(ELEM_POTENTIAL_X(P, x))
 
 /* a linear law on q in [qlo, qhi] with q' in [dlo, dhi]: its least potential and the range
@@ -234,6 +245,22 @@ static inline void law_linear_bounds(double k, double q0, double qlo, double qhi
     double x1 = e1 * dlo, x2 = e1 * dhi, x3 = e2 * dlo, x4 = e2 * dhi;
     double plo = MIN2(MIN2(x1, x2), MIN2(x3, x4)), phi = MAX2(MAX2(x1, x2), MAX2(x3, x4));
     *slo = k * plo; *shi = k * phi;
+}
+
+/* the same with a preload F (V = k (q - q0)^2 / 2 + F q): the least potential from the
+ * vertex q0 - F/k clamped into [qlo, qhi] (or the end F picks, k = 0), and the slope range
+ * of k (q - q0) q' plus that of F q' */
+static inline void law_preloaded_bounds(double k, double q0, double F, double qlo, double qhi,
+                                        double dlo, double dhi, double *Vmin, double *slo,
+                                        double *shi)
+{
+    law_linear_bounds(k, q0, qlo, qhi, dlo, dhi, Vmin, slo, shi);
+    if (F == 0.0) return;
+    double qv = k > 0 ? q0 - F / k : (F > 0 ? qlo : qhi);
+    qv = qv < qlo ? qlo : (qv > qhi ? qhi : qv);
+    *Vmin = LAW_PRELOADED_V(k, q0, F, qv);
+    double f1 = F * dlo, f2 = F * dhi;
+    *slo += MIN2(f1, f2); *shi += MAX2(f1, f2);
 }
 
 static void cubic_range(const double *q, double s0, double s1, double *lo, double *hi);
@@ -620,7 +647,7 @@ static int speed_piece_ok(const Table *T, const Par *p, int i, double s0, double
     double Vm = ELEM_POTENTIAL(p, v);
     if (p->x) { xtab_eval(T, i, sm, x, NULL); Vm += ELEM_POTENTIAL_X(p, x); }
     double Vsp, sslo, sshi;
-    law_linear_bounds(p->k, p->l0, llo, lhi, dllo, dlhi, &Vsp, &sslo, &sshi);
+    law_preloaded_bounds(p->k, p->l0, p->F, llo, lhi, dllo, dlhi, &Vsp, &sslo, &sshi);
     double V1 = glo + Vsp;
     double slo = dglo + sslo, shi = dghi + sshi;
     if (p->x) elem_bounds_x(T->xcc, p, i, s0, s1, &V1, &slo, &shi);

@@ -9,7 +9,8 @@ tables of docs/model.md are all read from these records; the machine elements
 
 Kinds: ``"pos"`` (a number > 0), ``"nonneg"`` (>= 0), ``"real"``, ``"vec2"``/``"vec3"`` (a list
 of 2 or 3 numbers), ``"bounds"`` (two numbers lo <= hi), ``"int+"`` (a whole number >= 1),
-``"str:a,b,c"`` (one of the words), ``"bool"``.
+``"str:a,b,c"`` (one of the words), ``"words:a,b,c"`` (a list of distinct words of them),
+``"bool"``.
 """
 
 from __future__ import annotations
@@ -26,7 +27,8 @@ class Key(NamedTuple):
     """One config key.
 
     ``default`` None means derived: ``derive(values)`` computes it from the other checked
-    values (``values[section][name]``), and ``derived`` says how, for the docs. ``lo``/``hi``
+    values (``values[section][name]``), and ``derived`` says how, for the docs; without a
+    ``derive`` the key is optional and its value None when not given. ``lo``/``hi``
     are the admissible magnitudes (both ends included; every component of a vector), in the
     key's ``unit``. ``spread`` is the default relative tolerance of the key (``[tolerance]``),
     None for none. ``doc`` is the one line the docs' key tables show.
@@ -62,8 +64,10 @@ class Key(NamedTuple):
 
     @property
     def choices(self) -> tuple[str, ...]:
-        """The words a ``str:`` key accepts (empty for other kinds)."""
-        return tuple(self.kind[4:].split(",")) if self.kind.startswith("str:") else ()
+        """The words a ``str:`` or ``words:`` key accepts (empty for other kinds)."""
+        if self.kind.startswith(("str:", "words:")):
+            return tuple(self.kind.split(":", 1)[1].split(","))
+        return ()
 
     @property
     def range(self) -> tuple[float, float, str] | None:

@@ -241,7 +241,7 @@ class LidModel:
     def params(self, design=None) -> np.ndarray:
         """The parameter vector p of ``design`` (a [design] section; default: the config's)."""
         d = design if design is not None else self.cfg.design
-        return np.array([getattr(d, name) for name in elements.PARAM_NAMES], float)
+        return np.array([q.number(getattr(d, q.name)) for q in elements.PARAMS], float)
 
     def closure(self, theta: float) -> tuple[float, float]:
         """(phi, gamma) in radians on this model's branch."""

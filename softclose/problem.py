@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from .config.schema import KEYS
-from .elements import PARAM_NAMES
+from .elements import PARAM_NAMES, PARAMS
 
 #: the design variables the optimiser picks (config section [design], bounds in [optimise])
 DESIGN_KEYS = ("spring_k", "spring_rest_length", "damper_c")
@@ -99,13 +99,13 @@ def params_of(cfg, design: dict | None = None) -> np.ndarray:
     """The parameter vector p (:data:`PARAM_KEYS`) of ``cfg``'s design, with ``design`` (a
     dict of some of its keys) taking precedence."""
     d = dict(design or {})
-    return np.array([float(d[k]) if k in d else float(getattr(cfg.design, k))
-                     for k in PARAM_KEYS])
+    return np.array([q.number(d[q.name] if q.name in d else getattr(cfg.design, q.name))
+                     for q in PARAMS])
 
 
 #: the parameters' defaults (the elements added since the seed: absent)
-PARAM_DEFAULTS = np.array([next(k.default for k in KEYS if k.full == f"design.{name}")
-                           for name in PARAM_KEYS], float)
+PARAM_DEFAULTS = np.array([q.number(next(k.default for k in KEYS if k.full == q.key))
+                           for q in PARAMS])
 
 
 def as_params(p) -> np.ndarray:

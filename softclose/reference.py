@@ -135,6 +135,19 @@ class Reference:
             prev = (t, x, g)
             t, x = t + h, x1
         lmin, lmax = self._l_extremes(th_min, th_max)
+        from . import statics
+        _, why = statics.out_of_range(
+            lambda e, t: np.asarray(m.coordinate_fns[e.name].map(len(t))(t)[0]).ravel(),
+            m.cfg, p[None, :], {"min_spring_length": [lmin], "max_spring_length": [lmax],
+                                "theta_min": [th_min], "theta_max": [th_max]})
+        if why[0]:
+            return StrokeResult(
+                closed=False, closing_time=None, impact_theta_dot=None, impact_tip_speed=None,
+                peak_tip_speed=None, min_spring_length=float(lmin),
+                max_spring_length=float(lmax), holding_moment=m.holding_moment(p),
+                status=StrokeStatus.OUT_OF_RANGE, method="cvodes", tolerance=self.tol,
+                message=f"invalid design: {why[0]}", reason=why[0], theta_min=float(th_min),
+                theta_max=float(th_max))
         return StrokeResult(
             closed=closed, closing_time=out.get("closing_time"),
             impact_theta_dot=out.get("impact_theta_dot"),

@@ -129,10 +129,26 @@ class Simulator:
                                  early_exit=early_exit)
         res = {name: out[:, i] for i, name in enumerate(native.OUT_FIELDS)}
         res["status"] = out[:, 0].astype(int)
+        res["reason"] = native.not_closed_reasons(out)
+        self._check_ranges(P, res)
         res["closed"] = res["status"] == StrokeStatus.CLOSED
         res["holding_moment"] = self.holding_moments(P, m)
-        res["reason"] = native.not_closed_reasons(out)
         return res
+
+    def _check_ranges(self, P, res: dict) -> None:
+        """Strokes that take an element outside its valid range become OUT_OF_RANGE, their
+        reason saying where and by how much (:func:`softclose.statics.out_of_range`)."""
+        ok = np.isin(res["status"], (StrokeStatus.CLOSED, StrokeStatus.NOT_CLOSED))
+        if not ok.any():
+            return
+        idx = np.flatnonzero(ok)
+        _, why = statics.out_of_range(statics.table_coordinate(self.table), self.cfg, P[idx],
+                                      {k: np.asarray(v)[idx] for k, v in res.items()
+                                       if k in native.OUT_FIELDS})
+        bad = why != ""
+        if bad.any():
+            res["status"][idx[bad]] = StrokeStatus.OUT_OF_RANGE
+            res["reason"][idx[bad]] = why[bad]
 
     def holding_moments(self, P: np.ndarray, lid_mass=None) -> np.ndarray:
         """dV/dtheta at theta_closed (N m) for rows of P."""
@@ -152,6 +168,14 @@ class Simulator:
             out = native.run_strokes(self.table, self.method, self.step, st.t_max, st.theta0,
                                      st.theta_closed, design[None, :], threads=1)[0]
         res = self._result(out, p)
+        if res.ok:
+            _, why = statics.out_of_range(statics.table_coordinate(self.table), self.cfg,
+                                          p[None, :], res.__dict__)
+            if why[0]:                # an invalid design: no stroke metrics are its
+                res = replace(res, status=StrokeStatus.OUT_OF_RANGE, closed=False,
+                              closing_time=None, impact_theta_dot=None,
+                              impact_tip_speed=None, peak_tip_speed=None,
+                              message=f"invalid design: {why[0]}", reason=why[0])
         if res.ok and estimate_error:
             accuracy, message = self._error_estimate(res, p)
             res = replace(res, accuracy=accuracy, message=message)

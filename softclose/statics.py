@@ -71,3 +71,62 @@ def rest_jacobian(table, theta, p, lid_mass=None) -> tuple[np.ndarray, np.ndarra
              - rest_theta_ddot(table, theta - eps, P, lid_mass)) / (2 * eps)
         cols, co, Pn = _at(table, theta, P, lid_mass)
         return a, -damping(co, Pn) / cols["M"]
+
+
+def out_of_range(coordinate, cfg, P, metrics: dict) -> tuple[np.ndarray, np.ndarray]:
+    """Which strokes take an element outside its valid range (a spring past its free length:
+    an extension spring shorter, a compression spring longer; or past its length limits).
+
+    ``metrics`` holds per row the extremes of each ranged element's coordinate over the
+    stroke (the spring's ``min_spring_length``, ``max_spring_length``) and the angles it
+    visited (``theta_min``, ``theta_max``); ``coordinate(element, thetas)`` gives an element's
+    coordinate at angles (from the table: :func:`table_coordinate`; the reference uses the
+    exact model). Returns (by how far beyond, m or rad; why, one line per row: "" for a valid
+    stroke), the reason naming the element, where along the stroke it leaves the range and by
+    how much.
+    """
+    P = as_params(np.atleast_2d(np.asarray(P, float)))
+    n = len(P)
+    excess, text = np.zeros(n), np.full(n, "", dtype=object)
+    Pn = elements.params(P)
+    for e in elements.ELEMENTS:
+        if not e.extremes:
+            continue
+        lo, hi = (np.broadcast_to(np.asarray(v, float), (n,)) for v in e.valid(Pn, cfg))
+        qmin, qmax = (np.atleast_1d(np.asarray(metrics[k], float)) for k in e.extremes)
+        scale = 1e-9 * np.maximum(np.abs(qmax), 1.0)       # rounding of the extremes
+        with np.errstate(invalid="ignore"):
+            below, above = lo - qmin, qmax - hi
+            bad = np.flatnonzero((below > scale) | (above > scale))
+        for i in bad:
+            th = (float(np.atleast_1d(metrics["theta_min"])[i]),
+                  float(np.atleast_1d(metrics["theta_max"])[i]))
+            short = below[i] > above[i]
+            beyond = max(below[i], above[i])
+            excess[i] = max(excess[i], beyond)
+            where = _leaves(lambda t: coordinate(e, t), th, lo[i] if short else hi[i], short)
+            text[i] = text[i] or e.range_message(Pn, cfg, i, short, where, beyond)
+    return excess, text
+
+
+def table_coordinate(table):
+    """``coordinate(element, thetas)`` from the table's column of each element's q."""
+    def q(element, th):
+        col = COEFFS.index(next(c for c, what in element.columns if what == "q"))
+        return table.evaluate(th)[:, col]
+    return q
+
+
+def _leaves(q_of, theta_range, bound: float, short: bool) -> tuple[float, float]:
+    """(where the coordinate crosses ``bound`` -- the edge of the region beyond it nearest its
+    worst point --, where it lies furthest beyond it), rad, over ``theta_range``."""
+    th = np.linspace(theta_range[0], theta_range[1], 401)
+    q = np.asarray(q_of(th), float).ravel()
+    beyond = (bound - q) if short else (q - bound)
+    worst = int(np.argmax(beyond))
+    inside = np.flatnonzero(beyond <= 0)
+    if not len(inside):                     # beyond over the whole stroke
+        return None, float(th[worst])
+    j = int(inside[np.argmin(np.abs(inside - worst))])
+    k = j + 1 if j < worst else j - 1       # its neighbour towards the worst point
+    return 0.5 * float(th[j] + th[k]), float(th[worst])

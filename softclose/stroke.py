@@ -25,6 +25,9 @@ class StrokeStatus(IntEnum):
     LEFT_RANGE = 3
     NON_FINITE = 4
     IMPLICIT_FAILED = 5
+    #: integrated to its end, but an element left its valid range (a spring past its free
+    #: length): an invalid design, whose metrics are not reported as the stroke's
+    OUT_OF_RANGE = 6
 
     @property
     def ok(self) -> bool:
@@ -42,7 +45,8 @@ class StrokeStatus(IntEnum):
 _TEXT = {StrokeStatus.CLOSED: "closed", StrokeStatus.NOT_CLOSED: "not closed",
          StrokeStatus.UNSTABLE: "unstable", StrokeStatus.LEFT_RANGE: "left the tabulated range",
          StrokeStatus.NON_FINITE: "non-finite",
-         StrokeStatus.IMPLICIT_FAILED: "implicit solve failed"}
+         StrokeStatus.IMPLICIT_FAILED: "implicit solve failed",
+         StrokeStatus.OUT_OF_RANGE: "invalid design"}
 
 
 @dataclass(frozen=True)

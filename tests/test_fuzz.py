@@ -219,6 +219,11 @@ def scalar_value(draw, key: str, kind: str, vkind: str):
     if kind.startswith("str:"):                     # the kinds below: a valid choice or not
         choices = kind[4:].split(",")
         return toml(draw(st.sampled_from(choices + ["RK4", "rk45", "bfgs", "pardiso"])))
+    if kind.startswith("words:"):                   # a list of the words, or not quite
+        choices = kind[6:].split(",")
+        words = draw(st.lists(st.sampled_from(choices + ["Linear", "spiral", "gas_strut"]),
+                              min_size=0, max_size=4))
+        return toml(words)
     if vkind in ("in_range", "scaled") and rng is None and kind == "spread":
         return toml(draw(st.sampled_from([0.0, 0.01, 0.1, 0.5, 0.99, 1.0, 2.0])))
     if rng is None:                                  # tolerance options, components of keys

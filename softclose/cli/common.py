@@ -85,7 +85,8 @@ def format_metrics(m: dict) -> str:
             err = f"  (± {e:.1e})" if e is not None else ""
             out.append(f"  {key:<19} {v:.7g} {UNITS[key]}{err}")
     if m.get("reason"):
-        out.append(f"  why not closed: {m['reason']}")
+        why = "invalid design" if m.get("status") == "invalid design" else "why not closed"
+        out.append(f"  {why}: {m['reason']}")
     if "method" in m and m.get("step") is not None:
         out.append(f"  ({m['method']}, step {m['step']:g} s, {m['steps']} steps; "
                    "± = estimated distance from the converged answer)")

@@ -21,7 +21,9 @@ def run(cfg, args) -> Outcome:
     payload["integrator"] = res.method
     if not res.ok:
         payload["error"] = res.message
-        return Outcome(payload, format_metrics(payload), 3, error=res.message)
+        from ..stroke import StrokeStatus
+        code = 2 if res.status is StrokeStatus.OUT_OF_RANGE else 3   # an invalid design
+        return Outcome(payload, format_metrics(payload), code, error=res.message)
     files = []
     if out is not None:
         from .files import write_stroke_outputs

@@ -34,11 +34,12 @@ def _num(x) -> str:
 def default_text(k: Key) -> str:
     """The default as the tables show it: a number, a list, a quoted word, or its rule."""
     if k.default is None:
-        return k.derived
+        return k.derived or "none"
     if isinstance(k.default, str):
         return f'`"{k.default}"`'
     if isinstance(k.default, tuple):
-        return "[" + ", ".join(_num(x) for x in k.default) + "]"
+        return "[" + ", ".join(f'"{x}"' if isinstance(x, str) else _num(x)
+                               for x in k.default) + "]"
     return _num(k.default)
 
 

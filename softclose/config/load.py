@@ -121,8 +121,8 @@ def from_dict(raw: dict[str, Any]) -> Config:
         if v is not None and k.full in RANGES:
             in_range(k.full, k.full, values[k.section][k.name])
     for k in KEYS:                       # derived defaults, from the checked values
-        if values[k.section][k.name] is None:
-            values[k.section][k.name] = k.derive(values)
+        if values[k.section][k.name] is None and k.derive is not None:
+            values[k.section][k.name] = k.derive(values)     # (else: optional, None)
 
     s = values["stroke"]
     if not s["theta0_deg"] > s["theta_closed_deg"]:

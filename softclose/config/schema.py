@@ -99,6 +99,10 @@ CORE: tuple[Key, ...] = (
         "bounds of spring_rest_length (lower > 0)", lo=1e-4, hi=10.0),
     Key("optimise", "damper_c", "bounds", (0.0, 5000.0), "N s/m", "bounds of damper_c",
         lo=0.0, hi=1e7),
+    Key("optimise", "spring_kinds", "words:compression,extension,linear",
+        ("compression", "extension"), "",
+        "the kinds of spring the optimiser may choose (one problem each, the best kept): "
+        "springs one can buy; `linear` (the idealised element) only when listed"),
     Key("optimise", "nodes", "int+", 10, "", "shooting intervals N", lo=1, hi=1000,
         note="with nodes × substeps ≤ 2000"),
     Key("optimise", "substeps", "int+", 4, "", "RK4 sub-steps per interval M", lo=1, hi=1000),

@@ -73,6 +73,18 @@ def check(key: str, kind: str, v: Any) -> Any:
         if not isinstance(v, bool):
             raise ConfigError(f"{key}: expected true or false, got {fmt(v)}")
         return v
+    if kind.startswith("words:"):          # a non-empty list of distinct words of the choices
+        choices = kind[6:].split(",")
+        if not isinstance(v, (list, tuple)) or not v:
+            raise ConfigError(f"{key}: expected a list of one or more of {', '.join(choices)}; "
+                              f"got {fmt(v)}")
+        for w in v:
+            if not isinstance(w, str) or w not in choices:
+                raise ConfigError(f"{key}: expected a list of {', '.join(choices)}; got "
+                                  f"{fmt(w)} in it")
+        if len(set(v)) != len(v):
+            raise ConfigError(f"{key}: {fmt(list(v))} names a word twice")
+        return tuple(v)
     if kind.startswith("str:"):
         choices = kind[4:].split(",")
         if not isinstance(v, str) or v not in choices:

@@ -26,12 +26,13 @@ from .springs import Spring, TorsionSpring
 ELEMENTS: tuple[Element, ...] = (Gravity(), Spring(), TorsionSpring(), Dashpot(),
                                  RotaryDamper())
 BY_NAME = {e.name: e for e in ELEMENTS}
-#: the seed's elements, whose parameters come first in p: (k, l0, c, c_rot)
-SEED = ("spring", "dashpot", "rotary")
+#: the seed's parameters, which come first in p: (k, l0, c, c_rot)
+SEED = ("spring_k", "spring_rest_length", "damper_c", "rotary_damper_c")
 #: the per-stroke parameters: the columns of the parameter vector p. The seed's four come
-#: first, then those of the elements added since, in the order of :data:`ELEMENTS`.
-PARAMS: tuple[Param, ...] = tuple(q for name in SEED for q in BY_NAME[name].params) + tuple(
-    q for e in ELEMENTS if e.name not in SEED for q in e.params)
+#: first, then the others, in the order of :data:`ELEMENTS`.
+PARAMS: tuple[Param, ...] = tuple(q for name in SEED for e in ELEMENTS for q in e.params
+                                  if q.name == name) + tuple(
+    q for e in ELEMENTS for q in e.params if q.name not in SEED)
 #: their names (``design`` keys without the section)
 PARAM_NAMES: tuple[str, ...] = tuple(q.name for q in PARAMS)
 #: the config keys every element owns
@@ -59,7 +60,7 @@ EXTRA = tuple(e for e in ELEMENTS if e.table == "extra")
 def acting(cfg, extra_values: dict | None = None) -> tuple[Element, ...]:
     """The elements that exert a force with ``cfg``'s design (and ``extra_values``, a dict
     of design values that vary, e.g. swept or freed: their largest magnitude)."""
-    values = {q.name: getattr(cfg.design, q.name) for q in PARAMS}
+    values = {q.name: q.number(getattr(cfg.design, q.name)) for q in PARAMS}
     values.update(extra_values or {})
     return tuple(e for e in ELEMENTS if bool(e.acts(values)))
 

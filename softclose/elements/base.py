@@ -49,14 +49,24 @@ from ..keys import Key
 
 
 class Param(NamedTuple):
-    """A per-stroke parameter of an element: its ``design`` key and the factor to SI."""
+    """A per-stroke parameter of an element: its ``design`` key and the factor to SI, or --
+    for a key whose value is a word (a spring's kind) -- the number each word stands for in p."""
 
     name: str
     si: float = 1.0
+    codes: dict | None = None
 
     @property
     def key(self) -> str:
         return f"design.{self.name}"
+
+    def number(self, value) -> float:
+        """The config value as the number p holds (a word by its code)."""
+        return float(self.codes[value] if self.codes is not None else value)
+
+    def word(self, number: float) -> str:
+        """The word of a coded parameter's number."""
+        return next(w for w, c in self.codes.items() if c == number)
 
 
 class Params:
@@ -98,6 +108,9 @@ class Element:
     table: str = "base"
     #: the column of the lid mass's derivative table it needs (gravity's depend on the mass)
     mass_dependent: bool = False
+    #: for an element with a valid range: the stroke metrics that hold its coordinate's
+    #: extremes over the stroke (checked against :meth:`valid`)
+    extremes: tuple[str, str] | None = None
 
     # -- the coordinate ---------------------------------------------------------------------
     def coordinate(self, cfg):
@@ -121,9 +134,20 @@ class Element:
         """B: the force along q is -B q-dot (None: not a damper)."""
         return None
 
-    def valid(self, P) -> tuple[float, float]:
-        """The valid range of q: a stroke that leaves it is an invalid design."""
+    def valid(self, P, cfg=None):
+        """The valid range (lo, hi) of q (per design for rows of P; ``cfg`` gives the limits
+        that are not per-stroke values): a stroke that leaves it is an invalid design."""
         return (-math.inf, math.inf)
+
+    def range_message(self, P, cfg, i: int, short: bool, where: tuple, excess: float) -> str:
+        """One line: design i takes the element out of its valid range (``short``: below its
+        lower end), from the angle ``where[0]``, furthest at ``where[1]`` (rad), by
+        ``excess``."""
+        side = "below" if short else "above"
+        edge = ("over the whole stroke" if where[0] is None else
+                f"from theta = {math.degrees(where[0]):.1f} deg")
+        return (f"the {self.name} leaves its valid range ({side} it {edge}, by up to "
+                f"{excess:.3g} at theta = {math.degrees(where[1]):.1f} deg)")
 
     # -- what it changes in the model ---------------------------------------------------------
     def structure(self, cfg) -> tuple:

@@ -1,12 +1,15 @@
-"""Springs: a linear spring on a length, a torsion spring at a pivot.
+"""Springs: the spring on a length (of a kind, with a preload), a torsion spring at a pivot.
 
-Both are the same law on their coordinate q: ``V = 1/2 k (q - q0)^2``, ``T = k (q - q0)``
-(affine: a = -k q0, b = k), valid everywhere.
+Both are affine laws on their coordinate q, ``T = a + b q``: the torsion spring's
+``T = k (q - q0)``, valid everywhere; the spring's ``T = s F0 + k (l - l0)``, valid on its
+side of its free length (:class:`Spring`).
 """
 
 from __future__ import annotations
 
 import math
+
+import numpy as np
 
 from ..keys import Key
 from .base import Element, Param
@@ -28,26 +31,102 @@ class _Linear(Element):
         return (-P[self.rate] * P[self.free], P[self.rate])
 
 
-class Spring(_Linear):
+#: the spring's kinds, and the sign s of the preload each gives: T = s F0 + k (l - l0)
+KINDS = {"linear": 0.0, "extension": 1.0, "compression": -1.0}
+
+
+class Spring(Element):
+    """The spring between E on the lid and the anchor D, of a kind that can be bought.
+
+    ``T = s F0 + k (l - l0)``, ``V = 1/2 k (l - l0)^2 + s F0 l`` with s = +1 for an extension
+    spring (pulls; F0 its initial tension; valid while l >= l0, its closed-coil free length,
+    and up to ``spring_max_length``), s = -1 for a compression spring or gas strut (pushes; F0
+    its preload, a strut's force at full extension with k its progression; valid while
+    l <= l0, its free length, and down to ``spring_min_length``, its solid length), s = 0 for
+    the seed's linear element (a double-acting cartridge: pulls and pushes, no preload, within
+    the optional limits). A stroke that takes it outside its valid range is an invalid
+    design: the law beyond the free length (a slack spring, a preload's jump) is never used
+    for a reported number.
+    """
+
     name = "spring"
-    doc = ("spring between E on the lid and the anchor D: pulls when longer than l0, "
-           "pushes when shorter (the seed's idealised, double-acting element)")
-    rate, free = "spring_k", "spring_rest_length"
+    doc = ("spring between E on the lid and the anchor D: an extension spring (pulls), a "
+           "compression spring or gas strut (pushes), or the seed's linear cartridge")
     keys = (
-        Key("design", "spring_k", "nonneg", 0.0, "N/m", "spring stiffness k (>= 0)",
+        Key("design", "spring_k", "nonneg", 0.0, "N/m", "spring rate k (>= 0)",
             lo=0.0, hi=1e7, spread=0.10),
-        Key("design", "spring_rest_length", "pos", 0.05, "m", "spring rest length l0 (> 0)",
-            lo=1e-4, hi=10.0),
+        Key("design", "spring_rest_length", "pos", 0.05, "m",
+            "spring free length l0 (> 0): an extension spring's closed-coil length, a "
+            "compression spring's or strut's extended length", lo=1e-4, hi=10.0),
+        Key("design", "spring_kind", "str:" + ",".join(KINDS), "linear", "",
+            "`extension` (pulls, valid while l >= l0), `compression` (pushes, valid while "
+            "l <= l0: a coil spring or gas strut) or `linear` (pulls and pushes: the seed's "
+            "idealised element)"),
+        Key("design", "spring_preload", "nonneg", 0.0, "N",
+            "F0 (>= 0): an extension spring's initial tension, a compression spring's or gas "
+            "strut's preload (a strut's force at full extension); not used by `linear`",
+            lo=0.0, hi=1e5),
+        Key("design", "spring_min_length", "pos", None, "m",
+            "shortest length the spring may take (a compression spring's solid length, a "
+            "strut's compressed length); none: no limit", lo=1e-4, hi=10.0),
+        Key("design", "spring_max_length", "pos", None, "m",
+            "longest length the spring may take (an extension spring's maximum extension); "
+            "none: no limit", lo=1e-4, hi=10.0),
         Key("geometry", "lid_e", "vec2", (0.004, 0.014), "m",
             "spring point E, lid frame, from A", lo=-10.0, hi=10.0),
         Key("geometry", "spring_anchor", "vec2", (-0.060, 0.020), "m",
             "spring anchor D (world)", lo=-10.0, hi=10.0),
     )
-    params = (Param("spring_k"), Param("spring_rest_length"))
+    params = (Param("spring_k"), Param("spring_rest_length"),
+              Param("spring_kind", codes=KINDS), Param("spring_preload"))
+    acting_params = ("spring_k", "spring_preload")
     columns = (("l", "q"), ("dl", "dq"))
 
     def coordinate(self, cfg):
         return Length("E", "lid_e", "spring_anchor")
+
+    def preload(self, P):
+        """s F0: the signed preload (+ pulls, - pushes)."""
+        return P["spring_kind"] * P["spring_preload"]
+
+    def potential(self, q, P):
+        return 0.5 * P["spring_k"] * (q - P["spring_rest_length"]) ** 2 + self.preload(P) * q
+
+    def tension(self, q, P):
+        return self.preload(P) + P["spring_k"] * (q - P["spring_rest_length"])
+
+    def affine(self, P):
+        return (self.preload(P) - P["spring_k"] * P["spring_rest_length"], P["spring_k"])
+
+    extremes = ("min_spring_length", "max_spring_length")
+
+    def range_message(self, P, cfg, i, short, where, excess):
+        s, l0 = float(P["spring_kind"][i]), float(P["spring_rest_length"][i])
+        if s > 0 and short:
+            what = (f"the extension spring (it only pulls) would be shorter than its free "
+                    f"length {l0 * 1e3:.2f} mm")
+        elif s < 0 and not short:
+            what = (f"the compression spring (it only pushes) would be longer than its free "
+                    f"length {l0 * 1e3:.2f} mm")
+        elif short:
+            what = (f"the spring would be shorter than its minimum length "
+                    f"(design.spring_min_length = {cfg.design.spring_min_length * 1e3:.2f} mm)")
+        else:
+            what = (f"the spring would be longer than its maximum length "
+                    f"(design.spring_max_length = {cfg.design.spring_max_length * 1e3:.2f} mm)")
+        edge, worst = (None if a is None else math.degrees(a) for a in where)
+        span = ("over the whole stroke" if edge is None else
+                f"{'below' if worst < edge else 'above'} theta = {edge:.1f} deg")
+        return f"{what} {span}, by up to {excess * 1e3:.2f} mm (at theta = {worst:.1f} deg)"
+
+    def valid(self, P, cfg=None):
+        """(lo, hi) of l, per design: an extension spring from l0 up to its maximum length, a
+        compression spring from its solid length up to l0, the linear one within its limits."""
+        s, l0 = P["spring_kind"], P["spring_rest_length"]
+        d = cfg.design if cfg is not None else None
+        lmin = d.spring_min_length if d is not None and d.spring_min_length else -math.inf
+        lmax = d.spring_max_length if d is not None and d.spring_max_length else math.inf
+        return np.where(s > 0, l0, lmin), np.where(s < 0, l0, lmax)
 
 
 class TorsionSpring(_Linear):

@@ -80,8 +80,8 @@ def stem(key: str) -> str:
     return re.sub(r"[^A-Za-z0-9_]+", "_", key).strip("_")
 
 
-def _fmt(v: float) -> str:
-    return f"{v:.4g}"
+def _fmt(v) -> str:
+    return v if isinstance(v, str) else f"{v:.4g}"
 
 
 # -- what a map shows ------------------------------------------------------------------------

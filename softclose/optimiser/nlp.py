@@ -48,7 +48,7 @@ from .. import elements
 from ..config import NLP_BUDGET
 from ..dynamics import coefficients
 from ..errors import ConfigError
-from ..problem import DESIGN_KEYS, PARAM_KEYS, SCALES
+from ..problem import DESIGN_KEYS, PARAM_KEYS, SCALES, params_of
 
 #: margin (deg) beyond the stroke over which the Chebyshev series are fitted
 FIT_MARGIN_DEG = 3.0
@@ -499,7 +499,7 @@ class ShootingNLP:
         """NLP parameters of ``cfg``'s problem (``weights`` overrides the objective's)."""
         o, st = cfg.optimise, cfg.stroke
         wi, wp = (o.weight_impact, o.weight_peak_tip) if weights is None else weights
-        fixed = [getattr(cfg.design, k) for k in FIXED_PARAMS]
+        fixed = params_of(cfg)[len(DESIGN_KEYS):]
         return np.r_[st.theta0, st.theta_closed, wi, wp, weight_time, fixed, J_ref,
                      self.time_grid()]
 

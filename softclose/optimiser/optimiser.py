@@ -17,7 +17,9 @@ from ..errors import ConfigError, NumericalError, SoftcloseError
 from ..problem import DESIGN_KEYS, SCALES, UNITS, describe, design_of, with_designs
 from ..progress import Progress
 from .cache import get_nlp, has_nlp, stroke_simulator
+from ..parts import spring_part
 from .diagnose import diagnose
+from .kinds import kind_config
 from .nlp import J_INDEX, Discretisation, Run, ShootingNLP, check_options, discretisation
 from .polish import nlp_objective, refine, tighten
 from .result import Active, OptimiseResult
@@ -188,7 +190,62 @@ def guarded(fn):
 def optimise(cfg, *, starts: int | None = None, verify: bool = True,
              progress: bool = False, nodes: int | None = None,
              substeps: int | None = None) -> OptimiseResult:
-    """Solve cfg's soft-close problem from several starts; the best answer, verified.
+    """The verified optimum over the spring kinds the optimiser may choose
+    (``optimise.spring_kinds``): one problem per kind (:func:`optimise_kind`), its free
+    length bounded so that the spring stays valid over the whole stroke
+    (:mod:`.kinds`); the best verified answer is kept, and says what spring to buy
+    (``part``: kind, free length, rate, preload, working lengths, largest force, and the
+    margins within which it must be made). A kind that cannot be valid, or finds no answer,
+    is listed in ``kinds`` with why.
+    """
+    t_start = time.perf_counter()
+    rows, results = [], []
+    for kind in cfg.optimise.spring_kinds:
+        c, why = kind_config(cfg, kind)
+        if why is not None:
+            rows.append({"kind": kind, "success": False, "objective": None, "message": why})
+            continue
+        r = optimise_kind(c, starts=starts, verify=verify, progress=progress, nodes=nodes,
+                          substeps=substeps)
+        rows.append({"kind": kind, "success": r.success, "objective": r.objective,
+                     "message": r.message})
+        results.append((kind, r))
+    good = [(k, r) for k, r in results if r.success]
+    pool = good or [(k, r) for k, r in results if r.design is not None]
+    notes = [f"spring kinds: " + "; ".join(
+        f"{row['kind']}: " + (f"J = {row['objective']:.8g}" if row["objective"] is not None
+                              else "no design") + ("" if row["success"] else
+                                                   f" ({row['message'] or 'failed'})")
+        for row in rows)]
+    if not pool and results:     # no kind found a design: the one that came closest speaks
+        kind, best = min(results, key=lambda kr: (kr[1].infeasibility or {}).get(
+            "least_violation", np.inf))
+        others = "; ".join(f"{r['kind']}: {r['message']}" for r in rows if r["kind"] != kind)
+        return replace(best, kind=kind, kinds=tuple(rows),
+                       message=best.message + (f" (other spring kinds: {others})" if others
+                                               else ""),
+                       notes=best.notes + tuple(notes),
+                       total_time=time.perf_counter() - t_start)
+    if not pool:
+        return OptimiseResult(False, "no spring kind of optimise.spring_kinds can be valid: "
+                              + "; ".join(f"{r['kind']}: {r['message']}" for r in rows),
+                              "Infeasible_Problem_Detected", None, None, problem=describe(cfg),
+                              notes=tuple(notes), config=cfg, kinds=tuple(rows),
+                              total_time=time.perf_counter() - t_start)
+    kind, best = min(pool, key=lambda kr: (kr[1].objective if kr[1].objective is not None
+                                           else np.inf))
+    part = spring_part(best.config, best.design, best.metrics or best.optimiser) \
+        if best.design is not None else None
+    return replace(best, kind=kind, kinds=tuple(rows), part=part,
+                   notes=best.notes + tuple(notes), total_time=time.perf_counter() - t_start)
+
+
+@guarded
+def optimise_kind(cfg, *, starts: int | None = None, verify: bool = True,
+                  progress: bool = False, nodes: int | None = None,
+                  substeps: int | None = None) -> OptimiseResult:
+    """Solve cfg's soft-close problem, with cfg's spring kind, from several starts; the best
+    answer, verified.
 
     Starts come from a coarse sweep of the design box (``starts`` of them, default
     optimise.starts); each is solved by Ipopt; the best converged one is refined, has its
@@ -234,6 +291,7 @@ def optimise(cfg, *, starts: int | None = None, verify: bool = True,
         if not ok:
             msg, inf = diagnose(cfg, nlp, runs)
             best = min(runs, key=lambda r: sum(r.violations.values()))
+            inf = dict(inf or {}, least_violation=float(sum(best.violations.values())))
             return OptimiseResult(
                 False, msg, best.status, None, None, nodes=nlp.N, substeps=nlp.M,
                 hessian=o.hessian, iterations=sum(r.iterations for r in runs),

@@ -18,7 +18,9 @@ import numpy as np
 from ..errors import ConfigError
 from ..problem import describe
 from ..progress import Progress
+from ..parts import spring_part
 from .cache import get_nlp, stroke_simulator
+from .kinds import kind_config
 from .nlp import J_INDEX, ShootingNLP, discretisation
 from .optimiser import check_problem, finish, guarded, optimise, start_row
 from .polish import nlp_objective
@@ -72,8 +74,20 @@ def front(cfg, closing_times, *, starts: int = 3, progress: bool = False) -> Fro
 
 def continue_from(cfg, prev: OptimiseResult) -> OptimiseResult:
     """The verified optimum of ``cfg`` from ``prev``, the answer of a neighbouring problem
-    (same geometry and nodes): warm from its design and states, and from the best point of
-    a coarse sweep when that answer fails or the sweep beats it."""
+    (same geometry and nodes, and ``prev``'s spring kind): warm from its design and states,
+    and from the best point of a coarse sweep when that answer fails or the sweep beats it."""
+    if prev.kind is not None:
+        c, why = kind_config(cfg, prev.kind)
+        if why is None:
+            r = _continue(c, prev)
+            part = spring_part(c, r.design, r.metrics or r.optimiser) if r.design else None
+            return replace(r, kind=prev.kind, part=part,
+                           kinds=({"kind": prev.kind, "success": r.success,
+                                   "objective": r.objective, "message": r.message},))
+    return _continue(cfg, prev)
+
+
+def _continue(cfg, prev: OptimiseResult) -> OptimiseResult:
     o = cfg.optimise
     disc = discretisation(cfg, prev.nodes)
     nlp = get_nlp(cfg, disc.nodes, disc.substeps)

@@ -80,6 +80,10 @@ class OptimiseResult:
     config: object = field(default=None, repr=False, compare=False)
     run: object = field(default=None, repr=False, compare=False)    # the final Ipopt run
     nlp_key: tuple | None = field(default=None, repr=False, compare=False)
+    #: the spring kind chosen, every kind tried (kind, success, objective, message), the part
+    kind: str | None = None
+    kinds: tuple = ()
+    part: object = None
 
     @property
     def verified(self) -> bool:
@@ -95,7 +99,9 @@ class OptimiseResult:
         verification, active limits, problem, starts, the coarse sweep, solver, notes."""
         from ..jsonio import jsonable
         out = {"success": self.success, "message": self.message, "status": self.status,
-               "design": self.design, "objective": self.objective}
+               "design": self.design, "objective": self.objective, "kind": self.kind,
+               "part": None if self.part is None else self.part.to_json(),
+               "kinds": list(self.kinds)}
         for k in METRIC_KEYS:
             out[k] = None if self.metrics is None else self.metrics.get(k)
         out["optimiser"] = self.optimiser
@@ -117,6 +123,7 @@ class OptimiseResult:
     def row(self) -> dict:
         """The one-row table form (:meth:`to_frame`) as a dict."""
         row = {k: (self.design or {}).get(k) for k in DESIGN_KEYS}
+        row["spring_kind"] = self.kind
         row["objective"] = self.objective
         row.update({k: (self.metrics or {}).get(k) for k in METRIC_KEYS})
         ver = self.verification.to_json() if self.verification is not None else {}

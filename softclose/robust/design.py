@@ -57,6 +57,7 @@ from typing import Any
 import numpy as np
 
 from ..config import Config, check_batch
+from ..errors import ConfigError
 from ..problem import DESIGN_KEYS, METRIC_KEYS, VERIFY_RTOL, describe, design_of, params_of
 from .analysis import YieldResult, analyse_samples
 from .box import box_of
@@ -73,11 +74,55 @@ from .worst_cases import check_corners
 
 def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None = None,
                     seed: int = 0, verify: bool = True) -> RobustResult:
-    """The robust soft-close design over cfg's ``[tolerance]`` box (see the module docstring).
+    """The robust soft-close design over cfg's ``[tolerance]`` box, for each spring kind the
+    optimiser may choose (``optimise.spring_kinds``; the free length bounded so that the
+    spring stays valid over the stroke and its own tolerance:
+    :func:`softclose.optimiser.kinds.kind_config`); the best successful one is kept, with the
+    part to buy (``part``) and every kind tried (``kinds``).
 
     ``samples`` (default ``[tolerance] samples``) and ``seed`` fix the yield estimate;
     ``verify`` re-simulates every scenario with the adaptive reference.
     """
+    from dataclasses import replace
+
+    from ..optimiser.kinds import kind_config
+    from ..parts import spring_part
+    t_start = time.perf_counter()
+    check_batch(cfg, int(samples or cfg.tolerance.samples),
+                "--samples" if samples else "tolerance.samples")
+    check_keys(cfg)
+    rows, results = [], []
+    for kind in cfg.optimise.spring_kinds:
+        c, why = kind_config(cfg, kind, robust=True)
+        if why is not None:
+            rows.append({"kind": kind, "success": False, "objective": None, "message": why})
+            continue
+        r = optimise_robust_kind(c, progress=progress, samples=samples, seed=seed,
+                                 verify=verify)
+        rows.append({"kind": kind, "success": r.success, "objective": r.objective,
+                     "message": r.message})
+        results.append((kind, r, c))
+    pool = [x for x in results if x[1].success] or [x for x in results if x[1].design] \
+        or results
+    if not pool:
+        raise ConfigError("no spring kind of optimise.spring_kinds can be valid: "
+                          + "; ".join(f"{r['kind']}: {r['message']}" for r in rows))
+    kind, best, c = min(pool, key=lambda x: x[1].objective if x[1].objective is not None
+                        else np.inf)
+    part = spring_part(c, best.design, best.metrics) if best.design is not None else None
+    notes = best.notes + ("spring kinds: " + "; ".join(
+        f"{r['kind']}: " + (f"worst J = {r['objective']:.8g}" if r["objective"] is not None
+                            else "no design") + ("" if r["success"] else
+                                                 f" ({r['message'] or 'failed'})")
+        for r in rows),)
+    times = dict(best.times, total=time.perf_counter() - t_start)
+    return replace(best, kind=kind, kinds=tuple(rows), part=part, notes=notes, times=times)
+
+
+def optimise_robust_kind(cfg: Config, *, progress: bool = False, samples: int | None = None,
+                         seed: int = 0, verify: bool = True) -> RobustResult:
+    """The robust soft-close design over cfg's ``[tolerance]`` box with cfg's spring kind (see
+    the module docstring)."""
     from ..progress import Progress
     t_start = time.perf_counter()
     tol = cfg.tolerance
@@ -140,9 +185,10 @@ class _Log:
 
 # -- the steps ------------------------------------------------------------------------------------
 def _nominal(cfg: Config) -> dict:
-    """The nominal optimum (no tolerances), for the start and the comparison."""
-    from ..optimiser import optimise
-    res = optimise(cfg, verify=False)
+    """The nominal optimum (no tolerances) with cfg's spring kind, for the start and the
+    comparison."""
+    from ..optimiser.optimiser import optimise_kind
+    res = optimise_kind(cfg, verify=False)
     return {"success": bool(res.success), "design": res.design, "objective": res.objective,
             "message": res.message}
 

@@ -41,7 +41,7 @@ import casadi as ca
 import numpy as np
 
 from ..config import Config
-from ..problem import DESIGN_KEYS, PARAM_KEYS, SCALES
+from ..problem import DESIGN_KEYS, PARAM_KEYS, SCALES, params_of
 
 #: the parameters of p that are not design variables: NLP parameters
 FIXED = PARAM_KEYS[len(DESIGN_KEYS):]
@@ -251,7 +251,7 @@ class ScenarioNLP:
         A = np.concatenate([np.asarray(a, float) for a, _ in maps])
         B = np.concatenate([np.asarray(b, float) for _, b in maps])
         return np.r_[st.theta0, st.theta_closed, o.weight_impact, o.weight_peak_tip,
-                     [getattr(cfg.design, k) for k in FIXED], J_ref, time_grid(self.N), A, B]
+                     params_of(cfg)[len(DESIGN_KEYS):], J_ref, time_grid(self.N), A, B]
 
     def bounds(self, cfg: Config, t_hi: list[float] | None = None,
                t_lo: list[float] | None = None, design_lb=None):

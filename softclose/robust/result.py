@@ -42,6 +42,10 @@ class RobustResult:
     #: worst_margin, breaking (labels of corners outside the NLP that break a constraint),
     #: in_nlp (corners among the scenarios), scenarios (how many the NLP had)
     corner_check: dict | None = None
+    #: the spring kind chosen, every kind tried (kind, success, objective, message), the part
+    kind: str | None = None
+    kinds: tuple = ()
+    part: object = None
 
     @property
     def yield_(self) -> float | None:
@@ -55,7 +59,9 @@ class RobustResult:
         from ..jsonio import jsonable
         out = {"success": self.success, "status": self.status, "message": self.message,
                "design": self.design, "objective": self.objective,
-               "robust_objective": self.robust_objective}
+               "robust_objective": self.robust_objective, "kind": self.kind,
+               "part": None if self.part is None else self.part.to_json(),
+               "kinds": list(self.kinds)}
         for k in METRIC_KEYS:
             out[k] = None if self.metrics is None else self.metrics.get(k)
         y = self.yield_result

@@ -33,7 +33,8 @@ from collections import OrderedDict
 
 import numpy as np
 
-from ..problem import LID_MASS, METRIC_KEYS, PARAM_COLUMNS, PARAM_KEYS, infeasibility, objective
+from ..problem import (LID_MASS, METRIC_KEYS, PARAM_COLUMNS, PARAM_KEYS, infeasibility, objective,
+                       params_of)
 from ..stroke import StrokeStatus
 
 #: designs per chunk: the unit of progress, of Ctrl-C and resume, and of a Parquet part file
@@ -118,7 +119,7 @@ def evaluate_chunk(cfg_dict: dict, keys: list[str], ids: np.ndarray, X: np.ndarr
     if n == 0:
         return out
     base = _config(cfg_dict)
-    P = np.tile(np.array([getattr(base.design, k) for k in PARAM_KEYS], float), (n, 1))
+    P = np.tile(params_of(base), (n, 1))
     for j, k in enumerate(keys):
         if k in PARAM_COLUMNS:
             P[:, PARAM_COLUMNS[k]] = X[:, j]
@@ -216,12 +217,17 @@ def _store(out: dict, rows: np.ndarray, res: dict, cfg, sim, P: np.ndarray,
     why = np.asarray(res["reason"], dtype=object)   # why an open stroke stays open
     nc = (status == StrokeStatus.NOT_CLOSED) & (why != "")
     reason[nc] = "not closed (" + why[nc] + ")"     # "not closed (held open at ...)"
-    for i in np.nonzero(~ok)[0]:  # the method could not integrate it: say why, with the remedy
+    invalid = status == StrokeStatus.OUT_OF_RANGE    # a part left its valid range
+    reason[invalid] = np.asarray(res["reason"], dtype=object)[invalid]
+    for k in ("min_spring_length", "max_spring_length"):        # they say why
+        out[k][rows[invalid]] = np.asarray(res[k], float)[invalid]
+    for i in np.nonzero(~ok & ~invalid)[0]:  # the method could not integrate it: say why
         s = StrokeStatus(int(status[i]))
         reason[i] = ("not closed (the lid swung beyond the stroke range)"
                      if s is StrokeStatus.LEFT_RANGE else
                      sim.diagnose(s, P[i], None if masses is None else float(masses[i])))
     out["status"][rows] = _STATUS_TEXT[np.clip(status, 0, len(_STATUS_TEXT) - 1)]
+    out["status"][rows[invalid]] = INVALID
     out["reason"][rows] = reason
     out["feasible"][rows] = reason == ""
 

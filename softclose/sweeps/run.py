@@ -23,7 +23,7 @@ from typing import Callable, Iterable, Iterator
 import numpy as np
 
 from ..errors import ConfigError
-from ..problem import categorise
+from ..problem import categorise, params_of
 from .chunks import CHUNK, PARAM_COLUMNS, columns, empty, evaluate_chunk
 from .result import SweepResult
 from .tally import Bins, Tally
@@ -142,8 +142,22 @@ def run(cfg, space, *, progress: bool = False, threads: int | None = None,
                        seconds=time.perf_counter() - t0, stages=stages, chunk=chunk,
                        interrupted=interrupted or tally.computed < n, columns=cols,
                        dataset=dataset,
-                       fixed={k: float(getattr(cfg.design, k.split(".")[1]))
-                              for k in PARAM_COLUMNS if k not in keys})
+                       fixed={k: _value(getattr(cfg.design, k.split(".")[1]))
+                              for k in PARAM_COLUMNS if k not in keys and _says(cfg, k)})
+
+
+def _says(cfg, key: str) -> bool:
+    """Does a design key not swept say something about the rows: one of the seed's four
+    (k, l0, c, c_rot), or another at a value other than its default?"""
+    from ..elements import SEED
+    from ..problem import PARAM_DEFAULTS
+    i = PARAM_COLUMNS[key]
+    return key.split(".")[1] in SEED or params_of(cfg)[i] != PARAM_DEFAULTS[i]
+
+
+def _value(v):
+    """A design value as a result states it: a number as a float, a word (a kind) as is."""
+    return v if isinstance(v, str) else float(v)
 
 
 __all__ = ["run", "local_map", "chunk_ids", "n_chunks", "MAX_IN_MEMORY"]

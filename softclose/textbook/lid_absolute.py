@@ -47,6 +47,7 @@ class LidParameters:
     l0: float = 0.05
     c: float = 0.0
     c_rot: float = 0.0
+    F: float = 0.0                   # the spring's signed preload: +F0 pulls, -F0 pushes
     kt: float = 0.0                  # torsion spring rate (N m/rad)
     psi0: float = 0.0                # its free angle (rad)
     pivot: str = "O"                 # O, B, A or C
@@ -65,6 +66,7 @@ def read_parameters(cfg) -> LidParameters:
         m1=m.lid, m2=m.crank_oa, m3=m.crank_bc, J1=m.inertia_lid, J2=m.inertia_oa,
         J3=m.inertia_bc, g=m.gravity,
         k=d.spring_k, l0=d.spring_rest_length, c=d.damper_c, c_rot=d.rotary_damper_c,
+        F={"extension": 1.0, "compression": -1.0}.get(d.spring_kind, 0.0) * d.spring_preload,
         kt=d.torsion_k, psi0=np.radians(d.torsion_free_angle_deg), pivot=d.torsion_pivot)
 
 
@@ -130,7 +132,7 @@ def evaluate_applied_forces(p: LidParameters, q: np.ndarray, qd: np.ndarray) -> 
     E = locate_point(q, 0, s_E)
     ED = np.asarray(p.D, float) - E
     l = np.linalg.norm(ED)
-    add_point_force(Q, q, 0, s_E, p.k * (l - p.l0) * ED / l)
+    add_point_force(Q, q, 0, s_E, (p.F + p.k * (l - p.l0)) * ED / l)
     s_C = _lid_offset(p, p.AC)
     C = locate_point(q, 0, s_C)
     e_OC = C / np.linalg.norm(C)
