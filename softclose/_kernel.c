@@ -12,7 +12,7 @@
  * their accuracy is that of the method itself; the same for the peak tip speed and the
  * lowest angle of a stroke that turns back. Nothing is integrated past the event.
  *
- * A design row is (k, l0, c, c_rot, s, F0, k_t, psi_free, e_tol[, m_lid]) (LAYOUT): the
+ * A design row is (k, l0, c, c_rot, s, F0, k_t, psi_free, one_way, e_tol[, m_lid]) (LAYOUT): the
  * parameters of the machine elements (see THE MACHINE ELEMENTS below), then e_tol, then
  * m_lid (kg, NaN = the table's own mass m0), which selects the lid mass. M, dM, Vg and dVg are affine in the lid's mass, so the
  * coefficients of a row are c(m0) + (m_lid - m0) dc/dm, with dc/dm from a second table
@@ -83,9 +83,10 @@ enum { C_M, C_DM, C_VG, C_DVG, C_L, C_DL, C_DD, C_TAU };
 #define SMAX 4
 /* every layout constant the Python side shares, checked there when the kernel is loaded */
 static const char LAYOUT[] =
-    "abi=3;cc=M,dM,Vg,dVg,l,dl,dd,tau;mass=M,dM,Vg,dVg;xcc=psi,dpsi,-,-;"
+    "abi=3;meta=ncell,lo,h,m0,rotary_at_pivot;cc=M,dM,Vg,dVg,l,dl,dd,tau;mass=M,dM,Vg,dVg;"
+    "xcc=psi,dpsi,dpr2,-;"
     "row=spring_k,spring_rest_length,damper_c,rotary_damper_c,spring_kind,spring_preload,"
-    "torsion_k,torsion_free_angle,energy_tol,lid_mass;out=status,closing_time,impact_theta_dot,impact_tip_speed,"
+    "torsion_k,torsion_free_angle,damper_one_way,energy_tol,lid_mass;out=status,closing_time,impact_theta_dot,impact_tip_speed,"
     "peak_tip_speed,min_spring_length,max_spring_length,steps,energy_rise,theta_min,"
     "theta_dot_max,theta_max,stop_reason,stop_theta,stop_time;nrng=18";
 
@@ -110,6 +111,7 @@ typedef struct {
     const double *rng; /* ncell * NRNG: ranges of some pieces over each whole cell (or NULL) */
     const double *xcc; /* ncell * 4 * NX: the element columns' pieces (X_*), or NULL */
     const int *crit;   /* the cells where l' may vanish (R_LCRIT), ascending (with rng) */
+    int rot_pivot;     /* the rotary damper acts at a pivot (its psi'^2 in xcc), not the lid */
     int ncrit;
     int ncell;
     double lo, h, inv_h, m0;
@@ -157,7 +159,8 @@ typedef struct {
  *                                                (F = s F0: its kind's sign times its preload)
  *   torsion   psi at its pivot   psi, dpsi (x)    V = k_t (q - psi0)^2 / 2, T = k_t (q - psi0)
  *   dashpot   |C - O|            dd = q'^2        B = c
- *   rotary    theta              (q' = 1)         B = c_rot
+ *   rotary    psi at its pivot   dpr2 = q'^2 (x)  B = c_rot (at the lid, q' = 1: no column)
+ *   (with one_way, the dampers act only while the lid closes: their damping is 0 for th' > 0)
  *
  * The laws are macros over numbers, so the scalar code (double) and the SIMD lanes (v4) use
  * the same operations in the same order. For the early exit every conservative law also
@@ -173,28 +176,35 @@ typedef struct {
  * by ELEM_SLOPE_X ..., added where a row has them (Par.x; Par4.anyx for a group). */
 
 /* the design-row columns: the elements' parameters (in the registry's order), e_tol, m_lid */
-enum { D_K, D_L0, D_C, D_CR, D_KIND, D_F0, D_KT, D_PSI0, D_ETOL, D_MLID, NDESIGN };
-/* the extra table's columns: the torsion spring's psi and dpsi at its pivot */
-enum { X_PSI, X_DPSI };
+enum { D_K, D_L0, D_C, D_CR, D_KIND, D_F0, D_KT, D_PSI0, D_OW, D_ETOL, D_MLID, NDESIGN };
+/* the extra table's columns: the torsion spring's psi and dpsi at its pivot, the rotary
+ * damper's psi'^2 at its pivot */
+enum { X_PSI, X_DPSI, X_DR2 };
 
-/* one row's element parameters (SI); F: the spring's signed preload s F0; dm = m_lid - m0: 0
- * for a row at the table's mass; x: the row has an element of the extra table */
-typedef struct { double k, l0, F, c, cr, kt, psi0, dm; int x; } Par;
+/* one row's element parameters (SI); F: the spring's signed preload s F0; cr / crp: the
+ * rotary damper at the lid / at a pivot (the table says which: rotary_at_pivot); ow: the
+ * dampers are one-way; dm = m_lid - m0: 0 for a row at the table's mass; x: the row has an
+ * element of the extra table */
+typedef struct { double k, l0, F, c, cr, crp, kt, psi0, dm; int x, ow; } Par;
 /* the lanes' parameters as vectors; any: a lane at another lid mass; anyx: a lane with
  * element columns (its element terms are added for every lane of the group: the others add
  * a zero, k_t = 0) */
-typedef struct { v4 k, l0, F, c, cr, kt, psi0; double dm[VW]; int any, anyx; } Par4;
-/* read a design row d into p (not dm) */
-#define ELEM_READ(p, d) do { \
+typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0; v4l ow; double dm[VW]; int any, anyx, anyow; } Par4;
+/* read a design row d of table T into p (not dm) */
+#define ELEM_READ(p, d, T) do { \
         (p)->k = (d)[D_K]; (p)->l0 = (d)[D_L0]; (p)->c = (d)[D_C]; (p)->cr = (d)[D_CR]; \
+        (p)->crp = 0.0; \
+        if ((T)->rot_pivot) { (p)->crp = (p)->cr; (p)->cr = 0.0; } \
         (p)->F = (d)[D_KIND] * (d)[D_F0]; \
-        (p)->kt = (d)[D_KT]; (p)->psi0 = (d)[D_PSI0]; (p)->x = (p)->kt != 0.0; \
+        (p)->kt = (d)[D_KT]; (p)->psi0 = (d)[D_PSI0]; (p)->ow = (d)[D_OW] != 0.0; \
+        (p)->x = (p)->kt != 0.0 || (p)->crp != 0.0; \
     } while (0)
 /* copy row p into lane q of the group G (then G->anyx |= p->x) */
 #define ELEM_LANE(G, q, p) do { \
         (G)->k[q] = (p)->k; (G)->l0[q] = (p)->l0; (G)->c[q] = (p)->c; (G)->cr[q] = (p)->cr; \
         (G)->F[q] = (p)->F; \
-        (G)->kt[q] = (p)->kt; (G)->psi0[q] = (p)->psi0; \
+        (G)->kt[q] = (p)->kt; (G)->psi0[q] = (p)->psi0; (G)->crp[q] = (p)->crp; \
+        (G)->ow[q] = -(long long)(p)->ow; \
     } while (0)
 #define LAW_LINEAR_T(k, q0, q) ((k) * ((q) - (q0)))                  /* T = dV/dq */
 #define LAW_LINEAR_V(k, q0, q) (0.5 * (k) * ((q) - (q0)) * ((q) - (q0)))
@@ -217,8 +227,11 @@ typedef struct { v4 k, l0, F, c, cr, kt, psi0; double dm[VW]; int any, anyx; } P
 #define ELEM_ENERGY(P, cv, KE) \
     ((KE) + (cv)[C_VG] + LAW_PRELOADED_V((P)->k, (P)->l0, (P)->F, (cv)[C_L]))
 #define ELEM_POTENTIAL_X(P, x) LAW_LINEAR_V((P)->kt, (P)->psi0, (x)[X_PSI])
-/* the damping on theta': the dashpot and the rotary damper */
+/* the damping on theta': the dashpot and the rotary damper at the lid (then + the rotary
+ * damper at a pivot, from x[]); a one-way row's damping is 0 while th' > 0 */
 #define ELEM_DAMPING(P, cv) ((P)->c * (cv)[C_DD] + (P)->cr)
+#define ELEM_DAMPING_X(P, x) ((P)->crp * (x)[X_DR2])
+#define ELEM_ONE_WAY(p, thd, damp) ((p)->ow && (thd) > 0 ? 0.0 : (damp))
 /* d/dtheta of the slope and of the damping (values c, x; their derivatives dc, dx) */
 #define ELEM_DSLOPE(P, cv, dcv) \
     ((dcv)[C_DVG] + LAW_PRELOADED_DSLOPE((P)->k, (P)->l0, (P)->F, (cv)[C_L], (dcv)[C_L], \
@@ -226,9 +239,10 @@ typedef struct { v4 k, l0, F, c, cr, kt, psi0; double dm[VW]; int any, anyx; } P
 #define ELEM_DSLOPE_X(P, x, dx) \
     LAW_LINEAR_DSLOPE((P)->kt, (P)->psi0, (x)[X_PSI], (dx)[X_PSI], (x)[X_DPSI], (dx)[X_DPSI])
 #define ELEM_DDAMPING(P, dcv) ((P)->c * (dcv)[C_DD])
+#define ELEM_DDAMPING_X(P, dx) ((P)->crp * (dx)[X_DR2])
 /* does the row dissipate (the early exit's condition)? */
-#define ELEM_DISSIPATES(P) ((P)->c > 0 || (P)->cr > 0)
-#define ELEM_DAMPERS_VALID(P) ((P)->c >= 0 && (P)->cr >= 0)
+#define ELEM_DISSIPATES(P) ((P)->c > 0 || (P)->cr > 0 || (P)->crp > 0)
+#define ELEM_DAMPERS_VALID(P) ((P)->c >= 0 && (P)->cr >= 0 && (P)->crp >= 0)
 /* the size of the springs' potential terms (the energy's rounding scale) */
 #define ELEM_SIZE(P, cv) (fabs((cv)[C_VG]) + 0.5 * fabs((P)->k) * ((cv)[C_L] - (P)->l0) \
                           * ((cv)[C_L] - (P)->l0) + fabs((P)->F * (cv)[C_L]))
@@ -347,13 +361,15 @@ static inline int rhs(const Table *T, const Par *p, double th, double thd, doubl
     double v[NC], dv[NC], x[NX], dx[NX];
     if (tab_eval_x(T, p, th, v, J ? dv : NULL, x, J ? dx : NULL)) return 1;
     double damp = ELEM_DAMPING(p, v), slope = ELEM_SLOPE(p, v);
-    if (p->x) slope += ELEM_SLOPE_X(p, x);
+    if (p->x) { slope += ELEM_SLOPE_X(p, x); damp += ELEM_DAMPING_X(p, x); }
+    damp = ELEM_ONE_WAY(p, thd, damp);
     double N = -slope - 0.5 * v[C_DM] * thd * thd - damp * thd;
     *thdd = N / v[C_M];
     if (J) {
-        double dslope = ELEM_DSLOPE(p, v, dv);
-        if (p->x) dslope += ELEM_DSLOPE_X(p, x, dx);
-        double Nth = -dslope - 0.5 * dv[C_DM] * thd * thd - ELEM_DDAMPING(p, dv) * thd;
+        double dslope = ELEM_DSLOPE(p, v, dv), ddamp = ELEM_DDAMPING(p, dv);
+        if (p->x) { dslope += ELEM_DSLOPE_X(p, x, dx); ddamp += ELEM_DDAMPING_X(p, dx); }
+        ddamp = ELEM_ONE_WAY(p, thd, ddamp);
+        double Nth = -dslope - 0.5 * dv[C_DM] * thd * thd - ddamp * thd;
         J[0] = (Nth - *thdd * dv[C_M]) / v[C_M];
         J[1] = (-v[C_DM] * thd - damp) / v[C_M];
     }
@@ -852,9 +868,10 @@ static inline int node_eval(const Table *T, const Par *p, double th, double thd,
     double Vn = ELEM_POTENTIAL(p, c), En = ELEM_ENERGY(p, c, 0.5 * M * thd * thd);
     if (p->x) {
         xtab_eval(T, i, s, x, NULL);
-        slope += ELEM_SLOPE_X(p, x);
+        slope += ELEM_SLOPE_X(p, x); damp += ELEM_DAMPING_X(p, x);
         Vn += ELEM_POTENTIAL_X(p, x); En += ELEM_POTENTIAL_X(p, x);
     }
+    damp = ELEM_ONE_WAY(p, thd, damp);
     double N = -slope - 0.5 * dM * thd * thd - damp * thd;
     double acc = N / M;
     double sg = thd >= 0 ? 1.0 : -1.0;
@@ -879,7 +896,7 @@ static int lane_start(const Table *T, Lane *L, const double *d, int ncol, double
                       double th0, double dt, double t_max, int early, double *traj,
                       long traj_cap)
 {
-    ELEM_READ(&L->p, d);
+    ELEM_READ(&L->p, d, T);
     L->e_tol = d[D_ETOL];
     L->p.dm = 0.0;
     if (ncol > D_MLID && isfinite(d[D_MLID]) && d[D_MLID] != T->m0) L->p.dm = d[D_MLID] - T->m0;
@@ -1144,6 +1161,13 @@ ALWAYS void coef4(const Table *T, const Par4 *P, v4 th, v4 *c, const double **b,
     transpose4(hi, c + 4);
 }
 
+/* ELEM_ONE_WAY for lanes: 0 where the lane's dampers are one-way and th' > 0 */
+ALWAYS v4 one_way4(const Par4 *P, v4 thd, v4 damp)
+{
+    v4 zero = {0.0, 0.0, 0.0, 0.0};
+    return sel4(P->ow & (thd > zero), zero, damp);
+}
+
 /* the element columns of the lanes (cells b, local variables s from coef4) as columns x[j] */
 ALWAYS void xcoef4(const Table *T, const double *const *b, v4 s, v4 *x)
 {
@@ -1163,7 +1187,12 @@ ALWAYS v4 rhs4(const Table *T, const Par4 *P, v4 th, v4 thd, v4l *okm)
     const double *b[VW];
     coef4(T, P, th, c, b, &s, okm);
     v4 damp = ELEM_DAMPING(P, c), slope = ELEM_SLOPE(P, c);
-    if (P->anyx) { v4 x[NX]; xcoef4(T, b, s, x); slope += ELEM_SLOPE_X(P, x); }
+    if (P->anyx) {
+        v4 x[NX];
+        xcoef4(T, b, s, x);
+        slope += ELEM_SLOPE_X(P, x); damp += ELEM_DAMPING_X(P, x);
+    }
+    if (P->anyow) damp = one_way4(P, thd, damp);
     v4 N = -slope - 0.5 * c[C_DM] * thd * thd - damp * thd;
     return N / c[C_M];
 }
@@ -1183,9 +1212,10 @@ ALWAYS void node4(const Table *T, const Par4 *P, v4 th, v4 thd, v4 *a, v4 *g, v4
     if (P->anyx) {
         v4 x[NX];
         xcoef4(T, b, s, x);
-        slope += ELEM_SLOPE_X(P, x);
+        slope += ELEM_SLOPE_X(P, x); damp += ELEM_DAMPING_X(P, x);
         En += ELEM_POTENTIAL_X(P, x); Vn += ELEM_POTENTIAL_X(P, x);
     }
+    if (P->anyow) damp = one_way4(P, thd, damp);
     v4 N = -slope - 0.5 * dM * thd * thd - damp * thd;
     v4 acc = N / M;
     *Ev = En;
@@ -1222,7 +1252,12 @@ ALWAYS int rhs_fast(const Table *T, const Par *p, double th, double thd, double 
     double c[NC];
     c[C_DVG] = dVg; c[C_L] = l; c[C_DL] = dl; c[C_DD] = dd;
     double damp = ELEM_DAMPING(p, c), slope = ELEM_SLOPE(p, c);
-    if (p->x) { double x[NX]; xtab_eval(T, i, s, x, NULL); slope += ELEM_SLOPE_X(p, x); }
+    if (p->x) {
+        double x[NX];
+        xtab_eval(T, i, s, x, NULL);
+        slope += ELEM_SLOPE_X(p, x); damp += ELEM_DAMPING_X(p, x);
+    }
+    damp = ELEM_ONE_WAY(p, thd, damp);
     double N = -slope - 0.5 * dM * thd * thd - damp * thd;
     *thdd = N / M;
     return 0;
@@ -1498,10 +1533,11 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
                 int q = k % VW;
                 ELEM_LANE(G, q, &L->p);
                 G->dm[q] = L->p.dm;
-                G->any = 0; G->anyx = 0;
+                G->any = 0; G->anyx = 0; G->anyow = 0;
                 for (int e = 0; e < VW; e++) {
                     G->any |= G->dm[e] != 0.0;
                     G->anyx |= lanes[k - q + e].p.x && used[k - q + e];
+                    G->anyow |= lanes[k - q + e].p.ow && used[k - q + e];
                 }
                 if (over) {
                     lane_finish(T, L, thc, t_max);
@@ -1598,7 +1634,7 @@ static void run(const Table *T, const Method *m, double dt, double t_max, double
 }
 
 /* ---- exported entry points (called through ctypes; the GIL is released) ----
- * tab_meta = (ncell, lo, h, m0); cc: ncell x 4 x NC; dcc: the same, or NULL; rng: ncell x
+ * tab_meta = (ncell, lo, h, m0, rotary_at_pivot); cc: ncell x 4 x NC; dcc: the same, or NULL; rng: ncell x
  * NRNG (see the Table) or NULL */
 
 static void make(const double *tab_meta, const double *cc, const double *dcc,
@@ -1608,7 +1644,7 @@ static void make(const double *tab_meta, const double *cc, const double *dcc,
     T->crit = NULL; T->ncrit = 0;
     T->cc = cc; T->dcc = dcc; T->xcc = xcc; T->rng = rng;
     T->ncell = (int)tab_meta[0]; T->lo = tab_meta[1];
-    T->h = tab_meta[2]; T->m0 = tab_meta[3];
+    T->h = tab_meta[2]; T->m0 = tab_meta[3]; T->rot_pivot = tab_meta[4] != 0.0;
     T->inv_h = 1.0 / T->h;
     m->kind = (int)tableau[0]; m->s = (int)tableau[1];
     int s = m->s;
@@ -1670,7 +1706,7 @@ int sc_step(const double *tab_meta, const double *cc, const double *dcc, const d
     Table T; Method m;
     make(tab_meta, cc, dcc, xcc, NULL, tableau, &T, &m);
     Par p;
-    ELEM_READ(&p, design);
+    ELEM_READ(&p, design, &T);
     p.dm = 0.0;
     if (p.x && !xcc) return S_RANGE;
     if (isfinite(design[D_MLID]) && design[D_MLID] != T.m0) {

@@ -74,14 +74,14 @@ def coordinates(theta, cfg, sigma, ps: Pose | None = None) -> dict:
     return out
 
 
-def coordinates_of_columns(columns: dict) -> dict:
-    """Each element's :class:`Coord` from tabulated columns (``columns[name]``: numbers or
-    arrays): what the element declares it tabulates (its q, q' or q'^2); an element with no
-    columns acts on the lid's own angle (q' = 1). An element whose columns are not in
-    ``columns`` (the extra table, not read) is left out."""
+def coordinates_of_columns(columns: dict, cfg) -> dict:
+    """Each element's :class:`Coord` in ``cfg`` from tabulated columns (``columns[name]``:
+    numbers or arrays): what the element declares it tabulates (its q, q' or q'^2); an element
+    on the lid's own angle has q' = 1. An element whose columns are not in ``columns`` (the
+    extra table, not read) is left out."""
     out = {}
     for e in ELEMENTS:
-        if not e.columns:
+        if not e.columns or e.unit_rate(cfg):
             out[e.name] = Coord(None, 1.0, 1.0)
         elif all(col in columns for col, _ in e.columns):
             out[e.name] = Coord(**{what: columns[col] for col, what in e.columns})
@@ -139,7 +139,8 @@ def potential(coords, P):
 def theta_ddot(cf, theta_d, p):
     """theta'' from the coefficients ``cf`` (dict), theta' and the parameter vector p."""
     P = elements.params(p)
-    Q = -slope(cf["coords"], P) - damping(cf["coords"], P) * theta_d
+    Q = -slope(cf["coords"], P) - damping(cf["coords"], P) * elements.one_way(P, theta_d) \
+        * theta_d
     return (Q - 0.5 * cf["dM"] * theta_d ** 2) / cf["M"]
 
 
@@ -150,7 +151,8 @@ def energy(cf, theta_d, p):
 
 def damper_power(cf, theta_d, p):
     """Power of the dampers on the linkage (W, <= 0)."""
-    return -damping(cf["coords"], elements.params(p)) * theta_d ** 2
+    P = elements.params(p)
+    return -damping(cf["coords"], P) * elements.one_way(P, theta_d) * theta_d ** 2
 
 
 def newton_euler_system(theta, theta_d, p, cfg, sigma):
@@ -188,7 +190,8 @@ def newton_euler_system(theta, theta_d, p, cfg, sigma):
         q = coord.value(ps)
         f = -e.tension(q, P)
         if e.viscous(P) is not None:
-            f = f - e.viscous(P) * _rate(coord, ps, omega, A, phi_d, theta_d)
+            f = f - e.viscous(P) * elements.one_way(P, theta_d) \
+                * _rate(coord, ps, omega, A, phi_d, theta_d)
         for body, point, load in coord.loads(ps, f):
             forces[body].append((point, load))
     centre = {"lid": "G1", "oa": "G2", "bc": "G3"}

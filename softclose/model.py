@@ -221,7 +221,11 @@ class LidModel:
                          pts["T"], pts["G1"]],
             ["x"], ["phi", "gamma", "phi_dot", "gamma_dot", "v_T", "A", "C", "E", "T", "G1"])
         # the holding moment dV/dtheta (gravity + springs), as a function of theta and p
-        self.dV = ca.Function("dV", [th, p], [dyn.slope(cf["coords"], elements.params(p))])
+        slope = dyn.slope(cf["coords"], elements.params(p))
+        self.dV = ca.Function("dV", [th, p], [slope])
+        # the hand force at the tip that holds the lid at theta (friction aside): dV / tau
+        F = slope / cf["tau"]
+        self.opening = ca.Function("opening", [th, p], [F, ca.jacobian(F, th)])
         # every element's coordinate and its theta-derivative: {name: Function theta -> (q, q')}
         self.coordinate_fns = {e: ca.Function(f"q_{e}", [th], [c.q, c.dq])
                                for e, c in cf["coords"].items()}

@@ -107,7 +107,8 @@ _SI = np.array([q.si for q in elements.PARAMS])
 #: version of the exported C signatures; a built extension reporting another is not used
 KERNEL_ABI = 3
 #: every layout constant this module shares with the kernel (``sc_layout()`` must equal it)
-LAYOUT = (f"abi={KERNEL_ABI};cc={','.join(COEFFS)};mass={','.join(COEFFS[:4])};"
+LAYOUT = (f"abi={KERNEL_ABI};meta=ncell,lo,h,m0,{','.join(elements.KERNEL_META)};"
+          f"cc={','.join(COEFFS)};mass={','.join(COEFFS[:4])};"
           f"xcc={','.join(EXTRA_COEFFS + ('-',) * (NX - len(EXTRA_COEFFS)))};"
           f"row={','.join(DESIGN_COLUMNS)};out={','.join(OUT_FIELDS)};nrng=18")
 
@@ -226,7 +227,8 @@ _NP = len(elements.PARAMS)
 
 def _extra(designs: np.ndarray, table: CoefficientTable) -> np.ndarray | None:
     """The extra table in the kernel's layout if any row has an element of it, else None."""
-    return table.extra_kernel if elements.needs_extra(designs[:, :_NP]) else None
+    return table.extra_kernel if elements.needs_extra(designs[:, :_NP], table.model.cfg) \
+        else None
 
 
 def _lid_masses(designs: np.ndarray, table: CoefficientTable) -> np.ndarray | None:

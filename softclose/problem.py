@@ -64,6 +64,8 @@ METRICS = (
     Metric("min_spring_length", "m", "shortest spring length over the stroke"),
     Metric("max_spring_length", "m", "longest spring length over the stroke"),
     Metric("holding_moment", "N m", "dV/dtheta at theta_closed (> 0 presses the lid shut)"),
+    Metric("opening_force", "N", "largest hand force at the tip, along its path, that lifts "
+           "the lid slowly from closed to theta0"),
 )
 METRIC_KEYS = tuple(m.key for m in METRICS)
 
@@ -77,9 +79,9 @@ UNITS: dict[str, str] = {
 
 #: the named constraints of the design problem
 CONSTRAINTS = ("closed", "closing_time_max", "closing_time_min", "no_rebound",
-               "holding_moment_min")
+               "holding_moment_min", "opening_force_max")
 #: why a design is infeasible, in the order they are tested (the first that applies is given)
-REASONS = ("not closed", "too slow", "too fast", "not held shut", "rebound")
+REASONS = ("not closed", "too slow", "too fast", "not held shut", "rebound", "too heavy to open")
 
 #: accuracy targets of the fixed-step metrics against the converged answer
 TARGETS = {"closing_time": 1e-7, "impact_theta_dot": 1e-6, "impact_tip_speed": 1e-6,
@@ -161,11 +163,13 @@ def objective(opt, impact_theta_dot, peak_tip_speed):
     return float(J) if np.ndim(J) == 0 else J
 
 
-def infeasibility(opt, closed, closing_time, holding_moment, theta_dot_max) -> np.ndarray:
+def infeasibility(opt, closed, closing_time, holding_moment, theta_dot_max,
+                  opening_force=None) -> np.ndarray:
     """Why each design is infeasible: the first of :data:`REASONS` that applies, "" if none.
 
     Vectorised over designs; ``theta_dot_max`` is the largest theta' of the stroke (> 0 is
-    a rebound). NaN closing times (not closed) never count as too slow or too fast.
+    a rebound). NaN closing times (not closed) never count as too slow or too fast. The
+    opening force counts only when ``optimise.opening_force_max`` is set and it is given.
     """
     closed = np.atleast_1d(np.asarray(closed, bool))
     ct = np.atleast_1d(np.asarray(closing_time, float))
@@ -174,6 +178,9 @@ def infeasibility(opt, closed, closing_time, holding_moment, theta_dot_max) -> n
     reason = np.full(closed.shape, "", dtype=object)
     with np.errstate(invalid="ignore"):
         # assigned in reverse order of REASONS so that the first applicable one is kept
+        if opt.opening_force_max is not None and opening_force is not None:
+            of = np.broadcast_to(np.asarray(opening_force, float), closed.shape)
+            reason[of > opt.opening_force_max] = "too heavy to open"
         reason[closed & (tdm > 0)] = "rebound"
         reason[hm < opt.holding_moment_min] = "not held shut"
         reason[closed & (ct < opt.closing_time_min)] = "too fast"
@@ -182,9 +189,11 @@ def infeasibility(opt, closed, closing_time, holding_moment, theta_dot_max) -> n
     return reason
 
 
-def feasible(opt, closed, closing_time, holding_moment, theta_dot_max) -> np.ndarray:
+def feasible(opt, closed, closing_time, holding_moment, theta_dot_max,
+             opening_force=None) -> np.ndarray:
     """True where a design meets every constraint (see :func:`infeasibility`)."""
-    return infeasibility(opt, closed, closing_time, holding_moment, theta_dot_max) == ""
+    return infeasibility(opt, closed, closing_time, holding_moment, theta_dot_max,
+                         opening_force) == ""
 
 
 def target(key: str, value: float) -> float:
@@ -212,7 +221,8 @@ def describe(cfg) -> dict[str, Any]:
     """The problem of ``cfg`` as plain values (for reports and JSON)."""
     o = cfg.optimise
     return {"closing_time_min": o.closing_time_min, "closing_time_max": o.closing_time_max,
-            "holding_moment_min": o.holding_moment_min, "weight_impact": o.weight_impact,
+            "holding_moment_min": o.holding_moment_min,
+            "opening_force_max": o.opening_force_max, "weight_impact": o.weight_impact,
             "weight_peak_tip": o.weight_peak_tip,
             "bounds": {k: list(getattr(o, k)) for k in DESIGN_KEYS}}
 

@@ -15,7 +15,7 @@ import math
 import casadi as ca
 import numpy as np
 
-from . import elements
+from . import elements, statics
 from .dynamics import COEFFS
 from .errors import NumericalError
 from .problem import as_params
@@ -135,7 +135,6 @@ class Reference:
             prev = (t, x, g)
             t, x = t + h, x1
         lmin, lmax = self._l_extremes(th_min, th_max)
-        from . import statics
         _, why = statics.out_of_range(
             lambda e, t: np.asarray(m.coordinate_fns[e.name].map(len(t))(t)[0]).ravel(),
             m.cfg, p[None, :], {"min_spring_length": [lmin], "max_spring_length": [lmax],
@@ -146,9 +145,11 @@ class Reference:
                 peak_tip_speed=None, min_spring_length=float(lmin),
                 max_spring_length=float(lmax), holding_moment=m.holding_moment(p),
                 status=StrokeStatus.OUT_OF_RANGE, method="cvodes", tolerance=self.tol,
+                opening_force=statics.opening_force_exact(m, p),
                 message=f"invalid design: {why[0]}", reason=why[0], theta_min=float(th_min),
                 theta_max=float(th_max))
         return StrokeResult(
+            opening_force=statics.opening_force_exact(m, p),
             closed=closed, closing_time=out.get("closing_time"),
             impact_theta_dot=out.get("impact_theta_dot"),
             impact_tip_speed=out.get("impact_tip_speed"), peak_tip_speed=float(peak),

@@ -150,6 +150,11 @@ class Simulator:
             res["status"][idx[bad]] = StrokeStatus.OUT_OF_RANGE
             res["reason"][idx[bad]] = why[bad]
 
+    def opening_forces(self, P: np.ndarray, lid_mass=None) -> np.ndarray:
+        """The opening effort (N) of rows of P (:func:`softclose.statics.opening_forces`): not
+        part of :meth:`run_batch` (statics, which a search of designs does not need)."""
+        return statics.opening_forces(self.table, self.cfg, as_params(P), lid_mass)
+
     def holding_moments(self, P: np.ndarray, lid_mass=None) -> np.ndarray:
         """dV/dtheta at theta_closed (N m) for rows of P."""
         return statics.holding_moments(self.table, self.cfg.stroke.theta_closed, as_params(P),
@@ -222,6 +227,7 @@ class Simulator:
             min_spring_length=col["min_spring_length"] if ok else None,
             max_spring_length=col["max_spring_length"] if ok else None,
             holding_moment=self.model.holding_moment(p), status=status,
+            opening_force=float(self.opening_forces(np.asarray(p)[None, :])[0]),
             method=self.method.name, step=self.step, steps=int(out[7]),
             message=None if ok else self.diagnose(status, p), reason=reason,
             theta_min=col["theta_min"] if ok else None, theta_max=col["theta_max"] if ok else None,

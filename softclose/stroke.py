@@ -79,6 +79,7 @@ class StrokeResult:
     theta_min: float | None = None
     theta_max: float | None = None
     theta_dot_max: float | None = None
+    opening_force: float | None = None
     trajectory: dict | None = field(default=None, repr=False, compare=False)
 
     @property

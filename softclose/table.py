@@ -18,6 +18,7 @@ from functools import cached_property
 
 import numpy as np
 
+from . import elements
 from .dynamics import COEFFS, EXTRA_COEFFS
 from .errors import NumericalError
 
@@ -121,7 +122,8 @@ class CoefficientTable:
         h = (hi - lo) / n
         nodes = np.linspace(lo, hi, n + 1)
         self.cc, v = _pieces(model, nodes, h)                  # (ncell, NC, 4)
-        self.meta = np.array([n, lo, h, self.lid_mass], float)
+        self.meta = np.array([n, lo, h, self.lid_mass, *elements.kernel_meta(model.cfg)],
+                             float)
         self.lo, self.hi, self.h, self.ncell = lo, hi, h, n
         # interpolation error at the cell midpoints, relative to each coefficient's scale
         mid = 0.5 * (nodes[:-1] + nodes[1:])
@@ -253,6 +255,10 @@ class CoefficientTable:
     def _mass_slope(self, i: np.ndarray, s: np.ndarray) -> np.ndarray:
         r = self.mass_derivative[i]
         return r[..., 0] + s * (r[..., 1] + s * (r[..., 2] + s * r[..., 3]))
+
+    def mass_slope_at(self, theta) -> np.ndarray:
+        """d(M, dM, Vg, dVg)/d(lid mass) at angles ``theta`` (shape (len, 4))."""
+        return self._mass_slope(*self._cell(np.atleast_1d(np.asarray(theta, float))))
 
     def mass_slope(self, theta: float) -> np.ndarray:
         """d(M, dM, Vg, dVg)/d(lid mass) at one angle (shape (4,)), as :meth:`evaluate`

@@ -440,10 +440,13 @@ def _per_mass_reference(cfg, masses, P):
     ref["feasible"] = np.zeros(len(P), bool)
     for m in np.unique(masses):
         rows = np.nonzero(masses == m)[0]
-        r = Simulator(cfg.update({"mass.lid": float(m)})).run_batch(P[rows])
+        sim = Simulator(cfg.update({"mass.lid": float(m)}))
+        r = sim.run_batch(P[rows])
+        r["opening_force"] = sim.opening_forces(P[rows])
         ok = (r["status"] == 0) | (r["status"] == 1)
         for k in METRIC_KEYS[1:]:
-            ref[k][rows] = np.where(ok | (k == "holding_moment"), r[k], np.nan)
+            ref[k][rows] = np.where(ok | (k in ("holding_moment", "opening_force")), r[k],
+                                    np.nan)
         ref["closed"][rows] = r["closed"]
         ref["feasible"][rows] = infeasibility(cfg.optimise, r["closed"], r["closing_time"],
                                               r["holding_moment"], r["theta_dot_max"]) == ""

@@ -89,6 +89,9 @@ CORE: tuple[Key, ...] = (
         note="below `stroke.t_max`"),
     Key("optimise", "holding_moment_min", "real", 0.1, "N m", "least holding moment",
         lo=-1e6, hi=1e6),
+    Key("optimise", "opening_force_max", "pos", None, "N",
+        "largest opening effort allowed (the hand force at the tip that lifts the lid); "
+        "none: not bounded", lo=1e-6, hi=1e6),
     Key("optimise", "weight_impact", "nonneg", 1.0, "s²", "weight of impact_theta_dot² in J",
         lo=0.0, hi=1e6),
     Key("optimise", "weight_peak_tip", "nonneg", 0.1, "s²/m²",

@@ -65,13 +65,35 @@ def acting(cfg, extra_values: dict | None = None) -> tuple[Element, ...]:
     return tuple(e for e in ELEMENTS if bool(e.acts(values)))
 
 
-def needs_extra(P) -> bool:
-    """Does any row of P (parameter vectors) have an acting element of the extra table?"""
+def needs_extra(P, cfg) -> bool:
+    """Does any row of P (parameter vectors) have an element acting that reads the table of
+    element columns in ``cfg`` (a torsion spring, a rotary damper at a pivot)?"""
     import numpy as np
     P = np.atleast_2d(np.asarray(P, float))
     values = {q.name: P[:, i] for i, q in enumerate(PARAMS)}
-    return any(bool(np.any(e.acts(values))) for e in EXTRA)
+    return any(bool(np.any(e.acts(values))) for e in EXTRA if e.in_extra(cfg))
 
 
-__all__ = ["ELEMENTS", "BY_NAME", "EXTRA", "needs_extra", "PARAMS", "PARAM_NAMES", "KEYS", "SPRINGS", "DAMPERS",
+#: the flags of a table the kernel reads (after ncell, lo, h, m0): its structural element
+#: choices -- the rotary damper at a pivot rather than the lid
+KERNEL_META = ("rotary_at_pivot",)
+
+
+def kernel_meta(cfg) -> tuple[float, ...]:
+    """The values of :data:`KERNEL_META` in ``cfg``."""
+    return (float(BY_NAME["rotary"].in_extra(cfg)),)
+
+
+def one_way(P, theta_d):
+    """The dampers' factor with ``design.damper_one_way``: 0 while the lid opens (theta' > 0),
+    else 1 (numbers, arrays or CasADi expressions alike)."""
+    ow = P["damper_one_way"]
+    if hasattr(theta_d, "is_symbolic") or hasattr(ow, "is_symbolic"):
+        import casadi as ca
+        return 1 - ow * ca.if_else(theta_d > 0, 1, 0)
+    import numpy as np
+    return 1 - ow * (np.asarray(theta_d) > 0)
+
+
+__all__ = ["ELEMENTS", "BY_NAME", "EXTRA", "needs_extra", "one_way", "PARAMS", "PARAM_NAMES", "KEYS", "SPRINGS", "DAMPERS",
            "Element", "Param", "Params", "params", "structure", "acting"]

@@ -103,9 +103,11 @@ class Element:
     #: the kernel's tabulated functions of theta it reads: names of its q ("q"), q' ("dq")
     #: or q'^2 ("dq2"), as (column name, what)
     columns: tuple[tuple[str, str], ...] = ()
-    #: "base": in the kernel's fixed table (the seed's elements, always tabulated);
-    #: "extra": in the table of element columns, tabulated when a stroke needs it
+    #: "base": in the kernel's fixed table (always tabulated); "extra": in the table of
+    #: element columns, tabulated when a stroke needs it
     table: str = "base"
+    #: one of the seed's elements (gravity, the spring, the dashpot, the rotary damper)
+    seed: bool = False
     #: the column of the lid mass's derivative table it needs (gravity's depend on the mass)
     mass_dependent: bool = False
     #: for an element with a valid range: the stroke metrics that hold its coordinate's
@@ -148,6 +150,15 @@ class Element:
                 f"from theta = {math.degrees(where[0]):.1f} deg")
         return (f"the {self.name} leaves its valid range ({side} it {edge}, by up to "
                 f"{excess:.3g} at theta = {math.degrees(where[1]):.1f} deg)")
+
+    def unit_rate(self, cfg) -> bool:
+        """True when the element's coordinate is the lid's own angle in ``cfg`` (q' = 1: no
+        column is read for it)."""
+        return False
+
+    def in_extra(self, cfg) -> bool:
+        """Does the element read the table of element columns in ``cfg``?"""
+        return self.table == "extra" and not self.unit_rate(cfg)
 
     # -- what it changes in the model ---------------------------------------------------------
     def structure(self, cfg) -> tuple:

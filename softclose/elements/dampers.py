@@ -1,22 +1,29 @@
-"""Dampers: a dashpot on a length, a rotary damper on the lid's rotation.
+"""Dampers: a dashpot on a length, a rotary damper at a pivot (or on the lid's rotation).
 
 Both are viscous: the force along q is ``-B q-dot`` with B = c, so their generalised force on
-theta is ``-c q'^2 theta'`` and they only dissipate (power ``-c q'^2 theta'^2``).
+theta is ``-c q'^2 theta'`` and they only dissipate (power ``-c q'^2 theta'^2``). With
+``design.damper_one_way`` they resist only closing (theta' < 0), as most soft-close parts do:
+a monotone closing stroke is the same either way, a stroke that turns back is not.
 """
 
 from __future__ import annotations
 
 from ..keys import Key
 from .base import Element, Param
-from .coordinates import Length, PivotAngle
+from .coordinates import PIVOTS, Length, PivotAngle
 
 
 class Dashpot(Element):
     name = "dashpot"
+    seed = True
     doc = "dashpot between pin C on the lid and the ground pivot O"
     keys = (Key("design", "damper_c", "nonneg", 0.0, "N s/m", "dashpot coefficient c (>= 0)",
-                lo=0.0, hi=1e7, spread=0.20),)
-    params = (Param("damper_c"),)
+                lo=0.0, hi=1e7, spread=0.20),
+            Key("design", "damper_one_way", "bool", False, "",
+                "the dashpot and the rotary damper resist only closing (theta' < 0), as most "
+                "soft-close parts do"))
+    params = (Param("damper_c"), Param("damper_one_way", codes={False: 0.0, True: 1.0}))
+    acting_params = ("damper_c",)
     columns = (("dd", "dq2"),)
 
     def coordinate(self, cfg):
@@ -27,15 +34,32 @@ class Dashpot(Element):
 
 
 class RotaryDamper(Element):
+    """A rotary damper at a pivot: a moment -c_rot psi' on the relative rotation of the two
+    bodies the pin joins; at ``"lid"`` (the default) the seed's moment on the lid's own
+    rotation, a modelling aid with no machine element behind it. Its q'^2 lies in the
+    table of element columns (1 at the lid, which needs no column)."""
+
     name = "rotary"
-    doc = "rotary damper on the lid's own rotation (a modelling aid of the seed)"
+    seed = True
+    doc = "rotary damper at a pivot (O, B, A, C) or on the lid's own rotation (the seed's)"
     keys = (Key("design", "rotary_damper_c", "nonneg", 0.0, "N m s/rad",
-                "rotary damper coefficient c_rot (>= 0), on the lid's rotation theta",
-                lo=0.0, hi=1e5),)
+                "rotary damper coefficient c_rot (>= 0)", lo=0.0, hi=1e5),
+            Key("design", "rotary_damper_pivot", "str:" + ",".join(PIVOTS), "lid", "",
+                "where the rotary damper acts: `lid` (the lid's own rotation theta: the seed's "
+                "modelling aid) or a real damper at pivot O (phi), B (gamma), A (theta - phi), "
+                "C (theta - gamma)"))
     params = (Param("rotary_damper_c"),)
+    columns = (("dpr2", "dq2"),)
+    table = "extra"
 
     def coordinate(self, cfg):
-        return PivotAngle("lid")
+        return PivotAngle(cfg.design.rotary_damper_pivot)
+
+    def structure(self, cfg):
+        return (cfg.design.rotary_damper_pivot,)
+
+    def unit_rate(self, cfg) -> bool:
+        return cfg.design.rotary_damper_pivot == "lid"
 
     def viscous(self, P):
         return P["rotary_damper_c"]

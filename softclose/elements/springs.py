@@ -50,6 +50,7 @@ class Spring(Element):
     """
 
     name = "spring"
+    seed = True
     doc = ("spring between E on the lid and the anchor D: an extension spring (pulls), a "
            "compression spring or gas strut (pushes), or the seed's linear cartridge")
     keys = (

@@ -55,7 +55,8 @@ LABELS = {
 #: how infeasible cells are drawn, by category (fill colour, hatch)
 STYLE = {"not closed": ("0.62", None), "too slow": ("0.88", "//"),
          "too fast": ("0.88", "\\\\"), "not held shut": ("0.88", "xx"),
-         "rebound": ("0.88", ".."), "invalid": ("0.35", None),
+         "rebound": ("0.88", ".."), "too heavy to open": ("0.88", "--"),
+         "invalid": ("0.35", None),
          "not integrated": ("0.88", "++")}
 #: most cells per axis drawn from a slice held in memory (longer axes are thinned)
 MAX_CELLS = 300

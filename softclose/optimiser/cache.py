@@ -27,6 +27,7 @@ def get_model(cfg) -> LidModel:
 def nlp_key(cfg, nodes: int | None = None, substeps: int | None = None) -> tuple:
     o = cfg.optimise
     return model_key(cfg) + (tuple(e.name for e in nlp_elements(cfg)),
+                             o.opening_force_max is not None,
                              nodes or o.nodes, substeps or o.substeps, o.hessian,
                              o.linear_solver, o.max_iter)
 
@@ -41,7 +42,8 @@ def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None) -> Shoot
     key = nlp_key(cfg, nodes, substeps)
     if key not in _NLPS:
         nlp = ShootingNLP(get_model(cfg), key[-5], key[-4], o.hessian, o.linear_solver,
-                          o.max_iter, els=nlp_elements(cfg))
+                          o.max_iter, els=nlp_elements(cfg),
+                          opening=o.opening_force_max is not None)
         nlp.key = key
         _NLPS[key] = nlp
     return _NLPS[key]

@@ -67,6 +67,24 @@ WARM_OPTIONS = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-8,
                 "ipopt.warm_start_slack_bound_push": 1e-9}
 #: smallest closing time the NLP may take (s): T = 0 would make every step vanish
 T_FLOOR = 1e-3
+#: intervals of the angle grid over which the opening effort is bounded (when
+#: optimise.opening_force_max is set): the nodes and the cubic Hermite maxima between them
+OPENING_INTERVALS = 32
+
+
+def opening_bound(model, theta0, thc, design):
+    """The opening effort at the nodes of a grid of [theta_closed, theta0] and the maxima of
+    its cubic Hermite interpolant in every interval (error O(h^4)): every value <= the bound
+    bounds the largest effort over the stroke."""
+    n = OPENING_INTERVALS
+    u = ca.DM(np.linspace(0.0, 1.0, n + 1)).T
+    th = thc + (theta0 - thc) * u
+    F, dF = model.opening.map(n + 1)(th, ca.repmat(design, 1, n + 1))
+    h = (theta0 - thc) / n
+    va, vb, ma, mb = F[:n], F[1:], dF[:n] * h, dF[1:] * h
+    return ca.vertcat(F.T, hermite_max(va.T, ma.T, vb.T, mb.T))
+
+
 #: up to this many sub-steps an interval is unrolled in SX; beyond, one SX sub-step is
 #: accumulated (mapaccum), so that building the NLP does not grow with the sub-steps
 UNROLL_MAX = 8
@@ -84,7 +102,7 @@ def nlp_elements(cfg) -> tuple:
     """The elements the NLP carries: the seed's always, the others when they act in ``cfg``
     (an element that exerts no force adds nothing but series to fit)."""
     acting = elements.acting(cfg)
-    return tuple(e for e in elements.ELEMENTS if e.table == "base" or e in acting)
+    return tuple(e for e in elements.ELEMENTS if e.seed or e in acting)
 
 
 def series_terms(els) -> list[tuple[str, str, str]]:
@@ -401,7 +419,7 @@ class ShootingNLP:
 
     def __init__(self, model, nodes: int, substeps: int, hessian: str = "exact",
                  linear_solver: str = "mumps", max_iter: int = 500, tol: float = 1e-10,
-                 els=None):
+                 els=None, opening: bool = False):
         t0 = time.perf_counter()
         check_linear_solver(linear_solver)
         self.model, self.N, self.M = model, nodes, substeps
@@ -424,6 +442,8 @@ class ShootingNLP:
                  "peak_tip_speed": s - ca.vec(sp),               # >= 0
                  "holding_moment": model.dV(thc, design),        # >= holding_moment_min
                  "release_downwards": self.f(ca.vertcat(theta0, 0), design)[1]}  # <= 0
+        if opening:        # the opening effort (optimise.opening_force_max): <= the bound
+            g_all["opening_force"] = opening_bound(model, theta0, thc, design)
         self.g_names = list(g_all)
         self.g_sizes = [int(v.numel()) for v in g_all.values()]
         # softclose.problem.objective with the weights as NLP parameters (+ a time term that
@@ -487,9 +507,10 @@ class ShootingNLP:
         lbx[-1] = 0.0
         lo = {"continuity": 0.0, "theta_above_closed": 0.0, "theta_dot_nonpositive": -np.inf,
               "peak_tip_speed": 0.0, "holding_moment": o.holding_moment_min,
-              "release_downwards": -np.inf}
+              "release_downwards": -np.inf, "opening_force": -np.inf}
         hi = {"continuity": 0.0, "theta_above_closed": np.inf, "theta_dot_nonpositive": 0.0,
-              "peak_tip_speed": np.inf, "holding_moment": np.inf, "release_downwards": 0.0}
+              "peak_tip_speed": np.inf, "holding_moment": np.inf, "release_downwards": 0.0,
+              "opening_force": np.inf if o.opening_force_max is None else o.opening_force_max}
         lbg = np.concatenate([np.full(n, lo[k]) for k, n in zip(self.g_names, self.g_sizes)])
         ubg = np.concatenate([np.full(n, hi[k]) for k, n in zip(self.g_names, self.g_sizes)])
         return lbx, ubx, lbg, ubg

@@ -13,6 +13,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from .. import statics
 from ..errors import ConfigError, NumericalError, SoftcloseError
 from ..problem import DESIGN_KEYS, SCALES, UNITS, describe, design_of, with_designs
 from ..progress import Progress
@@ -63,7 +64,8 @@ def claims(nlp: ShootingNLP, cfg, run: Run) -> tuple[dict, dict, float]:
     m = {"closed": True, "closing_time": T, "impact_theta_dot": thd,
          "impact_tip_speed": float(np.hypot(*vT)), "peak_tip_speed": peak,
          "min_spring_length": lmin, "max_spring_length": lmax,
-         "holding_moment": model.holding_moment(p)}
+         "holding_moment": model.holding_moment(p),
+         "opening_force": statics.opening_force_exact(model, p)}
     return design_of(d), m, nlp_objective(nlp, cfg, run)
 
 
@@ -117,6 +119,11 @@ def active_set(nlp: ShootingNLP, cfg, run: Run, t_limit: float) -> tuple[Active,
     if lam_rel > ACTIVE_LAM:
         out.append(Active("release_downwards", "constraint", "upper", 0.0, "rad/s^2",
                           -Jr * lam_rel))
+    if "opening_force" in groups:
+        lam_of = float(np.maximum(lam_g[groups["opening_force"]], 0).sum())
+        if lam_of > ACTIVE_LAM:
+            out.append(Active("opening_force_max", "constraint", "upper", o.opening_force_max,
+                              "N", -Jr * lam_of))
     return tuple(out)
 
 

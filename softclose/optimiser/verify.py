@@ -232,6 +232,10 @@ def verify(cfg, design: dict, claims: dict | None = None,
     hm = ref.holding_moment
     cons["holding_moment_min"] = {"value": hm, "bound": o.holding_moment_min, "unit": "N m",
                                   "ok": hm >= o.holding_moment_min - CONSTRAINT_TOL}
+    if o.opening_force_max is not None:
+        of = ref.opening_force
+        cons["opening_force_max"] = {"value": of, "bound": o.opening_force_max, "unit": "N",
+                                     "ok": of <= o.opening_force_max + CONSTRAINT_TOL}
     agreement = {}
     if claims is not None:
         for k in METRIC_KEYS:

@@ -92,11 +92,13 @@ def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
             raise type(exc)(f"tolerance box: at {where} {str(exc).splitlines()[0]}") from None
         out = sim.run_batch(P[rows], threads=threads,
                             lid_mass=None if masses is None else masses[rows])
+        out["opening_force"] = sim.opening_forces(P[rows],
+                                                  None if masses is None else masses[rows])
         status = np.asarray(out["status"], int)
         ok = (status == 0) | (status == 1)
         for k in METRIC_KEYS[1:] + ("theta_dot_max", "theta_min"):
             v = np.asarray(out[k], float).copy()
-            if k != "holding_moment":
+            if k not in ("holding_moment", "opening_force"):
                 v[~ok] = np.nan
             if k in ("closing_time", "impact_theta_dot", "impact_tip_speed"):
                 v[status != 0] = np.nan
@@ -106,6 +108,7 @@ def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
     o = cfg.optimise
     cols["objective"] = objective(o, cols["impact_theta_dot"], cols["peak_tip_speed"])
     cols["reason"] = infeasibility(o, cols["closed"], cols["closing_time"],
-                                   cols["holding_moment"], cols["theta_dot_max"])
+                                   cols["holding_moment"], cols["theta_dot_max"],
+                                   cols["opening_force"])
     cols["feasible"] = cols["reason"] == ""
     return cols

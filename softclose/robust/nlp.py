@@ -41,6 +41,7 @@ import casadi as ca
 import numpy as np
 
 from ..config import Config
+from ..optimiser.nlp import opening_bound
 from ..problem import DESIGN_KEYS, PARAM_KEYS, SCALES, params_of
 
 #: the parameters of p that are not design variables: NLP parameters
@@ -53,7 +54,7 @@ PARAMS = ("theta0", "theta_closed", "weight_impact", "weight_peak_tip", *FIXED, 
 T_FLOOR = 1e-3
 #: per-scenario constraint groups, in order
 GROUPS = ("continuity", "theta_above_closed", "theta_dot_nonpositive", "peak_tip_speed",
-          "holding_moment", "release_downwards", "epigraph")
+          "holding_moment", "release_downwards", "epigraph", "opening_force")
 CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 WARM_OPTIONS = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
                 "ipopt.warm_start_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9,
@@ -184,7 +185,9 @@ class ScenarioNLP:
             peaks.append(ca.mmax(sp))     # the scenario's own peak: sub-steps, Hermite maxima
             blocks = [ca.vec(xe - X[s]), ca.vec(a) - thc, ca.vec(b), pk[s] - ca.vec(sp),
                       model.dV(thc, ps[s]), model.ode(ca.vertcat(theta0, 0), ps[s])[1],
-                      t - Js / Jref]
+                      t - Js / Jref,
+                      opening_bound(model, theta0, thc, ps[s]) if o.opening_force_max
+                      is not None else ca.MX(0, 1)]
             g += blocks
             self.g_sizes.append([int(v.numel()) for v in blocks])
         self.block = sum(self.g_sizes[0])
@@ -280,10 +283,12 @@ class ScenarioNLP:
         lo = {"continuity": 0.0, "theta_above_closed": 0.0, "theta_dot_nonpositive": -np.inf,
               "peak_tip_speed": 0.0, "holding_moment": o.holding_moment_min,
               "release_downwards": -np.inf,
-              "epigraph": 0.0 if self.robust_objective == "worst" else -np.inf}
+              "epigraph": 0.0 if self.robust_objective == "worst" else -np.inf,
+              "opening_force": -np.inf}
         hi = {"continuity": 0.0, "theta_above_closed": np.inf, "theta_dot_nonpositive": 0.0,
               "peak_tip_speed": np.inf, "holding_moment": np.inf, "release_downwards": 0.0,
-              "epigraph": np.inf}
+              "epigraph": np.inf,
+              "opening_force": np.inf if o.opening_force_max is None else o.opening_force_max}
         lbg = np.concatenate([np.full(n, lo[k]) for sizes in self.g_sizes
                               for k, n in zip(GROUPS, sizes)])
         ubg = np.concatenate([np.full(n, hi[k]) for sizes in self.g_sizes
@@ -345,7 +350,7 @@ def get_scenario_nlp(cfg: Config, model_cfgs: list[Config], nodes: int, substeps
     o = cfg.optimise
     key = (tuple(_model_key(c)
                  for c in model_cfgs), nodes, substeps, robust_objective, o.hessian,
-           o.linear_solver, o.max_iter)
+           o.linear_solver, o.max_iter, o.opening_force_max is not None)
     if key in _NLPS:
         return _NLPS[key], True
     if len(_NLPS) > 16:

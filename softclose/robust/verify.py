@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 
+from .. import statics
 from ..config import Config
 from ..problem import (DESIGN_KEYS, METRIC_KEYS, VERIFY_RTOL, agreement_tolerance, design_of,
                        params_of)
@@ -106,7 +107,8 @@ def scenario_report(cfg, problem, run, verify: bool) -> tuple[list, bool]:
         model = problem.nlp.scenario_models[s]
         metrics = {"closed": True, "closing_time": T, "impact_theta_dot": float(X[1, -1]),
                    "peak_tip_speed": float(run.peaks[s]),
-                   "holding_moment": model.holding_moment(p)}
+                   "holding_moment": model.holding_moment(p),
+                   "opening_force": statics.opening_force_exact(model, p)}
         entry = {"label": box_d.label(z), "origin": sc.origin,
                  "values": {k: float(v) for k, v in zip(box_d.keys, box_d.values(z)[0])},
                  "z": list(map(float, z)), "metrics": metrics, "objective": float(run.J[s]),

@@ -154,6 +154,7 @@ def evaluate_chunk(cfg_dict: dict, keys: list[str], ids: np.ndarray, X: np.ndarr
                 continue
         res = sim.run_batch(P[rows], threads=threads) if masses is None else \
             sim.run_batch(P[rows], threads=threads, lid_mass=masses)
+        res["opening_force"] = sim.opening_forces(P[rows], masses)
         _store(out, rows, res, cfg, sim, P[rows], masses)
     return out
 
@@ -206,14 +207,14 @@ def _store(out: dict, rows: np.ndarray, res: dict, cfg, sim, P: np.ndarray,
     closed = status == StrokeStatus.CLOSED
     for k in METRIC_KEYS[1:]:
         v = np.asarray(res[k], float).copy()
-        if k != "holding_moment":
+        if k not in ("holding_moment", "opening_force"):     # (statics: every design has them)
             v[~ok] = np.nan
         out[k][rows] = v
     out["closed"][rows] = closed
     J = objective(cfg.optimise, res["impact_theta_dot"], res["peak_tip_speed"])
     out["objective"][rows] = np.where(closed, J, np.nan)
     reason = infeasibility(cfg.optimise, closed, res["closing_time"], res["holding_moment"],
-                           res["theta_dot_max"])
+                           res["theta_dot_max"], res["opening_force"])
     why = np.asarray(res["reason"], dtype=object)   # why an open stroke stays open
     nc = (status == StrokeStatus.NOT_CLOSED) & (why != "")
     reason[nc] = "not closed (" + why[nc] + ")"     # "not closed (held open at ...)"

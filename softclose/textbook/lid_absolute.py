@@ -48,13 +48,15 @@ class LidParameters:
     c: float = 0.0
     c_rot: float = 0.0
     F: float = 0.0                   # the spring's signed preload: +F0 pulls, -F0 pushes
+    rot_pivot: str = "lid"           # where the rotary damper acts: lid, O, B, A or C
+    one_way: bool = False            # the dampers resist only closing (theta' < 0)
     kt: float = 0.0                  # torsion spring rate (N m/rad)
     psi0: float = 0.0                # its free angle (rad)
     pivot: str = "O"                 # O, B, A or C
 
 
-#: the torsion spring's pin: (body a, body b) with psi = angle(a) - angle(b); -1 = ground
-_PINS = {"O": (1, -1), "B": (2, -1), "A": (0, 1), "C": (0, 2)}
+#: a pin's bodies: (body a, body b) with psi = angle(a) - angle(b); -1 = ground
+_PINS = {"O": (1, -1), "B": (2, -1), "A": (0, 1), "C": (0, 2), "lid": (0, -1)}
 
 def read_parameters(cfg) -> LidParameters:
     """Build the parameters from a Config-like object (attribute access; assembly in degrees)."""
@@ -67,6 +69,7 @@ def read_parameters(cfg) -> LidParameters:
         J3=m.inertia_bc, g=m.gravity,
         k=d.spring_k, l0=d.spring_rest_length, c=d.damper_c, c_rot=d.rotary_damper_c,
         F={"extension": 1.0, "compression": -1.0}.get(d.spring_kind, 0.0) * d.spring_preload,
+        rot_pivot=d.rotary_damper_pivot, one_way=d.damper_one_way,
         kt=d.torsion_k, psi0=np.radians(d.torsion_free_angle_deg), pivot=d.torsion_pivot)
 
 
@@ -137,8 +140,13 @@ def evaluate_applied_forces(p: LidParameters, q: np.ndarray, qd: np.ndarray) -> 
     C = locate_point(q, 0, s_C)
     e_OC = C / np.linalg.norm(C)
     ld_dot = e_OC @ velocity_of_point(q, qd, 0, s_C)
-    add_point_force(Q, q, 0, s_C, -p.c * ld_dot * e_OC)
-    add_moment(Q, 0, -p.c_rot * qd[2])
+    on = 0.0 if p.one_way and qd[2] > 0 else 1.0     # one-way dampers: only while closing
+    add_point_force(Q, q, 0, s_C, -on * p.c * ld_dot * e_OC)
+    a, b = _PINS[p.rot_pivot]                        # the rotary damper on its pin's bodies
+    rate = (qd[3 * a + 2] if a >= 0 else 0.0) - (qd[3 * b + 2] if b >= 0 else 0.0)
+    add_moment(Q, a, -on * p.c_rot * rate)
+    if b >= 0:
+        add_moment(Q, b, on * p.c_rot * rate)
     if p.kt:
         a, b = _PINS[p.pivot]
         angle = lambda i: q[3 * i + 2] if i >= 0 else 0.0  # noqa: E731
