@@ -12,7 +12,7 @@
  * their accuracy is that of the method itself; the same for the peak tip speed and the
  * lowest angle of a stroke that turns back. Nothing is integrated past the event.
  *
- * A design row is (k, l0, c, c_rot, s, F0, k_t, psi_free, one_way, e_tol[, m_lid]) (LAYOUT): the
+ * A design row is (k, l0, c, c_rot, s, F0, k_t, psi_free, one_way, T_f, e_tol[, m_lid]) (LAYOUT): the
  * parameters of the machine elements (see THE MACHINE ELEMENTS below), then e_tol, then
  * m_lid (kg, NaN = the table's own mass m0), which selects the lid mass. M, dM, Vg and dVg are affine in the lid's mass, so the
  * coefficients of a row are c(m0) + (m_lid - m0) dc/dm, with dc/dm from a second table
@@ -86,7 +86,7 @@ static const char LAYOUT[] =
     "abi=3;meta=ncell,lo,h,m0,rotary_at_pivot;cc=M,dM,Vg,dVg,l,dl,dd,tau;mass=M,dM,Vg,dVg;"
     "xcc=psi,dpsi,dpr2,-;"
     "row=spring_k,spring_rest_length,damper_c,rotary_damper_c,spring_kind,spring_preload,"
-    "torsion_k,torsion_free_angle,damper_one_way,energy_tol,lid_mass;out=status,closing_time,impact_theta_dot,impact_tip_speed,"
+    "torsion_k,torsion_free_angle,damper_one_way,friction_torque,energy_tol,lid_mass;out=status,closing_time,impact_theta_dot,impact_tip_speed,"
     "peak_tip_speed,min_spring_length,max_spring_length,steps,energy_rise,theta_min,"
     "theta_dot_max,theta_max,stop_reason,stop_theta,stop_time;nrng=18";
 
@@ -101,7 +101,7 @@ enum { O_STATUS, O_TIME, O_THD, O_TIP, O_PEAK, O_LMIN, O_LMAX, O_NSTEP, O_EDRIFT
 /* status codes */
 enum { S_CLOSED = 0, S_OPEN = 1, S_UNSTABLE = 2, S_RANGE = 3, S_NONFINITE = 4, S_NEWTON = 5 };
 /* stop reasons */
-enum { R_NONE = 0, R_BARRIER = 1, R_HELD = 2 };
+enum { R_NONE = 0, R_BARRIER = 1, R_HELD = 2, R_STUCK = 3 };
 
 /* The table, power-major: cell i holds 4 rows (powers s^0..s^3) of the NC coefficients. */
 typedef struct {
@@ -161,6 +161,10 @@ typedef struct {
  *   dashpot   |C - O|            dd = q'^2        B = c
  *   rotary    psi at its pivot   dpr2 = q'^2 (x)  B = c_rot (at the lid, q' = 1: no column)
  *   (with one_way, the dampers act only while the lid closes: their damping is 0 for th' > 0)
+ *   friction  theta              (q' = 1)         a moment -T_f fs against the motion: fs = the
+ *                                                 direction the lid moves, a state of the stroke;
+ *                                                 at rest (release, a turning point, located to
+ *                                                 the method's order) it sticks unless |V'| > T_f
  *
  * The laws are macros over numbers, so the scalar code (double) and the SIMD lanes (v4) use
  * the same operations in the same order. For the early exit every conservative law also
@@ -176,20 +180,23 @@ typedef struct {
  * by ELEM_SLOPE_X ..., added where a row has them (Par.x; Par4.anyx for a group). */
 
 /* the design-row columns: the elements' parameters (in the registry's order), e_tol, m_lid */
-enum { D_K, D_L0, D_C, D_CR, D_KIND, D_F0, D_KT, D_PSI0, D_OW, D_ETOL, D_MLID, NDESIGN };
+enum { D_K, D_L0, D_C, D_CR, D_KIND, D_F0, D_KT, D_PSI0, D_OW, D_TF, D_ETOL, D_MLID,
+       NDESIGN };
 /* the extra table's columns: the torsion spring's psi and dpsi at its pivot, the rotary
  * damper's psi'^2 at its pivot */
 enum { X_PSI, X_DPSI, X_DR2 };
 
 /* one row's element parameters (SI); F: the spring's signed preload s F0; cr / crp: the
  * rotary damper at the lid / at a pivot (the table says which: rotary_at_pivot); ow: the
- * dampers are one-way; dm = m_lid - m0: 0 for a row at the table's mass; x: the row has an
- * element of the extra table */
-typedef struct { double k, l0, F, c, cr, crp, kt, psi0, dm; int x, ow; } Par;
+ * dampers are one-way; Tf: dry friction, fs: the way the lid moves (its state: set at the
+ * release and at every turning point); dm = m_lid - m0: 0 for a row at the table's mass; x:
+ * the row has an element of the extra table */
+typedef struct { double k, l0, F, c, cr, crp, kt, psi0, Tf, fs, dm; int x, ow; } Par;
 /* the lanes' parameters as vectors; any: a lane at another lid mass; anyx: a lane with
  * element columns (its element terms are added for every lane of the group: the others add
  * a zero, k_t = 0) */
-typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0; v4l ow; double dm[VW]; int any, anyx, anyow; } Par4;
+typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs; v4l ow; double dm[VW];
+                 int any, anyx, anyow, anyf; } Par4;
 /* read a design row d of table T into p (not dm) */
 #define ELEM_READ(p, d, T) do { \
         (p)->k = (d)[D_K]; (p)->l0 = (d)[D_L0]; (p)->c = (d)[D_C]; (p)->cr = (d)[D_CR]; \
@@ -197,6 +204,7 @@ typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0; v4l ow; double dm[VW]; int a
         if ((T)->rot_pivot) { (p)->crp = (p)->cr; (p)->cr = 0.0; } \
         (p)->F = (d)[D_KIND] * (d)[D_F0]; \
         (p)->kt = (d)[D_KT]; (p)->psi0 = (d)[D_PSI0]; (p)->ow = (d)[D_OW] != 0.0; \
+        (p)->Tf = (d)[D_TF]; (p)->fs = 0.0; \
         (p)->x = (p)->kt != 0.0 || (p)->crp != 0.0; \
     } while (0)
 /* copy row p into lane q of the group G (then G->anyx |= p->x) */
@@ -204,7 +212,7 @@ typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0; v4l ow; double dm[VW]; int a
         (G)->k[q] = (p)->k; (G)->l0[q] = (p)->l0; (G)->c[q] = (p)->c; (G)->cr[q] = (p)->cr; \
         (G)->F[q] = (p)->F; \
         (G)->kt[q] = (p)->kt; (G)->psi0[q] = (p)->psi0; (G)->crp[q] = (p)->crp; \
-        (G)->ow[q] = -(long long)(p)->ow; \
+        (G)->ow[q] = -(long long)(p)->ow; (G)->Tf[q] = (p)->Tf; (G)->fs[q] = (p)->fs; \
     } while (0)
 #define LAW_LINEAR_T(k, q0, q) ((k) * ((q) - (q0)))                  /* T = dV/dq */
 #define LAW_LINEAR_V(k, q0, q) (0.5 * (k) * ((q) - (q0)) * ((q) - (q0)))
@@ -232,6 +240,8 @@ typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0; v4l ow; double dm[VW]; int a
 #define ELEM_DAMPING(P, cv) ((P)->c * (cv)[C_DD] + (P)->cr)
 #define ELEM_DAMPING_X(P, x) ((P)->crp * (x)[X_DR2])
 #define ELEM_ONE_WAY(p, thd, damp) ((p)->ow && (thd) > 0 ? 0.0 : (damp))
+/* dry friction's moment against the motion (fs: the lane's direction, set at its rests) */
+#define ELEM_FRICTION(p) ((p)->Tf * (p)->fs)
 /* d/dtheta of the slope and of the damping (values c, x; their derivatives dc, dx) */
 #define ELEM_DSLOPE(P, cv, dcv) \
     ((dcv)[C_DVG] + LAW_PRELOADED_DSLOPE((P)->k, (P)->l0, (P)->F, (cv)[C_L], (dcv)[C_L], \
@@ -242,6 +252,8 @@ typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0; v4l ow; double dm[VW]; int a
 #define ELEM_DDAMPING_X(P, dx) ((P)->crp * (dx)[X_DR2])
 /* does the row dissipate (the early exit's condition)? */
 #define ELEM_DISSIPATES(P) ((P)->c > 0 || (P)->cr > 0 || (P)->crp > 0)
+/* a friction row stops at its first stick, exactly: the energy rule is not used for it */
+#define ELEM_STICKS(P) ((P)->Tf > 0)
 #define ELEM_DAMPERS_VALID(P) ((P)->c >= 0 && (P)->cr >= 0 && (P)->crp >= 0)
 /* the size of the springs' potential terms (the energy's rounding scale) */
 #define ELEM_SIZE(P, cv) (fabs((cv)[C_VG]) + 0.5 * fabs((P)->k) * ((cv)[C_L] - (P)->l0) \
@@ -364,6 +376,7 @@ static inline int rhs(const Table *T, const Par *p, double th, double thd, doubl
     if (p->x) { slope += ELEM_SLOPE_X(p, x); damp += ELEM_DAMPING_X(p, x); }
     damp = ELEM_ONE_WAY(p, thd, damp);
     double N = -slope - 0.5 * v[C_DM] * thd * thd - damp * thd;
+    if (p->Tf != 0.0) N -= ELEM_FRICTION(p);
     *thdd = N / v[C_M];
     if (J) {
         double dslope = ELEM_DSLOPE(p, v, dv), ddamp = ELEM_DDAMPING(p, dv);
@@ -873,6 +886,7 @@ static inline int node_eval(const Table *T, const Par *p, double th, double thd,
     }
     damp = ELEM_ONE_WAY(p, thd, damp);
     double N = -slope - 0.5 * dM * thd * thd - damp * thd;
+    if (p->Tf != 0.0) N -= ELEM_FRICTION(p);
     double acc = N / M;
     double sg = thd >= 0 ? 1.0 : -1.0;
     *a = acc;
@@ -908,10 +922,24 @@ static int lane_start(const Table *T, Lane *L, const double *d, int ncol, double
     L->status = S_OPEN; L->reason = R_NONE; L->stop_theta = NAN; L->wait = 0;
     L->gain = 0.0; L->t_max = t_max; L->dt = dt; L->inv_dt = 1.0 / dt;
     /* the energy rule needs dissipation (c dd + c_rot > 0 on the stroke) */
-    L->early = early && ELEM_DISSIPATES(&L->p) && ELEM_DAMPERS_VALID(&L->p);
+    L->early = early && ELEM_DISSIPATES(&L->p) && ELEM_DAMPERS_VALID(&L->p)
+               && !ELEM_STICKS(&L->p);
     for (int j = 0; j < NOUT; j++) out[j] = NAN;
     lane_record(L);
     double E0, V0;
+    if (ELEM_STICKS(&L->p)) { /* released from rest: it moves only if |V'| exceeds T_f */
+        double Vr, dVr;
+        if ((L->p.dm != 0.0 && !T->dcc) || (L->p.x && !T->xcc)
+            || potential(T, &L->p, th0, &Vr, &dVr)) {
+            L->E0 = L->Emax = NAN; L->status = S_RANGE; return 1;
+        }
+        if (fabs(dVr) <= L->p.Tf) {
+            L->E0 = L->Emax = L->E = Vr; L->Vlo = L->Vhi = Vr;
+            L->reason = R_STUCK; L->stop_theta = th0;
+            return 1;
+        }
+        L->p.fs = dVr < 0 ? 1.0 : -1.0;     /* it moves the way -V' drives it */
+    }
     if ((L->p.dm != 0.0 && !T->dcc) || (L->p.x && !T->xcc)
         || node_eval(T, &L->p, th0, 0.0, &L->a, &L->g, &L->dg, &E0, &V0) || !isfinite(E0)) {
         L->E0 = L->Emax = NAN; L->status = S_RANGE; return 1;
@@ -991,6 +1019,49 @@ __attribute__((noinline)) static int lane_try_exit(const Table *T, Lane *L, doub
     return 1;
 }
 
+/* A lane with dry friction came to rest inside its step of length h (theta' changed sign
+ * against the friction's direction): the rest is located by a step of solved length, as
+ * the closing event (secant on theta'(tau), then bisection), so to the method's order; it
+ * is a turning point (an extreme of theta); there the lid sticks unless |V'| > T_f, else it
+ * moves on the way -V' drives it, from rest. 1 = the stroke is over (stuck). */
+__attribute__((noinline)) static int lane_friction_rest(const Table *T, const Method *m,
+                                                        Lane *L, double h, double th1,
+                                                        double thd1)
+{
+    Par *p = &L->p;
+    double th = L->th, thd = L->thd, a = 0.0, b = h, y0 = th1, y1 = thd1, tau = h;
+    /* theta'(0) has the friction's sign (or is 0: just released), theta'(h) the other */
+    double fa = thd != 0.0 ? thd : p->fs * 1e-300, fb = thd1;
+    int side = 0;
+    for (int it = 0; it < 200 && b - a > 1e-15 * h; it++) { /* Illinois false position */
+        tau = a - fa * (b - a) / (fb - fa);
+        if (!(tau > a && tau < b)) tau = 0.5 * (a + b);
+        if (step(T, m, p, tau, th, thd, &y0, &y1)) { L->status = S_RANGE; return 1; }
+        if (y1 == 0.0 || fabs(y1) <= 1e-15 * (1.0 + fabs(thd) + fabs(thd1))) break;
+        if ((y1 > 0) == (fa > 0)) { a = tau; fa = y1; if (side == -1) fb *= 0.5; side = -1; }
+        else { b = tau; fb = y1; if (side == 1) fa *= 0.5; side = 1; }
+    }
+    /* a peak of the tip speed before the rest (it falls to 0 there) */
+    if (L->n > 1 && L->g >= L->gp && L->g > 0)
+        refine_extremum(T, m, p, 0, L->thp, L->thdp, L->hp + tau, &L->peak);
+    if (L->g > L->peak) L->peak = L->g;
+    double V, dV;
+    if (potential(T, p, y0, &V, &dV)) { L->status = S_RANGE; return 1; }
+    if (y0 < L->th_min) { L->th_min = y0; L->Vlo = V; }
+    if (y0 > L->th_max) { L->th_max = y0; L->Vhi = V; }
+    L->t += tau; L->th = y0; L->thd = 0.0;
+    L->gp = L->g; L->thp = th; L->thdp = thd; L->hp = tau;
+    L->E = V;
+    lane_record(L);
+    if (fabs(dV) <= p->Tf) { L->reason = R_STUCK; L->stop_theta = y0; return 1; }
+    p->fs = dV < 0 ? 1.0 : -1.0;
+    double E1, V1;
+    if (node_eval(T, p, y0, 0.0, &L->a, &L->g, &L->dg, &E1, &V1)) {
+        L->status = S_RANGE; return 1;
+    }
+    return 0;
+}
+
 /* the node quantities of node_eval, computed for all lanes at once (or not: ok = -1) */
 typedef struct { double a, g, dg, E, V; int ok; } Node;
 
@@ -1040,6 +1111,8 @@ ALWAYS int lane_after_step(const Table *T, const Method *m, Lane *L, double h, d
         lane_record(L);
         return 1;
     }
+    if (ELEM_STICKS(p) && thd1 * p->fs < 0) /* came to rest inside this step */
+        return lane_friction_rest(T, m, L, h, th1, thd1);
     /* the new node: theta'' (the next step's first stage), tip speed, its rate, energy */
     double a1, g1, dg1, E1, V1;
     if (nd && nd->ok >= 0) {
@@ -1194,6 +1267,7 @@ ALWAYS v4 rhs4(const Table *T, const Par4 *P, v4 th, v4 thd, v4l *okm)
     }
     if (P->anyow) damp = one_way4(P, thd, damp);
     v4 N = -slope - 0.5 * c[C_DM] * thd * thd - damp * thd;
+    if (P->anyf) N -= ELEM_FRICTION(P);
     return N / c[C_M];
 }
 
@@ -1217,6 +1291,7 @@ ALWAYS void node4(const Table *T, const Par4 *P, v4 th, v4 thd, v4 *a, v4 *g, v4
     }
     if (P->anyow) damp = one_way4(P, thd, damp);
     v4 N = -slope - 0.5 * dM * thd * thd - damp * thd;
+    if (P->anyf) N -= ELEM_FRICTION(P);
     v4 acc = N / M;
     *Ev = En;
     *Vv = Vn;
@@ -1259,6 +1334,7 @@ ALWAYS int rhs_fast(const Table *T, const Par *p, double th, double thd, double 
     }
     damp = ELEM_ONE_WAY(p, thd, damp);
     double N = -slope - 0.5 * dM * thd * thd - damp * thd;
+    if (p->Tf != 0.0) N -= ELEM_FRICTION(p);
     *thdd = N / M;
     return 0;
 }
@@ -1393,7 +1469,8 @@ ALWAYS void explicit_lanes(const Table *T, const Method *m, const int s, const S
  * order and with the same operations, so its state is the scalar code's bit for bit; a lane
  * whose early-exit trigger fires then goes through lane_try_exit as it would there. Every
  * other lane (and every lane of a trajectory run: `scalar`) runs lane_after_step itself. */
-ALWAYS void after_steps_vec(const Table *T, const Method *m, Lane *lanes, Soa *S, int *used,
+ALWAYS void after_steps_vec(const Table *T, const Method *m, Lane *lanes, Soa *S, Par4 *P,
+                            int *used,
                             const double *hh, const double *y0, const double *y1,
                             const int *st, const Nodes *nd, double thc, double dt,
                             double t_max, long *traj_len, int scalar)
@@ -1416,6 +1493,7 @@ ALWAYS void after_steps_vec(const Table *T, const Method *m, Lane *lanes, Soa *S
             v4 n = ld4(S->n + b), gg = ld4(S->g + b), gp = ld4(S->gp + b), E = ld4(S->E + b);
             v4l refine = ((n + one) > one) & (gg >= gp) & (gg > g1);
             v4l turn = ((thd < zero) & (z1 >= zero)) | ((thd > zero) & (z1 <= zero));
+            if (P[g].anyf) turn |= z1 * P[g].fs < zero; /* a rest (also right after one) */
             f = ok & (abs4(z0) < inf) & (abs4(z1) < inf) & (z0 > c4) & ~refine & ~turn
                 & (abs4(E1) < inf) & ~((E1 - ld4(S->E0 + b)) > ld4(S->e_tol + b));
             v4 peak = ld4(S->peak + b), thmin = ld4(S->th_min + b), thmax = ld4(S->th_max + b);
@@ -1472,6 +1550,7 @@ ALWAYS void after_steps_vec(const Table *T, const Method *m, Lane *lanes, Soa *S
                 used[k] = 0;
             } else {
                 soa_out(S, L, k);
+                P[g].fs[q] = L->p.fs;     /* a rest of dry friction sets the direction */
             }
         }
     }
@@ -1533,11 +1612,12 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
                 int q = k % VW;
                 ELEM_LANE(G, q, &L->p);
                 G->dm[q] = L->p.dm;
-                G->any = 0; G->anyx = 0; G->anyow = 0;
+                G->any = 0; G->anyx = 0; G->anyow = 0; G->anyf = 0;
                 for (int e = 0; e < VW; e++) {
                     G->any |= G->dm[e] != 0.0;
                     G->anyx |= lanes[k - q + e].p.x && used[k - q + e];
                     G->anyow |= lanes[k - q + e].p.ow && used[k - q + e];
+                    G->anyf |= lanes[k - q + e].p.Tf != 0.0 && used[k - q + e];
                 }
                 if (over) {
                     lane_finish(T, L, thc, t_max);
@@ -1558,7 +1638,7 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
             Nodes nd;
             if (s == 4) explicit_lanes(T, m, 4, &S, P, hh, y0, y1, st, &nd, thc);
             else explicit_lanes(T, m, s, &S, P, hh, y0, y1, st, &nd, thc);
-            after_steps_vec(T, m, lanes, &S, used, hh, y0, y1, st, &nd, thc, dt, t_max,
+            after_steps_vec(T, m, lanes, &S, P, used, hh, y0, y1, st, &nd, thc, dt, t_max,
                             traj_len, traj != NULL);
             continue;
         }

@@ -28,7 +28,7 @@ from __future__ import annotations
 import casadi as ca
 
 from . import elements
-from .elements import DAMPERS, ELEMENTS, SPRINGS
+from .elements import DAMPERS, ELEMENTS, FRICTIONS, SPRINGS
 from .elements.coordinates import Length, PivotAngle, Pose, moment_about
 from .kinematics import acceleration_loop, closure, cross, perp, points, velocity_loop
 
@@ -131,16 +131,41 @@ def damping(coords, P):
     return _sum(e.viscous(P) * coords[e.name].dq2 for e in DAMPERS if e.name in coords)
 
 
+def friction(coords, P):
+    """sum C_e |q_e'| over the dry-friction elements: the friction moment on theta while the
+    lid moves (N m); None without one."""
+    return _sum(e.coulomb(P) * _abs(coords[e.name].dq) for e in FRICTIONS if e.name in coords)
+
+
+def _abs(x):
+    return x if isinstance(x, float) and x >= 0 else (ca.fabs(x) if hasattr(x, "is_symbolic")
+                                                      else abs(x))
+
+
+def direction(theta_d):
+    """sign(theta'): the way the lid moves (numbers, arrays or CasADi alike)."""
+    return ca.sign(theta_d) if hasattr(theta_d, "is_symbolic") else \
+        (float(theta_d > 0) - float(theta_d < 0) if isinstance(theta_d, float)
+         else (theta_d > 0) * 1.0 - (theta_d < 0) * 1.0)
+
+
 def potential(coords, P):
     """V = sum V_e(q_e) over the conservative elements (J)."""
     return _sum(e.potential(coords[e.name].q, P) for e in SPRINGS if e.name in coords)
 
 
-def theta_ddot(cf, theta_d, p):
-    """theta'' from the coefficients ``cf`` (dict), theta' and the parameter vector p."""
+def theta_ddot(cf, theta_d, p, moving=None):
+    """theta'' from the coefficients ``cf`` (dict), theta' and the parameter vector p.
+
+    Dry friction opposes the motion: ``moving`` is the way the lid moves (+1 up, -1 down;
+    default sign(theta'), which at rest applies none: the stick is the integrator's event).
+    """
     P = elements.params(p)
     Q = -slope(cf["coords"], P) - damping(cf["coords"], P) * elements.one_way(P, theta_d) \
         * theta_d
+    fr = friction(cf["coords"], P)
+    if fr is not None:
+        Q = Q - fr * (direction(theta_d) if moving is None else moving)
     return (Q - 0.5 * cf["dM"] * theta_d ** 2) / cf["M"]
 
 
@@ -150,9 +175,11 @@ def energy(cf, theta_d, p):
 
 
 def damper_power(cf, theta_d, p):
-    """Power of the dampers on the linkage (W, <= 0)."""
+    """Power of the dampers and of dry friction on the linkage (W, <= 0)."""
     P = elements.params(p)
-    return -damping(cf["coords"], P) * elements.one_way(P, theta_d) * theta_d ** 2
+    power = -damping(cf["coords"], P) * elements.one_way(P, theta_d) * theta_d ** 2
+    fr = friction(cf["coords"], P)
+    return power if fr is None else power - fr * _abs(theta_d)
 
 
 def newton_euler_system(theta, theta_d, p, cfg, sigma):
@@ -192,6 +219,8 @@ def newton_euler_system(theta, theta_d, p, cfg, sigma):
         if e.viscous(P) is not None:
             f = f - e.viscous(P) * elements.one_way(P, theta_d) \
                 * _rate(coord, ps, omega, A, phi_d, theta_d)
+        if e.coulomb(P) is not None:
+            f = f - e.coulomb(P) * direction(_rate(coord, ps, omega, A, phi_d, theta_d))
         for body, point, load in coord.loads(ps, f):
             forces[body].append((point, load))
     centre = {"lid": "G1", "oa": "G2", "bc": "G3"}
@@ -241,7 +270,7 @@ def velocity_of(pts, A, phi_d, theta_d, P):
     return phi_d * perp(A) + theta_d * perp(P - A)
 
 
-__all__ = ["COEFFS", "EXTRA_COEFFS", "PARAMS", "Coord", "coefficients", "coordinates",
+__all__ = ["COEFFS", "EXTRA_COEFFS", "PARAMS", "Coord", "friction", "direction", "coefficients", "coordinates",
            "coordinates_of_columns", "theta_ddot",
            "energy", "damper_power", "slope", "damping", "potential", "newton_euler_system",
            "pose"]

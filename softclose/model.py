@@ -204,6 +204,11 @@ class LidModel:
         self._cf_expr = cf
         tdd = dyn.theta_ddot(cf, thd, p)
         self.ode = ca.Function("ode", [x, p], [ca.vertcat(thd, tdd)], ["x", "p"], ["xdot"])
+        # the same with dry friction for a given direction of motion (+1 up, -1 down): what
+        # an integrator takes between two rests of a stroke with friction
+        mv = ca.SX.sym("moving")
+        self.ode_moving = ca.Function("ode_moving", [x, p, mv],
+                                      [ca.vertcat(thd, dyn.theta_ddot(cf, thd, p, mv))])
         vec = ca.vertcat(*[cf[k] for k in dyn.COEFFS])
         self.coeffs = ca.Function("coeffs", [th], [vec, ca.jacobian(vec, th)],
                                   ["theta"], ["c", "dc"])
@@ -243,9 +248,9 @@ class LidModel:
 
     # -- conveniences (numbers in, numbers out) ----------------------------------------
     def params(self, design=None) -> np.ndarray:
-        """The parameter vector p of ``design`` (a [design] section; default: the config's)."""
-        d = design if design is not None else self.cfg.design
-        return np.array([q.number(getattr(d, q.name)) for q in elements.PARAMS], float)
+        """The parameter vector p of the config (``design``: another [design] section)."""
+        cfg = self.cfg if design is None else self.cfg.replace(design=design._asdict())
+        return np.array([q.number(q.value(cfg)) for q in elements.PARAMS], float)
 
     def closure(self, theta: float) -> tuple[float, float]:
         """(phi, gamma) in radians on this model's branch."""

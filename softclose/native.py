@@ -61,8 +61,9 @@ tau = 1 (|theta'| <= sqrt(2 (E - V) / M) <= the largest theta' so far) keeps
 Why a stroke stays open is recorded in ``stop_reason`` (1: trapped behind a barrier, a
 maximum of V between the lid and the rim, ``stop_theta`` = its top; 2: held open, the
 potential rises from the lid's well all the way to the rim, ``stop_theta`` = the stable
-equilibrium at the bottom of the well, V'(theta) = 0), also for a stroke that ran to t_max
-when the energy then decides it; ``stop_time`` is when integration stopped (the closing
+equilibrium at the bottom of the well, V'(theta) = 0; 3: held by friction, the lid came to
+rest where |V'| does not exceed the friction moment, ``stop_theta`` = that angle, located to
+the method's order), also for a stroke that ran to t_max when the energy then decides it; ``stop_time`` is when integration stopped (the closing
 time, the early exit, t_max or a failure). :func:`not_closed_reasons` turns them into text.
 
 The kernel is built by ``pip install`` as the extension ``softclose._kernel``; in a source
@@ -97,7 +98,7 @@ OUT_FIELDS = ("status", "closing_time", "impact_theta_dot", "impact_tip_speed",
 STATUS = {0: "closed", 1: "not closed", 2: "unstable", 3: "left the tabulated range",
           4: "non-finite", 5: "implicit solve failed"}
 #: ``stop_reason`` codes: why a stroke does not close (0: it closed, failed, or is undecided)
-STOP_REASONS = {0: "", 1: "energy below the barrier", 2: "held open"}
+STOP_REASONS = {0: "", 1: "energy below the barrier", 2: "held open", 3: "held by friction"}
 #: the design-row columns, in order: the parameter vector (SI), then energy_tol and the
 #: optional lid_mass
 DESIGN_COLUMNS = tuple(q.name.removesuffix("_deg") for q in elements.PARAMS) + (
@@ -347,7 +348,7 @@ def not_closed_reasons(out) -> np.ndarray:
     text = np.full(status.shape, "", dtype=object)
     open_ = status == 1
     for code, head in ((1, "cannot reach the rim: energy below the barrier at theta = "),
-                       (2, "held open at theta = ")):
+                       (2, "held open at theta = "), (3, "held by friction at theta = ")):
         m = np.nonzero(open_ & (reason == code))[0]
         if len(m):   # each distinct angle formatted once (many rows share their well)
             t = theta[m]

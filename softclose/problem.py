@@ -37,7 +37,7 @@ DESIGN_KEYS = ("spring_k", "spring_rest_length", "damper_c")
 PARAM_KEYS = PARAM_NAMES
 assert PARAM_KEYS[:len(DESIGN_KEYS)] == DESIGN_KEYS
 #: config keys of the parameter vector p = (k, l0, c, c_rot), by column
-PARAM_COLUMNS = {f"design.{k}": i for i, k in enumerate(PARAM_KEYS)}
+PARAM_COLUMNS = {q.key: i for i, q in enumerate(PARAMS)}
 #: the config key the kernels also take per stroke, beside p (their lid-mass column: the
 #: tabulated coefficients are affine in the lid mass)
 LID_MASS = "mass.lid"
@@ -101,8 +101,7 @@ def params_of(cfg, design: dict | None = None) -> np.ndarray:
     """The parameter vector p (:data:`PARAM_KEYS`) of ``cfg``'s design, with ``design`` (a
     dict of some of its keys) taking precedence."""
     d = dict(design or {})
-    return np.array([q.number(d[q.name] if q.name in d else getattr(cfg.design, q.name))
-                     for q in PARAMS])
+    return np.array([q.number(d[q.name] if q.name in d else q.value(cfg)) for q in PARAMS])
 
 
 #: the parameters' defaults (the elements added since the seed: absent)

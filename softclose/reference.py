@@ -4,8 +4,11 @@ Independent of the fast path: no table, no fixed step. It integrates on an outpu
 (tolerance ``simulate.reference_tol``) and locates each event by Newton's method on the
 length of a last integration, ``x(tau) = CVODES(x_k, tau)`` (time scaled to [0, 1] with
 tau as a parameter); interior maxima of the tip speed and the lowest angle of a stroke that
-turns back are located the same way on the root of their time derivative. Used by tests,
-by ``optimise``'s verification and by ``bench``.
+turns back are located the same way on the root of their time derivative. With dry friction
+the direction of motion is a parameter of the flow: each rest (theta' = 0) is an event,
+located the same way, where the lid sticks if the driving moment |dV/dtheta| does not exceed
+the friction moment T_f, and otherwise moves on the way -dV/dtheta drives it (so also at the
+release). Used by tests, by ``optimise``'s verification and by ``bench``.
 """
 
 from __future__ import annotations
@@ -31,25 +34,31 @@ class Reference:
         self.model = model
         self.tol = tol if tol is not None else model.cfg.simulate.reference_tol
         self.grid_step = grid_step
-        x, tau = ca.SX.sym("x", 2), ca.SX.sym("tau")
+        x, tau, s = ca.SX.sym("x", 2), ca.SX.sym("tau"), ca.SX.sym("moving")
         p = ca.SX.sym("p", len(elements.PARAMS))
-        f = model.ode(x, p)
+        # s: the way the lid moves (+1 up, -1 down), which sets dry friction's sign
+        f = model.ode_moving(x, p, s)
         opts = {"abstol": self.tol, "reltol": self.tol, "max_num_steps": 200000}
-        dae = {"x": x, "p": ca.vertcat(p, tau), "ode": tau * f}
+        dae = {"x": x, "p": ca.vertcat(p, s, tau), "ode": tau * f}
         self._flow = ca.integrator("ref_flow", "cvodes", dae, 0.0, 1.0, opts)
         v_T = model.kin(x)[4]
-        xdot = model.ode(x, p)
         # d|v_T|/dt = v.a/|v| with a = dv/dt by AD along the flow; at rest it is |a|
-        a_T = ca.jtimes(v_T, x, xdot)
+        a_T = ca.jtimes(v_T, x, f)
         speed = ca.norm_2(v_T)
         dspeed = ca.if_else(speed > 0, ca.dot(v_T, a_T) / speed, ca.norm_2(a_T))
-        self._speed = ca.Function("speed", [x, p], [speed, dspeed])
+        self._speed_fn = ca.Function("speed", [x, p, s], [speed, dspeed])
+        self._moving = -1.0
+
+    def _speed(self, x, p):
+        """(|v_T|, d|v_T|/dt) at the state x, moving the stroke's current way."""
+        return self._speed_fn(x, p, self._moving)
 
     def flow(self, x0, p, tau):
-        """State after integrating for ``tau`` seconds from ``x0``."""
+        """State after integrating for ``tau`` seconds from ``x0`` (moving the way of the
+        stroke's current direction, which matters only with dry friction)."""
         if tau <= 0:
             return np.asarray(x0, float)
-        return np.asarray(self._flow(x0=x0, p=np.r_[p, tau])["xf"]).ravel()
+        return np.asarray(self._flow(x0=x0, p=np.r_[p, self._moving, tau])["xf"]).ravel()
 
     def _newton_time(self, x0, p, h, residual, lo=0.0, hi=None):
         """Root in (lo, hi] of residual(x(tau)) (a sign change is bracketed)."""
@@ -90,7 +99,12 @@ class Reference:
         speed = lambda y: float(self._speed(y, p)[0])  # noqa: E731
         dspeed = lambda y: float(self._speed(y, p)[1])  # noqa: E731
         prev = None  # (t, x, g) of the previous node
-        closed, out = False, {}
+        closed, out, stuck = False, {}, None
+        T_f = sum(float(e.coulomb(elements.params(p))) for e in elements.FRICTIONS)
+        self._moving = -1.0
+        if T_f > 0:  # released from rest: it moves only if the driving moment exceeds T_f
+            stuck, self._moving = self._rest(st.theta0, p, T_f)
+            t = t_max if stuck is not None else t
         while t < t_max - 1e-15:
             h = min(dt, t_max - t)
             try:
@@ -100,6 +114,23 @@ class Reference:
             if not np.all(np.isfinite(x1)):
                 raise NumericalError(f"the reference integrator diverged at t = {t:.4g} s")
             g, g1 = speed(x), speed(x1)
+            if T_f > 0 and x1[1] * self._moving < 0:  # came to rest inside (t, t+h]
+                tau = self._newton_time(x, p, h, lambda y: y[1] * self._moving, lo=0.0)
+                xe = self.flow(x, p, tau)
+                if xe[0] > thc:  # (a closing event first is the branch below)
+                    if prev is not None and g >= prev[2] and g > 0:
+                        tp, xp, _ = prev
+                        if dspeed(xp) > 0 > dspeed(xe):
+                            tm = self._newton_time(xp, p, t + tau - tp, dspeed)
+                            peak = max(peak, speed(self.flow(xp, p, tm)))
+                    peak = max(peak, g)
+                    th_min, th_max = min(th_min, float(xe[0])), max(th_max, float(xe[0]))
+                    t, x, prev = t + tau, np.array([xe[0], 0.0]), None
+                    stuck, moving = self._rest(float(xe[0]), p, T_f)
+                    if stuck is not None:
+                        break
+                    self._moving = moving
+                    continue
             if x1[0] <= thc:  # closing event inside (t, t+h]
                 tau = self._newton_time(x, p, h, lambda y: y[0] - thc)
                 xe = self.flow(x, p, tau)
@@ -134,9 +165,10 @@ class Reference:
             peak = max(peak, g1)
             prev = (t, x, g)
             t, x = t + h, x1
+        self._moving = -1.0
         lmin, lmax = self._l_extremes(th_min, th_max)
         _, why = statics.out_of_range(
-            lambda e, t: np.asarray(m.coordinate_fns[e.name].map(len(t))(t)[0]).ravel(),
+            lambda e, t: np.asarray(m.coordinate_fns[e.name].map(t.size)(t.ravel())[0]).ravel(),
             m.cfg, p[None, :], {"min_spring_length": [lmin], "max_spring_length": [lmax],
                                 "theta_min": [th_min], "theta_max": [th_max]})
         if why[0]:
@@ -148,8 +180,9 @@ class Reference:
                 opening_force=statics.opening_force_exact(m, p),
                 message=f"invalid design: {why[0]}", reason=why[0], theta_min=float(th_min),
                 theta_max=float(th_max))
+        why = None if stuck is None else f"held by friction at theta = {math.degrees(stuck):.1f} deg"
         return StrokeResult(
-            opening_force=statics.opening_force_exact(m, p),
+            opening_force=statics.opening_force_exact(m, p), reason=why, stop_theta=stuck,
             closed=closed, closing_time=out.get("closing_time"),
             impact_theta_dot=out.get("impact_theta_dot"),
             impact_tip_speed=out.get("impact_tip_speed"), peak_tip_speed=float(peak),
@@ -158,6 +191,14 @@ class Reference:
             status=StrokeStatus.CLOSED if closed else StrokeStatus.NOT_CLOSED,
             method="cvodes", tolerance=self.tol, theta_min=float(th_min),
             theta_max=float(th_max))
+
+    def _rest(self, theta, p, T_f):
+        """At rest at theta: (theta, None) if dry friction holds the lid there (|dV/dtheta| <=
+        T_f), else (None, the way -dV/dtheta drives it)."""
+        dV = float(self.model.dV(theta, p))
+        if abs(dV) <= T_f:
+            return theta, None
+        return None, (1.0 if dV < 0 else -1.0)
 
     def _l_extremes(self, a, b):
         grid = np.linspace(a, b, 801)

@@ -231,7 +231,8 @@ class Simulator:
             method=self.method.name, step=self.step, steps=int(out[7]),
             message=None if ok else self.diagnose(status, p), reason=reason,
             theta_min=col["theta_min"] if ok else None, theta_max=col["theta_max"] if ok else None,
-            theta_dot_max=col["theta_dot_max"] if ok else None)
+            theta_dot_max=col["theta_dot_max"] if ok else None,
+            stop_theta=col["stop_theta"] if status is StrokeStatus.NOT_CLOSED else None)
 
     def _error_estimate(self, res: StrokeResult, p) -> tuple[dict, str | None]:
         """|metric(h) - converged| estimated from the stroke at h/2 (Richardson), and a

@@ -99,14 +99,19 @@ def out_of_range(coordinate, cfg, P, metrics: dict) -> tuple[np.ndarray, np.ndar
         with np.errstate(invalid="ignore"):
             below, above = lo - qmin, qmax - hi
             bad = np.flatnonzero((below > scale) | (above > scale))
-        for i in bad:
-            th = (float(np.atleast_1d(metrics["theta_min"])[i]),
-                  float(np.atleast_1d(metrics["theta_max"])[i]))
-            short = below[i] > above[i]
-            beyond = max(below[i], above[i])
-            excess[i] = max(excess[i], beyond)
-            where = _leaves(lambda t: coordinate(e, t), th, lo[i] if short else hi[i], short)
-            text[i] = text[i] or e.range_message(Pn, cfg, i, short, where, beyond)
+        if not len(bad):
+            continue
+        short = below[bad] > above[bad]
+        beyond = np.maximum(below[bad], above[bad])
+        excess[bad] = np.maximum(excess[bad], beyond)
+        th = np.column_stack([np.atleast_1d(np.asarray(metrics[k], float))[bad]
+                              for k in ("theta_min", "theta_max")])
+        edge, worst = _leaves(lambda t: coordinate(e, t), th,
+                              np.where(short, lo[bad], hi[bad]), short)
+        for j, i in enumerate(bad):
+            where = (None if np.isnan(edge[j]) else float(edge[j]), float(worst[j]))
+            text[i] = text[i] or e.range_message(Pn, cfg, i, bool(short[j]), where,
+                                                 float(beyond[j]))
     return excess, text
 
 
@@ -114,23 +119,51 @@ def table_coordinate(table):
     """``coordinate(element, thetas)`` from the table's column of each element's q."""
     def q(element, th):
         col = COEFFS.index(next(c for c, what in element.columns if what == "q"))
-        return table.evaluate(th)[:, col]
+        return table.evaluate_column(th, col)
     return q
 
 
-def _leaves(q_of, theta_range, bound: float, short: bool) -> tuple[float, float]:
-    """(where the coordinate crosses ``bound`` -- the edge of the region beyond it nearest its
-    worst point --, where it lies furthest beyond it), rad, over ``theta_range``."""
-    th = np.linspace(theta_range[0], theta_range[1], 401)
-    q = np.asarray(q_of(th), float).ravel()
-    beyond = (bound - q) if short else (q - bound)
-    worst = int(np.argmax(beyond))
-    inside = np.flatnonzero(beyond <= 0)
-    if not len(inside):                     # beyond over the whole stroke
-        return None, float(th[worst])
-    j = int(inside[np.argmin(np.abs(inside - worst))])
-    k = j + 1 if j < worst else j - 1       # its neighbour towards the worst point
-    return 0.5 * float(th[j] + th[k]), float(th[worst])
+#: angles per stroke where :func:`_leaves` looks for the edge of the invalid region (the
+#: edge is interpolated between two of them, the worst point refined by a parabola)
+LEAVE_GRID = 101
+
+
+def _leaves(q_of, theta_ranges, bound, short, chunk: int = 4096):
+    """Per row: (where the coordinate crosses ``bound`` -- the edge of the region beyond it
+    nearest its worst point; NaN when it is beyond over the whole range --, where it lies
+    furthest beyond it), rad, over the row's ``theta_ranges`` (m, 2), on a grid of
+    LEAVE_GRID angles (rows in chunks: the coordinate is evaluated for a chunk at once)."""
+    theta_ranges = np.atleast_2d(np.asarray(theta_ranges, float))
+    m, G = len(theta_ranges), LEAVE_GRID
+    bound = np.broadcast_to(np.asarray(bound, float), (m,))
+    short = np.broadcast_to(np.asarray(short, bool), (m,))
+    edge, worst = np.full(m, np.nan), np.empty(m)
+    u, idx = np.linspace(0.0, 1.0, G), np.arange(G)
+    for a in range(0, m, chunk):
+        r = slice(a, min(a + chunk, m))
+        lo, hi = theta_ranges[r, :1], theta_ranges[r, 1:]
+        th = lo + (hi - lo) * u                        # (rows, grid)
+        th[:, -1] = hi[:, 0]
+        q = np.asarray(q_of(th), float).reshape(th.shape)
+        b = np.where(short[r, None], bound[r, None] - q, q - bound[r, None])
+        rows = np.arange(len(th))
+        w = np.argmax(b, axis=1)
+        dist = np.where(b <= 0, np.abs(idx - w[:, None]), G + 1)
+        j = np.argmin(dist, axis=1)
+        has = dist[rows, j] <= G
+        k = np.clip(np.where(j < w, j + 1, j - 1), 0, G - 1)   # towards the worst point
+        bj, bk = b[rows, j], b[rows, k]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            f = np.where(bk != bj, -bj / (bk - bj), 0.5)       # b crosses 0 between j and k
+        edge[r] = np.where(has, th[rows, j] + np.clip(f, 0, 1) * (th[rows, k] - th[rows, j]),
+                           np.nan)
+        wl, wr = np.clip(w - 1, 0, G - 1), np.clip(w + 1, 0, G - 1)
+        c = b[rows, wl] - 2 * b[rows, w] + b[rows, wr]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            d = np.where((w > 0) & (w < G - 1) & (c < 0),
+                         0.5 * (b[rows, wl] - b[rows, wr]) / c, 0.0)
+        worst[r] = th[rows, w] + np.clip(d, -1, 1) * (th[:, 1] - th[:, 0])
+    return edge, worst
 
 
 #: angles of the opening-force search over [theta_closed, theta0] (then a parabola at the
@@ -178,15 +211,11 @@ def opening_forces(table, cfg, P, lid_mass=None) -> np.ndarray:
     dm = table.mass_offsets(lid_mass, (len(P),))
     if dm is not None:               # gravity's slope at another lid mass: affine in it
         slope += np.multiply.outer(dm, table.mass_slope_at(th)[:, COEFFS.index("dVg")])
-    slope += friction_torque(cfg)
+    fr = [e.coulomb(Pn) for e in elements.FRICTIONS]     # (on the lid's angle: q' = 1)
+    for f in fr:
+        slope += np.asarray(f, float)[:, None]
     F = slope / cols["tau"]
     return _parabola_max(F, th)
-
-
-def friction_torque(cfg) -> float:
-    """The lumped friction torque on the lid's rotation (N m; 0 without friction)."""
-    fr = getattr(cfg, "friction", None)
-    return float(getattr(fr, "torque", 0.0) or 0.0)
 
 
 def _parabola_max(F: np.ndarray, th: np.ndarray) -> np.ndarray:
@@ -211,8 +240,9 @@ def opening_force_exact(model, p) -> float:
     (dV/dtheta + T_f) / |dr_T/dtheta| over a 2001-point grid of [theta_closed, theta0], then a
     golden-section search around the largest point."""
     import math
-    st, cfg = model.cfg.stroke, model.cfg
-    Tf = friction_torque(cfg)
+    st = model.cfg.stroke
+    Tf = sum(float(np.asarray(e.coulomb(elements.params(np.asarray(p, float))))) for e in
+             elements.FRICTIONS)
     tau_row = COEFFS.index("tau")
 
     def F(th):

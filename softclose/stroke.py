@@ -80,6 +80,9 @@ class StrokeResult:
     theta_max: float | None = None
     theta_dot_max: float | None = None
     opening_force: float | None = None
+    #: the angle the ``reason`` of a stroke that did not close names (rad): where friction
+    #: holds the lid, the well that holds it open, the top of the barrier it cannot pass
+    stop_theta: float | None = None
     trajectory: dict | None = field(default=None, repr=False, compare=False)
 
     @property

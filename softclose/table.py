@@ -190,6 +190,15 @@ class CoefficientTable:
             c[:, :4] += dm[:, None] * self._mass_slope(i, s)
         return c
 
+    def evaluate_column(self, theta, col: int) -> np.ndarray:
+        """One interpolated coefficient (column ``col`` of :meth:`evaluate`) at angles
+        ``theta`` (any shape), at the table's own mass."""
+        th = np.asarray(theta, float)
+        i, s = self._cell(th.ravel())
+        q = self.cc[i, col]
+        s = s[:, 0]
+        return (q[:, 0] + s * (q[:, 1] + s * (q[:, 2] + s * q[:, 3]))).reshape(th.shape)
+
     def _cell(self, th: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Cells of the angles ``th`` and their local variables s in [0, 1] (a column)."""
         x = np.clip((th - self.lo) / self.h, 0, self.ncell)

@@ -42,6 +42,6 @@ def test_element_keys_are_in_the_config_and_its_tables():
             assert f"| `{k.name}` |" in table
             if k.range:
                 assert RANGES[k.full] == k.range
-    # every parameter of p is a design key with its default
+    # every parameter of p is a config key with its default
     for q in elements.PARAMS:
-        assert getattr(cfg.design, q.name) == next(k.default for k in KEYS if k.full == q.key)
+        assert q.value(cfg) == next(k.default for k in KEYS if k.full == q.key)

@@ -14,8 +14,8 @@ from .load import (BATCH_STEP_BUDGET, NLP_BUDGET, STEP_BUDGET, TRAJECTORY_BUDGET
                    apply_override, check_batch, default_config, from_dict, load_config,
                    parse_value, read_toml, steps_per_stroke, to_dict)
 from .schema import (DEFAULT_SPREADS, HESSIANS, INTEGRATORS, KEYS, RANGES, SCHEMA, SECTIONS,
-                     TOLERANCE_KEYS, TOLERANCE_OPTIONS, TOLERANCE_SECTIONS, Design, Geometry,
-                     Mass, Optimise, Simulate, Stroke, numeric_keys)
+                     TOLERANCE_KEYS, TOLERANCE_OPTIONS, TOLERANCE_SECTIONS, Design, Friction,
+                     Geometry, Mass, Optimise, Simulate, Stroke, numeric_keys)
 from .tolerance import MAX_TOLERANCE_SAMPLES, Spread, Tolerance
 
 __all__ = ["ConfigError", "Config", "load_config", "default_config", "from_dict", "to_dict", "parse_value",

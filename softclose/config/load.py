@@ -58,6 +58,7 @@ class Config:
     geometry: Geometry
     mass: Mass
     design: Design
+    friction: Friction
     stroke: Stroke
     simulate: Simulate
     optimise: Optimise

@@ -21,7 +21,7 @@ from ..keys import Key
 INTEGRATORS = ("rk4", "euler_cromer", "gauss4", "radau5")
 HESSIANS = ("exact", "limited-memory")
 #: the sections of a config, in order; "tolerance" holds spreads and their options
-SECTIONS = ("geometry", "mass", "design", "stroke", "simulate", "optimise")
+SECTIONS = ("geometry", "mass", "design", "friction", "stroke", "simulate", "optimise")
 
 
 def _half_length(v):
@@ -161,7 +161,7 @@ DEFAULT_SPREADS: dict[str, float] = {
 TOLERANCE_OPTIONS: dict[str, tuple[str, Any]] = {k.name: (k.kind, k.default)
                                                  for k in TOLERANCE_KEYS}
 #: the sections whose values are physical quantities of the lid and may carry a tolerance
-TOLERANCE_SECTIONS = ("geometry", "mass", "design", "stroke")
+TOLERANCE_SECTIONS = ("geometry", "mass", "design", "friction", "stroke")
 
 
 class Section:
@@ -228,7 +228,8 @@ def _section(section: str, values: dict) -> Section:
 
 #: the section classes, by section
 SECTION_TYPES = {s: _section_type(s) for s in SECTIONS}
-Geometry, Mass, Design, Stroke, Simulate, Optimise = (SECTION_TYPES[s] for s in SECTIONS)
+Geometry, Mass, Design, Friction, Stroke, Simulate, Optimise = (SECTION_TYPES[s]
+                                                               for s in SECTIONS)
 
 
 def numeric_keys() -> list[str]:

@@ -18,13 +18,14 @@ from __future__ import annotations
 from ..keys import Key
 from .base import Element, Param, Params
 from .dampers import Dashpot, RotaryDamper
+from .friction import Friction
 from .gravity import Gravity
 from .springs import Spring, TorsionSpring
 
 #: every element, in the order their contributions are summed (gravity first, then the
 #: springs, then the dampers: the order of the seed's equation, so its sums are unchanged)
 ELEMENTS: tuple[Element, ...] = (Gravity(), Spring(), TorsionSpring(), Dashpot(),
-                                 RotaryDamper())
+                                 RotaryDamper(), Friction())
 BY_NAME = {e.name: e for e in ELEMENTS}
 #: the seed's parameters, which come first in p: (k, l0, c, c_rot)
 SEED = ("spring_k", "spring_rest_length", "damper_c", "rotary_damper_c")
@@ -40,6 +41,7 @@ KEYS: tuple[Key, ...] = tuple(k for e in ELEMENTS for k in e.keys)
 #: the elements whose force is conservative (a law T(q)) and those that are viscous (B)
 SPRINGS = tuple(e for e in ELEMENTS if e.affine.__func__ is not Element.affine)
 DAMPERS = tuple(e for e in ELEMENTS if e.viscous.__func__ is not Element.viscous)
+FRICTIONS = tuple(e for e in ELEMENTS if e.coulomb.__func__ is not Element.coulomb)
 
 
 def params(p) -> Params:
@@ -60,7 +62,7 @@ EXTRA = tuple(e for e in ELEMENTS if e.table == "extra")
 def acting(cfg, extra_values: dict | None = None) -> tuple[Element, ...]:
     """The elements that exert a force with ``cfg``'s design (and ``extra_values``, a dict
     of design values that vary, e.g. swept or freed: their largest magnitude)."""
-    values = {q.name: q.number(getattr(cfg.design, q.name)) for q in PARAMS}
+    values = {q.name: q.number(q.value(cfg)) for q in PARAMS}
     values.update(extra_values or {})
     return tuple(e for e in ELEMENTS if bool(e.acts(values)))
 
@@ -95,5 +97,5 @@ def one_way(P, theta_d):
     return 1 - ow * (np.asarray(theta_d) > 0)
 
 
-__all__ = ["ELEMENTS", "BY_NAME", "EXTRA", "needs_extra", "one_way", "PARAMS", "PARAM_NAMES", "KEYS", "SPRINGS", "DAMPERS",
+__all__ = ["ELEMENTS", "BY_NAME", "FRICTIONS", "EXTRA", "needs_extra", "one_way", "PARAMS", "PARAM_NAMES", "KEYS", "SPRINGS", "DAMPERS",
            "Element", "Param", "Params", "params", "structure", "acting"]

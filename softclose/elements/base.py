@@ -55,10 +55,16 @@ class Param(NamedTuple):
     name: str
     si: float = 1.0
     codes: dict | None = None
+    config_key: str | None = None        # when not ``design.<name>``
 
     @property
     def key(self) -> str:
-        return f"design.{self.name}"
+        return self.config_key or f"design.{self.name}"
+
+    def value(self, cfg):
+        """The parameter's value in ``cfg`` (as the config holds it)."""
+        section, attr = self.key.split(".")
+        return getattr(getattr(cfg, section), attr)
 
     def number(self, value) -> float:
         """The config value as the number p holds (a word by its code)."""
@@ -134,6 +140,11 @@ class Element:
 
     def viscous(self, P):
         """B: the force along q is -B q-dot (None: not a damper)."""
+        return None
+
+    def coulomb(self, P):
+        """C: a dry-friction force along q, -C sign(q-dot) while sliding; at rest it holds
+        any driving force up to C (stick). None: no friction."""
         return None
 
     def valid(self, P, cfg=None):

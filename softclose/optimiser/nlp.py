@@ -108,7 +108,9 @@ def nlp_elements(cfg) -> tuple:
 def series_terms(els) -> list[tuple[str, str, str]]:
     """(name, element, what) of the geometric functions of the equation of motion carried by
     the elements ``els``: per conservative element "b" (-q q'/M; not for gravity, whose T
-    is constant) and "a" (-q'/M), per damper "B" (-q'^2/M); summed in this order."""
+    is constant) and "a" (-q'/M), per damper "B" (-q'^2/M), per dry friction "C" (|q'|/M:
+    the stroke is monotone, theta' <= 0, so friction is the constant force C against it);
+    summed in this order."""
     out = []
     for e in els:
         if e in elements.SPRINGS:
@@ -117,6 +119,8 @@ def series_terms(els) -> list[tuple[str, str, str]]:
             out.append((f"{e.name}:a", e.name, "a"))
         if e in elements.DAMPERS:
             out.append((f"{e.name}:B", e.name, "B"))
+        if e in elements.FRICTIONS:
+            out.append((f"{e.name}:C", e.name, "C"))
     return out
 
 
@@ -137,7 +141,7 @@ class ChebyshevFit:
         self.elements = tuple(els if els is not None else nlp_elements(model.cfg))
         terms = series_terms(self.elements)
         what = {"a": lambda c: -c.dq / M, "b": lambda c: -c.q * c.dq / M,
-                "B": lambda c: -c.dq2 / M}
+                "B": lambda c: -c.dq2 / M, "C": lambda c: ca.fabs(c.dq) / M}
         funcs = [what[w](co[e]) for _, e, w in terms] + [-0.5 * cf["dM"] / M, cf["tau"]]
         self.names = tuple(n for n, _, _ in terms) + ("inertia", "tau", "dtau")
         g = ca.vertcat(*funcs)
@@ -228,7 +232,8 @@ def interval_function(model, substeps: int, fit: ChebyshevFit | None = None,
     a0, a1 = [], []
     for name, e, what in series_terms(fit.elements):
         el = elements.BY_NAME[e]
-        coef = el.viscous(P) if what == "B" else el.affine(P)["ab".index(what)]
+        coef = el.viscous(P) if what == "B" else el.coulomb(P) if what == "C" else \
+            el.affine(P)["ab".index(what)]
         (a1 if what == "B" else a0).append(coef * fit.series(name))
     cq = ca.vertcat(sum(a0[1:], a0[0]), sum(a1[1:], a1[0]))
     xs, cs = ca.SX.sym("x", 2), ca.SX.sym("cq", 2 * nb)

@@ -103,9 +103,11 @@ def discretise(cfg: Config) -> tuple[int, int, float, list[str]]:
 
 
 def model_config(cfg: Config, values: dict) -> Config:
-    """The config of a scenario's model: ``cfg`` with its non-design keys set."""
+    """The config of a scenario's model: ``cfg`` with its keys set that are not in the
+    parameter vector (those the scenario maps as a q + b)."""
+    from ..problem import PARAM_COLUMNS
     from .evaluate import with_values
-    return with_values(cfg, {k: v for k, v in values.items() if not k.startswith("design.")})
+    return with_values(cfg, {k: v for k, v in values.items() if k not in PARAM_COLUMNS})
 
 
 def _model_key(cfg: Config) -> tuple:

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..config import Config
-from ..problem import DESIGN_KEYS, PARAM_KEYS, with_designs
+from ..problem import DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, with_designs
 from .box import Box, box_of
 from .evaluate import evaluate
 from .policy import MAX_CORNERS, t_end
@@ -34,9 +34,8 @@ def maps(box: Box, z) -> tuple[np.ndarray, np.ndarray, dict]:
     PARAM_KEYS), model keys."""
     a, b, values = np.ones(len(PARAM_KEYS)), np.zeros(len(PARAM_KEYS)), {}
     for j, key in enumerate(box.keys):
-        name = key.removeprefix("design.")
-        if name in PARAM_KEYS:
-            col = PARAM_KEYS.index(name)
+        if key in PARAM_COLUMNS:
+            col = PARAM_COLUMNS[key]
             zj = max(z[j], box.z_min[j])
             if box.relative[j]:
                 a[col] = 1.0 + box.spreads[j] * zj
@@ -49,8 +48,7 @@ def maps(box: Box, z) -> tuple[np.ndarray, np.ndarray, dict]:
 
 def scenario_rows(box: Box, designs: np.ndarray, Z: np.ndarray, cfg):
     """Evaluation rows of every design (G, 3) in every scenario (S, d): (keys, X (G S, .))."""
-    keys = [f"design.{k}" for k in PARAM_KEYS] + [k for k in box.keys
-                                                   if not k.startswith("design.")]
+    keys = list(PARAM_COLUMNS) + [k for k in box.keys if k not in PARAM_COLUMNS]
     rows = []
     for q in with_designs(cfg, np.atleast_2d(designs)):
         for z in Z:

@@ -142,7 +142,7 @@ def run(cfg, space, *, progress: bool = False, threads: int | None = None,
                        seconds=time.perf_counter() - t0, stages=stages, chunk=chunk,
                        interrupted=interrupted or tally.computed < n, columns=cols,
                        dataset=dataset,
-                       fixed={k: _value(getattr(cfg.design, k.split(".")[1]))
+                       fixed={k: _value(getattr(getattr(cfg, k.split(".")[0]), k.split(".")[1]))
                               for k in PARAM_COLUMNS if k not in keys and _says(cfg, k)})
 
 
@@ -152,7 +152,7 @@ def _says(cfg, key: str) -> bool:
     from ..elements import SEED
     from ..problem import PARAM_DEFAULTS
     i = PARAM_COLUMNS[key]
-    return key.split(".")[1] in SEED or params_of(cfg)[i] != PARAM_DEFAULTS[i]
+    return key.removeprefix("design.") in SEED or params_of(cfg)[i] != PARAM_DEFAULTS[i]
 
 
 def _value(v):

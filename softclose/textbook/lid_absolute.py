@@ -53,6 +53,7 @@ class LidParameters:
     kt: float = 0.0                  # torsion spring rate (N m/rad)
     psi0: float = 0.0                # its free angle (rad)
     pivot: str = "O"                 # O, B, A or C
+    Tf: float = 0.0                  # Coulomb friction moment on the lid's rotation (N m)
 
 
 #: a pin's bodies: (body a, body b) with psi = angle(a) - angle(b); -1 = ground
@@ -70,7 +71,8 @@ def read_parameters(cfg) -> LidParameters:
         k=d.spring_k, l0=d.spring_rest_length, c=d.damper_c, c_rot=d.rotary_damper_c,
         F={"extension": 1.0, "compression": -1.0}.get(d.spring_kind, 0.0) * d.spring_preload,
         rot_pivot=d.rotary_damper_pivot, one_way=d.damper_one_way,
-        kt=d.torsion_k, psi0=np.radians(d.torsion_free_angle_deg), pivot=d.torsion_pivot)
+        kt=d.torsion_k, psi0=np.radians(d.torsion_free_angle_deg), pivot=d.torsion_pivot,
+        Tf=cfg.friction.torque)
 
 
 def default_parameters(**design) -> LidParameters:
@@ -127,7 +129,8 @@ def solve_configuration(p: LidParameters, theta: float, theta_dot: float = 0.0,
 
 
 def evaluate_applied_forces(p: LidParameters, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-    """Generalised forces Q: gravity, spring E-D, dashpot C-O, rotary damper (all but gravity on the lid)."""
+    """Generalised forces Q: gravity, spring E-D, dashpot C-O, rotary damper, torsion spring,
+    friction on the lid's rotation (all but gravity on the lid or at a pin)."""
     Q = np.zeros(9)
     for body, m in enumerate((p.m1, p.m2, p.m3)):
         add_point_force(Q, q, body, (0.0, 0.0), np.array([0.0, -m * p.g]))
@@ -157,6 +160,8 @@ def evaluate_applied_forces(p: LidParameters, q: np.ndarray, qd: np.ndarray) -> 
         add_moment(Q, a, moment)
         if b >= 0:
             add_moment(Q, b, -moment)
+    if p.Tf:                                         # dry friction against the lid's turning
+        add_moment(Q, 0, -p.Tf * np.sign(qd[2]))
     return Q
 
 
