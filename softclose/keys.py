@@ -10,7 +10,8 @@ tables of docs/model.md are all read from these records; the machine elements
 Kinds: ``"pos"`` (a number > 0), ``"nonneg"`` (>= 0), ``"real"``, ``"vec2"``/``"vec3"`` (a list
 of 2 or 3 numbers), ``"bounds"`` (two numbers lo <= hi), ``"int+"`` (a whole number >= 1),
 ``"str:a,b,c"`` (one of the words), ``"words:a,b,c"`` (a list of distinct words of them),
-``"bool"``.
+``"bool"``, ``"free"`` (a table KEY = [lo, hi] of further design variables:
+:mod:`softclose.config.free`).
 """
 
 from __future__ import annotations

@@ -18,7 +18,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from . import native, statics
+from . import elements, native, statics
 from .config import RANGES, STEP_BUDGET, TRAJECTORY_BUDGET, Config, default_config
 from .errors import ConfigError, NumericalError
 from .integrators import Method, get_method
@@ -234,6 +234,19 @@ class Simulator:
             theta_dot_max=col["theta_dot_max"] if ok else None,
             stop_theta=col["stop_theta"] if status is StrokeStatus.NOT_CLOSED else None)
 
+    def friction_gain(self, p) -> float:
+        """How much dry friction amplifies the table's relative error in a stroke's metrics:
+        (|V'| + T_f) / ||V'| - T_f| at the release (1 without friction). A lid whose driving
+        moment barely exceeds the friction moves on their small difference, which the
+        table knows only to its error times the moments themselves (a lid released at 1.0001
+        x T_f closes 4e-7 s off at any step: the table's 7.8e-12, amplified 2e4 times)."""
+        Tf = sum(float(e.coulomb(elements.params(np.asarray(p, float)))) for e in
+                 elements.FRICTIONS)
+        if Tf <= 0:
+            return 1.0
+        dV = abs(float(self.model.dV(self.cfg.stroke.theta0, p)))
+        return (dV + Tf) / max(abs(dV - Tf), 1e-300 + 1e-15 * (dV + Tf))
+
     def _error_estimate(self, res: StrokeResult, p) -> tuple[dict, str | None]:
         """|metric(h) - converged| estimated from the stroke at h/2 (Richardson), and a
         warning when the estimate exceeds the accuracy targets or the design is stiff."""
@@ -242,12 +255,12 @@ class Simulator:
         half.step = self.step / 2
         r2 = half.run(p, estimate_error=False)
         q = 2.0 ** self.method.order
-        tab = self.table.max_rel_error
+        tab = self.table.max_rel_error * self.friction_gain(p)
         est = {}
         for k in ERROR_KEYS:  # step error (Richardson) + what the table error can cause
             a, b = getattr(res, k), getattr(r2, k)
             est[k] = None if a is None or b is None else abs(a - b) * q / (q - 1) + tab * abs(a)
-        est["table_rel_error"] = tab
+        est["table_rel_error"] = self.table.max_rel_error
         h_lam = self.step * self.max_rate(p)
         est["step_times_max_rate"] = h_lam if math.isfinite(h_lam) else None
         if h_lam > STIFF_H_LAMBDA and self.method.real_stability != math.inf:
@@ -256,6 +269,14 @@ class Simulator:
                          "prefer simulate.integrator = \"radau5\" or a smaller simulate.step")
         over = [k for k in ERROR_KEYS if est[k] is not None
                 and est[k] > target(k, getattr(res, k))]
+        table_bound = [k for k in over if tab * abs(getattr(res, k)) > target(k, getattr(res, k))]
+        if table_bound:       # no step helps: the table's error, amplified by friction
+            return est, (f"warning: {', '.join(table_bound)} may be off by about "
+                         f"{max(est[k] for k in table_bound):.2g} whatever the step: the lid "
+                         f"moves on the small difference between its driving moment and the "
+                         f"friction moment (x{self.friction_gain(p):.3g} of the table's error "
+                         f"{self.table.max_rel_error:.1e}); the adaptive reference "
+                         "(softclose.Reference) has no table")
         if over:
             # error ~ h^order: the step that brings the worst metric within its target (a
             # relative target of a zero value is zero: any error exceeds it, by a large ratio)

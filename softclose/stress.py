@@ -7,7 +7,9 @@ NaN, a traceback, a hang or an answer the reference contradicts is a finding.
 
 - :func:`stress_cases` lists the cases: damping 0 … 1e6 N s/m, springs up to 1e6 N/m,
   steps far too large and very small, long undamped runs (energy drift), a toggle near or
-  inside the stroke, a release angle at the edge of the assembly, and a few other edges.
+  inside the stroke, a release angle at the edge of the assembly, the real elements at
+  their edges (a stiff torsion spring, friction that just holds or just slips, a preload
+  that reverses the stroke, a one-way damper on a rebound), and a few other edges.
 - :func:`run_stress_case` runs one case and returns its row (a dict; never raises for a
   softclose failure).
 - :func:`confirm` is the criterion: each metric within its accuracy target
@@ -82,6 +84,13 @@ def geometry_with_assembly(**geometry) -> dict:
     return g
 
 
+def _release_moment() -> float:
+    """|dV/dtheta| of the default lid at its release (N m): what friction must exceed."""
+    cfg = default_config()
+    m = LidModel(cfg)
+    return abs(float(m.dV(cfg.stroke.theta0, m.params())))
+
+
 def stress_cases(fast: bool = False) -> list[StressCase]:
     """Every stress case of the survey (``fast``: a representative subset for the tests)."""
     S = StressCase
@@ -148,6 +157,30 @@ def stress_cases(fast: bool = False) -> list[StressCase]:
                        {"geometry": edge, "stroke": {"theta0_deg": th0}}, exp))
     cases.append(S("release at 170°", "release edge", "default geometry (Grashof), theta0 = 170°",
                    {"stroke": {"theta0_deg": 170.0}}, "any"))
+    # the real elements at their edges
+    cases.append(S("stiff torsion spring", "elements",
+                   f"torsion spring k_t = 20 N m/rad at pivot O (free at the closed crank angle), "
+                   f"no damper: a fast oscillation, rk4 at {h0}",
+                   {"design": {"torsion_k": 20.0, "torsion_pivot": "O",
+                               "torsion_free_angle_deg": 120.94}}, "any"))
+    dV0 = _release_moment()
+    for f, what in ((1.0001, "just holds"), (0.9999, "just slips")):
+        cases.append(S(f"friction {what}", "elements",
+                       f"friction T_f = {f:g} x the release moment {dV0:.4f} N m: the lid "
+                       + ("stays where it is released" if f > 1 else
+                          "creeps off, then accelerates"),
+                       {"friction": {"torque": f * dV0}}))
+    if not fast:
+        cases.append(S("preload reverses the stroke", "elements",
+                       "a gas strut (compression, F0 = 200 N, k = 100 N/m, l0 = 0.12 m) "
+                       "pushes the released lid open, past theta0",
+                       {"design": {"spring_kind": "compression", "spring_preload": 200.0,
+                                   "spring_k": 100.0, "spring_rest_length": 0.12}}, "any"))
+        cases.append(S("one-way damper, rebound", "elements",
+                       "k = 3000 N/m, l0 = 0.09 m throws the lid up; the one-way dashpot lets "
+                       "it rise freely",
+                       {"design": {"spring_k": 3000.0, "spring_rest_length": 0.09,
+                                   "damper_c": 150.0, "damper_one_way": True}}, "any"))
     # other edges
     cases.append(S("tiny stroke", "other", "theta0 = 0.001°: a stroke of 1.7e-5 rad",
                    {"stroke": {"theta0_deg": 0.001}}))

@@ -67,6 +67,16 @@ def main(argv: list[str] | None = None) -> int:
         cancel_early()
 
 
+def free_overrides(args) -> list[str]:
+    """``--free KEY=LO:HI`` options as overrides of ``optimise.free.KEY``."""
+    from ..config.free import parse_free_option
+    out = []
+    for text in getattr(args, "free", None) or ():
+        key, (lo, hi) = parse_free_option(text)
+        out.append(f"optimise.free.{key}=[{lo!r}, {hi!r}]")
+    return out
+
+
 def _main(argv: list[str]) -> int:
     as_json = "--json" in argv
     from .. import interrupt
@@ -74,7 +84,7 @@ def _main(argv: list[str]) -> int:
         with interrupt.guard():   # Ctrl-C ends the command even inside a compiled solver
             args = build_parser().parse_args(argv)
             from ..config import load_config
-            cfg = load_config(args.config, args.overrides)
+            cfg = load_config(args.config, args.overrides + free_overrides(args))
             outcome: Outcome = args.run(cfg, args)
     except SoftcloseError as exc:
         if interrupt.interrupted():   # a solver turned the Ctrl-C into an error

@@ -14,7 +14,7 @@ import math
 import sys
 from pathlib import Path
 
-from .common import Outcome, add_common, add_out, prepare_out, wrote
+from .common import Outcome, add_common, add_out, interactive, prepare_out, wrote
 
 
 def register(sub) -> None:
@@ -30,8 +30,9 @@ def register(sub) -> None:
 def run(cfg, args) -> Outcome:
     out = prepare_out(args.out)
     from .. import bench
-    log = (lambda *a: None) if args.json else \
-        (lambda *a: print(*a, file=sys.stderr, flush=True))
+    # progress on a terminal only: a failing run's stderr is then its one-line error
+    log = (lambda *a: print(*a, file=sys.stderr, flush=True)) if interactive(args) else \
+        (lambda *a: None)
     res = bench.run(cfg, quick=args.quick, log=log)
     files = write_files(res, out) if out is not None else []
     payload = res.to_json()

@@ -24,6 +24,10 @@ def register(sub) -> None:
     add_out(p, what="also write the optimum's trajectory, figures and optimise.json")
     p.add_argument("--robust", action="store_true",
                    help="design for the [tolerance] box (yield, scenarios) instead")
+    p.add_argument("--free", action="append", default=[], metavar="KEY=LO:HI",
+                   help="also choose this element parameter within [LO, HI], in its own "
+                        "unit, e.g. design.spring_preload=0:200 (repeatable; the file's "
+                        "[optimise.free])")
     p.set_defaults(run=run_optimise)
     q = sub.add_parser("pareto", help="verified front of the objective against closing_time_max")
     add_common(q)
@@ -103,6 +107,13 @@ def _v(x, fmt=".9g") -> str:
     return format(x, fmt)
 
 
+def design_text(design: dict) -> str:
+    """``spring_k = 1914.71 N/m, ...``: every design variable with its unit."""
+    from ..problem import UNITS
+    return ", ".join(f"{k} = {v:.6g}" + (f" {UNITS[k]}" if UNITS.get(k) else "")
+                     for k, v in design.items())
+
+
 def format_result(res) -> str:
     """The optimisation as text: verdict, problem, design, objective, the verified metrics
     beside the optimiser's own, constraints, active limits, starts, notes."""
@@ -121,9 +132,11 @@ def format_result(res) -> str:
                      f"{pr['closing_time_max']:g} s, holding moment >= "
                      f"{pr['holding_moment_min']:g} N m")
     if res.design:
-        d = res.design
-        lines.append(f"  design: spring_k = {d['spring_k']:.6g} N/m, spring_rest_length = "
-                     f"{d['spring_rest_length']:.6g} m, damper_c = {d['damper_c']:.6g} N s/m")
+        lines.append("  design: " + design_text(res.design)
+                     + (f" ({res.kind} spring)" if getattr(res, "kind", None) else ""))
+        part = getattr(res, "part", None)
+        if part is not None:
+            lines.append("  to buy: " + part.text().replace("\n", "\n  "))
     ver = res.verification
     if res.objective is not None:
         s = f"  objective J = {res.objective:.8g} (the optimiser's)"

@@ -165,7 +165,10 @@ def format_robust(res) -> str:
     if res.design:
         d = res.design
         lines.append(f"  robust design: spring_k = {d['spring_k']:.6g} N/m, spring_rest_length ="
-                     f" {d['spring_rest_length']:.6g} m, damper_c = {d['damper_c']:.6g} N s/m")
+                     f" {d['spring_rest_length']:.6g} m, damper_c = {d['damper_c']:.6g} N s/m"
+                     + (f" ({res.kind} spring)" if getattr(res, "kind", None) else ""))
+        if getattr(res, "part", None) is not None:
+            lines.append("  to buy: " + res.part.text().replace("\n", "\n  "))
         lines.append(f"  {res.robust_objective}-case objective J = {res.objective:.6g}")
     if res.scenarios:
         lines.append(f"  scenarios ({len(res.scenarios)}; closing time and J from the NLP, "

@@ -20,6 +20,7 @@ from typing import Any, Iterable
 
 from ..errors import ConfigError
 from .schema import BY_NAME, KEYS, RANGES, SCHEMA, SECTION_TYPES, SECTIONS
+from .free import free_table, read_free
 from .tolerance import Tolerance, read_tolerance
 from .values import check, fmt, in_range, number
 
@@ -118,6 +119,9 @@ def from_dict(raw: dict[str, Any]) -> Config:
     values: dict[str, dict[str, Any]] = {s: {} for s in SECTIONS}
     for k in KEYS:
         v = raw.get(k.section, {}).get(k.name, k.default)
+        if k.kind == "free":             # a table of further design variables
+            values[k.section][k.name] = None if v is None else (read_free(k.full, v) or None)
+            continue
         values[k.section][k.name] = None if v is None else check(k.full, k.kind, v)
         if v is not None and k.full in RANGES:
             in_range(k.full, k.full, values[k.section][k.name])
@@ -164,7 +168,8 @@ def to_dict(cfg: Config) -> dict[str, dict[str, Any]]:
     out = {}
     for name in SECTIONS:
         sec = getattr(cfg, name)
-        out[name] = {k: (list(v) if isinstance(v, tuple) else v)
+        out[name] = {k: (free_table(v) if BY_NAME[f"{name}.{k}"].kind == "free" and v
+                         else list(v) if isinstance(v, tuple) else v)
                      for k, v in sec._asdict().items()}
     out["tolerance"] = cfg.tolerance.to_dict()
     return out
@@ -196,9 +201,16 @@ _KEY = re.compile(r"^([A-Za-z_]\w*)\.([A-Za-z_]\w*)(?:\[(\d+)\])?$")
 
 
 def _set_raw(raw: dict[str, Any], key: str, value: Any, origin: str) -> None:
-    """Set ``section.key`` or ``section.key[i]`` (or ``tolerance.<config key>``) in ``raw``."""
+    """Set ``section.key`` or ``section.key[i]`` (or ``tolerance.<config key>``, or
+    ``optimise.free.<config key>``) in ``raw``."""
     if key.startswith("tolerance."):  # tolerance.<config key> = spread
         raw.setdefault("tolerance", {})[key[len("tolerance."):].strip().strip('"')] = value
+        return
+    if key.startswith("optimise.free."):  # optimise.free.<config key> = [lo, hi]
+        opt = raw.setdefault("optimise", {})
+        if not isinstance(opt.get("free"), dict):
+            opt["free"] = {}
+        opt["free"][key[len("optimise.free."):].strip().strip('"')] = value
         return
     m = _KEY.match(key)
     if not m:

@@ -106,6 +106,11 @@ CORE: tuple[Key, ...] = (
         ("compression", "extension"), "",
         "the kinds of spring the optimiser may choose (one problem each, the best kept): "
         "springs one can buy; `linear` (the idealised element) only when listed"),
+    Key("optimise", "free", "free", None, "",
+        "further design variables, a table `KEY = [lo, hi]` in the key's own unit (also "
+        "`--free KEY=LO:HI`): `design.spring_preload`, `design.torsion_k`, "
+        "`design.torsion_free_angle_deg`, `design.rotary_damper_c`; none: k, l0 and c only",
+        note="`[optimise.free]` in a file"),
     Key("optimise", "nodes", "int+", 10, "", "shooting intervals N", lo=1, hi=1000,
         note="with nodes × substeps ≤ 2000"),
     Key("optimise", "substeps", "int+", 4, "", "RK4 sub-steps per interval M", lo=1, hi=1000),

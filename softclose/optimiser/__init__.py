@@ -5,8 +5,10 @@ Ipopt, every answer verified by the independent adaptive reference.
 - :func:`front` -- the verified optima over a series of closing_time_max -> :class:`FrontResult`;
 - :func:`solve` -- one Ipopt solve, cold or warm (benchmarks, continuation).
 
-Modules: :mod:`.nlp` (Chebyshev series of the geometry, the Hermite peak bound, the NLP, its
-discretisation), :mod:`.cache` (models and NLPs built once), :mod:`.starts` (starts from a
+Modules: :mod:`.interval` (the equation of motion as the NLP sees it: Chebyshev series of
+the geometry, one shooting interval, the Hermite peak bound, the elements and free design
+variables the NLP carries), :mod:`.nlp` (the NLP and its discretisation), :mod:`.kinds` (the
+spring kinds), :mod:`.cache` (models and NLPs built once), :mod:`.starts` (starts from a
 coarse sweep, initial guesses), :mod:`.polish` (sub-step refinement, closing-time
 correction), :mod:`.verify` (the adaptive reference's verdict), :mod:`.diagnose` (why a
 problem is infeasible), :mod:`.result` (result types), :mod:`.optimiser`, :mod:`.pareto`.
@@ -15,8 +17,8 @@ See docs/optimise.md.
 
 from ..problem import DESIGN_KEYS, METRIC_KEYS, SCALES
 from .cache import get_model, get_nlp
-from .nlp import (CONVERGED, H_MAX, MAX_STEPS, ChebyshevFit, Discretisation, Run,
-                  ShootingNLP, discretisation, hermite_max, interval_function)
+from .interval import ChebyshevFit, hermite_max, interval_function
+from .nlp import CONVERGED, H_MAX, MAX_STEPS, Discretisation, Run, ShootingNLP, discretisation
 from .optimiser import active_set, claims, optimise, solve
 from .pareto import continue_from, front
 from .result import Active, FrontResult, OptimiseResult

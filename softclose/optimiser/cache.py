@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from ..model import LidModel, model_key
 from ..simulate import Simulator
-from .nlp import ShootingNLP, nlp_elements
+from .interval import free_layout, nlp_elements
+from .nlp import ShootingNLP
 
 _MODELS: dict = {}
 _NLPS: dict = {}
@@ -27,7 +28,7 @@ def get_model(cfg) -> LidModel:
 def nlp_key(cfg, nodes: int | None = None, substeps: int | None = None) -> tuple:
     o = cfg.optimise
     return model_key(cfg) + (tuple(e.name for e in nlp_elements(cfg)),
-                             o.opening_force_max is not None,
+                             o.opening_force_max is not None, free_layout(cfg),
                              nodes or o.nodes, substeps or o.substeps, o.hessian,
                              o.linear_solver, o.max_iter)
 
@@ -43,7 +44,8 @@ def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None) -> Shoot
     if key not in _NLPS:
         nlp = ShootingNLP(get_model(cfg), key[-5], key[-4], o.hessian, o.linear_solver,
                           o.max_iter, els=nlp_elements(cfg),
-                          opening=o.opening_force_max is not None)
+                          opening=o.opening_force_max is not None,
+                          free=free_layout(cfg))
         nlp.key = key
         _NLPS[key] = nlp
     return _NLPS[key]

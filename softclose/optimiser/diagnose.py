@@ -69,14 +69,14 @@ def diagnose(cfg, nlp: ShootingNLP, runs: list[Run]) -> tuple[str, dict]:
             pp = nlp.params(cfg, 1.0, weight_time=sense, weights=(0.0, 0.0))
             w0, _ = initial_guess(nlp, relaxed, d0, sim, pp, t_max=st.t_max)
             r = nlp.solve(w0, pp, lbx, ubx, lbg, ubg)
-            if r.success and (best is None or sense * r.x[3] < sense * best.x[3]):
+            if r.success and (best is None or sense * r.x[nlp.iT] < sense * best.x[nlp.iT]):
                 best = r
         if best is None:
             continue
         d, T, _, _ = nlp.unpack(best.x)
-        rs = sim.run(with_designs(cfg, d), estimate_error=False)
+        rs = sim.run(nlp.param_vector(cfg, d), estimate_error=False)
         T_sim = rs.closing_time if rs.closed else T
-        dd = design_of(d)
+        dd = nlp.design_dict(cfg, d)
         info[f"{name}_stroke"] = {"closing_time": T_sim, "design": dd}
         ds = ", ".join(f"{k} = {v:.4g}" for k, v in dd.items())
         if sense > 0 and T_sim > o.closing_time_max * (1 + 1e-6):

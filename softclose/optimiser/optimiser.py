@@ -15,7 +15,7 @@ import numpy as np
 
 from .. import statics
 from ..errors import ConfigError, NumericalError, SoftcloseError
-from ..problem import DESIGN_KEYS, SCALES, UNITS, describe, design_of, with_designs
+from ..problem import DESIGN_KEYS, SCALES, UNITS, describe
 from ..progress import Progress
 from .cache import get_nlp, has_nlp, stroke_simulator
 from ..parts import spring_part
@@ -56,7 +56,7 @@ def claims(nlp: ShootingNLP, cfg, run: Run) -> tuple[dict, dict, float]:
     d, T, X, _ = nlp.unpack(run.x)
     st = cfg.stroke
     model = nlp.model
-    p = with_designs(cfg, d)
+    p = nlp.param_vector(cfg, d)
     thd = float(X[1, -1])
     vT = np.asarray(model.kin(np.array([st.theta_closed, thd]))[4]).ravel()
     lmin, lmax = get_checker(cfg).spring_extremes(st.theta_closed, st.theta0)
@@ -66,7 +66,19 @@ def claims(nlp: ShootingNLP, cfg, run: Run) -> tuple[dict, dict, float]:
          "min_spring_length": lmin, "max_spring_length": lmax,
          "holding_moment": model.holding_moment(p),
          "opening_force": statics.opening_force_exact(model, p)}
-    return design_of(d), m, nlp_objective(nlp, cfg, run)
+    return nlp.design_dict(cfg, d), m, nlp_objective(nlp, cfg, run)
+
+
+def free_in_bounds(cfg):
+    """``cfg`` with each free design variable (``optimise.free``) clipped into its bounds:
+    where the starts' sweep holds it."""
+    values = {}
+    for key, lo, hi in cfg.optimise.free or ():
+        section, name = key.split(".")
+        v = getattr(getattr(cfg, section), name)
+        if not lo <= v <= hi:
+            values[key] = float(np.clip(v, lo, hi))
+    return cfg.update(values)
 
 
 def active_set(nlp: ShootingNLP, cfg, run: Run, t_limit: float) -> tuple[Active, ...]:
@@ -82,16 +94,17 @@ def active_set(nlp: ShootingNLP, cfg, run: Run, t_limit: float) -> tuple[Active,
     o, st = cfg.optimise, cfg.stroke
     Jr, lam_x, lam_g = run.J_ref, run.lam_x, run.lam_g
     out = []
-    for i, key in enumerate(DESIGN_KEYS):
-        lam = float(lam_x[i])
-        lo, hi = getattr(o, key)
+    names = list(nlp.design_dict(cfg, nlp.unpack(run.x)[0]))
+    for i, ((lo, hi), key) in enumerate(zip(nlp.design_bounds(cfg), names)):
+        lam, sc = float(lam_x[i]), nlp.scales[i]
         for side, b, sign in (("upper", hi, 1.0), ("lower", lo, -1.0)):
-            at = abs(run.x[i] - b / SCALES[i]) <= 1e-7 * max(1.0, abs(b / SCALES[i]))
+            at = abs(run.x[i] - b / sc) <= 1e-7 * max(1.0, abs(b / sc))
             if sign * lam > ACTIVE_LAM or (at and lo != hi):
                 out.append(Active(key, "bound", side, float(b), UNITS[key],
-                                  -sign * Jr * lam / SCALES[i]))
+                                  -sign * Jr * lam / sc))
                 break
-    lam = float(lam_x[3])
+    iT = nlp.iT
+    lam = float(lam_x[iT])
     if lam > ACTIVE_LAM:
         name, v = (("closing_time_max", o.closing_time_max) if t_limit >= o.closing_time_max
                    else ("stroke.t_max", st.t_max))
@@ -107,11 +120,11 @@ def active_set(nlp: ShootingNLP, cfg, run: Run, t_limit: float) -> tuple[Active,
                           "N m", Jr * lam_hm))
     # theta' <= 0 at every sub-step and node: relaxed together (theta' <= eps everywhere)
     lam_rb = float(np.maximum(lam_g[groups["theta_dot_nonpositive"]], 0).sum()
-                   + np.maximum(lam_x[5:5 + 2 * N:2], 0).sum())
+                   + np.maximum(lam_x[iT + 2:iT + 2 + 2 * N:2], 0).sum())
     if lam_rb > ACTIVE_LAM:
         out.append(Active("no_rebound", "constraint", "upper", 0.0, "rad/s", -Jr * lam_rb))
     lam_rim = float(np.minimum(lam_g[groups["theta_above_closed"]], 0).sum()
-                    + np.minimum(lam_x[4:4 + 2 * (N - 1):2], 0).sum())
+                    + np.minimum(lam_x[iT + 1:iT + 1 + 2 * (N - 1):2], 0).sum())
     if lam_rim < -ACTIVE_LAM:
         out.append(Active("theta_above_closed", "constraint", "lower", st.theta_closed, "rad",
                           Jr * lam_rim))
@@ -130,7 +143,8 @@ def active_set(nlp: ShootingNLP, cfg, run: Run, t_limit: float) -> tuple[Active,
 def start_row(nlp: ShootingNLP, cfg, start, run: Run, J0) -> dict:
     """One start as reported: where it began, where it ended, how it went."""
     d, T, _, _ = nlp.unpack(run.x)
-    row = {"start": design_of(start), "start_objective": J0, "design": design_of(d),
+    row = {"start": nlp.design_dict(cfg, start), "start_objective": J0,
+           "design": nlp.design_dict(cfg, d),
            "objective": nlp_objective(nlp, cfg, run) if run.success else None,
            "closing_time": T, "status": run.status, "success": run.success,
            "iterations": run.iterations, "solve_time": run.time}
@@ -142,8 +156,12 @@ def start_row(nlp: ShootingNLP, cfg, start, run: Run, J0) -> dict:
 def distinct(rows: list, rtol: float = 1e-3) -> int:
     """How many distinct designs (scaled distance > rtol) the rows reached."""
     seen: list = []
+    keys = list(rows[0]["design"]) if rows else []
+    # the design variables scaled: k, l0, c by the NLP's scales, a free one by its largest
+    scale = np.r_[SCALES, [max(max(abs(r["design"][k]) for r in rows), 1e-12)
+                           for k in keys[len(DESIGN_KEYS):]]]
     for r in rows:
-        v = np.array([r["design"][k] for k in DESIGN_KEYS]) / SCALES
+        v = np.array([r["design"][k] for k in keys]) / scale
         if all(np.linalg.norm(v - s) > rtol * max(1.0, np.linalg.norm(s)) for s in seen):
             seen.append(v)
     return len(seen)
@@ -267,6 +285,7 @@ def optimise_kind(cfg, *, starts: int | None = None, verify: bool = True,
     """
     t_start = time.perf_counter()
     n_starts = check_problem(cfg, starts)
+    cfg = free_in_bounds(cfg)
     o = cfg.optimise
     disc = discretisation(cfg, nodes, substeps)
     notes = list(disc.notes)
@@ -306,8 +325,13 @@ def optimise_kind(cfg, *, starts: int | None = None, verify: bool = True,
                 infeasibility=inf, notes=tuple(notes), config=cfg,
                 total_time=time.perf_counter() - t_start, **base)
         best = runs[min(ok, key=lambda i: rows[i]["objective"])]
-        notes.append(f"{len(ok)} of {len(runs)} starts converged, to "
-                     f"{distinct([rows[i] for i in ok])} distinct optima")
+        n_opt = distinct([rows[i] for i in ok])
+        Js = [rows[i]["objective"] for i in ok]
+        same = n_opt > 1 and max(Js) - min(Js) <= 1e-6 * max(abs(min(Js)), 1e-300)
+        notes.append(f"{len(ok)} of {len(runs)} starts converged, to {n_opt} distinct "
+                     + ("designs of the same J: the optimum is not unique (a spring's preload "
+                        "and free length, say, trade against each other)" if same
+                        else "optima"))
         if verify:
             bar.update(len(designs), "verifying with the adaptive reference", force=True)
         res = finish(cfg, nlp, best, disc, verify=verify, polish=True, notes=notes, **base)

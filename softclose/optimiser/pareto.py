@@ -102,7 +102,7 @@ def _continue(cfg, prev: OptimiseResult) -> OptimiseResult:
     Xo = np.column_stack([[st.theta0, 0.0], X_old])
     Xn = np.vstack([np.interp(tau_new, tau_old, Xo[0]), np.interp(tau_new, tau_old, Xo[1])])
     Xn[0, -1] = st.theta_closed
-    x0 = nlp.pack(d_old, float(np.clip(T_old, lbx[3], ubx[3])), Xn, s_old)
+    x0 = nlp.pack(d_old, float(np.clip(T_old, lbx[nlp.iT], ubx[nlp.iT])), Xn, s_old)
     runs = [nlp.solve(x0, p, *bounds, origin="previous optimum")]
     starts = [d_old]
     J0s = [None]

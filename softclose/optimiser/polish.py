@@ -15,7 +15,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..problem import ERROR_KEYS, agreement_tolerance, objective, with_designs
+from ..problem import ERROR_KEYS, agreement_tolerance, objective
 from .cache import get_nlp
 from .nlp import MAX_STEPS, T_FLOOR, Run, ShootingNLP
 
@@ -74,7 +74,7 @@ def refine(cfg, nlp: ShootingNLP, run: Run, sim, notes: list) -> tuple[ShootingN
     never beyond :data:`MAX_STEPS` steps; verification judges the result either way)."""
     for _ in range(MAX_REFINE):
         d = nlp.unpack(run.x)[0]
-        rs = sim.run(with_designs(cfg, d), estimate_error=False)
+        rs = sim.run(nlp.param_vector(cfg, d), estimate_error=False)
         if not rs.closed:
             return nlp, run
         why = off(cfg, nlp, run, rs)
@@ -85,7 +85,7 @@ def refine(cfg, nlp: ShootingNLP, run: Run, sim, notes: list) -> tuple[ShootingN
                          "steps: not refined")
             return nlp, run
         fine = get_nlp(cfg, nlp.N, 2 * nlp.M)
-        r = fine.solve(run.x, run.p, *fine.bounds(cfg, *_time_bounds(run)))
+        r = fine.solve(run.x, run.p, *fine.bounds(cfg, *_time_bounds(nlp, run)))
         if not r.success:
             return nlp, run
         notes.append(f"{why}: sub-steps doubled to {fine.M} ({r.iterations} iterations)")
@@ -93,9 +93,9 @@ def refine(cfg, nlp: ShootingNLP, run: Run, sim, notes: list) -> tuple[ShootingN
     return nlp, run
 
 
-def _time_bounds(run: Run) -> tuple[float, float]:
+def _time_bounds(nlp: ShootingNLP, run: Run) -> tuple[float, float]:
     lbx, ubx = run.bounds[0], run.bounds[1]
-    return float(ubx[3]), float(lbx[3])
+    return float(ubx[nlp.iT]), float(lbx[nlp.iT])
 
 
 def tighten(cfg, nlp: ShootingNLP, run: Run, sim, t_limit: float, notes: list) -> Run:
@@ -111,7 +111,7 @@ def tighten(cfg, nlp: ShootingNLP, run: Run, sim, t_limit: float, notes: list) -
     lo, hi = t_lo, t_hi
     for _ in range(MAX_TIGHTEN):
         d, T, _, _ = nlp.unpack(run.x)
-        rs = sim.run(with_designs(cfg, d), estimate_error=False)
+        rs = sim.run(nlp.param_vector(cfg, d), estimate_error=False)
         if not rs.closed:
             return run
         Ts = rs.closing_time

@@ -123,6 +123,7 @@ class OptimiseResult:
     def row(self) -> dict:
         """The one-row table form (:meth:`to_frame`) as a dict."""
         row = {k: (self.design or {}).get(k) for k in DESIGN_KEYS}
+        row.update({k: v for k, v in (self.design or {}).items() if k not in row})  # free
         row["spring_kind"] = self.kind
         row["objective"] = self.objective
         row.update({k: (self.metrics or {}).get(k) for k in METRIC_KEYS})

@@ -78,7 +78,7 @@ def initial_guess(nlp: ShootingNLP, cfg, design, sim, p: np.ndarray,
     (closing time clipped into [closing_time_min, t_max]): (w0, the stroke's objective)."""
     o, st = cfg.optimise, cfg.stroke
     frac = np.minimum(np.cumsum(nlp.grid_of(p)), 1.0)   # node times / T
-    q = with_designs(cfg, np.asarray(design, float)[:3])
+    q = nlp.param_vector(cfg, design)
     r = sim.run(q, trajectory=True, estimate_error=False)
     N = nlp.N
     J0 = None

@@ -91,6 +91,11 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     check_batch(cfg, int(samples or cfg.tolerance.samples),
                 "--samples" if samples else "tolerance.samples")
     check_keys(cfg)
+    if cfg.optimise.free:
+        raise ConfigError(
+            "optimise.free: the robust design chooses k, l0 and c only; fix "
+            f"{', '.join(k for k, _, _ in cfg.optimise.free)} (e.g. at the nominal optimum's "
+            "values: softclose optimise --free ...) and run --robust without --free")
     rows, results = [], []
     for kind in cfg.optimise.spring_kinds:
         c, why = kind_config(cfg, kind, robust=True)

@@ -113,14 +113,14 @@ def model_config(cfg: Config, values: dict) -> Config:
 def _model_key(cfg: Config) -> tuple:
     """A scenario model's key: the model's, and the elements the NLP carries."""
     from ..model import model_key
-    from ..optimiser.nlp import nlp_elements
+    from ..optimiser.interval import nlp_elements
     return model_key(cfg) + (tuple(e.name for e in nlp_elements(cfg)),)
 
 
 def interval_of(cfg_model: Config, nodes: int, substeps: int):
     """(model, shooting-interval Function) of a scenario's model: the nominal optimiser's."""
     from ..optimiser.cache import get_model
-    from ..optimiser.nlp import ChebyshevFit, interval_function, nlp_elements
+    from ..optimiser.interval import ChebyshevFit, interval_function, nlp_elements
     model = get_model(cfg_model)
     fit = ChebyshevFit(model, els=nlp_elements(cfg_model))
     return model, interval_function(model, substeps, fit)

@@ -16,7 +16,7 @@ import softclose
 from softclose import native
 from softclose.config import default_config, from_dict
 from softclose.model import LidModel
-from softclose.optimiser.nlp import ChebyshevFit
+from softclose.optimiser.interval import ChebyshevFit
 from softclose.reference import Reference
 from softclose.simulate import Simulator
 

@@ -1,0 +1,249 @@
+"""The equation of motion as the NLP sees it: Chebyshev series of the geometry, and one
+shooting interval of RK4 sub-steps on them.
+
+theta'' = a0(theta) + a1(theta) theta' + a2(theta) theta'^2, with every element's law affine
+in its parameters (:mod:`softclose.elements.base`): a0 sums the conservative elements'
+a_e (-q_e'/M) + b_e (-q_e q_e'/M) (T_e = a_e + b_e q) and dry friction's C_e |q_e'|/M (the
+stroke is monotone, theta' <= 0), a1 the dampers' B_e (-q_e'^2/M), a2 = -M'/(2M). The
+geometric functions are fitted once per geometry as Chebyshev series to machine precision
+(:class:`ChebyshevFit`); the elements' parameters -- design variables or NLP parameters --
+combine them once per interval (:func:`interval_function`). Which elements the NLP carries
+(:func:`nlp_elements`) and which further design variables it has (``optimise.free``:
+:func:`free_layout`) are read from the config here.
+"""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+import numpy as np
+
+from .. import elements
+from ..dynamics import coefficients
+from ..problem import PARAM_KEYS
+
+#: margin (deg) beyond the stroke over which the Chebyshev series are fitted
+FIT_MARGIN_DEG = 3.0
+#: up to this many sub-steps an interval is unrolled in SX; beyond, one SX sub-step is
+#: accumulated (mapaccum), so that building the NLP does not grow with the sub-steps
+UNROLL_MAX = 8
+
+def free_of(cfg) -> tuple:
+    """``optimise.free``: the further design variables (key, lo, hi), possibly none."""
+    return tuple(cfg.optimise.free or ())
+
+
+def free_layout(cfg) -> tuple:
+    """The NLP's further design variables: (key, column of p, scale) each, the scale the
+    larger magnitude of the bounds (so that the scaled variable lies within [-1, 1])."""
+    from ..problem import PARAM_COLUMNS
+    return tuple((k, PARAM_COLUMNS[k], max(abs(lo), abs(hi)) or 1.0)
+                 for k, lo, hi in free_of(cfg))
+
+
+# -- the geometric functions as Chebyshev series -----------------------------------------
+def nlp_elements(cfg) -> tuple:
+    """The elements the NLP carries: the seed's always, the others when they act in ``cfg``
+    or may act through a free design variable (``optimise.free``; an element that exerts no
+    force adds nothing but series to fit)."""
+    extra = {k.split(".", 1)[1]: max(abs(lo), abs(hi)) for k, lo, hi in free_of(cfg)}
+    acting = elements.acting(cfg, extra)
+    return tuple(e for e in elements.ELEMENTS if e.seed or e in acting)
+
+
+def series_terms(els) -> list[tuple[str, str, str]]:
+    """(name, element, what) of the geometric functions of the equation of motion carried by
+    the elements ``els``: per conservative element "b" (-q q'/M; not for gravity, whose T
+    is constant) and "a" (-q'/M), per damper "B" (-q'^2/M), per dry friction "C" (|q'|/M:
+    the stroke is monotone, theta' <= 0, so friction is the constant force C against it);
+    summed in this order."""
+    out = []
+    for e in els:
+        if e in elements.SPRINGS:
+            if e.name != "gravity":
+                out.append((f"{e.name}:b", e.name, "b"))
+            out.append((f"{e.name}:a", e.name, "a"))
+        if e in elements.DAMPERS:
+            out.append((f"{e.name}:B", e.name, "B"))
+        if e in elements.FRICTIONS:
+            out.append((f"{e.name}:C", e.name, "C"))
+    return out
+
+
+class ChebyshevFit:
+    """The geometric functions of theta (and tau') as Chebyshev series on [lo, hi].
+
+    :attr:`names` lists them: the elements' series (:func:`series_terms`), then "inertia"
+    (-M'/(2M)), "tau" and "dtau". The degree is raised until the series match the exact
+    CasADi expressions to ``tol`` (relative to each function's largest value) on a 2001-point
+    grid: degree 14 and a maximal relative error ~4e-15 for the default geometry
+    (``max_rel_error``).
+    """
+
+    def __init__(self, model, tol: float = 1e-13, max_degree: int = 64, els=None):
+        th = ca.SX.sym("theta")
+        cf = coefficients(th, model.cfg, model.sigma)
+        M, co = cf["M"], cf["coords"]
+        self.elements = tuple(els if els is not None else nlp_elements(model.cfg))
+        terms = series_terms(self.elements)
+        what = {"a": lambda c: -c.dq / M, "b": lambda c: -c.q * c.dq / M,
+                "B": lambda c: -c.dq2 / M, "C": lambda c: ca.fabs(c.dq) / M}
+        funcs = [what[w](co[e]) for _, e, w in terms] + [-0.5 * cf["dM"] / M, cf["tau"]]
+        self.names = tuple(n for n, _, _ in terms) + ("inertia", "tau", "dtau")
+        g = ca.vertcat(*funcs)
+        self.exact = ca.Function("g_exact", [th], [ca.cse(g)])
+        # the stroke's angles with a margin for overshooting stages and iterates (the
+        # series extrapolate smoothly beyond it), within the range where the loop closes
+        st = model.cfg.stroke
+        lo = max(model.theta_range[0], st.theta_closed - math.radians(FIT_MARGIN_DEG))
+        hi = min(model.theta_range[1], st.theta0 + math.radians(FIT_MARGIN_DEG))
+        self.lo, self.hi = lo, hi
+        dense = np.linspace(lo, hi, 2001)
+        G = np.asarray(self.exact.map(len(dense))(dense))
+        scale = np.maximum(np.abs(G).max(axis=1), 1e-300)
+        ud = self._u(dense)
+        for n in range(8, max_degree + 1, 2):
+            k = np.arange(n + 1)
+            u = np.cos(np.pi * (k + 0.5) / (n + 1))
+            Gn = np.asarray(self.exact.map(n + 1)(lo + (u + 1) * (hi - lo) / 2))
+            C = np.array([np.polynomial.chebyshev.chebfit(u, Gn[i], n) for i in range(len(G))])
+            err = np.max(np.abs(np.polynomial.chebyshev.chebval(ud, C.T) - G).max(axis=1)
+                         / scale)
+            if err < tol:
+                break
+        dtau = np.polynomial.chebyshev.chebder(C[-1]) * 2 / (hi - lo)
+        C = np.vstack([C, np.r_[dtau, 0.0]])
+        self.coef, self.degree, self.max_rel_error = C, n, float(err)
+
+    def series(self, name: str) -> ca.DM:
+        """The Chebyshev coefficients of one function (by its name in :attr:`names`)."""
+        return ca.DM(self.coef[self.names.index(name)])
+
+    def _u(self, theta):
+        return (2 * theta - (self.lo + self.hi)) / (self.hi - self.lo)
+
+    def basis(self, theta):
+        """Chebyshev polynomials T_0..T_n at theta (an SX column)."""
+        u = self._u(theta)
+        T = [1, u]
+        for _ in range(2, self.degree + 1):
+            T.append(2 * u * T[-1] - T[-2])
+        return ca.vertcat(*T)
+
+
+def hermite_max(va, ma, vb, mb):
+    """Maximum over one sub-step of the cubic Hermite interpolant of the tip speed.
+
+    ``va, vb`` are the speeds at the ends, ``ma, mb`` their time derivatives times the step.
+    The interior maximum (p' = 0, p'' < 0) is clipped into [0, 1]; by the envelope theorem
+    the value is C1 in the data where it matters (the sub-step holding the peak).
+    """
+    a3 = 2 * va + ma - 2 * vb + mb
+    a2 = -3 * va - 2 * ma + 3 * vb - mb
+    a1 = ma
+    D = a2 * a2 - 3 * a3 * a1
+    # every operation is kept finite (with finite derivatives) in the branch not taken:
+    # reverse-mode AD multiplies a zero seed by the untaken branch's partials
+    pos = D > 0
+    r = ca.sqrt(ca.if_else(pos, D, 1.0))
+    den1 = r - a2                                # > 0 when a2 <= 0 (and D > 0)
+    use1 = a2 <= 0
+    ok1 = den1 > 0
+    s1 = a1 / ca.if_else(ok1, den1, 1.0)
+    ok2 = a3 != 0
+    s2 = (-a2 - r) / ca.if_else(ok2, 3 * a3, 1.0)
+    sig = ca.if_else(use1, ca.if_else(ok1, s1, 0.0), ca.if_else(ok2, s2, 0.0))
+    sig = ca.if_else(pos, ca.fmin(ca.fmax(sig, 0), 1), 0)
+    return ((a3 * sig + a2) * sig + a1) * sig + va
+
+
+def interval_function(model, substeps: int, fit: ChebyshevFit | None = None,
+                      with_ode: bool = False):
+    """One shooting interval of ``substeps`` RK4 sub-steps on ``model``'s equation of motion
+    (its Chebyshev series): ``interval(x0, q, h) -> (x1, theta, theta_dot, speed)``.
+
+    ``q`` the parameter vector (:data:`softclose.problem.PARAM_KEYS`), ``h`` the sub-step;
+    ``theta``/``theta_dot`` are the states
+    after sub-steps 1..M-1, ``speed`` the tip speeds after each sub-step followed by the
+    Hermite maxima inside each. With ``with_ode`` also returns the ODE ``f(x, q)``.
+    """
+    fit = fit or ChebyshevFit(model)
+    M = substeps
+    nb = fit.degree + 1
+    # theta'' = a0(theta) + a1(theta) theta' + a2(theta) theta'^2; the series of a0 and a1
+    # are combined from the parameters once per interval, not at every evaluation: each
+    # element's law gives the coefficients of its series (a_e, b_e of T = a + b q; B_e)
+    x0, q, h = ca.SX.sym("x0", 2), ca.SX.sym("q", len(PARAM_KEYS)), ca.SX.sym("h")
+    P = elements.params(q)
+    a0, a1 = [], []
+    for name, e, what in series_terms(fit.elements):
+        el = elements.BY_NAME[e]
+        coef = el.viscous(P) if what == "B" else el.coulomb(P) if what == "C" else \
+            el.affine(P)["ab".index(what)]
+        (a1 if what == "B" else a0).append(coef * fit.series(name))
+    cq = ca.vertcat(sum(a0[1:], a0[0]), sum(a1[1:], a1[0]))
+    xs, cs = ca.SX.sym("x", 2), ca.SX.sym("cq", 2 * nb)
+    B = fit.basis(xs[0])
+    acc = (ca.dot(cs[:nb], B) + ca.dot(cs[nb:], B) * xs[1]
+           + ca.dot(fit.series("inertia"), B) * xs[1] ** 2)
+    f_c = ca.Function("f_c", [xs, cs], [ca.vertcat(xs[1], acc)])
+    f = ca.Function("f", [xs, q], [f_c(xs, cq)])     # the ODE, for reporting
+    th = ca.SX.sym("th")
+    Bt = fit.basis(th)
+    tau = ca.Function("tau", [th], [ca.dot(fit.series("tau"), Bt),
+                                    ca.dot(fit.series("dtau"), Bt)])
+
+    def speed(x, xdot):  # |v_T| = -tau theta' (theta' <= 0), and h d|v_T|/dt
+        t, dt = tau(x[0])
+        return -t * x[1], -h * (dt * x[1] * x[1] + t * xdot[1])
+
+    def rk4(x, fx, cq_):  # one RK4 sub-step of length h; fx = f(x) (first stage reused)
+        k2 = f_c(x + 0.5 * h * fx, cq_)
+        k3 = f_c(x + 0.5 * h * k2, cq_)
+        k4 = f_c(x + h * k3, cq_)
+        return x + h / 6 * (fx + 2 * k2 + 2 * k3 + k4)
+
+    names = (["x0", "q", "h"], ["x1", "theta", "theta_dot", "speed"])
+    if M <= UNROLL_MAX:  # unrolled in SX (cheapest to evaluate)
+        x = x0
+        fx = f_c(x, cq)
+        va, ma = speed(x, fx)
+        ths, thds, spd, peak = [], [], [], []
+        for j in range(M):
+            x = rk4(x, fx, cq)
+            fx = f_c(x, cq)
+            vb, mb = speed(x, fx)
+            if j < M - 1:
+                ths.append(x[0])
+                thds.append(x[1])
+            spd.append(vb)
+            peak.append(hermite_max(va, ma, vb, mb))
+            va, ma = vb, mb
+        empty = ca.SX(0, 1)
+        outs = [x, ca.vertcat(*ths) if ths else empty,
+                ca.vertcat(*thds) if thds else empty, ca.vertcat(*spd, *peak)]
+        interval = ca.Function("interval", [x0, q, h], ca.cse(outs), *names)
+    else:  # one SX sub-step, accumulated M times (build time independent of M)
+        a, cqs = ca.SX.sym("a", 6), ca.SX.sym("cq", 2 * nb)   # a = (x, x', v, h v')
+        x, fx, va, ma = a[0:2], a[2:4], a[4], a[5]
+        x1 = rk4(x, fx, cqs)
+        fx1 = f_c(x1, cqs)
+        vb, mb = speed(x1, fx1)
+        step = ca.Function("substep", [a, cqs, h],
+                           ca.cse([ca.vertcat(x1, fx1, vb, mb),
+                                   ca.vertcat(x1, vb, hermite_max(va, ma, vb, mb))]))
+        fx0 = f_c(x0, cq)
+        start = ca.Function("start", [x0, q, h], [ca.vertcat(x0, fx0, *speed(x0, fx0)), cq])
+        accum = step.mapaccum("substeps", M)
+        x0m, qm, hm = ca.MX.sym("x0", 2), ca.MX.sym("q", len(PARAM_KEYS)), ca.MX.sym("h")
+        a0, cqm = start(x0m, qm, hm)
+        _, Y = accum(a0, ca.repmat(cqm, 1, M), ca.repmat(hm, 1, M))
+        outs = [Y[0:2, M - 1], Y[0, :M - 1].T, Y[1, :M - 1].T,
+                ca.vertcat(Y[2, :].T, Y[3, :].T)]
+        interval = ca.Function("interval", [x0m, qm, hm], outs, *names)
+    return (interval, f) if with_ode else interval
+
+
+__all__ = ["FIT_MARGIN_DEG", "UNROLL_MAX", "free_of", "free_layout", "nlp_elements",
+           "series_terms", "ChebyshevFit", "hermite_max", "interval_function"]
