@@ -10,7 +10,6 @@ shows its size, its feasible count and its best rows, never the rows themselves.
 
 from __future__ import annotations
 
-import html
 import math
 from dataclasses import dataclass, field
 
@@ -124,6 +123,7 @@ _MARK = {True: ("✓", "#1a7f37"), False: ("✗", "#cf222e"), None: ("", "inheri
 
 def to_html(d: Display) -> str:
     """The HTML form of ``d`` (every text escaped)."""
+    import html                    # (not at start-up: a command shows no HTML)
     e = html.escape
     mark, colour = _MARK[d.ok]
     out = [f'<div class="softclose-result" style="{_STYLE}">',
