@@ -147,6 +147,27 @@ class ChebyshevFit:
         C = np.vstack([C, np.r_[dtau, 0.0]])
         self.coef, self.degree, self.max_rel_error = C, n, float(err)
 
+    def state(self) -> dict:
+        """The fitted numbers (the disk cache keeps them beside a compiled NLP)."""
+        import numpy as np
+        return {"fit_coef": self.coef, "fit_numbers": np.array([self.lo, self.hi, self.degree,
+                                                                self.max_rel_error]),
+                "fit_names": np.array(self.names)}
+
+    @classmethod
+    def restore(cls, state: dict, els) -> "ChebyshevFit":
+        """The fit from :meth:`state`'s numbers (the elements ``els`` as when it was made)."""
+        f = cls.__new__(cls)
+        f.elements = tuple(els)
+        f.names = tuple(str(n) for n in state["fit_names"])
+        lo, hi, degree, err = (float(v) for v in state["fit_numbers"])
+        f.lo, f.hi, f.degree, f.max_rel_error = lo, hi, int(degree), err
+        f.coef = np.array(state["fit_coef"], float)
+        if f.names != tuple(n for n, _, _ in series_terms(f.elements)) + ("inertia", "tau",
+                                                                           "dtau"):
+            raise ValueError("the fit's series are not those of its elements")
+        return f
+
     def series(self, name: str) -> ca.DM:
         """The Chebyshev coefficients of one function (by its name in :attr:`names`)."""
         return ca.DM(self.coef[self.names.index(name)])
@@ -401,11 +422,44 @@ class ShootingNLP:
 
     def __init__(self, model, nodes: int, substeps: int, hessian: str = "exact",
                  linear_solver: str = "mumps", max_iter: int = 500, tol: float = 1e-10,
-                 els=None):
+                 els=None, library=None, meta: dict | None = None):
+        """Built symbolically (CasADi's virtual machine evaluates it), or -- ``library`` a
+        compiled library of this NLP (:mod:`softclose.buildcache`) and ``meta`` what
+        :meth:`meta` stored when it was built -- loaded: nothing symbolic is built, the
+        solves call the compiled functions."""
         t0 = time.perf_counter()
         check_linear_solver(linear_solver)
         self.model, self.N, self.M = model, nodes, substeps
         N, M = nodes, substeps
+        self.ipopt_options = {"print_time": False, "show_eval_warnings": False,
+                              "calc_lam_p": False,
+                              "ipopt.print_level": 0, "ipopt.sb": "yes",
+                              "ipopt.tol": tol, "ipopt.max_iter": max_iter,
+                              "ipopt.hessian_approximation": hessian,
+                              "ipopt.linear_solver": linear_solver,
+                              # constraints hold exactly at the answer, not to 1e-8
+                              "ipopt.bound_relax_factor": 0.0}
+        self.key = None
+        self.library = library
+        if library is not None:
+            els = tuple(els if els is not None else nlp_elements(model.cfg))
+            self.fit = ChebyshevFit.restore(meta, els)
+            self.g_names = [str(n) for n in meta["g_names"]]
+            self.g_sizes = [int(n) for n in meta["g_sizes"]]
+            self.nw = int(meta["nw"][0])
+            from ..buildcache import text
+            self._peak = ca.Function.deserialize(text(meta["peak"]))
+            lib = str(library)
+            self.solver = ca.nlpsol("softclose_ms", "ipopt", lib,
+                                    {**self.ipopt_options, **COLD_OPTIONS})
+            self.warm_solver = ca.nlpsol("softclose_ms_warm", "ipopt", lib,
+                                         {**self.ipopt_options, **WARM_OPTIONS})
+            if (self.solver.size1_in(0), self.solver.size1_in(1),
+                    self.solver.size1_in(5)) != (self.nw, len(NLP_PARAMS) + N,
+                                                 sum(self.g_sizes)):
+                raise ValueError("the compiled NLP has other dimensions")
+            self.build_time = time.perf_counter() - t0
+            return
         self.fit = ChebyshevFit(model, els=els)
         self.interval, self.f = interval_function(model, substeps, self.fit, with_ode=True)
         # the NLP: MX graph over the SX interval, mapped over the N intervals
@@ -434,13 +488,6 @@ class ShootingNLP:
         # the largest sub-step speed or Hermite maximum: the NLP's own peak tip speed
         self._peak = ca.Function("peak", [w, P], [ca.mmax(sp)])
         nlp = {"x": w, "f": J / Jref, "g": ca.vertcat(*g_all.values()), "p": P}
-        self.ipopt_options = {"print_time": False, "show_eval_warnings": False, "calc_lam_p": False,
-                              "ipopt.print_level": 0, "ipopt.sb": "yes",
-                              "ipopt.tol": tol, "ipopt.max_iter": max_iter,
-                              "ipopt.hessian_approximation": hessian,
-                              "ipopt.linear_solver": linear_solver,
-                              # constraints hold exactly at the answer, not to 1e-8
-                              "ipopt.bound_relax_factor": 0.0}
         self.solver = ca.nlpsol("softclose_ms", "ipopt", nlp,
                                 {**self.ipopt_options, **COLD_OPTIONS})
         # the warm solver shares the oracle (and its cached derivatives): ~0.05 s more
@@ -450,8 +497,23 @@ class ShootingNLP:
         self.warm_solver = ca.nlpsol("softclose_ms_warm", "ipopt",
                                      {"x": wx, "p": wpar, "f": fo, "g": go},
                                      {**self.ipopt_options, **WARM_OPTIONS})
-        self.key = None
         self.build_time = time.perf_counter() - t0
+
+    def __getattr__(self, name):
+        """``interval`` and ``f`` of an NLP loaded from its compiled library: built on first
+        use (tests and reports ask for them; the solves do not)."""
+        if name in ("interval", "f") and self.__dict__.get("library") is not None:
+            self.interval, self.f = interval_function(self.model, self.M, self.fit,
+                                                      with_ode=True)
+            return getattr(self, name)
+        raise AttributeError(name)
+
+    def meta(self) -> dict:
+        """What a compiled library of this NLP needs beside it (:mod:`softclose.buildcache`):
+        the fit, the constraint groups, the size of w, the peak function."""
+        return {**self.fit.state(), "g_names": np.array(self.g_names),
+                "g_sizes": np.array(self.g_sizes), "nw": np.array([self.nw]),
+                "peak": self._peak.serialize().encode()}
 
     # -- packing -------------------------------------------------------------------------
     def pack(self, design, T, X, s) -> np.ndarray:

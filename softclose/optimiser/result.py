@@ -139,7 +139,7 @@ class OptimiseResult(Displayed):
         from ..simulate import Simulator
         if self.design is None or self.config is None:
             raise ValueError("this result has no design to simulate")
-        return Simulator(self.config.with_design(**self.design)).run(trajectory=trajectory)
+        return Simulator(self.config.with_design(**self.design), cached=True).run(trajectory=trajectory)
 
     def _display(self) -> Display:
         bounds = self.problem.get("bounds", {})
