@@ -94,9 +94,9 @@ class BenchResult(Displayed):
             target = (f"≤ {_time(tgt['max_s'])}" if "max_s" in tgt else
                       f"≥ {tgt['min_per_s']:,.0f} /s" if "min_per_s" in tgt else
                       f"≤ {num(tgt['max_ratio'], 3)}×" if "max_ratio" in tgt else "")
-            value = (f"{t:.2f}×" if r.get("unit") == "ratio" and t is not None else
-                     _time(t))
-            rate = f"{r['rate']:,.0f} {r.get('unit') or ''}/s" if r.get("rate") else ""
+            value = _time(t)
+            rate = f"{r['rate']:,.0f} {r.get('unit') or ''}/s" if r.get("rate") else \
+                (f"{r['ratio']:.2f}× import casadi" if r.get("ratio") is not None else "")
             met = {True: "yes", False: "NO", None: ""}[r.get("met")]
             rows.append((r["what"], value, rate, target, met, r.get("note", "")))
         tables = (Table("speed of the user-facing calls (medians)",

@@ -80,6 +80,22 @@ def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None) -> Shoot
     return _NLPS[key]
 
 
+def prepare(cfg, nodes: int | None = None, substeps: int | None = None):
+    """Compile cfg's NLP now (seconds), unless it is compiled or compiling is off (no cache,
+    no C compiler, ``SOFTCLOSE_COMPILE=0``): the path of its library, or None. What the
+    background compilation does, for a benchmark or a machine set up ahead of use."""
+    from .. import buildcache
+    key = nlp_key(cfg, nodes, substeps)
+    disk = buildcache.key_of("nlp", key)
+    lib = buildcache.compiled_nlp(disk)
+    if lib is not None or not buildcache.compile_enabled():
+        return lib
+    nlp = build_nlp(cfg, key[-5], key[-4])
+    if not buildcache.has("nlpmeta", disk):
+        buildcache.store("nlpmeta", disk, nlp.meta())
+    return buildcache.compile_nlp(nlp.solver, disk)
+
+
 def stroke_simulator(cfg, t_end: float | None = None) -> Simulator:
     """An RK4 simulator (step <= 1 ms, C kernel) of cfg's model, its strokes cut at
     ``t_end`` when that is shorter than stroke.t_max (a sweep of starts needs no more)."""
