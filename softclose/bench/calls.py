@@ -19,7 +19,7 @@ from ..model import LidModel
 from ..reference import Reference
 from ..simulate import Simulator
 from .later import later_entries
-from .timing import fresh_env, kernel_times, median_time, speed_row
+from .timing import fresh_env, kernel_times, median_time, not_measured, speed_row
 
 #: modules that ``softclose simulate`` must not import at start-up (they are imported lazily)
 HEAVY_MODULES = ("pandas", "pyarrow", "scipy", "SALib", "dask", "matplotlib")
@@ -78,7 +78,12 @@ def speed(cfg: Config, quick: bool = False, cli: bool = True, later: bool = True
                 "imports " + ", ".join(heavy) + " at start-up")
         add(speed_row("cli_simulate", "`python -m softclose simulate --json` end to end "
                       "(fresh interpreter)", cli_time(["simulate", "--json"], rc), rc, note))
-        rows.extend(startup_rows(rc, log))
+        if quick:
+            rows.extend(not_measured(key, f"{what} end to end / `python -c \"import casadi\"`",
+                                     "not measured with --quick (40 fresh interpreters): "
+                                     "run softclose bench") for key, _, what in STARTUP)
+        else:
+            rows.extend(startup_rows(rc, log))
     if later:
         rows.extend(later_entries(cfg, quick=quick, log=log))
     return rows

@@ -81,6 +81,8 @@ def _main(argv: list[str]) -> int:
     try:
         with interrupt.guard():   # Ctrl-C ends the command even inside a compiled solver
             args = build_parser(argv).parse_args(argv)
+            from .common import set_figures
+            set_figures(args)
             from ..config import load_config
             cfg = load_config(args.config, args.overrides)
             outcome: Outcome = args.run(cfg, args)

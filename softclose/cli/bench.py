@@ -224,7 +224,7 @@ def write_csv(rows, path: Path) -> Path:
 
 def write_files(res, out: Path) -> list[Path]:
     """Tables, report, JSON and figures of one bench run into ``out`` (which exists)."""
-    from ..figures import save
+    from .common import save_figure as save
     from ..figures.bench import plot_error_vs_step, plot_optimiser, plot_work_precision
     from ..jsonio import dumps
     out = Path(out)
