@@ -41,7 +41,11 @@ def _draw_share(res, out, names: list[str]) -> None:
     from ..figures.sweep import plot_maps, save_maps
     from .common import FIGURES
     if names:
-        save_maps(plot_maps(res, only=names), out, FIGURES["format"], FIGURES["style"])
+        figs = plot_maps(res, only=names)
+        if FIGURES["format"] == "png" and FIGURES["style"] is None:
+            save_maps(figs, out)
+        else:
+            save_maps(figs, out, FIGURES["format"], FIGURES["style"])
 
 
 def _draw_in_processes(res, out: Path, processes: int) -> list[str]:
