@@ -47,6 +47,15 @@ CFLAGS = ("-O1", "-shared", "-fPIC")
 STALE_LOCK = 900.0
 
 
+def _blake2b(*args, **kw):
+    """BLAKE2b from CPython's own module (hashlib would load OpenSSL: ~4 ms of start-up)."""
+    try:
+        from _blake2 import blake2b
+    except ImportError:            # pragma: no cover  (a Python built without it)
+        from hashlib import blake2b
+    return blake2b(*args, **kw)
+
+
 def folder() -> Path | None:
     """The cache folder of this software (created), or None when the cache is off or the
     folder cannot be made."""
@@ -71,11 +80,9 @@ def _folder(setting: str) -> Path | None:
 def fingerprint() -> str:
     """What built an entry: CasADi, numpy, Python, this machine's kind and the package's
     source files (name, size, modification time), as 16 hex digits."""
-    import hashlib
-
     import casadi
     import numpy
-    h = hashlib.sha256()
+    h = _blake2b(digest_size=8)
     h.update(f"{casadi.__version__};{numpy.__version__};{sys.version};"
              f"{os.uname().machine if hasattr(os, 'uname') else ''}".encode())
     root = Path(__file__).resolve().parent
@@ -90,13 +97,12 @@ def fingerprint() -> str:
                     st = e.stat()
                     h.update(f"{e.path[len(str(root)):]};{st.st_size};{st.st_mtime_ns}\n"
                              .encode())
-    return h.hexdigest()[:16]
+    return h.hexdigest()
 
 
 def key_of(*parts) -> str:
     """A file-name key of ``parts`` (their reprs: config sections, numbers, strings)."""
-    import hashlib
-    return hashlib.sha256(repr(parts).encode()).hexdigest()[:24]
+    return _blake2b(repr(parts).encode(), digest_size=12).hexdigest()
 
 
 def _touch(path: Path) -> None:
