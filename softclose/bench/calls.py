@@ -110,6 +110,12 @@ def startup_rows(repeats: int = 9, log=None) -> list[dict]:
     lib = prepare(default_config())
     how = ("the NLP compiled" if lib is not None else
            "the NLP interpreted (no C compiler, or the cache is off)")
+    import importlib.util
+    from pathlib import Path
+    pyc = Path(importlib.util.cache_from_source(str(Path(__file__).with_name("calls.py"))))
+    if not pyc.exists():          # a checkout run with PYTHONDONTWRITEBYTECODE, say
+        how += "; no .pyc files: every module is compiled from source at each start " \
+               "(measure an installed package)"
     env = fresh_env()
     cmds = {"casadi": [sys.executable, "-c", "import casadi"]}
     cmds.update({k: [sys.executable, "-m", "softclose", *argv] for k, argv, _ in STARTUP})
