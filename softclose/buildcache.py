@@ -240,8 +240,9 @@ def forget_nlp(key: str) -> None:
 
 def request_nlp(key: str, spec: dict) -> bool:
     """The NLP ``key`` was used (and is not compiled): the second time -- a marker remembers
-    the first -- start its compilation in the background. ``spec``: what builds it (the
-    config as a dict, nodes, substeps). True when a compilation was started."""
+    the first -- start its compilation in the background, unless another one is running
+    (one at a time). ``spec``: what builds it (the config as a dict, nodes, substeps). True
+    when a compilation was started."""
     if not compile_enabled():
         return False
     where = folder()
@@ -253,7 +254,9 @@ def request_nlp(key: str, spec: dict) -> bool:
             pass
         _prune(where, "seen-*")
         return False
-    lock = where / f"nlp-{key}.lock"
+    # one compilation at a time on this machine (a grid of lids run twice must not start a
+    # compiler per lid): a later use asks again
+    lock = where / "compiling.lock"
     try:
         import time
         if lock.exists() and time.time() - lock.stat().st_mtime > STALE_LOCK:

@@ -125,6 +125,11 @@ def test_the_second_use_of_an_nlp_compiles_it_in_the_background(cache, cfg, monk
     _clear_memory()
     get_nlp(cfg)                        # being compiled (the lock): not again
     assert len(started) == 1
+    other = cfg.set("mass.lid", 0.6)    # nor another NLP while one compiles
+    get_nlp(other)
+    _clear_memory()
+    get_nlp(other)
+    assert len(started) == 1
     old = time.time() - buildcache.STALE_LOCK - 10
     os.utime(lock, (old, old))          # a compiler that died long ago
     _clear_memory()
