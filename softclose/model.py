@@ -52,8 +52,69 @@ def model_key(cfg: Config) -> tuple:
             elements.structure(cfg))
 
 
+#: the CasADi functions a model carries (attribute names), kept serialised in the disk cache
+FUNCTIONS = ("ode", "ode_moving", "coeffs", "xcoeffs", "energy_fn", "power_fn", "kin", "dV",
+             "opening", "_u")
+
+
 class LidModel:
     """The lid linkage of one config (geometry + mass); design values are parameters."""
+
+    @classmethod
+    def cached(cls, cfg: Config) -> "LidModel":
+        """``LidModel(cfg)``, loaded from the disk cache (:mod:`softclose.buildcache`) when
+        this software built it before, else built and stored. A loaded model deserialises
+        each CasADi function when it is first used; its numbers are the built model's."""
+        from . import buildcache
+        key = buildcache.key_of("model", model_key(cfg))
+        entry = buildcache.load("model", key)
+        if entry is not None:
+            try:
+                m = cls._restore(cfg, entry)
+                m.cache_key = key
+                return m
+            except Exception:   # noqa: BLE001  (a foreign or damaged entry: build anew)
+                pass
+        m = cls(cfg)
+        m.cache_key = key
+        buildcache.store("model", key, m._state())
+        return m
+
+    def _state(self) -> dict:
+        """What :meth:`cached` stores: the branch, the range, the serialised functions."""
+        out = {"numbers": np.array([self.sigma, *self.theta_range, self.max_abs_u])}
+        for name in FUNCTIONS:
+            out[f"fn{name}"] = getattr(self, name).serialize().encode()
+        for name, f in self.coordinate_fns.items():
+            out[f"q_{name}"] = f.serialize().encode()
+        return out
+
+    @classmethod
+    def _restore(cls, cfg: Config, entry: dict) -> "LidModel":
+        from .buildcache import text
+        m = cls.__new__(cls)
+        m.cfg, m.geo, m.mass = cfg, cfg.geometry, cfg.mass
+        sigma, lo, hi, u = (float(v) for v in entry["numbers"])
+        m.sigma, m.theta_range, m.max_abs_u = int(sigma), (lo, hi), u
+        m._serialised = {k: text(v) for k, v in entry.items() if k != "numbers"}
+        if set(m._serialised) < {f"fn{n}" for n in FUNCTIONS}:
+            raise ValueError("incomplete model entry")
+        return m
+
+    def __getattr__(self, name):
+        """A function of a model loaded from the disk cache, deserialised on first use."""
+        ser = self.__dict__.get("_serialised")
+        if ser is None:
+            raise AttributeError(name)
+        if name == "coordinate_fns":
+            value = {k[2:]: ca.Function.deserialize(v) for k, v in ser.items()
+                     if k.startswith("q_")}
+        elif f"fn{name}" in ser:
+            value = ca.Function.deserialize(ser[f"fn{name}"])
+        else:
+            raise AttributeError(name)
+        setattr(self, name, value)
+        return value
 
     def __init__(self, cfg: Config):
         self.cfg = cfg
@@ -201,7 +262,6 @@ class LidModel:
         th, thd = ca.SX.sym("theta"), ca.SX.sym("theta_dot")
         x, p = ca.vertcat(th, thd), ca.SX.sym("p", len(elements.PARAMS))
         cf = dyn.coefficients(th, self.cfg, s)
-        self._cf_expr = cf
         tdd = dyn.theta_ddot(cf, thd, p)
         self.ode = ca.Function("ode", [x, p], [ca.vertcat(thd, tdd)], ["x", "p"], ["xdot"])
         # the same with dry friction for a given direction of motion (+1 up, -1 down): what

@@ -43,6 +43,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from .display import MAX_ROWS, Display, Displayed, Table, num, unit_of
 from .errors import ConfigError, SoftcloseError
 from .problem import DESIGN_KEYS, METRIC_KEYS
 from .sweeps.distributed import ClusterLost
@@ -256,8 +257,8 @@ def optimise_grid(cfg, axes, *, dask=None, robust: bool = False, progress: bool 
     return dataclasses.replace(res, lost=lost) if lost else res
 
 
-@dataclass(frozen=True, eq=False)
-class OptimalGridResult:
+@dataclass(frozen=True, eq=False, repr=False)
+class OptimalGridResult(Displayed):
     """The optimal design over a grid of non-design keys: one row per grid point.
 
     ``columns`` (read-only numpy arrays, rows in id order = C order over ``keys``): ``id``,
@@ -379,6 +380,24 @@ class OptimalGridResult:
             "verified": self.verified, "robust": self.robust, "where": self.where,
             "seconds": self.seconds, "interrupted": self.interrupted, "lost": self.lost or None,
             "rows": [self.row(i) for i in range(self.points)]})
+
+    def _display(self) -> Display:
+        facts = [("points", f"{num(self.points)} ({' x '.join(map(str, self.shape))} over "
+                            f"{', '.join(self.keys)})"),
+                 ("verified", num(self.verified)),
+                 ("robust", "yes" if self.robust else "no"),
+                 ("time", f"{self.seconds:.2f} s ({self.where})")]
+        cols = ("id", *self.keys, *DESIGN_COLUMNS[:4], "closing_time", "impact_tip_speed",
+                *(("yield",) if self.robust and "yield" in self.columns else ()), "success")
+        head = tuple(c if not unit_of(c) else f"{c} [{unit_of(c)}]" for c in cols)
+        rows = [(str(int(self.columns["id"][i])),
+                 *(num(self.columns[c][i]) for c in cols[1:])) for i in
+                range(min(self.points, MAX_ROWS))]
+        table = Table("optimal designs by grid point", head, rows,
+                      f"first {len(rows)} of {num(self.points)}; all: .to_frame()"
+                      if self.points > len(rows) else "")
+        return Display("OptimalGridResult: the optimum at every grid point", self.success,
+                       self.message, tuple(facts), (table,), short=2)
 
     def plot(self):
         """Maps (two or more keys) or profiles (one key) of the optimal spring_k,

@@ -29,6 +29,9 @@ from .stroke import StrokeResult, StrokeStatus, none_if_nan
 from .table import CoefficientTable
 
 DEFAULT_STEP = default_config().simulate.step
+#: the per-step quantities of a trajectory, in order
+TRAJECTORY_KEYS = ("t", "theta", "theta_dot", "theta_ddot", "phi", "gamma", "tip_speed",
+                   "spring_length", "energy")
 #: largest relative interpolation error of the coefficient table that is accepted
 TABLE_TOL = 1e-7
 #: h |lambda|max above which an explicit method is outside its asymptotic regime
@@ -80,16 +83,37 @@ def _round_down(x: float) -> float:
     return math.floor(x / 10 ** e) * 10 ** e
 
 
+def _table(model: LidModel, cached: bool) -> CoefficientTable:
+    """The coefficient table of ``model``; with ``cached``, from the disk cache (kept beside
+    the model's entry) when it is there."""
+    key = getattr(model, "cache_key", None) if cached else None
+    if key is None:
+        return CoefficientTable(model)
+    from . import buildcache
+    entry = buildcache.load("table", key)
+    if entry is not None:
+        try:
+            return CoefficientTable.restore(model, entry)
+        except Exception:   # noqa: BLE001  (a damaged entry: build anew)
+            pass
+    table = CoefficientTable(model)
+    buildcache.store("table", key, table.state())
+    return table
+
+
 class Simulator:
     """Strokes of one config's geometry with one fixed-step method."""
 
     def __init__(self, cfg: Config, model: LidModel | None = None, integrator: str | None = None,
-                 step: float | None = None):
+                 step: float | None = None, cached: bool = False):
+        """``cached``: load the model and its table from the disk cache when this software
+        built them before, else build and store them (:mod:`softclose.buildcache`; for
+        one config at a time, not for the many configs of a sweep)."""
         self.cfg = cfg
-        self.model = model or LidModel(cfg)
+        self.model = model or (LidModel.cached(cfg) if cached else LidModel(cfg))
         self.method = get_method(integrator or cfg.simulate.integrator)
         self.step = step or cfg.simulate.step
-        self.table = CoefficientTable(self.model)
+        self.table = _table(self.model, cached)
         if self.table.max_rel_error > TABLE_TOL:
             raise NumericalError(
                 f"the linkage passes close to a toggle position (transmission angle "
@@ -185,7 +209,8 @@ class Simulator:
             accuracy, message = self._error_estimate(res, p)
             res = replace(res, accuracy=accuracy, message=message)
         if trajectory and res.ok:
-            res = replace(res, trajectory=self.derive_trajectory(traj, p))
+            keys = None if trajectory is True else tuple(trajectory)
+            res = replace(res, trajectory=self.derive_trajectory(traj, p, keys))
         return res
 
     def _check_trajectory_size(self, design) -> None:
@@ -376,23 +401,27 @@ class Simulator:
         return lo
 
     # -- trajectories ----------------------------------------------------------------
-    def derive_trajectory(self, traj: np.ndarray, p) -> dict:
-        """Per-step quantities for figures and CSV: angles, speeds, spring length, energy."""
+    def derive_trajectory(self, traj: np.ndarray, p, keys: tuple | None = None) -> dict:
+        """Per-step quantities for figures and CSV: angles, speeds, spring length, energy
+        (``keys``: only these, e.g. the optimiser's initial guess needs no energy)."""
         m = self.model
         n = len(traj)
         X = traj[:, 1:3].T
-        P = np.repeat(np.asarray(p, float)[:, None], n, axis=1)
-        kin = m.kin.map(n)(X)
-        xdot = np.asarray(m.ode.map(n)(X, P))
-        energy = np.asarray(m.energy_fn.map(n)(X, P)).ravel()
-        v_T = np.asarray(kin[4])
-        cf = self.table.evaluate(traj[:, 1])
-        return {
-            "t": traj[:, 0], "theta": traj[:, 1], "theta_dot": traj[:, 2],
-            "theta_ddot": xdot[1], "phi": np.asarray(kin[0]).ravel(),
-            "gamma": np.asarray(kin[1]).ravel(), "tip_speed": np.hypot(v_T[0], v_T[1]),
-            "spring_length": cf[:, COEFFS.index("l")], "energy": energy,
-        }
+        want = set(TRAJECTORY_KEYS if keys is None else keys)
+        out = {"t": traj[:, 0], "theta": traj[:, 1], "theta_dot": traj[:, 2]}
+        if want & {"phi", "gamma", "tip_speed"}:
+            kin = m.kin.map(n)(X)
+            v_T = np.asarray(kin[4])
+            out.update({"phi": np.asarray(kin[0]).ravel(), "gamma": np.asarray(kin[1]).ravel(),
+                        "tip_speed": np.hypot(v_T[0], v_T[1])})
+        if want & {"theta_ddot", "energy"}:
+            P = np.repeat(np.asarray(p, float)[:, None], n, axis=1)
+            out["theta_ddot"] = np.asarray(m.ode.map(n)(X, P))[1]
+            out["energy"] = np.asarray(m.energy_fn.map(n)(X, P)).ravel()
+        if "spring_length" in want:
+            out["spring_length"] = self.table.evaluate(traj[:, 1])[:, COEFFS.index("l")]
+        return {k: out[k] for k in TRAJECTORY_KEYS if k in out and (k in want or k in
+                                                                   ("t", "theta", "theta_dot"))}
 
 
 def simulate(cfg: Config, trajectory: bool = False) -> StrokeResult:
@@ -404,4 +433,4 @@ def simulate(cfg: Config, trajectory: bool = False) -> StrokeResult:
     the method cannot integrate is reported (``ok`` False, ``message`` says what to change),
     never raised.
     """
-    return Simulator(cfg).run(trajectory=trajectory)
+    return Simulator(cfg, cached=True).run(trajectory=trajectory)

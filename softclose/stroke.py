@@ -13,7 +13,8 @@ import math
 from dataclasses import dataclass, field
 from enum import IntEnum
 
-from .problem import METRIC_KEYS
+from .display import Display, Displayed, Table, pm, with_unit
+from .problem import METRIC_KEYS, METRICS
 
 
 class StrokeStatus(IntEnum):
@@ -49,8 +50,8 @@ _TEXT = {StrokeStatus.CLOSED: "closed", StrokeStatus.NOT_CLOSED: "not closed",
          StrokeStatus.OUT_OF_RANGE: "invalid design"}
 
 
-@dataclass(frozen=True)
-class StrokeResult:
+@dataclass(frozen=True, repr=False)
+class StrokeResult(Displayed):
     """The metrics of one stroke and how they were obtained.
 
     ``ok`` is False when the method could not integrate the stroke; ``message`` then says
@@ -127,6 +128,24 @@ class StrokeResult:
         if self.trajectory is None:
             raise ValueError("this result has no trajectory: simulate(cfg, trajectory=True)")
         return pd.DataFrame(self.trajectory)
+
+    def _display(self) -> Display:
+        how = (f"{self.method}, step {self.step:g} s, {self.steps} steps" if self.step else
+               f"{self.method}, tolerance {self.tolerance:g}" if self.tolerance else self.method)
+        acc = self.accuracy or {}
+        rows = [(m.key, pm(getattr(self, m.key), acc.get(m.key), m.unit) if m.key != "closed"
+                 else ("yes" if self.closed else "no"), m.description) for m in METRICS]
+        facts = [("status", self.status.text)]
+        facts += [(k, with_unit(getattr(self, k), u)) for k, u in
+                  (("closing_time", "s"), ("impact_tip_speed", "m/s"), ("peak_tip_speed", "m/s"))
+                  if getattr(self, k) is not None]
+        if self.reason:
+            facts.append(("why not closed", self.reason))
+        note = ("± is the estimated distance from the converged answer (Richardson at half "
+                "the step, plus the table's interpolation error)") if acc else ""
+        return Display(f"StrokeResult ({how})", self.ok,
+                       self.message or "", tuple(facts),
+                       (Table("metrics", ("metric", "value", "what"), rows, note),))
 
     def plot(self):
         """Time histories of the stroke (needs ``trajectory=True``): a matplotlib Figure."""

@@ -137,6 +137,26 @@ class CoefficientTable:
             raise NumericalError(f"the coefficient {bad} is not finite on the stroke range; "
                                  "the geometry is at or near a toggle position")
 
+    def state(self) -> dict:
+        """The arrays a table is restored from (:meth:`restore`; the disk cache keeps them)."""
+        return {"cc": self.cc, "meta": self.meta, "error": np.array([self.max_rel_error])}
+
+    @classmethod
+    def restore(cls, model, state: dict) -> "CoefficientTable":
+        """The table of ``model`` from :meth:`state`'s arrays, without evaluating anything
+        (the mass derivative and the element columns are derived again on first use)."""
+        t = cls.__new__(cls)
+        t.model, t.lid_mass = model, float(model.mass.lid)
+        t.cc = np.ascontiguousarray(state["cc"], float)
+        t.meta = np.array(state["meta"], float)
+        n, t.lo, t.h, _ = (float(v) for v in t.meta[:4])
+        t.ncell, t.hi = int(n), model.theta_range[1]
+        t.max_rel_error = float(state["error"][0])
+        expect = np.array([t.lid_mass, *elements.kernel_meta(model.cfg)], float)
+        if t.cc.shape[0] != t.ncell or not np.array_equal(t.meta[3:], expect):
+            raise ValueError("the table does not match its model")
+        return t
+
     def _kernel_arrays(self) -> tuple[np.ndarray, np.ndarray]:
         """The kernel's views of ``cc`` (derived again whenever ``cc`` is replaced)."""
         if getattr(self, "_kernel_src", None) is not self.cc:

@@ -34,6 +34,8 @@ def draw(p, t, Q, QD, QDD, out: Path) -> list[str]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from softclose.figures import save
+
     out.mkdir(parents=True, exist_ok=True)
     fig, ax = plt.subplots(3, 1, figsize=(8, 9), sharex=True)
     for k, name in ((0, "x1"), (1, "y1"), (3, "x2"), (4, "y2"), (6, "x3"), (7, "y3")):
@@ -53,8 +55,7 @@ def draw(p, t, Q, QD, QDD, out: Path) -> list[str]:
     fig.suptitle(r"Driven four-bar, $\phi_1 = 1.5\,t$")
     fig.tight_layout()
     files = [out / "motion.png"]
-    fig.savefig(files[0], dpi=120)
-    plt.close(fig)
+    files[0] = save(fig, files[0])
 
     J = np.array([locate_joints(q, p) for q in Q])
     fig, ax = plt.subplots(figsize=(8, 6))
@@ -73,8 +74,7 @@ def draw(p, t, Q, QD, QDD, out: Path) -> list[str]:
     ax.set_title("Initial configuration and joint trajectories (0–10 s)")
     fig.tight_layout()
     files.append(out / "trajectories.png")
-    fig.savefig(files[1], dpi=120)
-    plt.close(fig)
+    files[1] = save(fig, files[1])
     return [str(f) for f in files]
 
 

@@ -31,6 +31,8 @@ def draw(link, r, limit, limit_seed, out: Path) -> str:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from softclose.figures import save
+
     out.mkdir(parents=True, exist_ok=True)
     phi = np.degrees(r["phi"])
     fig, ax = plt.subplots(1, 3, figsize=(15, 4.8))
@@ -73,8 +75,7 @@ def draw(link, r, limit, limit_seed, out: Path) -> str:
     fig.suptitle("Linearised lever ratio |A0A|/|B0B| = 1.5 against the exact four-bar")
     fig.tight_layout()
     path = out / "linearisation.png"
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    path = save(fig, path)
     return str(path)
 
 

@@ -10,13 +10,19 @@ Writes to studies/out/report_figures/:
   report_figures.json  for each study: exit code, run time, and the figures it left in
                        studies/out/<name>/ (every study writes its own files there)
 
-Usage: python studies/report_figures.py [--fast] [--only NAME ...]
+``--format pdf`` (or svg) writes every figure in that format and in the report style
+(``softclose.figures``: a 3.5 in column, 8-pt text, vector), through the environment
+variables SOFTCLOSE_FIGURE_FORMAT and SOFTCLOSE_FIGURE_STYLE that ``softclose.figures.save``
+reads; ``--format png`` (the default) keeps the screen style.
+
+Usage: python studies/report_figures.py [--fast] [--format png|pdf|svg] [--only NAME ...]
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import subprocess
 import sys
 import time
@@ -46,11 +52,16 @@ def main(argv=None) -> int:
     ap.add_argument("--fast", action="store_true", help="every study in its fast mode")
     ap.add_argument("--only", nargs="*", default=None, help="run only these studies")
     ap.add_argument("--timeout", type=float, default=3600.0, help="per study (s)")
+    ap.add_argument("--format", choices=("png", "pdf", "svg"), default="png",
+                    help="figure format; pdf and svg in the report style (default png)")
     ap.add_argument("--out", type=Path, default=OUT, help=f"folder of the report (default {OUT})")
     ap.add_argument("--studies-out", type=Path, default=STUDIES_OUT,
                     help=f"each study that takes --out writes to DIR/<name> (default {STUDIES_OUT})")
     a = ap.parse_args(argv)
     a.out.mkdir(parents=True, exist_ok=True)
+    env = dict(os.environ)
+    if a.format != "png":
+        env.update(SOFTCLOSE_FIGURE_FORMAT=a.format, SOFTCLOSE_FIGURE_STYLE="report")
     report, failed = {}, 0
     for name in studies():
         if a.only is not None and name not in a.only:
@@ -65,12 +76,12 @@ def main(argv=None) -> int:
         cmd = [sys.executable, str(script)] + (["--fast"] if a.fast else []) + \
             (["--out", str(where)] if takes_out(script) else [])
         try:
-            p = subprocess.run(cmd, capture_output=True, text=True, timeout=a.timeout)
+            p = subprocess.run(cmd, capture_output=True, text=True, timeout=a.timeout, env=env)
             code, err = p.returncode, p.stderr.strip().splitlines()[-1:] if p.returncode else []
         except subprocess.TimeoutExpired:
             code, err = -1, [f"timed out after {a.timeout:.0f} s"]
         dt = time.time() - t0
-        figs = sorted(str(f) for f in where.rglob("*.png")
+        figs = sorted(str(f) for f in where.rglob(f"*.{a.format}")
                       if f.stat().st_mtime >= t0 - 1) if where.exists() else []
         report[name] = {"status": "ok" if code == 0 else "failed", "exit_code": code,
                         "seconds": round(dt, 2), "out": str(where), "figures": figs,

@@ -51,6 +51,8 @@ def draw(result, z, out: Path) -> str:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from softclose.figures import save
+
     out.mkdir(parents=True, exist_ok=True)
     d, a = result.points, result.pivot_a
     design = make_design(z, d, a)
@@ -79,8 +81,7 @@ def draw(result, z, out: Path) -> str:
     ax.legend(fontsize=8, loc="lower right")
     fig.tight_layout()
     path = out / "straight_line.png"
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    path = save(fig, path)
     return str(path)
 
 

@@ -11,10 +11,22 @@ an independent check of the CasADi kinematics.
 
 from __future__ import annotations
 
+import atexit
 import math
+import os
+import shutil
+import tempfile
 
 import numpy as np
 import pytest
+
+# the disk cache of built models and NLPs (softclose.buildcache): a folder of this test run
+# (every process it starts inherits it), and no NLP is compiled in the background -- the
+# tests of the cache compile one on purpose (tests/test_startup.py)
+_CACHE = tempfile.mkdtemp(prefix="softclose-test-cache-")
+atexit.register(shutil.rmtree, _CACHE, True)
+os.environ["SOFTCLOSE_CACHE"] = _CACHE
+os.environ["SOFTCLOSE_COMPILE"] = "0"
 
 from softclose.config import default_config, from_dict
 from softclose.model import LidModel

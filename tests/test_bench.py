@@ -192,3 +192,29 @@ def test_simulate_start_up_imports_nothing_heavy():
     assert abs(out["closing_time"] - 0.1491478) < 1e-7   # it ran the stroke
     assert out["loaded"] == [], out["loaded"]
     assert bench.startup_imports(["simulate", "--json"]) == []
+
+
+def test_start_up_rows_are_ratios_to_import_casadi(monkeypatch):
+    """The two start-up rows: each command's alternated median over the median of
+    ``python -c "import casadi"``, held to 1.5x (simulate) and 4x (optimise)."""
+    from softclose.bench import calls
+    times = iter([0.10, 0.14, 0.50] * 4)           # casadi, simulate, optimise; 4 rounds
+
+    class Done:
+        returncode = 0
+
+    monkeypatch.setattr(calls.subprocess, "run", lambda *a, **k: Done())
+    import softclose.optimiser.cache as oc
+    monkeypatch.setattr(oc, "prepare", lambda cfg: None)
+    # each subprocess "takes" the next time: perf_counter before and after
+    stamps = []
+    for t in times:
+        stamps += [0.0, t]
+    it = iter(stamps)
+    monkeypatch.setattr("time.perf_counter", lambda: next(it))
+    rows = calls.startup_rows(repeats=3)
+    sim, opt = rows
+    assert sim["key"] == "startup_simulate" and sim["ratio"] == pytest.approx(1.4)
+    assert sim["met"] is True and sim["target"] == {"max_ratio": 1.5}
+    assert opt["ratio"] == pytest.approx(5.0) and opt["met"] is False
+    assert "interpreted" in opt["note"]

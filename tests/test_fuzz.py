@@ -73,9 +73,16 @@ COMMANDS = {
                            "--set", "tolerance.samples=500"], "costly"),
     "bench": (["bench", "--quick"], "costly"),
 }
+#: how a command writes its figures (every command with --out; refused values too)
+FIGURE_OPTIONS = {
+    "--figure-format": ("png", [(v, True) for v in ("pdf", "svg", "gif", "PNG", "", "jpg")]),
+    "--figure-style": ("screen", [(v, True) for v in ("report", "paper", "", "REPORT")]),
+}
 #: the commands' own options: option -> (default, [(value, cheap)]); ``cheap``: refused, or
 #: quick to run (the only values the fast profile draws for the medium and costly commands)
 OPTIONS = {
+    "simulate": dict(FIGURE_OPTIONS),
+    "sweep": dict(FIGURE_OPTIONS),
     "state": {"--theta-deg": ("10", [(v, True) for v in (
                   "0", "-5", "18", "359", "360.5", "-1e300", "1e12", "nan", "inf", "-inf",
                   "abc", "")]),
@@ -83,10 +90,12 @@ OPTIONS = {
                   "3", "-1e4", "1e5", "nan", "1e300", "-inf")])},
     "yield": {"--samples": ("200", [("1", True), ("3", True), ("0", True), ("-5", True),
                                     ("2.5", True), ("abc", True), ("1000000000", True),
-                                    (str(10 ** 30), True), ("2000", False)])},
+                                    (str(10 ** 30), True), ("2000", False)]),
+              **FIGURE_OPTIONS},
     "sensitivity": {"--samples": ("16", [("8", True), ("3", True), ("0", True), ("-4", True),
                                          ("abc", True), (str(2 ** 40), True),
-                                         ("64", False)])},
+                                         ("64", False)]),
+                    **FIGURE_OPTIONS},
     "pareto": {"--closing-times": ("0.4:1:2", [(v, False) for v in (
         "0.4:1:1", "1:0.4:2", "0:1:2", "nan:1:2", "0.4:inf:2", "0.4:1:0", "0.4:1:100000",
         "0.3:3:2:log", "abc", "1e9:1e10:2", "0.4:30:2", "0.4:1:-2", "0.4:1:2.5")])},

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ..config import Config
+from ..display import Display, Displayed, Table, num
 from ..problem import RELATIVE, TARGETS
 from .later import optimiser_study
 from .precision import WorkPrecision, work_precision
@@ -52,8 +53,8 @@ def commit() -> str | None:
         return None
 
 
-@dataclass(frozen=True)
-class BenchResult:
+@dataclass(frozen=True, repr=False)
+class BenchResult(Displayed):
     """Everything one benchmark run measured (see the module docstring)."""
 
     machine: str
@@ -75,6 +76,35 @@ class BenchResult:
     @property
     def success(self) -> bool:
         return True
+
+    def _display(self) -> Display:
+        d = self.default
+        load = " → ".join("—" if v is None else f"{v:.2f}" for v in self.load)
+        facts = [("default step", f"{d['method']} at {d['step']:g} s: "
+                  + ("confirmed (the cheapest setting that meets the targets)"
+                     if d.get("confirmed") else "meets the targets" if d.get("meets_targets")
+                     else "does not meet the targets on " + ", ".join(d["failing_designs"]))),
+                 ("machine", self.machine), ("date", self.date),
+                 ("commit", self.commit or "—"), ("1-min load average", load or "—"),
+                 ("run", f"{self.elapsed:.1f} s" + (" (quick)" if self.quick else ""))]
+        rows = []
+        for r in self.speed:
+            t = r.get("median_s")
+            tgt = r.get("target") or {}
+            target = (f"≤ {_time(tgt['max_s'])}" if "max_s" in tgt else
+                      f"≥ {tgt['min_per_s']:,.0f} /s" if "min_per_s" in tgt else
+                      f"≤ {num(tgt['max_ratio'], 3)}×" if "max_ratio" in tgt else "")
+            value = _time(t)
+            rate = f"{r['rate']:,.0f} {r.get('unit') or ''}/s" if r.get("rate") else \
+                (f"{r['ratio']:.2f}× import casadi" if r.get("ratio") is not None else "")
+            met = {True: "yes", False: "NO", None: ""}[r.get("met")]
+            rows.append((r["what"], value, rate, target, met, r.get("note", "")))
+        tables = (Table("speed of the user-facing calls (medians)",
+                        ("what", "median", "rate", "target", "met", "note"), rows),)
+        missed = [r["what"] for r in self.speed if r.get("met") is False]
+        msg = ("targets missed: " + "; ".join(missed)) if missed else ""
+        return Display("BenchResult: run time against error, speeds and start-up", None, msg,
+                       tuple(facts), tables, short=1)
 
     def to_json(self) -> dict:
         from ..jsonio import jsonable
@@ -111,6 +141,14 @@ def run(cfg: Config, quick: bool = False, log=None, cli: bool = True,
                                "nodes": cfg.optimise.nodes,
                                "substeps": cfg.optimise.substeps},
                        load=(load0, _load()))
+
+
+def _time(t) -> str:
+    """Seconds as "1.37 s", "41.0 ms" or "3.5 µs"."""
+    if t is None:
+        return "—"
+    return f"{t:.3g} s" if t >= 1 else f"{t * 1e3:.3g} ms" if t >= 1e-3 else \
+        f"{t * 1e6:.3g} µs"
 
 
 def _load() -> float | None:

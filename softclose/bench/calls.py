@@ -19,7 +19,7 @@ from ..model import LidModel
 from ..reference import Reference
 from ..simulate import Simulator
 from .later import later_entries
-from .timing import fresh_env, kernel_times, median_time, speed_row
+from .timing import fresh_env, kernel_times, median_time, not_measured, speed_row
 
 #: modules that ``softclose simulate`` must not import at start-up (they are imported lazily)
 HEAVY_MODULES = ("pandas", "pyarrow", "scipy", "SALib", "dask", "matplotlib")
@@ -78,8 +78,65 @@ def speed(cfg: Config, quick: bool = False, cli: bool = True, later: bool = True
                 "imports " + ", ".join(heavy) + " at start-up")
         add(speed_row("cli_simulate", "`python -m softclose simulate --json` end to end "
                       "(fresh interpreter)", cli_time(["simulate", "--json"], rc), rc, note))
+        if quick:
+            rows.extend(not_measured(key, f"{what} end to end / `python -c \"import casadi\"`",
+                                     "not measured with --quick (40 fresh interpreters): "
+                                     "run softclose bench") for key, _, what in STARTUP)
+        else:
+            rows.extend(startup_rows(rc, log))
     if later:
         rows.extend(later_entries(cfg, quick=quick, log=log))
+    return rows
+
+
+#: the start-up targets: a command end to end in a fresh interpreter, as a multiple of the
+#: interpreter's own ``python -c "import casadi"`` (its floor): key, command, what
+STARTUP = (("startup_simulate", ["simulate", "--json"], "`softclose simulate --json`"),
+           ("startup_optimise", ["optimise", "--json"], "`softclose optimise --json` (the "
+            "main job: 6 starts, verification)"))
+
+
+def startup_rows(repeats: int = 9, log=None) -> list[dict]:
+    """The start-up ratios of :data:`STARTUP` on the default config: medians of ``repeats``
+    fresh interpreters of each command and of ``python -c "import casadi"``, run in turn
+    (alternated, so that a change of the host's speed touches all alike), after one run of
+    each and with the optimiser's NLP compiled (:func:`softclose.optimiser.cache.prepare`):
+    what a user's second and later runs take."""
+    import statistics
+    import time
+    from ..config import default_config
+    from ..optimiser.cache import prepare
+    log = log or (lambda *a: None)
+    lib = prepare(default_config())
+    how = ("the NLP compiled" if lib is not None else
+           "the NLP interpreted (no C compiler, or the cache is off)")
+    import importlib.util
+    from pathlib import Path
+    pyc = Path(importlib.util.cache_from_source(str(Path(__file__).with_name("calls.py"))))
+    if not pyc.exists():          # a checkout run with PYTHONDONTWRITEBYTECODE, say
+        how += "; no .pyc files: every module is compiled from source at each start " \
+               "(measure an installed package)"
+    env = fresh_env()
+    cmds = {"casadi": [sys.executable, "-c", "import casadi"]}
+    cmds.update({k: [sys.executable, "-m", "softclose", *argv] for k, argv, _ in STARTUP})
+    times: dict = {k: [] for k in cmds}
+    for i in range(repeats + 1):
+        for k, cmd in cmds.items():
+            t = time.perf_counter()
+            r = subprocess.run(cmd, capture_output=True, env=env, text=True)
+            dt = time.perf_counter() - t
+            if r.returncode != 0:
+                raise RuntimeError(f"{' '.join(cmd[2:])} failed: {r.stderr.strip()[-300:]}")
+            if i:                                    # the first round warms the caches
+                times[k].append(dt)
+    floor = statistics.median(times["casadi"])
+    rows = []
+    for key, _, what in STARTUP:
+        t = statistics.median(times[key])
+        rows.append(speed_row(key, f"{what} end to end / `python -c \"import casadi\"`", t,
+                              repeats, f"{t:.3f} s against {floor:.3f} s (alternated medians); "
+                              f"{how}", ratio=t / floor))
+        log(f"  {what}: {t / floor:.2f} x import casadi")
     return rows
 
 

@@ -21,6 +21,11 @@ from .common import Outcome
 
 #: command modules, in the order ``--help`` lists them
 COMMAND_MODULES = ("state", "simulate", "optimise", "sweep", "bench", "robust")
+#: the module of each command (a command line names one: only its module is imported and
+#: only its parser built -- the others' cost ~10 ms of start-up)
+COMMANDS = {"state": "state", "simulate": "simulate", "optimise": "optimise",
+            "optimize": "optimise", "pareto": "optimise", "sweep": "sweep", "bench": "bench",
+            "yield": "robust", "sensitivity": "robust"}
 
 
 class _Parser(argparse.ArgumentParser):
@@ -28,12 +33,15 @@ class _Parser(argparse.ArgumentParser):
         raise ConfigError(f"{self.prog}: {message}")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
+    """The parser of every command, or -- ``argv`` starting with a command's name -- of
+    that command's family only (the same parser for that command line)."""
     parser = _Parser(prog="softclose",
                      description="Design soft-closing lids on a four-bar linkage.")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
-    for name in COMMAND_MODULES:
+    first = argv[0] if argv else None
+    for name in ((COMMANDS[first],) if first in COMMANDS else COMMAND_MODULES):
         try:
             mod = importlib.import_module(f"{__name__}.{name}")
         except ModuleNotFoundError as exc:  # a command family not installed in this build
@@ -82,7 +90,9 @@ def _main(argv: list[str]) -> int:
     from .. import interrupt
     try:
         with interrupt.guard():   # Ctrl-C ends the command even inside a compiled solver
-            args = build_parser().parse_args(argv)
+            args = build_parser(argv).parse_args(argv)
+            from .common import set_figures
+            set_figures(args)
             from ..config import load_config
             cfg = load_config(args.config, args.overrides + free_overrides(args))
             outcome: Outcome = args.run(cfg, args)

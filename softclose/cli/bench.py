@@ -139,6 +139,8 @@ def target_text(target: dict | None) -> str:
         return "—"
     if "max_s" in target:
         return f"≤ {_duration(target['max_s'])}"
+    if "max_ratio" in target:
+        return f"≤ {target['max_ratio']:g}×"
     return f"≥ {target['min_per_s']:,.0f} /s"
 
 
@@ -147,7 +149,8 @@ def speed_markdown(rows) -> str:
     out = ["| what | median | rate | repeats | target | met? | note |",
            "|---|---:|---:|---:|---|:-:|---|"]
     for r in rows:
-        rate = f"{r['rate']:,.0f} {r['unit']}/s" if r.get("rate") else ""
+        rate = f"{r['rate']:,.0f} {r['unit']}/s" if r.get("rate") else \
+            (f"{r['ratio']:.2f}×" if r.get("ratio") is not None else "")
         met = {True: "yes", False: "**no**", None: ""}[r.get("met")]
         out.append(f"| {r['what']} | {_duration(r['median_s'])} | {rate} | {r['repeats']} | "
                    f"{target_text(r.get('target'))} | {met} | {r['note']} |")
@@ -222,7 +225,7 @@ def write_csv(rows, path: Path) -> Path:
 
 def write_files(res, out: Path) -> list[Path]:
     """Tables, report, JSON and figures of one bench run into ``out`` (which exists)."""
-    from ..figures import save
+    from .common import save_figure as save
     from ..figures.bench import plot_error_vs_step, plot_optimiser, plot_work_precision
     from ..jsonio import dumps
     out = Path(out)

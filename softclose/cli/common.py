@@ -33,9 +33,50 @@ def add_common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
 
 
-def add_out(p: argparse.ArgumentParser, required: bool = False, what: str = "") -> None:
+#: the figure formats and styles of the commands (softclose.figures.FORMATS / STYLES: not
+#: imported here, matplotlib is not needed to parse a command line)
+FIGURE_FORMATS = ("png", "pdf", "svg")
+FIGURE_STYLES = ("screen", "report")
+#: how this command writes its figures (set from its options by :func:`set_figures`)
+FIGURES = {"format": "png", "style": None}
+
+
+def add_out(p: argparse.ArgumentParser, required: bool = False, what: str = "",
+            figures: bool = True) -> None:
     p.add_argument("--out", metavar="DIR", required=required,
                    help=what or "folder for the tables and figures (created if missing)")
+    if figures:
+        add_figures(p)
+
+
+def add_figures(p: argparse.ArgumentParser) -> None:
+    """--figure-format and --figure-style (every command that writes figures)."""
+    p.add_argument("--figure-format", choices=FIGURE_FORMATS, default=None,
+                   help="file format of the figures (default png; pdf with "
+                        "--figure-style report)")
+    p.add_argument("--figure-style", choices=FIGURE_STYLES, default=None,
+                   help="screen (default) or report: a 3.5 in column (two columns for "
+                        "panels side by side), 8-pt text, vector by default")
+
+
+def set_figures(args) -> None:
+    """How this command writes figures, from its options (none: PNG in the current style of
+    :mod:`softclose.figures`, the screen's unless the environment says otherwise)."""
+    st = getattr(args, "figure_style", None)
+    fmt = getattr(args, "figure_format", None) or ("pdf" if st == "report" else "png")
+    FIGURES.update(format=fmt, style=st)
+
+
+def figure_path(path) -> Path:
+    """``path`` with the suffix of this command's figure format."""
+    return Path(path).with_suffix("." + FIGURES["format"])
+
+
+def save_figure(fig, path) -> Path:
+    """Write ``fig`` as ``path`` in this command's figure format and style (the suffix of
+    ``path`` is replaced) and close it."""
+    from ..figures import save
+    return save(fig, figure_path(path), style=FIGURES["style"])
 
 
 def prepare_out(path: str | os.PathLike | None) -> Path | None:
@@ -102,10 +143,9 @@ def write_outputs(out: Path, csv_name: str, frame, fig_name: str, plot) -> list[
     The figure is drawn only once the table is on disk, so that a failure or a Ctrl-C while
     matplotlib draws still leaves the numbers.
     """
-    from ..figures import save
     table = Path(out) / csv_name
     frame.to_csv(table, index=False)
-    return [table, save(plot(), Path(out) / fig_name)]
+    return [table, save_figure(plot(), Path(out) / fig_name)]
 
 
 def wrote(files) -> str:

@@ -27,7 +27,7 @@ def write_trajectory_csv(traj: dict, path: Path) -> Path:
 
 def write_stroke_outputs(model, res, out: Path, stem: str = "stroke") -> list[Path]:
     """Trajectory CSV, time histories, linkage drawing and animation of one stroke."""
-    from ..figures import save
+    from .common import save_figure as save
     from ..figures.stroke import plot_linkage, plot_time_histories, write_animation
     tr = res.trajectory
     files = [write_trajectory_csv(tr, out / f"{stem}_trajectory.csv"),

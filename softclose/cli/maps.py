@@ -39,8 +39,13 @@ def _cores() -> int:
 
 def _draw_share(res, out, names: list[str]) -> None:
     from ..figures.sweep import plot_maps, save_maps
+    from .common import FIGURES
     if names:
-        save_maps(plot_maps(res, only=names), out)
+        figs = plot_maps(res, only=names)
+        if FIGURES["format"] == "png" and FIGURES["style"] is None:
+            save_maps(figs, out)
+        else:
+            save_maps(figs, out, FIGURES["format"], FIGURES["style"])
 
 
 def _draw_in_processes(res, out: Path, processes: int) -> list[str]:
@@ -105,7 +110,9 @@ class Drawer:
             with os.fdopen(r, "rb") as f:
                 data = f.read()
             if data:                                   # (none: nothing to draw)
-                res, out = pickle.loads(data)
+                res, out, figures = pickle.loads(data)
+                from .common import FIGURES
+                FIGURES.update(figures)          # (forked before the options were read)
                 names = _draw_in_processes(res, Path(out), _cores() + 1)
                 with os.fdopen(bw, "w") as f:
                     f.write("\n".join(names))
@@ -124,7 +131,8 @@ class Drawer:
     def draw(self, res, out: Path) -> None:
         """Send the result; the drawer starts drawing as soon as it has read it (a thread
         writes it, so the caller goes on meanwhile)."""
-        data = pickle.dumps((res, str(out)), protocol=pickle.HIGHEST_PROTOCOL)
+        from .common import FIGURES
+        data = pickle.dumps((res, str(out), dict(FIGURES)), protocol=pickle.HIGHEST_PROTOCOL)
         fd, self._fd = self._fd, None
 
         def send():
@@ -227,7 +235,9 @@ def write_maps(res, out: Path, parallel: bool = True) -> list[Path]:
     """Draw and save the maps of ``res`` in ``out`` here (in forked processes when
     ``parallel``: as many as cores plus this one)."""
     processes = _cores() + 1 if parallel and hasattr(os, "fork") else 1
-    return [Path(out) / f"{n}.png" for n in _draw_in_processes(res, Path(out), processes)]
+    from .common import figure_path
+    return [figure_path(Path(out) / f"{n}.png")
+            for n in _draw_in_processes(res, Path(out), processes)]
 
 
 __all__ = ["Drawer", "write_maps", "start_early", "take_drawer", "cancel_early"]

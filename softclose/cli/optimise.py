@@ -86,7 +86,7 @@ def _run_robust(cfg, args, out) -> Outcome:
 
 def write_optimum(res, out) -> list:
     """The optimum's stroke (trajectory CSV, figures), its figure and ``optimise.json``."""
-    from ..figures import save
+    from .common import save_figure as save
     from ..jsonio import dumps
     from ..simulate import Simulator
     from .files import write_stroke_outputs

@@ -223,7 +223,7 @@ def robust_outcome(cfg, args) -> Outcome:
     payload = res.to_json()
     files = []
     if out is not None:
-        from ..figures import save
+        from .common import save_figure as save
         from ..jsonio import jsonable
         path = out / "robust.json"
         path.write_text(json.dumps(jsonable(payload), indent=1, allow_nan=False))

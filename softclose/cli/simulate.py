@@ -15,7 +15,7 @@ def register(sub) -> None:
 def run(cfg, args) -> Outcome:
     from ..simulate import Simulator
     out = prepare_out(args.out)
-    sim = Simulator(cfg)
+    sim = Simulator(cfg, cached=True)
     res = sim.run(trajectory=out is not None)
     payload = res.to_json()
     payload["integrator"] = res.method

@@ -28,7 +28,7 @@ import threading
 import time
 from pathlib import Path
 
-from .common import Outcome, add_common, interactive, prepare_out, wrote
+from .common import Outcome, add_common, add_figures, figure_path, interactive, prepare_out, wrote
 from .maps import take_drawer, write_maps
 
 
@@ -52,6 +52,7 @@ def register(sub) -> None:
     o.add_argument("--out", metavar="DIR", help="folder for the table, the maps and the manifest")
     o.add_argument("--format", choices=("csv", "parquet"),
                    help="csv (default): sweep.csv; parquet: sweep.parquet/, one part per chunk")
+    add_figures(o)
     o.add_argument("--resume", metavar="DIR",
                    help="finish an interrupted sweep in DIR (computes the missing chunks only)")
     o.add_argument("--chunk", type=int, metavar="N",
@@ -241,7 +242,7 @@ def _sweep_run(cfg, args, space, fmt, chunk, out: Path, m: dict, dask,
                 tm = time.perf_counter()
                 names = drawer.finish() if drawer is not None and maps else None
                 if names is not None:
-                    files += [out / f"{n}.png" for n in names]
+                    files += [figure_path(out / f"{n}.png") for n in names]
                 elif maps:                   # no drawer, or it failed: draw them here
                     files += write_maps(res, out)
                 store.write_manifest(out, m, complete=True)
@@ -355,7 +356,7 @@ def _optimal_grid(cfg, args, space, out):
                         progress=interactive(args))
     files = [write_table(res, out, getattr(args, "format", None) or "csv")]
     if not res.interrupted and res.verified:
-        from ..figures import save
+        from .common import save_figure as save
         files.append(save(res.plot(), Path(out) / FIGURE))
     payload = res.to_json()
     payload["files"] = [str(f) for f in files]

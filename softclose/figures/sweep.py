@@ -365,15 +365,21 @@ def _profile(v: _View, res):
     return fig
 
 
-def save_maps(figs: dict, out) -> list:
-    """Write the maps as ``<stem>.png`` in ``out`` (their layout is fixed: no tight-bbox
-    pass, which would draw each figure twice) and close them."""
+def save_maps(figs: dict, out, fmt: str = "png", style: str | None = None) -> list:
+    """Write the maps as ``<stem>.<fmt>`` in ``out`` and close them. PNG on the screen
+    (their layout is fixed: no tight-bbox pass, which would draw each figure twice); other
+    formats and styles through :func:`softclose.figures.save`."""
     from pathlib import Path
 
     import matplotlib
 
-    from . import DPI
+    from . import DPI, current_style, save
     paths = []
+    if fmt != "png" or (style or current_style()) != "screen":
+        for name, fig in figs.items():
+            fig._softclose_fixed_layout = True
+            paths.append(save(fig, Path(out) / f"{name}.{fmt}", style=style))
+        return paths
     with matplotlib.rc_context({"savefig.bbox": "standard"}):
         for name, fig in figs.items():
             path = Path(out) / f"{name}.png"

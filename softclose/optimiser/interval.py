@@ -116,6 +116,26 @@ class ChebyshevFit:
         C = np.vstack([C, np.r_[dtau, 0.0]])
         self.coef, self.degree, self.max_rel_error = C, n, float(err)
 
+    def state(self) -> dict:
+        """The fitted numbers (the disk cache keeps them beside a compiled NLP)."""
+        return {"fit_coef": self.coef, "fit_numbers": np.array([self.lo, self.hi, self.degree,
+                                                                self.max_rel_error]),
+                "fit_names": np.array(self.names)}
+
+    @classmethod
+    def restore(cls, state: dict, els) -> "ChebyshevFit":
+        """The fit from :meth:`state`'s numbers (the elements ``els`` as when it was made)."""
+        f = cls.__new__(cls)
+        f.elements = tuple(els)
+        f.names = tuple(str(n) for n in state["fit_names"])
+        lo, hi, degree, err = (float(v) for v in state["fit_numbers"])
+        f.lo, f.hi, f.degree, f.max_rel_error = lo, hi, int(degree), err
+        f.coef = np.array(state["fit_coef"], float)
+        if f.names != tuple(n for n, _, _ in series_terms(f.elements)) + ("inertia", "tau",
+                                                                           "dtau"):
+            raise ValueError("the fit's series are not those of its elements")
+        return f
+
     def series(self, name: str) -> ca.DM:
         """The Chebyshev coefficients of one function (by its name in :attr:`names`)."""
         return ca.DM(self.coef[self.names.index(name)])

@@ -47,7 +47,7 @@ import numpy as np
 from ..config import NLP_BUDGET
 from ..errors import ConfigError
 from ..problem import DESIGN_KEYS, PARAM_KEYS, SCALES, params_of
-from .interval import ChebyshevFit, free_of, hermite_max, interval_function
+from .interval import ChebyshevFit, free_of, hermite_max, interval_function, nlp_elements
 
 #: Ipopt return statuses that count as converged
 CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
@@ -217,7 +217,12 @@ class ShootingNLP:
 
     def __init__(self, model, nodes: int, substeps: int, hessian: str = "exact",
                  linear_solver: str = "mumps", max_iter: int = 500, tol: float = 1e-10,
-                 els=None, opening: bool = False, free: tuple = ()):
+                 els=None, opening: bool = False, free: tuple = (), library=None,
+                 meta: dict | None = None):
+        """Built symbolically (CasADi's virtual machine evaluates it), or -- ``library`` a
+        compiled library of this NLP (:mod:`softclose.buildcache`) and ``meta`` what
+        :meth:`meta` stored when it was built -- loaded: nothing symbolic is built, the
+        solves call the compiled functions."""
         t0 = time.perf_counter()
         check_linear_solver(linear_solver)
         self.model, self.N, self.M = model, nodes, substeps
@@ -227,6 +232,20 @@ class ShootingNLP:
         self.nd = len(DESIGN_KEYS) + len(self.free)
         self.scales = np.r_[SCALES, [sc for _, _, sc in self.free]]
         self.iT = self.nd                       # w = (d, T, X (node-major), s)
+        self.ipopt_options = {"print_time": False, "show_eval_warnings": False,
+                              "calc_lam_p": False,
+                              "ipopt.print_level": 0, "ipopt.sb": "yes",
+                              "ipopt.tol": tol, "ipopt.max_iter": max_iter,
+                              "ipopt.hessian_approximation": hessian,
+                              "ipopt.linear_solver": linear_solver,
+                              # constraints hold exactly at the answer, not to 1e-8
+                              "ipopt.bound_relax_factor": 0.0}
+        self.key = None
+        self.library = library
+        if library is not None:
+            self._load(library, meta, els)
+            self.build_time = time.perf_counter() - t0
+            return
         self.fit = ChebyshevFit(model, els=els)
         self.interval, self.f = interval_function(model, substeps, self.fit, with_ode=True)
         # the NLP: MX graph over the SX interval, mapped over the N intervals
@@ -262,13 +281,6 @@ class ShootingNLP:
         # the largest sub-step speed or Hermite maximum: the NLP's own peak tip speed
         self._peak = ca.Function("peak", [w, P], [ca.mmax(sp)])
         nlp = {"x": w, "f": J / Jref, "g": ca.vertcat(*g_all.values()), "p": P}
-        self.ipopt_options = {"print_time": False, "show_eval_warnings": False, "calc_lam_p": False,
-                              "ipopt.print_level": 0, "ipopt.sb": "yes",
-                              "ipopt.tol": tol, "ipopt.max_iter": max_iter,
-                              "ipopt.hessian_approximation": hessian,
-                              "ipopt.linear_solver": linear_solver,
-                              # constraints hold exactly at the answer, not to 1e-8
-                              "ipopt.bound_relax_factor": 0.0}
         self.solver = ca.nlpsol("softclose_ms", "ipopt", nlp,
                                 {**self.ipopt_options, **COLD_OPTIONS})
         # the warm solver shares the oracle (and its cached derivatives): ~0.05 s more
@@ -278,8 +290,42 @@ class ShootingNLP:
         self.warm_solver = ca.nlpsol("softclose_ms_warm", "ipopt",
                                      {"x": wx, "p": wpar, "f": fo, "g": go},
                                      {**self.ipopt_options, **WARM_OPTIONS})
-        self.key = None
         self.build_time = time.perf_counter() - t0
+
+    def _load(self, library, meta: dict, els) -> None:
+        """The solvers from a compiled library and the numbers :meth:`meta` kept."""
+        els = tuple(els if els is not None else nlp_elements(self.model.cfg))
+        self.fit = ChebyshevFit.restore(meta, els)
+        self.g_names = [str(n) for n in meta["g_names"]]
+        self.g_sizes = [int(n) for n in meta["g_sizes"]]
+        self.nw = int(meta["nw"][0])
+        from ..buildcache import text
+        self._peak = ca.Function.deserialize(text(meta["peak"]))
+        lib = str(library)
+        self.solver = ca.nlpsol("softclose_ms", "ipopt", lib,
+                                {**self.ipopt_options, **COLD_OPTIONS})
+        self.warm_solver = ca.nlpsol("softclose_ms_warm", "ipopt", lib,
+                                     {**self.ipopt_options, **WARM_OPTIONS})
+        if (self.solver.size1_in(0), self.solver.size1_in(1),
+                self.solver.size1_in(5)) != (self.nw, len(NLP_PARAMS) + self.N,
+                                             sum(self.g_sizes)):
+            raise ValueError("the compiled NLP has other dimensions")
+
+    def __getattr__(self, name):
+        """``interval`` and ``f`` of an NLP loaded from its compiled library: built on first
+        use (tests and reports ask for them; the solves do not)."""
+        if name in ("interval", "f") and self.__dict__.get("library") is not None:
+            self.interval, self.f = interval_function(self.model, self.M, self.fit,
+                                                      with_ode=True)
+            return getattr(self, name)
+        raise AttributeError(name)
+
+    def meta(self) -> dict:
+        """What a compiled library of this NLP needs beside it (:mod:`softclose.buildcache`):
+        the fit, the constraint groups, the size of w, the peak function."""
+        return {**self.fit.state(), "g_names": np.array(self.g_names),
+                "g_sizes": np.array(self.g_sizes), "nw": np.array([self.nw]),
+                "peak": self._peak.serialize().encode()}
 
     # -- packing -------------------------------------------------------------------------
     def pack(self, design, T, X, s) -> np.ndarray:

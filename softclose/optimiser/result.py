@@ -11,7 +11,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..problem import DESIGN_KEYS, METRIC_KEYS
+from ..display import Display, Displayed, Table, num, pm, with_unit
+from ..problem import DESIGN_KEYS, METRIC_KEYS, METRICS, UNITS
 from .verify import Verification
 
 
@@ -48,8 +49,8 @@ class Active:
         return s
 
 
-@dataclass(frozen=True)
-class OptimiseResult:
+@dataclass(frozen=True, repr=False)
+class OptimiseResult(Displayed):
     """The optimiser's answer; a failure is reported in it (``success`` False), never raised.
 
     ``success``: Ipopt converged and (when verified) the adaptive reference confirms every
@@ -146,7 +147,54 @@ class OptimiseResult:
         from ..simulate import Simulator
         if self.design is None or self.config is None:
             raise ValueError("this result has no design to simulate")
-        return Simulator(self.config.with_design(**self.design)).run(trajectory=trajectory)
+        return Simulator(self.config.with_design(**self.design), cached=True).run(trajectory=trajectory)
+
+    def _display(self) -> Display:
+        bounds = self.problem.get("bounds", {})
+        facts = [(k, with_unit((self.design or {}).get(k), UNITS[k])) for k in DESIGN_KEYS
+                 if self.design]
+        facts.append(("objective J", num(self.objective)))
+        if self.verification is not None and self.verification.objective is not None:
+            facts.append(("verified J", f"{num(self.verification.objective)} (adaptive "
+                          "reference)"))
+        tables = []
+        if self.design:
+            tables.append(Table("design", ("key", "value", "unit", "bounds"), [
+                (k, num(self.design[k], 7), UNITS[k],
+                 " … ".join(num(b) for b in bounds[k]) if k in bounds else "")
+                for k in DESIGN_KEYS]))
+        if self.metrics is not None or self.optimiser is not None:
+            ver = self.verification
+            agree = ver.agreement if ver is not None else {}
+            rows = []
+            for m in METRICS:
+                ref = (self.metrics or {}).get(m.key)
+                own = (self.optimiser or {}).get(m.key)
+                a = agree.get(m.key, {})
+                rows.append((m.key, with_unit(ref, m.unit, 7) if self.metrics else "—",
+                             with_unit(own, m.unit, 7),
+                             "" if a.get("difference") is None else
+                             f"{a['difference']:.1e} (allowed {a['tolerance']:.1e})"))
+            heading = ("verified metrics (adaptive reference) beside the optimiser's own"
+                       if self.metrics is not None else "the optimiser's own metrics "
+                       "(not verified)")
+            tables.append(Table(heading, ("metric", "verified", "optimiser", "difference"),
+                                rows))
+        if self.active:
+            tables.append(Table("what limits the design", ("limit", "at", "dJ per unit relaxed",
+                                                             "in words"),
+                                [(a.name, with_unit(a.value, a.unit), f"{a.dJ:.3g}",
+                                  a.describe(self.objective)) for a in self.active]))
+        if self.starts:
+            conv = sum(1 for r in self.starts if r.get("success"))
+            facts.append(("starts", f"{conv} of {len(self.starts)} converged"))
+        facts.append(("solver", f"{self.nodes} x {self.substeps} RK4 steps, {self.hessian} "
+                      f"Hessian, {self.iterations} iterations, {self.total_time:.2f} s"))
+        title = "OptimiseResult: " + ("verified optimum" if self.success and self.verified
+                                      else "optimum (not verified)" if self.success
+                                      else f"no verified optimum ({self.status})")
+        return Display(title, self.success, self.message, tuple(facts), tuple(tables),
+                       tuple(self.notes), short=4)
 
     def plot(self):
         """The optimal stroke's time histories with the verified metrics marked, and where
@@ -155,8 +203,8 @@ class OptimiseResult:
         return plot_optimum(self)
 
 
-@dataclass(frozen=True)
-class FrontResult:
+@dataclass(frozen=True, repr=False)
+class FrontResult(Displayed):
     """The verified optima for a series of closing_time_max values (the Pareto front of the
     objective against the allowed closing time)."""
 
@@ -199,6 +247,27 @@ class FrontResult:
         import pandas as pd
         return pd.DataFrame([{"closing_time_max": t, **p.row()}
                              for t, p in zip(self.closing_times, self.points)])
+
+    def _display(self) -> Display:
+        ok = sum(1 for p in self.points if p.success)
+        rows = []
+        for t, p in zip(self.closing_times, self.points):
+            d, m = p.design or {}, p.metrics or {}
+            rows.append((num(t), "yes" if p.success else "no", num(d.get("spring_k")),
+                         num(d.get("spring_rest_length")), num(d.get("damper_c")),
+                         num(p.objective), num(m.get("closing_time")),
+                         num(m.get("impact_tip_speed")), num(m.get("peak_tip_speed"))))
+        u = UNITS
+        table = Table("the front", (
+            "closing_time_max [s]", "verified", f"spring_k [{u['spring_k']}]",
+            f"spring_rest_length [{u['spring_rest_length']}]", f"damper_c [{u['damper_c']}]",
+            "J", "closing_time [s]", "impact_tip_speed [m/s]", "peak_tip_speed [m/s]"), rows)
+        facts = (("points", f"{len(self.points)}, {ok} verified"),
+                 ("closing_time_max", f"{num(min(self.closing_times))} … "
+                  f"{num(max(self.closing_times))} s" if self.closing_times else "—"),
+                 ("time", f"{self.total_time:.2f} s"))
+        return Display("FrontResult: the objective against closing_time_max", self.success,
+                       self.message, facts, (table,))
 
     def plot(self):
         """Objective, speeds and design against closing_time_max: a matplotlib Figure."""

@@ -79,7 +79,7 @@ def initial_guess(nlp: ShootingNLP, cfg, design, sim, p: np.ndarray,
     o, st = cfg.optimise, cfg.stroke
     frac = np.minimum(np.cumsum(nlp.grid_of(p)), 1.0)   # node times / T
     q = nlp.param_vector(cfg, design)
-    r = sim.run(q, trajectory=True, estimate_error=False)
+    r = sim.run(q, trajectory=("tip_speed",), estimate_error=False)
     N = nlp.N
     J0 = None
     if r.ok and r.trajectory is not None:

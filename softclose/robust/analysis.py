@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..config import Config, check_batch
+from ..display import Display, Displayed, Table, interval, num, percent, unit_of, with_unit
 from ..problem import DESIGN_KEYS, design_of, params_of
 from .box import Box, box_of
 from .evaluate import evaluate
@@ -35,8 +36,8 @@ from .verify import reference_check
 PERCENTILE_KEYS = ("closing_time", "impact_theta_dot", "impact_tip_speed")
 
 
-@dataclass(frozen=True)
-class YieldResult:
+@dataclass(frozen=True, repr=False)
+class YieldResult(Displayed):
     """Monte Carlo yield of one design over its tolerance box (see the module docstring).
 
     ``success`` means the analysis ran (every stroke integrated); whether the design is good
@@ -84,10 +85,46 @@ class YieldResult:
         cols.update({k: v for k, v in d["cols"].items() if k != "status"})
         return pd.DataFrame(cols)
 
+    def _display(self) -> Display:
+        return Display("YieldResult: Monte Carlo yield over the tolerance box",
+                       self.success, self.message, yield_facts(self), yield_tables(self))
+
     def plot(self):
         """Histograms of closing time and impact speed over the samples (a Figure)."""
         from ..figures.robust import plot_yield
         return plot_yield([self], ["design"])
+
+
+def yield_facts(y: YieldResult) -> tuple:
+    """The one-line facts of a yield: the design, the yield with its interval, the samples."""
+    from ..problem import UNITS
+    ok = "meets" if y.meets_required else "below"
+    facts = [("yield", f"{percent(y.yield_)} (95 % interval {interval(y.yield_ci)}; "
+                       f"{ok} the required {percent(y.required_yield)})"),
+             ("samples", f"{num(y.samples)} ({y.distribution}, seed {y.seed})")]
+    facts += [(k, with_unit(v, UNITS.get(k, ""))) for k, v in y.design.items()]
+    if y.numerical_failures:
+        facts.append(("not integrated", f"{y.numerical_failures} strokes"))
+    return tuple(facts)
+
+
+def yield_tables(y: YieldResult) -> tuple:
+    """The box, why samples failed and the percentiles, as tables."""
+    box = Table("tolerance box", ("key", "nominal", "low", "high", "spread"), [
+        (k, with_unit(b["nominal"], unit_of(k)), num(b["low"]), num(b["high"]),
+         f"±{100 * b['spread']:.3g} %" if b["relative"] else f"±{num(b['spread'])} "
+         f"{unit_of(k)}") for k, b in y.box.items()])
+    fail = Table("why samples fail", ("reason", "samples", "share"), [
+        (r, num(n), percent(n / y.samples if y.samples else None))
+        for r, n in sorted(y.failures.items(), key=lambda kv: -kv[1])]) if y.failures else None
+    def cell(k, v):   # a lid that did not close has an infinite closing time
+        return "not closed" if k == "closing_time" and v is not None and v == float("inf") \
+            else num(v)
+    qs = tuple(next(iter(y.percentiles.values()), {}).keys())
+    pct = Table("percentiles", ("metric", *(f"{q[1:]} %" for q in qs)), [
+        (f"{k} [{unit_of(k)}]", *(cell(k, p.get(q)) for q in qs))
+        for k, p in y.percentiles.items()])
+    return tuple(t for t in (box, fail, pct) if t is not None)
 
 
 def _box_json(box: Box) -> dict:

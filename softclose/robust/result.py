@@ -7,14 +7,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..problem import METRIC_KEYS
-from .analysis import YieldResult
+from ..display import Display, Displayed, Table, interval, num, percent, with_unit
+from ..problem import DESIGN_KEYS, METRIC_KEYS, METRICS, UNITS
+from .analysis import YieldResult, yield_tables
 from .box import Box
 from .stats import CI_METHOD
 
 
-@dataclass(frozen=True)
-class RobustResult:
+@dataclass(frozen=True, repr=False)
+class RobustResult(Displayed):
     """The robust design, its scenarios, its verification and its yield beside the nominal
     optimum's. A failure is reported in it (``success`` False, ``message``), never raised."""
 
@@ -100,6 +101,41 @@ class RobustResult:
             row["verified"] = s.get("verified")
             rows.append(row)
         return pd.DataFrame(rows)
+
+    def _display(self) -> Display:
+        facts = [(k, with_unit(v, UNITS[k])) for k, v in (self.design or {}).items()]
+        facts.append((f"objective ({self.robust_objective} case)" if self.robust_objective
+                       else "objective", num(self.objective)))
+        y, ny = self.yield_result, self.nominal_yield
+        if y is not None:
+            facts.append(("yield", f"{percent(y.yield_)} (95 % interval "
+                                   f"{interval(y.yield_ci)}, {num(y.samples)} samples)"))
+        if ny is not None:
+            facts.append(("nominal optimum's yield", f"{percent(ny.yield_)} (95 % interval "
+                                                     f"{interval(ny.yield_ci)})"))
+        facts.append(("scenarios", f"{len(self.scenarios)} (box scale {num(self.box_scale)})"))
+        tables = []
+        if self.design:
+            nom = (self.nominal or {}).get("design") or {}
+            tables.append(Table("design: robust against the nominal optimum",
+                                ("key", "robust", "nominal optimum", "unit"),
+                                [(k, num(self.design.get(k), 7), num(nom.get(k), 7), UNITS[k])
+                                 for k in DESIGN_KEYS]))
+        if self.metrics:
+            tables.append(Table("verified metrics of the nominal lid (adaptive reference)",
+                                ("metric", "value"),
+                                [(m.key, with_unit(self.metrics.get(m.key), m.unit, 7))
+                                 for m in METRICS]))
+        if self.scenarios:
+            tables.append(Table("scenarios", ("scenario", "origin", "objective", "verified"), [
+                (s.get("label"), s.get("origin"), num(s.get("objective")),
+                 num(s.get("verified"))) for s in self.scenarios]))
+        if y is not None:
+            tables.extend(yield_tables(y))
+        title = "RobustResult: " + ("robust design" if self.success else
+                                    f"no robust design ({self.status})")
+        return Display(title, self.success, self.message, tuple(facts), tuple(tables),
+                       tuple(self.notes))
 
     def plot(self):
         """Histograms of closing time and impact speed, nominal against robust design, over

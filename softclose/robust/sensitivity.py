@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..config import Config, check_batch
+from ..display import Display, Displayed, Table, num, with_unit
 from ..errors import ConfigError
 from ..problem import DESIGN_KEYS, design_of, params_of
 from .box import box_of
@@ -33,8 +34,8 @@ CENSORING = ("strokes that do not close count as closing at stroke.t_max (closin
              "and as an impact at theta' = 0 (impact_theta_dot)")
 
 
-@dataclass(frozen=True)
-class SensitivityResult:
+@dataclass(frozen=True, repr=False)
+class SensitivityResult(Displayed):
     """First-order (S1) and total (ST) Sobol indices of each output per toleranced key."""
 
     success: bool
@@ -73,6 +74,25 @@ class SensitivityResult:
                              "S1_conf": d["S1_conf"][k], "ST": d["ST"][k],
                              "ST_conf": d["ST_conf"][k]})
         return pd.DataFrame(rows)
+
+    def _display(self) -> Display:
+        from ..problem import UNITS
+        facts = [(f"{out} driven by", ", ".join(
+            f"{k} (ST {d['ST'][k]:.2f})" for k in sorted(self.keys, key=lambda k: -d["ST"][k])[:2]))
+            for out, d in self.indices.items()]
+        facts += [(k, with_unit(v, UNITS.get(k, ""))) for k, v in self.design.items()]
+        facts += [("strokes", f"{num(self.evaluations)} ({num(self.base_samples)} base "
+                              f"samples, {self.distribution})"),
+                  ("not closed", num(self.not_closed))]
+        tables = []
+        for out, d in self.indices.items():
+            tables.append(Table(f"Sobol indices of {out} (± 95 % bootstrap interval)",
+                                ("key", "first order S1", "total ST"),
+                                [(k, f"{d['S1'][k]:.3f} ± {d['S1_conf'][k]:.3f}",
+                                  f"{d['ST'][k]:.3f} ± {d['ST_conf'][k]:.3f}")
+                                 for k in sorted(self.keys, key=lambda k: -d["ST"][k])]))
+        return Display("SensitivityResult: Sobol indices over the tolerance box",
+                       self.success, self.message, tuple(facts), tuple(tables), short=2)
 
     def plot(self, title: str | None = None):
         """Bars of S1 and ST with their intervals, one panel per output (a Figure)."""

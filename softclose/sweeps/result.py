@@ -8,7 +8,14 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from ..display import Display, Displayed, Table, num, percent, unit_of
 from .chunks import columns as column_names
+
+#: best rows a sweep shows (of any number of designs)
+SHOW_BEST = 5
+#: columns of those rows, after id and the swept keys
+SHOW_COLUMNS = ("objective", "closing_time", "impact_tip_speed", "peak_tip_speed",
+                "holding_moment")
 
 
 def readonly_columns(columns: Mapping) -> Mapping[str, np.ndarray]:
@@ -21,8 +28,8 @@ def readonly_columns(columns: Mapping) -> Mapping[str, np.ndarray]:
     return types.MappingProxyType(cols)
 
 
-@dataclass(frozen=True, eq=False)
-class SweepResult:
+@dataclass(frozen=True, eq=False, repr=False)
+class SweepResult(Displayed):
     """Metrics, objective and feasibility of every design of a grid or sample.
 
     ``columns`` holds the rows (one per design, sorted by ``id``) as read-only numpy arrays
@@ -144,6 +151,49 @@ class SweepResult:
             "stages": dict(self.stages), "chunk": self.chunk, "fixed": dict(self.fixed),
             "best": dict(self.best) if self.best is not None else None,
         })
+
+    def best_rows(self, n: int = SHOW_BEST) -> list[dict]:
+        """The ``n`` feasible designs of lowest objective, best first (from the rows in
+        memory; a sweep streamed to a dataset gives its best design only)."""
+        if self.columns is None:
+            return [dict(self.best)] if self.best is not None else []
+        from .tally import row_of
+        J = np.asarray(self.columns["objective"], float)
+        ok = np.asarray(self.columns["feasible"], bool) & np.isfinite(J)
+        idx = np.flatnonzero(ok)
+        if len(idx) > n:       # a partial sort: 10^6 rows cost one pass
+            idx = idx[np.argpartition(J[idx], n - 1)[:n]]
+        idx = idx[np.argsort(J[idx], kind="stable")]
+        return [row_of(self.columns, int(i), self.keys) for i in idx]
+
+    def _display(self) -> Display:
+        n, ok = self.points, self.feasible
+        facts = [("designs", f"{num(n)} ({self.kind} over {', '.join(self.keys)})"),
+                 ("computed", num(self.computed)),
+                 ("feasible", f"{num(ok)} ({percent(ok / self.computed)})"
+                  if self.computed else "—")]
+        rate = self.designs_per_second
+        facts.append(("time", f"{self.seconds:.2f} s" + (f" ({rate:,.0f} designs/s)"
+                                                          if rate else "")))
+        if self.fixed:
+            facts.append(("not swept", ", ".join(f"{k} = {num(v)} {unit_of(k)}"
+                                                 for k, v in self.fixed.items())))
+        tables = [Table("space", ("",), [(d,) for d in self.space.describe()])]
+        if self.reasons:
+            tables.append(Table("why designs are infeasible", ("reason", "designs", "share"), [
+                (r, num(c), percent(c / self.computed if self.computed else None))
+                for r, c in sorted(self.reasons.items(), key=lambda kv: -kv[1])]))
+        best = self.best_rows()
+        if best:
+            cols = ("id", *self.keys, *SHOW_COLUMNS)
+            head = tuple(c if not unit_of(c) else f"{c} [{unit_of(c)}]" for c in cols)
+            tables.append(Table(f"best feasible designs (lowest objective; {len(best)} of "
+                                f"{num(ok)})", head,
+                                [(str(r["id"]), *(num(r.get(c)) for c in cols[1:]))
+                                 for r in best],
+                                "all rows: .to_frame()"))
+        return Display(f"SweepResult: {self.kind} of {num(n)} designs", self.success,
+                       self.message, tuple(facts), tuple(tables), short=3)
 
     def plot(self) -> dict:
         """The maps as matplotlib Figures, by file stem (``map_<k1>__<k2>``, or
