@@ -71,8 +71,21 @@ def kernel_times(sim: Simulator, p: np.ndarray, repeats: int = 5,
     return med / n, low / n
 
 
+#: the targets hold on an idle machine: a 1-minute load average below this (2 cores)
+IDLE_LOAD = 0.5
+
+
+def load_average() -> float | None:
+    """The 1-minute load average (None where the OS does not give it)."""
+    try:
+        return os.getloadavg()[0]
+    except (AttributeError, OSError):
+        return None
+
+
 def speed_row(key, what, seconds, repeats, note="", count=None, unit="designs") -> dict:
-    """One speed row: median seconds; ``count`` items per call gives a rate (per second)."""
+    """One speed row: median seconds; ``count`` items per call gives a rate (per second);
+    ``load``: the load average as it was measured (the targets are an idle machine's)."""
     rate = count / seconds if count and seconds > 0 else None
     tgt = SPEED_TARGETS.get(key)
     met = None
@@ -82,7 +95,7 @@ def speed_row(key, what, seconds, repeats, note="", count=None, unit="designs") 
         met = rate >= tgt["min_per_s"]
     return {"key": key, "what": what, "median_s": seconds, "repeats": repeats,
             "rate": rate, "unit": unit if count else "", "target": tgt, "met": met,
-            "note": note}
+            "load": load_average(), "note": note}
 
 
 def not_measured(key, what, note, repeats=0) -> dict:
