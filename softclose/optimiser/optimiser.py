@@ -150,9 +150,13 @@ def finish(cfg, nlp: ShootingNLP, run: Run, disc: Discretisation, *, verify: boo
         run = tighten(cfg, nlp, run, sim, disc.t_limit, notes)
     design, own, J = claims(nlp, cfg, run)
     active = active_set(nlp, cfg, run, disc.t_limit)
+    problem = describe(cfg)
+    # the closing-time bounds the NLP was solved with: closing_time_min raised to the NLP's
+    # floor, the limit moved by the discretisation error (tighten)
+    problem["closing_time_solved"] = [float(run.bounds[0][3]), float(run.bounds[1][3])]
     common = dict(nodes=nlp.N, substeps=nlp.M, hessian=cfg.optimise.hessian,
                   iterations=base.pop("iterations", run.iterations),
-                  solve_time=base.pop("solve_time", run.time), problem=describe(cfg),
+                  solve_time=base.pop("solve_time", run.time), problem=problem,
                   config=cfg, run=run, nlp_key=nlp.key, active=active, **base)
     if not verify:
         return OptimiseResult(True, "not verified (verify=False): the numbers in 'optimiser' "
