@@ -145,3 +145,32 @@ def test_bench_says_why_an_order_is_missing_and_under_which_load():
     assert "| **no** (loaded: 2.0) | 2.0 |" in table
     assert "The targets are set for an idle machine (load below 0.5)" in table
     assert ORDER_DASH.startswith("— : no slope fitted.")
+
+
+def test_bench_load_is_the_other_processes_not_the_bench_s_own():
+    """A row's load counts what other processes used while it was measured: the bench's
+    own busy loop (or its child's) is not load, another process spinning is (about a core)."""
+    import subprocess
+    import sys
+    import time
+
+    from softclose.bench.timing import OtherLoad
+
+    def spin(seconds):
+        t = time.perf_counter()
+        while time.perf_counter() - t < seconds:
+            pass
+    with OtherLoad() as own:
+        spin(0.6)
+        subprocess.run([sys.executable, "-c", "import time\nt=time.time()\nwhile "
+                        "time.time()-t<0.6: pass"], check=True)
+    p = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    try:
+        time.sleep(0.3)
+        with OtherLoad() as other:
+            time.sleep(1.0)
+    finally:
+        p.kill()
+        p.wait()
+    assert own.value is not None and other.value is not None
+    assert other.value - own.value >= 0.4, (own.value, other.value)

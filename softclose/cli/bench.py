@@ -3,7 +3,7 @@
 The measuring is :func:`softclose.bench.run`; this module formats its result (text and
 Markdown tables), writes the files and picks the exit code. With ``--out DIR`` (checked
 before any work) it writes ``work_precision.csv``, ``speed.csv``, ``optimiser.csv``,
-``bench.md``, ``bench.json`` and the figures ``work_precision.png``, ``error_vs_step.png``
+``bench.md``, ``bench.json``, ``speed.json`` (the speed rows alone) and the figures ``work_precision.png``, ``error_vs_step.png``
 and ``optimiser.png``.
 """
 
@@ -187,9 +187,10 @@ def speed_markdown(rows) -> str:
         out.append(f"| {r['what']} | {_duration(r['median_s'])} | {rate} | {r['repeats']} | "
                    f"{target_text(r.get('target'))} | {met_text(r)} | "
                    f"{_load_text(r.get('load'))} | {r['note']} |")
-    out += ["", f"load: the 1-minute load average when the row was measured. The targets are "
-                f"set for an idle machine (load below {IDLE_LOAD:g}); a row measured above it "
-                "is an upper bound of the idle time, and its \"no\" is the load's, not a "
+    out += ["", f"load: the cores other processes used on average while the row was measured "
+                f"(the machine's busy CPU time less the benchmark's own). The targets are set "
+                f"for an idle machine (load below {IDLE_LOAD:g}); a row measured above it is an "
+                "upper bound of the idle time, and its \"no\" is the load's, not a "
                 "regression, until it is measured idle."]
     return "\n".join(out)
 
@@ -260,6 +261,17 @@ def write_csv(rows, path: Path) -> Path:
     return path
 
 
+def speed_record(res) -> dict:
+    """The speed rows of a run with where and when they were measured."""
+    from ..bench.timing import IDLE_LOAD
+    return {"machine": res.machine, "date": res.date, "commit": res.commit,
+            "quick": res.quick, "load": list(res.load), "idle_load": IDLE_LOAD,
+            "rows": {r["key"]: {k: r.get(k) for k in ("what", "median_s", "rate", "unit",
+                                                      "repeats", "target", "met", "load",
+                                                      "note")}
+                     for r in res.speed}}
+
+
 def write_files(res, out: Path) -> list[Path]:
     """Tables, report, JSON and figures of one bench run into ``out`` (which exists)."""
     from ..figures import save
@@ -269,6 +281,10 @@ def write_files(res, out: Path) -> list[Path]:
     speed_rows = [{**r, "target": target_text(r.get("target"))} for r in res.speed]
     files = [write_csv(res.work_precision.rows, out / "work_precision.csv"),
              write_csv(speed_rows, out / "speed.csv")]
+    # the speed rows alone, with the run's machine, date, commit and load: the record the
+    # README's timings are held to (docs/bench_speed.json, tests/test_readme_numbers.py)
+    (out / "speed.json").write_text(dumps(speed_record(res), indent=1))
+    files.append(out / "speed.json")
     if res.optimiser:
         files.append(write_csv(res.optimiser, out / "optimiser.csv"))
     (out / "bench.md").write_text(report_markdown(res))
