@@ -149,7 +149,7 @@ def test_pareto_figure_states_j_s_unit():
     fr = softclose.front(default_config(), [0.8, 1.0])
     fig = fr.plot()
     label = fig.axes[0].get_ylabel()
-    assert label == "J = 1 s²·θ'² + 0.1 s²/m²·v_peak² [rad², dimensionless]"
+    assert label == "J = 1 s²·θ'² + 0.1 s²/m²·v_peak² [dimensionless]"
 
 
 def test_the_robust_report_names_what_limits_it(capsys):

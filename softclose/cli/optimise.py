@@ -328,7 +328,9 @@ def format_front(fr) -> str:
                      f"{_v(m.get('peak_tip_speed'), '10.5f'):>10} "
                      f"{'yes' if p.success else 'NO':>8}  {act}")
     lines.append("  (speeds: the adaptive reference's simulation of each optimum; "
-                 "J: the optimiser's, agreeing with the reference's to 1e-3)")
+                 "J: the optimiser's, agreeing with the reference's to 1e-3; designs rounded "
+                 "for the table: --out DIR writes each with every digit as "
+                 "DIR/designs/design_<i>.toml)")
     if fr.message:
         lines.append(f"  {fr.message}")
     return "\n".join(lines)

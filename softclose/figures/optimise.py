@@ -103,7 +103,7 @@ def plot_front(fr):
     a.set_xlabel("closing_time_max [s]")
     pr = rows[0][1].problem or {}
     wi, wp = pr.get("weight_impact", 1.0), pr.get("weight_peak_tip", 0.1)
-    a.set_ylabel(f"J = {wi:g} s²·θ'² + {wp:g} s²/m²·v_peak² [rad², dimensionless]", fontsize=9)
+    a.set_ylabel(f"J = {wi:g} s²·θ'² + {wp:g} s²/m²·v_peak² [dimensionless]", fontsize=9)
     a.set_title("Optimal objective against the allowed closing time")
     a.legend(fontsize=8)
     a = ax[0, 1]
