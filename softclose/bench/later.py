@@ -181,8 +181,8 @@ def _nominal_optimum(cfg: Config):
     d = r.design
     return cfg.with_design(**{k: d[k] for k in ("spring_k", "spring_rest_length",
                                                  "damper_c")}), \
-        (f"at the nominal optimum k = {d['spring_k']:.5g} N/m, l0 = "
-         f"{d['spring_rest_length']:.5g} m, c = {d['damper_c']:.5g} N s/m")
+        (f"at the nominal optimum k = {d['spring_k']:.7g} N/m, l0 = "
+         f"{d['spring_rest_length']:.7g} m, c = {d['damper_c']:.7g} N s/m")
 
 
 # -- optimiser ---------------------------------------------------------------------------
