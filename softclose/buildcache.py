@@ -269,7 +269,7 @@ def request_nlp(key: str, spec: dict) -> bool:
     with os.fdopen(fd, "w") as f:
         json.dump({"key": key, **spec}, f)
     try:
-        subprocess.Popen([sys.executable, "-m", "softclose.buildcache", str(lock)],
+        subprocess.Popen([sys.executable, "-m", "softclose.optimiser.compile", str(lock)],
                          stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                          stderr=subprocess.DEVNULL, start_new_session=True, close_fds=True,
                          env={**os.environ, ENV_FOLDER: os.environ.get(ENV_FOLDER, "")})
@@ -308,26 +308,3 @@ def compile_nlp(solver, key: str) -> Path | None:
         os.replace(out, path)
     _prune(where, "nlp-*.so")
     return path
-
-
-def _main(lock: str) -> int:
-    """The background compilation (``python -m softclose.buildcache LOCK``): build the NLP
-    the lock file names, compile it, remove the lock."""
-    import json
-    try:
-        os.nice(10)
-    except OSError:
-        pass
-    try:
-        spec = json.loads(Path(lock).read_text())
-        from .config import from_dict
-        from .optimiser.cache import build_nlp
-        nlp = build_nlp(from_dict(spec["config"]), spec["nodes"], spec["substeps"])
-        compile_nlp(nlp.solver, spec["key"])
-    finally:
-        _remove(Path(lock))
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(_main(sys.argv[1]))

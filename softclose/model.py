@@ -288,8 +288,10 @@ class LidModel:
         # the holding moment dV/dtheta (gravity + springs), as a function of theta and p
         slope = dyn.slope(cf["coords"], elements.params(p))
         self.dV = ca.Function("dV", [th, p], [slope])
-        # the hand force at the tip that holds the lid at theta (friction aside): dV / tau
-        F = slope / cf["tau"]
+        # the hand force at the tip that lifts the lid slowly through theta: (dV + friction,
+        # which opposes the lifting) / tau
+        fr = dyn.friction(cf["coords"], elements.params(p))
+        F = (slope if fr is None else slope + fr) / cf["tau"]
         self.opening = ca.Function("opening", [th, p], [F, ca.jacobian(F, th)])
         # every element's coordinate and its theta-derivative: {name: Function theta -> (q, q')}
         self.coordinate_fns = {e: ca.Function(f"q_{e}", [th], [c.q, c.dq])

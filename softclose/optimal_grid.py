@@ -254,7 +254,7 @@ def optimise_grid(cfg, axes, *, dask=None, robust: bool = False, progress: bool 
         bar.close()
     res = OptimalGridResult.from_rows(grid, rows, time.perf_counter() - t0, where,
                                       bool(robust), interrupted)
-    return dataclasses.replace(res, lost=lost) if lost else res
+    return dataclasses.replace(res, lost=lost, config=cfg)
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -281,6 +281,8 @@ class OptimalGridResult(Displayed):
     interrupted: bool = False
     #: why the Dask cluster stopped before every point was done ("" if it did not)
     lost: str = ""
+    #: the config the grid was solved over (its keys set per point)
+    config: Any = field(default=None, repr=False)
 
     def __post_init__(self):
         object.__setattr__(self, "columns", readonly_columns(self.columns))
@@ -358,6 +360,18 @@ class OptimalGridResult(Displayed):
         """The row of grid point ``i`` (plain values; NaN as None)."""
         from .jsonio import jsonable
         return jsonable({k: v[i] for k, v in self.columns.items()})
+
+    def design_config(self, i: int):
+        """The config of grid point ``i`` (its keys set) with its optimal design as
+        ``[design]`` (``softclose sweep --optimise --out D`` writes it as
+        D/designs/design_<i>.toml); ValueError when the point has no design."""
+        if self.config is None:
+            raise ValueError("this result does not carry its config")
+        c = self.columns
+        design = {k: float(c[k][i]) for k in DESIGN_KEYS}
+        if not all(math.isfinite(v) for v in design.values()):
+            raise ValueError(f"grid point {i} has no design ({c['message'][i]})")
+        return self.config.update({k: float(c[k][i]) for k in self.keys}).with_design(**design)
 
     def grid(self, name: str) -> np.ndarray:
         """Column ``name`` shaped as the grid (axes in the order of ``keys``)."""

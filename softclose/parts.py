@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import elements
 from .problem import PARAM_KEYS, feasible, params_of
 
 #: the ladders of deviations tried, each side: free length (m), rate (relative)
@@ -71,9 +72,8 @@ def spring_part(cfg, design: dict | None, metrics: dict | None,
     kind = cfg.design.spring_kind if design is None or "spring_kind" not in design \
         else design["spring_kind"]
     lo, hi = float(metrics["min_spring_length"]), float(metrics["max_spring_length"])
-    s = {"linear": 0.0, "extension": 1.0, "compression": -1.0}[kind]
-    forces = [s * P["spring_preload"] + P["spring_k"] * (x - P["spring_rest_length"])
-              for x in (lo, hi)]
+    a, b = elements.BY_NAME["spring"].affine(elements.params(p))    # its law T = a + b l
+    forces = [float(a + b * x) for x in (lo, hi)]
     return SpringPart(kind, float(P["spring_rest_length"]), float(P["spring_k"]),
                       float(P["spring_preload"]), (lo, hi), float(max(abs(f) for f in forces)),
                       margins(cfg, p) if tolerance else {})
@@ -82,24 +82,52 @@ def spring_part(cfg, design: dict | None, metrics: dict | None,
 def margins(cfg, p) -> dict:
     """How far the free length (m) and the rate (relative) may each move, below and above,
     with the design still feasible and valid (the kernel at cfg's step, every other value
-    nominal): the first deviation of the ladder that fails, less one step."""
+    nominal): the first deviation of the ladder that fails, less one step (found on every
+    :data:`LADDER_STRIDE`-th step, then step by step below the first that fails)."""
     from .simulate import Simulator
     sim = Simulator(cfg)
-    out = {}
+    p = np.asarray(p, float)
+    ladders = []                  # (name, steps, column, relative, sign), each side
     for key, steps, relative in (("spring_rest_length", FREE_LENGTH_STEPS, False),
                                  ("spring_k", RATE_STEPS, True)):
-        j = PARAM_KEYS.index(key)
-        sides = []
         for sign in (-1.0, 1.0):
-            d = sign * steps
-            P = np.tile(np.asarray(p, float), (len(d), 1))
+            ladders.append(("free_length" if key == "spring_rest_length" else "rate", steps,
+                            PARAM_KEYS.index(key), relative, sign))
+
+    def ok_at(which: list) -> list:
+        """Feasible and valid at the ladder indices ``which[l]`` of each ladder l: one batch."""
+        rows = []
+        for (_, steps, j, relative, sign), idx in zip(ladders, which):
+            d = sign * steps[idx]
+            P = np.tile(p, (len(d), 1))
             P[:, j] = p[j] * (1 + d) if relative else p[j] + d
             P[:, j] = np.maximum(P[:, j], 0.0 if relative else 1e-4)
-            r = sim.run_batch(P)
-            ok = feasible(cfg.optimise, r["closed"], r["closing_time"], r["holding_moment"],
-                          r["theta_dot_max"]) & (r["status"] == 0)
-            bad = np.flatnonzero(~ok)
-            sides.append(float(steps[bad[0] - 1]) if len(bad) and bad[0] > 0 else
-                         (0.0 if len(bad) else float(steps[-1])))
-        out["free_length" if key == "spring_rest_length" else "rate"] = tuple(sides)
+            rows.append(P)
+        r = sim.run_batch(np.vstack(rows))
+        ok = feasible(cfg.optimise, r["closed"], r["closing_time"], r["holding_moment"],
+                      r["theta_dot_max"]) & (r["status"] == 0)
+        return np.split(ok, np.cumsum([len(x) for x in which])[:-1])
+
+    # every LADDER_STRIDE-th step first, then the steps below the first that fails
+    coarse = [np.arange(LADDER_STRIDE - 1, len(steps), LADDER_STRIDE)
+              for _, steps, _, _, _ in ladders]
+    first = []
+    for idx, ok in zip(coarse, ok_at(coarse)):
+        bad = np.flatnonzero(~ok)
+        first.append(int(idx[bad[0]]) if len(bad) else None)
+    fine = [np.arange(max(f - LADDER_STRIDE + 1, 0), f) if f is not None else
+            np.arange(coarse_idx[-1] + 1, len(lad[1]))
+            for f, coarse_idx, lad in zip(first, coarse, ladders)]
+    out = {}
+    for (name, steps, _, _, _), f, idx, ok in zip(ladders, first, fine, ok_at(fine)):
+        bad = np.flatnonzero(~ok)
+        fail = int(idx[bad[0]]) if len(bad) else f          # the first step that fails
+        side = float(steps[-1]) if fail is None else \
+            (float(steps[fail - 1]) if fail > 0 else 0.0)
+        out[name] = out.get(name, ()) + (side,)
     return out
+
+
+#: the margins' ladders are tried every LADDER_STRIDE-th step, then step by step below the
+#: first that fails (the constraints change monotonically over so short a span)
+LADDER_STRIDE = 10

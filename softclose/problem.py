@@ -29,7 +29,8 @@ from typing import Any
 import numpy as np
 
 from .config.schema import KEYS
-from .elements import PARAM_NAMES, PARAMS
+from . import elements
+from .elements import ELEMENTS, PARAM_NAMES, PARAMS
 
 #: the design variables the optimiser picks (config section [design], bounds in [optimise])
 DESIGN_KEYS = ("spring_k", "spring_rest_length", "damper_c")
@@ -143,6 +144,35 @@ def param_rows(cfg, n: int, keys=(), X=None) -> np.ndarray:
     return P
 
 
+def _rates(element) -> tuple[str, ...]:
+    """The parameters whose non-zero value makes a spring or damper exert a force (its rate
+    or coefficient; a spring's rest length alone exerts none)."""
+    if element.acting_params is not None:
+        return tuple(element.acting_params)
+    rate = getattr(element, "rate", "")
+    return (rate,) if rate else tuple(q.name for q in element.params)
+
+
+#: the spring rates and damper coefficients of [design], from the element registry
+RATE_KEYS = tuple(name for e in ELEMENTS if e.name != "gravity"
+                  and (e in elements.SPRINGS or e in elements.DAMPERS) for name in _rates(e))
+
+
+def bare_lid(cfg, design: dict | None = None) -> bool:
+    """True when ``cfg``'s design (``design`` taking precedence) has no spring and no
+    damper: every rate and coefficient of :data:`RATE_KEYS` is zero, so the lid falls under
+    gravity alone (the default config's design)."""
+    d = dict(design or {})
+    return all(float(d.get(k, getattr(cfg.design, k))) == 0.0 for k in RATE_KEYS)
+
+
+#: what a report says about a design without spring or damper
+BARE_LID = ("this design has no spring and no damper (design.spring_k, torsion_k, damper_c and "
+            "rotary_damper_c are all 0: the default config's design): the lid falls freely "
+            "and slams shut, and relative spreads of the spring and the damper are spreads of "
+            "zero")
+
+
 def design_of(p) -> dict:
     """The design dict ``{spring_k, spring_rest_length, damper_c}`` of a parameter vector."""
     return {k: float(v) for k, v in zip(DESIGN_KEYS, np.asarray(p, float)[:3])}
@@ -222,7 +252,7 @@ def describe(cfg) -> dict[str, Any]:
     return {"closing_time_min": o.closing_time_min, "closing_time_max": o.closing_time_max,
             "holding_moment_min": o.holding_moment_min,
             "opening_force_max": o.opening_force_max, "weight_impact": o.weight_impact,
-            "weight_peak_tip": o.weight_peak_tip,
+            "weight_peak_tip": o.weight_peak_tip, "t_max": cfg.stroke.t_max,
             "bounds": {k: list(getattr(o, k)) for k in DESIGN_KEYS}}
 
 

@@ -237,32 +237,38 @@ def _parabola_max(F: np.ndarray, th: np.ndarray) -> np.ndarray:
 
 def opening_force_exact(model, p) -> float:
     """The opening effort of one design from the exact model (the reference's): the largest
-    (dV/dtheta + T_f) / |dr_T/dtheta| over a 2001-point grid of [theta_closed, theta0], then a
-    golden-section search around the largest point."""
-    import math
+    (dV/dtheta + T_f) / |dr_T/dtheta| (``model.opening``) over a 2001-point grid of
+    [theta_closed, theta0], then the root of its theta-derivative between the neighbours of
+    the largest point (Illinois false position; an end stays an end)."""
     st = model.cfg.stroke
-    Tf = sum(float(np.asarray(e.coulomb(elements.params(np.asarray(p, float))))) for e in
-             elements.FRICTIONS)
-    tau_row = COEFFS.index("tau")
-
-    def F(th):
-        th = np.atleast_1d(np.asarray(th, float))
-        dV = np.asarray(model.dV.map(len(th))(th, np.repeat(np.asarray(p, float)[:, None],
-                                                             len(th), 1))).ravel()
-        tau = np.asarray(model.coeffs.map(len(th))(th)[0])[tau_row]
-        return (dV + Tf) / tau
-    th = np.linspace(st.theta_closed, st.theta0, 2001)
-    v = F(th)
-    i = int(np.argmax(v))
-    lo, hi = th[max(i - 1, 0)], th[min(i + 1, len(th) - 1)]
-    g = (math.sqrt(5) - 1) / 2
-    best = float(v[i])
-    for _ in range(60):
-        a, b = hi - g * (hi - lo), lo + g * (hi - lo)
-        fa, fb = F([a, b])
-        best = max(best, float(fa), float(fb))
-        if fa > fb:
-            hi = b
-        else:
-            lo = a
+    p = np.asarray(p, float)
+    grid = model.__dict__.get("_opening_grid")
+    if grid is None:                  # (mapping a Function builds one: once per model)
+        grid = model.__dict__["_opening_grid"] = model.opening.map(OPENING_EXACT_GRID)
+    th = np.linspace(st.theta_closed, st.theta0, OPENING_EXACT_GRID)
+    F, dF = (np.asarray(a).ravel() for a in grid(th, np.repeat(p[:, None], len(th), 1)))
+    i = int(np.argmax(F))
+    best = float(F[i])
+    if 0 < i < len(th) - 1 and dF[i - 1] > 0 > dF[i + 1]:
+        a, b, fa, fb, side = th[i - 1], th[i + 1], dF[i - 1], dF[i + 1], 0
+        for _ in range(60):
+            x = a - fa * (b - a) / (fb - fa)
+            Fx, dFx = (float(v) for v in model.opening(x, p))
+            best = max(best, Fx)
+            if dFx == 0 or b - a < 1e-15:
+                break
+            if (dFx > 0) == (fa > 0):
+                a, fa = x, dFx
+                if side == -1:
+                    fb *= 0.5
+                side = -1
+            else:
+                b, fb = x, dFx
+                if side == 1:
+                    fa *= 0.5
+                side = 1
     return best
+
+
+#: angles of :func:`opening_force_exact`'s grid
+OPENING_EXACT_GRID = 2001

@@ -81,7 +81,7 @@ CLI_CASES = [
     ("--config missing file", ["simulate", "--config", "/nonexistent/softclose.toml"],
      "/nonexistent/softclose.toml"),
     ("unknown command", ["simulat"], "simulat"),
-    ("no command", [], "COMMAND"),
+    ("no command", [], "no command given"),
     ("unknown option", ["simulate", "--colour"], "--colour"),
     ("bench unknown option", ["bench", "--fast"], "--fast"),
     ("state without angle", ["state"], "--theta-deg"),

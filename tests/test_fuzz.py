@@ -72,6 +72,7 @@ COMMANDS = {
     "optimise --robust": (["optimise", "--robust", "--set", "optimise.starts=2",
                            "--set", "tolerance.samples=500"], "costly"),
     "bench": (["bench", "--quick"], "costly"),
+    "docs": (["docs"], "cheap"),
 }
 #: how a command writes its figures (every command with --out; refused values too)
 FIGURE_OPTIONS = {
@@ -88,6 +89,14 @@ OPTIONS = {
                   "abc", "")]),
               "--theta-dot": ("0", [(v, True) for v in (
                   "3", "-1e4", "1e5", "nan", "1e300", "-inf")])},
+    "simulate": {"--slow-motion": ("20", [(v, True) for v in (
+                     "1", "1000", "2.5", "0.999", "0", "-1", "nan", "inf", "abc", "", "1e300",
+                     "1001")])},
+    "optimise": {"--slow-motion": ("20", [(v, True) for v in (
+                     "1", "1000", "0", "-20", "nan", "abc", "1e9")])},
+    # a positional: given as its value alone (see _arg)
+    "docs": {"TOPIC": ("keys", [(v, True) for v in (
+                 "overview", "keys", "problem", "files", "nope", "KEYS", "", "--keys")])},
     "yield": {"--samples": ("200", [("1", True), ("3", True), ("0", True), ("-5", True),
                                     ("2.5", True), ("abc", True), ("1000000000", True),
                                     (str(10 ** 30), True), ("2000", False)]),
@@ -313,7 +322,7 @@ def options(draw, command: str, profile: str) -> list[str]:
             pool = []
         value = draw(st.sampled_from(pool)) if pool and draw(st.integers(0, 3)) == 0 \
             else default
-        argv.append(f"{opt}={value}")        # '--opt=-1e300': argparse takes it as a value
+        argv.append(_arg(opt, value))
     if command == "sweep":
         if draw(st.integers(0, 2)) == 0:
             argv.append(f"--grid={draw(grid_spec())}")
@@ -359,6 +368,12 @@ def time_limit(seconds: float, what: str):
         signal.setitimer(signal.ITIMER_REAL, 0)
         faulthandler.cancel_dump_traceback_later()
         signal.signal(signal.SIGALRM, previous)
+
+
+def _arg(opt: str, value: str) -> str:
+    """One option as argv gives it: '--opt=value' ('--opt=-1e300': argparse takes it as a
+    value), or the value alone for a positional (an OPTIONS name without dashes)."""
+    return f"{opt}={value}" if opt.startswith("-") else value
 
 
 def _option(argv: list[str], name: str) -> list[str]:
@@ -451,6 +466,8 @@ def work_seconds(command: str, cfg, argv: list[str]) -> float:
         return 300.0 + 10 * grid + 500 * stroke
     if command == "bench":
         return 400.0
+    if command == "docs":
+        return 30.0
     raise AssertionError(command)
 
 
@@ -519,8 +536,10 @@ def run_case(command: str, values, out_dir: Path, as_json: bool,
     base, _cost = COMMANDS[command]
     opts = list(opts)
     for opt, (default, _) in OPTIONS.get(command, {}).items():
-        if defaults and not _option(opts, opt):
-            opts.append(f"{opt}={default}")
+        given = _option(opts, opt) if opt.startswith("-") else \
+            [a for a in opts if not a.startswith("-")]
+        if defaults and not given:
+            opts.append(_arg(opt, default))
     if command == "sweep" and not _option(opts, "--grid"):
         opts.append("--grid=design.spring_k=0:2000:3")
     argv = [a.replace("{out}", str(out_dir)) for a in base] + opts
@@ -582,7 +601,8 @@ def run_case(command: str, values, out_dir: Path, as_json: bool,
 #: examples per command: (fast default run, long "-m fuzz" run)
 EXAMPLES = {"state": (100, 400), "simulate": (400, 1500), "sweep": (60, 300),
             "optimise": (25, 120), "yield": (25, 100), "sensitivity": (15, 60),
-            "pareto": (10, 30), "optimise --robust": (10, 15), "bench": (10, 8)}
+            "pareto": (10, 30), "optimise --robust": (10, 15), "bench": (10, 8),
+            "docs": (30, 100)}
 
 
 @pytest.fixture(scope="module")

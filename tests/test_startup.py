@@ -117,7 +117,7 @@ def test_the_second_use_of_an_nlp_compiles_it_in_the_background(cache, cfg, monk
     assert not started and list(cache.glob("*/seen-*"))
     _clear_memory()
     get_nlp(cfg)                        # second use (another process): compile it
-    assert len(started) == 1 and started[0][1:3] == ["-m", "softclose.buildcache"]
+    assert len(started) == 1 and started[0][1:3] == ["-m", "softclose.optimiser.compile"]
     lock = Path(started[0][3])
     assert lock.exists()
     spec = __import__("json").loads(lock.read_text())

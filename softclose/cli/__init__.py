@@ -20,24 +20,70 @@ from ..errors import ConfigError, SoftcloseError
 from .common import Outcome
 
 #: command modules, in the order ``--help`` lists them
-COMMAND_MODULES = ("state", "simulate", "optimise", "sweep", "bench", "robust")
+COMMAND_MODULES = ("state", "simulate", "optimise", "sweep", "bench", "robust", "docs")
 #: the module of each command (a command line names one: only its module is imported and
 #: only its parser built -- the others' cost ~10 ms of start-up)
 COMMANDS = {"state": "state", "simulate": "simulate", "optimise": "optimise",
             "optimize": "optimise", "pareto": "optimise", "sweep": "sweep", "bench": "bench",
-            "yield": "robust", "sensitivity": "robust"}
+            "yield": "robust", "sensitivity": "robust", "docs": "docs"}
+
+#: the program's name: every error line starts ``softclose: error:``
+PROG = "softclose"
+
+DESCRIPTION = """\
+Design soft-closing lids on a four-bar linkage: simulate the closing stroke, optimise the
+spring and damper, sweep any config keys, and judge a design under manufacturing tolerances.
+
+Start with `softclose optimise --out D`: it writes the optimal design as D/design.toml,
+which every command takes with `--config D/design.toml` (e.g. `softclose yield --config
+D/design.toml`). Every config key, its default, unit and range: `softclose docs keys`."""
+
+EPILOG = """\
+exit codes: 0 success, 2 invalid input, 3 a numerical or optimiser failure (reported, with
+what to change), 130 interrupted. `softclose COMMAND --help` describes a command;
+`softclose docs` the commands, the design problem and every config key."""
 
 
 class _Parser(argparse.ArgumentParser):
-    def error(self, message):  # one line, exit code 2
-        raise ConfigError(f"{self.prog}: {message}")
+    def error(self, message):  # one line, exit code 2; the prefix is main's
+        where = self.prog.removeprefix(PROG).strip()
+        if not where and "required: COMMAND" in message:
+            message = (f"no command given (commands: {', '.join(_commands(self))}; "
+                       "`softclose --help` says what each does)")
+        raise ConfigError(f"{where}: {message}" if where else message)
+
+    def _check_value(self, action, value):
+        """An unknown command is refused by name, with the nearest command."""
+        if isinstance(action, argparse._SubParsersAction) and value not in action.choices:
+            import difflib
+            near = difflib.get_close_matches(str(value), list(action.choices), n=1, cutoff=0.6)
+            hint = f"did you mean '{near[0]}'? " if near else ""
+            raise ConfigError(f"unknown command '{value}' ({hint}commands: "
+                              f"{', '.join(_names(action))}; `softclose --help` says what "
+                              "each does)")
+        super()._check_value(action, value)
+
+
+def _names(action) -> list[str]:
+    """The commands, each once (an alias after its command's name: 'optimise (optimize)')."""
+    names: dict[int, list[str]] = {}
+    for name, p in action.choices.items():
+        names.setdefault(id(p), []).append(name)
+    return [n[0] + (f" ({', '.join(n[1:])})" if len(n) > 1 else "") for n in names.values()]
+
+
+def _commands(parser) -> list[str]:
+    sub = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    return _names(sub[0]) if sub else []
 
 
 def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     """The parser of every command, or -- ``argv`` starting with a command's name -- of
     that command's family only (the same parser for that command line)."""
-    parser = _Parser(prog="softclose",
-                     description="Design soft-closing lids on a four-bar linkage.")
+    from ..version import __version__
+    parser = _Parser(prog=PROG, description=DESCRIPTION, epilog=EPILOG,
+                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
     first = argv[0] if argv else None

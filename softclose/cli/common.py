@@ -26,7 +26,9 @@ class Outcome:
 
 def add_common(p: argparse.ArgumentParser) -> None:
     """--config, --set and --json (every command)."""
-    p.add_argument("--config", metavar="FILE", help="TOML config file (see docs/model.md)")
+    p.add_argument("--config", metavar="FILE",
+                   help="TOML config file, e.g. the design.toml that `softclose optimise "
+                        "--out D` writes (every key: `softclose docs keys`)")
     p.add_argument("--set", dest="overrides", action="append", default=[],
                    metavar="SECTION.KEY=VALUE",
                    help="override one config key; the value is read as TOML (repeatable)")
@@ -77,6 +79,36 @@ def save_figure(fig, path) -> Path:
     ``path`` is replaced) and close it."""
     from ..figures import save
     return save(fig, figure_path(path), style=FIGURES["style"])
+
+
+#: the admissible --slow-motion factors of a stroke's animation
+SLOW_MOTION_RANGE = (1.0, 1000.0)
+
+
+def add_slow_motion(p: argparse.ArgumentParser) -> None:
+    """--slow-motion FACTOR: how much slower than the stroke its GIF plays (with --out)."""
+    p.add_argument("--slow-motion", metavar="FACTOR", type=str, default=None,
+                   help="with --out: the animation plays FACTOR times slower than the stroke "
+                        f"({SLOW_MOTION_RANGE[0]:g}..{SLOW_MOTION_RANGE[1]:g}; default: the "
+                        "smallest of 1, 2, 5, 10, 20, ... showing at least 60 frames, x20 "
+                        "for the default 0.15 s stroke; at most 60 s of animation)")
+
+
+def slow_motion(args) -> float | None:
+    """The --slow-motion factor (None: the default), checked before any work."""
+    import math
+    text = getattr(args, "slow_motion", None)
+    if text is None:
+        return None
+    lo, hi = SLOW_MOTION_RANGE
+    try:
+        x = float(text)
+    except ValueError:
+        raise ConfigError(f"--slow-motion {text}: expected a number (how many times slower "
+                          f"than the stroke the animation plays, {lo:g}..{hi:g})") from None
+    if not (math.isfinite(x) and lo <= x <= hi):
+        raise ConfigError(f"--slow-motion {text}: outside {lo:g}..{hi:g} (1: real time)")
+    return x
 
 
 def prepare_out(path: str | os.PathLike | None) -> Path | None:
@@ -146,6 +178,41 @@ def write_outputs(out: Path, csv_name: str, frame, fig_name: str, plot) -> list[
     table = Path(out) / csv_name
     frame.to_csv(table, index=False)
     return [table, save_figure(plot(), Path(out) / fig_name)]
+
+
+#: the file an optimiser's --out writes its design to
+DESIGN_FILE = "design.toml"
+
+
+def metrics_line(m: dict | None, J: float | None) -> str:
+    """The metrics a design file's header quotes (one line)."""
+    if not m or not m.get("closed"):
+        return "does not close" if m else ""
+    return (f"closes in {m['closing_time']:.7g} s, impact tip speed "
+            f"{m['impact_tip_speed']:.4g} m/s, peak tip speed {m['peak_tip_speed']:.4g} m/s, "
+            f"holding moment {m['holding_moment']:.7g} N m"
+            + (f"; J = {J:.7g}" if J is not None else ""))
+
+
+def write_design(path, cfg, what: str, lines=()) -> Path:
+    """Write ``cfg`` (a config whose [design] is the design handed on) as a TOML config
+    file every command takes with ``--config`` (:func:`softclose.config.to_toml`: the whole
+    config, read back to the same config), with a header saying what it is."""
+    from ..config import to_toml
+    from ..version import __version__
+    path = Path(path)
+    d = cfg.design
+    head = [f"softclose {__version__}: {what}",
+            f"design: spring_k = {d.spring_k!r} N/m, spring_rest_length = "
+            f"{d.spring_rest_length!r} m, damper_c = {d.damper_c!r} N s/m",
+            *[x for x in lines if x],
+            f"Every command takes this file: softclose yield --config {path.name}, "
+            f"softclose sensitivity --config {path.name}, softclose simulate --config "
+            f"{path.name} (add --set KEY=VALUE to change a key).",
+            "The whole config follows, each key with its unit; a derived key left as a "
+            "comment keeps following the keys it derives from."]
+    path.write_text(to_toml(cfg, "\n".join(head)))
+    return path
 
 
 def wrote(files) -> str:

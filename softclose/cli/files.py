@@ -25,8 +25,10 @@ def write_trajectory_csv(traj: dict, path: Path) -> Path:
     return path
 
 
-def write_stroke_outputs(model, res, out: Path, stem: str = "stroke") -> list[Path]:
-    """Trajectory CSV, time histories, linkage drawing and animation of one stroke."""
+def write_stroke_outputs(model, res, out: Path, stem: str = "stroke",
+                         slow_motion: float | None = None) -> list[Path]:
+    """Trajectory CSV, time histories, linkage drawing and animation of one stroke
+    (``slow_motion``: the GIF's factor; None: enough for at least 60 frames)."""
     from .common import save_figure as save
     from ..figures.stroke import plot_linkage, plot_time_histories, write_animation
     tr = res.trajectory
@@ -37,7 +39,7 @@ def write_stroke_outputs(model, res, out: Path, stem: str = "stroke") -> list[Pa
     files.append(save(plot_linkage(model, tr["theta"][idx], labels,
                                    title="Lid positions during the stroke"),
                       out / f"{stem}_linkage.png"))
-    gif = write_animation(model, tr, out / f"{stem}_animation.gif")
+    gif = write_animation(model, tr, out / f"{stem}_animation.gif", slow_motion=slow_motion)
     if gif:
         files.append(gif)
     return files

@@ -8,30 +8,63 @@ objective against closing_time_max (exit 3 when a point is not verified).
 
 from __future__ import annotations
 
+import argparse
 import math
 
 from ..errors import ConfigError
-from .common import Outcome, add_common, add_out, interactive, prepare_out, write_outputs, wrote
+from .common import (DESIGN_FILE, Outcome, add_common, add_out, add_slow_motion, interactive,
+                     metrics_line, prepare_out, slow_motion, write_design, write_outputs,
+                     wrote)
+from .text import closing_time_text, design_text, objective_text
 
 #: the default closing times of ``pareto`` (s)
 PARETO_DEFAULT = "0.3:3:10:log"
 
 
+OPTIMISE = """\
+The soft-close design: the spring (spring_k, spring_rest_length) and damper (damper_c)
+within the [optimise] bounds that minimise
+  J = weight_impact·impact_theta_dot² + weight_peak_tip·peak_tip_speed²
+(weights in s² and s²/m²: J is dimensionless) while the lid closes within
+[closing_time_min, closing_time_max], stays shut (holding_moment >= holding_moment_min) and
+does not rebound. Direct multiple shooting (optimise.nodes x optimise.substeps RK4 steps)
+solved by Ipopt from optimise.starts starts, then re-simulated by the adaptive reference
+(CVODES): every reported metric is the reference's, the optimiser's own beside it. The
+report names the bounds and constraints that limit the design, with dJ per unit relaxation.
+
+--out D writes D/design.toml (the whole config with the optimum as [design]: give it to any
+command with --config D/design.toml), optimise.json, figures and the optimum's stroke.
+--robust designs for the [tolerance] box instead: the design that meets every constraint in
+every scenario of the box (exit 3 when none can, saying which constraint and by how much)."""
+
+PARETO = """\
+The trade-off between a soft impact and a short closing time: the verified optimum for each
+closing_time_max of --closing-times (each point solved from its neighbour, re-simulated by
+the adaptive reference). --out D writes pareto.csv, pareto.png and each point's design as
+D/designs/design_<i>.toml (a config every command takes with --config)."""
+
+
 def register(sub) -> None:
     p = sub.add_parser("optimise", aliases=["optimize"],
-                       help="soft-close design by multiple shooting + Ipopt, verified")
+                       help="soft-close design by multiple shooting + Ipopt, verified",
+                       description=OPTIMISE,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     add_common(p)
-    add_out(p, what="also write the optimum's trajectory, figures and optimise.json")
+    add_out(p, what="also write design.toml (the optimum as a config file), optimise.json, "
+                    "figures and the optimum's stroke")
     p.add_argument("--robust", action="store_true",
                    help="design for the [tolerance] box (yield, scenarios) instead")
     p.add_argument("--free", action="append", default=[], metavar="KEY=LO:HI",
                    help="also choose this element parameter within [LO, HI], in its own "
                         "unit, e.g. design.spring_preload=0:200 (repeatable; the file's "
                         "[optimise.free])")
+    add_slow_motion(p)
     p.set_defaults(run=run_optimise)
-    q = sub.add_parser("pareto", help="verified front of the objective against closing_time_max")
+    q = sub.add_parser("pareto", help="verified front of the objective against closing_time_max",
+                       description=PARETO,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     add_common(q)
-    add_out(q, what="write pareto.csv and pareto.png to this folder")
+    add_out(q, what="write pareto.csv, pareto.png and designs/design_<i>.toml to this folder")
     q.add_argument("--closing-times", default=PARETO_DEFAULT, metavar="START:STOP:COUNT[:log]",
                    help=f"closing_time_max values in s (default {PARETO_DEFAULT}: "
                         "10 log-spaced values)")
@@ -40,6 +73,7 @@ def register(sub) -> None:
 
 # -- optimise ------------------------------------------------------------------------------
 def run_optimise(cfg, args) -> Outcome:
+    factor = slow_motion(args)
     out = prepare_out(args.out)
     if args.robust:
         return _run_robust(cfg, args, out)
@@ -48,7 +82,7 @@ def run_optimise(cfg, args) -> Outcome:
     payload = res.to_json()
     files = []
     if out is not None and res.design is not None:
-        files = write_optimum(res, out)
+        files = write_optimum(res, out, factor)
         payload["files"] = [str(f) for f in files]
     text = format_result(res) + wrote(files)
     return Outcome(payload, text, 0 if res.success else 3, tuple(files),
@@ -84,18 +118,26 @@ def _run_robust(cfg, args, out) -> Outcome:
                    None if ok else (getattr(res, "message", "") or "no robust design"))
 
 
-def write_optimum(res, out) -> list:
-    """The optimum's stroke (trajectory CSV, figures), its figure and ``optimise.json``."""
+def write_optimum(res, out, slow_motion=None) -> list:
+    """The optimum as a config file (``design.toml``), ``optimise.json``, its figure and its
+    stroke (trajectory CSV, figures, animation)."""
     from .common import save_figure as save
     from ..jsonio import dumps
     from ..simulate import Simulator
     from .files import write_stroke_outputs
-    sim = Simulator(res.config.with_design(**res.design))   # its model carries the design
+    files = [write_design(out / DESIGN_FILE, res.design_config(),
+                          "the optimum of `softclose optimise`"
+                          + ("" if res.success else " (NOT verified: see optimise.json)"),
+                          [f"verified by the adaptive reference: "
+                           f"{metrics_line(res.metrics, res.verified_objective)}"
+                           if res.verification is not None else ""])]
+    sim = Simulator(res.design_config())   # its model carries the design
     stroke = sim.run(trajectory=True)
-    files = [out / "optimise.json"]
-    files[0].write_text(dumps(res.to_json(), indent=1))
+    files.append(out / "optimise.json")
+    files[-1].write_text(dumps(res.to_json(), indent=1))
     files.append(save(res.plot(), out / "optimum.png"))
-    files += write_stroke_outputs(sim.model, stroke, out, stem="optimum")
+    files += write_stroke_outputs(sim.model, stroke, out, stem="optimum",
+                                  slow_motion=slow_motion)
     return files
 
 
@@ -105,13 +147,6 @@ def _v(x, fmt=".9g") -> str:
     if isinstance(x, bool):
         return "yes" if x else "no"
     return format(x, fmt)
-
-
-def design_text(design: dict) -> str:
-    """``spring_k = 1914.71 N/m, ...``: every design variable with its unit."""
-    from ..problem import UNITS
-    return ", ".join(f"{k} = {v:.6g}" + (f" {UNITS[k]}" if UNITS.get(k) else "")
-                     for k, v in design.items())
 
 
 def format_result(res) -> str:
@@ -126,11 +161,8 @@ def format_result(res) -> str:
         lines.append(f"  {res.message}")
     pr = res.problem
     if pr:
-        lines.append(f"  problem: J = {pr['weight_impact']:g}·impact_theta_dot² + "
-                     f"{pr['weight_peak_tip']:g}·peak_tip_speed², "
-                     f"{pr['closing_time_min']:g} s <= closing_time <= "
-                     f"{pr['closing_time_max']:g} s, holding moment >= "
-                     f"{pr['holding_moment_min']:g} N m")
+        lines.append(f"  problem: {objective_text(pr)}, {closing_time_text(pr)}, holding "
+                     f"moment >= {pr['holding_moment_min']:g} N m")
     if res.design:
         lines.append("  design: " + design_text(res.design)
                      + (f" ({res.kind} spring)" if getattr(res, "kind", None) else ""))
@@ -139,7 +171,8 @@ def format_result(res) -> str:
             lines.append("  to buy: " + part.text().replace("\n", "\n  "))
     ver = res.verification
     if res.objective is not None:
-        s = f"  objective J = {res.objective:.8g} (the optimiser's)"
+        s = (f"  objective J = {res.objective:.8g} (the optimiser's: its own discretisation "
+             "of the stroke, at the design above)")
         if ver is not None and ver.objective is not None:
             rel = ((res.objective - ver.objective) / abs(ver.objective) if ver.objective
                    else math.inf)
@@ -171,7 +204,13 @@ def format_result(res) -> str:
     elif res.design:
         lines.append("  no bound or constraint is active: an interior optimum")
     if res.starts:
-        lines.append(f"  starts ({len(res.starts)}, from a coarse sweep of the design box):")
+        Js = [st["objective"] for st in res.starts if st.get("objective") is not None]
+        moved = res.objective is not None and Js and \
+            abs(min(Js) - res.objective) > 1e-9 * abs(res.objective)
+        lines.append(f"  starts ({len(res.starts)}, from a coarse sweep of the design box"
+                     + ("; each J as its solve ended, before the best answer was refined and "
+                        "its closing-time bound corrected (notes), which moves J to the "
+                        "objective above" if moved else "") + "):")
         for i, s in enumerate(res.starts, 1):
             st = s["start"]
             J = f"{s['objective']:.8g}" if s.get("objective") is not None else "—"
@@ -217,11 +256,37 @@ def run_pareto(cfg, args) -> Outcome:
     payload = fr.to_json()
     files = []
     if out is not None:
-        files = write_outputs(out, "pareto.csv", fr.to_frame(), "pareto.png", fr.plot)
+        designs = write_front_designs(fr, out)
+        frame = fr.to_frame()
+        frame["design_file"] = [str(designs[i].relative_to(out)) if i in designs else ""
+                                for i in range(len(fr.points))]
+        files = write_outputs(out, "pareto.csv", frame, "pareto.png", fr.plot)
+        files += list(designs.values())
         payload["files"] = [str(f) for f in files]
+        for i, pt in enumerate(payload["points"]):
+            pt["design_file"] = str(designs[i]) if i in designs else None
     text = format_front(fr) + wrote(files)
     return Outcome(payload, text, 0 if fr.success else 3, tuple(files),
                    None if fr.success else fr.message)
+
+
+def write_front_designs(fr, out) -> dict:
+    """Each point of the front with a design as ``out/designs/design_<i>.toml`` (its config:
+    closing_time_max the point's); {point index: path}."""
+    folder = out / "designs"
+    paths = {}
+    for i, (t, p) in enumerate(zip(fr.closing_times, fr.points)):
+        if p.design is None or p.config is None:
+            continue
+        folder.mkdir(exist_ok=True)
+        paths[i] = write_design(
+            folder / f"design_{i:02d}.toml", p.design_config(),
+            f"point {i} of `softclose pareto`: the optimum for closing_time_max = {t:g} s"
+            + ("" if p.success else " (NOT verified)"),
+            [f"verified by the adaptive reference: "
+             f"{metrics_line(p.metrics, p.verified_objective)}"
+             if p.verification is not None else ""])
+    return paths
 
 
 def format_front(fr) -> str:
@@ -241,7 +306,9 @@ def format_front(fr) -> str:
                      f"{_v(m.get('peak_tip_speed'), '10.5f'):>10} "
                      f"{'yes' if p.success else 'NO':>8}  {act}")
     lines.append("  (speeds: the adaptive reference's simulation of each optimum; "
-                 "J: the optimiser's, agreeing with the reference's to 1e-3)")
+                 "J: the optimiser's, agreeing with the reference's to 1e-3; designs rounded "
+                 "for the table: --out DIR writes each with every digit as "
+                 "DIR/designs/design_<i>.toml)")
     if fr.message:
         lines.append(f"  {fr.message}")
     return "\n".join(lines)

@@ -8,13 +8,33 @@ take ``--samples N``, ``--seed S``, ``--out DIR`` (figures and tables) and ``--j
 
 from __future__ import annotations
 
+import argparse
 import math
 
 from .common import Outcome, add_common, add_out, prepare_out, write_outputs, wrote
+from .text import closing_time_text, design_text, objective_text
+
+
+YIELD = """\
+The share of produced lids that meet every constraint when the config's design is made
+with the [tolerance] spreads (springs ±10 %, dampers ±20 %, lid mass ±5 % by default): Monte
+Carlo over the tolerance box, a 95 % Wilson interval, why the failing lids fail, percentiles
+of closing time, impact and peak tip speed and J, and adaptive-reference checks of the worst
+samples. The report states the design it analysed and its nominal lid. The default config's
+design has no spring and no damper: to judge the optimum, run `softclose optimise --out D`,
+then `softclose yield --config D/design.toml`."""
+
+SENSITIVITY = """\
+Variance-based (Sobol) sensitivity of closing time and impact speed to each toleranced key
+of the config's design: first-order and total indices with 95 % bootstrap intervals
+(SALib). The report states the design it analysed; keys with no spread at that design (a
+relative spread of a zero spring) are left out and named. To analyse the optimum: `softclose
+optimise --out D`, then `softclose sensitivity --config D/design.toml`."""
 
 
 def register(sub) -> None:
-    p = sub.add_parser("yield", help="Monte Carlo yield of the design under [tolerance]")
+    p = sub.add_parser("yield", help="Monte Carlo yield of the design under [tolerance]",
+                       description=YIELD, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_common(p)
     add_out(p, what="write yield_samples.csv and yield_histograms.png to this folder")
     p.add_argument("--samples", type=int, metavar="N",
@@ -22,7 +42,9 @@ def register(sub) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.set_defaults(run=run_yield)
     p = sub.add_parser("sensitivity",
-                       help="Sobol indices of closing time and impact speed per toleranced key")
+                       help="Sobol indices of closing time and impact speed per toleranced key",
+                       description=SENSITIVITY,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     add_common(p)
     add_out(p, what="write sobol.csv and sobol.png to this folder")
     p.add_argument("--samples", type=int, metavar="N", default=1024,
@@ -51,32 +73,61 @@ def _pct(v, unit, digits=4) -> str:
         return "—"
     if math.isinf(v):
         return "not closed"
-    return f"{v:.{digits}g} {unit}"
+    return f"{v:.{digits}g} {unit}".rstrip()
+
+
+def nominal_text(n: dict) -> str:
+    """The nominal lid of a yield or sensitivity report in one line: metrics, J, verdict."""
+    if not n:
+        return ""
+    if not n.get("closed"):
+        return ("nominal lid: does not close within stroke.t_max"
+                + (f"; peak tip speed {n['peak_tip_speed']:.4g} m/s"
+                   if n.get("peak_tip_speed") is not None else "")
+                + f"; breaks: {n.get('reason') or 'not closed'}")
+    verdict = ("meets every constraint" if n.get("feasible") else
+               f"breaks a constraint: {n.get('reason')}")
+    return (f"nominal lid: closes in {n['closing_time']:.4g} s, impact tip speed "
+            f"{n['impact_tip_speed']:.4g} m/s (θ' {n['impact_theta_dot']:.4g} rad/s), peak "
+            f"{n['peak_tip_speed']:.4g} m/s, holding moment {n['holding_moment']:.4g} N m; "
+            f"J = {n['objective']:.6g}; {verdict}")
+
+
+#: how to analyse the optimum instead of a design without spring or damper
+TO_THE_OPTIMUM = ("to judge the optimum instead: softclose optimise --out D, then "
+                  "softclose yield --config D/design.toml")
 
 
 def format_yield(r, label: str = "design") -> list[str]:
-    """Lines describing one yield estimate."""
+    """Lines describing one yield estimate: the design, its nominal lid, the yield, why the
+    failing samples fail, percentiles, the adaptive reference's checks."""
     lo, hi = r.yield_ci
-    d = r.design
-    lines = [f"  {label}: spring_k = {d['spring_k']:.6g} N/m, spring_rest_length = "
-             f"{d['spring_rest_length']:.6g} m, damper_c = {d['damper_c']:.6g} N s/m",
-             f"    yield {100 * r.yield_:.2f} % (95 % Wilson interval {100 * lo:.2f} – "
-             f"{100 * hi:.2f} %) over {r.samples} samples; required "
-             f"{100 * r.required_yield:g} %: {'met' if r.meets_required else 'NOT met'}"]
+    lines = [f"  {label}: {design_text(r.design)}"]
+    if r.nominal:
+        lines.append(f"    {nominal_text(r.nominal)}")
+    for w in r.warnings:
+        lines.append(f"    NOTE: {w}")
+    lines.append(f"    yield {100 * r.yield_:.2f} % (95 % Wilson interval {100 * lo:.2f} – "
+                 f"{100 * hi:.2f} %) over {r.samples} samples; required "
+                 f"{100 * r.required_yield:g} %: {'met' if r.meets_required else 'NOT met'}")
     if r.failures:
         lines.append("    failing samples: " + ", ".join(
             f"{k} {v}" for k, v in sorted(r.failures.items(), key=lambda kv: -kv[1])))
     p = r.percentiles
-    ct, it, vt = p["closing_time"], p["impact_theta_dot"], p["impact_tip_speed"]
-    lines.append(f"    closing time  p1 {_pct(ct['p1'], 's')}, p50 {_pct(ct['p50'], 's')}, "
-                 f"p99 {_pct(ct['p99'], 's')}")
-    lines.append(f"    impact θ'     p1 {_pct(it['p1'], 'rad/s')}, p50 {_pct(it['p50'], 'rad/s')}"
-                 f", p99 {_pct(it['p99'], 'rad/s')} (closed samples)")
-    lines.append(f"    impact tip    p1 {_pct(vt['p1'], 'm/s')}, p50 {_pct(vt['p50'], 'm/s')}, "
-                 f"p99 {_pct(vt['p99'], 'm/s')}")
+    lines.append("    percentiles (closing time over every sample, a lid that did not close "
+                 "counting as the slowest; the others over the samples that closed):")
+    rows = (("closing time", "closing_time", "s"), ("impact θ'", "impact_theta_dot", "rad/s"),
+            ("impact tip", "impact_tip_speed", "m/s"), ("peak tip", "peak_tip_speed", "m/s"),
+            ("J", "objective", ""))
+    for name, key, unit in rows:
+        if key not in p:
+            continue
+        q = p[key]
+        lines.append(f"      {name:<13} p1 {_pct(q['p1'], unit)}, p50 {_pct(q['p50'], unit)}, "
+                     f"p99 {_pct(q['p99'], unit)}")
     for c in r.reference:
         if "error" in c:
-            lines.append(f"    reference at {c['label']}: failed ({c['error']})")
+            lines.append(f"    adaptive reference at the {c['label']}: failed ({c['error']})")
             continue
         agree = "agrees" if c.get("verdicts_agree") else "DISAGREES"
         diff = c.get("differences", {})
@@ -87,10 +138,20 @@ def format_yield(r, label: str = "design") -> list[str]:
     return lines
 
 
+def _source(args) -> str:
+    """Where the analysed design comes from, as the report says it."""
+    where = f"from {args.config}" if getattr(args, "config", None) else "the defaults"
+    if any(o.split("=", 1)[0].strip().startswith("design.")
+           for o in getattr(args, "overrides", ()) or ()):
+        where += " with --set"
+    return f"design ({where})"
+
+
 def _box_line(box: dict) -> str:
     parts = []
     for k, b in box.items():
-        parts.append(f"{k} ±{100 * b['spread']:.3g} %" if b["relative"] else
+        zero = " (of 0: no spread)" if b["relative"] and b.get("nominal") == 0 else ""
+        parts.append(f"{k} ±{100 * b['spread']:.3g} %{zero}" if b["relative"] else
                      f"{k} ±{b['spread']:g}")
     return ", ".join(parts)
 
@@ -107,7 +168,9 @@ def run_yield(cfg, args) -> Outcome:
     r = tolerance_analysis(cfg, samples=args.samples, seed=seed)
     payload = r.to_json()
     lines = [f"softclose yield: tolerance box {_box_line(r.box)} ({r.distribution})"]
-    lines += format_yield(r)
+    lines += format_yield(r, _source(args))
+    if r.warnings:
+        lines.append(f"  {TO_THE_OPTIMUM}")
     if r.message:
         lines.append(f"  note: {r.message}")
     files = []
@@ -127,11 +190,15 @@ def run_sensitivity(cfg, args) -> Outcome:
     out = prepare_out(args.out)
     r = sensitivity(cfg, samples=args.samples, seed=seed)
     payload = r.to_json()
-    d = r.design
     lines = [f"softclose sensitivity: Sobol indices over the tolerance box "
              f"({r.distribution}; N = {r.base_samples}, {r.evaluations} strokes)",
-             f"  design: spring_k = {d['spring_k']:.6g} N/m, spring_rest_length = "
-             f"{d['spring_rest_length']:.6g} m, damper_c = {d['damper_c']:.6g} N s/m"]
+             f"  {_source(args)}: {design_text(r.design)}"]
+    if r.nominal:
+        lines.append(f"    {nominal_text(r.nominal)}")
+    for w in r.warnings:
+        lines.append(f"    NOTE: {w}")
+    if r.fixed:
+        lines.append(f"  left out (no spread at this design): {', '.join(r.fixed)}")
     for name, idx in r.indices.items():
         lines.append(f"  {name}:  {'key':<22} {'S1':>14} {'ST':>14}")
         for k in r.keys:
@@ -141,6 +208,8 @@ def run_sensitivity(cfg, args) -> Outcome:
     lines.append(f"  (± : 95 % bootstrap interval) not closed: {r.not_closed} of {r.evaluations}"
                  + (" — counted as closing at stroke.t_max with impact θ' = 0" if r.not_closed
                     else ""))
+    if r.warnings:
+        lines.append(f"  {TO_THE_OPTIMUM.replace('softclose yield', 'softclose sensitivity')}")
     files = []
     if out is not None:
         files = write_outputs(out, "sobol.csv", r.to_frame(), "sobol.png", r.plot)
@@ -155,17 +224,13 @@ def format_robust(res) -> str:
     if res.message:
         lines.append(f"  {res.message}")
     pr = res.problem
-    lines.append(f"  problem: minimise the {res.robust_objective} scenario's J = "
-                 f"{pr['weight_impact']:g}·impact_theta_dot² + {pr['weight_peak_tip']:g}·"
-                 f"peak_tip_speed², every scenario closing in [{pr['closing_time_min']:g}, "
-                 f"{pr['closing_time_max']:g}] s, holding moment >= "
-                 f"{pr['holding_moment_min']:g} N m, no rebound")
+    lines.append(f"  problem: minimise the {res.robust_objective} scenario's "
+                 f"{objective_text(pr)}, every scenario: {closing_time_text(pr)}, holding "
+                 f"moment >= {pr['holding_moment_min']:g} N m, no rebound")
     lines.append(f"  tolerance box: {_box_line(res.box)}"
                  + (f" (widened x{res.box_scale:.3g})" if res.box_scale != 1 else ""))
     if res.design:
-        d = res.design
-        lines.append(f"  robust design: spring_k = {d['spring_k']:.6g} N/m, spring_rest_length ="
-                     f" {d['spring_rest_length']:.6g} m, damper_c = {d['damper_c']:.6g} N s/m"
+        lines.append(f"  robust design: {design_text(res.design)}"
                      + (f" ({res.kind} spring)" if getattr(res, "kind", None) else ""))
         if getattr(res, "part", None) is not None:
             lines.append("  to buy: " + res.part.text().replace("\n", "\n  "))
@@ -182,6 +247,17 @@ def format_robust(res) -> str:
                          f" (ref {rt:.5f})" if rt is not None else
                          f"    {s['label']:<48} T = {s['metrics']['closing_time']:.5f} s")
             lines[-1] += f", J = {s['objective']:.5g}, {ok}{mark}"
+    if res.active:
+        lines.append(f"  what limits the design (dJ: change of the {res.robust_objective}-case J "
+                     "per unit relaxation, from Ipopt's multipliers):")
+        for a in res.active:
+            where = ""
+            if a.scenarios:
+                where = (f"; holds in {len(a.scenarios)} of {len(res.scenarios)} scenarios: "
+                         + "; ".join(a.scenarios))
+            lines.append(f"    {a.describe(res.objective)}{where}")
+    elif res.design:
+        lines.append("  no bound or constraint is active: an interior robust optimum")
     cc = res.corner_check
     if cc:
         lines.append(f"  corner check (the kernel at every corner of the box): {cc['corners']} "
@@ -225,6 +301,19 @@ def robust_outcome(cfg, args) -> Outcome:
     if out is not None:
         from .common import save_figure as save
         from ..jsonio import jsonable
+        from .common import DESIGN_FILE, metrics_line, write_design
+        if res.design is not None:
+            y = res.yield_result
+            files.append(write_design(
+                out / DESIGN_FILE, res.design_config(),
+                "the robust design of `softclose optimise --robust`"
+                + ("" if res.success else " (NOT verified: see robust.json)"),
+                [f"nominal lid, verified by the adaptive reference: "
+                 f"{metrics_line(res.metrics, None)}",
+                 f"{res.robust_objective}-case J over the tolerance box = {res.objective:.7g}",
+                 f"yield {100 * y.yield_:.2f} % (95 % interval {100 * y.yield_ci[0]:.2f} – "
+                 f"{100 * y.yield_ci[1]:.2f} %) over {y.samples} samples"
+                 if y is not None else ""]))
         path = out / "robust.json"
         path.write_text(json.dumps(jsonable(payload), indent=1, allow_nan=False))
         files.append(path)

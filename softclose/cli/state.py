@@ -9,11 +9,32 @@ from .common import Outcome, add_common
 
 
 def register(sub) -> None:
-    p = sub.add_parser("state", help="kinematics, theta'' and pin reactions at one state")
+    p = sub.add_parser("state", help="kinematics, theta'' and pin reactions at one state",
+                       description="The linkage at one state (lid angle --theta-deg, rate "
+                                   "--theta-dot): the crank angles phi and gamma and their "
+                                   "rates, theta'' from the equation of motion, the tip "
+                                   "velocity and the eight pin-reaction components (Newton-"
+                                   "Euler), for the config's geometry, masses and design. "
+                                   "SI units, angles in degrees in the text, radians in "
+                                   "--json.")
     add_common(p)
     p.add_argument("--theta-deg", type=float, required=True, help="lid angle theta (deg)")
     p.add_argument("--theta-dot", type=float, default=0.0, help="theta' (rad/s), default 0")
     p.set_defaults(run=run)
+
+
+def _no_negative_zero(v):
+    """``v`` (numbers, lists, dicts of them) with -0.0 as 0.0: at rest the rates are zero, not
+    "-0" (the text and the JSON print what the sign of a zero product happened to be)."""
+    if isinstance(v, dict):
+        return {k: _no_negative_zero(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return type(v)(_no_negative_zero(x) for x in v)
+    if isinstance(v, float):
+        return v + 0.0
+    if hasattr(v, "dtype") and getattr(v, "dtype").kind == "f":
+        return v + 0.0
+    return v
 
 
 def run(cfg, args) -> Outcome:
@@ -32,8 +53,8 @@ def run(cfg, args) -> Outcome:
     if toggle is not None:  # the branch followed from the stroke does not reach theta
         raise ConfigError(f"--theta-deg: the loop cannot close at {args.theta_deg} deg on this "
                           f"branch (toggle position at {math.degrees(toggle):.3f} deg)")
-    s = model.state(theta, args.theta_dot)
-    lines = [f"theta      = {args.theta_deg:.6g} deg   theta' = {s['theta_dot']:.6g} rad/s",
+    s = _no_negative_zero(model.state(theta, args.theta_dot))
+    lines = [f"theta      = {args.theta_deg + 0.0:.6g} deg   theta' = {s['theta_dot']:.6g} rad/s",
              f"theta''    = {s['theta_ddot']:.8g} rad/s^2",
              f"phi        = {math.degrees(s['phi']):.6f} deg   gamma = {math.degrees(s['gamma']):.6f} deg",
              f"phi'       = {s['phi_dot']:.6g} rad/s   gamma' = {s['gamma_dot']:.6g} rad/s",

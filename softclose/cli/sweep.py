@@ -35,7 +35,13 @@ from .maps import take_drawer, write_maps
 def register(sub) -> None:
     p = sub.add_parser("sweep", help="metrics over a grid or a sample of config values",
                        description="Metrics, objective and feasibility of every design of a "
-                                   "grid (--grid) or a sample (--sample N --range ...).")
+                                   "grid (--grid) or a sample (--sample N --range ...) of any "
+                                   "numeric config keys, as a table (CSV or Parquet) and maps. "
+                                   "--optimise instead gives the verified optimum at every point "
+                                   "of a grid of non-design keys (one spring and damper per lid "
+                                   "of a product range), each also written as "
+                                   "DIR/designs/design_<id>.toml, a config every command takes "
+                                   "with --config.")
     add_common(p)
     g = p.add_argument_group("designs")
     g.add_argument("--grid", action="append", default=[],
@@ -337,6 +343,32 @@ def _optimal_text(res) -> str:
     return "\n".join(lines)
 
 
+def write_grid_designs(res, out) -> list:
+    """Each grid point with a design as ``out/designs/design_<id>.toml``: its config (the grid
+    keys set) with its optimum (robust design) as [design]."""
+    import math
+
+    from .common import write_design
+    c = res.columns
+    folder = Path(out) / "designs"
+    paths = []
+    for i in range(res.points):
+        if not all(math.isfinite(c[k][i]) for k in ("spring_k", "spring_rest_length",
+                                                     "damper_c")):
+            continue
+        folder.mkdir(exist_ok=True)
+        where = ", ".join(f"{k} = {c[k][i]:.7g}" for k in res.keys)
+        kind = "robust design" if res.robust else "optimum"
+        J = c["verified_objective"][i]
+        paths.append(write_design(
+            folder / f"design_{i}.toml", res.design_config(i),
+            f"row {i} of `softclose sweep --optimise`: the {kind} at {where}"
+            + ("" if c["success"][i] else " (NOT verified)"),
+            [f"J = {c['objective'][i]:.7g} (the optimiser's)"
+             + (f", {J:.7g} (the adaptive reference's)" if math.isfinite(J) else "")]))
+    return paths
+
+
 def _optimal_grid(cfg, args, space, out):
     """``softclose sweep --optimise --grid KEY=... [--dask ADDRESS|local:N] [--robust]
     --out DIR``: the table (``optimal.csv`` or, with ``--format parquet``,
@@ -355,13 +387,18 @@ def _optimal_grid(cfg, args, space, out):
     res = optimise_grid(cfg, space, dask=getattr(args, "dask", None), robust=robust,
                         progress=interactive(args))
     files = [write_table(res, out, getattr(args, "format", None) or "csv")]
+    designs = write_grid_designs(res, out)
     if not res.interrupted and res.verified:
         from .common import save_figure as save
         files.append(save(res.plot(), Path(out) / FIGURE))
     payload = res.to_json()
-    payload["files"] = [str(f) for f in files]
+    payload["files"] = [str(f) for f in files + designs]
     code = 3 if res.lost else 130 if res.interrupted else 0 if res.success else 3
     text = _optimal_text(res) + wrote(files)
+    if designs:
+        text += (f"\n  wrote {len(designs)} design files {Path(out) / 'designs'}/design_<id>"
+                 ".toml (id: the row of the table, from 0); each is a config every command "
+                 "takes with --config")
     if res.interrupted and not res.lost:
         text += "\n  interrupted: the finished points are in the table"
     return Outcome(payload, text, code, tuple(files), error=res.message if code == 3 else None)

@@ -6,6 +6,7 @@
 - :mod:`.values` -- checking one value against its key;
 - :mod:`.tolerance` -- the ``[tolerance]`` section;
 - :mod:`.load` -- :class:`Config`, loading, ``--set`` overrides, the work budgets;
+- :mod:`.write` -- a config written back as TOML (read back to the same config);
 - :mod:`.docs` -- the key tables of docs/model.md, generated from the records.
 """
 
@@ -17,8 +18,9 @@ from .schema import (DEFAULT_SPREADS, HESSIANS, INTEGRATORS, KEYS, RANGES, SCHEM
                      TOLERANCE_KEYS, TOLERANCE_OPTIONS, TOLERANCE_SECTIONS, Design, Friction,
                      Geometry, Mass, Optimise, Simulate, Stroke, numeric_keys)
 from .tolerance import MAX_TOLERANCE_SAMPLES, Spread, Tolerance
+from .write import to_toml
 
-__all__ = ["ConfigError", "Config", "load_config", "default_config", "from_dict", "to_dict", "parse_value",
+__all__ = ["ConfigError", "Config", "load_config", "default_config", "from_dict", "to_dict", "to_toml", "parse_value",
            "apply_override", "read_toml", "check_batch", "steps_per_stroke", "numeric_keys",
            "KEYS", "SCHEMA", "RANGES", "SECTIONS", "DEFAULT_SPREADS", "TOLERANCE_KEYS",
            "TOLERANCE_OPTIONS", "TOLERANCE_SECTIONS", "INTEGRATORS", "HESSIANS",

@@ -113,8 +113,7 @@ def from_dict(raw: dict[str, Any]) -> Config:
             raise ConfigError(f"[{section}]: expected a table of keys, got {fmt(table)}")
         for key in table:
             if key not in SCHEMA[section]:
-                raise ConfigError(f"unknown config key {section}.{key} "
-                                  f"(known in [{section}]: {', '.join(SCHEMA[section])})")
+                raise ConfigError(unknown_key(section, key))
     values: dict[str, dict[str, Any]] = {s: {} for s in SECTIONS}
     for k in KEYS:
         v = raw.get(k.section, {}).get(k.name, k.default)
@@ -162,6 +161,22 @@ def from_dict(raw: dict[str, Any]) -> Config:
     return Config(**sections, tolerance=tolerance, raw={k: dict(v) for k, v in raw.items()})
 
 
+def _nearest(word: str, known, before: str = "", after: str = "") -> str:
+    """'; did you mean X?' for the closest of ``known`` to ``word`` ('' when none is close)."""
+    import difflib
+    near = difflib.get_close_matches(str(word), list(known), n=1, cutoff=0.6)
+    return f"; did you mean {before}{near[0]}{after}?" if near else ""
+
+
+def unknown_key(section: str, name: str, origin: str = "") -> str:
+    """The message of an unknown key: the nearest valid key and every key of its section
+    (the same for a --set and a config file)."""
+    where = f"{origin}: " if origin else ""
+    return (f"{where}unknown config key {section}.{name}"
+            f"{_nearest(name, SCHEMA[section], section + '.')} "
+            f"(known in [{section}]: {', '.join(SCHEMA[section])})")
+
+
 def to_dict(cfg: Config) -> dict[str, dict[str, Any]]:
     """The config as a nested dict of plain values (lists for vectors)."""
     out = {}
@@ -176,8 +191,9 @@ def to_dict(cfg: Config) -> dict[str, dict[str, Any]]:
 
 
 
-def parse_value(text: str) -> Any:
-    """Read a command-line value as a TOML value; a bare word is a string."""
+def parse_value(text: str, key: str | None = None) -> Any:
+    """Read a command-line value as a TOML value; a bare word is a string. ``key`` (the key
+    it is for) is named when the text cannot be read."""
     import tomllib     # (only when there is a value to read: its regexes cost ~15 ms)
     try:
         return tomllib.loads(f"v = {text.strip()}")["v"]
@@ -185,8 +201,23 @@ def parse_value(text: str) -> Any:
         word = text.strip()
         if re.fullmatch(r"[A-Za-z_][\w\-]*", word):
             return word
-        raise ConfigError(f"cannot read {text.strip()!r} as a value (use TOML syntax: "
+        where = f"--set {key}={word}: " if key else ""
+        m = re.fullmatch(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/^²\s.*]+)",
+                         word)
+        if m and key:                   # a number with a unit: the unit is the key's
+            unit, typed = _unit(key), m.group(2).strip()
+            same = typed.replace(" ", "") == unit.replace(" ", "")
+            raise ConfigError(f"{where}cannot read {word!r} as a value: give the number "
+                              f"alone, in {unit}" + (f" (--set {key}={m.group(1)})" if same
+                                                     else f", not in {typed}")) from None
+        raise ConfigError(f"{where}cannot read {word!r} as a value (use TOML syntax: "
                           f"1e4, true, [0.06, 0.015], \"rk4\")") from None
+
+
+def _unit(key: str) -> str:
+    """The unit of a config key as a message names it ('the key's unit' if it has none)."""
+    k = BY_NAME.get(key.split("[", 1)[0])
+    return k.unit if k is not None and k.unit else "the key's unit"
 
 
 def apply_override(raw: dict[str, Any], text: str) -> None:
@@ -194,7 +225,7 @@ def apply_override(raw: dict[str, Any], text: str) -> None:
     if "=" not in text:
         raise ConfigError(f"--set {text!r}: expected section.key=value or section.key[i]=value")
     key, value_text = text.split("=", 1)
-    _set_raw(raw, key.strip(), parse_value(value_text), origin=f"--set {text!r}")
+    _set_raw(raw, key.strip(), parse_value(value_text, key.strip()), origin=f"--set {text!r}")
 
 
 _KEY = re.compile(r"^([A-Za-z_]\w*)\.([A-Za-z_]\w*)(?:\[(\d+)\])?$")
@@ -217,9 +248,11 @@ def _set_raw(raw: dict[str, Any], key: str, value: Any, origin: str) -> None:
         raise ConfigError(f"{origin}: expected section.key=value or section.key[i]=value")
     section, name, index = m.groups()
     if section not in SCHEMA:
-        raise ConfigError(f"{origin}: unknown config section [{section}]")
+        raise ConfigError(f"{origin}: unknown config section [{section}]"
+                          f"{_nearest(section, list(SCHEMA) + ['tolerance'], '[', ']')} "
+                          f"(known: {', '.join(SCHEMA)}, tolerance)")
     if name not in SCHEMA[section]:
-        raise ConfigError(f"{origin}: unknown config key {section}.{name}")
+        raise ConfigError(unknown_key(section, name, origin))
     table = raw.setdefault(section, {})
     if index is None:
         table[name] = value

@@ -34,9 +34,31 @@ def in_range(key: str, name: str, value: Any) -> None:
                               f"admissible range {fmt_range(key)}")
 
 
+def got(v: Any) -> str:
+    """What a value is, as a message names it: a string says it is one (``the string
+    '500'``: quoted in TOML, so text, not a number)."""
+    if isinstance(v, str):
+        return f"the string {v!r}"
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    return fmt(v)
+
+
+def _unquote_hint(v: Any) -> str:
+    """' (without the quotes: 500)' when a string reads as a number."""
+    if isinstance(v, str):
+        try:
+            x = float(v)
+        except ValueError:
+            return ""
+        if math.isfinite(x):
+            return f" (without the quotes it is a number: {v.strip()})"
+    return ""
+
+
 def number(key: str, v: Any) -> float:
     if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise ConfigError(f"{key}: expected a number, got {fmt(v)}")
+        raise ConfigError(f"{key}: expected a number, got {got(v)}{_unquote_hint(v)}")
     try:
         x = float(v)
     except OverflowError:           # an integer beyond the floats (TOML allows any length)
@@ -58,20 +80,21 @@ def check(key: str, kind: str, v: Any) -> Any:
     if kind in ("vec2", "vec3", "bounds"):
         n = 3 if kind == "vec3" else 2
         if not isinstance(v, (list, tuple)) or len(v) != n:
-            raise ConfigError(f"{key}: expected a list of {n} numbers, got {fmt(v)}")
+            raise ConfigError(f"{key}: expected a list of {n} numbers, got {got(v)}")
         xs = tuple(number(f"{key}[{i}]", x) for i, x in enumerate(v))
         if kind == "bounds" and xs[0] > xs[1]:
             raise ConfigError(f"{key}: lower bound {xs[0]} exceeds upper bound {xs[1]}")
         return xs
     if kind == "int+":
         if isinstance(v, bool) or not isinstance(v, int):
-            raise ConfigError(f"{key}: expected a whole number, got {fmt(v)}")
+            raise ConfigError(f"{key}: expected a whole number, got {got(v)}"
+                              f"{_unquote_hint(v)}")
         if v < 1:
             raise ConfigError(f"{key}: must be at least 1, got {v}")
         return v
     if kind == "bool":
         if not isinstance(v, bool):
-            raise ConfigError(f"{key}: expected true or false, got {fmt(v)}")
+            raise ConfigError(f"{key}: expected true or false, got {got(v)}")
         return v
     if kind.startswith("words:"):          # a non-empty list of distinct words of the choices
         choices = kind[6:].split(",")

@@ -20,6 +20,8 @@ def plot_optimum(res):
     fig, (a, b) = plt.subplots(1, 2, figsize=(12, 4.4), gridspec_kw={"width_ratios": [1.6, 1]},
                                layout="constrained")
     m = res.metrics or (res.optimiser or {})
+    a2 = None
+    marks = []
     if res.design is not None and res.config is not None:
         tr = res.simulate(trajectory=True).trajectory
         a.plot(tr["t"], tr["tip_speed"], color="C2", lw=2, label="tip speed")
@@ -30,14 +32,16 @@ def plot_optimum(res):
         if m.get("peak_tip_speed") is not None:
             i = int(np.argmax(tr["tip_speed"]))
             a.plot([tr["t"][i]], [m["peak_tip_speed"]], "kv", ms=6)
-            a.annotate(f"peak {m['peak_tip_speed']:.4g} m/s", (tr["t"][i], m["peak_tip_speed"]),
-                       xytext=(8, -2), textcoords="offset points", va="top", bbox=_BOX)
+            marks.append((f"peak {m['peak_tip_speed']:.4g} m/s",
+                          (tr["t"][i], m["peak_tip_speed"])))
         if m.get("closing_time") is not None:
             a.axvline(m["closing_time"], color="k", ls=":", lw=1)
             a.plot([m["closing_time"]], [m["impact_tip_speed"]], "ko")
-            a.annotate(f"impact {m['impact_tip_speed']:.3g} m/s\nat {m['closing_time']:.6g} s",
-                       (m["closing_time"], m["impact_tip_speed"]), xytext=(-10, 14),
-                       textcoords="offset points", ha="right", bbox=_BOX)
+            marks.append((f"impact {m['impact_tip_speed']:.3g} m/s\nat {m['closing_time']:.6g} s",
+                          (m["closing_time"], m["impact_tip_speed"])))
+        for ax_ in (a, a2):          # room for the labels above the curves
+            lo, hi = ax_.get_ylim()
+            ax_.set_ylim(lo, hi + 0.25 * (hi - lo))
     a.set_xlabel("time t [s]")
     a.set_ylabel(r"tip speed $|v_T|$ [m/s]", color="C2")
     verified = "verified by the adaptive reference" if res.verified else "NOT verified"
@@ -69,6 +73,12 @@ def plot_optimum(res):
     lim = [x.name for x in res.active if x.kind == "constraint"]
     b.set_title("Design within its bounds" + (f"\nactive: {', '.join(lim)}" if lim else ""),
                 fontsize=10)
+    fig.labels = []                  # placed where they touch no curve (tests check)
+    if marks:
+        from . import place_label
+        fig.canvas.draw()            # the layout, final
+        for text, xy in marks:
+            fig.labels.append(place_label(a, text, xy, avoid=fig.labels, twins=(a2,)))
     return fig
 
 
@@ -91,7 +101,9 @@ def plot_front(fr):
     if (~ok).any():
         a.loglog(t[~ok], J[~ok], "x", color="k", ms=8, label="not verified")
     a.set_xlabel("closing_time_max [s]")
-    a.set_ylabel("objective J [dimensionless]")
+    pr = rows[0][1].problem or {}
+    wi, wp = pr.get("weight_impact", 1.0), pr.get("weight_peak_tip", 0.1)
+    a.set_ylabel(f"J = {wi:g} s²·θ'² + {wp:g} s²/m²·v_peak² [dimensionless]", fontsize=9)
     a.set_title("Optimal objective against the allowed closing time")
     a.legend(fontsize=8)
     a = ax[0, 1]

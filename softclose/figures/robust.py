@@ -42,8 +42,10 @@ def plot_yield(results, labels, title: str | None = None):
     axes[0].set_ylabel("samples [-]")
     axes[1].set_xlabel("impact speed |θ'| at closing [rad/s]")
     axes[1].set_ylabel("samples [-]")
-    axes[0].legend(fontsize=8, loc="upper left")
-    axes[1].legend(fontsize=8)
+    # the legends go below the panels: inside, they covered the tallest bars
+    for ax in axes:
+        ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=1,
+                  frameon=False)
     n = results[0].samples if results else 0
     dist = results[0].distribution if results else ""
     fig.suptitle(title or f"Monte Carlo over the tolerance box ({n} samples, {dist}); "

@@ -63,12 +63,14 @@ MAX_CELLS = 300
 
 
 def unit(key: str) -> str:
+    """The unit of a config key (or vector component): its label's, else its record's."""
     if key in LABELS:
         return LABELS[key][1]
-    section = key.split(".")[0]
-    if key.startswith("geometry.assembly"):
-        return "deg"
-    return "m" if section == "geometry" else "-"
+    from ..config.schema import BY_NAME
+    record = BY_NAME.get(key.split("[", 1)[0])
+    if record is not None and record.unit:
+        return record.unit
+    return "-"
 
 
 def label(key: str) -> str:
@@ -89,10 +91,13 @@ def _fmt(v) -> str:
 class _View:
     """One map or profile: centres per axis, the quantities and the category of each cell."""
 
-    def __init__(self, keys, centres, logs, Z, cat, best, note, contours=True):
+    def __init__(self, keys, centres, logs, Z, cat, best, note, contours=True, extent=None):
         self.keys, self.centres, self.logs = keys, centres, logs
         self.Z, self.cat, self.best, self.note = Z, cat, best, note
         self.contours = contours      # not over the scatter of a random sample's cells
+        # per axis, the range the axis shows: the grid's own values (a cell around the first
+        # and last value is cut at them), or a sampled key's range; None: the cells' edges
+        self.extent = extent or [None] * len(keys)
 
 
 def _views_from_columns(res) -> list[_View]:
@@ -132,7 +137,8 @@ def _views_from_columns(res) -> list[_View]:
             best = tuple(float(res.best[space.keys[j]]) for j in g)
         views.append(_View([space.keys[j] for j in g], centres,
                            [space.log[j] if space.log else False for j in g],
-                           {q: pick(full[q]) for q in QUANTITIES}, pick(cat), best, note))
+                           {q: pick(full[q]) for q in QUANTITIES}, pick(cat), best, note,
+                           extent=[_span(space.values[j]) for j in g]))
     return views
 
 
@@ -170,8 +176,16 @@ def _views_from_bins(res) -> list[_View]:
             best = tuple(float(res.best[b.axes[j].key]) for j in g)
         views.append(_View([b.axes[j].key for j in g], [b.axes[j].centres for j in g],
                            [b.axes[j].log for j in g], Z, cat, best, note,
-                           contours=res.kind == "grid"))
+                           contours=res.kind == "grid",
+                           extent=[_span(b.axes[j].exact) if b.axes[j].exact is not None
+                                   else (b.axes[j].lo, b.axes[j].hi) for j in g]))
     return views
+
+
+def _span(values):
+    """(lowest, highest) of a grid axis' values; None for a single value (its cell stays)."""
+    v = np.asarray(values, float)
+    return (float(v.min()), float(v.max())) if len(v) > 1 and v.min() < v.max() else None
 
 
 # -- drawing --------------------------------------------------------------------------------
@@ -313,7 +327,8 @@ def _map(v: _View, res):
         _panel(fig, ax, v, q, feas, cax)
         _infeasible(ax, v, present)
         if v.best is not None:
-            ax.plot(*v.best, marker="*", color="red", mec="white", ms=16, ls="none")
+            ax.plot(*v.best, marker="*", color="red", mec="white", ms=16, ls="none",
+                    clip_on=False, zorder=5)       # whole, also on the grid's edge
         ax.grid(False)
         if v.logs[0]:
             ax.set_xscale("log")
@@ -323,6 +338,7 @@ def _map(v: _View, res):
             ax.set_yscale("log")
         else:
             ax.yaxis.set_major_locator(MaxNLocator(nbins=6, steps=[1, 2, 2.5, 5, 10]))
+        _within(ax, v)
     for ax in axs[0]:
         ax.tick_params(labelbottom=False)
     for ax in axs[:, 1]:
@@ -339,6 +355,14 @@ def _map(v: _View, res):
     return fig
 
 
+def _within(ax, v: _View) -> None:
+    """The axes show the grid's range, not beyond: a grid from 100 to 4000 N s/m is drawn
+    from 100 to 4000 (its first and last cells cut at those values), never from -350."""
+    for span, set_lim in zip(v.extent, (ax.set_xlim, ax.set_ylim)):
+        if span is not None:
+            set_lim(*span)
+
+
 def _profile(v: _View, res):
     key = v.keys[0]
     x = np.asarray(v.centres[0])
@@ -350,11 +374,13 @@ def _profile(v: _View, res):
         ax.plot(x, np.where(feas, y, np.nan), color="C0", lw=2, label="feasible")
         if v.best is not None:
             i = int(np.argmin(np.abs(x - v.best[0])))
-            ax.plot(x[i], y[i], "r*", ms=14, label="best feasible")
+            ax.plot(x[i], y[i], "r*", ms=14, label="best feasible", clip_on=False, zorder=5)
         name, u = QUANTITIES[q]
         ax.set_ylabel(f"{name} [{u}]")
         if v.logs[0]:
             ax.set_xscale("log")
+        if v.extent[0] is not None:
+            ax.set_xlim(*v.extent[0])
     for ax in axs[1]:
         ax.set_xlabel(label(key))
     axs[0, 0].legend(fontsize=8)

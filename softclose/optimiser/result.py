@@ -21,7 +21,9 @@ class Active:
     """A bound or constraint that holds with equality at the optimum, and its price.
 
     ``dJ`` is the change of J per unit relaxation of the limit (per ``unit``; negative:
-    relaxing a limiting bound lowers J), from Ipopt's multiplier, unscaled.
+    relaxing a limiting bound lowers J), from Ipopt's multiplier, unscaled. ``scenarios``
+    (robust design only) names the scenarios of the tolerance box where a constraint holds
+    with equality; relaxing the limit relaxes it in all of them.
     """
 
     name: str
@@ -30,10 +32,14 @@ class Active:
     value: float        # the limit (SI)
     unit: str
     dJ: float
+    scenarios: tuple = ()
 
     def to_json(self) -> dict:
-        return {"name": self.name, "kind": self.kind, "bound": self.bound,
-                "value": self.value, "unit": self.unit, "dJ": self.dJ}
+        out = {"name": self.name, "kind": self.kind, "bound": self.bound,
+               "value": self.value, "unit": self.unit, "dJ": self.dJ}
+        if self.scenarios:
+            out["scenarios"] = list(self.scenarios)
+        return out
 
     def describe(self, J: float | None = None) -> str:
         """'spring_rest_length at its upper bound 0.12 m: dJ = -0.0123 per m of relaxation
@@ -141,6 +147,14 @@ class OptimiseResult(Displayed):
         verified_objective and objective_relative_difference, active limits, status."""
         import pandas as pd
         return pd.DataFrame([self.row()])
+
+    def design_config(self):
+        """The config this result solved, with its optimal design as ``[design]``: what
+        every function takes to analyse the optimum (``softclose.tolerance_analysis(
+        res.design_config())``); ``softclose optimise --out D`` writes it as D/design.toml."""
+        if self.design is None or self.config is None:
+            raise ValueError("this result has no design")
+        return self.config.with_design(**self.design)
 
     def simulate(self, trajectory: bool = True):
         """The optimal design's stroke by the fixed-step simulator (with its trajectory)."""

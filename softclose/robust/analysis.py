@@ -8,12 +8,17 @@ distribution over the tolerance box of cfg's design, runs every stroke in the C 
   (closed, closing time within the window, held shut, no rebound), with a 95 % Wilson score
   interval (:func:`softclose.robust.stats.wilson`);
 - the 1st / 50th / 99th **percentiles** of closing time (a lid that did not close counts as
-  +inf, so a percentile beyond t_max reads "not closed") and of the impact speeds (over the
-  samples that closed);
+  +inf, so a percentile beyond t_max reads "not closed"), of the impact speeds, the peak tip
+  speed and the objective J (over the samples that closed);
+- the **nominal lid**: the design with every toleranced key at its nominal value, its
+  metrics (the same kernel as the samples), J and whether it meets every constraint, and
+  whether the design has a spring or a damper at all (``nominal["bare"]``: the default
+  config's design has neither, and its "yield" is that of a lid slamming shut);
 - why the others failed (counts by reason);
 - the **adaptive reference** at the worst sample and at the samples nearest the boundary of
-  the feasible set, with the kernel's numbers beside it: that the verdicts agree shows the
-  kernel's step error does not move samples across the boundary.
+  the feasible set (distinct points: two samples whose labels read the same are one check),
+  with the kernel's numbers beside it: that the verdicts agree shows the kernel's step error
+  does not move samples across the boundary.
 """
 
 from __future__ import annotations
@@ -26,14 +31,17 @@ import numpy as np
 
 from ..config import Config, check_batch
 from ..display import Display, Displayed, Table, interval, num, percent, unit_of, with_unit
-from ..problem import DESIGN_KEYS, design_of, params_of
+from ..problem import (BARE_LID, DESIGN_KEYS, LID_MASS, METRIC_KEYS, bare_lid, design_of,
+                       params_of)
 from .box import Box, box_of
 from .evaluate import evaluate
 from .stats import CI_METHOD, margins, percentiles, wilson
 from .verify import reference_check
 
-#: metrics whose percentiles are reported
-PERCENTILE_KEYS = ("closing_time", "impact_theta_dot", "impact_tip_speed")
+#: metrics whose percentiles are reported (closing time over every sample, the others over
+#: the samples that closed)
+PERCENTILE_KEYS = ("closing_time", "impact_theta_dot", "impact_tip_speed", "peak_tip_speed",
+                   "objective")
 
 
 @dataclass(frozen=True, repr=False)
@@ -61,10 +69,18 @@ class YieldResult(Displayed):
     numerical_failures: int = 0
     time: float = 0.0
     data: dict = field(default_factory=dict, repr=False, compare=False)
+    #: the nominal lid (:func:`nominal_stroke`): metrics, objective, feasible, reason, bare
+    nominal: dict = field(default_factory=dict)
 
     @property
     def meets_required(self) -> bool:
         return self.yield_ >= self.required_yield
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """What a reader must know to read the yield: the design has no spring and no
+        damper (:data:`softclose.problem.BARE_LID`)."""
+        return (BARE_LID,) if self.nominal.get("bare") else ()
 
     def to_json(self) -> dict:
         from ..jsonio import jsonable
@@ -73,7 +89,8 @@ class YieldResult(Displayed):
             "yield": self.yield_, "yield_ci": list(self.yield_ci), "ci_method": CI_METHOD,
             "required_yield": self.required_yield, "meets_required": self.meets_required,
             "samples": self.samples, "distribution": self.distribution, "seed": self.seed,
-            "box": self.box, "failures": self.failures,
+            "box": self.box, "nominal": self.nominal, "warnings": list(self.warnings),
+            "failures": self.failures,
             "numerical_failures": self.numerical_failures, "percentiles": self.percentiles,
             "reference": self.reference, "time": self.time})
 
@@ -150,19 +167,26 @@ def analyse_samples(cfg: Config, box: Box, z: np.ndarray, *, seed: int = 0,
     closed = np.asarray(cols["closed"], bool)
     pct = {"closing_time": percentiles(ct)}
     for key in PERCENTILE_KEYS[1:]:
-        pct[key] = percentiles(np.asarray(cols[key])[closed])
+        pct[key] = percentiles(np.asarray(cols[key], float)[closed])
     m = margins(cols, cfg.optimise)
     checks = []
     if reference and n:
-        picks = []
+        picks, labels = [], set()
+
+        def pick(i, why):
+            label = box.label(z[i])
+            if label not in labels:        # the same point as far as a reader can tell
+                labels.add(label)
+                picks.append((i, why))
         if (~ok).any():
-            picks.append((int(np.argmin(m)), "worst sample"))
+            pick(int(np.argmin(m)), "worst sample")
         near = np.argsort(np.abs(np.where(np.isfinite(m), m, np.inf)))
-        for i in near:
-            if len(picks) >= reference:
+        for i in near[:max(64, 4 * reference)]:
+            if len(picks) >= reference or not np.isfinite(m[i]):
                 break
-            if int(i) not in [p for p, _ in picks] and np.isfinite(m[i]):
-                picks.append((int(i), "nearest the boundary"))
+            nth = sum(1 for _, w in picks if w.endswith("nearest the boundary"))
+            pick(int(i), ("sample" if not nth else f"{_ORDINAL[min(nth, 3)]} sample")
+                 + " nearest the boundary")
         for i, why in picks:
             kern = {c: (None if isinstance(v := cols[c][i], float) and not np.isfinite(v)
                         else v) for c in cols}
@@ -182,6 +206,7 @@ def analyse_samples(cfg: Config, box: Box, z: np.ndarray, *, seed: int = 0,
             f"the adaptive reference disagrees with the kernel's verdict at {len(disagree)} of "
             f"{len(checks)} checked samples (margins below the kernel's accuracy)")
     y = k / n if n else float("nan")
+    nominal = nominal_stroke(cfg)
     return YieldResult(
         success=numerical == 0, message=msg, design=design_of(params_of(cfg)),
         keys=box.keys, distribution=box.distribution, samples=n, seed=seed, yield_=y,
@@ -189,7 +214,28 @@ def analyse_samples(cfg: Config, box: Box, z: np.ndarray, *, seed: int = 0,
         failures=dict(reasons), percentiles=pct, box=_box_json(box), reference=checks,
         numerical_failures=numerical, time=time.perf_counter() - t0,
         data={"z": z, "X": X, "cols": cols, "margin": m,
-              "closing_time_max": cfg.optimise.closing_time_max})
+              "closing_time_max": cfg.optimise.closing_time_max}, nominal=nominal)
+
+
+_ORDINAL = {1: "2nd", 2: "3rd", 3: "next"}
+
+
+def nominal_stroke(cfg: Config) -> dict:
+    """The design's own lid, every toleranced key at its nominal value: its §4 metrics from
+    the C kernel (as the samples'), ``objective`` (J; None when it does not close),
+    ``feasible`` and ``reason`` (the first constraint it breaks, "" if none), and ``bare``
+    (no spring and no damper: :func:`softclose.problem.bare_lid`)."""
+    cols = evaluate(cfg, [LID_MASS], [[cfg.mass.lid]])   # the lid-mass column: exact
+    out = {}
+    for k in METRIC_KEYS + ("objective",):
+        v = cols[k][0]
+        v = v.item() if hasattr(v, "item") else v
+        out[k] = None if isinstance(v, float) and not np.isfinite(v) else v
+    out["closed"] = bool(out["closed"])
+    out["feasible"] = bool(cols["feasible"][0])
+    out["reason"] = str(cols["reason"][0])
+    out["bare"] = bare_lid(cfg)
+    return out
 
 
 def tolerance_analysis(cfg: Config, *, samples: int | None = None, seed: int = 0,

@@ -59,11 +59,12 @@ import numpy as np
 from ..config import Config, check_batch
 from ..errors import ConfigError
 from ..problem import DESIGN_KEYS, METRIC_KEYS, VERIFY_RTOL, describe, design_of, params_of
+from .active import active_set
 from .analysis import YieldResult, analyse_samples
 from .box import box_of
 from .evaluate import slow_keys
 from .infeasible import diagnose
-from .nlp import discretise
+from .nlp import T_FLOOR, discretise, t_limit
 from .policy import MAX_CORNERS, MAX_WIDEN, SLOW_YIELD_SAMPLES, WIDEN, YIELD_REFERENCE, check_keys
 from .result import RobustResult, box_summary
 from .scenarios import initial_scenarios
@@ -121,7 +122,8 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
                                                  f" ({r['message'] or 'failed'})")
         for r in rows),)
     times = dict(best.times, total=time.perf_counter() - t_start)
-    return replace(best, kind=kind, kinds=tuple(rows), part=part, notes=notes, times=times)
+    return replace(best, kind=kind, kinds=tuple(rows), part=part, notes=notes, times=times,
+                   config=cfg.set("design.spring_kind", kind))   # (not the kind's bounds)
 
 
 def optimise_robust_kind(cfg: Config, *, progress: bool = False, samples: int | None = None,
@@ -142,7 +144,10 @@ def optimise_robust_kind(cfg: Config, *, progress: bool = False, samples: int | 
     log.notes += disc_notes
     z_yield = _yield_samples(cfg, samples, seed, log.notes)
     problem, run, yres, scale = _solve_widening(cfg, nominal, N, M, z_yield, seed, log)
-    base = dict(robust_objective=tol.robust_objective, problem=describe(cfg),
+    problem_json = describe(cfg)
+    problem_json["closing_time_solved"] = [max(cfg.optimise.closing_time_min, T_FLOOR),
+                                           t_limit(cfg)]
+    base = dict(robust_objective=tol.robust_objective, problem=problem_json,
                 solver=_solver(problem, log.rounds, N, M), rounds=log.rounds, box_scale=scale,
                 box=box_summary(box_of(cfg, scale=scale)))
     if not run.success:
@@ -158,6 +163,7 @@ def optimise_robust_kind(cfg: Config, *, progress: bool = False, samples: int | 
     corner_check = _corner_guarantee(cfg, scale, problem, run, log)
     verification = _verification(scen, verified) if verify else None
     msgs = _failures(verification, scen, corner_check, yres, tol.required_yield, scale)
+    active = active_set(run, [s["label"] for s in scen])
     log.bar.update(10, "done")
     log.finish()
     return RobustResult(not msgs, "; ".join(msgs), run.r["status"], design, J_obj,
@@ -165,7 +171,7 @@ def optimise_robust_kind(cfg: Config, *, progress: bool = False, samples: int | 
                         verification=verification, yield_result=yres,
                         nominal=_nominal_json(nominal, nyield), nominal_yield=nyield,
                         notes=tuple(log.notes), times=log.times, corner_check=corner_check,
-                        **base)
+                        active=active, config=cfg, **base)
 
 
 @dataclass
@@ -279,7 +285,7 @@ def _no_design(cfg: Config, problem: Problem, run: Run, nominal: dict, N: int, M
     return RobustResult(False, msg, run.r["status"], None, None, metrics=None, scenarios=[],
                         verification=None, yield_result=None, nominal=nominal_json,
                         nominal_yield=None, infeasibility=info, notes=tuple(log.notes),
-                        times=log.times, **base)
+                        times=log.times, config=cfg, **base)
 
 
 def _nominal_yield(cfg: Config, nominal: dict, z_yield: np.ndarray, seed: int,

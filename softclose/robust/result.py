@@ -47,6 +47,19 @@ class RobustResult(Displayed):
     kind: str | None = None
     kinds: tuple = ()
     part: object = None
+    #: the bounds and constraints that limit the robust design, with dJ per unit relaxation
+    #: (:class:`softclose.optimiser.Active`, ``scenarios`` naming where each holds)
+    active: tuple = ()
+    #: the config it was designed for
+    config: object = field(default=None, repr=False, compare=False)
+
+    def design_config(self):
+        """The config with the robust design as ``[design]`` (``softclose optimise --robust
+        --out D`` writes it as D/design.toml)."""
+        if self.design is None or self.config is None:
+            raise ValueError("this result has no design")
+        kind = {"spring_kind": self.kind} if self.kind else {}
+        return self.config.with_design(**kind, **self.design)
 
     @property
     def yield_(self) -> float | None:
@@ -76,6 +89,7 @@ class RobustResult(Displayed):
             "distribution": None if y is None else y.distribution,
             "percentiles": None if y is None else y.percentiles,
             "failures": None if y is None else y.failures,
+            "active": [a.to_json() for a in self.active],
             "scenarios": self.scenarios,
             "nominal": self.nominal,
             "box": self.box, "box_scale": self.box_scale,

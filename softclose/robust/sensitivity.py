@@ -24,7 +24,7 @@ import numpy as np
 from ..config import Config, check_batch
 from ..display import Display, Displayed, Table, num, with_unit
 from ..errors import ConfigError
-from ..problem import DESIGN_KEYS, design_of, params_of
+from ..problem import BARE_LID, DESIGN_KEYS, design_of, params_of
 from .box import box_of
 from .evaluate import evaluate
 
@@ -50,10 +50,21 @@ class SensitivityResult(Displayed):
     seed: int
     time: float = 0.0
     data: dict = field(default_factory=dict, repr=False, compare=False)
+    #: the nominal lid (:func:`softclose.robust.analysis.nominal_stroke`)
+    nominal: dict = field(default_factory=dict)
+    #: the toleranced keys with no spread at this design (left out of the indices)
+    fixed: tuple = ()
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """The design has no spring and no damper (:data:`softclose.problem.BARE_LID`)."""
+        return (BARE_LID,) if self.nominal.get("bare") else ()
 
     def to_json(self) -> dict:
         from ..jsonio import jsonable
-        out = {"success": self.success, "message": self.message, "design": self.design}
+        out = {"success": self.success, "message": self.message, "design": self.design,
+               "nominal": self.nominal, "warnings": list(self.warnings),
+               "fixed": list(self.fixed)}
         out.update(self.indices)
         out.update({"not_closed": self.not_closed, "not_closed_treatment": CENSORING,
                     "keys": list(self.keys), "base_samples": self.base_samples,
@@ -168,6 +179,8 @@ def sensitivity(cfg: Config, *, samples: int = 1024, seed: int = 0,
     if nc:
         msgs.append(f"{nc} of {len(X)} strokes did not close; {CENSORING}")
     msg = "; ".join(msgs)
+    from .analysis import nominal_stroke
     return SensitivityResult(True, msg, design_of(params_of(cfg)), tuple(keys), int(samples),
                              len(X), nc, indices, box.distribution, seed,
-                             time.perf_counter() - t0, {"X": X, "Y": Y, "cols": cols})
+                             time.perf_counter() - t0, {"X": X, "Y": Y, "cols": cols},
+                             nominal=nominal_stroke(cfg), fixed=tuple(fixed))
