@@ -39,6 +39,29 @@ PARAM_KEYS = PARAM_NAMES
 assert PARAM_KEYS[:len(DESIGN_KEYS)] == DESIGN_KEYS
 #: config keys of the parameter vector p = (k, l0, c, c_rot), by column
 PARAM_COLUMNS = {q.key: i for i, q in enumerate(PARAMS)}
+#: the parameters whose config value is a word (a spring's kind, a one-way flag), by config
+#: key: p holds each word's number (:attr:`Param.codes`); a sweep takes the words and its
+#: tables show them
+WORD_PARAMS = {q.key: q for q in PARAMS if q.codes is not None}
+
+
+def word_text(key: str, number: float) -> str:
+    """The word a coded parameter's number stands for, as a config file writes it."""
+    w = WORD_PARAMS[key].word(float(number))
+    return str(w).lower() if isinstance(w, bool) else str(w)
+
+
+def word_code(key: str, word) -> float:
+    """The number p holds for a word (or a TOML boolean) of a coded parameter; ValueError
+    naming the words it takes."""
+    q = WORD_PARAMS[key]
+    for w, c in q.codes.items():
+        if word == w or (isinstance(word, str) and word.strip().lower() == str(w).lower()):
+            return float(c)
+    raise ValueError(f"{key} takes {', '.join(word_text(key, c) for c in q.codes.values())}, "
+                     f"got {word!r}")
+
+
 #: the config key the kernels also take per stroke, beside p (their lid-mass column: the
 #: tabulated coefficients are affine in the lid mass)
 LID_MASS = "mass.lid"

@@ -68,7 +68,8 @@ def test_quick_run_reports_the_configured_default_not_its_cheapest(wp):
     assert (d["method"], d["step"]) == ("rk4", default_config().simulate.step) == ("rk4", 2e-3)
     assert d["meets_targets"] and not d["confirmed"]
     assert d["designs"] == ["spec8", "soft_close"]
-    assert d["omitted_designs"] == ["strong_spring", "stiff_corner"]
+    assert d["omitted_designs"] == ["strong_spring", "stiff_corner",
+                                    *bench.precision.ELEMENT_DESIGNS]
     assert (d["cheapest"]["method"], d["cheapest"]["step"]) == ("rk4", 5e-3)
     five = [r for r in wp.rows if r["method"] == "rk4" and r["step"] == 5e-3]
     assert len(five) == 2 and all(r["meets_targets"] for r in five)
@@ -79,6 +80,34 @@ def test_quick_run_reports_the_configured_default_not_its_cheapest(wp):
     md = work_precision_markdown(wp)
     assert "| rk4 **(default)** | 0.002 |" in md and "| rk4 (cheapest here) | 0.005 |" in md
     assert "| rk4 **(default)** | 0.005 |" not in md
+
+
+def test_real_elements_rows_converge_at_the_methods_order(monkeypatch):
+    """The full bench's designs with the real elements (a preloaded compression spring, a
+    one-way dashpot with friction, a torsion spring with friction): each design's vector is
+    the config's own (a second route: ``params_of`` of the config with those keys), rk4
+    converges at fourth order on the closing time and the impact speed -- the friction's
+    stick test and the one-way switch located to the method's order -- and the configured
+    default meets every target on them."""
+    from softclose.bench import precision
+    from softclose.problem import params_of
+    cfg = default_config()
+    for name, values in precision.ELEMENT_DESIGNS.items():
+        sets = {("friction.torque" if k == "friction_torque" else f"design.{k}"): v
+                for k, v in values.items()}
+        np.testing.assert_array_equal(precision.element_params(values),
+                                      params_of(cfg.update(sets)))
+    full = precision.designs_for
+    monkeypatch.setattr(precision, "designs_for", lambda c, quick=False: {
+        k: v for k, v in full(c, False).items() if k in precision.ELEMENT_DESIGNS})
+    wp = precision.work_precision(cfg, repeats=1, methods=["rk4"])
+    assert wp.designs == tuple(precision.ELEMENT_DESIGNS)
+    for name in wp.designs:
+        assert wp.truths[name].status.text == "closed"
+        for k in ("closing_time", "impact_theta_dot"):
+            o = wp.orders[(name, "rk4", k)]
+            assert o is not None and 3.7 < o < 4.3, (name, k, o)
+    assert wp.default["meets_targets"] and wp.default["failing_designs"] == []
 
 
 def test_stiff_corner_rules_out_5ms():

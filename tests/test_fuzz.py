@@ -301,6 +301,13 @@ def value_for(draw, key: str, vkind: str) -> str:
 def grid_spec(draw) -> str:
     """One --grid KEY=START:STOP:COUNT of a fuzzed sweep: any key, values of any kind."""
     key = draw(st.sampled_from([k for k, _ in KEYS] + ["design.nope", "mass"]))
+    if draw(st.integers(0, 4)) == 0:   # a word key: its words, or anything else
+        key = draw(st.sampled_from(["design.spring_kind", "design.damper_one_way"]))
+        words = draw(st.lists(st.sampled_from(["linear", "extension", "compression", "true",
+                                               "false", "bogus", "", "1", "-1", "nan", "[]"]),
+                              min_size=1, max_size=3))
+        return f"{key}={','.join(words)}" if draw(st.booleans()) else \
+            f"{key}=[{', '.join(words)}]"
     kind = KIND_OF.get(key, "real")
     ends = []
     for _ in range(2):
@@ -402,6 +409,9 @@ def _grid_points(argv: list[str]) -> int | None:
     """Points of the sweep's grids (None when a COUNT is not a whole number)."""
     n = 1
     for spec in _option(argv, "--grid"):
+        if ":" not in spec:          # a word key's list of words
+            n *= spec.count(",") + 1
+            continue
         try:
             n *= max(int(spec.rsplit(":", 1)[-1]), 0)
         except ValueError:

@@ -294,3 +294,34 @@ def test_sensitivity_ignores_a_spread_below_floating_point_resolution():
     names = set(js["closing_time"]["S1"])
     assert names == {"design.spring_k", "design.damper_c", "mass.lid"}
     assert "geometry.pivot_b[0]" not in names
+
+
+def test_a_tolerance_on_friction_works_like_any_key():
+    """Friction as the only spread (uniform, +-30 % about f*, the friction at which the stroke
+    takes exactly closing_time_max by the reference, with its stick/slip events): the true
+    yield is 1/2, and the estimate finds it within its statistical error; every failure is
+    'too slow'; the kernel's verdicts agree with the reference nearest the boundary."""
+    from scipy.optimize import brentq
+
+    from softclose.problem import params_of
+    cfg = default_config().with_design(spring_k=K_HELD,
+                                       spring_rest_length=OPT["spring_rest_length"],
+                                       damper_c=2600.0)
+    ref = Reference(LidModel(cfg))
+    f_star = brentq(lambda f: ref.simulate(params_of(cfg.update({"friction.torque": f})))
+                    .closing_time - cfg.optimise.closing_time_max, 0.0, 0.2, xtol=1e-9)
+    assert 0.05 < f_star < 0.07
+    cfg = cfg.update({"friction.torque": f_star, "tolerance.design.spring_k": 0,
+                      "tolerance.design.damper_c": 0, "tolerance.mass.lid": 0,
+                      "tolerance.friction.torque": 0.3})
+    n = 20000
+    r = tolerance_analysis(cfg, samples=n, seed=11, reference=2)
+    assert r.keys == ("friction.torque",)
+    assert abs(r.yield_ - 0.5) < 4 * math.sqrt(0.25 / n)
+    assert r.yield_ci[0] < 0.5 < r.yield_ci[1]
+    assert set(r.failures) == {"too slow"}
+    assert r.reference and all(c["verdicts_agree"] for c in r.reference)
+    # the samples fail exactly above f* (the kernel's threshold: table-limited, ~1e-7 s)
+    f = r.data["X"][:, 0]
+    feasible = r.to_frame()["feasible"].to_numpy()
+    assert np.all(feasible[f < 0.999 * f_star]) and not np.any(feasible[f > 1.001 * f_star])

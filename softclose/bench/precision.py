@@ -42,11 +42,37 @@ SPRING_DASHPOT = {
 }
 #: how many of the spring + dashpot designs a quick run takes (in the order above)
 QUICK_DESIGNS = 1
+#: designs with the real elements (full runs only), by their parameters (the others at their
+#: defaults): a preloaded compression spring (its force jumps by the preload at the free
+#: length, which this stroke never reaches: 0.45 s, -0.40 rad/s); a one-way dashpot with
+#: Coulomb friction (0.33 s, -0.73 rad/s); a torsion spring with friction (0.35 s, -0.72 rad/s)
+ELEMENT_DESIGNS = {
+    "compression_preload": {"spring_k": 1500.0, "spring_rest_length": 0.07,
+                            "damper_c": 2000.0, "spring_kind": "compression",
+                            "spring_preload": 10.0},
+    "friction_one_way": {"spring_k": 500.0, "spring_rest_length": 0.05, "damper_c": 3000.0,
+                         "damper_one_way": True, "friction_torque": 0.05},
+    "torsion_friction": {"damper_c": 2500.0, "torsion_k": 0.2, "torsion_free_angle_deg": 30.0,
+                         "friction_torque": 0.03},
+}
+
+
+def element_params(values: dict) -> np.ndarray:
+    """The parameter vector p of a design given by some of its parameters (words by their
+    codes), the others at their defaults (absent)."""
+    from ..elements import PARAMS
+    from ..problem import PARAM_DEFAULTS
+    p = PARAM_DEFAULTS.copy()
+    for i, q in enumerate(PARAMS):
+        if q.name in values:
+            p[i] = q.number(values[q.name])
+    return p
 
 
 def designs_for(cfg: Config, quick: bool = False) -> dict[str, np.ndarray]:
     """The benchmark's designs: the config's own (named "spec8" when it is the SPEC §8 case:
-    no spring, no damper) and the spring + dashpot designs (the first only when ``quick``)."""
+    no spring, no damper), the spring + dashpot designs (the first only when ``quick``) and,
+    in a full run, the real elements' (:data:`ELEMENT_DESIGNS`)."""
     own = params_of(cfg)
     name = "spec8" if own[0] == 0 and own[2] == 0 and own[3] == 0 else "config"
     out = {name: own}
@@ -54,6 +80,8 @@ def designs_for(cfg: Config, quick: bool = False) -> dict[str, np.ndarray]:
         if quick and i >= QUICK_DESIGNS:
             break
         out[k] = as_params(v)
+    if not quick:
+        out.update({k: element_params(v) for k, v in ELEMENT_DESIGNS.items()})
     return out
 
 # -- errors --------------------------------------------------------------------------------

@@ -296,16 +296,45 @@ def _text(res, payload: dict, files, resume) -> str:
     b = res.best
     if b:
         lines.append(f"  best feasible (id {b['id']}): "
-                     + ", ".join(f"{k} = {b[k]:.6g}" for k in res.keys)
+                     + ", ".join(f"{k} = {_g(b[k])}" for k in res.keys)
                      + f"; objective {b['objective']:.6g}, closing_time "
                        f"{b['closing_time']:.4f} s, impact {b['impact_theta_dot']:.4f} rad/s, "
                        f"peak tip {b['peak_tip_speed']:.4f} m/s")
     elif res.computed:
         lines.append("  no feasible design")
+    lines += _best_per_word(res)
     lines += [f"  wrote {f}" for f in files]
     if resume:
         lines.append(f"  interrupted: the finished chunks are kept; resume with: {resume}")
     return "\n".join(lines)
+
+
+def _g(v) -> str:
+    return v if isinstance(v, str) else f"{v:.6g}"
+
+
+def _best_per_word(res) -> list[str]:
+    """For a swept word key (a spring's kind): the best feasible objective of each word --
+    what each kind costs over the rest of the grid (rows held in memory only)."""
+    import numpy as np
+
+    from ..problem import WORD_PARAMS, word_text
+    if res.columns is None:
+        return []
+    out = []
+    feas = np.asarray(res.columns["feasible"], bool)
+    J = np.asarray(res.columns["objective"], float)
+    for k in res.keys:
+        if k not in WORD_PARAMS:
+            continue
+        x = np.asarray(res.columns[k], float)
+        parts = []
+        for c in np.unique(x[np.isfinite(x)]):
+            m = feas & (x == c)
+            best = f"{J[m].min():.6g}" if m.any() else "none feasible"
+            parts.append(f"{word_text(k, c)} {best} ({int(m.sum())} feasible)")
+        out.append(f"  best objective by {k}: " + ", ".join(parts))
+    return out
 
 
 def _optimal_text(res) -> str:

@@ -83,8 +83,35 @@ def stem(key: str) -> str:
     return re.sub(r"[^A-Za-z0-9_]+", "_", key).strip("_")
 
 
-def _fmt(v) -> str:
+def _fmt(v, key: str | None = None) -> str:
+    from ..problem import WORD_PARAMS, word_text
+    if key in WORD_PARAMS and not isinstance(v, str):
+        return word_text(key, v)
     return v if isinstance(v, str) else f"{v:.4g}"
+
+
+def _number(key: str, v) -> float:
+    """A best design's value on a map axis (a word key's word as p's number)."""
+    from ..problem import WORD_PARAMS, word_code
+    return word_code(key, v) if key in WORD_PARAMS and isinstance(v, str) else float(v)
+
+
+def _is_word(key: str) -> bool:
+    from ..problem import WORD_PARAMS
+    return key in WORD_PARAMS
+
+
+def _setting(key: str, value) -> str:
+    """``key = value unit`` (a word key: ``key = word``)."""
+    if _is_word(key):
+        return f"{key} = {_fmt(value, key)}"
+    return f"{key} = {_fmt(value)} {unit(key)}"
+
+
+def _mapped(keys) -> list[int]:
+    """The axes a map may show: not a word key (a spring's kind is sliced, not drawn)."""
+    from ..problem import WORD_PARAMS
+    return [j for j, k in enumerate(keys) if k not in WORD_PARAMS]
 
 
 # -- what a map shows ------------------------------------------------------------------------
@@ -110,7 +137,7 @@ def _views_from_columns(res) -> list[_View]:
         bidx = np.unravel_index(int(res.best["id"]), shape)
     else:
         bidx = tuple(n // 2 for n in shape)
-    multi = [j for j, n in enumerate(shape) if n >= 2]
+    multi = [j for j, n in enumerate(shape) if n >= 2 and j in _mapped(space.keys)]
     groups = [(multi[0],)] if len(multi) == 1 else \
         [(a, b) for i, a in enumerate(multi) for b in multi[i + 1:]][:15]
     views = []
@@ -127,14 +154,14 @@ def _views_from_columns(res) -> list[_View]:
 
         def pick(a, ix=ix, sl=sl):
             return a[sl][ix]
-        fixed = [f"{space.keys[j]} = {_fmt(space.values[j][bidx[j]])} {unit(space.keys[j])}"
+        fixed = [_setting(space.keys[j], space.values[j][bidx[j]])
                  for j in range(len(shape)) if j not in g and shape[j] >= 1]
         why = "the best feasible design's values" if res.best is not None else \
             "the middle of each axis (no feasible design)"
         note = (f"slice at {', '.join(fixed)} ({why})" if fixed else "every design of the grid")
         best = None
         if res.best is not None:
-            best = tuple(float(res.best[space.keys[j]]) for j in g)
+            best = tuple(_number(space.keys[j], res.best[space.keys[j]]) for j in g)
         views.append(_View([space.keys[j] for j in g], centres,
                            [space.log[j] if space.log else False for j in g],
                            {q: pick(full[q]) for q in QUANTITIES}, pick(cat), best, note,
@@ -145,8 +172,10 @@ def _views_from_columns(res) -> list[_View]:
 def _views_from_bins(res) -> list[_View]:
     """Maps from the binned summary (sampled or streamed sweeps)."""
     b = res.bins
-    multi = [g for g in b.groups if len(g) == 1]
-    groups = multi if len(multi) == 1 else [g for g in b.groups if len(g) == 2]
+    keys = [a.key for a in b.axes]
+    shown = [g for g in b.groups if all(j in _mapped(keys) for j in g)]
+    multi = [g for g in shown if len(g) == 1]
+    groups = multi if len(multi) == 1 else [g for g in shown if len(g) == 2]
     views = []
     for g in groups:
         c = b.cells[g]
@@ -162,7 +191,8 @@ def _views_from_bins(res) -> list[_View]:
                     f"{' x '.join(str(b.axes[j].n) for j in g)} bins")
         else:
             what = f"{res.points:,} designs in {' x '.join(str(b.axes[j].n) for j in g)} bins"
-        free = ", ".join(f"{a.key} {_fmt(a.lo)}..{_fmt(a.hi)} {unit(a.key)}" for a in others)
+        free = ", ".join(f"{a.key} {_fmt(a.lo, a.key)}..{_fmt(a.hi, a.key)}"
+                         + ("" if _is_word(a.key) else f" {unit(a.key)}") for a in others)
         exact = all(b.axes[j].exact is not None for j in g)
         if exact and not free:
             note = f"every design of the grid ({res.points:,})"
@@ -173,7 +203,7 @@ def _views_from_bins(res) -> list[_View]:
                 (f" over {free}" if free else "")
         best = None
         if res.best is not None:
-            best = tuple(float(res.best[b.axes[j].key]) for j in g)
+            best = tuple(_number(b.axes[j].key, res.best[b.axes[j].key]) for j in g)
         views.append(_View([b.axes[j].key for j in g], [b.axes[j].centres for j in g],
                            [b.axes[j].log for j in g], Z, cat, best, note,
                            contours=res.kind == "grid",

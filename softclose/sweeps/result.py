@@ -132,10 +132,15 @@ class SweepResult(Displayed):
         metrics, ``objective``, ``feasible``, ``status``, ``reason``; sorted by id."""
         import pandas as pd
         names = column_names(self.keys)
+        from .store import as_words
         if self.columns is None:
             df = pd.read_parquet(self.dataset)
-            return df[names].sort_values("id", kind="stable").reset_index(drop=True)
-        return pd.DataFrame({k: np.asarray(self.columns[k]) for k in names})
+            df = df[names].sort_values("id", kind="stable").reset_index(drop=True)
+            for k, v in as_words({k: df[k].to_numpy() for k in self.keys}, self.keys).items():
+                df[k] = v
+            return df
+        cols = as_words(self.columns, self.keys)
+        return pd.DataFrame({k: np.asarray(cols[k]) for k in names})
 
     def to_json(self) -> dict:
         """The summary: counts, reasons, the best feasible design, timings."""

@@ -43,7 +43,8 @@ def readonly(a) -> np.ndarray:
 def check_key(key: str, option: str) -> str:
     """``key`` if it is a numeric config key (see :func:`softclose.config.numeric_keys`)."""
     from ..config import numeric_keys
-    known = numeric_keys()
+    from ..problem import WORD_PARAMS
+    known = numeric_keys() + list(WORD_PARAMS)
     if key not in known:
         stem = key.split(".")[-1].split("[")[0]
         close = [k for k in known if stem and stem in k]
@@ -56,6 +57,14 @@ def check_key(key: str, option: str) -> str:
 def check_values(cfg, key: str, values, option: str) -> None:
     """Refuse values the config itself refuses (its smallest and largest are tried)."""
     if cfg is None:
+        return
+    from ..problem import WORD_PARAMS
+    if key in WORD_PARAMS:          # every word is tried (there are two or three)
+        for c in np.unique(values):
+            try:
+                cfg.update({key: WORD_PARAMS[key].word(float(c))})
+            except ConfigError as exc:
+                raise ConfigError(f"{option}: {str(exc).splitlines()[0]}") from None
         return
     for v in (float(np.min(values)), float(np.max(values))):
         try:
@@ -99,7 +108,9 @@ class Grid:
                                          for k, v, g in zip(self.keys, self.values, logs)]}
 
     def describe(self) -> list[str]:
-        return [f"{k} ({len(v)} values, {v.min():.6g} .. {v.max():.6g}"
+        from ..problem import WORD_PARAMS, word_text
+        return [f"{k} ({', '.join(word_text(k, x) for x in v)})" if k in WORD_PARAMS else
+                f"{k} ({len(v)} values, {v.min():.6g} .. {v.max():.6g}"
                 f"{', log' if g else ''})"
                 for k, v, g in zip(self.keys, self.values, self.log or (False,) * len(self.keys))]
 
@@ -113,8 +124,13 @@ def make_grid(axes: dict, cfg=None, option: str = "axes") -> Grid:
     for key, vals in axes.items():
         check_key(key, f"{option} {key}")
         try:
-            v = np.asarray(vals, float).ravel() if np.ndim(vals) <= 1 else None
-        except (TypeError, ValueError):
+            v = _codes(key, vals) if _is_word_key(key) else \
+                np.asarray(vals, float).ravel() if np.ndim(vals) <= 1 else None
+        except ValueError as exc:
+            if _is_word_key(key):
+                raise ConfigError(f"{option} {key}: {exc}") from None
+            v = None
+        except TypeError:
             v = None
         if v is None:
             raise ConfigError(f"{option} {key}: expected a 1-D sequence of numbers")
@@ -127,12 +143,53 @@ def make_grid(axes: dict, cfg=None, option: str = "axes") -> Grid:
         check_values(cfg, key, v, f"{option} {key}")
         keys.append(key)
         values.append(readonly(v))
-        log.append(_geometric(v))
+        log.append(_geometric(v) and not _is_word_key(key))
     grid = Grid(tuple(keys), tuple(values), tuple(log))
     if grid.n > MAX_DESIGNS:
         raise ConfigError(f"{option}: {grid.n} designs is more than {MAX_DESIGNS}; "
                           "use fewer values or --sample")
     return grid
+
+
+def _is_word_key(key: str) -> bool:
+    from ..problem import WORD_PARAMS
+    return key in WORD_PARAMS
+
+
+def _codes(key: str, words) -> np.ndarray:
+    """The numbers p holds for a word key's values (words, or the numbers themselves)."""
+    from ..problem import word_code
+    if isinstance(words, (str, bool)):
+        words = [words]
+    out = []
+    for w in words:
+        if isinstance(w, (int, float, np.number)) and not isinstance(w, bool):
+            from ..problem import WORD_PARAMS
+            if float(w) not in WORD_PARAMS[key].codes.values():
+                word_code(key, w)             # refused, naming the words
+            out.append(float(w))
+        else:
+            out.append(word_code(key, w))
+    return np.array(out, float)
+
+
+def _parse_words(key: str, rhs: str, spec: str, option: str) -> np.ndarray:
+    """A word key's values: ``[compression, extension]``, ``compression,extension`` or a
+    TOML array of strings (or booleans)."""
+    text = rhs.strip()
+    if text.startswith("[") and text.endswith("]"):
+        text = text[1:-1]
+    words = [w.strip().strip("'\"") for w in text.split(",")]
+    if not words or not all(words):
+        raise ConfigError(f"{option} {spec!r}: expected {key}=WORD,WORD,... or "
+                          f"{key}=[WORD, ...]")
+    try:
+        v = _codes(key, words)
+    except ValueError as exc:
+        raise ConfigError(f"{option} {spec!r}: {exc}") from None
+    if len(np.unique(v)) != len(v):
+        raise ConfigError(f"{option} {spec!r}: a value is repeated")
+    return v
 
 
 def _geometric(v: np.ndarray) -> bool:
@@ -168,7 +225,9 @@ def parse_grid_spec(spec: str, cfg=None) -> tuple[str, np.ndarray, bool]:
     key, rhs = (s.strip() for s in spec.split("=", 1))
     check_key(key, f"{option} {spec!r}")
     log = False
-    if rhs.startswith("["):
+    if _is_word_key(key):
+        v = _parse_words(key, rhs, spec, option)
+    elif rhs.startswith("["):
         try:
             vals = tomllib.loads(f"v = {rhs}")["v"]
         except tomllib.TOMLDecodeError:
@@ -323,6 +382,7 @@ def make_range(key: str, lo, hi, log: bool = False, cfg=None, where: str | None 
     """A validated :class:`Range`; ``where`` starts every error message (default the key)."""
     where = where or f"ranges {key}"
     check_key(key, where)
+    _no_range(key, where)
     try:
         lo, hi = float(lo), float(hi)
     except (TypeError, ValueError):
@@ -338,6 +398,14 @@ def make_range(key: str, lo, hi, log: bool = False, cfg=None, where: str | None 
     return Range(key, lo, hi, bool(log))
 
 
+def _no_range(key: str, where: str) -> None:
+    if _is_word_key(key):
+        from ..problem import WORD_PARAMS, word_text
+        words = ",".join(word_text(key, c) for c in WORD_PARAMS[key].codes.values())
+        raise ConfigError(f"{where}: {key} takes words, not a range: sweep it on a grid "
+                          f"(--grid {key}={words})")
+
+
 def parse_range(spec: str, cfg=None) -> Range:
     """``KEY=LO:HI`` or ``KEY=LO:HI:log`` -> :class:`Range`."""
     option = "--range"
@@ -347,6 +415,7 @@ def parse_range(spec: str, cfg=None) -> Range:
                           "design.damper_c=100:4000")
     key, a, b, mode = m.groups()
     check_key(key, f"{option} {spec!r}")
+    _no_range(key, f"{option} {spec!r}")
     if mode not in (None, "log"):
         raise ConfigError(f"{option} {spec!r}: the third field may only be 'log', got {mode!r}")
     lo = _number(a, "LO", spec, option)

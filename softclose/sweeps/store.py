@@ -122,20 +122,26 @@ def differences(old: dict, new: dict) -> list[str]:
 
 
 # -- Arrow tables ----------------------------------------------------------------------------
-def _schema(keys):
+def _schema(keys, words: bool = False):
+    """The table's Arrow schema; ``words``: a word key's column (a spring's kind) as its
+    words (CSV), not the numbers p holds (Parquet, memory)."""
     import pyarrow as pa
-    from ..problem import METRIC_KEYS
-    fields = [pa.field("id", pa.int64())] + [pa.field(k, pa.float64()) for k in keys]
+    from ..problem import METRIC_KEYS, WORD_PARAMS
+    fields = [pa.field("id", pa.int64())] + [
+        pa.field(k, pa.string() if words and k in WORD_PARAMS else pa.float64()) for k in keys]
     fields += [pa.field(k, pa.bool_() if k == "closed" else pa.float64()) for k in METRIC_KEYS]
     fields += [pa.field("objective", pa.float64()), pa.field("feasible", pa.bool_()),
                pa.field("status", pa.string()), pa.field("reason", pa.string())]
     return pa.schema(fields)
 
 
-def arrow_table(cols: dict, keys, nulls: bool = False):
-    """The chunk ``cols`` as a pyarrow Table (``nulls``: NaN as null, for CSV)."""
+def arrow_table(cols: dict, keys, nulls: bool = False, words: bool = False):
+    """The chunk ``cols`` as a pyarrow Table (``nulls``: NaN as null, for CSV; ``words``: word
+    keys as words)."""
     import pyarrow as pa
-    schema = _schema(keys)
+    schema = _schema(keys, words)
+    if words:
+        cols = as_words(cols, keys)
     arrays = [_arrow(np.asarray(cols[f.name]), f.type, nulls) for f in schema]
     return pa.Table.from_arrays(arrays, schema=schema)
 
@@ -178,13 +184,36 @@ def _numpy(table) -> dict[str, np.ndarray]:
     return out
 
 
+def as_words(cols: dict, keys) -> dict:
+    """``cols`` with each word key's numbers (p's codes) as its words."""
+    from ..problem import WORD_PARAMS, word_text
+    coded = [k for k in keys if k in WORD_PARAMS]
+    if not coded:
+        return cols
+    out = dict(cols)
+    for k in coded:
+        x = np.asarray(cols[k], float)
+        out[k] = np.array(["" if np.isnan(v) else word_text(k, v) for v in x], dtype=object)
+    return out
+
+
+def as_codes(cols: dict, keys) -> dict:
+    """The inverse of :func:`as_words`."""
+    from ..problem import WORD_PARAMS, word_code
+    out = dict(cols)
+    for k in keys:
+        if k in WORD_PARAMS:
+            out[k] = np.array([word_code(k, w) if w else np.nan for w in cols[k]], float)
+    return out
+
+
 # -- CSV ---------------------------------------------------------------------------------------
 def write_csv(cols: dict, keys, path: Path) -> Path:
     """``sweep.csv`` column-wise (pyarrow), via a temporary file renamed into place."""
     import pyarrow.csv as pcsv
     path = Path(path)
     tmp = path.with_name(f".{path.name}.tmp")
-    pcsv.write_csv(arrow_table(cols, keys, nulls=True), tmp,
+    pcsv.write_csv(arrow_table(cols, keys, nulls=True, words=True), tmp,
                    pcsv.WriteOptions(quoting_style="needed"))
     os.replace(tmp, path)
     return path
@@ -198,7 +227,7 @@ def read_csv(path: Path, keys=None) -> dict[str, np.ndarray]:
     with open(path) as fh:
         header = [h.strip().strip('"') for h in fh.readline().rstrip("\n").split(",")]
     keys = keys if keys is not None else header[1:header.index("closed")]
-    schema = _schema(keys)
+    schema = _schema(keys, words=True)
     types = {f.name: f.type for f in schema}
     conv = pcsv.ConvertOptions(column_types=types, strings_can_be_null=False,
                                true_values=["true"], false_values=["false"])
@@ -208,7 +237,10 @@ def read_csv(path: Path, keys=None) -> dict[str, np.ndarray]:
         raise ConfigError(f"{path}: not a sweep table ({str(exc).splitlines()[0]})") from None
     if t.column_names != columns(keys):
         raise ConfigError(f"{path}: its columns are not those of this sweep")
-    return _numpy(t)
+    try:
+        return as_codes(_numpy(t), keys)
+    except ValueError as exc:
+        raise ConfigError(f"{path}: {exc}") from None
 
 
 def chunks_of(cols: dict, n: int, chunk: int) -> Iterator[tuple[int, dict]]:

@@ -61,9 +61,14 @@ class Tally:
 def row_of(cols: dict, i: int, keys) -> dict:
     """Row ``i`` of a chunk as plain values (NaN -> None)."""
     from ..jsonio import jsonable
+    from ..problem import WORD_PARAMS, word_text
     from .chunks import columns
-    return {k: jsonable(cols[k][i].item() if hasattr(cols[k][i], "item") else cols[k][i])
-            for k in columns(keys)}
+    row = {k: jsonable(cols[k][i].item() if hasattr(cols[k][i], "item") else cols[k][i])
+           for k in columns(keys)}
+    for k in keys:                       # a word key (a spring's kind) by its word
+        if k in WORD_PARAMS and row[k] is not None:
+            row[k] = word_text(k, row[k])
+    return row
 
 
 class Axis:
