@@ -8,6 +8,7 @@ corrects the best answer (:mod:`.polish`), re-simulates it with the adaptive ref
 
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import replace
 
@@ -20,6 +21,7 @@ from ..progress import Progress
 from .cache import get_nlp, has_nlp, stroke_simulator
 from ..parts import spring_part
 from .diagnose import diagnose
+from . import sidebyside
 from .kinds import kind_config
 from .nlp import J_INDEX, Discretisation, Run, ShootingNLP, check_options, discretisation
 from .polish import nlp_objective, refine, tighten
@@ -228,20 +230,65 @@ def optimise(cfg, *, starts: int | None = None, verify: bool = True,
     is listed in ``kinds`` with why.
     """
     t_start = time.perf_counter()
-    rows, results, pending = [], [], []
+    rows, results, pending, todo = [], [], [], []
     for kind in cfg.optimise.spring_kinds:
         c, why = kind_config(cfg, kind)
         if why is not None:
             rows.append({"kind": kind, "success": False, "objective": None, "message": why})
             continue
-        # every kind is solved (multistart); the polish and the reference's verification,
-        # which cost as much, go to the best kind first (then the next, should it fail)
-        r, later = optimise_kind(c, starts=starts, verify=verify, progress=progress,
-                                 nodes=nodes, substeps=substeps, defer=True)
-        rows.append({"kind": kind, "success": r.success, "objective": r.objective,
-                     "message": r.message, "verified": False})
-        results.append((kind, r))
-        pending.append(later)
+        rows.append({"kind": kind})
+        todo.append((kind, c))
+    # every kind is solved (multistart): the kinds after the first side by side with it in
+    # forked processes where that is safe (.sidebyside: the same numbers); the polish and the
+    # reference's verification, which cost as much, go to the best kind first (then the
+    # next, should it fail)
+    solve = functools.partial(optimise_kind, starts=starts, verify=verify, nodes=nodes,
+                              substeps=substeps, defer=True)
+    children = {}
+    try:
+        if sidebyside.available(len(todo)):
+            disc = discretisation(todo[0][1], nodes, substeps)
+            get_nlp(todo[0][1], disc.nodes, disc.substeps)       # loaded once, inherited
+            children = {kind: sidebyside.KindProcess(functools.partial(solve, c, progress=False))
+                        for kind, c in todo[1:]}
+        for kind, c in todo:
+            r, later = _kind_answer(children.get(kind), solve, c, progress)
+            row = next(row for row in rows if row["kind"] == kind)
+            row.update({"success": r.success, "objective": r.objective,
+                        "message": r.message, "verified": False})
+            results.append((kind, r))
+            pending.append(later)
+        return _best_kind(cfg, rows, results, pending, verify, t_start)
+    except BaseException:       # Ctrl-C, an error: the kinds' processes end at once
+        for child in children.values():
+            child.close(wait=0.0)
+        raise
+    finally:
+        for child in children.values():
+            child.close()
+
+
+def _kind_answer(child, solve, c, progress):
+    """(a kind's unpolished result, how to finish it): from its side-by-side process, or
+    solved here (also when that process failed: its kind is solved here after all)."""
+    if child is not None:
+        try:
+            r = child.raw()
+
+            def later():
+                try:
+                    return child.finish()
+                except (EOFError, OSError):
+                    r2, again = solve(c, progress=progress)
+                    return again() if again is not None else r2
+            return r, later
+        except (EOFError, OSError):
+            pass
+    return solve(c, progress=progress)
+
+
+def _best_kind(cfg, rows, results, pending, verify, t_start) -> OptimiseResult:
+    """The kinds' answers to the result: the best polished and verified first."""
     order = sorted(range(len(results)), key=lambda i: (
         results[i][1].objective if results[i][1].success else np.inf))
     row_of = {row["kind"]: row for row in rows}
