@@ -40,12 +40,17 @@ def with_values(cfg: Config, values: dict[str, float]) -> Config:
 
 
 def simulator(cfg: Config, t_end: float | None = None):
-    """The fixed-step simulator of cfg's model (cached per geometry, mass, stroke, method);
+    """The fixed-step simulator of cfg's model (cached per geometry, mass, stroke, method,
+    element choices and spring limits);
     strokes are cut at ``t_end`` when it is below stroke.t_max."""
     from ..simulate import Simulator
     if t_end is not None and t_end < cfg.stroke.t_max:
         cfg = cfg.replace(stroke={"t_max": float(t_end)})
-    key = (cfg.geometry, cfg.mass, cfg.stroke, cfg.simulate)
+    from .. import elements
+    # the element choices (a rotary damper's pivot) and the spring's length limits are the
+    # simulator's too: its table and its range check read them
+    key = (cfg.geometry, cfg.mass, cfg.stroke, cfg.simulate, elements.structure(cfg),
+           cfg.design.spring_min_length, cfg.design.spring_max_length)
     if key not in _SIMS:
         if len(_SIMS) > 32:
             _SIMS.clear()
