@@ -5,13 +5,13 @@
   and column;
 - :mod:`.screen` -- every pair over its own tolerance box in the C kernel;
 - :mod:`.verify` -- the adaptive reference at every corner of the best pairs' boxes;
-- :mod:`.select` -- the procedure (:func:`select`); :mod:`.result` -- :class:`SelectResult`.
+- :mod:`.ranking` -- the procedure (:func:`select`); :mod:`.result` -- :class:`SelectResult`.
 """
 
 from .parts import (Catalog, DamperEntry, SpringEntry, read_dampers, read_springs,
                     standard_free_length_tolerance)
 from .result import SelectResult
-from .select import select
+from .ranking import select
 
 __all__ = ["select", "SelectResult", "read_springs", "read_dampers", "Catalog",
            "SpringEntry", "DamperEntry", "standard_free_length_tolerance"]

@@ -13,9 +13,9 @@ import contextlib
 
 
 def _select_task(cfg_dict: dict, box, a: int, chunk: list):
-    """One chunk of pairs on a worker: :func:`softclose.catalog.select.screen_chunk`."""
+    """One chunk of pairs on a worker: :func:`softclose.catalog.ranking.screen_chunk`."""
     from ..config.load import from_dict
-    from .select import screen_chunk
+    from .ranking import screen_chunk
     return screen_chunk(from_dict(cfg_dict), box, a, chunk)
 
 

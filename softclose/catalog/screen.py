@@ -161,7 +161,7 @@ def run_pairs(cfg: Config, box: PairBox, pairs: list) -> dict:
         for i in idx:
             keys, x = pair_rows(box, *pairs[i])
             X.append(x)
-        cols = evaluate(c, keys, np.vstack(X))
+        cols = evaluate(c, keys, np.vstack(X), explain=False)
         if out is None:
             out = {k: np.empty((len(pairs) * n,) + np.shape(v)[1:], np.asarray(v).dtype)
                    for k, v in cols.items()}
@@ -218,41 +218,58 @@ def summarise(box: PairBox, cols: dict, npairs: int) -> dict:
             "nominal": nominal}
 
 
-def reason_text(cfg, box: PairBox, cols: dict, p: int, row: int, reason: str, spring,
-                damper) -> str:
-    """One line: why pair ``p`` fails at its row ``row`` (a point of its box)."""
-    n = box.points
-    r = p * n + row
-    where = "nominal" if row == box.corners else box.label(box.Z[row], spring, damper)
-    what = {"corner": "at the corner", "sample": "at the sample"}[
-        "corner" if row < box.corners else "sample"] if row != box.corners else "at"
+def reason_text(box: PairBox, cols: dict, p: int, row: int, reason: str, spring, damper,
+                range_text: str = "") -> str:
+    """One line: why pair ``p`` fails at its row ``row`` (a point of its box);
+    ``range_text``: where the spring leaves its valid range there (:func:`range_texts`)."""
+    r = p * box.points + row
+    if row == box.corners:
+        what = "at the nominal point"
+    else:
+        what = ("at the corner " if row < box.corners else "at the sample ") \
+            + box.label(box.Z[row], spring, damper)
     if reason in ("too slow", "too fast"):
-        return f"{reason}: closes in {cols['closing_time'][r]:.4g} s {what} {where}"
+        return f"{reason}: closes in {cols['closing_time'][r]:.4g} s {what}"
     if reason == "not held shut":
-        return (f"not held shut: holding moment {cols['holding_moment'][r]:.4g} N m {what} "
-                f"{where}")
+        return f"not held shut: holding moment {cols['holding_moment'][r]:.4g} N m {what}"
     if reason == "too heavy to open":
-        return f"too heavy to open: {cols['opening_force'][r]:.4g} N {what} {where}"
+        return f"too heavy to open: {cols['opening_force'][r]:.4g} N {what}"
     if reason == RANGE:
-        return f"{range_text(cfg, box, spring, damper, row)} ({what} {where})"
-    return f"{reason} {what} {where}"
+        return f"{range_text or RANGE} ({what})"
+    return f"{reason} {what}"
 
 
-def range_text(cfg, box: PairBox, spring, damper, row: int) -> str:
-    """Where the spring leaves its valid range at one point of the pair's box (the kernel's
-    stroke there, :func:`softclose.statics.out_of_range`)."""
-    keys, X = pair_rows(box, spring, damper)
-    x = X[row:row + 1]
-    c = pivot_config(cfg, damper)
-    slow = slow_keys(keys)
-    if slow:
-        c = c.update({k: float(x[0, keys.index(k)]) for k in slow})
-    sim = simulator(c)
+def range_texts(cfg, box: PairBox, items: list) -> list[str]:
+    """Where the spring leaves its valid range, for each ``(spring, damper, row)`` of
+    ``items`` (the kernel's stroke at that point of the pair's box,
+    :func:`softclose.statics.out_of_range`, which names the angle); one batch per pivot and
+    part limits."""
     from ..problem import LID_MASS, param_rows
-    P = param_rows(c, 1, keys, x)
-    m = float(x[0, keys.index(LID_MASS)]) if LID_MASS in keys else None
-    res = sim.run_batch(P, lid_mass=m)
-    _, why = statics.out_of_range(statics.table_coordinate(sim.table),
-                                  limits_view(c, spring.min_length, spring.max_length), P,
-                                  res)
-    return str(why[0]) if why[0] else RANGE
+    out = [RANGE] * len(items)
+    groups: dict = {}
+    for n, (s, d, _) in enumerate(items):
+        key = (d.pivot if d.kind == "rotary" else None, s.min_length, s.max_length)
+        groups.setdefault(key, []).append(n)
+    for (_, lo, hi), idx in groups.items():
+        c0 = pivot_config(cfg, items[idx[0]][1])
+        rows, keys = [], None
+        for n in idx:
+            s, d, row = items[n]
+            keys, X = pair_rows(box, s, d)
+            rows.append(X[row])
+        X = np.array(rows)
+        slow = slow_keys(keys)
+        batches = [(c0, np.arange(len(idx)))] if not slow else [
+            (c0.update({k: float(X[j, keys.index(k)]) for k in slow}), np.array([j]))
+            for j in range(len(idx))]
+        for c, js in batches:
+            P = param_rows(c, len(js), keys, X[js])
+            m = X[js, keys.index(LID_MASS)] if LID_MASS in keys else None
+            sim = simulator(c)
+            res = sim.run_batch(P, lid_mass=m)
+            _, why = statics.out_of_range(statics.table_coordinate(sim.table),
+                                          limits_view(c, lo, hi), P, res)
+            for j, w in zip(js, why):
+                if w:
+                    out[idx[j]] = str(w)
+    return out

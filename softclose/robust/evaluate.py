@@ -59,12 +59,14 @@ def simulator(cfg: Config, t_end: float | None = None):
 
 
 def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
-             threads: int | None = None) -> dict:
+             threads: int | None = None, explain: bool = True) -> dict:
     """Metric columns of the strokes of ``cfg`` with the keys set to the rows of ``X``.
 
     ``keys`` are numeric config keys, ``X`` (n, len(keys)) their values (absolute).
     ``t_end`` cuts the strokes early (anything slower is infeasible anyway: the
-    closing-time window ends before it). Returns a dict of arrays (see ``COLUMNS``).
+    closing-time window ends before it); ``explain=False`` skips locating where a spring
+    leaves its valid range (:meth:`softclose.simulate.Simulator.run_batch`). Returns a dict
+    of arrays (see ``COLUMNS``).
     """
     keys = list(keys)
     X = np.atleast_2d(np.asarray(X, float)).reshape(-1, len(keys))
@@ -96,7 +98,8 @@ def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
             where = ", ".join(f"{k} = {v:g}" for k, v in vals.items())
             raise type(exc)(f"tolerance box: at {where} {str(exc).splitlines()[0]}") from None
         out = sim.run_batch(P[rows], threads=threads,
-                            lid_mass=None if masses is None else masses[rows])
+                            lid_mass=None if masses is None else masses[rows],
+                            explain=explain)
         out["opening_force"] = sim.opening_forces(P[rows],
                                                   None if masses is None else masses[rows])
         status = np.asarray(out["status"], int)

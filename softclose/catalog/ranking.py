@@ -27,7 +27,7 @@ from ..errors import ConfigError
 from ..progress import Progress
 from .parts import Catalog, DamperEntry, as_catalog, read_dampers, read_springs
 from .result import SelectResult, pair_entry
-from .screen import PairBox, pair_box, reason_text, run_pairs, summarise
+from .screen import RANGE, PairBox, pair_box, range_texts, reason_text, run_pairs, summarise
 
 #: rows of the kernel per chunk of pairs (a chunk is the unit of progress and of Ctrl-C)
 CHUNK_ROWS = 40_000
@@ -206,11 +206,14 @@ def screen_chunk(cfg: Config, box: PairBox, a: int, chunk: list) -> tuple[int, l
     cols = run_pairs(cfg, box, chunk)
     sm = summarise(box, cols, len(chunk))
     n, nc = box.points, box.corners
+    rng = [p for p, r in enumerate(sm["reason"]) if r == RANGE]
+    where = dict(zip(rng, range_texts(cfg, box, [(*chunk[p], sm["fail_row"][p])
+                                                  for p in rng]))) if rng else {}
     out = []
     for p, (s, d) in enumerate(chunk):
         reason = sm["reason"][p]
-        text = "" if not reason else reason_text(cfg, box, cols, p, sm["fail_row"][p], reason,
-                                                 s, d)
+        text = "" if not reason else reason_text(box, cols, p, sm["fail_row"][p], reason,
+                                                 s, d, where.get(p, ""))
         e = pair_entry(s, d, bool(sm["corners_ok"][p]), float(sm["yield"][p]),
                        float(sm["worst_objective"][p]), text,
                        int(sm["corner_count"][p]), nc,
