@@ -149,7 +149,26 @@ def later_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
         rows.append(not_measured("sobol_1024", what_s, note))
     else:
         timed("sobol_1024", what_s, lambda: sens(at, samples=1024), rep, note=note)
+    _select_row(cfg, timed, rows)
     return rows
+
+
+def _select_row(cfg: Config, timed, rows: list) -> None:
+    """``select``: 1,000 spring x damper pairs of the illustrative catalog (its first 100
+    springs x its first 10 dampers), each over its own tolerance box at 16 corners and 256
+    samples, ranked, the best 10 verified at every corner by the adaptive reference."""
+    from ..catalog import select
+    from ..catalog.illustrative import dampers, springs
+    s, d = springs()[:100], dampers()[:10]
+    select(cfg, s[:2], d[:2], samples=16, verify=0)     # warm-up: its tables built
+    res = timed("select_1000", "select(cfg, springs, dampers): 1,000 catalog pairs (100 "
+                "springs x 10 dampers) over their tolerance boxes, top 10 verified",
+                lambda: select(cfg, s, d), 1, count=1000, unit="pairs")
+    if res is not None:
+        t = res.times
+        rows[-1]["note"] = (f"screen {t.get('screen', 0):.2f} s (16 corners + nominal + 256 samples a "
+                f"pair: {res.evaluated * 273:,} strokes), reference at the best "
+                f"{res.verified_count} pairs' 16 corners {t.get('verify', 0):.2f} s")
 
 
 def _cli_sweep_rows(cfg: Config, rows: list, n_grid: int, timed, repeats: int) -> None:

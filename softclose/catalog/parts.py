@@ -89,7 +89,7 @@ class SpringEntry:
     max_length: float | None
     rate_tolerance: float
     free_length_tolerance: float
-    line: int = 0
+    line: int = field(default=0, compare=False)
 
     @property
     def spring_kind(self) -> str:
@@ -118,7 +118,7 @@ class DamperEntry:
     c: float
     pivot: str | None
     c_tolerance: float
-    line: int = 0
+    line: int = field(default=0, compare=False)
 
     def design(self) -> dict:
         """The [design] values of this damper: it replaces the config's dashpot and rotary
