@@ -22,7 +22,7 @@ import time
 
 import numpy as np
 
-from ..config import Config
+from ..config import Config, check_batch
 from ..errors import ConfigError
 from ..progress import Progress
 from .parts import Catalog, DamperEntry, as_catalog, read_dampers, read_springs
@@ -109,6 +109,10 @@ def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: 
     spr: Catalog = as_catalog(springs, read_springs)
     dmp: Catalog | None = as_catalog(dampers, read_dampers)
     box = pair_box(cfg, samples, seed)
+    n_pairs = len(spr) * (len(dmp) if dmp is not None else 1)
+    check_batch(cfg, n_pairs * box.points + (0 if dmp is not None else
+                                             len(spr) * (C_GRID + C_FINE + 1) * box.corners),
+                "select: the pairs' strokes")
     warnings = list(spr.warnings) + (list(dmp.warnings) if dmp is not None else [])
     times = {}
     interrupted = False
