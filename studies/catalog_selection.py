@@ -69,7 +69,7 @@ def draw(sel, own, path: Path) -> Path:
         ax.scatter([e["worst_objective"]], [100 * e["yield"]], s=120, marker="D",
                    facecolors="none", edgecolors="k", zorder=6,
                    label="robust optimum as a part (free length ± standard grade)")
-        ax.legend(fontsize=8, loc="lower right")
+        ax.legend(fontsize=8, loc="center right")
     return save(fig, path)
 
 

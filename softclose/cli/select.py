@@ -25,8 +25,17 @@ spring's rate and free length, the damper's c, as the catalog gives them; [toler
 the other keys, e.g. the lid's mass), in the C kernel at every corner and on Monte Carlo
 samples. Rank: meets every constraint at every corner first, then yield, then worst-case
 J. The best --verify pairs are re-simulated at every corner by the adaptive reference.
-Catalog columns (SI, or mm and N/mm named so in the header): `softclose docs keys` and
-README "Parts from a catalog"; examples/catalogs/ has an illustrative catalog."""
+
+Spring columns: part, kind (extension | compression | gas_strut), rate_N_per_m,
+free_length_m, preload_N, min_length_m, max_length_m (empty: no limit), rate_tolerance
+(relative), optional free_length_tolerance_m (default: the standard grade, ±0.9 mm up to
+63 mm, ±1.3 mm up to 100 mm, ±1.5 % beyond); the lengths and rate may be given in mm and
+N/mm instead (free_length_mm, rate_N_per_mm, ...). Damper columns: part, kind (dashpot |
+rotary), c (N s/m, or N m s/rad for a rotary damper), pivot (rotary: O, B, A, C or lid),
+c_tolerance (relative). A gas strut is a compression spring whose preload is its force at
+full extension and whose rate is its progression. Rows that cannot be used are reported by
+line and column and left out. An illustrative catalog (not real parts):
+`python -m softclose.catalog.illustrative DIR`."""
 
 
 def register(sub) -> None:

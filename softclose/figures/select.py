@@ -36,7 +36,7 @@ def plot_select(result, title: str | None = None):
     ax.set_xlabel("worst-case J over the tolerance box [-]")
     ax.set_ylabel("yield [%]")
     ax.set_ylim(-3, 103)
-    ax.legend(fontsize=8, loc="lower right")
+    ax.legend(fontsize=8, loc="center right")
     ax.set_title(title or f"{result.evaluated} catalog pairs, each over its own tolerance box "
                  f"({result.samples} samples)", fontsize=10)
     fig.tight_layout()
