@@ -304,3 +304,25 @@ def test_ctrl_c_keeps_the_pairs_screened(tmp_path, monkeypatch):
     assert all(e["verified"] is None for e in r.ranking)
     keys = [(not e["feasible"], -e["yield"]) for e in r.ranking]
     assert keys == sorted(keys)
+
+
+def test_dask_local_ranks_as_the_local_run(tmp_path, monkeypatch):
+    """``--dask local:2``: the chunks of pairs screened on two worker processes (arriving in
+    any order) give the local run's ranking, number for number."""
+    pytest.importorskip("distributed")
+    import softclose.catalog.ranking as S
+    monkeypatch.setattr(S, "CHUNK_ROWS", 6 * 25)        # 6 chunks of 6 pairs
+    s = _write(tmp_path, "s.csv", SPRINGS)
+    dm = _write(tmp_path, "d.csv", DAMPERS)
+    cfgfile = _write(tmp_path, "cfg.toml", "[tolerance]\n\"mass.lid\" = 0.0\n")
+    argv = ["select", "--springs", str(s), "--dampers", str(dm), "--config", str(cfgfile),
+            "--samples", "16", "--verify", "0", "--json"]
+    code_a, out_a = _run(*argv)
+    code_b, out_b = _run(*argv, "--dask", "local:2")
+    assert code_a == code_b == 0
+    a, b = json.loads(out_a)["ranking"], json.loads(out_b)["ranking"]
+    assert len(a) == len(b) == 36
+    for x, y in zip(a, b):
+        for k in ("spring", "damper", "feasible", "yield", "worst_objective", "reason",
+                  "corners_feasible"):
+            assert x[k] == y[k], k
