@@ -10,7 +10,9 @@ The procedure, step by step:
    nominal point and on the same Monte Carlo samples, in the C kernel, chunk by chunk.
 3. **Rank**: meets every constraint at every corner first, then yield (the share of samples
    that meet every constraint), then worst-case J (over corners and samples), lower first.
-4. **Verify** (:mod:`.verify`): the best ``verify`` pairs at every corner by the adaptive
+4. **Re-solve** (no damper catalog): the best pairs' c by the robust NLP with the spring
+   fixed (:mod:`.nlp`); the pair keeps the NLP's c when it then ranks better.
+5. **Verify** (:mod:`.verify`): the best ``verify`` pairs at every corner by the adaptive
    reference. Where the reference's verdict differs from the kernel's, the reference's
    stands, the pairs are ranked again and the new best ones verified in turn.
 """
@@ -88,14 +90,17 @@ def _rank_key(e: dict):
 
 
 def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: int = 0,
-           verify: int = VERIFY, progress: bool = False, mapper=None) -> SelectResult:
+           verify: int = VERIFY, progress: bool = False, mapper=None,
+           nlp: bool = True) -> SelectResult:
     """Rank every spring (x damper) of the catalogs by how the lid closes with it, each
     over its own tolerance box and ``[tolerance]`` for the other keys (module docstring).
 
     ``springs``, ``dampers``: catalog files (:mod:`softclose.catalog.parts`), read
     :class:`Catalog` objects or lists of entries; ``dampers=None`` chooses the dashpot's c
     per spring. ``samples``: Monte Carlo samples per pair; ``verify``: how many of the best
-    pairs the adaptive reference checks at every corner. ``mapper``: run chunks elsewhere
+    pairs the adaptive reference checks at every corner; ``nlp`` (without dampers): those
+    pairs' c re-solved first by the robust NLP (:mod:`.nlp`; kept when it ranks better than
+    the grid's). ``mapper``: run chunks elsewhere
     (``softclose.catalog.distributed``). Ctrl-C between chunks keeps the pairs screened
     (``result.interrupted``). Returns a :class:`SelectResult`; never raises for a part
     that fails (it is ranked with the reason).
@@ -147,6 +152,13 @@ def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: 
         interrupted = True
     entries = found
     order = sorted(entries, key=lambda i: _rank_key(entries[i]))
+    if dmp is None and nlp and not interrupted and verify:
+        tn = time.perf_counter()
+        try:
+            order = _resolve_c(cfg, box, pairs, entries, kernel, order, verify)
+        except KeyboardInterrupt:
+            interrupted = True
+        times["nlp"] = time.perf_counter() - tn
     tv = time.perf_counter()
     checked: dict = {}
     if not interrupted and verify:
@@ -202,6 +214,29 @@ def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: 
         warnings=tuple(warnings), samples=samples, seed=seed, corners=box.corners,
         box=_box_json(box), continuous=dmp is None, verified_count=len(checked),
         times=times, springs=spr.path, dampers=None if dmp is None else dmp.path)
+
+
+def _resolve_c(cfg, box, pairs, entries, kernel, order, n) -> list:
+    """The best ``n`` springs' c re-solved by the robust NLP (:mod:`.nlp`); the pair is
+    screened again with the NLP's c and keeps whichever c ranks better. Returns the new
+    order."""
+    from dataclasses import replace
+    from .nlp import solve_c
+    for i in order[:n]:
+        s, d = pairs[i]
+        info = solve_c(cfg, s, d)
+        info["c_grid"] = d.c
+        kept = "grid"
+        if info["c"] is not None and info["c"] != d.c:
+            d2 = replace(d, c=info["c"])
+            _, rows = screen_chunk(cfg, box, i, [(s, d2)])
+            e2, corners2 = rows[0]
+            if _rank_key(e2) < _rank_key(entries[i]):
+                entries[i], kernel[i], pairs[i] = e2, corners2, (s, d2)
+                kept = "nlp"
+        info["kept"] = kept
+        entries[i]["nlp"] = info
+    return sorted(entries, key=lambda i: _rank_key(entries[i]))
 
 
 def screen_chunk(cfg: Config, box: PairBox, a: int, chunk: list) -> tuple[int, list]:

@@ -57,6 +57,9 @@ def register(sub) -> None:
     p.add_argument("--verify", type=int, metavar="N", default=10,
                    help="how many of the best pairs the adaptive reference checks at every "
                         "corner (default 10)")
+    p.add_argument("--no-nlp", dest="nlp", action="store_false",
+                   help="without --dampers: keep the c of the kernel's grid (by default the "
+                        "--verify best springs' c is re-solved by the robust NLP)")
     p.add_argument("--dask", metavar="ADDRESS|local:N",
                    help="screen the pairs on a Dask cluster (scheduler address or local:N)")
     p.set_defaults(run=run)
@@ -112,6 +115,13 @@ def format_select(r, top: int = 15) -> str:
                      + (f"; nominal lid closes in {b['nominal']['closing_time']:.4g} s"
                         if b["nominal"].get("closing_time") == b["nominal"].get("closing_time")
                         else ""))
+        if b.get("nlp"):
+            n = b["nlp"]
+            lines.append(f"  its c by the robust NLP (the spring fixed, over its box): "
+                         + (f"{n['c']:.6g} N s/m, worst-scenario J {n['objective']:.6g}"
+                            if n["c"] is not None else f"no solution ({n['message']})")
+                         + f"; the grid's {n['c_grid']:.6g} N s/m; kept the "
+                         + ("NLP's" if n["kept"] == "nlp" else "grid's"))
         ref = b.get("reference")
         if ref:
             lines.append(f"  adaptive reference at its {len(ref['corners'])} corners: "
@@ -138,10 +148,11 @@ def run(cfg, args) -> Outcome:
         from ..catalog.distributed import mapper
         with mapper(args.dask) as m:
             res = select(cfg, springs, dampers, samples=args.samples, seed=args.seed,
-                         verify=args.verify, progress=interactive(args), mapper=m)
+                         verify=args.verify, progress=interactive(args), mapper=m,
+                         nlp=args.nlp)
     else:
         res = select(cfg, springs, dampers, samples=args.samples, seed=args.seed,
-                     verify=args.verify, progress=interactive(args))
+                     verify=args.verify, progress=interactive(args), nlp=args.nlp)
     payload = res.to_json()
     files = []
     if out is not None:
