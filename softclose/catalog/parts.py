@@ -287,7 +287,7 @@ def read_springs(path) -> Catalog:
             parts.append(SpringEntry(part, kind, v["rate"], v["free_length"], v["preload"],
                                      lo, hi, v["rate_tolerance"], flt, line))
         except _Bad as exc:
-            warnings.append(str(exc))
+            warnings.append(f"{exc}; row left out")
     return _finish(path, parts, warnings, "spring")
 
 
@@ -323,7 +323,7 @@ def read_dampers(path) -> Catalog:
                 _check(pivot == "", line, "pivot", "a dashpot has no pivot (leave it empty)")
             parts.append(DamperEntry(part, kind, c, pivot or None, tol, line))
         except _Bad as exc:
-            warnings.append(str(exc))
+            warnings.append(f"{exc}; row left out")
     return _finish(path, parts, warnings, "damper")
 
 

@@ -92,7 +92,7 @@ def format_select(r, top: int = 15) -> str:
         lines.append("  no damper catalog: the dashpot's c chosen per spring within "
                      "optimise.damper_c, made to [tolerance] design.damper_c")
     for w in r.warnings[:10]:
-        lines.append(f"  warning: {w} (row left out)")
+        lines.append(f"  warning: {w}")
     if len(r.warnings) > 10:
         lines.append(f"  ... {len(r.warnings) - 10} more rows left out")
     feas = sum(1 for e in r.ranking if e["feasible"])
