@@ -332,3 +332,32 @@ def test_dask_local_ranks_as_the_local_run(tmp_path, monkeypatch):
         for k in ("spring", "damper", "feasible", "yield", "worst_objective", "reason",
                   "corners_feasible"):
             assert x[k] == y[k], k
+
+
+def test_the_reference_verdict_stands_where_it_differs(tmp_path, monkeypatch):
+    """Where the reference's verdict at a corner differs from the kernel's, the pair takes
+    the reference's and the pairs are ranked again: the next best is then verified too (the
+    reference stood in for here by one that fails the kernel's best pair at one corner)."""
+    import softclose.catalog.verify as V
+    from softclose.catalog import select
+    s = _write(tmp_path, "s.csv", SPRINGS)
+    dm = _write(tmp_path, "d.csv", DAMPERS)
+    plain = select(_cfg(), s, dm, samples=16, verify=0)
+    first = (plain.ranking[0]["spring"], plain.ranking[0]["damper"])
+    real = V.verify_pair
+
+    def verify_pair(cfg, box, spring, damper, F, J):
+        v = real(cfg, box, spring, damper, F, J)
+        if (spring.part, damper.part) == first:
+            v = dict(v, feasible=False, agree=False, differ=[v["corners"][0]["label"]],
+                     reason="too slow (stand-in)")
+        return v
+    monkeypatch.setattr(V, "verify_pair", verify_pair)
+    r = select(_cfg(), s, dm, samples=16, verify=2)
+    demoted = next(e for e in r.ranking if (e["spring"], e["damper"]) == first)
+    assert demoted["verified"] is False and not demoted["feasible"]
+    assert demoted["reason"] == "the reference: too slow (stand-in)"
+    assert demoted["kernel_reason"] == ""
+    assert (r.ranking[0]["spring"], r.ranking[0]["damper"]) != first
+    assert r.ranking[0]["verified"] is True and r.ranking[1]["verified"] is True
+    assert r.success and r.verified_count == 3

@@ -32,9 +32,10 @@ class SelectResult(Displayed):
     """The ranked pairs (``ranking``, best first: feasible at every corner of its box, then
     yield, then worst-case J) and how they were judged.
 
-    ``success``: the best pair meets every constraint at every corner and the reference
-    agrees; ``verified`` of a pair: the adaptive reference's verdict at every corner of its
-    box is the kernel's (None: not checked, outside the best ``verify``).
+    ``success``: the best pair meets every constraint at every corner of its box (by the
+    reference, where it was checked); ``verified`` of a pair: the adaptive reference's
+    verdict at every corner of its box is the kernel's (None: not checked, outside the best
+    ``verify``; False: they differ, and the reference's verdict is the pair's).
     """
 
     success: bool
