@@ -361,3 +361,28 @@ def test_the_reference_verdict_stands_where_it_differs(tmp_path, monkeypatch):
     assert (r.ranking[0]["spring"], r.ranking[0]["damper"]) != first
     assert r.ranking[0]["verified"] is True and r.ranking[1]["verified"] is True
     assert r.success and r.verified_count == 3
+
+
+def test_ctrl_c_on_the_command_line_writes_what_was_ranked(tmp_path, monkeypatch):
+    """Exit 130, and --out holds the pairs screened before the interruption, ranked."""
+    import softclose.catalog.ranking as S
+    calls = {"n": 0}
+    real = S.screen_chunk
+
+    def chunk(*a, **k):
+        calls["n"] += 1
+        if calls["n"] == 2:
+            raise KeyboardInterrupt
+        return real(*a, **k)
+    monkeypatch.setattr(S, "screen_chunk", chunk)
+    monkeypatch.setattr(S, "CHUNK_ROWS", 12 * 25)      # 12 pairs a chunk
+    s = _write(tmp_path, "s.csv", SPRINGS)
+    dm = _write(tmp_path, "d.csv", DAMPERS)
+    cfgfile = _write(tmp_path, "cfg.toml", "[tolerance]\n\"mass.lid\" = 0.0\n")
+    code, out = _run("select", "--springs", str(s), "--dampers", str(dm), "--config",
+                     str(cfgfile), "--samples", "16", "--out", str(tmp_path / "o"))
+    assert code == 130
+    import pandas as pd
+    df = pd.read_csv(tmp_path / "o" / "select.csv")
+    assert len(df) == 12 and df["verified"].isna().all()
+    assert "interrupted: 12 of 36 pairs screened" in out
