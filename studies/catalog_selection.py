@@ -139,8 +139,8 @@ def main(argv=None) -> int:
         r = out["robust_optimum"]
         print(f"robust optimum ({r['kind']}): worst-case J {r['worst_objective_own_box']:.5g} "
               f"over its own box, yield {100 * (r['yield_own_box'] or 0):.2f} %")
-        print(f"  as a part (free length ± {1e3 * as_part(cfg, robust)[0].free_length_tolerance:.1f}"
-              f" mm): feasible at every corner {mine['feasible']}, yield "
+        tol = 1e3 * as_part(cfg, robust)[0].free_length_tolerance
+        print(f"  as a part (free length ± {tol:.1f} mm): feasible at every corner {mine['feasible']}, yield "
               f"{100 * mine['yield']:.2f} %, worst-case J {mine['worst_objective']}"
               + (f"; {mine['reason']}" if mine["reason"] else ""))
         for name, e in (("best catalog pair", best), ("best spring, c chosen", best_c)):

@@ -29,7 +29,8 @@ from ..errors import ConfigError
 from ..progress import Progress
 from .parts import Catalog, DamperEntry, as_catalog, read_dampers, read_springs
 from .result import SelectResult, pair_entry
-from .screen import RANGE, PairBox, pair_box, range_texts, reason_text, run_pairs, summarise
+from .screen import (RANGE, PairBox, pair_box, range_texts, reason_text, run_pairs,
+                     summarise)
 
 #: rows of the kernel per chunk of pairs (a chunk is the unit of progress and of Ctrl-C)
 CHUNK_ROWS = 40_000

@@ -97,8 +97,9 @@ class SelectResult(Displayed):
         facts = [("pairs", f"{self.evaluated} of {self.pairs} screened in "
                            f"{self.seconds:.3g} s")]
         if b is not None:
-            facts.append(("best", f"{b['spring']}" + (f" + {b['damper']}" if b["damper"]
-                                                       else f" + c = {b['design']['damper_c']:.4g} N s/m")))
+            with_ = (f" + {b['damper']}" if b["damper"] else
+                     f" + c = {b['design']['damper_c']:.4g} N s/m")
+            facts.append(("best", f"{b['spring']}{with_}"))
             facts.append(("yield", percent(b["yield"])))
             facts.append(("worst J", num(b["worst_objective"])))
         feas = sum(1 for e in self.ranking if e["feasible"])

@@ -197,7 +197,6 @@ def summarise(box: PairBox, cols: dict, npairs: int) -> dict:
     with np.errstate(invalid="ignore"):
         worst = np.where(np.isnan(J).any(axis=1), np.inf, np.nanmax(np.where(
             np.isnan(J), -np.inf, J), axis=1))
-        worst_row = np.argmax(np.where(np.isnan(J), np.inf, J), axis=1)
     why, at = [], []
     for p in range(npairs):
         fail = np.flatnonzero(~F[p])
@@ -214,7 +213,7 @@ def summarise(box: PairBox, cols: dict, npairs: int) -> dict:
                ("closing_time", "impact_tip_speed", "peak_tip_speed", "holding_moment",
                 "opening_force", "min_spring_length", "max_spring_length", "objective")}
     return {"corners_ok": corners_ok, "corner_count": corner_count, "yield": yld,
-            "worst_objective": worst, "worst_row": worst_row, "reason": why, "fail_row": at,
+            "worst_objective": worst, "reason": why, "fail_row": at,
             "nominal": nominal}
 
 
