@@ -14,6 +14,7 @@ keys), ``.to_json()`` and ``.plot()`` (a matplotlib Figure):
   numeric config keys;
 - :func:`tolerance_analysis`, :func:`sensitivity` -- Monte Carlo yield and Sobol indices of a
   design under ``[tolerance]``;
+- :func:`select` -- the springs and dampers of catalog files ranked over their own tolerances;
 - :func:`load_config`, :func:`default_config`; ``cfg.set("mass.lid", 0.6)`` changes one key.
 
 Lower layers for scripts that need them: :class:`LidModel`, :class:`Simulator`,
@@ -40,13 +41,14 @@ _LAZY = {
     "sweep": "sweeps", "sample": "sweeps", "SweepResult": "sweeps",
     "tolerance_analysis": "robust", "sensitivity": "robust", "RobustResult": "robust",
     "YieldResult": "robust", "SensitivityResult": "robust",
+    "select": "catalog", "SelectResult": "catalog",
 }
 
 __all__ = ["simulate", "optimise", "front", "sweep", "sample", "tolerance_analysis",
            "sensitivity", "load_config", "default_config", "Config", "StrokeResult",
            "StrokeStatus", "OptimiseResult", "FrontResult", "SweepResult", "RobustResult",
-           "YieldResult", "SensitivityResult", "ConfigError", "NumericalError",
-           "SoftcloseError", "LidModel", "Reference", "Simulator"]
+           "YieldResult", "SensitivityResult", "select", "SelectResult", "ConfigError",
+           "NumericalError", "SoftcloseError", "LidModel", "Reference", "Simulator"]
 
 
 def optimise(cfg: Config, *, robust: bool = False, progress: bool = False, **options):

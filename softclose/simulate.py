@@ -132,7 +132,7 @@ class Simulator:
         return 0.05 * scale
 
     def run_batch(self, P, threads: int | None = None, lid_mass=None,
-                  early_exit: bool = True) -> dict:
+                  early_exit: bool = True, explain: bool = True) -> dict:
         """Metrics for rows of P (the parameter vector, :data:`softclose.problem.PARAM_KEYS`):
         a dict of arrays (the metric keys,
         ``status`` as :class:`~softclose.stroke.StrokeStatus` codes, ``reason`` why an open
@@ -142,6 +142,8 @@ class Simulator:
         rebuilding the model (the coefficients are linear in it). ``early_exit`` stops a
         stroke as soon as the energy proves it can no longer close and its metrics can no
         longer change (see :mod:`softclose.native`); the metrics are the same either way.
+        ``explain=False``: a stroke that takes an element out of its valid range says only
+        that, not where (:func:`softclose.statics.out_of_range`; faster for large screens).
         """
         P = as_params(np.atleast_2d(np.asarray(P, float)))
         st = self.cfg.stroke
@@ -154,12 +156,12 @@ class Simulator:
         res = {name: out[:, i] for i, name in enumerate(native.OUT_FIELDS)}
         res["status"] = out[:, 0].astype(int)
         res["reason"] = native.not_closed_reasons(out)
-        self._check_ranges(P, res)
+        self._check_ranges(P, res, explain)
         res["closed"] = res["status"] == StrokeStatus.CLOSED
         res["holding_moment"] = self.holding_moments(P, m)
         return res
 
-    def _check_ranges(self, P, res: dict) -> None:
+    def _check_ranges(self, P, res: dict, explain: bool = True) -> None:
         """Strokes that take an element outside its valid range become OUT_OF_RANGE, their
         reason saying where and by how much (:func:`softclose.statics.out_of_range`)."""
         ok = np.isin(res["status"], (StrokeStatus.CLOSED, StrokeStatus.NOT_CLOSED))
@@ -168,7 +170,7 @@ class Simulator:
         idx = np.flatnonzero(ok)
         _, why = statics.out_of_range(statics.table_coordinate(self.table), self.cfg, P[idx],
                                       {k: np.asarray(v)[idx] for k, v in res.items()
-                                       if k in native.OUT_FIELDS})
+                                       if k in native.OUT_FIELDS}, explain)
         bad = why != ""
         if bad.any():
             res["status"][idx[bad]] = StrokeStatus.OUT_OF_RANGE

@@ -73,7 +73,11 @@ COMMANDS = {
                            "--set", "tolerance.samples=500"], "costly"),
     "bench": (["bench", "--quick"], "costly"),
     "docs": (["docs"], "cheap"),
+    "select": (["select", "--springs", str(ROOT / "tests" / "data" / "catalog_springs.csv"),
+                "--dampers", str(ROOT / "tests" / "data" / "catalog_dampers.csv")], "medium"),
 }
+#: the pairs of the catalog the fuzzed select runs (4 springs x 2 dampers)
+SELECT_PAIRS = 8
 #: how a command writes its figures (every command with --out; refused values too)
 FIGURE_OPTIONS = {
     "--figure-format": ("png", [(v, True) for v in ("pdf", "svg", "gif", "PNG", "", "jpg")]),
@@ -105,6 +109,17 @@ OPTIONS = {
                                          ("abc", True), (str(2 ** 40), True),
                                          ("64", False)]),
                     **FIGURE_OPTIONS},
+    "select": {"--samples": ("16", [(v, True) for v in ("0", "1", "-3", "2.5", "abc", "100001",
+                                                          str(10 ** 30))] + [("64", False)]),
+               "--verify": ("1", [(v, True) for v in ("0", "-1", "x", "1.5")] +
+                            [("2", False)]),
+               "--seed": ("0", [(v, True) for v in ("7", "-2", "nan", "")]),
+               "--springs": (None, [(v, True) for v in (
+                   "/nonexistent.csv", str(ROOT / "tests"), str(ROOT / "README.md"),
+                   str(ROOT / "tests" / "data" / "catalog_dampers.csv"), "")]),
+               "--dampers": (None, [(v, True) for v in (
+                   "/nonexistent.csv", str(ROOT / "tests" / "data" / "catalog_springs.csv"),
+                   str(ROOT / "pyproject.toml"))])},
     "pareto": {"--closing-times": ("0.4:1:2", [(v, False) for v in (
         "0.4:1:1", "1:0.4:2", "0:1:2", "nan:1:2", "0.4:inf:2", "0.4:1:0", "0.4:1:100000",
         "0.3:3:2:log", "abc", "1e9:1e10:2", "0.4:30:2", "0.4:1:-2", "0.4:1:2.5")])},
@@ -329,7 +344,8 @@ def options(draw, command: str, profile: str) -> list[str]:
             pool = []
         value = draw(st.sampled_from(pool)) if pool and draw(st.integers(0, 3)) == 0 \
             else default
-        argv.append(_arg(opt, value))
+        if value is not None:           # (None: the base command line's own)
+            argv.append(_arg(opt, value))
     if command == "sweep":
         if draw(st.integers(0, 2)) == 0:
             argv.append(f"--grid={draw(grid_spec())}")
@@ -429,7 +445,17 @@ def strokes_of(command: str, cfg, argv: list[str]) -> int:
         return max(n or 0, 0) * (len(cfg.tolerance.spreads) + 2)
     if command == "sweep":
         return _grid_points(argv) or 0
+    if command == "select":       # every pair at its corners, the nominal point, the samples
+        n = _int_option(argv, "--samples", 256)
+        return SELECT_PAIRS * (2 ** (3 + _select_axes(cfg)) + 1 + max(n or 0, 0))
     return 0
+
+
+def _select_axes(cfg) -> int:
+    """The [tolerance] keys a select box adds to a pair's own (rate, free length, c)."""
+    owned = ("design.spring_k", "design.spring_rest_length", "design.damper_c",
+             "design.rotary_damper_c")
+    return sum(1 for s in cfg.tolerance.spreads if s.key not in owned)
 
 
 def _refinement_seconds(o) -> float:
@@ -478,6 +504,12 @@ def work_seconds(command: str, cfg, argv: list[str]) -> float:
         return 400.0
     if command == "docs":
         return 30.0
+    if command == "select":       # the kernel's batch, a model per distinct geometry, the
+        # reference at every corner of the verified pairs (0.5 s each)
+        d = 3 + _select_axes(cfg)
+        verify = max(_int_option(argv, "--verify", 10) or 0, 0)
+        return 60.0 + 2 * batch + 0.2 * SELECT_PAIRS * 2 ** d \
+            + min(verify, SELECT_PAIRS) * 2 ** d * 0.5 + 200 * stroke
     raise AssertionError(command)
 
 
@@ -548,7 +580,7 @@ def run_case(command: str, values, out_dir: Path, as_json: bool,
     for opt, (default, _) in OPTIONS.get(command, {}).items():
         given = _option(opts, opt) if opt.startswith("-") else \
             [a for a in opts if not a.startswith("-")]
-        if defaults and not given:
+        if defaults and not given and default is not None:
             opts.append(_arg(opt, default))
     if command == "sweep" and not _option(opts, "--grid"):
         opts.append("--grid=design.spring_k=0:2000:3")
@@ -612,7 +644,7 @@ def run_case(command: str, values, out_dir: Path, as_json: bool,
 EXAMPLES = {"state": (100, 400), "simulate": (400, 1500), "sweep": (60, 300),
             "optimise": (25, 120), "yield": (25, 100), "sensitivity": (15, 60),
             "pareto": (10, 30), "optimise --robust": (10, 15), "bench": (10, 8),
-            "docs": (30, 100)}
+            "docs": (30, 100), "select": (25, 100)}
 
 
 @pytest.fixture(scope="module")

@@ -49,8 +49,8 @@ def later_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
     Yield and Sobol indices are measured at the nominal optimum (``softclose.optimise``'s
     design): the default config's own design has no spring and no damper, so relative
     spreads of spring_k and damper_c would be zero there. A function that does not exist
-    yet gives a row with a note; ``quick`` skips the two longest (robust optimisation and
-    the Monte Carlo run) with a note. Each entry is the median of up to 3 runs (1 with
+    yet gives a row with a note; ``quick`` skips the longest (robust optimisation, the
+    Monte Carlo run, catalog selection) with a note. Each entry is the median of up to 3 runs (1 with
     ``quick``), fewer when the runs so far took :data:`LATER_BUDGET_S` or more.
     """
     log = log or (lambda *a: None)
@@ -149,7 +149,29 @@ def later_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
         rows.append(not_measured("sobol_1024", what_s, note))
     else:
         timed("sobol_1024", what_s, lambda: sens(at, samples=1024), rep, note=note)
+    _select_row(cfg, timed, rows, quick)
     return rows
+
+
+def _select_row(cfg: Config, timed, rows: list, quick: bool = False) -> None:
+    """``select``: 1,000 spring x damper pairs of the illustrative catalog (its first 100
+    springs x its first 10 dampers), each over its own tolerance box at 16 corners and 256
+    samples, ranked, the best 10 verified at every corner by the adaptive reference."""
+    what = ("select(cfg, springs, dampers): 1,000 catalog pairs (100 springs x 10 dampers) "
+            "over their tolerance boxes, top 10 verified")
+    if quick:
+        rows.append(not_measured("select_1000", what, "not run with --quick"))
+        return
+    from ..catalog import select
+    from ..catalog.illustrative import dampers, springs
+    s, d = springs()[:100], dampers()[:10]
+    select(cfg, s[:2], d[:2], samples=16, verify=0)     # warm-up: its tables built
+    res = timed("select_1000", what, lambda: select(cfg, s, d), 1, count=1000, unit="pairs")
+    if res is not None:
+        t = res.times
+        rows[-1]["note"] = (f"screen {t.get('screen', 0):.2f} s (16 corners + nominal + 256 samples a "
+                f"pair: {res.evaluated * 273:,} strokes), reference at the best "
+                f"{res.verified_count} pairs' 16 corners {t.get('verify', 0):.2f} s")
 
 
 def _cli_sweep_rows(cfg: Config, rows: list, n_grid: int, timed, repeats: int) -> None:

@@ -26,6 +26,9 @@ COMMAND_MODULES = ("state", "simulate", "optimise", "sweep", "bench", "robust", 
 COMMANDS = {"state": "state", "simulate": "simulate", "optimise": "optimise",
             "optimize": "optimise", "pareto": "optimise", "sweep": "sweep", "bench": "bench",
             "yield": "robust", "sensitivity": "robust", "docs": "docs"}
+# softclose select: catalog parts ranked over their tolerances (softclose.catalog)
+COMMAND_MODULES += ("select",)
+COMMANDS["select"] = "select"
 
 #: the program's name: every error line starts ``softclose: error:``
 PROG = "softclose"

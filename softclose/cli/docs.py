@@ -130,6 +130,7 @@ def files() -> str:
              "designs/design_<id>.toml"),
             ("yield --out D", "yield_samples.csv, yield_histograms.png"),
             ("sensitivity --out D", "sobol.csv, sobol.png"),
+            ("select --out D", "select.csv (every pair, best first), select.json, select.png"),
             ("bench --out D", "work_precision.csv, speed.csv, optimiser.csv, bench.md, "
              "bench.json and figures")]
     lines = ["files the commands write (--out D is checked before any work):"]

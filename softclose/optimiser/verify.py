@@ -193,14 +193,16 @@ def _g(v) -> str:
 
 
 def verify(cfg, design: dict, claims: dict | None = None,
-           claimed_objective: float | None = None) -> Verification:
+           claimed_objective: float | None = None, checker: Checker | None = None
+           ) -> Verification:
     """Re-simulate ``design`` with the adaptive reference and check it (module docstring).
 
-    ``claims``: the optimiser's own §4 metrics; ``claimed_objective``: its J. Never raises
-    for a design the reference cannot simulate: ``error`` says why.
+    ``claims``: the optimiser's own §4 metrics; ``claimed_objective``: its J; ``checker``:
+    the :class:`Checker` of cfg's model (default: the cached one of its geometry). Never
+    raises for a design the reference cannot simulate: ``error`` says why.
     """
     o, st = cfg.optimise, cfg.stroke
-    chk = get_checker(cfg)
+    chk = checker or get_checker(cfg)
     model = chk.model
     p = params_of(cfg, design)
     method = (f"CVODES (adaptive BDF) on the exact equation, tolerance "

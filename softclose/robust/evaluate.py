@@ -40,12 +40,17 @@ def with_values(cfg: Config, values: dict[str, float]) -> Config:
 
 
 def simulator(cfg: Config, t_end: float | None = None):
-    """The fixed-step simulator of cfg's model (cached per geometry, mass, stroke, method);
+    """The fixed-step simulator of cfg's model (cached per geometry, mass, stroke, method,
+    element choices and spring limits);
     strokes are cut at ``t_end`` when it is below stroke.t_max."""
     from ..simulate import Simulator
     if t_end is not None and t_end < cfg.stroke.t_max:
         cfg = cfg.replace(stroke={"t_max": float(t_end)})
-    key = (cfg.geometry, cfg.mass, cfg.stroke, cfg.simulate)
+    from .. import elements
+    # the element choices (a rotary damper's pivot) and the spring's length limits are the
+    # simulator's too: its table and its range check read them
+    key = (cfg.geometry, cfg.mass, cfg.stroke, cfg.simulate, elements.structure(cfg),
+           cfg.design.spring_min_length, cfg.design.spring_max_length)
     if key not in _SIMS:
         if len(_SIMS) > 32:
             _SIMS.clear()
@@ -54,12 +59,14 @@ def simulator(cfg: Config, t_end: float | None = None):
 
 
 def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
-             threads: int | None = None) -> dict:
+             threads: int | None = None, explain: bool = True) -> dict:
     """Metric columns of the strokes of ``cfg`` with the keys set to the rows of ``X``.
 
     ``keys`` are numeric config keys, ``X`` (n, len(keys)) their values (absolute).
     ``t_end`` cuts the strokes early (anything slower is infeasible anyway: the
-    closing-time window ends before it). Returns a dict of arrays (see ``COLUMNS``).
+    closing-time window ends before it); ``explain=False`` skips locating where a spring
+    leaves its valid range (:meth:`softclose.simulate.Simulator.run_batch`). Returns a dict
+    of arrays (see ``COLUMNS``).
     """
     keys = list(keys)
     X = np.atleast_2d(np.asarray(X, float)).reshape(-1, len(keys))
@@ -91,7 +98,8 @@ def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
             where = ", ".join(f"{k} = {v:g}" for k, v in vals.items())
             raise type(exc)(f"tolerance box: at {where} {str(exc).splitlines()[0]}") from None
         out = sim.run_batch(P[rows], threads=threads,
-                            lid_mass=None if masses is None else masses[rows])
+                            lid_mass=None if masses is None else masses[rows],
+                            explain=explain)
         out["opening_force"] = sim.opening_forces(P[rows],
                                                   None if masses is None else masses[rows])
         status = np.asarray(out["status"], int)

@@ -1,0 +1,17 @@
+"""Parts from a catalog: rank the springs and dampers one can buy (``softclose select``).
+
+- :mod:`.parts` -- the catalog files (SPEC §10): springs (extension, compression, gas strut)
+  and dampers (dashpot, rotary at a pivot), SI or mm in the header, bad rows reported by line
+  and column;
+- :mod:`.screen` -- every pair over its own tolerance box in the C kernel;
+- :mod:`.verify` -- the adaptive reference at every corner of the best pairs' boxes;
+- :mod:`.ranking` -- the procedure (:func:`select`); :mod:`.result` -- :class:`SelectResult`.
+"""
+
+from .parts import (Catalog, DamperEntry, SpringEntry, read_dampers, read_springs,
+                    standard_free_length_tolerance)
+from .result import SelectResult
+from .ranking import select
+
+__all__ = ["select", "SelectResult", "read_springs", "read_dampers", "Catalog",
+           "SpringEntry", "DamperEntry", "standard_free_length_tolerance"]

@@ -1,0 +1,84 @@
+"""The illustrative catalog (NOT real parts): standard rate and length series for the
+examples, the benchmark and the study. ``python -m softclose.catalog.illustrative DIR`` writes
+it as ``DIR/springs.csv`` and ``DIR/dampers.csv`` (what ``examples/catalogs/`` holds).
+
+- compression springs: free lengths 56-80 mm x rates 500-10,000 N/m in ISO 3 R10 steps, solid
+  length 40 % of the free length, rate ±10 %, the free length to the standard grade;
+- extension springs: free lengths 30-50 mm x rates 100-1,600 N/m (R5) x initial tensions 2 and
+  5 N, maximum length twice the free length, rate ±10 %;
+- gas struts: extended lengths 60-80 mm, 20 mm stroke, forces F1 = 10-200 N in the usual
+  steps, progression F2/F1 = 1.3 (rate = 0.3 F1 / stroke), force ±10 %, length ±1.5 mm;
+- dampers: dashpots of 1,000-6,000 N s/m (±20 %), rotary dampers of 0.5-2 N m s/rad at pivots
+  O and A (±30 %).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from .parts import DamperEntry, SpringEntry, standard_free_length_tolerance
+
+HEADER = """\
+# ILLUSTRATIVE CATALOG -- NOT REAL PARTS. Made up for softclose's examples, benchmark and study:
+# standard rate and length series (ISO 3 R10 steps), not any maker's data. Replace it with your
+# supplier's catalog export (see examples/catalogs/README.md) before buying anything.
+"""
+R10 = (500, 630, 800, 1000, 1250, 1600, 2000, 2500, 3150, 4000, 5000, 6300, 8000, 10000)
+
+
+def springs() -> list[SpringEntry]:
+    out = []
+    for L in (56, 58, 60, 62, 64, 66, 68, 70, 75, 80):
+        for k in R10:
+            l0 = L / 1e3
+            out.append(SpringEntry(f"CS-{L:03d}-{k:05d}", "compression", float(k), l0, 0.0,
+                                   round(0.4 * L) / 1e3, None, 0.10,
+                                   standard_free_length_tolerance(l0)))
+    for L in (30, 35, 40, 45, 50):
+        for k in (100, 160, 250, 400, 630, 1000, 1600):
+            for F0 in (2, 5):
+                l0 = L / 1e3
+                out.append(SpringEntry(f"ES-{L:03d}-{k:04d}-T{F0}", "extension", float(k), l0,
+                                       float(F0), None, 2 * l0, 0.10,
+                                       standard_free_length_tolerance(l0)))
+    for L in (60, 65, 70, 75, 80):
+        for F1 in (10, 20, 30, 40, 50, 60, 80, 100, 120, 150, 200):
+            out.append(SpringEntry(f"GS-{L:03d}-F{F1:03d}", "gas_strut", round(F1 * 0.3 / 0.020, 1),
+                                   L / 1e3, float(F1), (L - 20) / 1e3, None, 0.10, 0.0015))
+    return out
+
+
+def dampers() -> list[DamperEntry]:
+    out = [DamperEntry(f"DP-{c:04d}", "dashpot", float(c), None, 0.2)
+           for c in (1000, 1500, 2000, 2500, 3000, 4000, 5000, 6000)]
+    out += [DamperEntry(f"RD-{piv}-{c:g}".replace(".", "p"), "rotary", c, piv, 0.3)
+            for piv, c in (("O", 0.5), ("O", 1.0), ("O", 2.0), ("A", 0.5), ("A", 1.0))]
+    return out
+
+
+def _cell(v) -> str:
+    return "" if v is None else repr(v) if isinstance(v, float) else str(v)
+
+
+def write(folder) -> tuple[Path, Path]:
+    """Write the catalog as ``folder/springs.csv`` and ``folder/dampers.csv``."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    s = folder / "springs.csv"
+    cols = ("part", "kind", "rate_N_per_m", "free_length_m", "preload_N", "min_length_m",
+            "max_length_m", "rate_tolerance", "free_length_tolerance_m")
+    lines = [",".join(cols)] + [",".join(_cell(x) for x in (
+        e.part, e.kind, e.rate, e.free_length, e.preload, e.min_length, e.max_length,
+        e.rate_tolerance, e.free_length_tolerance)) for e in springs()]
+    s.write_text(HEADER + "\n".join(lines) + "\n")
+    d = folder / "dampers.csv"
+    lines = ["part,kind,c,pivot,c_tolerance"] + [",".join(_cell(x) for x in (
+        e.part, e.kind, e.c, e.pivot, e.c_tolerance)) for e in dampers()]
+    d.write_text(HEADER + "\n".join(lines) + "\n")
+    return s, d
+
+
+if __name__ == "__main__":
+    for p in write(sys.argv[1] if len(sys.argv) > 1 else "."):
+        print(p)

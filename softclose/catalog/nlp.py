@@ -1,0 +1,56 @@
+"""The dashpot's c of one catalog spring re-solved by the robust NLP (no damper catalog).
+
+The spring is fixed (its rate and free length bounded to themselves, its kind and preload,
+its length limits), its own tolerances replace ``[tolerance]``'s spring spreads (the rate's,
+the free length's as an absolute spread), the dashpot carries ``[tolerance]``'s spread of
+``design.damper_c``; :func:`softclose.robust.optimise_robust` then chooses c within
+``optimise.damper_c`` for the worst scenario of that box. The NLP's own verification is left
+to the caller, which re-screens the pair with that c in the kernel and checks every corner
+with the reference.
+"""
+
+from __future__ import annotations
+
+from ..config import Config
+from ..errors import SoftcloseError
+from .screen import without_limits
+
+
+def spring_config(cfg: Config, spring, damper) -> Config:
+    """``cfg`` with the spring fixed as the design and its tolerances as the box's."""
+    values = {"design.spring_kind": spring.spring_kind, "design.spring_k": spring.rate,
+              "design.spring_rest_length": spring.free_length,
+              "design.spring_preload": spring.preload, "design.damper_c": damper.c,
+              "design.rotary_damper_c": 0.0,
+              "optimise.spring_k": [spring.rate, spring.rate],
+              "optimise.spring_rest_length": [spring.free_length, spring.free_length],
+              "optimise.spring_kinds": [spring.spring_kind],
+              "tolerance.design.spring_k": spring.rate_tolerance,
+              "tolerance.design.spring_rest_length": {"absolute":
+                                                      spring.free_length_tolerance},
+              "tolerance.design.damper_c": damper.c_tolerance}
+    if spring.min_length is not None:
+        values["design.spring_min_length"] = spring.min_length
+    if spring.max_length is not None:
+        values["design.spring_max_length"] = spring.max_length
+    return without_limits(cfg).update(values)
+
+
+#: Monte Carlo samples of the NLP's own yield estimate (the pair is screened again anyway)
+NLP_SAMPLES = 1000
+
+
+def solve_c(cfg: Config, spring, damper) -> dict:
+    """The robust NLP's c for ``spring`` (``damper``: the dashpot chosen so far, its c the
+    start): {c (None when it found none), success, objective (worst scenario), message}."""
+    from ..robust import optimise_robust
+    try:
+        c = spring_config(cfg, spring, damper)
+        r = optimise_robust(c, samples=NLP_SAMPLES, verify=False)
+    except SoftcloseError as exc:
+        return {"c": None, "success": False, "objective": None,
+                "message": str(exc).splitlines()[0]}
+    d = r.design or {}
+    return {"c": None if "damper_c" not in d else float(d["damper_c"]),
+            "success": bool(r.design is not None), "objective": r.objective,
+            "message": (r.message or "").splitlines()[0] if r.message else ""}

@@ -1,0 +1,339 @@
+"""Catalog files (SPEC §10): the springs and dampers one can buy, one part a CSV row.
+
+Springs: ``part, kind, rate_N_per_m, free_length_m, preload_N, min_length_m, max_length_m,
+rate_tolerance[, free_length_tolerance_m]``; the lengths and the rate may instead be given in
+millimetres (``rate_N_per_mm, free_length_mm, min_length_mm, max_length_mm,
+free_length_tolerance_mm``): the header names the unit. Kinds and how each maps onto
+``design.spring_kind``:
+
+- ``extension`` -> ``extension`` (pulls; the preload is its initial tension, valid from the
+  free length up to ``max_length``);
+- ``compression`` -> ``compression`` (pushes; the preload is usually 0, valid from
+  ``min_length``, its solid length, up to the free length);
+- ``gas_strut`` -> ``compression`` with the strut's force at full extension F1 as the
+  preload and its progression as the rate (``rate = F1 (F2/F1 - 1) / stroke``), its extended
+  length as the free length and its compressed length as ``min_length`` (the strut's own
+  friction is not modelled: give it as ``friction.torque`` if it matters).
+
+An empty ``min_length``/``max_length`` cell is no limit. ``rate_tolerance`` is relative (0.1:
+±10 %); ``free_length_tolerance`` absolute; absent (column or cell), the free length is held
+to a spring maker's standard grade (:func:`standard_free_length_tolerance`).
+
+Dampers: ``part, kind, c, pivot, c_tolerance`` -- ``dashpot`` (c in N s/m, between the lid's
+``geometry.dashpot_lid`` and ``geometry.dashpot_anchor``; ``c_N_s_per_mm`` is accepted too) or
+``rotary`` (c in N m s/rad at ``pivot``: lid, O, B, A or C).
+
+A row that cannot be used (a missing value, a negative rate, a free length above the maximum
+length, an unknown kind, ...) is left out with a warning naming its line and column; a header
+without a required column, or a file without one usable row, is a :class:`ConfigError`.
+Lines starting with ``#`` are comments.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..errors import ConfigError
+
+#: catalog kinds of spring -> design.spring_kind
+SPRING_KINDS = {"extension": "extension", "compression": "compression",
+                "gas_strut": "compression"}
+DAMPER_KINDS = ("dashpot", "rotary")
+PIVOTS = ("lid", "O", "B", "A", "C")
+
+#: spring columns: name -> (alternative header names with their factor to SI)
+_SPRING_COLS = {
+    "rate": (("rate_N_per_m", 1.0), ("rate_N_per_mm", 1e3)),
+    "free_length": (("free_length_m", 1.0), ("free_length_mm", 1e-3)),
+    "preload": (("preload_N", 1.0),),
+    "min_length": (("min_length_m", 1.0), ("min_length_mm", 1e-3)),
+    "max_length": (("max_length_m", 1.0), ("max_length_mm", 1e-3)),
+    "rate_tolerance": (("rate_tolerance", 1.0),),
+    "free_length_tolerance": (("free_length_tolerance_m", 1.0),
+                              ("free_length_tolerance_mm", 1e-3)),
+}
+_SPRING_OPTIONAL = ("free_length_tolerance",)
+_DAMPER_COLS = {
+    "c": (("c", 1.0), ("c_N_s_per_m", 1.0), ("c_N_m_s_per_rad", 1.0), ("c_N_s_per_mm", 1e3)),
+    "c_tolerance": (("c_tolerance", 1.0),),
+}
+
+
+def standard_free_length_tolerance(free_length: float) -> float:
+    """± free length (m) of a spring maker's standard grade (DIN 2097 grade 2 as makers'
+    tables give it): ±0.9 mm up to 63 mm, ±1.3 mm up to 100 mm, ±1.5 % of the free length
+    beyond (the published 40-63 mm and 63-100 mm bands are ±0.8-0.9 and ±1.1-1.3 mm: the
+    upper figure is taken)."""
+    if free_length <= 0.063:
+        return 0.9e-3
+    if free_length <= 0.100:
+        return 1.3e-3
+    return 0.015 * free_length
+
+
+@dataclass(frozen=True)
+class SpringEntry:
+    """One spring of a catalog, in SI: its ``kind`` as the catalog names it, ``spring_kind``
+    the model's (:data:`SPRING_KINDS`), lengths in m, the rate in N/m, the preload in N, the
+    rate's relative and the free length's absolute (m) tolerance."""
+
+    part: str
+    kind: str
+    rate: float
+    free_length: float
+    preload: float
+    min_length: float | None
+    max_length: float | None
+    rate_tolerance: float
+    free_length_tolerance: float
+    line: int = field(default=0, compare=False)
+
+    @property
+    def spring_kind(self) -> str:
+        return SPRING_KINDS[self.kind]
+
+    def design(self) -> dict:
+        """The [design] values of this spring (nominal)."""
+        return {"spring_kind": self.spring_kind, "spring_k": self.rate,
+                "spring_rest_length": self.free_length, "spring_preload": self.preload}
+
+    def to_json(self) -> dict:
+        return {"part": self.part, "kind": self.kind, "rate_N_per_m": self.rate,
+                "free_length_m": self.free_length, "preload_N": self.preload,
+                "min_length_m": self.min_length, "max_length_m": self.max_length,
+                "rate_tolerance": self.rate_tolerance,
+                "free_length_tolerance_m": self.free_length_tolerance}
+
+
+@dataclass(frozen=True)
+class DamperEntry:
+    """One damper of a catalog: ``kind`` dashpot (c in N s/m) or rotary (c in N m s/rad at
+    ``pivot``), ``c_tolerance`` relative."""
+
+    part: str
+    kind: str
+    c: float
+    pivot: str | None
+    c_tolerance: float
+    line: int = field(default=0, compare=False)
+
+    def design(self) -> dict:
+        """The [design] values of this damper: it replaces the config's dashpot and rotary
+        damper (the other is 0)."""
+        if self.kind == "dashpot":
+            return {"damper_c": self.c, "rotary_damper_c": 0.0}
+        return {"damper_c": 0.0, "rotary_damper_c": self.c, "rotary_damper_pivot": self.pivot}
+
+    def to_json(self) -> dict:
+        return {"part": self.part, "kind": self.kind, "c": self.c, "pivot": self.pivot,
+                "c_tolerance": self.c_tolerance}
+
+
+@dataclass(frozen=True)
+class Catalog:
+    """The usable parts of one file and a warning per row left out."""
+
+    path: str
+    parts: tuple
+    warnings: tuple = field(default_factory=tuple)
+
+    def __len__(self) -> int:
+        return len(self.parts)
+
+
+def _lines(path) -> list[tuple[int, list[str]]]:
+    """(line number, fields) of every non-blank, non-comment line."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise ConfigError(f"{path}: is a folder, expected a CSV file") from None
+    except UnicodeDecodeError:
+        raise ConfigError(f"{path}: not a text file (expected CSV, UTF-8)") from None
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read ({exc.strerror or type(exc).__name__})") \
+            from None
+    out = []
+    for i, line in enumerate(text.splitlines(), 1):
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        try:
+            fields = next(csv.reader([line], skipinitialspace=True))
+        except csv.Error as exc:
+            raise ConfigError(f"{path}: line {i}: not CSV ({exc})") from None
+        out.append((i, [f.strip() for f in fields]))
+    if not out:
+        raise ConfigError(f"{path}: empty (expected a header line and one part a row)")
+    return out
+
+
+def _header(path, fields: list[str], line: int, cols: dict, base: tuple,
+            optional: tuple = ()) -> dict:
+    """Which column holds each quantity, and its factor to SI: {name: (index, factor, header)}."""
+    where = {}
+    seen = {}
+    for j, h in enumerate(fields):
+        if h in seen:
+            raise ConfigError(f"{path}: line {line}, column {j + 1}: '{h}' appears twice")
+        seen[h] = j
+    for name in base:
+        if name not in seen:
+            raise ConfigError(f"{path}: line {line}: missing column '{name}' (the header "
+                              f"has {', '.join(fields)})")
+        where[name] = (seen[name], 1.0, name)
+    for name, alts in cols.items():
+        given = [(seen[h], f, h) for h, f in alts if h in seen]
+        if len(given) > 1:
+            raise ConfigError(f"{path}: line {line}: {' and '.join(g[2] for g in given)} "
+                              "give the same quantity; keep one")
+        if given:
+            where[name] = given[0]
+        elif name not in optional:
+            names = " or ".join(h for h, _ in alts)
+            raise ConfigError(f"{path}: line {line}: missing column {names} (the header has "
+                              f"{', '.join(fields)})")
+    return where
+
+
+class _Bad(Exception):
+    pass
+
+
+def _cell(row, where, name, line, *, required=True):
+    """The cell of quantity ``name`` as SI (None: empty and not required)."""
+    j, factor, header = where[name]
+    text = row[j] if j < len(row) else ""
+    if text == "":
+        if required:
+            raise _Bad(f"line {line}, column {header}: missing value")
+        return None
+    try:
+        v = float(text)
+    except ValueError:
+        raise _Bad(f"line {line}, column {header}: '{text}' is not a number") from None
+    if not math.isfinite(v):
+        raise _Bad(f"line {line}, column {header}: '{text}' is not a finite number")
+    return v * factor
+
+
+def _check(cond, line, header, what):
+    if not cond:
+        raise _Bad(f"line {line}, column {header}: {what}")
+
+
+def _finish(path, parts, warnings, what) -> Catalog:
+    if not parts:
+        first = f" ({warnings[0]}" + (f"; {len(warnings) - 1} more" if len(warnings) > 1
+                                       else "") + ")" if warnings else ""
+        raise ConfigError(f"{path}: no usable {what} in the file{first}")
+    names = {}
+    for p in parts:
+        if p.part in names:
+            warnings.append(f"line {p.line}, column part: '{p.part}' also on line "
+                            f"{names[p.part]}; both are kept")
+        names.setdefault(p.part, p.line)
+    return Catalog(str(path), tuple(parts), tuple(f"{path}: {w}" for w in warnings))
+
+
+def read_springs(path) -> Catalog:
+    """The springs of a catalog file (module docstring); rows that cannot be used are left
+    out with a warning naming their line and column."""
+    lines = _lines(path)
+    hline, head = lines[0]
+    where = _header(path, head, hline, _SPRING_COLS, ("part", "kind"), _SPRING_OPTIONAL)
+    parts, warnings = [], []
+    for line, row in lines[1:]:
+        try:
+            if len(row) > len(head):
+                raise _Bad(f"line {line}: {len(row)} fields, the header has {len(head)}")
+            part = row[where["part"][0]] if where["part"][0] < len(row) else ""
+            _check(part != "", line, "part", "missing value")
+            kind = row[where["kind"][0]] if where["kind"][0] < len(row) else ""
+            _check(kind in SPRING_KINDS, line, "kind",
+                   f"unknown kind '{kind}' (extension, compression or gas_strut)")
+            v = {n: _cell(row, where, n, line, required=n not in
+                          ("min_length", "max_length", "free_length_tolerance"))
+                 for n in where if n not in ("part", "kind")}
+            h = {n: where[n][2] for n in where}
+            _check(v["rate"] >= 0, line, h["rate"], f"negative rate {v['rate']:g} N/m")
+            _check(v["free_length"] > 0, line, h["free_length"], "the free length must be > 0")
+            _check(v["preload"] >= 0, line, h["preload"], "negative preload")
+            _check(v["rate"] > 0 or v["preload"] > 0, line, h["rate"],
+                   "no rate and no preload: the part exerts no force")
+            _check(0 <= v["rate_tolerance"] < 1, line, h["rate_tolerance"],
+                   "a relative tolerance in [0, 1) (0.1 is ±10 %)")
+            lo, hi = v.get("min_length"), v.get("max_length")
+            if lo is not None:
+                _check(lo > 0, line, h["min_length"], "must be > 0")
+                _check(lo < v["free_length"] or kind == "extension", line, h["min_length"],
+                       "the minimum (solid) length must be below the free length")
+            if hi is not None:
+                _check(hi >= v["free_length"], line, h["max_length"],
+                       f"the free length {v['free_length'] * 1e3:g} mm is above the maximum "
+                       f"length {hi * 1e3:g} mm")
+            if lo is not None and hi is not None:
+                _check(lo < hi, line, h["min_length"], "above the maximum length")
+            flt = v.get("free_length_tolerance")
+            if flt is None:
+                flt = standard_free_length_tolerance(v["free_length"])
+            else:
+                _check(0 <= flt < v["free_length"], line, h["free_length_tolerance"],
+                       "must be >= 0 and below the free length")
+            parts.append(SpringEntry(part, kind, v["rate"], v["free_length"], v["preload"],
+                                     lo, hi, v["rate_tolerance"], flt, line))
+        except _Bad as exc:
+            warnings.append(f"{exc}; row left out")
+    return _finish(path, parts, warnings, "spring")
+
+
+def read_dampers(path) -> Catalog:
+    """The dampers of a catalog file (module docstring)."""
+    lines = _lines(path)
+    hline, head = lines[0]
+    where = _header(path, head, hline, _DAMPER_COLS, ("part", "kind", "pivot"))
+    parts, warnings = [], []
+    for line, row in lines[1:]:
+        try:
+            if len(row) > len(head):
+                raise _Bad(f"line {line}: {len(row)} fields, the header has {len(head)}")
+            get = (lambda n: row[where[n][0]] if where[n][0] < len(row) else "")
+            part, kind, pivot = get("part"), get("kind"), get("pivot")
+            _check(part != "", line, "part", "missing value")
+            _check(kind in DAMPER_KINDS, line, "kind",
+                   f"unknown kind '{kind}' (dashpot or rotary)")
+            c = _cell(row, where, "c", line)
+            tol = _cell(row, where, "c_tolerance", line)
+            hc = where["c"][2]
+            _check(c > 0, line, hc, f"the coefficient must be > 0, got {c:g}")
+            if kind == "dashpot" and hc == "c_N_m_s_per_rad":
+                raise _Bad(f"line {line}, column {hc}: a dashpot's c is in N s/m")
+            if kind == "rotary" and hc == "c_N_s_per_mm":
+                raise _Bad(f"line {line}, column {hc}: a rotary damper's c is in N m s/rad")
+            _check(0 <= tol < 1, line, where["c_tolerance"][2],
+                   "a relative tolerance in [0, 1) (0.2 is ±20 %)")
+            if kind == "rotary":
+                _check(pivot in PIVOTS, line, "pivot",
+                       f"unknown pivot '{pivot}' ({', '.join(PIVOTS)})")
+            else:
+                _check(pivot == "", line, "pivot", "a dashpot has no pivot (leave it empty)")
+            parts.append(DamperEntry(part, kind, c, pivot or None, tol, line))
+        except _Bad as exc:
+            warnings.append(f"{exc}; row left out")
+    return _finish(path, parts, warnings, "damper")
+
+
+def as_catalog(x, reader) -> Catalog:
+    """A Catalog from a path, a Catalog, or a list of entries."""
+    if x is None or isinstance(x, Catalog):
+        return x
+    if isinstance(x, (str, Path)):
+        return reader(x)
+    parts = tuple(x)
+    if not parts:
+        raise ConfigError("catalog: no parts given")
+    return Catalog("<list>", parts)

@@ -1,0 +1,116 @@
+"""The result of ``select``: the ranked pairs, each with its verdicts and why it fails."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from ..display import Display, Displayed, Table, num, percent
+
+#: the keys of one ranked pair as SPEC §10 gives them (``--json``), then the details
+SPEC_KEYS = ("spring", "damper", "feasible", "yield", "worst_objective", "design", "verified")
+
+
+def pair_entry(spring, damper, feasible: bool, yld: float, worst: float, reason: str,
+               corners_ok: int, corners: int, nominal: dict) -> dict:
+    """One ranked pair: SPEC §10's keys, then why it fails (``reason``, "" if it does not),
+    how many corners meet every constraint, the nominal point's metrics, the parts."""
+    design = {**spring.design(), "spring_min_length": spring.min_length,
+              "spring_max_length": spring.max_length}
+    design.update({"damper_c": 0.0, "rotary_damper_c": 0.0})
+    design.update(damper.design())
+    return {"spring": spring.part, "damper": damper.part, "feasible": feasible,
+            "yield": yld, "worst_objective": worst if math.isfinite(worst) else None,
+            "design": design, "verified": None, "reason": reason,
+            "corners_feasible": corners_ok, "corners": corners, "nominal": nominal,
+            "spring_part": spring.to_json(), "damper_part": damper.to_json(),
+            "reference": None}
+
+
+@dataclass(frozen=True, repr=False)
+class SelectResult(Displayed):
+    """The ranked pairs (``ranking``, best first: feasible at every corner of its box, then
+    yield, then worst-case J) and how they were judged.
+
+    ``success``: the best pair meets every constraint at every corner of its box (by the
+    reference, where it was checked); ``verified`` of a pair: the adaptive reference's
+    verdict at every corner of its box is the kernel's (None: not checked, outside the best
+    ``verify``; False: they differ, and the reference's verdict is the pair's).
+    """
+
+    success: bool
+    message: str
+    ranking: tuple
+    evaluated: int
+    pairs: int
+    seconds: float
+    interrupted: bool = False
+    warnings: tuple = ()
+    samples: int = 0
+    seed: int = 0
+    corners: int = 0
+    box: dict = field(default_factory=dict)
+    continuous: bool = False
+    verified_count: int = 0
+    times: dict = field(default_factory=dict)
+    springs: str = ""
+    dampers: str | None = None
+
+    @property
+    def best(self) -> dict | None:
+        return self.ranking[0] if self.ranking else None
+
+    def to_json(self) -> dict:
+        from ..jsonio import jsonable
+        return jsonable({
+            "ranking": [dict(e) for e in self.ranking], "evaluated": self.evaluated,
+            "seconds": self.seconds, "pairs": self.pairs, "success": self.success,
+            "message": self.message, "interrupted": self.interrupted,
+            "warnings": list(self.warnings), "samples": self.samples, "seed": self.seed,
+            "corners": self.corners, "box": self.box,
+            "damper_c_optimised": self.continuous, "verified_pairs": self.verified_count,
+            "times": self.times, "springs": self.springs, "dampers": self.dampers})
+
+    def to_frame(self):
+        """One row per pair, best first: rank, the parts, the verdicts, why it fails, the
+        nominal metrics and the design values."""
+        import pandas as pd
+        rows = []
+        for r, e in enumerate(self.ranking, 1):
+            row = {"rank": r, "spring": e["spring"], "damper": e["damper"],
+                   "feasible": e["feasible"], "yield": e["yield"],
+                   "worst_objective": e["worst_objective"], "verified": e["verified"],
+                   "corners_feasible": e["corners_feasible"], "corners": e["corners"],
+                   "reason": e["reason"]}
+            row.update({f"nominal_{k}": v for k, v in e["nominal"].items()})
+            row.update(e["design"])
+            rows.append(row)
+        return pd.DataFrame(rows)
+
+    def plot(self):
+        """Yield against worst-case J for every pair, the chosen one marked (a Figure)."""
+        from ..figures.select import plot_select
+        return plot_select(self)
+
+    def _display(self) -> Display:
+        b = self.best
+        facts = [("pairs", f"{self.evaluated} of {self.pairs} screened in "
+                           f"{self.seconds:.3g} s")]
+        if b is not None:
+            with_ = (f" + {b['damper']}" if b["damper"] else
+                     f" + c = {b['design']['damper_c']:.4g} N s/m")
+            facts.append(("best", f"{b['spring']}{with_}"))
+            facts.append(("yield", percent(b["yield"])))
+            facts.append(("worst J", num(b["worst_objective"])))
+        feas = sum(1 for e in self.ranking if e["feasible"])
+        facts.append(("feasible at every corner", f"{feas} pairs"))
+        rows = [(i + 1, e["spring"], e["damper"] or "c optimised", num(e["feasible"]),
+                 percent(e["yield"]), num(e["worst_objective"]),
+                 {None: "—", True: "yes", False: "DIFFERS"}[e["verified"]],
+                 e["reason"] or "") for i, e in enumerate(self.ranking)]
+        table = Table("ranking (feasible at every corner, then yield, then worst-case J)",
+                      ("#", "spring", "damper", "feasible", "yield", "worst J", "verified",
+                       "why not"), rows)
+        return Display("SelectResult: catalog parts ranked over their tolerance boxes",
+                       self.success, self.message, tuple(facts), (table,),
+                       tuple(self.warnings[:5]))

@@ -1,0 +1,274 @@
+"""Screening spring x damper pairs in the C kernel, each over its own tolerance box.
+
+A pair's box has the axes (in unit coordinates z, z = ±1 at the faces): the spring's rate
+(``rate (1 + z rate_tolerance)``), its free length (``free_length + z free_length_tolerance``),
+the damper's coefficient (``c (1 + z c_tolerance)``), then every other key of
+``[tolerance]`` (the config's spreads of ``design.spring_k``, ``spring_rest_length``,
+``damper_c`` and ``rotary_damper_c`` are replaced by the parts' own). Each pair is run at
+the 2^d corners, the nominal point and the same Monte Carlo samples (common random numbers:
+two pairs see the same relative deviations), all rows of a chunk of pairs in one kernel
+batch (:func:`softclose.robust.evaluate.evaluate`).
+
+A row meets every constraint of the problem (:func:`softclose.problem.infeasibility`) and
+keeps the spring in its valid range: the kind's side of its free length (the kernel's own
+range check) and the part's ``min_length`` / ``max_length`` (checked here against the
+stroke's extremes, as the limits differ per part).
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, replace
+from types import SimpleNamespace
+
+import numpy as np
+
+from .. import statics
+from ..config import Config
+from ..config.load import from_dict
+from ..elements.springs import KINDS
+from ..robust.box import Box, box_of
+from ..robust.evaluate import evaluate, simulator, slow_keys
+
+#: the [tolerance] keys a catalog's own tolerances replace
+OWNED = ("design.spring_k", "design.spring_rest_length", "design.damper_c",
+         "design.rotary_damper_c")
+#: the design keys a pair sets in every row (before the other toleranced keys)
+PAIR_KEYS = ("design.spring_k", "design.spring_rest_length", "design.spring_kind",
+             "design.spring_preload", "design.damper_c", "design.rotary_damper_c")
+PRELOAD = "design.spring_preload"
+#: relative slack of the length limits (the extremes' rounding)
+LIMIT_RTOL = 1e-9
+#: the reason of a row whose spring leaves its valid range
+RANGE = "leaves its valid range"
+
+
+def without_limits(cfg: Config) -> Config:
+    """``cfg`` without spring length limits (each part brings its own)."""
+    d = cfg.design
+    if d.spring_min_length is None and d.spring_max_length is None:
+        return cfg
+    raw = {k: dict(v) for k, v in cfg.raw.items()}
+    for k in ("spring_min_length", "spring_max_length"):
+        raw.get("design", {}).pop(k, None)
+    return from_dict(raw)
+
+
+def limits_view(cfg: Config, lo, hi):
+    """What the range check reads of a config, with a part's limits (None: no limit)."""
+    return SimpleNamespace(design=SimpleNamespace(spring_min_length=lo, spring_max_length=hi),
+                           stroke=cfg.stroke)
+
+
+@dataclass(frozen=True)
+class PairBox:
+    """The unit points every pair is run at: corners, the nominal point, Monte Carlo samples;
+    and the box of the other toleranced keys."""
+
+    other: Box
+    Z: np.ndarray          # (n_points, 3 + other.dim)
+    corners: int
+    samples: int
+
+    @property
+    def points(self) -> int:
+        return len(self.Z)
+
+    @property
+    def dim(self) -> int:
+        return self.Z.shape[1]
+
+    def label(self, z, spring, damper) -> str:
+        """``rate +10 %, free length -0.9 mm, c -20 %, mass.lid +5 %`` at unit point z."""
+        z = np.asarray(z, float)
+        parts = []
+        if spring.rate_tolerance:
+            parts.append(f"rate {100 * z[0] * spring.rate_tolerance:+.3g} %")
+        if spring.free_length_tolerance:
+            parts.append(f"free length {1e3 * z[1] * spring.free_length_tolerance:+.3g} mm")
+        if damper.c_tolerance:
+            parts.append(f"c {100 * z[2] * damper.c_tolerance:+.3g} %")
+        rest = self.other.label(z[3:]) if self.other.dim else "nominal"
+        if rest != "nominal":
+            parts.append(rest)
+        return ", ".join(parts) or "nominal"
+
+
+def pair_box(cfg: Config, samples: int, seed: int = 0) -> PairBox:
+    """The unit points of every pair: 2^d corners (d = 3 + the other toleranced keys), the
+    nominal point, ``samples`` Monte Carlo points of ``[tolerance] distribution``."""
+    tol = cfg.tolerance
+    tol = replace(tol, spreads=tuple(s for s in tol.spreads if s.key not in OWNED))
+    other = box_of(cfg, tolerance=tol)
+    d = 3 + other.dim
+    corners = np.array(list(itertools.product((-1.0, 1.0), repeat=d)))
+    rng = np.random.default_rng(seed)
+    if tol.distribution == "uniform":
+        z = rng.uniform(-1.0, 1.0, (samples, d))
+    else:
+        z = rng.standard_normal((samples, d)) / 3.0
+    if other.dim:
+        z[:, 3:] = np.maximum(z[:, 3:], other.z_min)
+    Z = np.vstack([corners, np.zeros((1, d)), z])
+    return PairBox(other, Z, len(corners), samples)
+
+
+def pair_rows(box: PairBox, spring, damper) -> tuple[list[str], np.ndarray]:
+    """The keys and their values at every unit point of one pair's box."""
+    Z = box.Z
+    k = np.maximum(spring.rate * (1 + Z[:, 0] * spring.rate_tolerance), 0.0)
+    l0 = np.maximum(spring.free_length + Z[:, 1] * spring.free_length_tolerance, 1e-4)
+    c = np.maximum(damper.c * (1 + Z[:, 2] * damper.c_tolerance), 0.0)
+    n = len(Z)
+    dash = damper.kind == "dashpot"
+    cols = {"design.spring_k": k, "design.spring_rest_length": l0,
+            "design.spring_kind": np.full(n, KINDS[spring.spring_kind]),
+            "design.spring_preload": np.full(n, spring.preload),
+            "design.damper_c": c if dash else np.zeros(n),
+            "design.rotary_damper_c": np.zeros(n) if dash else c}
+    if box.other.dim:
+        V = box.other.values(Z[:, 3:])
+        for j, key in enumerate(box.other.keys):
+            if key == PRELOAD:          # a spread of the preload: around this part's
+                h = box.other.half[j] / box.other.nominal[j] * spring.preload \
+                    if box.other.relative[j] and box.other.nominal[j] else box.other.half[j]
+                cols[key] = np.maximum(spring.preload + Z[:, 3 + j] * h, 0.0)
+            else:
+                cols[key] = V[:, j]
+    return list(cols), np.column_stack(list(cols.values()))
+
+
+def pivot_config(cfg: Config, damper) -> Config:
+    """The config a damper is run in: its pivot for a rotary damper, no spring limits."""
+    cfg = without_limits(cfg)
+    if damper.kind == "rotary" and cfg.design.rotary_damper_pivot != damper.pivot:
+        cfg = cfg.replace(design={"rotary_damper_pivot": damper.pivot})
+    return cfg
+
+
+def run_pairs(cfg: Config, box: PairBox, pairs: list) -> dict:
+    """Every row of every pair ``(spring, damper)``: the metric columns of
+    :func:`softclose.robust.evaluate.evaluate`, ``reason`` and ``feasible`` with the parts'
+    length limits checked, and the row's lower and upper length limit; rows pair-major."""
+    n = box.points
+    groups: dict = {}
+    for i, (s, d) in enumerate(pairs):
+        groups.setdefault(d.pivot if d.kind == "rotary" else None, []).append(i)
+    out = None
+    for _, idx in groups.items():
+        c = pivot_config(cfg, pairs[idx[0]][1])
+        keys, X = None, []
+        for i in idx:
+            keys, x = pair_rows(box, *pairs[i])
+            X.append(x)
+        cols = evaluate(c, keys, np.vstack(X), explain=False)
+        if out is None:
+            out = {k: np.empty((len(pairs) * n,) + np.shape(v)[1:], np.asarray(v).dtype)
+                   for k, v in cols.items()}
+            out["reason"] = np.empty(len(pairs) * n, dtype=object)
+        rows = (np.asarray(idx)[:, None] * n + np.arange(n)).ravel()
+        for k, v in cols.items():
+            out[k][rows] = v
+    lo = np.repeat([np.nan if s.min_length is None else s.min_length for s, _ in pairs], n)
+    hi = np.repeat([np.nan if s.max_length is None else s.max_length for s, _ in pairs], n)
+    with np.errstate(invalid="ignore"):
+        bad = (out["min_spring_length"] < lo * (1 - LIMIT_RTOL)) \
+            | (out["max_spring_length"] > hi * (1 + LIMIT_RTOL)) | (out["status"] == 6)
+    numerical = np.isin(out["status"], (2, 3, 4, 5))
+    out["reason"] = np.asarray(out["reason"], dtype=object)
+    out["reason"][bad] = RANGE
+    out["reason"][numerical] = "not integrated"
+    out["feasible"] = out["reason"] == ""
+    out["lo"], out["hi"] = lo, hi
+    return out
+
+
+def summarise(box: PairBox, cols: dict, npairs: int) -> dict:
+    """Per pair: feasible at every corner, yield over the samples, worst J (over corners,
+    nominal and samples; inf when a row did not close), the nominal metrics, why it fails
+    (the most frequent reason over corners, else samples) and at which row."""
+    n, nc = box.points, box.corners
+    F = cols["feasible"].reshape(npairs, n)
+    J = cols["objective"].reshape(npairs, n)
+    R = cols["reason"].reshape(npairs, n)
+    corners_ok = F[:, :nc].all(axis=1)
+    corner_count = F[:, :nc].sum(axis=1)
+    yld = F[:, nc + 1:].mean(axis=1) if box.samples else corners_ok.astype(float)
+    with np.errstate(invalid="ignore"):
+        worst = np.where(np.isnan(J).any(axis=1), np.inf, np.nanmax(np.where(
+            np.isnan(J), -np.inf, J), axis=1))
+    why, at = [], []
+    for p in range(npairs):
+        fail = np.flatnonzero(~F[p])
+        if not len(fail):
+            why.append("")
+            at.append(-1)
+            continue
+        first = fail[fail < nc] if (fail < nc).any() else fail
+        reasons, counts = np.unique(R[p, first].astype(str), return_counts=True)
+        r = reasons[np.argmax(counts)]
+        why.append(str(r))
+        at.append(int(first[R[p, first] == r][0]))
+    nominal = {k: cols[k].reshape(npairs, n)[:, nc] for k in
+               ("closing_time", "impact_tip_speed", "peak_tip_speed", "holding_moment",
+                "opening_force", "min_spring_length", "max_spring_length", "objective")}
+    return {"corners_ok": corners_ok, "corner_count": corner_count, "yield": yld,
+            "worst_objective": worst, "reason": why, "fail_row": at,
+            "nominal": nominal}
+
+
+def reason_text(box: PairBox, cols: dict, p: int, row: int, reason: str, spring, damper,
+                range_text: str = "") -> str:
+    """One line: why pair ``p`` fails at its row ``row`` (a point of its box);
+    ``range_text``: where the spring leaves its valid range there (:func:`range_texts`)."""
+    r = p * box.points + row
+    if row == box.corners:
+        what = "at the nominal point"
+    else:
+        what = ("at the corner " if row < box.corners else "at the sample ") \
+            + box.label(box.Z[row], spring, damper)
+    if reason in ("too slow", "too fast"):
+        return f"{reason}: closes in {cols['closing_time'][r]:.4g} s {what}"
+    if reason == "not held shut":
+        return f"not held shut: holding moment {cols['holding_moment'][r]:.4g} N m {what}"
+    if reason == "too heavy to open":
+        return f"too heavy to open: {cols['opening_force'][r]:.4g} N {what}"
+    if reason == RANGE:
+        return f"{range_text or RANGE} ({what})"
+    return f"{reason} {what}"
+
+
+def range_texts(cfg, box: PairBox, items: list) -> list[str]:
+    """Where the spring leaves its valid range, for each ``(spring, damper, row)`` of
+    ``items`` (the kernel's stroke at that point of the pair's box,
+    :func:`softclose.statics.out_of_range`, which names the angle); one batch per pivot and
+    part limits."""
+    from ..problem import LID_MASS, param_rows
+    out = [RANGE] * len(items)
+    groups: dict = {}
+    for n, (s, d, _) in enumerate(items):
+        key = (d.pivot if d.kind == "rotary" else None, s.min_length, s.max_length)
+        groups.setdefault(key, []).append(n)
+    for (_, lo, hi), idx in groups.items():
+        c0 = pivot_config(cfg, items[idx[0]][1])
+        rows, keys = [], None
+        for n in idx:
+            s, d, row = items[n]
+            keys, X = pair_rows(box, s, d)
+            rows.append(X[row])
+        X = np.array(rows)
+        slow = slow_keys(keys)
+        batches = [(c0, np.arange(len(idx)))] if not slow else [
+            (c0.update({k: float(X[j, keys.index(k)]) for k in slow}), np.array([j]))
+            for j in range(len(idx))]
+        for c, js in batches:
+            P = param_rows(c, len(js), keys, X[js])
+            m = X[js, keys.index(LID_MASS)] if LID_MASS in keys else None
+            sim = simulator(c)
+            res = sim.run_batch(P, lid_mass=m)
+            _, why = statics.out_of_range(statics.table_coordinate(sim.table),
+                                          limits_view(c, lo, hi), P, res)
+            for j, w in zip(js, why):
+                if w:
+                    out[idx[j]] = str(w)
+    return out

@@ -1,0 +1,171 @@
+"""``softclose select``: rank the springs (x dampers) of catalog files.
+
+    softclose select --springs FILE [--dampers FILE] [--samples N] [--seed S] [--verify N]
+                     [--dask ADDRESS|local:N] [--json] [--out DIR]
+
+``--out DIR`` writes ``select.csv`` (every pair, best first), ``select.json`` and the figure
+``select.png`` (yield against worst-case J). Exit 0 when the best pair meets every
+constraint at every corner of its tolerance box and the reference agrees; 3 when no pair
+does (the ranking is still printed and written); 2 for a bad file or option; 130 after
+Ctrl-C (the pairs screened so far are ranked and written).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from .common import Outcome, add_common, add_out, interactive, prepare_out, save_figure, wrote
+
+DESCRIPTION = """\
+Rank the springs one can buy (extension, compression, gas strut) -- with every damper of
+--dampers, or with the config's dashpot whose c is chosen per spring when no damper file
+is given -- by how the lid closes with them: each pair over its own tolerance box (the
+spring's rate and free length, the damper's c, as the catalog gives them; [tolerance] for
+the other keys, e.g. the lid's mass), in the C kernel at every corner and on Monte Carlo
+samples. Rank: meets every constraint at every corner first, then yield, then worst-case
+J. The best --verify pairs are re-simulated at every corner by the adaptive reference.
+
+Spring columns: part, kind (extension | compression | gas_strut), rate_N_per_m,
+free_length_m, preload_N, min_length_m, max_length_m (empty: no limit), rate_tolerance
+(relative), optional free_length_tolerance_m (default: the standard grade, ±0.9 mm up to
+63 mm, ±1.3 mm up to 100 mm, ±1.5 % beyond); the lengths and rate may be given in mm and
+N/mm instead (free_length_mm, rate_N_per_mm, ...). Damper columns: part, kind (dashpot |
+rotary), c (N s/m, or N m s/rad for a rotary damper), pivot (rotary: O, B, A, C or lid),
+c_tolerance (relative). A gas strut is a compression spring whose preload is its force at
+full extension and whose rate is its progression. Rows that cannot be used are reported by
+line and column and left out. An illustrative catalog (not real parts):
+`python -m softclose.catalog.illustrative DIR`."""
+
+
+def register(sub) -> None:
+    p = sub.add_parser("select", help="rank catalog springs and dampers over their tolerances",
+                       description=DESCRIPTION,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_common(p)
+    p.add_argument("--springs", metavar="FILE", required=True,
+                   help="spring catalog (CSV: part, kind, rate_N_per_m, free_length_m, "
+                        "preload_N, min_length_m, max_length_m, rate_tolerance"
+                        "[, free_length_tolerance_m])")
+    p.add_argument("--dampers", metavar="FILE",
+                   help="damper catalog (CSV: part, kind, c, pivot, c_tolerance); without "
+                        "it the dashpot's c is chosen per spring within optimise.damper_c")
+    add_out(p, what="write select.csv, select.json and select.png to this folder")
+    p.add_argument("--samples", type=int, metavar="N", default=256,
+                   help="Monte Carlo samples per pair (default 256)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--verify", type=int, metavar="N", default=10,
+                   help="how many of the best pairs the adaptive reference checks at every "
+                        "corner (default 10)")
+    p.add_argument("--no-nlp", dest="nlp", action="store_false",
+                   help="without --dampers: keep the c of the kernel's grid (by default the "
+                        "--verify best springs' c is re-solved by the robust NLP)")
+    p.add_argument("--dask", metavar="ADDRESS|local:N",
+                   help="screen the pairs on a Dask cluster (scheduler address or local:N)")
+    p.set_defaults(run=run)
+
+
+def _check(args) -> None:
+    from ..errors import ConfigError
+    if not 0 <= args.samples <= 100_000:
+        raise ConfigError(f"--samples {args.samples}: expected 0..100000")
+    if args.seed < 0:
+        raise ConfigError(f"--seed {args.seed}: must be non-negative")
+    if args.verify < 0:
+        raise ConfigError(f"--verify {args.verify}: must be non-negative")
+
+
+def _pair(e) -> str:
+    return e["spring"] + (f" + {e['damper']}" if e["damper"] else
+                          f" + dashpot c = {e['design']['damper_c']:.4g} N s/m")
+
+
+def _num(v, fmt=".4g") -> str:
+    return "—" if v is None else format(v, fmt)
+
+
+def format_select(r, top: int = 15) -> str:
+    lines = [f"softclose select: {r.evaluated} of {r.pairs} pairs screened over their tolerance "
+             f"boxes ({r.corners} corners, {r.samples} samples each) in {r.seconds:.2f} s; the "
+             f"best {r.verified_count} checked at every corner by the adaptive reference"]
+    if r.continuous:
+        lines.append("  no damper catalog: the dashpot's c chosen per spring within "
+                     "optimise.damper_c, made to [tolerance] design.damper_c")
+    for w in r.warnings[:10]:
+        lines.append(f"  warning: {w}")
+    if len(r.warnings) > 10:
+        lines.append(f"  ... {len(r.warnings) - 10} more rows left out")
+    feas = sum(1 for e in r.ranking if e["feasible"])
+    lines.append(f"  {feas} of {len(r.ranking)} pairs meet every constraint at every corner")
+    lines.append(f"  {'#':>3} {'pair':<34} {'corners':>8} {'yield':>8} {'worst J':>10} "
+                 f"{'verified':>9}  why not")
+    for i, e in enumerate(r.ranking[:top], 1):
+        ver = {None: "—", True: "yes", False: "DIFFERS"}[e["verified"]]
+        lines.append(f"  {i:>3} {_pair(e)[:34]:<34} {e['corners_feasible']:>3}/{e['corners']:<4}"
+                     f" {100 * e['yield']:>7.2f}% {_num(e['worst_objective'], '.5g'):>10} "
+                     f"{ver:>9}  {e['reason']}")
+    if len(r.ranking) > top:
+        lines.append(f"  ... {len(r.ranking) - top} more (--out DIR writes every pair)")
+    b = r.best
+    if b is not None:
+        d = b["design"]
+        lines.append(f"  best: {_pair(b)}: {d['spring_kind']} spring, rate {d['spring_k']:.6g} "
+                     f"N/m, free length {1e3 * d['spring_rest_length']:.4g} mm, preload "
+                     f"{d['spring_preload']:.4g} N"
+                     + (f"; nominal lid closes in {b['nominal']['closing_time']:.4g} s"
+                        if b["nominal"].get("closing_time") == b["nominal"].get("closing_time")
+                        else ""))
+        if b.get("nlp"):
+            n = b["nlp"]
+            lines.append(f"  its c by the robust NLP (the spring fixed, over its box): "
+                         + (f"{n['c']:.6g} N s/m, worst-scenario J {n['objective']:.6g}"
+                            if n["c"] is not None else f"no solution ({n['message']})")
+                         + f"; the grid's {n['c_grid']:.6g} N s/m; kept the "
+                         + ("NLP's" if n["kept"] == "nlp" else "grid's"))
+        ref = b.get("reference")
+        if ref:
+            lines.append(f"  adaptive reference at its {len(ref['corners'])} corners: "
+                         + ("every constraint met" if ref["feasible"] else
+                            f"FAILS ({ref['reason']})")
+                         + (", the kernel's verdicts agree" if ref["agree"] else
+                            f"; the kernel's verdict differs at {', '.join(ref['differ'])}")
+                         + (f"; worst J {ref['worst_objective']:.6g}"
+                            if ref["worst_objective"] not in (None, float("inf")) else ""))
+    if r.message:
+        lines.append(f"  note: {r.message}")
+    t = r.times
+    lines.append("  (" + ", ".join(f"{k} {v:.2f} s" for k, v in t.items()) + ")")
+    return "\n".join(lines)
+
+
+def run(cfg, args) -> Outcome:
+    from ..catalog import read_dampers, read_springs, select
+    _check(args)
+    out = prepare_out(args.out)
+    springs = read_springs(args.springs)
+    dampers = read_dampers(args.dampers) if args.dampers else None
+    if args.dask:
+        from ..catalog.distributed import mapper
+        with mapper(args.dask) as m:
+            res = select(cfg, springs, dampers, samples=args.samples, seed=args.seed,
+                         verify=args.verify, progress=interactive(args), mapper=m,
+                         nlp=args.nlp)
+    else:
+        res = select(cfg, springs, dampers, samples=args.samples, seed=args.seed,
+                     verify=args.verify, progress=interactive(args), nlp=args.nlp)
+    payload = res.to_json()
+    files = []
+    if out is not None:
+        from ..jsonio import jsonable
+        path = out / "select.csv"
+        res.to_frame().to_csv(path, index=False)
+        files.append(path)
+        path = out / "select.json"
+        path.write_text(json.dumps(jsonable(payload), indent=1, allow_nan=False))
+        files.append(path)
+        if res.ranking and not res.interrupted:
+            files.append(save_figure(res.plot(), out / "select.png"))
+        payload["files"] = [str(f) for f in files]
+    code = 130 if res.interrupted else (0 if res.success else 3)
+    return Outcome(payload, format_select(res) + wrote(files), code, tuple(files),
+                   error=None if res.success or res.interrupted else res.message)
