@@ -14,6 +14,8 @@ keys), ``.to_json()`` and ``.plot()`` (a matplotlib Figure):
   numeric config keys;
 - :func:`tolerance_analysis`, :func:`sensitivity` -- Monte Carlo yield and Sobol indices of a
   design under ``[tolerance]``;
+- :func:`fit` -- the model calibrated to measured closing strokes: estimates with 95 %
+  intervals, correlations, identifiability, the calibrated config (``softclose.fit``);
 - :func:`load_config`, :func:`default_config`; ``cfg.set("mass.lid", 0.6)`` changes one key.
 
 Lower layers for scripts that need them: :class:`LidModel`, :class:`Simulator`,
@@ -40,10 +42,11 @@ _LAZY = {
     "sweep": "sweeps", "sample": "sweeps", "SweepResult": "sweeps",
     "tolerance_analysis": "robust", "sensitivity": "robust", "RobustResult": "robust",
     "YieldResult": "robust", "SensitivityResult": "robust",
+    "fit": "calibration", "FitResult": "calibration",
 }
 
 __all__ = ["simulate", "optimise", "front", "sweep", "sample", "tolerance_analysis",
-           "sensitivity", "load_config", "default_config", "Config", "StrokeResult",
+           "sensitivity", "fit", "FitResult", "load_config", "default_config", "Config", "StrokeResult",
            "StrokeStatus", "OptimiseResult", "FrontResult", "SweepResult", "RobustResult",
            "YieldResult", "SensitivityResult", "ConfigError", "NumericalError",
            "SoftcloseError", "LidModel", "Reference", "Simulator"]
