@@ -211,19 +211,24 @@ def solve(cfg, data, free, *, axis=None, starts: int = 1, seed: int = 0, prepare
         want += list(range(ix["v"].start, ix["v"].stop))
     E = np.zeros((nw + nlp.ng, len(want)))
     E[want, range(len(want))] = 1.0
-    try:
-        with np.errstate(all="ignore"):
-            Z = np.linalg.solve(K, E)
-        if not np.all(np.isfinite(Z)):
-            raise np.linalg.LinAlgError
-    except np.linalg.LinAlgError:
-        Z = np.linalg.pinv(K) @ E
+    Z = np.full(E.shape, np.nan)
+    if np.all(np.isfinite(K)):
+        try:
+            with np.errstate(all="ignore"):
+                Z = np.linalg.solve(K, E)
+            if not np.all(np.isfinite(Z)):
+                raise np.linalg.LinAlgError
+        except np.linalg.LinAlgError:
+            try:
+                Z = np.linalg.pinv(K) @ E
+            except np.linalg.LinAlgError:
+                pass
     C = s2 * Z[want, :]
     C = 0.5 * (C + C.T)
     value = ws[:nk] * scale
     cov = C[:nk, :nk] * np.outer(scale, scale)
-    std = np.sqrt(np.clip(np.diag(cov), 0, None))
     with np.errstate(all="ignore"):
+        std = np.sqrt(np.clip(np.diag(cov), 0, None))
         corr = cov / np.outer(std, std)
     tq = t_quantile(dof)
     # per stroke: the release, the residuals in the data's unit, the model at the samples
@@ -235,7 +240,8 @@ def solve(cfg, data, free, *, axis=None, starts: int = 1, seed: int = 0, prepare
         v = ws[ix["v"]]
         X = ws[ix["X"]].reshape(-1, 2).T
         vi = [want.index(q) for q in range(ix["v"].start, ix["v"].stop)]
-        vstd = np.sqrt(np.clip(np.diag(C)[vi], 0, None))
+        with np.errstate(all="ignore"):
+            vstd = np.sqrt(np.clip(np.diag(C)[vi], 0, None))
         per.append(StrokeFit.of(s, float(v[1]), float(v[0]), float(v[2]) if len(v) > 2 else 0.0,
                                 X, rs, float(vstd[1]), float(vstd[0])))
     return FitResult.build(cfg, keys, value, std, corr, tq, dof, s2, ok, status, iters,

@@ -1,6 +1,7 @@
 """Reading a measured closing stroke and finding the stroke in it.
 
-A file is a CSV (comma, semicolon or tab separated) with a header row: a time column
+A file is a CSV (comma, semicolon or tab separated; lines starting with # are comments) with
+a header row: a time column
 (``time_s``, or a phone sensor app's ``"Time (s)"``) and one measured quantity --
 ``theta_deg``/``theta_rad`` (a video tracker's angle track) or ``theta_dot_rad_s``/a phone's
 ``"Gyroscope x (rad/s)"`` (an angular rate; the axis by ``axis``, else the axis that moves
@@ -87,13 +88,21 @@ def record_of(data, axis: str | None = None, name: str = "data") -> Record:
 
 def parse(text: str, path: str, axis: str | None = None) -> Record:
     """Parse a data file's text (``path``: how messages name it)."""
-    rows = list(csv.reader(text.splitlines(), delimiter=_sniff(text.split("\n", 1)[0])))
-    if not rows:
+    lines_all = text.splitlines()
+    # comment lines (starting with #) are skipped; the file's line numbers are kept
+    numbered = [(n, ln) for n, ln in enumerate(lines_all, start=1)
+                if not ln.lstrip().startswith("#")]
+    if not numbered or not any(ln.strip() for _, ln in numbered):
         raise ConfigError(f"{path}: the data file is empty")
+    while not numbered[0][1].strip():
+        numbered.pop(0)
+    head_line = numbered[0][0]
+    rows = list(csv.reader([ln for _, ln in numbered], delimiter=_sniff(numbered[0][1])))
+    row_lines = [n for n, _ in numbered]
     header = [h.strip() for h in rows[0]]
     tcol = next((c for c in TIME_COLUMNS if c in header), None)
     if tcol is None:
-        raise ConfigError(f"{path}:1: no time column (expected one of "
+        raise ConfigError(f"{path}:{head_line}: no time column (expected one of "
                           f"{', '.join(repr(c) for c in TIME_COLUMNS)}; found "
                           f"{', '.join(repr(h) for h in header) or 'nothing'})")
     gyro = {h.split()[1].lower(): h for h in header
@@ -103,7 +112,7 @@ def parse(text: str, path: str, axis: str | None = None) -> Record:
         raise ConfigError(f"--axis {axis}: expected x, y or z")
     if axis is not None:
         if axis not in gyro:
-            raise ConfigError(f"{path}:1: --axis {axis}: no column 'Gyroscope {axis} (rad/s)'")
+            raise ConfigError(f"{path}:{head_line}: --axis {axis}: no column 'Gyroscope {axis} (rad/s)'")
         ycol, kind = gyro[axis], "rate"
     else:
         ycol = next((c for c in ANGLE_COLUMNS if c in header), None)
@@ -116,13 +125,13 @@ def parse(text: str, path: str, axis: str | None = None) -> Record:
                 ycol = None      # the axis that moves most, chosen below
             elif ycol is None:
                 raise ConfigError(
-                    f"{path}:1: no measured column (expected theta_deg, theta_rad, "
+                    f"{path}:{head_line}: no measured column (expected theta_deg, theta_rad, "
                     f"theta_dot_rad_s or a gyroscope axis 'Gyroscope x (rad/s)'; found "
                     f"{', '.join(repr(h) for h in header)})")
     cols = [tcol] + ([ycol] if ycol else list(gyro.values()))
     idx = [header.index(c) for c in cols]
     data, lines = [], []
-    for n, row in enumerate(rows[1:], start=2):
+    for n, row in zip(row_lines[1:], rows[1:]):
         if not row or all(not c.strip() for c in row):
             continue
         vals = []

@@ -30,7 +30,7 @@ class StrokeFit:
     release_angle_std_deg: float
     bias: float
     axis_sign: float
-    t_closed: float
+    t_last: float             # the last sample fitted (the closing lies within the next frame)
     residual_rms: float
     samples_used: int
 
@@ -45,7 +45,7 @@ class StrokeFit:
         model[used] = y[used] - rs * conv
         return cls(rec.path, rec.kind, rec.column, "deg" if angle else "rad/s", rec.t, y,
                    model, t_r, t_std, math.degrees(th_r), math.degrees(th_std),
-                   bias * s.sign, s.sign, s.t_closed,
+                   bias * s.sign, s.sign, float(rec.t[s.moving[-1]]),
                    float(np.sqrt(np.mean((rs * conv) ** 2))), len(used))
 
     def to_json(self) -> dict:
@@ -55,7 +55,7 @@ class StrokeFit:
                 "release_angle_std_deg": self.release_angle_std_deg,
                 "bias": self.bias if self.kind == "rate" else None,
                 "axis_sign": self.axis_sign if self.kind == "rate" else None,
-                "closing_time_estimate": self.t_closed - self.release_time,
+                "last_fitted_time": self.t_last,
                 "residual_rms": self.residual_rms, "residual_unit": self.unit,
                 "samples_used": self.samples_used, "samples": int(len(self.t))}
 
@@ -108,7 +108,7 @@ class FitResult(Displayed):
                              1.0, abs(value[i])) or np.isfinite(hi[i])
                          and abs(value[i] - hi[i]) <= 1e-6 * abs(hi[i]))
         collinear, why = (), []
-        if nk >= 2 and np.all(np.isfinite(corr)):
+        if ok and nk >= 2 and np.all(np.isfinite(corr)):
             lam, V = np.linalg.eigh(C)
             vif = np.diag(np.linalg.pinv(C))
             if lam[0] <= 0 or np.max(vif) > VIF_MAX:
@@ -129,17 +129,18 @@ class FitResult(Displayed):
         if loose:
             why.append(f"{', '.join(loose)} not determined by the data (standard deviation "
                        f"above {UNDETERMINED:.0%} of the value)")
-        identifiable = not why
+        identifiable = (not why) if ok else None     # (unknown without a fit)
         msg = []
         if not ok:
             msg.append(f"the fit did not converge (Ipopt: {status}): give better first values "
-                       "with --set, or more starts (--starts)")
+                       "with --set, or more starts (--starts), and check that the config's "
+                       "geometry and stroke are the measured lid's")
         msg += why
         if at_bound:
             msg.append(f"{', '.join(at_bound)} at the bound of its range (its interval is "
                        "one-sided in truth)")
         return cls(bool(ok), "; ".join(msg), tuple(keys), values, stds, ci, correlation,
-                   bool(identifiable), collinear, tuple(strokes), status, int(iters), int(dof),
+                   identifiable, collinear, tuple(strokes), status, int(iters), int(dof),
                    float(s2), {k: float(u_init[i]) for i, k in enumerate(keys)}, at_bound,
                    int(starts), float(defect), int(n_move), cfg)
 
@@ -229,7 +230,8 @@ class FitResult(Displayed):
     def _display(self) -> Display:
         facts = [(k, f"{with_unit(self.values[k], unit_of(k))} ± {num(self.std[k], 2)}")
                  for k in self.keys]
-        facts.append(("identifiable", "yes" if self.identifiable else
+        facts.append(("identifiable", "yes" if self.identifiable else "—" if
+                      self.identifiable is None else
                       "no: " + " / ".join(self.collinear or ("see the message",))))
         facts.append(("residual rms", ", ".join(f"{num(s.residual_rms, 3)} {s.unit}"
                                                 for s in self.strokes)))
@@ -247,7 +249,7 @@ class FitResult(Displayed):
                             [(s.path, num(s.release_time, 5), num(s.release_angle_deg, 5),
                               f"{num(s.residual_rms, 3)} {s.unit}", s.samples_used)
                              for s in self.strokes]))
-        return Display("FitResult", self.success and self.identifiable, self.message,
+        return Display("FitResult", bool(self.success and self.identifiable), self.message,
                        tuple(facts), tuple(tables))
 
 

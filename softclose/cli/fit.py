@@ -70,10 +70,10 @@ def format_fit(res, payload) -> str:
         for a in res.keys:
             lines.append(f"    {a:<{w}} " + " ".join(f"{res.correlation[a][b]:+.3f}"
                                                      for b in res.keys))
-    lines.append(f"  identifiable: {'yes' if res.identifiable else 'NO'}")
+    lines.append(f"  identifiable: {'yes' if res.identifiable else 'NO' if res.identifiable is False else '—'}")
     for s in res.strokes:
         lines.append(f"  {s.path}: release at {s.release_time:.4f} s from "
-                     f"{s.release_angle_deg:.3f} deg, closes ~{s.t_closed:.4f} s, "
+                     f"{s.release_angle_deg:.3f} deg, fitted up to {s.t_last:.4f} s, "
                      f"{s.samples_used} samples, rms residual {s.residual_rms:.3g} {s.unit}"
                      + (f", bias {s.bias:.4g} rad/s" if s.kind == "rate" else ""))
     lines.append(f"  ({res.iterations} Ipopt iterations, {res.substeps} sub-step(s) a frame: "
