@@ -200,22 +200,35 @@ class FitResult(Displayed):
 
     # -- hand-over -----------------------------------------------------------------------
     def tolerance(self) -> dict:
-        """The ``[tolerance]`` proposal: each fitted key's spread from its 95 % interval
-        (relative, or absolute for a value of 0; the configured distribution's meaning:
-        uniform: the interval's half width, normal: 3 standard deviations). Keys the data do
-        not determine get none (name them in ``[tolerance]`` by hand)."""
+        """The ``[tolerance]`` proposal: for each fitted key of the lid (not a design variable
+        the optimiser chooses -- spring_k, spring_rest_length, damper_c, ``optimise.free`` --
+        whose spread is that of the parts to buy, not of this prototype), a spread from its
+        95 % interval: relative (absolute for a value of 0 or at its bound), in the meaning of
+        the configured distribution (uniform: the interval's half width; normal: 3 standard
+        deviations), and never below a spread the config already gives the key. Keys the data
+        do not determine get none (give them by hand)."""
+        from ..problem import DESIGN_KEYS
+        skip = {f"design.{k}" for k in DESIGN_KEYS} | {k for k, _, _ in
+                                                        (self.cfg.optimise.free or ())}
+        given = {sp.key: sp for sp in self.cfg.tolerance.spreads}
         out = {}
         normal = self.cfg.tolerance.distribution == "normal"
         for k in self.keys:
-            if k in self.collinear:
+            if k in self.collinear or k in skip:
                 continue
             v, s = self.values[k], self.std[k]
             half = 3 * s if normal else 0.5 * (self.ci95[k][1] - self.ci95[k][0])
             if not (np.isfinite(half) and half > 0):
                 continue
-            if v != 0 and half / abs(v) < 0.95:
-                out[k] = float(f"{half / abs(v):.3g}")
+            old = given.get(k)
+            if v != 0 and k not in self.at_bound and half / abs(v) < 0.95:
+                rel = half / abs(v)
+                if old is not None:
+                    rel = max(rel, old.value if old.relative else old.value / abs(v))
+                out[k] = float(f"{rel:.3g}")
             elif v == 0 or k in self.at_bound:
+                if old is not None and not old.relative:
+                    half = max(half, old.value)
                 out[k] = {"absolute": float(f"{half:.3g}")}
         return out
 

@@ -23,8 +23,10 @@ Jacobian), the correlations and a verdict: keys the data cannot separate (a vari
 inflation above 10, e.g. the lid's mass against the damper from one stroke) are named, and
 their numbers are not to be trusted. Give the keys you know (the lid weighed) with --set.
 With --out: calibrated.toml (the config with the fitted keys and a [tolerance] proposal from
-the 95 % intervals: `softclose optimise --robust --config DIR/calibrated.toml`), fit.csv (the
-estimates), samples.csv (data, model, residual) and the figure fit.png."""
+the 95 % intervals of the lid's keys -- masses, inertias, friction; the design variables keep
+the spreads of the parts to buy --: `softclose optimise --robust --config DIR/calibrated.toml`),
+fit.csv (the estimates), samples.csv (every sample: measured, model, residual, in deg or
+rad/s, a gyroscope's turned to theta' with its bias) and the figure fit.png."""
 
 
 def register(sub) -> None:
@@ -97,9 +99,11 @@ def write_fit(res, out: Path, data) -> list:
             "fitted: " + ", ".join(f"{k} = {res.values[k]!r} ± {res.std[k]:.3g} (95 %: "
                                    f"{res.ci95[k][0]:.6g} .. {res.ci95[k][1]:.6g})"
                                    for k in res.keys),
-            ("[tolerance] proposal from the 95 % intervals: " + ", ".join(
-                f"{k} = {v}" for k, v in tol.items())) if tol else
-            "no [tolerance] proposal (no key determined)",
+            ("[tolerance] proposal from the 95 % intervals (the lid's keys; the design "
+             "variables keep the spreads of the parts to buy): " + ", ".join(
+                 f"{k} = {v}" for k, v in tol.items())) if tol else
+            "no [tolerance] proposal (no key of the lid determined; the design variables "
+            "keep the spreads of the parts to buy)",
             "design for what is known of the lid: softclose optimise --robust --config "
             "calibrated.toml"]
     if not res.identifiable:
@@ -112,10 +116,9 @@ def write_fit(res, out: Path, data) -> list:
     files.append(table)
     rows = []
     for s in res.strokes:
-        rows.append(pd.DataFrame({"file": s.path, "time_s": s.t, f"measured_{s.unit}": s.y,
-                                  f"model_{s.unit}": s.model,
-                                  "residual": s.y - s.model,
-                                  "fitted": np.isfinite(s.model)}))
+        rows.append(pd.DataFrame({"file": s.path, "time_s": s.t, "measured": s.y,
+                                  "model": s.model, "residual": s.y - s.model,
+                                  "unit": s.unit, "fitted": np.isfinite(s.model)}))
     samples = out / "samples.csv"
     pd.concat(rows).to_csv(samples, index=False)
     files.append(samples)

@@ -8,8 +8,9 @@ from . import plt
 
 
 def plot_fit(result, title: str | None = None):
-    """One column per record: top, the measured samples (grey: not fitted) and the model at
-    the fitted ones, the release marked; bottom, the residuals with +-2 sigma of the noise."""
+    """One column per record: top, the measured samples (grey: not fitted; a gyroscope's with
+    its axis turned to theta' and its bias removed) and the model at the fitted ones, the
+    release marked; bottom, the residuals with +-2 rms."""
     n = len(result.strokes)
     fig, axes = plt.subplots(2, n, figsize=(5.5 * n, 5.6), squeeze=False,
                              gridspec_kw={"height_ratios": [2.2, 1]}, sharex="col")
@@ -17,8 +18,8 @@ def plot_fit(result, title: str | None = None):
         top, bot = axes[0, j], axes[1, j]
         used = np.isfinite(s.model)
         what = "θ [deg]" if s.kind == "angle" else "θ' (bias removed) [rad/s]"
-        y = s.y if s.kind == "angle" else s.y - s.bias
-        m = s.model if s.kind == "angle" else s.model - s.bias
+        b = 0.0 if s.kind == "angle" else s.bias * s.axis_sign   # (theta' way round)
+        y, m = s.y - b, s.model - b
         top.plot(s.t[~used], y[~used], ".", color="0.7", ms=3, label="not fitted")
         top.plot(s.t[used], y[used], ".", color="tab:blue", ms=3, label="measured")
         top.plot(s.t[used], m[used], "-", color="tab:red", lw=1.2, label="fitted model")
