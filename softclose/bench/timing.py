@@ -34,6 +34,8 @@ SPEED_TARGETS = {
     "robust_optimise": {"max_s": 10.0},      # both spring kinds one can buy
     "yield_1e5_robust": {"max_s": 1.0},
     "sobol_1024": {"max_s": 2.0},
+    "fit_cli_2x1": {"max_s": 2.0},
+    "fit_cli_5x3": {"max_s": 10.0},
 }
 
 
