@@ -22,6 +22,7 @@ from softclose.errors import ConfigError
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "data" / "stroke.csv"
+README = (ROOT / "README.md").read_text()
 #: the README's optimum as a built prototype (a compression spring), the lid weighed
 PROTOTYPE = {"design.spring_kind": "compression", "design.spring_k": 1914.709,
              "design.spring_rest_length": 0.07925707, "design.damper_c": 2087.754}
@@ -49,6 +50,7 @@ def test_recovery_over_noise_seeds(prototype, exact):
     t, th, _, t_rel, _ = exact
     inside = {k: 0 for k in truth}
     est, std, rel = {k: [] for k in truth}, {k: [] for k in truth}, []
+    ci = {k: [] for k in truth}
     for seed in range(50):
         noise = np.random.default_rng(seed).standard_normal(len(t))
         r = sc.fit(guess, {"time_s": t, "theta_deg": np.degrees(th) + 0.15 * noise},
@@ -58,12 +60,22 @@ def test_recovery_over_noise_seeds(prototype, exact):
             inside[k] += r.ci95[k][0] <= truth[k] <= r.ci95[k][1]
             est[k].append(r.values[k])
             std[k].append(r.std[k])
+            ci[k].append(r.ci95[k])
         rel.append(r.strokes[0].release_time - t_rel)
         assert abs(r.values["design.damper_c"] / truth["design.damper_c"] - 1) < 0.03
+    both = sum(lo_d <= truth["design.damper_c"] <= hi_d and lo_i <= truth["mass.inertia_lid"]
+               <= hi_i for (lo_d, hi_d), (lo_i, hi_i) in zip(ci["design.damper_c"],
+                                                            ci["mass.inertia_lid"]))
     for k in truth:
         assert inside[k] >= 45, (k, inside[k])
         spread, reported = np.std(est[k]), np.mean(std[k])
         assert 0.6 < spread / reported < 1.6, (k, spread, reported)
+    # the README quotes these counts and ratios (its table row fit_seeds)
+    rel_spread = {k: f"{100 * np.std(est[k]) / truth[k]:.2g} % against "
+                     f"{100 * np.mean(std[k]) / truth[k]:.2g} %" for k in truth}
+    assert (f"{inside['design.damper_c']} and {inside['mass.inertia_lid']} of the 50 fits "
+            f"(both at once in {both}); {rel_spread['design.damper_c']}, "
+            f"{rel_spread['mass.inertia_lid']}") in README
     assert abs(np.mean(est["design.damper_c"]) / truth["design.damper_c"] - 1) < 0.005
     assert abs(np.mean(rel)) < 2e-3 and np.std(rel) < 5e-3     # the release, to a frame
 
@@ -157,6 +169,12 @@ def test_cli_done_when(tmp_path, capsys):
         lo, hi = p[k]["ci95"]
         assert lo <= v <= hi
     assert d["identifiable"] is True and 0.1 < d["residual_rms"] < 0.2
+    c, i = p["design.damper_c"], p["mass.inertia_lid"]
+    quoted = (f"damper_c = {c['value']:.1f} ± {c['std']:.1f} N s/m (95 %: {c['ci95'][0]:.1f}–"
+              f"{c['ci95'][1]:.1f}; truth 2087.754), inertia_lid = {i['value']:.4f} ± "
+              f"{i['std']:.4f} kg m² (95 %: {i['ci95'][0]:.4f}–{i['ci95'][1]:.4f}; truth "
+              f"0.0104), rms residual {d['residual_rms']:.3f}°")
+    assert quoted in README, quoted                   # the README's table row "fit"
     assert abs(d["release_time"] - 0.10308) < 0.01 and abs(d["release_angle_deg"] - 18) < 0.2
     assert {Path(f).name for f in d["files"]} == {"calibrated.toml", "fit.csv", "samples.csv",
                                                   "fit.svg"}
