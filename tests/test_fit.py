@@ -246,3 +246,37 @@ def test_bad_options(argv, pattern, capsys):
 def test_missing_file(capsys):
     rc = main(["fit", "/nonexistent/stroke.csv", "--free", "design.damper_c"])
     assert rc == 2 and "no such data file" in capsys.readouterr().err
+
+
+def test_other_columns_and_separators(prototype, exact, tmp_path):
+    """theta_rad (tab separated) and theta_dot_rad_s (semicolons) read as the same stroke:
+    the damper within its interval from each; several starts find the same fit."""
+    t, th, thd, _, _ = exact
+    rng = np.random.default_rng(9)
+    a = tmp_path / "rad.tsv"
+    a.write_text("time_s\ttheta_rad\n" + "".join(
+        f"{x:.12g}\t{y:.12g}\n" for x, y in zip(t, th + math.radians(0.15) * rng.standard_normal(
+            len(t)))))
+    b = tmp_path / "rate.csv"
+    b.write_text("time_s;theta_dot_rad_s\n" + "".join(
+        f"{x:.12g};{y:.12g}\n" for x, y in zip(t, thd + 0.01 * rng.standard_normal(len(t)))))
+    for path, kind in ((a, "angle"), (b, "rate")):
+        r = sc.fit(prototype, path, ["design.damper_c"])
+        assert r.strokes[0].kind == kind and r.success
+        lo, hi = r.ci95["design.damper_c"]
+        assert lo <= 2087.754 <= hi
+    r3 = sc.fit(prototype.update({"design.damper_c": 1000.0}), a, ["design.damper_c"],
+                starts=3)
+    assert r3.values["design.damper_c"] == pytest.approx(
+        sc.fit(prototype, a, ["design.damper_c"]).values["design.damper_c"], rel=1e-6)
+
+
+def test_plot(prototype):
+    """The figure: data and model per record, residuals below."""
+    import matplotlib
+    matplotlib.use("Agg")
+    r = sc.fit(prototype, EXAMPLE, ["design.damper_c"])
+    fig = r.plot()
+    assert len(fig.axes) == 2
+    top = fig.axes[0]
+    assert len(top.lines) >= 3     # not fitted, measured, model (and the release)

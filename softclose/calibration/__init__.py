@@ -16,15 +16,15 @@ from .result import FitResult, StrokeFit
 
 
 def fit(cfg, data, free, *, axis: str | None = None, starts: int = 1,
-        seed: int = 0) -> FitResult:
+        seed: int = 0, progress: bool = False) -> FitResult:
     """Fit the keys ``free`` (e.g. ``["design.damper_c", "mass.inertia_lid"]``) of ``cfg``
     to ``data`` (a CSV path, a table of columns, or a list of them: fitted jointly, sharing
     the keys). ``axis``: a gyroscope's axis (x, y, z); ``starts``: how many first guesses
     (the first from the equation error, the others scattered around it). Bad data raise
     :class:`~softclose.errors.ConfigError`; a fit that does not converge returns a result
-    with ``success`` False."""
+    with ``success`` False. ``progress``: a progress line over the starts on a terminal."""
     from .core import solve
-    return solve(cfg, data, free, axis=axis, starts=starts, seed=seed)
+    return solve(cfg, data, free, axis=axis, starts=starts, seed=seed, progress=progress)
 
 
 __all__ = ["fit", "FitResult", "StrokeFit", "FIT_KEYS"]

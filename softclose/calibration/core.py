@@ -146,7 +146,8 @@ def _parameters(stroke, scale):
     return np.concatenate(pars)
 
 
-def solve(cfg, data, free, *, axis=None, starts: int = 1, seed: int = 0, prepared=None):
+def solve(cfg, data, free, *, axis=None, starts: int = 1, seed: int = 0, prepared=None,
+          progress: bool = False):
     """The fit of the keys ``free`` to ``data``: a :class:`softclose.calibration.FitResult`."""
     from .result import FitResult, StrokeFit
     model, keys, strokes = prepared or prepare(cfg, data, free, axis)
@@ -179,7 +180,12 @@ def solve(cfg, data, free, *, axis=None, starts: int = 1, seed: int = 0, prepare
     rng = np.random.default_rng(seed)
     n_move, n_rel = substeps(h_move), substeps(h_rel)
     best = None
+    from ..interrupt import check
+    from ..progress import Progress
+    bar = Progress(int(starts), "fit", enabled=progress and starts > 1, unit="")
     for i in range(max(1, int(starts))):
+        check()                       # Ctrl-C between starts (Ipopt may swallow it)
+        bar.update(i, f"best 1/2 r'r = {best[1]:.6g}" if best else "")
         factor = np.ones(nk) if i == 0 else np.exp(0.7 * rng.standard_normal(nk))
         w = w0.copy()
         w[:nk] = np.clip(u_init * factor / scale, lbw[:nk], ubw[:nk])
@@ -188,6 +194,7 @@ def solve(cfg, data, free, *, axis=None, starts: int = 1, seed: int = 0, prepare
         ok = status in CONVERGED and np.isfinite(f)
         if best is None or (ok, -f) > (best[3], -best[1]):
             best = (ws, f, status, ok, it)
+    bar.close()
     ws, f, status, ok, iters = best
     # the integration error: sub-steps doubled until halving them changes no sample by more
     # than DEFECT_MAX of the noise (the solution re-solved from the last one)

@@ -7,7 +7,7 @@ import argparse
 from pathlib import Path
 
 from ..errors import ConfigError
-from .common import Outcome, add_common, add_out, prepare_out, save_figure, wrote
+from .common import Outcome, add_common, add_out, interactive, prepare_out, save_figure, wrote
 
 DESCRIPTION = """\
 Fit config keys of the lid's dynamics (masses, inertias, the dampers, friction, a spring's
@@ -132,7 +132,7 @@ def run(cfg, args) -> Outcome:
     keys = check_keys(args.fit_free)
     starts = _starts(args.starts)
     out = prepare_out(args.out)
-    res = fit(cfg, args.data, keys, axis=args.axis, starts=starts)
+    res = fit(cfg, args.data, keys, axis=args.axis, starts=starts, progress=interactive(args))
     payload = res.to_json()
     files = []
     if out is not None and res.success:
