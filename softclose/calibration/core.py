@@ -114,6 +114,44 @@ def equation_error_guess(model, keys, strokes, u0, lo, hi, iterations: int = 8):
     return x
 
 
+#: most samples a fit takes (all records): the NLP has two states a sample
+MAX_SAMPLES = 20000
+#: largest KKT matrix (rows) whose pseudo-inverse is tried when the sparse solve fails
+DENSE_MAX = 3000
+
+
+def kkt_columns(J, G, want):
+    """Columns ``want`` of the inverse of the KKT matrix [[J'J, G'], [G, 0]] at those rows
+    (scipy sparse J, G): the parameter block of the estimates' covariance (times s^2).
+    Sparse LU; a singular matrix (keys the data cannot tell apart at all) gives the
+    pseudo-inverse's when small, else NaN."""
+    import warnings
+
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+    nw, ng = J.shape[1], G.shape[0]
+    K = sp.bmat([[J.T @ J, G.T], [G, None]], format="csc")
+    E = np.zeros((nw + ng, len(want)))
+    E[want, range(len(want))] = 1.0
+    Z = np.full(E.shape, np.nan)
+    if not np.all(np.isfinite(K.data)):
+        return Z[want, :]
+    try:
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("error", spla.MatrixRankWarning)
+            Z = np.asarray(spla.spsolve(K, E)).reshape(E.shape)
+        if not np.all(np.isfinite(Z)):
+            raise np.linalg.LinAlgError
+    except (np.linalg.LinAlgError, RuntimeError, spla.MatrixRankWarning):
+        Z = np.full(E.shape, np.nan)
+        if K.shape[0] <= DENSE_MAX:
+            try:
+                Z = np.linalg.pinv(K.toarray()) @ E
+            except np.linalg.LinAlgError:
+                pass
+    return Z[want, :]
+
+
 def _bounds(keys):
     lo, hi = zip(*(bounds_of(k) for k in keys))
     return np.array(lo, float), np.array(hi, float)
@@ -131,6 +169,11 @@ def prepare(cfg, data, free, axis=None):
     records = [record_of(d, axis, f"data[{i}]") for i, d in enumerate(data)]
     model = LidModel.cached(cfg)
     strokes = [locate(r, cfg.stroke.theta_closed) for r in records]
+    used = sum(st.samples_used for st in strokes)
+    if used > MAX_SAMPLES:
+        raise ConfigError(f"fit: {used} samples in the strokes, above the budget of "
+                          f"{MAX_SAMPLES}; keep every n-th sample (a 120 Hz video of a 1 s "
+                          "stroke has 120)")
     return model, keys, strokes
 
 
@@ -206,31 +249,16 @@ def solve(cfg, data, free, *, axis=None, starts: int = 1, seed: int = 0, prepare
         ok = status2 in CONVERGED and np.isfinite(f2)
         ws, f, status, iters = ws2, f2, status2, iters + it2
         defect = float(nlp.defect(ws, P))
-    r, J, G = (np.asarray(ca.DM(v)) for v in nlp.jac(ws, P))
-    r = r.ravel()
+    r, J, G = nlp.jac(ws, P)
+    r = np.asarray(r).ravel()
     m, nfree = len(r), nlp.nw - nlp.ng
     dof = m - nfree
     s2 = float(r @ r) / dof if dof > 0 else math.nan
-    nw = nlp.nw
-    K = np.block([[J.T @ J, G.T], [G, np.zeros((nlp.ng, nlp.ng))]])
     want = list(range(nk))
     for ix in nlp.index:
         want += list(range(ix["v"].start, ix["v"].stop))
-    E = np.zeros((nw + nlp.ng, len(want)))
-    E[want, range(len(want))] = 1.0
-    Z = np.full(E.shape, np.nan)
-    if np.all(np.isfinite(K)):
-        try:
-            with np.errstate(all="ignore"):
-                Z = np.linalg.solve(K, E)
-            if not np.all(np.isfinite(Z)):
-                raise np.linalg.LinAlgError
-        except np.linalg.LinAlgError:
-            try:
-                Z = np.linalg.pinv(K) @ E
-            except np.linalg.LinAlgError:
-                pass
-    C = s2 * Z[want, :]
+    Z = kkt_columns(J.sparse(), G.sparse(), want)
+    C = s2 * Z
     C = 0.5 * (C + C.T)
     value = ws[:nk] * scale
     cov = C[:nk, :nk] * np.outer(scale, scale)
