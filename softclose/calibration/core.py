@@ -77,7 +77,6 @@ def measured_states(stroke):
     if stroke.record.kind == "angle":
         return _smooth(t, y, mv)
     w = y - stroke.bias
-    _, _, _ = None, None, None
     wv, wd, _ = _smooth(t, w, mv, deg=1)
     tt = np.r_[stroke.t_release, t[mv]]
     ww = np.r_[0.0, w[mv]]
