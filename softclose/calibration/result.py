@@ -120,8 +120,7 @@ class FitResult(Displayed):
                            f"{' and '.join(collinear)} (correlation {C[pair[1], pair[2]]:+.3f} "
                            f"between {keys[pair[1]]} and {keys[pair[2]]}; variance inflation "
                            f"{np.max(vif):.0f} > {VIF_MAX:g}): fix one of them with --set "
-                           "(weigh or measure it) or add strokes that change their balance "
-                           "(another release angle, an added mass)")
+                           "(weigh or measure it); their numbers are not to be trusted")
         if not np.all(np.isfinite(std)):
             why.append("the covariance is singular: the data do not determine the keys")
         loose = [k for i, k in enumerate(keys) if k not in collinear and k not in at_bound
