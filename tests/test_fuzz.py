@@ -75,9 +75,17 @@ COMMANDS = {
     "docs": (["docs"], "cheap"),
     "select": (["select", "--springs", str(ROOT / "tests" / "data" / "catalog_springs.csv"),
                 "--dampers", str(ROOT / "tests" / "data" / "catalog_dampers.csv")], "medium"),
+    # the fit of the example record (its data file a drawn positional: see OPTIONS)
+    "fit": (["fit", "--free", "design.damper_c", "--free", "mass.inertia_lid", "--out",
+             "{out}", "--set", 'design.spring_kind="compression"', "--set",
+             "design.spring_k=1914.709", "--set", "design.spring_rest_length=0.07925707"],
+            "medium"),
 }
 #: the pairs of the catalog the fuzzed select runs (4 springs x 2 dampers)
 SELECT_PAIRS = 8
+#: the fit's data files: the examples, and files it must refuse in one line
+FIT_DATA = ROOT / "examples" / "data"
+BAD_DATA = ROOT / "tests" / "data" / "fit"
 #: how a command writes its figures (every command with --out; refused values too)
 FIGURE_OPTIONS = {
     "--figure-format": ("png", [(v, True) for v in ("pdf", "svg", "gif", "PNG", "", "jpg")]),
@@ -99,6 +107,12 @@ OPTIONS = {
     "optimise": {"--slow-motion": ("20", [(v, True) for v in (
                      "1", "1000", "0", "-20", "nan", "abc", "1e9")])},
     # a positional: given as its value alone (see _arg)
+    "fit": {"DATA": (str(FIT_DATA / "stroke.csv"), [(str(v), True) for v in (
+                FIT_DATA / "gyroscope.csv", FIT_DATA / "nope.csv", FIT_DATA, "",
+                *sorted(BAD_DATA.glob("*.csv")))]),
+            "--starts": ("1", [(v, True) for v in ("2", "0", "-1", "51", "abc", "", "1e3",
+                                                   "9" * 40)] + [("5", False)]),
+            **FIGURE_OPTIONS},
     "docs": {"TOPIC": ("keys", [(v, True) for v in (
                  "overview", "keys", "problem", "files", "nope", "KEYS", "", "--keys")])},
     "yield": {"--samples": ("200", [("1", True), ("3", True), ("0", True), ("-5", True),
@@ -510,6 +524,10 @@ def work_seconds(command: str, cfg, argv: list[str]) -> float:
         verify = max(_int_option(argv, "--verify", 10) or 0, 0)
         return 60.0 + 2 * batch + 0.2 * SELECT_PAIRS * 2 ** d \
             + min(verify, SELECT_PAIRS) * 2 ** d * 0.5 + 200 * stroke
+    if command == "fit":    # ~1 s a start at the default step; the step halved when needed
+        return 60.0 + 3e3 * stroke * int((_option(argv, "--starts") or ["1"])[-1]
+                                         if (_option(argv, "--starts") or ["1"])[-1].isdigit()
+                                         else 1)
     raise AssertionError(command)
 
 
@@ -644,7 +662,7 @@ def run_case(command: str, values, out_dir: Path, as_json: bool,
 EXAMPLES = {"state": (100, 400), "simulate": (400, 1500), "sweep": (60, 300),
             "optimise": (25, 120), "yield": (25, 100), "sensitivity": (15, 60),
             "pareto": (10, 30), "optimise --robust": (10, 15), "bench": (10, 8),
-            "docs": (30, 100), "select": (25, 100)}
+            "docs": (30, 100), "select": (25, 100), "fit": (25, 100)}
 
 
 @pytest.fixture(scope="module")
@@ -712,6 +730,11 @@ ISSUE_CASES = [
     ("optimise", [("optimise.starts", "big_int", "1" + "0" * 400)], []),
     # a lid of 0.37 mm: exit 3, and CasADi must not add its own warnings to the one line
     ("optimise", [("geometry.lid_length", "in_range", "0.00036890193232696903")], []),
+    # the fit: an accepted run, a lid of another mass, two starts, a bad file, a gyroscope
+    ("fit", [], []),
+    ("fit", [("mass.lid", "in_range", "0.6")], ["--starts=2"]),
+    ("fit", [], [str(BAD_DATA / "backwards.csv")]),
+    ("fit", [("geometry.crank_oa", "in_range", "0.03")], [str(FIT_DATA / "gyroscope.csv")]),
 ]
 
 
@@ -791,6 +814,8 @@ SUBPROCESS_SAMPLE = [
     ["simulate", "--set", "design.spring_k=" + "9" * 400],
     ["sweep", "--grid", "design.spring_k=nan:1:3", "--out", "{out}"],
     ["sweep", "--grid=geometry.assembly[0]=2.0:10.0:1000000000000", "--out", "{out}"],
+    ["fit", str(BAD_DATA / "binary.csv"), "--free", "design.damper_c"],
+    ["fit", str(BAD_DATA / "nan_row.csv"), "--free", "design.damper_c", "--json"],
 ]
 
 

@@ -27,7 +27,8 @@ ROOT = Path(__file__).resolve().parents[1]
 STUDIES = ROOT / "studies"
 SCRIPTS = sorted(p for p in STUDIES.glob("*.py") if not p.stem.startswith("_"))
 #: studies with their own number checks below
-CHECKED = ("work_precision", "stress_survey", "seed_reproduction", "report_figures")
+CHECKED = ("work_precision", "stress_survey", "seed_reproduction", "report_figures",
+           "calibration")
 #: studies still importing through sys.path (their owner moves them to the public API)
 SYS_PATH_PENDING = ("pareto_closing_time", "spring_damper_maps")
 
@@ -221,3 +222,34 @@ def test_report_figures_runs_a_study(tmp_path):
     figs = [Path(f) for f in s["figures"]]
     assert figs == [tmp_path / "seed_reproduction" / "seed_reproduction.png"]
     assert figs[0].read_bytes()[:4] == b"\x89PNG"
+
+
+@pytest.mark.slow
+def test_calibration_study(tmp_path):
+    """studies/calibration.py: the truths of the synthetic prototype inside the fit's 95 %
+    intervals, the damper against friction reported as not identifiable, and the as-built
+    design's stroke on the true lid recomputed by the library (it misses the 1 s limit the
+    calibrated robust design meets)."""
+    import softclose
+    script = STUDIES / "calibration.py"
+    t0 = time.time()
+    p = run(script, "--fast", "--json", "--out", str(tmp_path))
+    assert p.returncode == 0, p.stderr[-2000:]
+    check_files(script, tmp_path, t0)
+    rep = json.loads(p.stdout)
+    assert all(v["inside"] for v in rep["fit"].values())
+    assert rep["identifiable"] is True
+    assert rep["with_damper"]["identifiable"] is False
+    assert set(rep["with_damper"]["collinear"]) >= {"design.damper_c", "friction.torque"}
+    rows = {r["design"]: r for r in rep["comparison"]}
+    built = rows["nominal optimum (as built)"]
+    cfg = softclose.default_config().update({
+        "design.spring_kind": "compression", "design.spring_k": 1914.709,
+        "design.spring_rest_length": 0.07925707, "design.damper_c": 2087.754,
+        "friction.torque": 0.03, "mass.inertia_lid": 0.0125})
+    assert built["closing_time"] == pytest.approx(softclose.simulate(cfg).closing_time,
+                                                  rel=1e-9)
+    assert built["closing_time"] > 1.0 > rows["robust, calibrated model"]["closing_time"]
+    cal = softclose.load_config(tmp_path / "calibrated.toml")
+    fitted = json.loads((tmp_path / "fit.json").read_text())["joint"]["parameters"]
+    assert cal.friction.torque == fitted["friction.torque"]["value"]

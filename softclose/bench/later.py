@@ -1,6 +1,7 @@
 """The later features' entries of the benchmark, each through its public function: sweep
 throughput on the 40,000-design grid (the kernel, the in-process sweep, the command line end
-to end), robust optimisation, Monte Carlo yield and Sobol indices (:func:`later_entries`);
+to end), robust optimisation, Monte Carlo yield, Sobol indices and the calibration's fits
+(:mod:`.fitting`) (:func:`later_entries`);
 and the optimiser's shooting intervals N and sub-steps against the error of the optimal
 objective and the solve time (:func:`optimiser_study`).
 """
@@ -150,6 +151,8 @@ def later_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
     else:
         timed("sobol_1024", what_s, lambda: sens(at, samples=1024), rep, note=note)
     _select_row(cfg, timed, rows, quick)
+    from .fitting import fit_entries
+    fit_entries(rows, timed, 1 if quick else 5)
     return rows
 
 

@@ -35,6 +35,8 @@ SPEED_TARGETS = {
     "yield_1e5_robust": {"max_s": 1.0},
     "sobol_1024": {"max_s": 2.0},
     "select_1000": {"max_s": 20.0},          # 1,000 catalog pairs, top 10 verified
+    "fit_cli_2x1": {"max_s": 2.0},
+    "fit_cli_5x3": {"max_s": 10.0},
 }
 
 

@@ -131,6 +131,9 @@ def files() -> str:
             ("yield --out D", "yield_samples.csv, yield_histograms.png"),
             ("sensitivity --out D", "sobol.csv, sobol.png"),
             ("select --out D", "select.csv (every pair, best first), select.json, select.png"),
+            ("fit DATA --free KEY --out D", "calibrated.toml (the config with the fitted "
+             "keys and a [tolerance] proposal; softclose optimise --robust --config "
+             "D/calibrated.toml designs for it), fit.csv, samples.csv, fit.png"),
             ("bench --out D", "work_precision.csv, speed.csv, optimiser.csv, bench.md, "
              "bench.json and figures")]
     lines = ["files the commands write (--out D is checked before any work):"]

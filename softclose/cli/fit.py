@@ -1,0 +1,144 @@
+"""``softclose fit DATA [DATA ...] --free KEY ... [--out DIR]``: the model calibrated to
+measured closing strokes."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..errors import ConfigError
+from .common import Outcome, add_common, add_out, interactive, prepare_out, save_figure, wrote
+
+DESCRIPTION = """\
+Fit config keys of the lid's dynamics (masses, inertias, the dampers, friction, a spring's
+rate or preload) to measured closing strokes: a video tracker's angle track (CSV columns
+time_s and theta_deg or theta_rad) or a phone's gyroscope export ("Time (s)", "Gyroscope x
+(rad/s)"; --axis, its bias is estimated), or theta_dot_rad_s. The record may start before the
+release and run past the closing: the release time and angle are estimated, the samples after
+the closing left out. Several files are fitted jointly, sharing the keys. Multiple shooting on
+the data's own time grid with the config's integrator, Gauss-Newton, Ipopt.
+
+Each estimate comes with its standard deviation and 95 % interval (from the residuals and the
+Jacobian), the correlations and a verdict: keys the data cannot separate (a variance
+inflation above 10, e.g. the lid's mass against the damper from one stroke) are named, and
+their numbers are not to be trusted. Give the keys you know (the lid weighed) with --set.
+With --out: calibrated.toml (the config with the fitted keys and a [tolerance] proposal from
+the 95 % intervals of the lid's keys -- masses, inertias, friction; the design variables keep
+the spreads of the parts to buy --: `softclose optimise --robust --config DIR/calibrated.toml`),
+fit.csv (the estimates), samples.csv (every sample: measured, model, residual, in deg or
+rad/s, a gyroscope's turned to theta' with its bias) and the figure fit.png."""
+
+
+def register(sub) -> None:
+    p = sub.add_parser("fit", help="calibrate the model to measured closing strokes",
+                       description=DESCRIPTION,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("data", nargs="+", metavar="DATA",
+                   help="CSV file(s) of a measured stroke (fitted jointly)")
+    p.add_argument("--free", dest="fit_free", action="append", default=[], metavar="KEY",
+                   help="a config key to fit, e.g. design.damper_c or mass.inertia_lid "
+                        "(repeatable; its configured value is the first guess)")
+    p.add_argument("--axis", choices=("x", "y", "z"), default=None,
+                   help="the gyroscope axis of a phone's export (default: the axis that "
+                        "moves most)")
+    p.add_argument("--starts", default="1", metavar="N",
+                   help="first guesses to start from (1..50; the best fit is kept)")
+    add_common(p)
+    add_out(p, what="also write the calibrated config, the tables and the figure here")
+    p.set_defaults(run=run)
+
+
+def _starts(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise ConfigError(f"--starts {text}: expected a whole number 1..50") from None
+    if not 1 <= n <= 50:
+        raise ConfigError(f"--starts {text}: outside 1..50")
+    return n
+
+
+def format_fit(res, payload) -> str:
+    from ..display import num
+    lines = []
+    w = max(len(k) for k in res.keys)
+    for k in res.keys:
+        p = payload["parameters"][k]
+        rel = f" ({p['std'] / abs(p['value']):.2%})" if p["value"] else ""
+        lines.append(f"  {k:<{w}} {num(p['value'], 7)} ± {num(p['std'], 3)}{rel}  "
+                     f"95 %: [{num(p['ci95'][0], 6)}, {num(p['ci95'][1], 6)}] {p['unit']}")
+    if len(res.keys) > 1:
+        lines.append("  correlation:")
+        for a in res.keys:
+            lines.append(f"    {a:<{w}} " + " ".join(f"{res.correlation[a][b]:+.3f}"
+                                                     for b in res.keys))
+    lines.append(f"  identifiable: {'yes' if res.identifiable else 'NO' if res.identifiable is False else '—'}")
+    for s in res.strokes:
+        lines.append(f"  {s.path}: release at {s.release_time:.4f} s from "
+                     f"{s.release_angle_deg:.3f} deg, fitted up to {s.t_last:.4f} s, "
+                     f"{s.samples_used} samples, rms residual {s.residual_rms:.3g} {s.unit}"
+                     + (f", bias {s.bias:.4g} rad/s" if s.kind == "rate" else ""))
+    lines.append(f"  ({res.iterations} Ipopt iterations, {res.substeps} sub-step(s) a frame: "
+                 f"integration error {res.integration_error:.1e} of the noise)")
+    if res.message:
+        lines.append(f"  note: {res.message}")
+    return "\n".join(lines)
+
+
+def write_fit(res, out: Path, data) -> list:
+    """The hand-over: calibrated.toml, fit.csv, samples.csv, the figure."""
+    import numpy as np
+    import pandas as pd
+    from ..config import to_toml
+    from ..version import __version__
+    files = []
+    cfg = res.calibrated_config()
+    tol = res.tolerance()
+    head = [f"softclose {__version__}: the config calibrated to measured strokes",
+            "data: " + ", ".join(str(d) for d in data),
+            "fitted: " + ", ".join(f"{k} = {res.values[k]!r} ± {res.std[k]:.3g} (95 %: "
+                                   f"{res.ci95[k][0]:.6g} .. {res.ci95[k][1]:.6g})"
+                                   for k in res.keys),
+            ("[tolerance] proposal from the 95 % intervals (the lid's keys; the design "
+             "variables keep the spreads of the parts to buy): " + ", ".join(
+                 f"{k} = {v}" for k, v in tol.items())) if tol else
+            "no [tolerance] proposal (no key of the lid determined; the design variables "
+            "keep the spreads of the parts to buy)",
+            "design for what is known of the lid: softclose optimise --robust --config "
+            "calibrated.toml"]
+    if not res.identifiable:
+        head.insert(1, "WARNING: not identifiable: " + res.message)
+    path = out / "calibrated.toml"
+    path.write_text(to_toml(cfg, "\n".join(head)))
+    files.append(path)
+    table = out / "fit.csv"
+    res.to_frame().to_csv(table, index=False)
+    files.append(table)
+    rows = []
+    for s in res.strokes:
+        rows.append(pd.DataFrame({"file": s.path, "time_s": s.t, "measured": s.y,
+                                  "model": s.model, "residual": s.y - s.model,
+                                  "unit": s.unit, "fitted": np.isfinite(s.model)}))
+    samples = out / "samples.csv"
+    pd.concat(rows).to_csv(samples, index=False)
+    files.append(samples)
+    files.append(save_figure(res.plot(), out / "fit"))
+    return files
+
+
+def run(cfg, args) -> Outcome:
+    from ..calibration import fit
+    from ..calibration.equation import check_keys
+    keys = check_keys(args.fit_free)
+    starts = _starts(args.starts)
+    out = prepare_out(args.out)
+    res = fit(cfg, args.data, keys, axis=args.axis, starts=starts, progress=interactive(args))
+    payload = res.to_json()
+    files = []
+    if out is not None and res.success:
+        files = write_fit(res, out, args.data)
+        payload["files"] = [str(f) for f in files]
+    text = format_fit(res, payload) + wrote(files)
+    if not res.success:
+        return Outcome(payload, text, 3, tuple(files), error=res.message)
+    return Outcome(payload, text, 0, tuple(files))
