@@ -59,6 +59,9 @@ def claims(nlp: ShootingNLP, cfg, run: Run) -> tuple[dict, dict, float]:
     p = nlp.param_vector(cfg, d)
     thd = float(X[1, -1])
     vT = np.asarray(model.kin(np.array([st.theta_closed, thd]))[4]).ravel()
+    if nlp.placed:      # the exact model at the optimum's attachment points
+        cfg = nlp.placed_config(cfg, d)
+        model = get_checker(cfg).model
     lmin, lmax = get_checker(cfg).spring_extremes(st.theta_closed, st.theta0)
     peak = nlp.peak(run)
     m = {"closed": True, "closing_time": T, "impact_theta_dot": thd,
@@ -72,10 +75,10 @@ def claims(nlp: ShootingNLP, cfg, run: Run) -> tuple[dict, dict, float]:
 def free_in_bounds(cfg):
     """``cfg`` with each free design variable (``optimise.free``) clipped into its bounds:
     where the starts' sweep holds it."""
+    from ..config.free import config_value
     values = {}
     for key, lo, hi in cfg.optimise.free or ():
-        section, name = key.split(".")
-        v = getattr(getattr(cfg, section), name)
+        v = config_value(cfg, key)
         if not lo <= v <= hi:
             values[key] = float(np.clip(v, lo, hi))
     return cfg.update(values)
@@ -100,7 +103,7 @@ def active_set(nlp: ShootingNLP, cfg, run: Run, t_limit: float) -> tuple[Active,
         for side, b, sign in (("upper", hi, 1.0), ("lower", lo, -1.0)):
             at = abs(run.x[i] - b / sc) <= 1e-7 * max(1.0, abs(b / sc))
             if sign * lam > ACTIVE_LAM or (at and lo != hi):
-                out.append(Active(key, "bound", side, float(b), UNITS[key],
+                out.append(Active(key, "bound", side, float(b), UNITS.get(key, "m"),
                                   -sign * Jr * lam / sc))
                 break
     iT = nlp.iT
@@ -176,6 +179,8 @@ def finish(cfg, nlp: ShootingNLP, run: Run, disc: Discretisation, *, verify: boo
         nlp, run = refine(cfg, nlp, run, sim, notes)
         run = tighten(cfg, nlp, run, sim, disc.t_limit, notes)
     design, own, J = claims(nlp, cfg, run)
+    if nlp.placed:       # from here on: the config with the optimum's attachment points
+        cfg = nlp.placed_config(cfg, nlp.unpack(run.x)[0])
     active = active_set(nlp, cfg, run, disc.t_limit)
     problem = describe(cfg)
     # the closing-time bounds the NLP was solved with: closing_time_min raised to the NLP's
@@ -193,6 +198,12 @@ def finish(cfg, nlp: ShootingNLP, run: Run, disc: Discretisation, *, verify: boo
     return OptimiseResult(ver.ok, ver.message and f"the answer is {ver.message}", run.status,
                           design, J, ver.metrics, {"objective": J, **own}, ver,
                           notes=tuple(notes), **common)
+
+
+def _points_of(res, cfg):
+    """``cfg`` (not the kind's bounds) with the attachment points ``res`` placed."""
+    from .placement import placed_config
+    return placed_config(cfg, res.design or {})
 
 
 def guarded(fn):
@@ -289,7 +300,7 @@ def optimise(cfg, *, starts: int | None = None, verify: bool = True,
     part = spring_part(best.config, best.design, best.metrics or best.optimiser) \
         if best.design is not None else None
     return replace(best, kind=kind, kinds=tuple(rows), part=part,
-                   config=cfg.set("design.spring_kind", kind),   # (not the kind's bounds)
+                   config=_points_of(best, cfg.set("design.spring_kind", kind)),
                    notes=best.notes + tuple(notes), total_time=time.perf_counter() - t_start)
 
 

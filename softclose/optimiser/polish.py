@@ -37,6 +37,14 @@ def nlp_objective(nlp: ShootingNLP, cfg, run: Run) -> float:
     return objective(cfg.optimise, float(X[1, -1]), nlp.peak(run))
 
 
+def _sim(cfg, nlp: ShootingNLP, d, sim):
+    """The simulator of ``d``'s stroke: ``sim``, or one at d's attachment points."""
+    if not nlp.placed:
+        return sim
+    from .cache import stroke_simulator
+    return stroke_simulator(nlp.placed_config(cfg, d))
+
+
 def _merge(new: Run, old: Run) -> Run:
     """``new`` with the cost of the runs that led to it added."""
     return replace(new, time=new.time + old.time, iterations=new.iterations + old.iterations,
@@ -74,7 +82,7 @@ def refine(cfg, nlp: ShootingNLP, run: Run, sim, notes: list) -> tuple[ShootingN
     never beyond :data:`MAX_STEPS` steps; verification judges the result either way)."""
     for _ in range(MAX_REFINE):
         d = nlp.unpack(run.x)[0]
-        rs = sim.run(nlp.param_vector(cfg, d), estimate_error=False)
+        rs = _sim(cfg, nlp, d, sim).run(nlp.param_vector(cfg, d), estimate_error=False)
         if not rs.closed:
             return nlp, run
         why = off(cfg, nlp, run, rs)
@@ -111,7 +119,7 @@ def tighten(cfg, nlp: ShootingNLP, run: Run, sim, t_limit: float, notes: list) -
     lo, hi = t_lo, t_hi
     for _ in range(MAX_TIGHTEN):
         d, T, _, _ = nlp.unpack(run.x)
-        rs = sim.run(nlp.param_vector(cfg, d), estimate_error=False)
+        rs = _sim(cfg, nlp, d, sim).run(nlp.param_vector(cfg, d), estimate_error=False)
         if not rs.closed:
             return run
         Ts = rs.closing_time
