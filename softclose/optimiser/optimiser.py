@@ -22,7 +22,7 @@ from ..parts import spring_part
 from .diagnose import diagnose
 from .kinds import kind_config
 from .nlp import J_INDEX, Discretisation, Run, ShootingNLP, check_options, discretisation
-from .polish import nlp_objective, refine, tighten
+from .polish import keep_clear, nlp_objective, refine, tighten
 from .result import Active, OptimiseResult
 from .starts import MAX_STARTS, initial_guess, sweep_starts, sweep_time
 from .verify import get_checker, verify as verify_design
@@ -178,6 +178,7 @@ def finish(cfg, nlp: ShootingNLP, run: Run, disc: Discretisation, *, verify: boo
         sim = stroke_simulator(cfg)
         nlp, run = refine(cfg, nlp, run, sim, notes)
         run = tighten(cfg, nlp, run, sim, disc.t_limit, notes)
+        run = keep_clear(cfg, nlp, run, notes)
     design, own, J = claims(nlp, cfg, run)
     if nlp.placed:       # from here on: the config with the optimum's attachment points
         cfg = nlp.placed_config(cfg, nlp.unpack(run.x)[0])
@@ -195,7 +196,19 @@ def finish(cfg, nlp: ShootingNLP, run: Run, disc: Discretisation, *, verify: boo
                               "are the NLP's own", run.status, design, J, None,
                               {"objective": J, **own}, notes=tuple(notes), **common)
     ver = verify_design(cfg, design, own, J)
-    return OptimiseResult(ver.ok, ver.message and f"the answer is {ver.message}", run.status,
+    ok, msg = ver.ok, ver.message and f"the answer is {ver.message}"
+    if cfg.optimise.keep_out:          # the exact check of the keep-out regions
+        from .keep_out import clearance
+        for line, c in clearance(cfg).items():
+            notes.append(f"keep-out: the {line}'s line clears the regions by "
+                         f"{c['clearance'] * 1e3:.3f} mm at the least (theta = "
+                         f"{c['theta_deg']:.1f} deg; exact closure, 2001 angles)")
+            if not c["ok"]:
+                ok = False
+                msg = "; ".join(filter(None, [msg, f"the {line}'s line crosses a keep-out "
+                                              f"region by {-c['clearance'] * 1e3:.3f} mm at "
+                                              f"theta = {c['theta_deg']:.1f} deg"]))
+    return OptimiseResult(ok, msg, run.status,
                           design, J, ver.metrics, {"objective": J, **own}, ver,
                           notes=tuple(notes), **common)
 

@@ -140,7 +140,7 @@ def placed_constraints(nlp, model, design, g, theta0, thc, keep_out=()) -> dict:
            "spring_length": ca.vertcat(ca.vec(L), ca.vec(Lmax), ca.vec(Lmin))}
     if keep_out:
         from .keep_out import keep_out_constraints
-        out["keep_out"] = keep_out_constraints(nlp.fit, theta0, thc, g, keep_out)
+        out["keep_out"] = keep_out_constraints(nlp.fit, theta0, thc, g, keep_out, nlp.place)
     return out
 
 

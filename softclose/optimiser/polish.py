@@ -139,3 +139,33 @@ def tighten(cfg, nlp: ShootingNLP, run: Run, sim, t_limit: float, notes: list) -
                      f"{r.iterations} warm iterations")
         run = _merge(r, run)
     return run
+
+
+def keep_clear(cfg, nlp: ShootingNLP, run: Run, notes: list) -> Run:
+    """The keep-out regions hold at the NLP's angle nodes; between them a line may still
+    graze a region. Checked exactly (:func:`softclose.optimiser.keep_out.clearance`); while
+    a free line crosses one, the nodes' bound is raised by 1.5 times the crossing and the
+    problem re-solved warm (at most :data:`MAX_TIGHTEN` times)."""
+    from .keep_out import LINES, clearance, free_lines
+    groups = dict(nlp.groups())
+    if not cfg.optimise.keep_out or "keep_out" not in groups:
+        return run
+    names = {ln[0] for ln in free_lines(nlp.place)}
+    margin = 0.0
+    for _ in range(MAX_TIGHTEN):
+        d = nlp.unpack(run.x)[0]
+        worst = min((c["clearance"] for line, c in clearance(nlp.placed_config(cfg, d)).items()
+                     if line in names), default=0.0)
+        if worst >= 0.0:
+            return run
+        margin += 1.5 * -worst + 1e-7
+        lbx, ubx, lbg, ubg = (np.array(b, float) for b in run.bounds)
+        lbg[groups["keep_out"]] = margin
+        r = nlp.solve(run.x, run.p, lbx, ubx, lbg, ubg, run.lam_x, run.lam_g, warm=True)
+        if not r.success:
+            return run
+        notes.append(f"keep-out: a line grazed a region between the NLP's angle nodes by "
+                     f"{-worst * 1e3:.3f} mm: re-solved with a clearance of {margin * 1e3:.3f} mm "
+                     f"at the nodes ({r.iterations} warm iterations)")
+        run = _merge(r, run)
+    return run

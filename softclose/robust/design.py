@@ -123,6 +123,7 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
             r = replace(r, design={**(r.design or {}), **{k.split(".", 1)[1]: v
                                                           for k, v in points.items()}},
                         notes=tuple(stage_notes) + r.notes)
+            r = _keep_out_check(c, r)
         rows.append({"kind": kind, "success": r.success, "objective": r.objective,
                      "message": r.message})
         results.append((kind, r, c))
@@ -147,6 +148,27 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
                                          if f"geometry.{k}" in SLOTS})
     return replace(best, kind=kind, kinds=tuple(rows), part=part, notes=notes, times=times,
                    config=out_cfg)
+
+
+def _keep_out_check(cfg: Config, r: RobustResult) -> RobustResult:
+    """The exact keep-out check at the result's points (``optimise.keep_out``)."""
+    from dataclasses import replace
+
+    from ..optimiser.keep_out import clearance
+    if not cfg.optimise.keep_out:
+        return r
+    notes, msgs = list(r.notes), []
+    for line, c in clearance(cfg).items():
+        notes.append(f"keep-out: the {line}'s line clears the regions by "
+                     f"{c['clearance'] * 1e3:.3f} mm at the least (theta = {c['theta_deg']:.1f} "
+                     "deg; exact closure, 2001 angles)")
+        if not c["ok"]:
+            msgs.append(f"the {line}'s line crosses a keep-out region by "
+                        f"{-c['clearance'] * 1e3:.3f} mm")
+    if msgs:
+        return replace(r, success=False, message="; ".join(filter(None, [r.message, *msgs])),
+                       notes=tuple(notes))
+    return replace(r, notes=tuple(notes))
 
 
 def optimise_robust_kind(cfg: Config, *, progress: bool = False, samples: int | None = None,

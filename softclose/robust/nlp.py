@@ -55,7 +55,7 @@ T_FLOOR = 1e-3
 #: per-scenario constraint groups, in order
 GROUPS = ("continuity", "theta_above_closed", "theta_dot_nonpositive", "peak_tip_speed",
           "holding_moment", "release_downwards", "epigraph", "opening_force",
-          "spring_long", "spring_short", "spring_length")
+          "spring_long", "spring_short", "spring_length", "keep_out")
 CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 WARM_OPTIONS = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
                 "ipopt.warm_start_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9,
@@ -226,7 +226,9 @@ class ScenarioNLP:
             blocks = [ca.vec(xe - X[s]), ca.vec(a) - thc, ca.vec(b), pk[s] - ca.vec(sp),
                       hold, release, t - Js / Jref,
                       opening_bound(model, theta0, thc, ps[s]) if o.opening_force_max
-                      is not None and not self.placed else none] + lengths
+                      is not None and not self.placed else none] + lengths + [
+                          self._keep_out(cfg, fit, theta0, thc, gvec) if self.placed and s == 0
+                          else none]
             g += blocks
             self.g_sizes.append([int(v.numel()) for v in blocks])
         self.block = sum(self.g_sizes[0])
@@ -259,6 +261,14 @@ class ScenarioNLP:
                                      {"x": wx, "p": wp_, "f": fo, "g": go},
                                      {**self.options, **WARM_OPTIONS})
         self.build_time = time.perf_counter() - t0
+
+    def _keep_out(self, cfg, fit, theta0, thc, g):
+        """optimise.keep_out at the shared points (in the first scenario's block only)."""
+        from ..optimiser.cache import keep_out_of
+        from ..optimiser.keep_out import keep_out_constraints
+        polys = keep_out_of(cfg)
+        return keep_out_constraints(fit, theta0, thc, g, polys, self.place) if polys \
+            else ca.MX(0, 1)
 
     # -- layout ------------------------------------------------------------------------
     @property
