@@ -109,7 +109,10 @@ CORE: tuple[Key, ...] = (
     Key("optimise", "free", "free", None, "",
         "further design variables, a table `KEY = [lo, hi]` in the key's own unit (also "
         "`--free KEY=LO:HI`): `design.spring_preload`, `design.torsion_k`, "
-        "`design.torsion_free_angle_deg`, `design.rotary_damper_c`; none: k, l0 and c only",
+        "`design.torsion_free_angle_deg`, `design.rotary_damper_c` (nominal optimiser), and "
+        "the attachment points `geometry.spring_anchor[i]`, `geometry.lid_e[i]`, "
+        "`geometry.dashpot_anchor[i]`, `geometry.dashpot_lid[i]` (nominal and robust); "
+        "none: k, l0 and c only",
         note="`[optimise.free]` in a file"),
     Key("optimise", "keep_out", "polygons", None, "m",
         "regions the spring's and the dashpot's lines must not cross over the stroke: a list "
