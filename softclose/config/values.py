@@ -124,6 +124,10 @@ def check(key: str, kind: str, v: Any) -> Any:
                 raise ConfigError(f"{where}: expected a polygon of at least 3 [x, y] vertices, "
                                   f"got {fmt(poly)}")
             pts = tuple(check(f"{where}[{j}]", "vec2", q) for j, q in enumerate(poly))
+            for j, q in enumerate(pts):
+                if max(abs(q[0]), abs(q[1])) > 10.0:
+                    raise ConfigError(f"{where}[{j}]: {fmt(list(q))} m is outside the "
+                                      "admissible range -10 .. 10 m")
             n = len(pts)
             turns = [(pts[(j + 1) % n][0] - pts[j][0]) * (pts[(j + 2) % n][1] - pts[j][1])
                      - (pts[(j + 1) % n][1] - pts[j][1]) * (pts[(j + 2) % n][0] - pts[j][0])

@@ -105,10 +105,11 @@ def clearance(cfg, polys=None) -> dict:
             "dashpot": (np.asarray(geo.dashpot_anchor, float), lid(geo.dashpot_lid))}
     out = {}
     for name, (P0, P1) in ends.items():
-        worst, at = math.inf, None
+        worst, at = math.inf, float(np.degrees(th[-1]))
         for poly in polys:
             gap = np.asarray(gap_function(poly).map(CHECK_ANGLES)(
                 np.repeat(P0[:, None], CHECK_ANGLES, axis=1), P1)).ravel()
+            gap = np.where(np.isfinite(gap), gap, -math.inf)   # (never: polygons are checked)
             i = int(np.argmin(gap))
             if gap[i] < worst:
                 worst, at = float(gap[i]), float(np.degrees(th[i]))
