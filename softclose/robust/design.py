@@ -112,7 +112,15 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
         if why is None and placed:      # stage 1: where (robust/placement.py)
             from .placement import choose_points, fixed_points
             stage_notes: list = []
-            points, _ = choose_points(c, stage_notes)
+            bound = min((x[1].objective for x in results if x[1].success
+                         and x[1].objective is not None), default=None)
+            points, info = choose_points(c, stage_notes, bound)
+            if points is None:
+                rows.append({"kind": kind, "success": False, "objective": None, "message": (
+                    f"not solved: its nominal co-design optimum J = "
+                    f"{info['nominal_objective']:.6g} already exceeds the worst case "
+                    f"{bound:.6g} of a kind solved before (the nominal lid is a scenario)")})
+                continue
             c, why = kind_config(fixed_points(cfg, points), kind, robust=True)
         if why is not None:
             rows.append({"kind": kind, "success": False, "objective": None, "message": why})

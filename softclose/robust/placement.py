@@ -37,9 +37,13 @@ def fixed_points(cfg: Config, points: dict) -> Config:
     return placed_config(cfg, points).set("optimise.free", rest or None)
 
 
-def choose_points(cfg: Config, notes: list) -> tuple[dict, dict]:
+def choose_points(cfg: Config, notes: list, bound: float | None = None) -> tuple[dict, dict]:
     """Stage 1 (module docstring): (points {key: m}, what it found). With no solution the
-    points of the nominal optimum (or the config's) are returned, and ``info`` says so."""
+    points of the nominal optimum (or the config's) are returned, and ``info`` says so.
+
+    ``bound``: the best worst-case J another spring kind reached. The nominal lid is one of
+    the box's scenarios, so a kind whose nominal co-design optimum already exceeds it cannot
+    do better: then (None, info) at once, without the scenario NLP."""
     from ..optimiser.optimiser import optimise_kind
     from .box import box_of
     from .nlp import discretise
@@ -53,6 +57,8 @@ def choose_points(cfg: Config, notes: list) -> tuple[dict, dict]:
         (k for k, _, _ in layout),
         (_value(c, k) for k, _, _ in layout))}
     info = {"nominal_objective": nominal.objective, "nominal_points": dict(points)}
+    if bound is not None and nominal.objective is not None and nominal.objective > bound:
+        return None, info
     N, M, _, _ = discretise(c)
     box = box_of(c)
     ref = ([nominal.design[k] for k in DESIGN_KEYS] if nominal.design else
