@@ -186,7 +186,7 @@ def finish(cfg, nlp: ShootingNLP, run: Run, disc: Discretisation, *, verify: boo
     problem = describe(cfg)
     # the closing-time bounds the NLP was solved with: closing_time_min raised to the NLP's
     # floor, the limit moved by the discretisation error (tighten)
-    problem["closing_time_solved"] = [float(run.bounds[0][3]), float(run.bounds[1][3])]
+    problem["closing_time_solved"] = [float(run.bounds[0][nlp.iT]), float(run.bounds[1][nlp.iT])]
     common = dict(nodes=nlp.N, substeps=nlp.M, hessian=cfg.optimise.hessian,
                   iterations=base.pop("iterations", run.iterations),
                   solve_time=base.pop("solve_time", run.time), problem=problem,
