@@ -165,3 +165,20 @@ def test_keep_out_gap_is_the_distance_for_simple_cases():
     assert float(gap([2, 0], [0, 2])) == pytest.approx(0.0, abs=1e-12)   # touches a corner
     with pytest.raises(ConfigError, match=r"optimise.keep_out\[0\].*convex"):
         default_config().set("optimise.keep_out", [[[0, 0], [1, 0], [0.2, 0.2], [0, 1]]])
+
+
+def test_pareto_front_with_free_points_is_verified_and_monotone():
+    """The Pareto optimiser carries the points too: each point of the front verified at its
+    own points, J falling as the closing time allowed grows, and never above the front at
+    today's points."""
+    base = default_config().set("optimise.spring_kinds", ["compression"]) \
+        .set("optimise.starts", 2)
+    free = {"geometry.lid_e[1]": [0.004, 0.024], "geometry.spring_anchor[0]": [-0.09, -0.03]}
+    fr = softclose.front(base.set("optimise.free", free), [0.6, 1.0], starts=2)
+    fr0 = softclose.front(base, [0.6, 1.0], starts=2)
+    Js = [p.objective for p in fr.points]
+    assert all(p.success for p in fr.points), [p.message for p in fr.points]
+    assert Js[1] < Js[0]
+    for p, p0 in zip(fr.points, fr0.points):
+        assert p.objective <= p0.objective * (1 + 1e-6)
+        assert "lid_e[1]" in p.design and p.verification.ok
