@@ -33,6 +33,12 @@ that are not design variables -- the rotary damper, those of the elements added 
 time grid) is an NLP parameter, and closing-time bounds, design bounds and
 holding_moment_min are bounds: one NLP per geometry and (N, M) serves multistart, warm
 re-solves and Pareto fronts (:func:`softclose.optimiser.cache.get_nlp`).
+
+Attachment points freed in ``optimise.free`` (``geometry.spring_anchor[i]``, ``lid_e[i]``,
+``dashpot_anchor[i]``, ``dashpot_lid[i]``) are design variables after the others: the spring
+and the dashpot then act through the points (:mod:`softclose.optimiser.placement`), the
+spring kind's validity over the stroke and the keep-out regions are constraints, and the
+answer is verified at a config with the points set (:meth:`ShootingNLP.placed_config`).
 """
 
 from __future__ import annotations
