@@ -103,7 +103,9 @@ def points(theta, phi, gamma, geo):
     """World positions of the named points for a closed configuration."""
     A = geo.crank_oa * e(phi)
     B = ca.DM(geo.pivot_b)
-    return {
+    h = getattr(geo, "dashpot_lid", None)
+    extra = {} if h is None else {"H": A + rot(theta, h)}
+    return {**extra,
         "A": A,
         "C": A + rot(theta, geo.lid_c),
         "E": A + rot(theta, geo.lid_e),

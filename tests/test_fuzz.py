@@ -298,10 +298,35 @@ def scalar_value(draw, key: str, kind: str, vkind: str):
     return toml(max(1, int(d * f)) if integer else float(d) * f)
 
 
+#: optimise.keep_out: (accepted, refused) polygon lists
+POLYGONS = (["[]", "[[[-0.030, 0.0505], [-0.026, 0.0505], [-0.026, 0.0545]]]",
+             "[[[-0.1, -0.1], [-0.09, -0.1], [-0.09, -0.09], [-0.1, -0.09]]]",
+             "[[[0.0, 0.0], [0.05, 0.0], [0.0, 0.05]], [[-0.05, 0.06], [-0.04, 0.06], "
+             "[-0.04, 0.07]]]"],
+            ["[[[0, 0], [1, 0], [0.2, 0.2], [0, 1]]]", "[[[0, 0], [1, 1]]]",
+             "[[[0, 0], [1, 0], [2, 0]]]", "[[[nan, 0], [1, 0], [0, 1]]]",
+             "[[[1e300, 0], [1, 0], [0, 1]]]", "[[0, 0], [1, 0], [0, 1]]", "[[[11, 0], "
+             "[12, 0], [12, 1]]]", "[1.0]", "[[[0, 0], [1, 0], [1, 1], [0, 0]]]"])
+#: optimise.free: (accepted, refused) tables, attachment points among them
+FREE_TABLES = (['{"geometry.lid_e[0]" = [-0.006, 0.044], "geometry.lid_e[1]" = [0.004, 0.024]}',
+                '{"geometry.spring_anchor[0]" = [-0.09, -0.03]}',
+                '{"geometry.dashpot_anchor[1]" = [-0.02, 0.02], '
+                '"geometry.dashpot_lid[0]" = [0.0, 0.03]}',
+                '{"design.spring_preload" = [0, 200], "geometry.lid_e[1]" = [0.004, 0.024]}',
+                '{"geometry.lid_e[0]" = [0.01, 0.01]}'],
+               ['{"geometry.lid_e[0]" = [0.044, -0.006]}', '{"geometry.pivot_b[0]" = [0, 1]}',
+                '{"geometry.lid_e[2]" = [0, 1]}', '{"geometry.lid_e[0]" = [nan, 1]}',
+                '{"geometry.spring_anchor[1]" = [-1e300, 0]}', '{"geometry.lid_e" = [0, 1]}',
+                '{"geometry.lid_e[0]" = [0, 11]}', '{"geometry.lid_e[0]" = 0.01}'])
+
+
 @st.composite
 def value_for(draw, key: str, vkind: str) -> str:
     """The TOML text of a value of kind ``vkind`` for ``key``."""
     kind = KIND_OF[key]
+    if kind in ("polygons", "free") and vkind not in ("string", "bool", "big_int", "nan"):
+        ok, bad = POLYGONS if kind == "polygons" else FREE_TABLES
+        return draw(st.sampled_from(bad if vkind in REFUSED_KINDS else ok + bad))
     if kind in _VEC_LEN:
         n = _VEC_LEN[kind]
         if vkind in ("in_range", "edge", "outside", "scaled", "nan", "inf", "tiny", "zero",

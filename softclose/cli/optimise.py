@@ -136,6 +136,10 @@ def write_optimum(res, out, slow_motion=None) -> list:
     files.append(out / "optimise.json")
     files[-1].write_text(dumps(res.to_json(), indent=1))
     files.append(save(res.plot(), out / "optimum.png"))
+    cfg = res.design_config()
+    if any("[" in k for k in res.design) or cfg.optimise.keep_out:   # where it attaches
+        from ..figures.placement import plot_attachments
+        files.append(save(plot_attachments(cfg), out / "attachments.png"))
     files += write_stroke_outputs(sim.model, stroke, out, stem="optimum",
                                   slow_motion=slow_motion)
     return files

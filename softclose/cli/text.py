@@ -11,7 +11,8 @@ def design_text(d: dict) -> str:
     (enough to reproduce the default optimum within its active limits; the design file has
     every digit)."""
     from ..problem import UNITS
-    return ", ".join(f"{k} = {v:.7g}" + (f" {UNITS[k]}" if UNITS.get(k) else "")
+    unit = {k: UNITS.get(k) or ("m" if "[" in k else "") for k in d}   # (a point: m)
+    return ", ".join(f"{k} = {v:.7g}" + (f" {unit[k]}" if unit[k] else "")
                      for k, v in d.items())
 
 

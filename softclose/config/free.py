@@ -27,6 +27,28 @@ FREE_KEYS: tuple[str, ...] = tuple(
     q.key for q in elements.PARAMS
     if q.codes is None and q.key.startswith("design.")
     and q.name not in ("spring_k", "spring_rest_length", "damper_c"))
+#: the attachment points the optimiser may place (SPEC §9): the spring's anchor D (world)
+#: and its lid point E (lid frame), the dashpot's anchor and its lid point, per component
+PLACEMENT_KEYS: tuple[str, ...] = tuple(
+    f"geometry.{name}[{i}]" for name in ("spring_anchor", "lid_e", "dashpot_anchor",
+                                         "dashpot_lid") for i in (0, 1))
+#: every key that may be freed, in the order the NLP carries them
+FREE_KEYS = FREE_KEYS + PLACEMENT_KEYS
+
+
+def is_placement(key: str) -> bool:
+    """Is ``key`` an attachment point's component (not an element's parameter)?"""
+    return key in PLACEMENT_KEYS
+
+
+def config_value(cfg, key: str) -> float:
+    """The value of a numeric key (``section.name`` or ``section.name[i]``) in ``cfg``."""
+    section, name = key.split(".", 1)
+    i = None
+    if name.endswith("]"):
+        name, i = name[:-1].split("[")
+    v = getattr(getattr(cfg, section), name)
+    return float(v if i is None else v[int(i)])
 
 
 def _flat(table: dict, prefix: str = "") -> dict:
@@ -48,8 +70,8 @@ def why_not_free(key: str) -> str | None:
         name = key.split(".")[1]
         return f"{key} is always a design variable: bound it with optimise.{name} = [lo, hi]"
     if key.split("[")[0] in BY_NAME and key.startswith("geometry."):
-        return (f"{key}: placement is not among the optimiser's design variables (only the "
-                f"elements' parameters are: {', '.join(FREE_KEYS)})")
+        return (f"{key}: of the geometry only the attachment points are design variables "
+                f"(placement keys: {', '.join(PLACEMENT_KEYS)})")
     if key.split("[")[0] in BY_NAME:
         return f"{key} cannot be a design variable (free keys: {', '.join(FREE_KEYS)})"
     return f"unknown key {key!r} (free keys: {', '.join(FREE_KEYS)})"
@@ -71,11 +93,12 @@ def read_free(name: str, value: Any) -> tuple[tuple[str, float, float], ...]:
         lo, hi = number(f"{where}[0]", b[0]), number(f"{where}[1]", b[1])
         if lo > hi:
             raise ConfigError(f"{where}: lower bound {lo:g} exceeds upper bound {hi:g}")
-        if BY_NAME[key].kind == "nonneg" and lo < 0:
+        base = key.split("[")[0]
+        if BY_NAME[base].kind == "nonneg" and lo < 0:
             raise ConfigError(f"{where}: lower bound must be non-negative ({key} is), got "
                               f"{lo:g}")
-        if key in RANGES:
-            in_range(key, where, (lo, hi))
+        if base in RANGES:
+            in_range(base, where, (lo, hi))
         out[key] = (lo, hi)
     return tuple((k, *out[k]) for k in FREE_KEYS if k in out)
 
@@ -102,4 +125,4 @@ def parse_free_option(text: str) -> tuple[str, list]:
     return key.strip().strip("'\""), vals
 
 
-__all__ = ["FREE_KEYS", "read_free", "why_not_free", "free_table", "parse_free_option"]
+__all__ = ["FREE_KEYS", "PLACEMENT_KEYS", "is_placement", "config_value", "read_free", "why_not_free", "free_table", "parse_free_option"]

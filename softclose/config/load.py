@@ -95,8 +95,13 @@ class Config:
 
     def with_design(self, **values) -> "Config":
         """A copy with some ``[design]`` values changed, by name (validated); None leaves a
-        value as it is: ``cfg.with_design(spring_k=300.0, damper_c=None)``."""
-        return self.replace(design={k: v for k, v in values.items() if v is not None})
+        value as it is: ``cfg.with_design(spring_k=300.0, damper_c=None)``. An attachment
+        point's component among them (``lid_e[0]``, as the optimiser names a free point)
+        sets that ``geometry`` key."""
+        points = {f"geometry.{k}": v for k, v in values.items() if "[" in k and v is not None}
+        out = self.replace(design={k: v for k, v in values.items()
+                                   if v is not None and "[" not in k})
+        return out.update(points) if points else out
 
 
 def from_dict(raw: dict[str, Any]) -> Config:
@@ -285,9 +290,15 @@ def _derived_default(raw: dict[str, Any], section: str, key: str) -> list[float]
                 known[k.name] = number(k.full, given.get(k.name, k.default))
             except ConfigError as exc:
                 errors.append(exc)
+        elif k.section == section and k.kind == "vec2" and k.default is not None:
+            v = given.get(k.name, k.default)     # (a vector another one derives from)
+            if isinstance(v, (list, tuple)) and len(v) == 2:
+                known[k.name] = tuple(v)
     try:
         return list(BY_NAME[f"{section}.{key}"].derive({section: known}))
     except KeyError:                    # what it derives from is not a number: say so
+        if not errors:
+            raise ConfigError(f"{section}.{key}: set the keys it derives from first") from None
         raise errors[0] from None
 
 

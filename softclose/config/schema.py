@@ -109,8 +109,16 @@ CORE: tuple[Key, ...] = (
     Key("optimise", "free", "free", None, "",
         "further design variables, a table `KEY = [lo, hi]` in the key's own unit (also "
         "`--free KEY=LO:HI`): `design.spring_preload`, `design.torsion_k`, "
-        "`design.torsion_free_angle_deg`, `design.rotary_damper_c`; none: k, l0 and c only",
+        "`design.torsion_free_angle_deg`, `design.rotary_damper_c` (nominal optimiser), and "
+        "the attachment points `geometry.spring_anchor[i]`, `geometry.lid_e[i]`, "
+        "`geometry.dashpot_anchor[i]`, `geometry.dashpot_lid[i]` (nominal and robust); "
+        "none: k, l0 and c only",
         note="`[optimise.free]` in a file"),
+    Key("optimise", "keep_out", "polygons", None, "m",
+        "regions the spring's and the dashpot's lines must not cross over the stroke: a list "
+        "of convex polygons in the ground frame, each a list of [x, y] vertices; none: no "
+        "region (a constraint of the NLP with free attachment points, checked exactly "
+        "afterwards)", note="e.g. `[[[-0.05, -0.02], [0.0, -0.02], [0.0, 0.0]]]`"),
     Key("optimise", "nodes", "int+", 10, "", "shooting intervals N", lo=1, hi=1000,
         note="with nodes × substeps ≤ 2000"),
     Key("optimise", "substeps", "int+", 4, "", "RK4 sub-steps per interval M", lo=1, hi=1000),

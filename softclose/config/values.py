@@ -113,4 +113,28 @@ def check(key: str, kind: str, v: Any) -> Any:
         if not isinstance(v, str) or v not in choices:
             raise ConfigError(f"{key}: expected one of {', '.join(choices)}; got {fmt(v)}")
         return v
+    if kind == "polygons":               # convex polygons: lists of >= 3 [x, y] vertices
+        if not isinstance(v, (list, tuple)):
+            raise ConfigError(f"{key}: expected a list of polygons (each a list of [x, y] "
+                              f"vertices), got {got(v)}")
+        out = []
+        for i, poly in enumerate(v):
+            where = f"{key}[{i}]"
+            if not isinstance(poly, (list, tuple)) or len(poly) < 3:
+                raise ConfigError(f"{where}: expected a polygon of at least 3 [x, y] vertices, "
+                                  f"got {fmt(poly)}")
+            pts = tuple(check(f"{where}[{j}]", "vec2", q) for j, q in enumerate(poly))
+            for j, q in enumerate(pts):
+                if max(abs(q[0]), abs(q[1])) > 10.0:
+                    raise ConfigError(f"{where}[{j}]: {fmt(list(q))} m is outside the "
+                                      "admissible range -10 .. 10 m")
+            n = len(pts)
+            turns = [(pts[(j + 1) % n][0] - pts[j][0]) * (pts[(j + 2) % n][1] - pts[j][1])
+                     - (pts[(j + 1) % n][1] - pts[j][1]) * (pts[(j + 2) % n][0] - pts[j][0])
+                     for j in range(n)]
+            if not (all(t > 0 for t in turns) or all(t < 0 for t in turns)):
+                raise ConfigError(f"{where}: the polygon must be convex with distinct corners "
+                                  "(split a concave region into convex ones)")
+            out.append(pts)
+        return tuple(out)
     raise AssertionError(kind)

@@ -16,18 +16,28 @@ from .coordinates import PIVOTS, Length, PivotAngle
 class Dashpot(Element):
     name = "dashpot"
     seed = True
-    doc = "dashpot between pin C on the lid and the ground pivot O"
+    doc = ("dashpot between a lid point H (default pin C) and a ground anchor (default the "
+           "pivot O)")
     keys = (Key("design", "damper_c", "nonneg", 0.0, "N s/m", "dashpot coefficient c (>= 0)",
                 lo=0.0, hi=1e7, spread=0.20),
             Key("design", "damper_one_way", "bool", False, "",
                 "the dashpot and the rotary damper resist only closing (theta' < 0), as most "
-                "soft-close parts do"))
+                "soft-close parts do"),
+            Key("geometry", "dashpot_anchor", "vec2", (0.0, 0.0), "m",
+                "dashpot anchor on the ground (world; default the pivot O)", lo=-10.0,
+                hi=10.0),
+            Key("geometry", "dashpot_lid", "vec2", None, "m",
+                "dashpot point on the lid, lid frame, from A", lo=-10.0, hi=10.0,
+                derived="`lid_c` (pin C)", derive=lambda v: v["geometry"]["lid_c"]))
     params = (Param("damper_c"), Param("damper_one_way", codes={False: 0.0, True: 1.0}))
     acting_params = ("damper_c",)
     columns = (("dd", "dq2"),)
 
     def coordinate(self, cfg):
-        return Length("C", None, None, (0.0, 0.0))
+        g = cfg.geometry
+        if tuple(g.dashpot_lid) == tuple(g.lid_c) and tuple(g.dashpot_anchor) == (0.0, 0.0):
+            return Length("C", None, None, (0.0, 0.0))     # the seed's: C to O
+        return Length("H", "dashpot_lid", "dashpot_anchor")
 
     def viscous(self, P):
         return P["damper_c"]

@@ -11,7 +11,10 @@ variables the NLP carries), :mod:`.nlp` (the NLP and its discretisation), :mod:`
 spring kinds), :mod:`.cache` (models and NLPs built once), :mod:`.starts` (starts from a
 coarse sweep, initial guesses), :mod:`.polish` (sub-step refinement, closing-time
 correction), :mod:`.verify` (the adaptive reference's verdict), :mod:`.diagnose` (why a
-problem is infeasible), :mod:`.result` (result types), :mod:`.optimiser`, :mod:`.pareto`.
+problem is infeasible), :mod:`.result` (result types), :mod:`.optimiser`, :mod:`.pareto`,
+:mod:`.placement` (attachment points as design variables: the lengths as expressions of the
+points on the fitted closure, the spring kind's validity over the stroke) and
+:mod:`.keep_out` (regions the spring and dashpot lines must not cross).
 See docs/optimise.md.
 """
 

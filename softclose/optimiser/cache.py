@@ -12,6 +12,7 @@ from ..model import LidModel, model_key
 from ..simulate import Simulator
 from .interval import free_layout, nlp_elements
 from .nlp import ShootingNLP
+from .placement import placement_layout
 
 _MODELS: dict = {}
 _NLPS: dict = {}
@@ -30,8 +31,18 @@ def nlp_key(cfg, nodes: int | None = None, substeps: int | None = None) -> tuple
     o = cfg.optimise
     return model_key(cfg) + (tuple(e.name for e in nlp_elements(cfg)),
                              o.opening_force_max is not None, free_layout(cfg),
+                             placement_layout(cfg), keep_out_of(cfg),
                              nodes or o.nodes, substeps or o.substeps, o.hessian,
                              o.linear_solver, o.max_iter)
+
+
+def keep_out_of(cfg) -> tuple:
+    """optimise.keep_out as a tuple of polygons (tuples of (x, y)); empty without one or
+    without free attachment points (fixed points are checked, not optimised)."""
+    polys = getattr(cfg.optimise, "keep_out", None)
+    if not polys or not placement_layout(cfg):
+        return ()
+    return tuple(tuple(tuple(float(c) for c in v) for v in poly) for poly in polys)
 
 
 def has_nlp(cfg, nodes: int | None = None, substeps: int | None = None) -> bool:
@@ -43,7 +54,8 @@ def build_nlp(cfg, nodes: int, substeps: int) -> ShootingNLP:
     o = cfg.optimise
     return ShootingNLP(get_model(cfg), nodes, substeps, o.hessian, o.linear_solver,
                        o.max_iter, els=nlp_elements(cfg),
-                       opening=o.opening_force_max is not None, free=free_layout(cfg))
+                       opening=o.opening_force_max is not None, free=free_layout(cfg),
+                       placement=placement_layout(cfg), keep_out=keep_out_of(cfg))
 
 
 def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None) -> ShootingNLP:
@@ -68,7 +80,8 @@ def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None) -> Shoot
                 nlp = ShootingNLP(get_model(cfg), N, M, o.hessian, o.linear_solver,
                                   o.max_iter, els=nlp_elements(cfg),
                                   opening=o.opening_force_max is not None,
-                                  free=free_layout(cfg), library=lib, meta=meta)
+                                  free=free_layout(cfg), library=lib, meta=meta,
+                                  placement=placement_layout(cfg), keep_out=keep_out_of(cfg))
             except Exception:   # noqa: BLE001  (a damaged or foreign library: build anew)
                 buildcache.forget_nlp(disk)
                 nlp = None

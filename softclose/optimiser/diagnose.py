@@ -74,7 +74,8 @@ def diagnose(cfg, nlp: ShootingNLP, runs: list[Run]) -> tuple[str, dict]:
         if best is None:
             continue
         d, T, _, _ = nlp.unpack(best.x)
-        rs = sim.run(nlp.param_vector(cfg, d), estimate_error=False)
+        from .polish import _sim
+        rs = _sim(cfg, nlp, d, sim).run(nlp.param_vector(cfg, d), estimate_error=False)
         T_sim = rs.closing_time if rs.closed else T
         dd = nlp.design_dict(cfg, d)
         info[f"{name}_stroke"] = {"closing_time": T_sim, "design": dd}

@@ -39,7 +39,7 @@ def free_layout(cfg) -> tuple:
     larger magnitude of the bounds (so that the scaled variable lies within [-1, 1])."""
     from ..problem import PARAM_COLUMNS
     return tuple((k, PARAM_COLUMNS[k], max(abs(lo), abs(hi)) or 1.0)
-                 for k, lo, hi in free_of(cfg))
+                 for k, lo, hi in free_of(cfg) if k in PARAM_COLUMNS)
 
 
 # -- the geometric functions as Chebyshev series -----------------------------------------
@@ -47,7 +47,8 @@ def nlp_elements(cfg) -> tuple:
     """The elements the NLP carries: the seed's always, the others when they act in ``cfg``
     or may act through a free design variable (``optimise.free``; an element that exerts no
     force adds nothing but series to fit)."""
-    extra = {k.split(".", 1)[1]: max(abs(lo), abs(hi)) for k, lo, hi in free_of(cfg)}
+    extra = {k.split(".", 1)[1]: max(abs(lo), abs(hi)) for k, lo, hi in free_of(cfg)
+             if k.startswith("design.")}
     acting = elements.acting(cfg, extra)
     return tuple(e for e in elements.ELEMENTS if e.seed or e in acting)
 
@@ -81,7 +82,8 @@ class ChebyshevFit:
     (``max_rel_error``).
     """
 
-    def __init__(self, model, tol: float = 1e-13, max_degree: int = 64, els=None):
+    def __init__(self, model, tol: float = 1e-13, max_degree: int = 64, els=None,
+                 pose: bool = False):
         th = ca.SX.sym("theta")
         cf = coefficients(th, model.cfg, model.sigma)
         M, co = cf["M"], cf["coords"]
@@ -89,8 +91,14 @@ class ChebyshevFit:
         terms = series_terms(self.elements)
         what = {"a": lambda c: -c.dq / M, "b": lambda c: -c.q * c.dq / M,
                 "B": lambda c: -c.dq2 / M, "C": lambda c: ca.fabs(c.dq) / M}
-        funcs = [what[w](co[e]) for _, e, w in terms] + [-0.5 * cf["dM"] / M, cf["tau"]]
-        self.names = tuple(n for n, _, _ in terms) + ("inertia", "tau", "dtau")
+        funcs = [what[w](co[e]) for _, e, w in terms]
+        names = [n for n, _, _ in terms]
+        if pose:        # the closure itself, for attachment points as design variables
+            from .placement import POSE_SERIES, pose_functions
+            funcs += pose_functions(th, model.cfg, model.sigma, M)
+            names += list(POSE_SERIES)
+        funcs += [-0.5 * cf["dM"] / M, cf["tau"]]
+        self.names = tuple(names) + ("inertia", "tau", "dtau")
         g = ca.vertcat(*funcs)
         self.exact = ca.Function("g_exact", [th], [ca.cse(g)])
         # the stroke's angles with a margin for overshooting stages and iterates (the
@@ -122,6 +130,11 @@ class ChebyshevFit:
                                                                 self.max_rel_error]),
                 "fit_names": np.array(self.names)}
 
+    @property
+    def pose(self) -> bool:
+        """Does the fit hold the closure's series (attachment points as variables)?"""
+        return "pose:Ax" in self.names
+
     @classmethod
     def restore(cls, state: dict, els) -> "ChebyshevFit":
         """The fit from :meth:`state`'s numbers (the elements ``els`` as when it was made)."""
@@ -131,8 +144,10 @@ class ChebyshevFit:
         lo, hi, degree, err = (float(v) for v in state["fit_numbers"])
         f.lo, f.hi, f.degree, f.max_rel_error = lo, hi, int(degree), err
         f.coef = np.array(state["fit_coef"], float)
-        if f.names != tuple(n for n, _, _ in series_terms(f.elements)) + ("inertia", "tau",
-                                                                           "dtau"):
+        from .placement import POSE_SERIES
+        pose = POSE_SERIES if "pose:Ax" in f.names else ()
+        if f.names != tuple(n for n, _, _ in series_terms(f.elements)) + pose + (
+                "inertia", "tau", "dtau"):
             raise ValueError("the fit's series are not those of its elements")
         return f
 
@@ -179,7 +194,7 @@ def hermite_max(va, ma, vb, mb):
 
 
 def interval_function(model, substeps: int, fit: ChebyshevFit | None = None,
-                      with_ode: bool = False):
+                      with_ode: bool = False, placement: bool = False):
     """One shooting interval of ``substeps`` RK4 sub-steps on ``model``'s equation of motion
     (its Chebyshev series): ``interval(x0, q, h) -> (x1, theta, theta_dot, speed)``.
 
@@ -187,28 +202,47 @@ def interval_function(model, substeps: int, fit: ChebyshevFit | None = None,
     ``theta``/``theta_dot`` are the states
     after sub-steps 1..M-1, ``speed`` the tip speeds after each sub-step followed by the
     Hermite maxima inside each. With ``with_ode`` also returns the ODE ``f(x, q)``.
+
+    With ``placement`` (a fit with the closure's series) the spring and the dashpot act
+    through the attachment points g (:mod:`.placement`), a fourth input:
+    ``interval(x0, q, h, g)``, ``f(x, q, g)``.
     """
-    fit = fit or ChebyshevFit(model)
+    fit = fit or ChebyshevFit(model, pose=placement)
     M = substeps
     nb = fit.degree + 1
     # theta'' = a0(theta) + a1(theta) theta' + a2(theta) theta'^2; the series of a0 and a1
     # are combined from the parameters once per interval, not at every evaluation: each
     # element's law gives the coefficients of its series (a_e, b_e of T = a + b q; B_e)
     x0, q, h = ca.SX.sym("x0", 2), ca.SX.sym("q", len(PARAM_KEYS)), ca.SX.sym("h")
+    g = None
     P = elements.params(q)
     a0, a1 = [], []
+    placed = ("spring", "dashpot") if placement else ()
     for name, e, what in series_terms(fit.elements):
+        if e in placed:
+            continue
         el = elements.BY_NAME[e]
         coef = el.viscous(P) if what == "B" else el.coulomb(P) if what == "C" else \
             el.affine(P)["ab".index(what)]
         (a1 if what == "B" else a0).append(coef * fit.series(name))
     cq = ca.vertcat(sum(a0[1:], a0[0]), sum(a1[1:], a1[0]))
-    xs, cs = ca.SX.sym("x", 2), ca.SX.sym("cq", 2 * nb)
+    xs = ca.SX.sym("x", 2)
+    if placement:   # the spring's (a_s, b_s), the dashpot's c and the points g ride along
+        from .placement import SLOTS, lengths
+        g = ca.SX.sym("g", len(SLOTS))
+        sa, sb = elements.BY_NAME["spring"].affine(P)
+        cq = ca.vertcat(cq, sa, sb, elements.BY_NAME["dashpot"].viscous(P), g)
+    cs = ca.SX.sym("cq", cq.numel())
     B = fit.basis(xs[0])
-    acc = (ca.dot(cs[:nb], B) + ca.dot(cs[nb:], B) * xs[1]
+    acc = (ca.dot(cs[:nb], B) + ca.dot(cs[nb:2 * nb], B) * xs[1]
            + ca.dot(fit.series("inertia"), B) * xs[1] ** 2)
+    if placement:
+        l, ldl, dq2, invM = lengths(fit, xs[0], B, cs[2 * nb + 3:])
+        a_s, b_s, c_d = cs[2 * nb], cs[2 * nb + 1], cs[2 * nb + 2]
+        acc = acc - (a_s * ldl / l + b_s * ldl) * invM - c_d * dq2 * invM * xs[1]
     f_c = ca.Function("f_c", [xs, cs], [ca.vertcat(xs[1], acc)])
-    f = ca.Function("f", [xs, q], [f_c(xs, cq)])     # the ODE, for reporting
+    extra_in = [g] if placement else []
+    f = ca.Function("f", [xs, q] + extra_in, [f_c(xs, cq)])     # the ODE, for reporting
     th = ca.SX.sym("th")
     Bt = fit.basis(th)
     tau = ca.Function("tau", [th], [ca.dot(fit.series("tau"), Bt),
@@ -224,7 +258,8 @@ def interval_function(model, substeps: int, fit: ChebyshevFit | None = None,
         k4 = f_c(x + h * k3, cq_)
         return x + h / 6 * (fx + 2 * k2 + 2 * k3 + k4)
 
-    names = (["x0", "q", "h"], ["x1", "theta", "theta_dot", "speed"])
+    names = (["x0", "q", "h"] + (["g"] if placement else []),
+             ["x1", "theta", "theta_dot", "speed"])
     if M <= UNROLL_MAX:  # unrolled in SX (cheapest to evaluate)
         x = x0
         fx = f_c(x, cq)
@@ -243,9 +278,9 @@ def interval_function(model, substeps: int, fit: ChebyshevFit | None = None,
         empty = ca.SX(0, 1)
         outs = [x, ca.vertcat(*ths) if ths else empty,
                 ca.vertcat(*thds) if thds else empty, ca.vertcat(*spd, *peak)]
-        interval = ca.Function("interval", [x0, q, h], ca.cse(outs), *names)
+        interval = ca.Function("interval", [x0, q, h] + extra_in, ca.cse(outs), *names)
     else:  # one SX sub-step, accumulated M times (build time independent of M)
-        a, cqs = ca.SX.sym("a", 6), ca.SX.sym("cq", 2 * nb)   # a = (x, x', v, h v')
+        a, cqs = ca.SX.sym("a", 6), ca.SX.sym("cq", cq.numel())   # a = (x, x', v, h v')
         x, fx, va, ma = a[0:2], a[2:4], a[4], a[5]
         x1 = rk4(x, fx, cqs)
         fx1 = f_c(x1, cqs)
@@ -254,14 +289,16 @@ def interval_function(model, substeps: int, fit: ChebyshevFit | None = None,
                            ca.cse([ca.vertcat(x1, fx1, vb, mb),
                                    ca.vertcat(x1, vb, hermite_max(va, ma, vb, mb))]))
         fx0 = f_c(x0, cq)
-        start = ca.Function("start", [x0, q, h], [ca.vertcat(x0, fx0, *speed(x0, fx0)), cq])
+        start = ca.Function("start", [x0, q, h] + extra_in,
+                            [ca.vertcat(x0, fx0, *speed(x0, fx0)), cq])
         accum = step.mapaccum("substeps", M)
         x0m, qm, hm = ca.MX.sym("x0", 2), ca.MX.sym("q", len(PARAM_KEYS)), ca.MX.sym("h")
-        a0, cqm = start(x0m, qm, hm)
+        gm = [ca.MX.sym("g", len(SLOTS))] if placement else []
+        a0, cqm = start(x0m, qm, hm, *gm)
         _, Y = accum(a0, ca.repmat(cqm, 1, M), ca.repmat(hm, 1, M))
         outs = [Y[0:2, M - 1], Y[0, :M - 1].T, Y[1, :M - 1].T,
                 ca.vertcat(Y[2, :].T, Y[3, :].T)]
-        interval = ca.Function("interval", [x0m, qm, hm], outs, *names)
+        interval = ca.Function("interval", [x0m, qm, hm] + gm, outs, *names)
     return (interval, f) if with_ode else interval
 
 

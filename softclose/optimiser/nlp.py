@@ -33,6 +33,12 @@ that are not design variables -- the rotary damper, those of the elements added 
 time grid) is an NLP parameter, and closing-time bounds, design bounds and
 holding_moment_min are bounds: one NLP per geometry and (N, M) serves multistart, warm
 re-solves and Pareto fronts (:func:`softclose.optimiser.cache.get_nlp`).
+
+Attachment points freed in ``optimise.free`` (``geometry.spring_anchor[i]``, ``lid_e[i]``,
+``dashpot_anchor[i]``, ``dashpot_lid[i]``) are design variables after the others: the spring
+and the dashpot then act through the points (:mod:`softclose.optimiser.placement`), the
+spring kind's validity over the stroke and the keep-out regions are constraints, and the
+answer is verified at a config with the points set (:meth:`ShootingNLP.placed_config`).
 """
 
 from __future__ import annotations
@@ -48,6 +54,7 @@ from ..config import NLP_BUDGET
 from ..errors import ConfigError
 from ..problem import DESIGN_KEYS, PARAM_KEYS, SCALES, params_of
 from .interval import ChebyshevFit, free_of, hermite_max, interval_function, nlp_elements
+from .placement import placed_config, placed_constraints, slot_values
 
 #: Ipopt return statuses that count as converged
 CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
@@ -218,7 +225,7 @@ class ShootingNLP:
     def __init__(self, model, nodes: int, substeps: int, hessian: str = "exact",
                  linear_solver: str = "mumps", max_iter: int = 500, tol: float = 1e-10,
                  els=None, opening: bool = False, free: tuple = (), library=None,
-                 meta: dict | None = None):
+                 meta: dict | None = None, placement: tuple = (), keep_out: tuple = ()):
         """Built symbolically (CasADi's virtual machine evaluates it), or -- ``library`` a
         compiled library of this NLP (:mod:`softclose.buildcache`) and ``meta`` what
         :meth:`meta` stored when it was built -- loaded: nothing symbolic is built, the
@@ -229,8 +236,13 @@ class ShootingNLP:
         N, M = nodes, substeps
         # the design variables: k, l0, c, then the free ones (optimise.free: free_layout)
         self.free = tuple(free)
-        self.nd = len(DESIGN_KEYS) + len(self.free)
-        self.scales = np.r_[SCALES, [sc for _, _, sc in self.free]]
+        # the free attachment points (optimise.free geometry.*: placement_layout), last
+        self.place = tuple(placement)
+        self.placed = bool(self.place)
+        self.g0 = slot_values(model.cfg)
+        self.nd = len(DESIGN_KEYS) + len(self.free) + len(self.place)
+        self.scales = np.r_[SCALES, [sc for _, _, sc in self.free],
+                            [sc for _, _, sc in self.place]]
         self.iT = self.nd                       # w = (d, T, X (node-major), s)
         self.ipopt_options = {"print_time": False, "show_eval_warnings": False,
                               "calc_lam_p": False,
@@ -246,8 +258,13 @@ class ShootingNLP:
             self._load(library, meta, els)
             self.build_time = time.perf_counter() - t0
             return
-        self.fit = ChebyshevFit(model, els=els)
-        self.interval, self.f = interval_function(model, substeps, self.fit, with_ode=True)
+        if self.placed and opening:
+            raise ConfigError("optimise.opening_force_max cannot yet be combined with free "
+                              "attachment points (optimise.free geometry.*): fix the points "
+                              "or drop the bound")
+        self.fit = ChebyshevFit(model, els=els, pose=self.placed)
+        self.interval, self.f = interval_function(model, substeps, self.fit, with_ode=True,
+                                                  placement=self.placed)
         # the NLP: MX graph over the SX interval, mapped over the N intervals
         d, T = ca.MX.sym("d", self.nd), ca.MX.sym("T")
         X, s = ca.MX.sym("X", 2, N), ca.MX.sym("s")
@@ -262,13 +279,25 @@ class ShootingNLP:
             entries[col] = d[len(DESIGN_KEYS) + j] * sc
         design = ca.vertcat(*entries)
         Xs = ca.horzcat(ca.vertcat(theta0, 0), X[:, :N - 1])
-        xe, a, b, sp = self.interval.map(N)(Xs, ca.repmat(design, 1, N), T * grid.T / M)
+        gin = []
+        if self.placed:     # the points g: the model's, the free components variables
+            gl = [ca.MX(float(v)) for v in self.g0]
+            for j, (_, slot, sc) in enumerate(self.place):
+                gl[slot] = d[len(DESIGN_KEYS) + len(self.free) + j] * sc
+            gvec = ca.vertcat(*gl)
+            gin = [ca.repmat(gvec, 1, N)]
+        xe, a, b, sp = self.interval.map(N)(Xs, ca.repmat(design, 1, N), T * grid.T / M,
+                                            *gin)
+        if self.placed:     # the holding moment: the spring's part at the points g
+            g_all = placed_constraints(self, model, design, gvec, theta0, thc, keep_out)
+        else:
+            g_all = {"holding_moment": model.dV(thc, design),
+                     "release_downwards": self.f(ca.vertcat(theta0, 0), design)[1]}
         g_all = {"continuity": ca.vec(xe - X),                  # = 0
                  "theta_above_closed": ca.vec(a) - thc,          # >= 0
                  "theta_dot_nonpositive": ca.vec(b),             # <= 0
                  "peak_tip_speed": s - ca.vec(sp),               # >= 0
-                 "holding_moment": model.dV(thc, design),        # >= holding_moment_min
-                 "release_downwards": self.f(ca.vertcat(theta0, 0), design)[1]}  # <= 0
+                 **g_all}      # holding moment >= holding_moment_min, release <= 0, ...
         if opening:        # the opening effort (optimise.opening_force_max): <= the bound
             g_all["opening_force"] = opening_bound(model, theta0, thc, design)
         self.g_names = list(g_all)
@@ -296,6 +325,8 @@ class ShootingNLP:
         """The solvers from a compiled library and the numbers :meth:`meta` kept."""
         els = tuple(els if els is not None else nlp_elements(self.model.cfg))
         self.fit = ChebyshevFit.restore(meta, els)
+        if self.fit.pose != self.placed:
+            raise ValueError("the compiled NLP carries other attachment points")
         self.g_names = [str(n) for n in meta["g_names"]]
         self.g_sizes = [int(n) for n in meta["g_sizes"]]
         self.nw = int(meta["nw"][0])
@@ -316,7 +347,7 @@ class ShootingNLP:
         use (tests and reports ask for them; the solves do not)."""
         if name in ("interval", "f") and self.__dict__.get("library") is not None:
             self.interval, self.f = interval_function(self.model, self.M, self.fit,
-                                                      with_ode=True)
+                                                      with_ode=True, placement=self.placed)
             return getattr(self, name)
         raise AttributeError(name)
 
@@ -333,7 +364,8 @@ class ShootingNLP:
         T, X (2, N) and s."""
         d = np.asarray(design, float)
         if len(d) == len(PARAM_KEYS):
-            d = np.r_[d[:len(DESIGN_KEYS)], [d[col] for _, col, _ in self.free]]
+            d = np.r_[d[:len(DESIGN_KEYS)], [d[col] for _, col, _ in self.free],
+                      [self.g0[slot] for _, slot, _ in self.place]]
         return np.r_[d[:self.nd] / self.scales, T, np.asarray(X, float).T.ravel(), s]
 
     def unpack(self, w):
@@ -351,9 +383,12 @@ class ShootingNLP:
             return d[:self.nd]
         P = params_of(cfg)
         bounds = {k: (lo, hi) for k, lo, hi in free_of(cfg)}
+        g = slot_values(cfg)
         return np.r_[d[:len(DESIGN_KEYS)],
                      [float(np.clip(P[col], *bounds.get(k, (-np.inf, np.inf))))
-                      for k, col, _ in self.free]]
+                      for k, col, _ in self.free],
+                     [float(np.clip(g[slot], *bounds.get(k, (-np.inf, np.inf))))
+                      for k, slot, _ in self.place]]
 
     def param_vector(self, cfg, design) -> np.ndarray:
         """The parameter vector p of ``cfg`` with ``design``'s variables."""
@@ -367,8 +402,18 @@ class ShootingNLP:
     def design_dict(self, cfg, design) -> dict:
         """{name: value} of the design variables (k, l0, c, the free ones by their names)."""
         d = self.full_design(cfg, design)
-        names = DESIGN_KEYS + tuple(k.split(".", 1)[1] for k, _, _ in self.free)
+        names = DESIGN_KEYS + tuple(k.split(".", 1)[1] for k, _, _ in self.free + self.place)
         return {n: float(v) for n, v in zip(names, d)}
+
+    def points(self, design) -> dict:
+        """{key: value} of the free attachment points in ``design`` (the design variables)."""
+        d = np.asarray(design, float)
+        n0 = len(DESIGN_KEYS) + len(self.free)
+        return {k: float(d[n0 + j]) for j, (k, _, _) in enumerate(self.place)}
+
+    def placed_config(self, cfg, design):
+        """``cfg`` with the attachment points of ``design`` (itself without free points)."""
+        return placed_config(cfg, self.points(design)) if self.placed else cfg
 
     def peak(self, run: Run) -> float:
         """The NLP's own peak tip speed at ``run``'s point: the largest sub-step speed or
@@ -397,6 +442,9 @@ class ShootingNLP:
         hi = {"continuity": 0.0, "theta_above_closed": np.inf, "theta_dot_nonpositive": 0.0,
               "peak_tip_speed": np.inf, "holding_moment": np.inf, "release_downwards": 0.0,
               "opening_force": np.inf if o.opening_force_max is None else o.opening_force_max}
+        if self.placed:
+            from .placement import placed_bounds
+            placed_bounds(cfg, lo, hi)
         lbg = np.concatenate([np.full(n, lo[k]) for k, n in zip(self.g_names, self.g_sizes)])
         ubg = np.concatenate([np.full(n, hi[k]) for k, n in zip(self.g_names, self.g_sizes)])
         return lbx, ubx, lbg, ubg
@@ -405,11 +453,12 @@ class ShootingNLP:
         """(lo, hi) of each design variable (k, l0, c from [optimise], then the free ones)."""
         o = cfg.optimise
         free = {k: (lo, hi) for k, lo, hi in free_of(cfg)}
-        missing = [k for k, _, _ in self.free if k not in free]
+        missing = [k for k, _, _ in self.free + self.place if k not in free]
         if missing:
             raise ConfigError(f"optimise.free: this NLP chooses {', '.join(missing)}, which "
                               "the config does not bound")
-        return [tuple(getattr(o, k)) for k in DESIGN_KEYS] + [free[k] for k, _, _ in self.free]
+        return [tuple(getattr(o, k)) for k in DESIGN_KEYS] + [free[k] for k, _, _ in
+                                                              self.free + self.place]
 
     def params(self, cfg, J_ref: float = 1.0, weight_time: float = 0.0,
                weights: tuple | None = None) -> np.ndarray:

@@ -24,7 +24,7 @@ from .diagnose import diagnose
 from . import sidebyside
 from .kinds import kind_config
 from .nlp import J_INDEX, Discretisation, Run, ShootingNLP, check_options, discretisation
-from .polish import nlp_objective, refine, tighten
+from .polish import keep_clear, nlp_objective, refine, tighten
 from .result import Active, OptimiseResult
 from .starts import MAX_STARTS, initial_guess, sweep_starts, sweep_time
 from .verify import get_checker, verify as verify_design
@@ -61,6 +61,9 @@ def claims(nlp: ShootingNLP, cfg, run: Run) -> tuple[dict, dict, float]:
     p = nlp.param_vector(cfg, d)
     thd = float(X[1, -1])
     vT = np.asarray(model.kin(np.array([st.theta_closed, thd]))[4]).ravel()
+    if nlp.placed:      # the exact model at the optimum's attachment points
+        cfg = nlp.placed_config(cfg, d)
+        model = get_checker(cfg).model
     lmin, lmax = get_checker(cfg).spring_extremes(st.theta_closed, st.theta0)
     peak = nlp.peak(run)
     m = {"closed": True, "closing_time": T, "impact_theta_dot": thd,
@@ -74,10 +77,10 @@ def claims(nlp: ShootingNLP, cfg, run: Run) -> tuple[dict, dict, float]:
 def free_in_bounds(cfg):
     """``cfg`` with each free design variable (``optimise.free``) clipped into its bounds:
     where the starts' sweep holds it."""
+    from ..config.free import config_value
     values = {}
     for key, lo, hi in cfg.optimise.free or ():
-        section, name = key.split(".")
-        v = getattr(getattr(cfg, section), name)
+        v = config_value(cfg, key)
         if not lo <= v <= hi:
             values[key] = float(np.clip(v, lo, hi))
     return cfg.update(values)
@@ -102,7 +105,7 @@ def active_set(nlp: ShootingNLP, cfg, run: Run, t_limit: float) -> tuple[Active,
         for side, b, sign in (("upper", hi, 1.0), ("lower", lo, -1.0)):
             at = abs(run.x[i] - b / sc) <= 1e-7 * max(1.0, abs(b / sc))
             if sign * lam > ACTIVE_LAM or (at and lo != hi):
-                out.append(Active(key, "bound", side, float(b), UNITS[key],
+                out.append(Active(key, "bound", side, float(b), UNITS.get(key, "m"),
                                   -sign * Jr * lam / sc))
                 break
     iT = nlp.iT
@@ -177,12 +180,15 @@ def finish(cfg, nlp: ShootingNLP, run: Run, disc: Discretisation, *, verify: boo
         sim = stroke_simulator(cfg)
         nlp, run = refine(cfg, nlp, run, sim, notes)
         run = tighten(cfg, nlp, run, sim, disc.t_limit, notes)
+        run = keep_clear(cfg, nlp, run, notes)
     design, own, J = claims(nlp, cfg, run)
+    if nlp.placed:       # from here on: the config with the optimum's attachment points
+        cfg = nlp.placed_config(cfg, nlp.unpack(run.x)[0])
     active = active_set(nlp, cfg, run, disc.t_limit)
     problem = describe(cfg)
     # the closing-time bounds the NLP was solved with: closing_time_min raised to the NLP's
     # floor, the limit moved by the discretisation error (tighten)
-    problem["closing_time_solved"] = [float(run.bounds[0][3]), float(run.bounds[1][3])]
+    problem["closing_time_solved"] = [float(run.bounds[0][nlp.iT]), float(run.bounds[1][nlp.iT])]
     common = dict(nodes=nlp.N, substeps=nlp.M, hessian=cfg.optimise.hessian,
                   iterations=base.pop("iterations", run.iterations),
                   solve_time=base.pop("solve_time", run.time), problem=problem,
@@ -192,9 +198,27 @@ def finish(cfg, nlp: ShootingNLP, run: Run, disc: Discretisation, *, verify: boo
                               "are the NLP's own", run.status, design, J, None,
                               {"objective": J, **own}, notes=tuple(notes), **common)
     ver = verify_design(cfg, design, own, J)
-    return OptimiseResult(ver.ok, ver.message and f"the answer is {ver.message}", run.status,
+    ok, msg = ver.ok, ver.message and f"the answer is {ver.message}"
+    if cfg.optimise.keep_out:          # the exact check of the keep-out regions
+        from .keep_out import clearance
+        for line, c in clearance(cfg).items():
+            notes.append(f"keep-out: the {line}'s line clears the regions by "
+                         f"{c['clearance'] * 1e3:.3f} mm at the least (theta = "
+                         f"{c['theta_deg']:.1f} deg; exact closure, 2001 angles)")
+            if not c["ok"]:
+                ok = False
+                msg = "; ".join(filter(None, [msg, f"the {line}'s line crosses a keep-out "
+                                              f"region by {-c['clearance'] * 1e3:.3f} mm at "
+                                              f"theta = {c['theta_deg']:.1f} deg"]))
+    return OptimiseResult(ok, msg, run.status,
                           design, J, ver.metrics, {"objective": J, **own}, ver,
                           notes=tuple(notes), **common)
+
+
+def _points_of(res, cfg):
+    """``cfg`` (not the kind's bounds) with the attachment points ``res`` placed."""
+    from .placement import placed_config
+    return placed_config(cfg, res.design or {})
 
 
 def guarded(fn):
@@ -336,7 +360,7 @@ def _best_kind(cfg, rows, results, pending, verify, t_start) -> OptimiseResult:
     part = spring_part(best.config, best.design, best.metrics or best.optimiser) \
         if best.design is not None else None
     return replace(best, kind=kind, kinds=tuple(rows), part=part,
-                   config=cfg.set("design.spring_kind", kind),   # (not the kind's bounds)
+                   config=_points_of(best, cfg.set("design.spring_kind", kind)),
                    notes=best.notes + tuple(notes), total_time=time.perf_counter() - t_start)
 
 

@@ -37,6 +37,14 @@ def nlp_objective(nlp: ShootingNLP, cfg, run: Run) -> float:
     return objective(cfg.optimise, float(X[1, -1]), nlp.peak(run))
 
 
+def _sim(cfg, nlp: ShootingNLP, d, sim):
+    """The simulator of ``d``'s stroke: ``sim``, or one at d's attachment points."""
+    if not nlp.placed:
+        return sim
+    from .cache import stroke_simulator
+    return stroke_simulator(nlp.placed_config(cfg, d))
+
+
 def _merge(new: Run, old: Run) -> Run:
     """``new`` with the cost of the runs that led to it added."""
     return replace(new, time=new.time + old.time, iterations=new.iterations + old.iterations,
@@ -74,7 +82,7 @@ def refine(cfg, nlp: ShootingNLP, run: Run, sim, notes: list) -> tuple[ShootingN
     never beyond :data:`MAX_STEPS` steps; verification judges the result either way)."""
     for _ in range(MAX_REFINE):
         d = nlp.unpack(run.x)[0]
-        rs = sim.run(nlp.param_vector(cfg, d), estimate_error=False)
+        rs = _sim(cfg, nlp, d, sim).run(nlp.param_vector(cfg, d), estimate_error=False)
         if not rs.closed:
             return nlp, run
         why = off(cfg, nlp, run, rs)
@@ -111,7 +119,7 @@ def tighten(cfg, nlp: ShootingNLP, run: Run, sim, t_limit: float, notes: list) -
     lo, hi = t_lo, t_hi
     for _ in range(MAX_TIGHTEN):
         d, T, _, _ = nlp.unpack(run.x)
-        rs = sim.run(nlp.param_vector(cfg, d), estimate_error=False)
+        rs = _sim(cfg, nlp, d, sim).run(nlp.param_vector(cfg, d), estimate_error=False)
         if not rs.closed:
             return run
         Ts = rs.closing_time
@@ -129,5 +137,35 @@ def tighten(cfg, nlp: ShootingNLP, run: Run, sim, t_limit: float, notes: list) -
         notes.append(f"closing-time bounds corrected for the NLP's discretisation error "
                      f"({shift:+.2e} s): solved with [{lo:.9g}, {hi:.9g}] s, "
                      f"{r.iterations} warm iterations")
+        run = _merge(r, run)
+    return run
+
+
+def keep_clear(cfg, nlp: ShootingNLP, run: Run, notes: list) -> Run:
+    """The keep-out regions hold at the NLP's angle nodes; between them a line may still
+    graze a region. Checked exactly (:func:`softclose.optimiser.keep_out.clearance`); while
+    a free line crosses one, the nodes' bound is raised by 1.5 times the crossing and the
+    problem re-solved warm (at most :data:`MAX_TIGHTEN` times)."""
+    from .keep_out import LINES, clearance, free_lines
+    groups = dict(nlp.groups())
+    if not cfg.optimise.keep_out or "keep_out" not in groups:
+        return run
+    names = {ln[0] for ln in free_lines(nlp.place)}
+    margin = 0.0
+    for _ in range(MAX_TIGHTEN):
+        d = nlp.unpack(run.x)[0]
+        worst = min((c["clearance"] for line, c in clearance(nlp.placed_config(cfg, d)).items()
+                     if line in names), default=0.0)
+        if worst >= 0.0:
+            return run
+        margin += 1.5 * -worst + 1e-7
+        lbx, ubx, lbg, ubg = (np.array(b, float) for b in run.bounds)
+        lbg[groups["keep_out"]] = margin
+        r = nlp.solve(run.x, run.p, lbx, ubx, lbg, ubg, run.lam_x, run.lam_g, warm=True)
+        if not r.success:
+            return run
+        notes.append(f"keep-out: a line grazed a region between the NLP's angle nodes by "
+                     f"{-worst * 1e3:.3f} mm: re-solved with a clearance of {margin * 1e3:.3f} mm "
+                     f"at the nodes ({r.iterations} warm iterations)")
         run = _merge(r, run)
     return run

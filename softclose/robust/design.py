@@ -92,19 +92,46 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     check_batch(cfg, int(samples or cfg.tolerance.samples),
                 "--samples" if samples else "tolerance.samples")
     check_keys(cfg)
-    if cfg.optimise.free:
+    from ..optimiser.placement import SLOTS, placed_config
+    others = [k for k, _, _ in cfg.optimise.free or () if k not in SLOTS]
+    if others:
         raise ConfigError(
-            "optimise.free: the robust design chooses k, l0 and c only; fix "
-            f"{', '.join(k for k, _, _ in cfg.optimise.free)} (e.g. at the nominal optimum's "
-            "values: softclose optimise --free ...) and run --robust without --free")
+            "optimise.free: the robust design chooses k, l0, c and the attachment points "
+            f"(geometry.*) only; fix {', '.join(others)} (e.g. at the nominal optimum's "
+            "values: softclose optimise --free ...) and run --robust without them")
+    placed = bool(cfg.optimise.free)
+    if placed:
+        toleranced = [k for k in cfg.tolerance.keys if any(
+            s.startswith(k.split("[")[0]) for s in (k2 for k2, _, _ in cfg.optimise.free))]
+        if toleranced:
+            raise ConfigError(f"[tolerance]: {toleranced[0]} is a free attachment point; a "
+                              "point the optimiser chooses carries no tolerance here")
     rows, results = [], []
     for kind in cfg.optimise.spring_kinds:
         c, why = kind_config(cfg, kind, robust=True)
+        if why is None and placed:      # stage 1: where (robust/placement.py)
+            from .placement import choose_points, fixed_points
+            stage_notes: list = []
+            bound = min((x[1].objective for x in results if x[1].success
+                         and x[1].objective is not None), default=None)
+            points, info = choose_points(c, stage_notes, bound)
+            if points is None:
+                rows.append({"kind": kind, "success": False, "objective": None, "message": (
+                    f"not solved: its nominal co-design optimum J = "
+                    f"{info['nominal_objective']:.6g} already exceeds the worst case "
+                    f"{bound:.6g} of a kind solved before (the nominal lid is a scenario)")})
+                continue
+            c, why = kind_config(fixed_points(cfg, points), kind, robust=True)
         if why is not None:
             rows.append({"kind": kind, "success": False, "objective": None, "message": why})
             continue
         r = optimise_robust_kind(c, progress=progress, samples=samples, seed=seed,
                                  verify=verify)
+        if placed:                       # stage 2 ran at the points: report them
+            r = replace(r, design={**(r.design or {}), **{k.split(".", 1)[1]: v
+                                                          for k, v in points.items()}},
+                        notes=tuple(stage_notes) + r.notes)
+            r = _keep_out_check(c, r)
         rows.append({"kind": kind, "success": r.success, "objective": r.objective,
                      "message": r.message})
         results.append((kind, r, c))
@@ -122,8 +149,34 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
                                                  f" ({r['message'] or 'failed'})")
         for r in rows),)
     times = dict(best.times, total=time.perf_counter() - t_start)
+    out_cfg = cfg.set("design.spring_kind", kind)         # (not the kind's bounds)
+    if placed:                          # with the points set, no longer free
+        from .placement import fixed_points
+        out_cfg = fixed_points(out_cfg, {f"geometry.{k}": v for k, v in (best.design or {}).items()
+                                         if f"geometry.{k}" in SLOTS})
     return replace(best, kind=kind, kinds=tuple(rows), part=part, notes=notes, times=times,
-                   config=cfg.set("design.spring_kind", kind))   # (not the kind's bounds)
+                   config=out_cfg)
+
+
+def _keep_out_check(cfg: Config, r: RobustResult) -> RobustResult:
+    """The exact keep-out check at the result's points (``optimise.keep_out``)."""
+    from dataclasses import replace
+
+    from ..optimiser.keep_out import clearance
+    if not cfg.optimise.keep_out:
+        return r
+    notes, msgs = list(r.notes), []
+    for line, c in clearance(cfg).items():
+        notes.append(f"keep-out: the {line}'s line clears the regions by "
+                     f"{c['clearance'] * 1e3:.3f} mm at the least (theta = {c['theta_deg']:.1f} "
+                     "deg; exact closure, 2001 angles)")
+        if not c["ok"]:
+            msgs.append(f"the {line}'s line crosses a keep-out region by "
+                        f"{-c['clearance'] * 1e3:.3f} mm")
+    if msgs:
+        return replace(r, success=False, message="; ".join(filter(None, [r.message, *msgs])),
+                       notes=tuple(notes))
+    return replace(r, notes=tuple(notes))
 
 
 def optimise_robust_kind(cfg: Config, *, progress: bool = False, samples: int | None = None,

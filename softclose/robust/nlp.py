@@ -54,7 +54,8 @@ PARAMS = ("theta0", "theta_closed", "weight_impact", "weight_peak_tip", *FIXED, 
 T_FLOOR = 1e-3
 #: per-scenario constraint groups, in order
 GROUPS = ("continuity", "theta_above_closed", "theta_dot_nonpositive", "peak_tip_speed",
-          "holding_moment", "release_downwards", "epigraph", "opening_force")
+          "holding_moment", "release_downwards", "epigraph", "opening_force",
+          "spring_long", "spring_short", "spring_length", "keep_out")
 CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 WARM_OPTIONS = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
                 "ipopt.warm_start_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9,
@@ -117,13 +118,18 @@ def _model_key(cfg: Config) -> tuple:
     return model_key(cfg) + (tuple(e.name for e in nlp_elements(cfg)),)
 
 
-def interval_of(cfg_model: Config, nodes: int, substeps: int):
-    """(model, shooting-interval Function) of a scenario's model: the nominal optimiser's."""
+def interval_of(cfg_model: Config, nodes: int, substeps: int, placement: bool = False):
+    """(model, shooting-interval Function) of a scenario's model: the nominal optimiser's;
+    with ``placement`` also its fit and ODE (the attachment points an input: the fit is of
+    the closure, which the points do not change)."""
     from ..optimiser.cache import get_model
     from ..optimiser.interval import ChebyshevFit, interval_function, nlp_elements
     model = get_model(cfg_model)
-    fit = ChebyshevFit(model, els=nlp_elements(cfg_model))
-    return model, interval_function(model, substeps, fit)
+    fit = ChebyshevFit(model, els=nlp_elements(cfg_model), pose=placement)
+    if not placement:
+        return model, interval_function(model, substeps, fit)
+    f, ode = interval_function(model, substeps, fit, with_ode=True, placement=True)
+    return model, (f, fit, ode)
 
 
 class ScenarioNLP:
@@ -140,13 +146,21 @@ class ScenarioNLP:
         self.N, self.M, self.S = nodes, substeps, len(model_cfgs)
         self.robust_objective = robust_objective
         N, M, S = nodes, substeps, self.S
+        # free attachment points (optimise.free geometry.*), shared by every scenario
+        from ..optimiser.placement import (length_bounds, placement_layout, slot_values,
+                                           spring_moment)
+        self.place = placement_layout(cfg)
+        self.placed = bool(self.place)
+        self.g0 = slot_values(cfg)
+        self.nd = 3 + len(self.place)
+        self.scales = np.r_[SCALES, [sc for _, _, sc in self.place]]
         # one interval Function per distinct model
         keys, self.model_index, funcs, models = [], [], [], []
         for c in model_cfgs:
             key = _model_key(c)
             if key not in keys:
                 keys.append(key)
-                model, f = interval_of(c, N, M)
+                model, f = interval_of(c, N, M, self.placed)
                 models.append(model)
                 funcs.append(f)
             self.model_index.append(keys.index(key))
@@ -159,11 +173,16 @@ class ScenarioNLP:
         grid = P[npar:npar + N]
         A = ca.reshape(P[npar + N:npar + N + NP * S], NP, S)
         B = ca.reshape(P[npar + N + NP * S:], NP, S)
-        d, t = ca.MX.sym("d", 3), ca.MX.sym("t")
+        d, t = ca.MX.sym("d", self.nd), ca.MX.sym("t")
         T = [ca.MX.sym(f"T{s}") for s in range(S)]
         X = [ca.MX.sym(f"X{s}", 2, N) for s in range(S)]
         pk = [ca.MX.sym(f"s{s}") for s in range(S)]
-        q = ca.vertcat(d * ca.DM(SCALES), fixed)
+        q = ca.vertcat(d[:3] * ca.DM(SCALES), fixed)
+        if self.placed:
+            gl = [ca.MX(float(v)) for v in self.g0]
+            for j, (_, slot, sc) in enumerate(self.place):
+                gl[slot] = d[3 + j] * sc
+            gvec = ca.vertcat(*gl)
         ps = [A[:, s] * q + B[:, s] for s in range(S)]
         # the shooting intervals, one map per model over all of its scenarios' intervals
         outs: list = [None] * S
@@ -174,7 +193,8 @@ class ScenarioNLP:
             X0 = ca.horzcat(*[ca.horzcat(ca.vertcat(theta0, 0), X[s][:, :N - 1]) for s in ss])
             Q = ca.horzcat(*[ca.repmat(ps[s], 1, N) for s in ss])
             H = ca.horzcat(*[T[s] * grid.T / M for s in ss])
-            xe, a, b, sp = f.map(N * len(ss))(X0, Q, H)
+            gin = [ca.repmat(gvec, 1, N * len(ss))] if self.placed else []
+            xe, a, b, sp = (f[0] if self.placed else f).map(N * len(ss))(X0, Q, H, *gin)
             for j, s in enumerate(ss):
                 cols = slice(j * N, (j + 1) * N)
                 outs[s] = (xe[:, cols], a[:, cols], b[:, cols], sp[:, cols])
@@ -185,11 +205,30 @@ class ScenarioNLP:
             Js = wi * X[s][1, N - 1] ** 2 + wp * pk[s] ** 2
             J.append(Js)
             peaks.append(ca.mmax(sp))     # the scenario's own peak: sub-steps, Hermite maxima
+            none = ca.MX(0, 1)
+            if self.placed:     # the spring at the shared points g (optimiser.placement)
+                from .. import elements
+                from ..problem import PARAM_COLUMNS
+                _, fit, ode = funcs[self.model_index[s]]
+                mask = np.ones(NP)
+                mask[[PARAM_COLUMNS["design.spring_k"], PARAM_COLUMNS["design.spring_preload"]]] = 0
+                sa, sb = elements.BY_NAME["spring"].affine(elements.params(ps[s]))
+                hold = model.dV(thc, ps[s] * ca.DM(mask)) + spring_moment(fit, thc, gvec, sa, sb)
+                release = ode(ca.vertcat(theta0, 0), ps[s], gvec)[1]
+                L, Lmax, Lmin = length_bounds(fit, theta0, thc, gvec)
+                l0 = ps[s][PARAM_COLUMNS["design.spring_rest_length"]]
+                lengths = [l0 - ca.vertcat(ca.vec(L), ca.vec(Lmax)),
+                           ca.vertcat(ca.vec(L), ca.vec(Lmin)) - l0,
+                           ca.vertcat(ca.vec(L), ca.vec(Lmax), ca.vec(Lmin))]
+            else:
+                hold, release = model.dV(thc, ps[s]), model.ode(ca.vertcat(theta0, 0), ps[s])[1]
+                lengths = [none, none, none]
             blocks = [ca.vec(xe - X[s]), ca.vec(a) - thc, ca.vec(b), pk[s] - ca.vec(sp),
-                      model.dV(thc, ps[s]), model.ode(ca.vertcat(theta0, 0), ps[s])[1],
-                      t - Js / Jref,
+                      hold, release, t - Js / Jref,
                       opening_bound(model, theta0, thc, ps[s]) if o.opening_force_max
-                      is not None else ca.MX(0, 1)]
+                      is not None and not self.placed else none] + lengths + [
+                          self._keep_out(cfg, fit, theta0, thc, gvec) if self.placed and s == 0
+                          else none]
             g += blocks
             self.g_sizes.append([int(v.numel()) for v in blocks])
         self.block = sum(self.g_sizes[0])
@@ -223,6 +262,14 @@ class ScenarioNLP:
                                      {**self.options, **WARM_OPTIONS})
         self.build_time = time.perf_counter() - t0
 
+    def _keep_out(self, cfg, fit, theta0, thc, g):
+        """optimise.keep_out at the shared points (in the first scenario's block only)."""
+        from ..optimiser.cache import keep_out_of
+        from ..optimiser.keep_out import keep_out_constraints
+        polys = keep_out_of(cfg)
+        return keep_out_constraints(fit, theta0, thc, g, polys, self.place) if polys \
+            else ca.MX(0, 1)
+
     # -- layout ------------------------------------------------------------------------
     @property
     def per(self) -> int:
@@ -230,11 +277,15 @@ class ScenarioNLP:
         return 2 * self.N + 2
 
     def offset(self, s: int) -> int:
-        return 4 + s * self.per
+        return self.nd + 1 + s * self.per
 
     def pack(self, design, t, states) -> np.ndarray:
-        """w from the design (SI), t, and per scenario (T, X (2, N), s)."""
-        parts = [np.asarray(design[:3], float) / SCALES, [t]]
+        """w from the design (SI; k, l0, c alone: the free points from the config), t, and
+        per scenario (T, X (2, N), s)."""
+        d = np.asarray(design, float)
+        if len(d) < self.nd:
+            d = np.r_[d[:3], [self.g0[slot] for _, slot, _ in self.place]]
+        parts = [d[:self.nd] / self.scales, [t]]
         for T, X, pk in states:
             parts += [[T], np.asarray(X, float).T.ravel(), [pk]]
         return np.concatenate([np.atleast_1d(np.asarray(p, float)) for p in parts])
@@ -248,7 +299,7 @@ class ScenarioNLP:
             i = self.offset(s)
             states.append((float(w[i]), w[i + 1:i + 1 + 2 * N].reshape(N, 2).T,
                            float(w[i + 1 + 2 * N])))
-        return w[:3] * SCALES, float(w[3]), states
+        return w[:self.nd] * self.scales, float(w[self.nd]), states
 
     def params(self, cfg: Config, maps: list[tuple[np.ndarray, np.ndarray]],
                J_ref: float = 1.0) -> np.ndarray:
@@ -270,8 +321,11 @@ class ScenarioNLP:
             if design_lb is not None:
                 lo = max(lo, design_lb[i])
             lbx[i], ubx[i] = lo / SCALES[i], hi / SCALES[i]
+        free = {k: (lo, hi) for k, lo, hi in (o.free or ())}
+        for j, (k, _, sc) in enumerate(self.place):
+            lbx[3 + j], ubx[3 + j] = free[k][0] / sc, free[k][1] / sc
         if self.robust_objective != "worst":
-            lbx[3] = ubx[3] = 0.0
+            lbx[self.nd] = ubx[self.nd] = 0.0
         for s in range(self.S):
             i = self.offset(s)
             lbx[i] = max(o.closing_time_min if t_lo is None else t_lo[s], T_FLOOR)
@@ -291,6 +345,8 @@ class ScenarioNLP:
               "peak_tip_speed": np.inf, "holding_moment": np.inf, "release_downwards": 0.0,
               "epigraph": np.inf,
               "opening_force": np.inf if o.opening_force_max is None else o.opening_force_max}
+        from ..optimiser.placement import placed_bounds
+        placed_bounds(cfg, lo, hi)
         lbg = np.concatenate([np.full(n, lo[k]) for sizes in self.g_sizes
                               for k, n in zip(GROUPS, sizes)])
         ubg = np.concatenate([np.full(n, hi[k]) for sizes in self.g_sizes
@@ -350,9 +406,11 @@ def get_scenario_nlp(cfg: Config, model_cfgs: list[Config], nodes: int, substeps
                      robust_objective: str) -> tuple[ScenarioNLP, bool]:
     """The ScenarioNLP of these scenario models (cached); (nlp, was it cached)."""
     o = cfg.optimise
+    from ..optimiser.placement import placement_layout
     key = (tuple(_model_key(c)
                  for c in model_cfgs), nodes, substeps, robust_objective, o.hessian,
-           o.linear_solver, o.max_iter, o.opening_force_max is not None)
+           o.linear_solver, o.max_iter, o.opening_force_max is not None,
+           placement_layout(cfg))
     if key in _NLPS:
         return _NLPS[key], True
     if len(_NLPS) > 16:

@@ -1,0 +1,151 @@
+"""What does each placement lever buy? Where the spring and the dashpot attach, co-designed
+with k, l0 and c, nominally and over the default tolerance box.
+
+Levers (a compression spring throughout, the default problem):
+
+- ``today``: the points of the default geometry (D, E, the dashpot from C to O);
+- ``spring``: the spring's anchor D within (-90..-30, -10..50) mm and its lid point E within
+  (-6..44, 4..24) mm (the issue's box: D +- 30 mm, E -10..+40, +-10 mm);
+- ``dashpot``: the dashpot's ground anchor within +-30 mm of O and its lid point within
+  (-10..+40, +-10) mm of pin C;
+- ``both``: the two together.
+
+Each is solved by ``softclose.optimise`` (nominal, verified by the adaptive reference) and
+``softclose.optimise(..., robust=True)`` (worst case over the box, every scenario verified);
+the gain is J(lever) / J(today) - 1. A damper that engages only near the rim (the issue's
+engagement-angle lever) is not built yet: the study says so in its output.
+
+Writes to studies/out/co_design/:
+  levers.csv          one row per (problem, lever): J, success, the points, time
+  levers.json         the same with every design, and the gains against today's points
+  gains.png           J of each lever, nominal and robust
+  attachments.png     the best robust design's points, lines over the stroke, its boxes
+
+Usage: python studies/co_design.py [--fast] [--json] [--out DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import sys
+import time
+from pathlib import Path
+
+import softclose
+from softclose.figures import save
+from softclose.jsonio import jsonable
+
+OUT = Path(__file__).resolve().parent / "out" / "co_design"
+SPRING = {"geometry.spring_anchor[0]": [-0.09, -0.03], "geometry.spring_anchor[1]": [-0.01, 0.05],
+          "geometry.lid_e[0]": [-0.006, 0.044], "geometry.lid_e[1]": [0.004, 0.024]}
+DASHPOT = {"geometry.dashpot_anchor[0]": [-0.03, 0.03],
+           "geometry.dashpot_anchor[1]": [-0.03, 0.03],
+           "geometry.dashpot_lid[0]": [0.002, 0.052], "geometry.dashpot_lid[1]": [0.003, 0.023]}
+LEVERS = {"today": {}, "spring": SPRING, "dashpot": DASHPOT, "both": {**SPRING, **DASHPOT}}
+#: the levers solved with --fast: nominally, and robustly (a robust co-design takes ~20 s)
+FAST_NOMINAL = ("today", "spring", "dashpot")
+FAST_ROBUST = ("today", "spring")
+
+
+def solve(cfg, fast: bool) -> dict:
+    """{(problem, lever): (result, seconds)}."""
+    out = {}
+    for name, box in LEVERS.items():
+        if fast and name not in FAST_NOMINAL:
+            continue
+        c = cfg.set("optimise.free", box) if box else cfg
+        t0 = time.perf_counter()
+        out[("nominal", name)] = (softclose.optimise(c), time.perf_counter() - t0)
+        if fast and name not in FAST_ROBUST:
+            continue
+        t0 = time.perf_counter()
+        cr = c.set("tolerance.samples", 2000) if fast else c
+        out[("robust", name)] = (softclose.optimise(cr, robust=True), time.perf_counter() - t0)
+    return out
+
+
+def draw_gains(rows, path: Path) -> Path:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.8), layout="constrained")
+    for ax, problem in zip(axes, ("nominal", "robust")):
+        rs = [r for r in rows if r["problem"] == problem and r["objective"] is not None]
+        ax.bar(range(len(rs)), [r["objective"] for r in rs],
+               color=["tab:grey" if r["lever"] == "today" else "tab:green" for r in rs])
+        for i, r in enumerate(rs):
+            ax.text(i, r["objective"], f"{r['objective']:.4f}\n({r['gain']:+.1%})"
+                    if r["gain"] is not None else f"{r['objective']:.4f}",
+                    ha="center", va="bottom", fontsize=8)
+        ax.set_xticks(range(len(rs)), [r["lever"] for r in rs])
+        ax.set_ylabel("J" if problem == "nominal" else "worst-case J")
+        ax.set_title(f"{problem}: J per placement lever")
+        ax.grid(axis="y", alpha=0.3)
+        ax.margins(y=0.2)
+    return save(fig, path)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--fast", action="store_true",
+                    help="no `both` lever, robust only for today's points and the spring's, "
+                         "2,000 samples")
+    ap.add_argument("--json", action="store_true", help="print one JSON object")
+    ap.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
+    a = ap.parse_args(argv)
+    a.out.mkdir(parents=True, exist_ok=True)
+    cfg = softclose.default_config().set("optimise.spring_kinds", ["compression"])
+    answers = solve(cfg, a.fast)
+    rows = []
+    for (problem, lever), (res, seconds) in answers.items():
+        today = answers[(problem, "today")][0].objective
+        gain = (res.objective / today - 1.0) if res.objective is not None and today else None
+        points = {k: v for k, v in (res.design or {}).items() if "[" in k}
+        rows.append({"problem": problem, "lever": lever, "objective": res.objective,
+                     "gain": gain, "success": res.success, "seconds": seconds,
+                     "points": json.dumps(points), "message": res.message or ""})
+    files = []
+    path = a.out / "levers.csv"
+    with open(path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    files.append(path)
+    files.append(draw_gains(rows, a.out / "gains.png"))
+    robust = [(res.objective, lever, res) for (p, lever), (res, _) in answers.items()
+              if p == "robust" and res.success and res.objective is not None]
+    best = min(robust, key=lambda x: x[0])[2]
+    from softclose.figures.placement import plot_attachments
+    files.append(save(plot_attachments(best.design_config(),
+                                       title="Best robust design",
+                                       before=cfg), a.out / "attachments.png"))
+    summary = {"levers": rows,
+               "designs": {f"{p}_{lever}": {"design": res.design, "objective": res.objective,
+                                            "success": res.success}
+                           for (p, lever), (res, _) in answers.items()},
+               "not_built": "the end damper (engagement angle) lever: issue 23 item 2 is "
+                            "not built yet",
+               "note": "gain: J(lever) / J(today's points) - 1; compression spring"}
+    path = a.out / "levers.json"
+    path.write_text(json.dumps(jsonable(summary), indent=1, allow_nan=False))
+    files.append(path)
+    summary["files"] = [str(f) for f in files]
+    if a.json:
+        print(json.dumps(jsonable(summary), allow_nan=False))
+    else:
+        for r in rows:
+            print(f"{r['problem']:<8} {r['lever']:<8} J = "
+                  + (f"{r['objective']:.6g}" if r["objective"] is not None else "-")
+                  + (f" ({r['gain']:+.1%} against today's points)" if r["gain"] else "")
+                  + f"  {'verified' if r['success'] else 'NOT verified: ' + r['message']}"
+                  + f"  {r['seconds']:.1f} s")
+        print("not built: " + summary["not_built"])
+        print("wrote " + ", ".join(str(f) for f in files))
+    ok = all(res.success for res, _ in answers.values())
+    return 0 if ok else 3
+
+
+if __name__ == "__main__":
+    sys.exit(main())
