@@ -34,13 +34,8 @@ from ..model import LidModel
 from .data import locate, record_of
 from .equation import bounds_of, check_keys, fit_ode, value_of
 from .nlp import DEFECT_MAX, get_nlp, substeps
+from .result import UNDETERMINED, VIF_MAX  # noqa: F401  (the verdict's thresholds)
 
-#: variance inflation factor above which keys count as not identifiable (the usual
-#: multicollinearity rule; a pair correlated beyond |r| = 0.949; a lid's mass against its
-#: damper from one stroke is ~0.98-0.99)
-VIF_MAX = 10.0
-#: relative standard deviation above which a key counts as not determined by the data
-UNDETERMINED = 0.5
 CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
 

@@ -11,6 +11,13 @@ import numpy as np
 
 from ..display import Display, Displayed, Table, num, unit_of, with_unit
 
+#: variance inflation factor above which keys count as not identifiable (the usual
+#: multicollinearity rule; a pair correlated beyond |r| = 0.949; a lid's mass against its
+#: damper from one stroke is ~0.98-0.99)
+VIF_MAX = 10.0
+#: relative standard deviation above which a key counts as not determined by the data
+UNDETERMINED = 0.5
+
 
 @dataclass(frozen=True, repr=False)
 class StrokeFit:
@@ -93,7 +100,6 @@ class FitResult(Displayed):
     @classmethod
     def build(cls, cfg, keys, value, std, corr, tq, dof, s2, ok, status, iters, strokes,
               lo, hi, u_init, starts, defect=math.nan, n_move=0):
-        from .core import UNDETERMINED, VIF_MAX
         nk = len(keys)
         values = {k: float(value[i]) for i, k in enumerate(keys)}
         stds = {k: float(std[i]) for i, k in enumerate(keys)}

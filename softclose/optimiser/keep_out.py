@@ -88,12 +88,12 @@ def keep_out_constraints(fit, theta0, thc, g, polys, place=None):
 def clearance(cfg, polys=None) -> dict:
     """The exact check: per line, the smallest gap over the stroke (m; < 0: it crosses a
     region) and the angle where (deg), on :data:`CHECK_ANGLES` angles of the exact closure."""
-    from .cache import get_model
+    from ..model import LidModel
     polys = cfg.optimise.keep_out if polys is None else polys
     if not polys:
         return {}
     st, geo = cfg.stroke, cfg.geometry
-    model = get_model(cfg)
+    model = LidModel.cached(cfg)     # (the model's disk cache: no optimiser cache below)
     th = np.linspace(st.theta_closed, st.theta0, CHECK_ANGLES)
     A = np.asarray(model.kin.map(CHECK_ANGLES)(np.vstack([th, np.zeros_like(th)]))[5])
     c, s = np.cos(th), np.sin(th)

@@ -54,6 +54,7 @@ from ..config import NLP_BUDGET
 from ..errors import ConfigError
 from ..problem import DESIGN_KEYS, PARAM_KEYS, SCALES, params_of
 from .interval import ChebyshevFit, free_of, hermite_max, interval_function, nlp_elements
+from .keep_out import keep_out_constraints
 from .placement import placed_config, placed_constraints, slot_values
 
 #: Ipopt return statuses that count as converged
@@ -289,7 +290,10 @@ class ShootingNLP:
         xe, a, b, sp = self.interval.map(N)(Xs, ca.repmat(design, 1, N), T * grid.T / M,
                                             *gin)
         if self.placed:     # the holding moment: the spring's part at the points g
-            g_all = placed_constraints(self, model, design, gvec, theta0, thc, keep_out)
+            g_all = placed_constraints(self, model, design, gvec, theta0, thc)
+            if keep_out:    # the lines with a free point clear the regions
+                g_all["keep_out"] = keep_out_constraints(self.fit, theta0, thc, gvec, keep_out,
+                                                         self.place)
         else:
             g_all = {"holding_moment": model.dV(thc, design),
                      "release_downwards": self.f(ca.vertcat(theta0, 0), design)[1]}

@@ -101,7 +101,7 @@ def length_bounds(fit, theta0, thc, g):
     """The spring's length over the stroke: (nodes of an angle grid, the Hermite maxima,
     the Hermite minima in every interval) -- every value within the bounds bounds the length
     over the whole stroke (to O(h^4))."""
-    from .interval import hermite_max
+    from .hermite import hermite_max
     n = LENGTH_INTERVALS
     u = ca.DM(np.linspace(0.0, 1.0, n + 1)).T
     th = thc + (theta0 - thc) * u
@@ -118,7 +118,7 @@ def spring_moment(fit, theta, g, a, b):
     return a * ldl / l + b * ldl
 
 
-def placed_constraints(nlp, model, design, g, theta0, thc, keep_out=()) -> dict:
+def placed_constraints(nlp, model, design, g, theta0, thc) -> dict:
     """The constraint groups of a placed NLP beside the shooting ones: the holding moment
     (every element's at theta_closed, the spring's at the points g), the release downwards,
     the spring's length over the stroke against its kind (``spring_long``: l0 - l >= 0 for
@@ -138,9 +138,6 @@ def placed_constraints(nlp, model, design, g, theta0, thc, keep_out=()) -> dict:
            "spring_long": l0 - ca.vertcat(ca.vec(L), ca.vec(Lmax)),
            "spring_short": ca.vertcat(ca.vec(L), ca.vec(Lmin)) - l0,
            "spring_length": ca.vertcat(ca.vec(L), ca.vec(Lmax), ca.vec(Lmin))}
-    if keep_out:
-        from .keep_out import keep_out_constraints
-        out["keep_out"] = keep_out_constraints(nlp.fit, theta0, thc, g, keep_out, nlp.place)
     return out
 
 
