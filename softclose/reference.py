@@ -84,12 +84,15 @@ class Reference:
                 side = 1
         return 0.5 * (lo + hi)
 
-    def simulate(self, p=None) -> StrokeResult:
+    def simulate(self, p=None, cfg=None) -> StrokeResult:
         """The metrics of one stroke (plus ``theta_min``, ``theta_max``), adaptively.
 
         Returns the same :class:`~softclose.stroke.StrokeResult` as the fixed-step
         simulator, with ``method`` "cvodes" and ``tolerance`` the CVODES tolerance. A failure
-        of CVODES raises :class:`~softclose.errors.NumericalError`.
+        of CVODES raises :class:`~softclose.errors.NumericalError`. ``cfg``: the config whose
+        spring length limits (``design.spring_min_length``, ``spring_max_length``) the stroke
+        is checked against -- default the model's own; a model shared between configs (the
+        caches key models by their structure, not by these limits) is given the one judged.
         """
         m, st = self.model, self.model.cfg.stroke
         p = m.params() if p is None else as_params(p)
@@ -169,7 +172,8 @@ class Reference:
         lmin, lmax = self._l_extremes(th_min, th_max)
         _, why = statics.out_of_range(
             lambda e, t: np.asarray(m.coordinate_fns[e.name].map(t.size)(t.ravel())[0]).ravel(),
-            m.cfg, p[None, :], {"min_spring_length": [lmin], "max_spring_length": [lmax],
+            cfg if cfg is not None else m.cfg, p[None, :],
+            {"min_spring_length": [lmin], "max_spring_length": [lmax],
                                 "theta_min": [th_min], "theta_max": [th_max]})
         if why[0]:
             return StrokeResult(

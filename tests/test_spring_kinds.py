@@ -205,3 +205,28 @@ def test_a_preloaded_strut_holds_the_lid_open_at_its_equilibrium():
     assert abs(float(sim.model.dV(th, p))) < 1e-8
     assert float(sim.model.dV(th - 1e-4, p)) < 0 < float(sim.model.dV(th + 1e-4, p))
     assert r["stop_time"][0] < cfg.stroke.t_max
+
+
+def test_a_shared_model_is_checked_against_the_judged_configs_limits():
+    """The caches key models by their structure, not by the spring's length limits: a model
+    built for a config without limits judges another config's stroke against that config's
+    limits when given it (the reference, and the optimiser's verification), as the
+    fixed-step simulator does."""
+    from softclose.optimiser.verify import verify
+    from softclose.problem import params_of
+    base = default_config().update({"design.spring_kind": "linear", "design.spring_k": 1914.7,
+                                    "design.spring_rest_length": 0.07926,
+                                    "design.damper_c": 2087.75})
+    limited = base.set("design.spring_max_length", 0.057)
+    shared = Reference(LidModel(base))
+    p = params_of(base)
+    assert shared.simulate(p).status == StrokeStatus.CLOSED
+    ref = shared.simulate(p, cfg=limited)
+    fixed = softclose.simulate(limited)
+    assert ref.status == fixed.status == StrokeStatus.OUT_OF_RANGE
+    assert "maximum length (design.spring_max_length = 57.00 mm)" in ref.reason
+    assert ref.reason.split(" above theta")[0] == fixed.reason.split(" above theta")[0]
+    design = {"spring_k": 1914.709, "spring_rest_length": 0.07925707, "damper_c": 2087.754}
+    assert verify(base, design).ok       # the checker's model is now cached without limits
+    v = verify(limited, design)
+    assert not v.ok and "valid_range is violated" in v.message and "57.00 mm" in v.message

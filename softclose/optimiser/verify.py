@@ -24,7 +24,7 @@ import numpy as np
 from ..errors import NumericalError
 from ..problem import (CONSTRAINT_TOL, DESIGN_KEYS, METRIC_KEYS, UNITS, VERIFY_RTOL,
                        PARAM_KEYS, agreement_tolerance, objective, params_of)
-from ..stroke import StrokeResult
+from ..stroke import StrokeResult, StrokeStatus
 from .cache import get_model
 
 #: output grid of the verifying reference simulation (s): events and peaks are located by
@@ -133,7 +133,9 @@ class Verification:
             return (f"the adaptive reference could not simulate the design ({self.error})",)
         out = []
         for k, c in self.constraints.items():
-            if not c["ok"]:
+            if not c["ok"] and c.get("reason"):
+                out.append(f"{k} is violated in the reference simulation: {c['reason']}")
+            elif not c["ok"]:
                 u = f" {c['unit']}" if c.get("unit") else ""
                 out.append(f"{k} is violated in the reference simulation "
                            f"({_g(c['value'])}{u} against the bound {_g(c['bound'])}{u})")
@@ -209,7 +211,7 @@ def verify(cfg, design: dict, claims: dict | None = None,
               f"{chk.reference.tol:g}")
     t0 = time.perf_counter()
     try:
-        ref = chk.reference.simulate(p)
+        ref = chk.reference.simulate(p, cfg=cfg)     # cfg's limits, not the cached model's
     except NumericalError as exc:
         return Verification(None, None, method=method, time=time.perf_counter() - t0,
                             error=str(exc))
@@ -217,6 +219,9 @@ def verify(cfg, design: dict, claims: dict | None = None,
     T = ref.closing_time
     cons = {"closed": {"value": bool(ref.closed), "bound": True, "unit": "",
                        "ok": bool(ref.closed)}}
+    if ref.status == StrokeStatus.OUT_OF_RANGE:   # a spring out of its valid range: why
+        cons = {"valid_range": {"value": False, "bound": True, "unit": "", "ok": False,
+                                "reason": ref.reason}}
     if T is not None:
         cons["closing_time_max"] = {"value": T, "bound": o.closing_time_max, "unit": "s",
                                     "ok": T <= o.closing_time_max * (1 + CLOSING_RTOL)}
