@@ -133,7 +133,11 @@ OPTIONS = {
                    str(ROOT / "tests" / "data" / "catalog_dampers.csv"), "")]),
                "--dampers": (None, [(v, True) for v in (
                    "/nonexistent.csv", str(ROOT / "tests" / "data" / "catalog_springs.csv"),
-                   str(ROOT / "pyproject.toml"))])},
+                   str(ROOT / "pyproject.toml"))]),
+               "--free": (None, [(v, True) for v in (
+                   "design.spring_preload=0:10", "geometry.lid_e[1]=0.02:0.01",
+                   "geometry.lid_e[9]=0:1", "nope=1:2", "geometry.lid_e[1]=abc", "")]
+                          + [("geometry.lid_e[1]=0.004:0.024", False)])},
     "pareto": {"--closing-times": ("0.4:1:2", [(v, False) for v in (
         "0.4:1:1", "1:0.4:2", "0:1:2", "nan:1:2", "0.4:inf:2", "0.4:1:0", "0.4:1:100000",
         "0.3:3:2:log", "abc", "1e9:1e10:2", "0.4:30:2", "0.4:1:-2", "0.4:1:2.5")])},
@@ -547,8 +551,9 @@ def work_seconds(command: str, cfg, argv: list[str]) -> float:
         # reference at every corner of the verified pairs (0.5 s each)
         d = 3 + _select_axes(cfg)
         verify = max(_int_option(argv, "--verify", 10) or 0, 0)
+        placing = 120.0 * min(verify, SELECT_PAIRS) if _option(argv, "--free") else 0.0
         return 60.0 + 2 * batch + 0.2 * SELECT_PAIRS * 2 ** d \
-            + min(verify, SELECT_PAIRS) * 2 ** d * 0.5 + 200 * stroke
+            + min(verify, SELECT_PAIRS) * 2 ** d * 0.5 + 200 * stroke + placing
     if command == "fit":    # ~1 s a start at the default step; the step halved when needed
         return 60.0 + 3e3 * stroke * int((_option(argv, "--starts") or ["1"])[-1]
                                          if (_option(argv, "--starts") or ["1"])[-1].isdigit()

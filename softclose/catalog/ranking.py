@@ -112,6 +112,8 @@ def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: 
         raise ConfigError(f"samples: expected a whole number 0..100000, got {samples!r}")
     if isinstance(verify, bool) or not isinstance(verify, (int, np.integer)) or verify < 0:
         raise ConfigError(f"verify: expected a whole number >= 0, got {verify!r}")
+    from .place import placement_keys
+    placed = placement_keys(cfg)      # (refuses free keys other than attachment points)
     spr: Catalog = as_catalog(springs, read_springs)
     dmp: Catalog | None = as_catalog(dampers, read_dampers)
     box = pair_box(cfg, samples, seed)
@@ -160,11 +162,21 @@ def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: 
         except KeyboardInterrupt:
             interrupted = True
         times["nlp"] = time.perf_counter() - tn
+    cfgs: dict = {}             # pair index -> the config at the pair's own points
+    if placed and not interrupted and verify:
+        tp = time.perf_counter()
+        try:
+            order = _place_best(cfg, box, pairs, entries, kernel, order, verify, cfgs,
+                                samples, progress)
+        except KeyboardInterrupt:
+            interrupted = True
+        times["placement"] = time.perf_counter() - tp
     tv = time.perf_counter()
     checked: dict = {}
     if not interrupted and verify:
         try:
-            order = _verify_best(cfg, box, pairs, entries, kernel, order, verify, checked)
+            order = _verify_best(cfg, box, pairs, entries, kernel, order, verify, checked,
+                                 cfgs)
         except KeyboardInterrupt:
             interrupted = True
     times["verify"] = time.perf_counter() - tv
@@ -196,11 +208,14 @@ def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: 
         times=times, springs=spr.path, dampers=None if dmp is None else dmp.path)
 
 
-def _verify_best(cfg, box, pairs, entries, kernel, order, n, checked: dict) -> list:
+def _verify_best(cfg, box, pairs, entries, kernel, order, n, checked: dict,
+                 cfgs: dict | None = None) -> list:
     """The adaptive reference at every corner of the best ``n`` pairs (``checked`` gets each
-    pair's :func:`.verify.verify_pair`); where its verdict differs from the kernel's, the
-    reference's stands and the pairs are ranked again, until the best ``n`` are all checked
-    (at most 5 rounds). Returns the new order."""
+    pair's :func:`.verify.verify_pair`; ``cfgs``: a pair's own config, at its own attachment
+    points); where its verdict differs from the kernel's, the reference's stands and the
+    pairs are ranked again, until the best ``n`` are all checked (at most 5 rounds). Returns
+    the new order."""
+    cfgs = cfgs or {}
     from .verify import verify_pair
     for _ in range(5):
         todo = [i for i in order[:n] if i not in checked]
@@ -208,7 +223,7 @@ def _verify_best(cfg, box, pairs, entries, kernel, order, n, checked: dict) -> l
             break
         for i in todo:
             F, J = kernel[i]
-            v = verify_pair(cfg, box, *pairs[i], F, J)
+            v = verify_pair(cfgs.get(i, cfg), box, *pairs[i], F, J)
             checked[i] = v
             e = entries[i]
             e["verified"] = v["agree"]
@@ -223,6 +238,35 @@ def _verify_best(cfg, box, pairs, entries, kernel, order, n, checked: dict) -> l
                 e["reason"] = "" if v["feasible"] else f"the reference: {v['reason']}"
         order = sorted(entries, key=lambda i: _rank_key(entries[i]))
     return order
+
+
+def _place_best(cfg, box, pairs, entries, kernel, order, n, cfgs: dict, samples: int,
+                progress: bool) -> list:
+    """The best ``n`` pairs' attachment points re-optimised (:mod:`.place`); a pair screened
+    again at its points keeps them when it ranks better there (``cfgs`` gets its config).
+    Returns the new order."""
+    from .nlp import NLP_SAMPLES
+    from .place import place_pair
+    best = order[:n]
+    bar = Progress(len(best), "placing", enabled=progress, unit="pairs")
+    with bar:
+        for j, i in enumerate(best):
+            s, d = pairs[i]
+            info = place_pair(cfg, s, d, max(samples, NLP_SAMPLES))
+            kept = "config"
+            if info["values"]:
+                c_i = cfg.update(info["values"])
+                _, rows = screen_chunk(c_i, box, i, [(s, d)])
+                e2, corners2 = rows[0]
+                if _rank_key(e2) < _rank_key(entries[i]):
+                    e2["design"].update({k.removeprefix("geometry."): v
+                                         for k, v in info["values"].items()})
+                    entries[i], kernel[i], cfgs[i] = e2, corners2, c_i
+                    kept = "placed"
+            info["kept"] = kept
+            entries[i]["placement"] = info
+            bar.update(j + 1, f"{s.part}: {kept}", force=True)
+    return sorted(entries, key=lambda i: _rank_key(entries[i]))
 
 
 def _resolve_c(cfg, box, pairs, entries, kernel, order, n) -> list:

@@ -1,7 +1,7 @@
 """``softclose select``: rank the springs (x dampers) of catalog files.
 
     softclose select --springs FILE [--dampers FILE] [--samples N] [--seed S] [--verify N]
-                     [--dask ADDRESS|local:N] [--json] [--out DIR]
+                     [--free KEY=LO:HI ...] [--dask ADDRESS|local:N] [--json] [--out DIR]
 
 ``--out DIR`` writes ``select.csv`` (every pair, best first), ``select.json`` and the figure
 ``select.png`` (yield against worst-case J). Exit 0 when the best pair meets every
@@ -62,6 +62,12 @@ def register(sub) -> None:
                         "--verify best springs' c is re-solved by the robust NLP)")
     p.add_argument("--dask", metavar="ADDRESS|local:N",
                    help="screen the pairs on a Dask cluster (scheduler address or local:N)")
+    p.add_argument("--free", action="append", default=[], metavar="KEY=LO:HI",
+                   help="an attachment point free within [LO, HI] (repeatable; "
+                        "geometry.spring_anchor[i], lid_e[i], dashpot_anchor[i], "
+                        "dashpot_lid[i]): the --verify best pairs' points re-optimised per "
+                        "part by the robust co-design (~15 s a pair), each pair judged and "
+                        "verified at its own points")
     p.set_defaults(run=run)
 
 
@@ -122,6 +128,15 @@ def format_select(r, top: int = 15) -> str:
                             if n["c"] is not None else f"no solution ({n['message']})")
                          + f"; the grid's {n['c_grid']:.6g} N s/m; kept the "
                          + ("NLP's" if n["kept"] == "nlp" else "grid's"))
+        pl = b.get("placement")
+        if pl:
+            pts = ", ".join(f"{k.removeprefix('geometry.')} = {1e3 * v:.2f} mm"
+                            for k, v in (pl["values"] or {}).items())
+            lines.append("  mounted at " + (
+                f"{pts} (its points by the robust co-design, worst-scenario J "
+                f"{pl['objective']:.6g}; screened and verified there)" if pl["kept"] == "placed"
+                else "the config's points" + (f" ({pl['message']})" if pl["message"] else
+                                              " (its own points ranked no better)")))
         ref = b.get("reference")
         if ref:
             lines.append(f"  adaptive reference at its {len(ref['corners'])} corners: "
