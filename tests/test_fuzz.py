@@ -49,7 +49,7 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, reject, settings
 from hypothesis import strategies as st
 
-from softclose.cli import build_parser, main
+from softclose.cli import build_parser, free_overrides, main
 from softclose.config import (SCHEMA, BATCH_STEP_BUDGET, RANGES, TOLERANCE_OPTIONS,
                               load_config, steps_per_stroke)
 from softclose.errors import ConfigError
@@ -639,9 +639,9 @@ def run_case(command: str, values, out_dir: Path, as_json: bool,
         argv.append("--json")
     shown = "softclose " + " ".join(argv)
     overrides = [argv[i + 1] for i, a in enumerate(argv) if a == "--set"]
-    try:   # the command line is read first, then the config
-        build_parser().parse_args(argv)
-        cfg = load_config(None, overrides)
+    try:   # the command line is read first (its --free options too), then the config
+        args = build_parser().parse_args(argv)
+        cfg = load_config(None, overrides + free_overrides(args))
         refused = None
     except ConfigError as exc:
         cfg, refused = None, str(exc)
