@@ -22,6 +22,7 @@ from . import elements, statics
 from .dynamics import COEFFS
 from .errors import NumericalError
 from .problem import as_params
+from .roots import illinois
 from .stroke import StrokeResult, StrokeStatus
 
 _L = COEFFS.index("l")  # spring length among the model's coefficients
@@ -64,25 +65,9 @@ class Reference:
         """Root in (lo, hi] of residual(x(tau)) (a sign change is bracketed)."""
         hi = h if hi is None else hi
         r_lo, r_hi = residual(self.flow(x0, p, lo)), residual(self.flow(x0, p, hi))
-        side = 0
-        for _ in range(200):  # Illinois false position: superlinear, never stalls
-            tau = lo - r_lo * (hi - lo) / (r_hi - r_lo) if r_hi != r_lo else 0.5 * (lo + hi)
-            if not lo < tau < hi:
-                tau = 0.5 * (lo + hi)
-            r = residual(self.flow(x0, p, tau))
-            if r == 0 or hi - lo < 1e-14 * max(1.0, hi) or abs(r) < 1e-15:
-                return tau
-            if (r > 0) == (r_lo > 0):
-                lo, r_lo = tau, r
-                if side == -1:
-                    r_hi *= 0.5
-                side = -1
-            else:
-                hi, r_hi = tau, r
-                if side == 1:
-                    r_lo *= 0.5
-                side = 1
-        return 0.5 * (lo + hi)
+        return illinois(lambda tau: residual(self.flow(x0, p, tau)), lo, hi, r_lo, r_hi,
+                        lambda a, b, tau, r: (r == 0 or b - a < 1e-14 * max(1.0, b)
+                                              or abs(r) < 1e-15), 200)
 
     def simulate(self, p=None, cfg=None) -> StrokeResult:
         """The metrics of one stroke (plus ``theta_min``, ``theta_max``), adaptively.

@@ -15,6 +15,7 @@ import numpy as np
 from . import elements
 from .dynamics import COEFFS, EXTRA_COEFFS, coordinates_of_columns, damping, potential, slope
 from .problem import as_params
+from .roots import illinois
 
 
 def columns(table, theta, n: int, lid_mass=None, extra: bool = False) -> dict:
@@ -256,23 +257,13 @@ def opening_force_exact(model, p) -> float:
     i = int(np.argmax(F))
     best = float(F[i])
     if 0 < i < len(th) - 1 and dF[i - 1] > 0 > dF[i + 1]:
-        a, b, fa, fb, side = th[i - 1], th[i + 1], dF[i - 1], dF[i + 1], 0
-        for _ in range(60):
-            x = a - fa * (b - a) / (fb - fa)
+        def dF_at(x):           # every force met on the way counts towards the largest
+            nonlocal best
             Fx, dFx = (float(v) for v in model.opening(x, p))
             best = max(best, Fx)
-            if dFx == 0 or b - a < 1e-15:
-                break
-            if (dFx > 0) == (fa > 0):
-                a, fa = x, dFx
-                if side == -1:
-                    fb *= 0.5
-                side = -1
-            else:
-                b, fb = x, dFx
-                if side == 1:
-                    fa *= 0.5
-                side = 1
+            return dFx
+        illinois(dF_at, th[i - 1], th[i + 1], dF[i - 1], dF[i + 1],
+                 lambda a, b, x, r: r == 0 or b - a < 1e-15, 60)
     return best
 
 
