@@ -286,9 +286,30 @@ def run_strokes(table: CoefficientTable, method: Method, step: float, t_max: flo
         while bounds[-1] < n:
             left = n - bounds[-1]
             bounds.append(bounds[-1] + min(left, max(64, left // (4 * threads))))
-        from concurrent.futures import ThreadPoolExecutor
-        with ThreadPoolExecutor(threads) as ex:
-            list(ex.map(lambda ab: work(*ab), zip(bounds[:-1], bounds[1:])))
+        # (plain threads, this one among them: concurrent.futures costs ~5 ms to import,
+        # a tenth of a command's own work; the C calls release the GIL)
+        import threading
+        chunks, lock = iter(list(zip(bounds[:-1], bounds[1:]))), threading.Lock()
+        failed: list = []
+
+        def worker():
+            try:
+                while not failed:
+                    with lock:
+                        ab = next(chunks, None)
+                    if ab is None:
+                        return
+                    work(*ab)
+            except BaseException as exc:     # noqa: BLE001  (raised below, in this thread)
+                failed.append(exc)
+        others = [threading.Thread(target=worker, daemon=True) for _ in range(threads - 1)]
+        for t in others:
+            t.start()
+        worker()
+        for t in others:
+            t.join()
+        if failed:
+            raise failed[0]
     return out
 
 

@@ -60,10 +60,10 @@ class SpringPart:
 
 
 def spring_part(cfg, design: dict | None, metrics: dict | None,
-                tolerance: bool = True) -> SpringPart | None:
+                tolerance: bool = True, model=None) -> SpringPart | None:
     """The part of ``design`` (``cfg``'s spring kind and preload) over the stroke whose
     ``metrics`` give its working lengths; None without a spring. ``tolerance``: find how
-    precisely it must be made (:func:`margins`)."""
+    precisely it must be made (:func:`margins`; ``model``: cfg's model, when at hand)."""
     p = params_of(cfg, design)
     P = dict(zip(PARAM_KEYS, p))
     if P["spring_k"] == 0 and P["spring_preload"] == 0 or metrics is None \
@@ -76,16 +76,18 @@ def spring_part(cfg, design: dict | None, metrics: dict | None,
     forces = [float(a + b * x) for x in (lo, hi)]
     return SpringPart(kind, float(P["spring_rest_length"]), float(P["spring_k"]),
                       float(P["spring_preload"]), (lo, hi), float(max(abs(f) for f in forces)),
-                      margins(cfg, p) if tolerance else {})
+                      margins(cfg, p, model) if tolerance else {})
 
 
-def margins(cfg, p) -> dict:
+def margins(cfg, p, model=None) -> dict:
     """How far the free length (m) and the rate (relative) may each move, below and above,
     with the design still feasible and valid (the kernel at cfg's step, every other value
     nominal): the first deviation of the ladder that fails, less one step (found on every
     :data:`LADDER_STRIDE`-th step, then step by step below the first that fails)."""
     from .simulate import Simulator
-    sim = Simulator(cfg)
+    # the model at hand (else built), its table from the build cache when it has been built
+    # before: a whole model and table cost ~20 ms against ~10 ms for the strokes
+    sim = Simulator(cfg, model=model, cached=model is not None)
     p = np.asarray(p, float)
     ladders = []                  # (name, steps, column, relative, sign), each side
     for key, steps, relative in (("spring_rest_length", FREE_LENGTH_STEPS, False),

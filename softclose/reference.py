@@ -19,13 +19,13 @@ import casadi as ca
 import numpy as np
 
 from . import elements, statics
-from .dynamics import COEFFS
 from .errors import NumericalError
 from .problem import as_params
 from .roots import illinois
 from .stroke import StrokeResult, StrokeStatus
 
-_L = COEFFS.index("l")  # spring length among the model's coefficients
+#: grid steps of the reference integrated in one CVODES run (then scanned for events)
+CHUNK = 16
 
 
 class Reference:
@@ -42,6 +42,14 @@ class Reference:
         opts = {"abstol": self.tol, "reltol": self.tol, "max_num_steps": 200000}
         dae = {"x": x, "p": ca.vertcat(p, s, tau), "ode": tau * f}
         self._flow = ca.integrator("ref_flow", "cvodes", dae, 0.0, 1.0, opts)
+        # the same flow with CHUNK grid nodes in one call: CVODES carries on through the
+        # nodes instead of starting afresh at each (a start costs ~0.5 ms: its first steps
+        # are tiny and of order one; the nodes of a continued run cost ~30 us each)
+        self._chunk_flow = ca.integrator("ref_chunk", "cvodes", dae, 0.0,
+                                         [i / CHUNK for i in range(1, CHUNK + 1)], opts)
+        self._ahead: list = []      # the next grid states of the current chunk
+        self._ahead_key = None      # (state they continue from, step, direction of motion)
+        self._chunk_off = 0         # grid steps to take singly after a failed chunk
         v_T = model.kin(x)[4]
         # d|v_T|/dt = v.a/|v| with a = dv/dt by AD along the flow; at rest it is |a|
         a_T = ca.jtimes(v_T, x, f)
@@ -60,6 +68,30 @@ class Reference:
         if tau <= 0:
             return np.asarray(x0, float)
         return np.asarray(self._flow(x0=x0, p=np.r_[p, self._moving, tau])["xf"]).ravel()
+
+    def step(self, x0, p, h):
+        """State after one grid step ``h`` from the node ``x0``: from the chunk (one CVODES
+        run over the next :data:`CHUNK` nodes) when ``x0`` is the node it has reached, else
+        by a new chunk; singly where a chunk fails (it may run past the rim into a toggle
+        position) -- a single step that fails raises as :meth:`flow` does."""
+        key = (h, self._moving)
+        if self._ahead and self._ahead_key == key and np.array_equal(self._ahead_x, x0):
+            self._ahead_x = self._ahead.pop(0)
+            return self._ahead_x
+        self._ahead = []
+        if self._chunk_off > 0:
+            self._chunk_off -= 1
+            return self.flow(x0, p, h)
+        try:
+            xs = np.asarray(self._chunk_flow(x0=x0, p=np.r_[p, self._moving, CHUNK * h])["xf"])
+        except RuntimeError:
+            xs = None
+        if xs is None or not np.all(np.isfinite(xs)):
+            self._chunk_off = CHUNK - 1
+            return self.flow(x0, p, h)
+        self._ahead = [xs[:, i].copy() for i in range(1, CHUNK)]
+        self._ahead_key, self._ahead_x = key, xs[:, 0].copy()
+        return self._ahead_x
 
     def _newton_time(self, x0, p, h, residual, lo=0.0, hi=None):
         """Root in (lo, hi] of residual(x(tau)) (a sign change is bracketed)."""
@@ -87,21 +119,22 @@ class Reference:
         speed = lambda y: float(self._speed(y, p)[0])  # noqa: E731
         dspeed = lambda y: float(self._speed(y, p)[1])  # noqa: E731
         prev = None  # (t, x, g) of the previous node
+        g_x = None   # the tip speed at x, when known (the previous step's g1)
         closed, out, stuck = False, {}, None
         T_f = sum(float(e.coulomb(elements.params(p))) for e in elements.FRICTIONS)
-        self._moving = -1.0
+        self._moving, self._ahead, self._chunk_off = -1.0, [], 0
         if T_f > 0:  # released from rest: it moves only if the driving moment exceeds T_f
             stuck, self._moving = self._rest(st.theta0, p, T_f)
             t = t_max if stuck is not None else t
         while t < t_max - 1e-15:
             h = min(dt, t_max - t)
             try:
-                x1 = self.flow(x, p, h)
+                x1 = self.step(x, p, h)
             except RuntimeError as exc:
                 raise NumericalError(f"the reference integrator failed at t = {t:.4g} s ({exc})")
             if not np.all(np.isfinite(x1)):
                 raise NumericalError(f"the reference integrator diverged at t = {t:.4g} s")
-            g, g1 = speed(x), speed(x1)
+            g, g1 = (speed(x) if g_x is None else g_x), speed(x1)
             if T_f > 0 and x1[1] * self._moving < 0:  # came to rest inside (t, t+h]
                 tau = self._newton_time(x, p, h, lambda y: y[1] * self._moving, lo=0.0)
                 xe = self.flow(x, p, tau)
@@ -113,7 +146,7 @@ class Reference:
                             peak = max(peak, speed(self.flow(xp, p, tm)))
                     peak = max(peak, g)
                     th_min, th_max = min(th_min, float(xe[0])), max(th_max, float(xe[0]))
-                    t, x, prev = t + tau, np.array([xe[0], 0.0]), None
+                    t, x, prev, g_x = t + tau, np.array([xe[0], 0.0]), None, None
                     stuck, moving = self._rest(float(xe[0]), p, T_f)
                     if stuck is not None:
                         break
@@ -152,7 +185,7 @@ class Reference:
             th_max = max(th_max, float(x1[0]))
             peak = max(peak, g1)
             prev = (t, x, g)
-            t, x = t + h, x1
+            t, x, g_x = t + h, x1, g1
         self._moving = -1.0
         lmin, lmax = self._l_extremes(th_min, th_max)
         _, why = statics.out_of_range(
@@ -190,21 +223,28 @@ class Reference:
         return None, (1.0 if dV < 0 else -1.0)
 
     def _l_extremes(self, a, b):
+        """min and max of the spring length over theta in [a, b]: the best of an 801-point
+        grid, refined by golden section on the two cells about it (to ~1e-13 rad)."""
         grid = np.linspace(a, b, 801)
-        lv = np.asarray(self.model.coeffs.map(len(grid))(grid)[0])[_L]
+        length = self.model.coordinate_fns["spring"]
+        lv = np.asarray(length.map(len(grid))(grid)[0]).ravel()
         out = []
         for sgn in (1, -1):
             i = int(np.argmin(sgn * lv))
             lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, len(grid) - 1)]
-            f = lambda th: sgn * float(self.model.coeffs(th)[0][_L])  # noqa: E731
+            f = lambda th: sgn * float(length(th)[0])  # noqa: E731
             gr = (math.sqrt(5) - 1) / 2  # golden section on the bracket
             c, d = hi - gr * (hi - lo), lo + gr * (hi - lo)
-            for _ in range(80):
-                if f(c) < f(d):
-                    hi = d
+            fc, fd = f(c), f(d)
+            while hi - lo > 1e-13 * max(1.0, abs(hi)):
+                if fc < fd:
+                    hi, d, fd = d, c, fc
+                    c = hi - gr * (hi - lo)
+                    fc = f(c)
                 else:
-                    lo = c
-                c, d = hi - gr * (hi - lo), lo + gr * (hi - lo)
+                    lo, c, fc = c, d, fd
+                    d = lo + gr * (hi - lo)
+                    fd = f(d)
             best = min(f(0.5 * (lo + hi)), sgn * lv[i])
             out.append(sgn * best)
         return out[0], out[1]

@@ -249,6 +249,9 @@ def opening_force_exact(model, p) -> float:
     the largest point (Illinois false position; an end stays an end)."""
     st = model.cfg.stroke
     p = np.asarray(p, float)
+    last = model.__dict__.get("_opening_last")     # the optimiser's claims, then the
+    if last is not None and last[0] == p.tobytes():  # reference's: the same design twice
+        return last[1]
     grid = model.__dict__.get("_opening_grid")
     if grid is None:                  # (mapping a Function builds one: once per model)
         grid = model.__dict__["_opening_grid"] = model.opening.map(OPENING_EXACT_GRID)
@@ -264,6 +267,7 @@ def opening_force_exact(model, p) -> float:
             return dFx
         illinois(dF_at, th[i - 1], th[i + 1], dF[i - 1], dF[i + 1],
                  lambda a, b, x, r: r == 0 or b - a < 1e-15, 60)
+    model.__dict__["_opening_last"] = (p.tobytes(), best)
     return best
 
 

@@ -37,6 +37,19 @@ def test_a_child_answers_finishes_and_stops():
         os.waitpid(child.pid, os.WNOHANG)
 
 
+def test_a_child_does_the_parents_share_first():
+    """``before``: the parent's share (some of the first kind's starts), sent before the
+    child's own answer; an error in it is raised here, and the child still answers."""
+    with KindProcess(_pair, before=lambda: {4: "start 5", 5: "start 6"}) as child:
+        assert child.before() == {4: "start 5", 5: "start 6"}
+        assert child.raw() == 41
+        assert child.finish() == 42
+    with KindProcess(_pair, before=_fails) as child:
+        with pytest.raises(NumericalError, match="try other optimise.nodes"):
+            child.before()
+        assert child.raw() == 41
+
+
 def test_a_childs_error_is_raised_here():
     with KindProcess(_fails) as child:
         with pytest.raises(NumericalError, match="try other optimise.nodes"):
@@ -73,13 +86,18 @@ cfg = softclose.load_config()
 assert sidebyside.available(2), "side by side is not available in a fresh interpreter"
 if sys.argv[1] == "dead":
     real = sidebyside.KindProcess
-    sidebyside.KindProcess = lambda solve: real(lambda: os._exit(3))
+    sidebyside.KindProcess = lambda solve, before=None: real(lambda: os._exit(3))
 forked = softclose.optimise(cfg)
 os.environ[sidebyside.ENV] = "0"
 serial = softclose.optimise(cfg)
 print(json.dumps({"same": [forked.objective == serial.objective, forked.design == serial.design,
                            forked.metrics == serial.metrics, forked.kinds == serial.kinds,
-                           forked.notes == serial.notes],
+                           forked.notes == serial.notes,
+                           # every start, the child's share of the first kind's among them
+                           [{k: v for k, v in r.items() if k != "solve_time"}
+                            for r in forked.starts] ==
+                           [{k: v for k, v in r.items() if k != "solve_time"}
+                            for r in serial.starts]],
                   "J": forked.objective, "kinds": [[k["kind"], k["objective"]]
                                                    for k in forked.kinds],
                   "success": forked.success and serial.success}))

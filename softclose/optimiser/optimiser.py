@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import functools
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -18,7 +18,7 @@ from .. import statics
 from ..errors import ConfigError, NumericalError, SoftcloseError
 from ..problem import DESIGN_KEYS, SCALES, UNITS, describe
 from ..progress import Progress
-from .cache import get_nlp, has_nlp, stroke_simulator
+from .cache import get_model, get_nlp, has_nlp, stroke_simulator
 from ..parts import spring_part
 from .diagnose import diagnose
 from . import sidebyside
@@ -268,15 +268,27 @@ def optimise(cfg, *, starts: int | None = None, verify: bool = True,
     # next, should it fail)
     solve = functools.partial(optimise_kind, starts=starts, verify=verify, nodes=nodes,
                               substeps=substeps, defer=True)
-    children = {}
+    children, first = {}, {}
     try:
         if sidebyside.available(len(todo)):
             disc = discretisation(todo[0][1], nodes, substeps)
             get_nlp(todo[0][1], disc.nodes, disc.substeps)       # loaded once, inherited
-            children = {kind: sidebyside.KindProcess(functools.partial(solve, c, progress=False))
-                        for kind, c in todo[1:]}
+            plan, share = None, ()
+            if len(todo) == 2:      # one other kind: its process takes some of this one's
+                plan = plan_kind(todo[0][1], starts, nodes, substeps)   # starts too (first)
+                share = shared_starts(plan.n_starts)
+                first = {"plan": plan}
+            children = {kind: sidebyside.KindProcess(
+                functools.partial(solve, c, progress=False),
+                before=functools.partial(solve_starts, plan, share) if share else None)
+                for kind, c in todo[1:]}
+            if share:
+                first["elsewhere"] = (share, children[todo[1][0]].before)
         for kind, c in todo:
-            r, later = _kind_answer(children.get(kind), solve, c, progress)
+            r, later = _kind_answer(children.get(kind), functools.partial(solve, **(
+                first if kind == todo[0][0] else {})), c, progress)
+            if children and kind == todo[0][0] and later is not None and r.success:
+                later = ahead(later)    # polished and verified while the others finish
             row = next(row for row in rows if row["kind"] == kind)
             row.update({"success": r.success, "objective": r.objective,
                         "message": r.message, "verified": False})
@@ -290,6 +302,24 @@ def optimise(cfg, *, starts: int | None = None, verify: bool = True,
     finally:
         for child in children.values():
             child.close()
+
+
+def shared_starts(n: int) -> tuple:
+    """Which of the first kind's ``n`` starts the other kind's process solves (before its
+    own): the last third -- this process polishes and verifies after its starts, about as
+    much work as two starts, and the other kinds' starts cost about as much as the first's."""
+    return tuple(range(n - n // 3, n))
+
+
+def ahead(later):
+    """``later`` done now, kept for when it is asked for (an exception too: raised then)."""
+    try:
+        done = later()
+    except Exception as exc:        # noqa: BLE001  (raised where the serial run raises it)
+        def again():
+            raise exc
+        return again
+    return lambda: done
 
 
 def _kind_answer(child, solve, c, progress):
@@ -357,17 +387,70 @@ def _best_kind(cfg, rows, results, pending, verify, t_start) -> OptimiseResult:
                               total_time=time.perf_counter() - t_start)
     kind, best = min(pool, key=lambda kr: (kr[1].objective if kr[1].objective is not None
                                            else np.inf))
-    part = spring_part(best.config, best.design, best.metrics or best.optimiser) \
-        if best.design is not None else None
+    part = spring_part(best.config, best.design, best.metrics or best.optimiser,
+                       model=get_model(best.config)) if best.design is not None else None
     return replace(best, kind=kind, kinds=tuple(rows), part=part,
                    config=_points_of(best, cfg.set("design.spring_kind", kind)),
                    notes=best.notes + tuple(notes), total_time=time.perf_counter() - t_start)
 
 
+@dataclass(frozen=True)
+class Plan:
+    """A kind's multistart before its solves: the problem (cfg with the free variables in
+    their bounds), its discretisation and NLP, and the starts' designs from the sweep."""
+    cfg: object
+    disc: Discretisation
+    nlp: ShootingNLP
+    build: float            # s spent building the NLP here (0 when it was at hand)
+    sim: object             # the simulator of the sweep and the initial guesses
+    designs: np.ndarray     # (starts, 3): where each start begins
+    info: dict              # the sweep's summary
+    bounds: tuple
+
+    @property
+    def n_starts(self) -> int:
+        return len(self.designs)
+
+
+def plan_kind(cfg, starts: int | None = None, nodes: int | None = None,
+              substeps: int | None = None, bar: Progress | None = None) -> Plan:
+    """Everything a kind's starts need: the NLP (built or loaded), the sweep of the design
+    box and the starts picked from it."""
+    n_starts = check_problem(cfg, starts)
+    cfg = free_in_bounds(cfg)
+    disc = discretisation(cfg, nodes, substeps)
+    if bar is not None and disc.steps > 400:
+        bar.update(0, f"building the NLP ({disc.nodes} x {disc.substeps} RK4 steps)", force=True)
+    cached = has_nlp(cfg, disc.nodes, disc.substeps)
+    nlp = get_nlp(cfg, disc.nodes, disc.substeps)
+    sim = stroke_simulator(cfg, sweep_time(cfg, disc.t_limit))
+    designs, info = sweep_starts(cfg, n_starts, disc.t_limit, sim)
+    return Plan(cfg, disc, nlp, 0.0 if cached else nlp.build_time, sim, designs, info,
+                nlp.bounds(cfg))
+
+
+def solve_start(plan: Plan, i: int) -> tuple[Run, dict]:
+    """Start ``i`` of ``plan``: its initial guess from the simulated stroke, one Ipopt solve,
+    and its row of the report. The same numbers in whichever process runs it."""
+    nlp, cfg, d0 = plan.nlp, plan.cfg, plan.designs[i]
+    p = nlp.params(cfg)
+    w0, J0 = initial_guess(nlp, cfg, d0, plan.sim, p, plan.disc.t_limit)
+    p[J_INDEX] = max(J0, 1e-8)
+    r = nlp.solve(w0, p, *plan.bounds, origin=f"start {i + 1}")
+    check_options(r, cfg)
+    return r, start_row(nlp, cfg, d0, r, J0)
+
+
+def solve_starts(plan: Plan, which) -> dict:
+    """The starts ``which`` of ``plan``: {index: (run, row)} (for another process)."""
+    return {i: solve_start(plan, i) for i in which}
+
+
 @guarded
 def optimise_kind(cfg, *, starts: int | None = None, verify: bool = True,
                   progress: bool = False, nodes: int | None = None,
-                  substeps: int | None = None, defer: bool = False):
+                  substeps: int | None = None, defer: bool = False,
+                  plan: Plan | None = None, elsewhere=None):
     """Solve cfg's soft-close problem, with cfg's spring kind, from several starts; the best
     answer, verified.
 
@@ -379,39 +462,44 @@ def optimise_kind(cfg, *, starts: int | None = None, verify: bool = True,
     reference's (objective to 1e-3 relative). Infeasible problems and solver failures are
     reported in the result, never raised. ``progress=True`` draws the starts on a terminal.
 
+    ``plan``: the kind's :func:`plan_kind`, when made already; ``elsewhere``: (indices,
+    collect) -- starts another process solves, and how to get them ({index: (run, row)};
+    any it does not deliver are solved here).
+
     The design for the ``[tolerance]`` box is :func:`softclose.robust.optimise_robust`
     (which builds on this one; ``softclose.optimise(cfg, robust=True)`` calls it).
     """
     t_start = time.perf_counter()
-    n_starts = check_problem(cfg, starts)
-    cfg = free_in_bounds(cfg)
     o = cfg.optimise
-    disc = discretisation(cfg, nodes, substeps)
-    notes = list(disc.notes)
+    n_starts = check_problem(cfg, starts) if plan is None else plan.n_starts
     bar = Progress(n_starts, "optimise", enabled=progress, unit="")
-    if disc.steps > 400:
-        bar.update(0, f"building the NLP ({disc.nodes} x {disc.substeps} RK4 steps)", force=True)
-    cached = has_nlp(cfg, disc.nodes, disc.substeps)
-    nlp = get_nlp(cfg, disc.nodes, disc.substeps)
-    build = 0.0 if cached else nlp.build_time
-    sim_sweep = stroke_simulator(cfg, sweep_time(cfg, disc.t_limit))
-    designs, info = sweep_starts(cfg, n_starts, disc.t_limit, sim_sweep)
-    bounds = nlp.bounds(cfg)
-    runs, rows = [], []
+    plan = plan or plan_kind(cfg, starts, nodes, substeps, bar)
+    cfg, disc, nlp = plan.cfg, plan.disc, plan.nlp
+    notes = list(disc.notes)
+    away, collect = elsewhere if elsewhere else ((), None)
+    solved: dict = {}
     with bar:
-        for i, d0 in enumerate(designs):
-            bar.update(i, f"start {i + 1} of {len(designs)}: solving ({disc.nodes} x "
-                          f"{disc.substeps} RK4 steps)", force=True)
-            p = nlp.params(cfg)
-            w0, J0 = initial_guess(nlp, cfg, d0, sim_sweep, p, disc.t_limit)
-            p[J_INDEX] = max(J0, 1e-8)
-            r = nlp.solve(w0, p, *bounds, origin=f"start {i + 1}")
-            check_options(r, cfg)
-            runs.append(r)
-            rows.append(start_row(nlp, cfg, d0, r, J0))
-            bar.update(i + 1, f"start {i + 1}: {r.status}, {r.iterations} iterations",
+        for i in range(plan.n_starts):
+            if i in away:
+                continue
+            bar.update(len(solved), f"start {i + 1} of {plan.n_starts}: solving "
+                                    f"({disc.nodes} x {disc.substeps} RK4 steps)", force=True)
+            solved[i] = r, _ = solve_start(plan, i)
+            bar.update(len(solved), f"start {i + 1}: {r.status}, {r.iterations} iterations",
                        force=True)
-        base = dict(starts=tuple(rows), build_time=build, sweep=info)
+        if away:
+            try:
+                solved.update({i: v for i, v in collect().items() if i in away})
+            except (EOFError, OSError):     # the other process failed: solved here instead
+                pass
+            for i in away:
+                if i not in solved:
+                    solved[i] = solve_start(plan, i)
+            bar.update(len(solved), f"starts {min(away) + 1}..{max(away) + 1}: solved "
+                                    "side by side", force=True)
+        runs = [solved[i][0] for i in range(plan.n_starts)]
+        rows = [solved[i][1] for i in range(plan.n_starts)]
+        base = dict(starts=tuple(rows), build_time=plan.build, sweep=plan.info)
         ok = [i for i, r in enumerate(runs) if r.success]
         if not ok:
             msg, inf = diagnose(cfg, nlp, runs)
@@ -448,7 +536,7 @@ def optimise_kind(cfg, *, starts: int | None = None, verify: bool = True,
                                + (raw.total_time or 0.0))
             return replace(raw, total_time=time.perf_counter() - t_start), later
         if verify:
-            bar.update(len(designs), "verifying with the adaptive reference", force=True)
+            bar.update(plan.n_starts, "verifying with the adaptive reference", force=True)
         res = finish(cfg, nlp, best, disc, verify=verify, polish=True, notes=notes, **base)
     return replace(res, total_time=time.perf_counter() - t_start)
 

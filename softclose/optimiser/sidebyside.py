@@ -5,8 +5,13 @@
 are independent, so on a machine with two or more cores every kind after the first is
 solved in a child process forked once the NLP is loaded -- the child inherits the model,
 the tables and the compiled NLP, nothing is built again -- while this process solves the
-first. A child sends back its kind's unpolished answer and waits: told to finish, it
-polishes and verifies that answer and sends the result; told to stop, it exits.
+first. With two kinds, the child first solves the last third of the first kind's starts
+(this process polishes and verifies after its starts: the work is then about even) and
+sends them. A child sends back its kind's unpolished answer and waits: told to finish, it
+polishes and verifies that answer and sends the result; told to stop, it exits. This
+process polishes and verifies the first kind as soon as its starts are in, without waiting
+for the others (the best kind is usually the first listed; when it is not, that work was
+done while the others were still solving).
 
 The numbers are those of solving the kinds one after the other: the same code on the same
 inputs, in another process. The kinds are solved one after the other instead where fork is
@@ -60,12 +65,14 @@ def _recv(fd: int):
 class KindProcess:
     """One kind's multistart in a forked child: ``solve()`` -> ``(raw, later)`` there.
 
+    ``before``: work the child does first, for the parent (some of the first kind's starts),
+    returned by :meth:`before`.
     :meth:`raw` returns the kind's unpolished result (or raises what the child raised);
     :meth:`finish` asks the child to polish and verify it and returns that result;
     :meth:`close` stops the child (always call it: ``with`` does).
     """
 
-    def __init__(self, solve):
+    def __init__(self, solve, before=None):
         global _IN_CHILD
         up_r, up_w = os.pipe()        # child -> parent
         down_r, down_w = os.pipe()    # parent -> child
@@ -77,6 +84,11 @@ class KindProcess:
                 signal.signal(signal.SIGINT, signal.SIG_IGN)
                 os.close(up_r)
                 os.close(down_w)
+                if before is not None:      # work for the parent first
+                    try:
+                        _send(up_w, ("before", before()))
+                    except Exception as exc:  # noqa: BLE001  (sent to the parent)
+                        _send(up_w, ("error", exc))
                 try:
                     raw, later = solve()
                     _send(up_w, ("raw", raw))
@@ -103,6 +115,10 @@ class KindProcess:
             raise value
         assert kind == tag, (kind, tag)
         return value
+
+    def before(self):
+        """What ``before()`` returned in the child (asked before :meth:`raw`)."""
+        return self._answer("before")
 
     def raw(self):
         """The kind's unpolished result (what ``solve()`` returned first)."""

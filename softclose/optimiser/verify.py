@@ -61,7 +61,14 @@ class Checker:
         return float(np.max(np.asarray(out)[1]))
 
     def spring_extremes(self, a: float, b: float) -> tuple[float, float]:
-        """min and max of the spring length over theta in [a, b] (grid + parabola)."""
+        """min and max of the spring length over theta in [a, b] (grid + parabola); the
+        geometry's alone, so kept per (a, b)."""
+        known = self.__dict__.setdefault("_extremes", {})
+        if (a, b) not in known:
+            known[(a, b)] = self._spring_extremes(a, b)
+        return known[(a, b)]
+
+    def _spring_extremes(self, a: float, b: float) -> tuple[float, float]:
         g = np.linspace(a, b, 2001)
         lv = np.asarray(self._l.map(len(g))(g)[0]).ravel()
         out = []
