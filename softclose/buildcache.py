@@ -25,7 +25,8 @@ truncated or foreign entry is ignored (and removed), never an error: the thing i
 again. ``SOFTCLOSE_CACHE`` names the folder (default ``$XDG_CACHE_HOME/softclose`` or
 ``~/.cache/softclose``); ``SOFTCLOSE_CACHE=off`` turns the cache off, ``SOFTCLOSE_COMPILE=0``
 only the compiling. At most :data:`MAX_ENTRIES` entries of each kind are kept (the least
-recently used go).
+recently used go), and the folders of :data:`KEEP_VERSIONS` other versions of the software
+(:func:`prune_versions`, when a new version makes its folder).
 """
 
 from __future__ import annotations
@@ -70,10 +71,45 @@ def _folder(setting: str) -> Path | None:
         Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "softclose"
     path = base / fingerprint()
     try:
+        new = not path.exists()
         path.mkdir(parents=True, exist_ok=True)
     except OSError:
         return None
+    if new:                 # another version of the software: forget the oldest ones
+        prune_versions(base, keep=path)
+    else:
+        _touch(path)        # (the version folders' times say which were used last)
     return path
+
+
+#: version folders kept beside the current one (each up to ~150 MB: 64 models, 64 NLPs),
+#: and how long one must have been unused before it goes (another process may still use it)
+KEEP_VERSIONS = 6
+UNUSED_FOR = 3600.0
+
+
+def prune_versions(base: Path, keep: Path | None = None) -> list[Path]:
+    """Remove the folders of other versions of the software (16 hex digits each) beyond the
+    :data:`KEEP_VERSIONS` most recently used, when unused for :data:`UNUSED_FOR` seconds; the
+    removed ones. An upgrade, or a checkout edited for a week, would otherwise leave a folder
+    per version behind."""
+    import shutil
+    import time
+    try:
+        found = [p for p in base.iterdir() if p.is_dir() and p != keep and len(p.name) == 16
+                 and all(c in "0123456789abcdef" for c in p.name)]
+        found.sort(key=lambda p: p.stat().st_mtime, reverse=True)
+    except OSError:
+        return []
+    now, gone = time.time(), []
+    for p in found[KEEP_VERSIONS:]:
+        try:
+            if now - p.stat().st_mtime > UNUSED_FOR:
+                shutil.rmtree(p, ignore_errors=True)
+                gone.append(p)
+        except OSError:
+            pass
+    return gone
 
 
 @lru_cache(maxsize=1)

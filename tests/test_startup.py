@@ -210,3 +210,33 @@ def test_a_command_line_builds_its_own_parser_only():
         # the same options as in the full parser
         assert choices[name].format_usage() == \
             full._subparsers._group_actions[0].choices[name].format_usage()
+
+
+def test_the_folders_of_other_versions_are_pruned(tmp_path):
+    """A new version of the software keeps the KEEP_VERSIONS most recently used folders of
+    the others (and any used within the hour: another process may be using it); the rest
+    go, and nothing that is not a version folder is touched."""
+    import time
+    now = time.time()
+    old = []
+    for i in range(buildcache.KEEP_VERSIONS + 3):
+        p = tmp_path / f"{i:016x}"
+        (p / "sub").mkdir(parents=True)
+        (p / "sub" / "model-x.bin").write_bytes(b"0")
+        age = 7200.0 + 60.0 * i          # the larger i, the longer unused
+        os.utime(p, (now - age, now - age))
+        old.append(p)
+    recent = tmp_path / "ffffffffffffffff"       # beyond the count, but used a minute ago
+    recent.mkdir()
+    os.utime(recent, (now - 60.0, now - 60.0))
+    other = tmp_path / "notes"                   # not a version folder
+    other.mkdir()
+    os.utime(other, (now - 1e6, now - 1e6))
+    current = tmp_path / "0123456789abcdef"
+    current.mkdir()
+    gone = buildcache.prune_versions(tmp_path, keep=current)
+    # the recent one counts among the KEEP_VERSIONS most recent: the oldest four go
+    assert sorted(gone) == sorted(old[buildcache.KEEP_VERSIONS - 1:])
+    assert all(not p.exists() for p in gone)
+    assert all(p.exists() for p in old[:buildcache.KEEP_VERSIONS - 1])
+    assert recent.exists() and other.exists() and current.exists()
