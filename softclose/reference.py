@@ -26,6 +26,10 @@ from .stroke import StrokeResult, StrokeStatus
 
 #: grid steps of the reference integrated in one CVODES run (then scanned for events)
 CHUNK = 16
+#: most CVODES steps of one such run: a chunk of a stroke takes ~70-120 at tolerance 1e-12;
+#: one that runs past the rim towards a toggle position (where the closure has no solution
+#: and the equation is NaN) would otherwise grind on, shrinking its steps, for minutes
+CHUNK_MAX_STEPS = 4000
 
 
 class Reference:
@@ -46,10 +50,11 @@ class Reference:
         # nodes instead of starting afresh at each (a start costs ~0.5 ms: its first steps
         # are tiny and of order one; the nodes of a continued run cost ~30 us each)
         self._chunk_flow = ca.integrator("ref_chunk", "cvodes", dae, 0.0,
-                                         [i / CHUNK for i in range(1, CHUNK + 1)], opts)
+                                         [i / CHUNK for i in range(1, CHUNK + 1)],
+                                         {**opts, "max_num_steps": CHUNK_MAX_STEPS})
         self._ahead: list = []      # the next grid states of the current chunk
         self._ahead_key = None      # (state they continue from, step, direction of motion)
-        self._chunk_off = 0         # grid steps to take singly after a failed chunk
+        self._chunk_off = 0         # grid steps to take singly (after a failed chunk: all)
         v_T = model.kin(x)[4]
         # d|v_T|/dt = v.a/|v| with a = dv/dt by AD along the flow; at rest it is |a|
         a_T = ca.jtimes(v_T, x, f)
@@ -67,7 +72,12 @@ class Reference:
         stroke's current direction, which matters only with dry friction)."""
         if tau <= 0:
             return np.asarray(x0, float)
-        return np.asarray(self._flow(x0=x0, p=np.r_[p, self._moving, tau])["xf"]).ravel()
+        try:
+            return np.asarray(self._flow(x0=x0, p=np.r_[p, self._moving, tau])["xf"]).ravel()
+        except RuntimeError as exc:   # (a step towards a toggle position: the equation is NaN)
+            raise NumericalError(f"the reference integrator (CVODES) failed from theta = "
+                                 f"{math.degrees(float(x0[0])):.4g} deg "
+                                 f"({str(exc).splitlines()[-1].strip()})") from None
 
     def step(self, x0, p, h):
         """State after one grid step ``h`` from the node ``x0``: from the chunk (one CVODES
@@ -87,7 +97,9 @@ class Reference:
         except RuntimeError:
             xs = None
         if xs is None or not np.all(np.isfinite(xs)):
-            self._chunk_off = CHUNK - 1
+            # a chunk that fails is near the end of what the stroke can reach (past the rim,
+            # towards a toggle): the rest of the stroke is taken step by step
+            self._chunk_off = 1 << 62
             return self.flow(x0, p, h)
         self._ahead = [xs[:, i].copy() for i in range(1, CHUNK)]
         self._ahead_key, self._ahead_x = key, xs[:, 0].copy()
@@ -121,6 +133,12 @@ class Reference:
         prev = None  # (t, x, g) of the previous node
         g_x = None   # the tip speed at x, when known (the previous step's g1)
         closed, out, stuck = False, {}, None
+        # a spring outside its valid range at every angle from the rim to the release is an
+        # invalid design whatever the stroke does: not integrated (such a lid may oscillate
+        # wildly, every turn an event); the reason is the one its stroke would give
+        invalid = self._invalid_throughout(p, cfg, thc, st.theta0)
+        if invalid is not None:
+            return invalid
         T_f = sum(float(e.coulomb(elements.params(p))) for e in elements.FRICTIONS)
         self._moving, self._ahead, self._chunk_off = -1.0, [], 0
         if T_f > 0:  # released from rest: it moves only if the driving moment exceeds T_f
@@ -130,8 +148,8 @@ class Reference:
             h = min(dt, t_max - t)
             try:
                 x1 = self.step(x, p, h)
-            except RuntimeError as exc:
-                raise NumericalError(f"the reference integrator failed at t = {t:.4g} s ({exc})")
+            except NumericalError as exc:
+                raise NumericalError(f"{exc} at t = {t:.4g} s") from None
             if not np.all(np.isfinite(x1)):
                 raise NumericalError(f"the reference integrator diverged at t = {t:.4g} s")
             g, g1 = (speed(x) if g_x is None else g_x), speed(x1)
@@ -188,20 +206,9 @@ class Reference:
             t, x, g_x = t + h, x1, g1
         self._moving = -1.0
         lmin, lmax = self._l_extremes(th_min, th_max)
-        _, why = statics.out_of_range(
-            lambda e, t: np.asarray(m.coordinate_fns[e.name].map(t.size)(t.ravel())[0]).ravel(),
-            cfg if cfg is not None else m.cfg, p[None, :],
-            {"min_spring_length": [lmin], "max_spring_length": [lmax],
-                                "theta_min": [th_min], "theta_max": [th_max]})
-        if why[0]:
-            return StrokeResult(
-                closed=False, closing_time=None, impact_theta_dot=None, impact_tip_speed=None,
-                peak_tip_speed=None, min_spring_length=float(lmin),
-                max_spring_length=float(lmax), holding_moment=m.holding_moment(p),
-                status=StrokeStatus.OUT_OF_RANGE, method="cvodes", tolerance=self.tol,
-                opening_force=statics.opening_force_exact(m, p),
-                message=f"invalid design: {why[0]}", reason=why[0], theta_min=float(th_min),
-                theta_max=float(th_max))
+        invalid = self._invalid(p, cfg, lmin, lmax, th_min, th_max)
+        if invalid is not None:
+            return invalid
         why = None if stuck is None else f"held by friction at theta = {math.degrees(stuck):.1f} deg"
         return StrokeResult(
             opening_force=statics.opening_force_exact(m, p), reason=why, stop_theta=stuck,
@@ -213,6 +220,37 @@ class Reference:
             status=StrokeStatus.CLOSED if closed else StrokeStatus.NOT_CLOSED,
             method="cvodes", tolerance=self.tol, theta_min=float(th_min),
             theta_max=float(th_max))
+
+    def _invalid(self, p, cfg, lmin, lmax, th_min, th_max) -> StrokeResult | None:
+        """The result of a stroke over [th_min, th_max] whose spring lengths lmin..lmax leave
+        an element's valid range (``cfg``'s, else the model's): an invalid design; None if
+        the stroke is valid."""
+        m = self.model
+        _, why = statics.out_of_range(
+            lambda e, t: np.asarray(m.coordinate_fns[e.name].map(t.size)(t.ravel())[0]).ravel(),
+            cfg if cfg is not None else m.cfg, p[None, :],
+            {"min_spring_length": [lmin], "max_spring_length": [lmax],
+             "theta_min": [th_min], "theta_max": [th_max]})
+        if not why[0]:
+            return None
+        return StrokeResult(
+            closed=False, closing_time=None, impact_theta_dot=None, impact_tip_speed=None,
+            peak_tip_speed=None, min_spring_length=float(lmin), max_spring_length=float(lmax),
+            holding_moment=m.holding_moment(p), status=StrokeStatus.OUT_OF_RANGE,
+            method="cvodes", tolerance=self.tol, opening_force=statics.opening_force_exact(m, p),
+            message=f"invalid design: {why[0]}", reason=why[0], theta_min=float(th_min),
+            theta_max=float(th_max))
+
+    def _invalid_throughout(self, p, cfg, a, b) -> StrokeResult | None:
+        """:meth:`_invalid` for a spring whose every length over theta in [a, b] lies outside
+        its valid range (the lid cannot be anywhere there with a valid spring); else None."""
+        lmin, lmax = self._l_extremes(a, b)
+        P = elements.params(p[None, :])
+        lo, hi = (float(np.asarray(v, float).ravel()[0]) for v in
+                  elements.BY_NAME["spring"].valid(P, cfg if cfg is not None else self.model.cfg))
+        if not (lmin > hi or lmax < lo):
+            return None
+        return self._invalid(p, cfg, lmin, lmax, a, b)
 
     def _rest(self, theta, p, T_f):
         """At rest at theta: (theta, None) if dry friction holds the lid there (|dV/dtheta| <=

@@ -23,6 +23,7 @@ from softclose.errors import ConfigError
 from softclose.model import LidModel
 from softclose.reference import Reference
 from softclose.simulate import Simulator
+from softclose.stroke import StrokeStatus
 
 pytestmark = pytest.mark.stress
 
@@ -197,3 +198,40 @@ def test_confirm_uses_the_targets_and_the_estimate():
     assert not ok and err["peak_tip_speed"] == pytest.approx(2e-6, rel=1e-6)
     # closed against not closed is never confirmed
     assert not stress.confirm(dataclasses.replace(same, closed=False), ref)[0]
+
+
+def test_reference_near_a_toggle_neither_grinds_nor_raises_a_traceback():
+    """Regression (CI of 8f31760): the reference runs CVODES on through 16 grid nodes a call;
+    near the rim such a run went on past it towards the toggle position, where the equation
+    is NaN, and ground for 80 s shrinking its steps. It now stops within CHUNK_MAX_STEPS and
+    the stroke goes on node by node; a single flow that fails is a NumericalError (exit code
+    3 with its message), never a bare RuntimeError of CVODES."""
+    import time
+    from softclose.errors import NumericalError
+    from softclose.reference import CHUNK_MAX_STEPS
+    geo = stress.geometry_with_assembly(crank_bc=0.0925)
+    cfg = default_config().replace(geometry=geo, stroke={"theta_closed_deg": -2.4})
+    ref = Reference(LidModel(cfg))
+    t0 = time.process_time()
+    r = ref.simulate()
+    assert time.process_time() - t0 < 10.0          # 80 s of CPU before the fix
+    assert r.closed and abs(r.closing_time - 0.169856) < 1e-5
+    assert CHUNK_MAX_STEPS >= 1000                  # a chunk of a stroke takes ~70-120
+    with pytest.raises(NumericalError, match="reference integrator"):
+        ref.flow(np.array([math.radians(-2.3), -3.0]), ref.model.params(), 0.5)
+
+
+def test_reference_judges_a_spring_out_of_range_everywhere_without_integrating():
+    """Regression (fuzz, CI of 8f31760): a lid point 14 m away makes the compression spring
+    longer than its free length at every angle; such a lid oscillates wildly (every turn an
+    event of the reference: 13 s a stroke). The design is invalid whatever the stroke does,
+    and the reference says so at once, with the reason the kernel gives."""
+    cfg = default_config().update({"mass.crank_bc": 1e-4, "geometry.lid_e": [-10.0, -10.0],
+                                   "design.spring_kind": "compression", "design.spring_k": 2000.0,
+                                   "design.spring_rest_length": 0.057,
+                                   "design.damper_c": 3000.0})
+    ref = Reference(LidModel(cfg)).simulate()
+    fixed = Simulator(cfg).run(estimate_error=False)
+    assert ref.status == fixed.status == StrokeStatus.OUT_OF_RANGE
+    assert "over the whole stroke" in ref.reason
+    assert ref.reason.split(", by up to")[0] == fixed.reason.split(", by up to")[0]
