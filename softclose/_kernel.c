@@ -86,7 +86,8 @@ static const char LAYOUT[] =
     "abi=3;meta=ncell,lo,h,m0,rotary_at_pivot;cc=M,dM,Vg,dVg,l,dl,dd,tau;mass=M,dM,Vg,dVg;"
     "xcc=psi,dpsi,dpr2,-;"
     "row=spring_k,spring_rest_length,damper_c,rotary_damper_c,spring_kind,spring_preload,"
-    "torsion_k,torsion_free_angle,damper_one_way,friction_torque,energy_tol,lid_mass;out=status,closing_time,impact_theta_dot,impact_tip_speed,"
+    "torsion_k,torsion_free_angle,damper_one_way,friction_torque,end_damper_c,end_damper_angle,"
+    "energy_tol,lid_mass;out=status,closing_time,impact_theta_dot,impact_tip_speed,"
     "peak_tip_speed,min_spring_length,max_spring_length,steps,energy_rise,theta_min,"
     "theta_dot_max,theta_max,stop_reason,stop_theta,stop_time;nrng=18";
 
@@ -180,8 +181,8 @@ typedef struct {
  * by ELEM_SLOPE_X ..., added where a row has them (Par.x; Par4.anyx for a group). */
 
 /* the design-row columns: the elements' parameters (in the registry's order), e_tol, m_lid */
-enum { D_K, D_L0, D_C, D_CR, D_KIND, D_F0, D_KT, D_PSI0, D_OW, D_TF, D_ETOL, D_MLID,
-       NDESIGN };
+enum { D_K, D_L0, D_C, D_CR, D_KIND, D_F0, D_KT, D_PSI0, D_OW, D_TF, D_EC, D_EA, D_ETOL,
+       D_MLID, NDESIGN };
 /* the extra table's columns: the torsion spring's psi and dpsi at its pivot, the rotary
  * damper's psi'^2 at its pivot */
 enum { X_PSI, X_DPSI, X_DR2 };
