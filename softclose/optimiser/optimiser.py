@@ -71,6 +71,9 @@ def claims(nlp: ShootingNLP, cfg, run: Run) -> tuple[dict, dict, float]:
          "min_spring_length": lmin, "max_spring_length": lmax,
          "holding_moment": model.holding_moment(p),
          "opening_force": statics.opening_force_exact(model, p)}
+    eng = nlp.engagement(run.x)
+    if eng is not None:     # two phases: the node between them is the engagement
+        m["engage_time"], m["engage_theta_dot"] = eng
     return nlp.design_dict(cfg, d), m, nlp_objective(nlp, cfg, run)
 
 
@@ -117,7 +120,7 @@ def active_set(nlp: ShootingNLP, cfg, run: Run, t_limit: float) -> tuple[Active,
     elif lam < -ACTIVE_LAM:
         out.append(Active("closing_time_min", "constraint", "lower", o.closing_time_min, "s",
                           Jr * lam))
-    N = nlp.N
+    N, iX = nlp.N, nlp.iX
     groups = dict(nlp.groups())
     lam_hm = float(lam_g[groups["holding_moment"]].sum())
     if lam_hm < -ACTIVE_LAM:
@@ -125,11 +128,11 @@ def active_set(nlp: ShootingNLP, cfg, run: Run, t_limit: float) -> tuple[Active,
                           "N m", Jr * lam_hm))
     # theta' <= 0 at every sub-step and node: relaxed together (theta' <= eps everywhere)
     lam_rb = float(np.maximum(lam_g[groups["theta_dot_nonpositive"]], 0).sum()
-                   + np.maximum(lam_x[iT + 2:iT + 2 + 2 * N:2], 0).sum())
+                   + np.maximum(lam_x[iX + 1:iX + 1 + 2 * N:2], 0).sum())
     if lam_rb > ACTIVE_LAM:
         out.append(Active("no_rebound", "constraint", "upper", 0.0, "rad/s", -Jr * lam_rb))
     lam_rim = float(np.minimum(lam_g[groups["theta_above_closed"]], 0).sum()
-                    + np.minimum(lam_x[iT + 1:iT + 1 + 2 * (N - 1):2], 0).sum())
+                    + np.minimum(lam_x[iX:iX + 2 * (N - 1):2], 0).sum())
     if lam_rim < -ACTIVE_LAM:
         out.append(Active("theta_above_closed", "constraint", "lower", st.theta_closed, "rad",
                           Jr * lam_rim))
@@ -189,7 +192,8 @@ def finish(cfg, nlp: ShootingNLP, run: Run, disc: Discretisation, *, verify: boo
     # the closing-time bounds the NLP was solved with: closing_time_min raised to the NLP's
     # floor, the limit moved by the discretisation error (tighten)
     problem["closing_time_solved"] = [float(run.bounds[0][nlp.iT]), float(run.bounds[1][nlp.iT])]
-    common = dict(nodes=nlp.N, substeps=nlp.M, hessian=cfg.optimise.hessian,
+    common = dict(nodes=nlp.nodes, substeps=nlp.M, substeps2=nlp.M2,
+                  hessian=cfg.optimise.hessian,
                   iterations=base.pop("iterations", run.iterations),
                   solve_time=base.pop("solve_time", run.time), problem=problem,
                   config=cfg, run=run, nlp_key=nlp.key, active=active, **base)
@@ -506,7 +510,8 @@ def optimise_kind(cfg, *, starts: int | None = None, verify: bool = True,
             best = min(runs, key=lambda r: sum(r.violations.values()))
             inf = dict(inf or {}, least_violation=float(sum(best.violations.values())))
             failed = OptimiseResult(
-                False, msg, best.status, None, None, nodes=nlp.N, substeps=nlp.M,
+                False, msg, best.status, None, None, nodes=nlp.nodes, substeps=nlp.M,
+                substeps2=nlp.M2,
                 hessian=o.hessian, iterations=sum(r.iterations for r in runs),
                 solve_time=sum(r.time for r in runs), problem=describe(cfg),
                 infeasibility=inf, notes=tuple(notes), config=cfg,
@@ -581,7 +586,8 @@ def solve(cfg, nodes: int | None = None, substeps: int | None = None,
         res = OptimiseResult(
             False, f"Ipopt stopped with status {r.status} after {r.iterations} iterations; "
             "use optimise() (several starts) or raise optimise.max_iter", r.status, None, None,
-            nodes=nlp.N, substeps=nlp.M, hessian=cfg.optimise.hessian, iterations=r.iterations,
+            nodes=nlp.nodes, substeps=nlp.M, substeps2=nlp.M2, hessian=cfg.optimise.hessian,
+            iterations=r.iterations,
             solve_time=r.time, problem=describe(cfg), config=cfg, run=r, nlp_key=nlp.key,
             notes=disc.notes, **base)
     else:

@@ -5,11 +5,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import statics
+from .. import elements, statics
 from ..dynamics import COEFFS
 from ..problem import DESIGN_KEYS, objective, with_designs
 from .cache import stroke_simulator
-from .nlp import T_FLOOR, ShootingNLP
+from .nlp import PHASE_FLOOR, T_FLOOR, ShootingNLP
 
 #: the coarse sweep of the design box: points along (spring_k, spring_rest_length, damper_c)
 SWEEP_SHAPE = (8, 6, 8)
@@ -77,25 +77,39 @@ def initial_guess(nlp: ShootingNLP, cfg, design, sim, p: np.ndarray,
     """Primal start from the simulated stroke of ``design`` on the time grid of ``p``
     (closing time clipped into [closing_time_min, t_max]): (w0, the stroke's objective)."""
     o, st = cfg.optimise, cfg.stroke
-    frac = np.minimum(np.cumsum(nlp.grid_of(p)), 1.0)   # node times / T
     q = nlp.param_vector(cfg, design)
     r = sim.run(q, trajectory=("tip_speed",), estimate_error=False)
     N = nlp.N
-    J0 = None
+    J0 = T1 = None
+    # a two-phase stroke: the node between the phases on the engagement angle
+    th_e = float(elements.params(q)["end_damper_angle_deg"]) if nlp.two_phase else None
     if r.ok and r.trajectory is not None:
         tr = r.trajectory
         T = r.closing_time if r.closed else tr["t"][-1]
         T = float(np.clip(T, max(o.closing_time_min, T_FLOOR), t_max))
-        tn = T * frac
+        if nlp.two_phase:       # where the simulated stroke first crosses theta_e
+            below = np.flatnonzero(tr["theta"] <= th_e)
+            T1 = T * (st.theta0 - th_e) / (st.theta0 - st.theta_closed)
+            if len(below) and below[0] > 0:
+                i = below[0]
+                t0, t1, a, b = tr["t"][i - 1], tr["t"][i], tr["theta"][i - 1], tr["theta"][i]
+                T1 = float(t0 + (t1 - t0) * (a - th_e) / (a - b)) if a != b else float(t1)
+            T1 = float(np.clip(T1, PHASE_FLOOR, T - PHASE_FLOOR))
+        tn = nlp.node_times(p, T, T1)
         X = np.vstack([np.interp(tn, tr["t"], tr["theta"]),
                        np.minimum(np.interp(tn, tr["t"], tr["theta_dot"]), 0.0)])
         peak = float(np.max(tr["tip_speed"][tr["t"] <= T + 1e-12]))
         J0 = objective(o, float(X[1, -1]), peak)
     else:  # not integrable at this step: a straight line in theta
         T = t_max
-        X = np.vstack([st.theta0 + frac * (st.theta_closed - st.theta0),
+        if nlp.two_phase:
+            T1 = T * (st.theta0 - th_e) / (st.theta0 - st.theta_closed)
+        tn = nlp.node_times(p, T, T1)
+        X = np.vstack([st.theta0 + tn / T * (st.theta_closed - st.theta0),
                        np.full(N, (st.theta_closed - st.theta0) / T)])
         peak = 1.0
+    if nlp.two_phase:           # the node between the phases exactly on theta_e
+        X[0, nlp.nodes - 1] = th_e
     X[0, -1] = st.theta_closed
     J0 = J0 if J0 is not None and np.isfinite(J0) else 1.0
-    return nlp.pack(q, T, X, peak), float(J0)
+    return nlp.pack(q, T, X, peak, T1), float(J0)
