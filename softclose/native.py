@@ -94,7 +94,7 @@ from .table import NX, CoefficientTable
 OUT_FIELDS = ("status", "closing_time", "impact_theta_dot", "impact_tip_speed",
               "peak_tip_speed", "min_spring_length", "max_spring_length", "steps",
               "energy_rise", "theta_min", "theta_dot_max", "theta_max",
-              "stop_reason", "stop_theta", "stop_time")
+              "stop_reason", "stop_theta", "stop_time", "engage_time", "engage_theta_dot")
 STATUS = {0: "closed", 1: "not closed", 2: "unstable", 3: "left the tabulated range",
           4: "non-finite", 5: "implicit solve failed"}
 #: ``stop_reason`` codes: why a stroke does not close (0: it closed, failed, or is undecided)
@@ -106,7 +106,7 @@ DESIGN_COLUMNS = tuple(q.name.removesuffix("_deg") for q in elements.PARAMS) + (
 #: the SI factor of each parameter column (an angle given in degrees: pi/180)
 _SI = np.array([q.si for q in elements.PARAMS])
 #: version of the exported C signatures; a built extension reporting another is not used
-KERNEL_ABI = 3
+KERNEL_ABI = 4
 #: every layout constant this module shares with the kernel (``sc_layout()`` must equal it)
 LAYOUT = (f"abi={KERNEL_ABI};meta=ncell,lo,h,m0,{','.join(elements.KERNEL_META)};"
           f"cc={','.join(COEFFS)};mass={','.join(COEFFS[:4])};"
@@ -249,14 +249,6 @@ def _lid_masses(designs: np.ndarray, table: CoefficientTable) -> np.ndarray | No
     return None
 
 
-def _no_end_damper(designs: np.ndarray) -> None:
-    """(Until the kernel carries the end damper's law and its engagement event.)"""
-    j = DESIGN_COLUMNS.index("end_damper_c")
-    if designs.shape[1] > j and np.any(designs[:, j] != 0.0):
-        raise ConfigError("design.end_damper_c: the fixed-step kernel does not carry the end "
-                          "damper yet; only the adaptive reference simulates it")
-
-
 def run_strokes(table: CoefficientTable, method: Method, step: float, t_max: float,
                 theta0: float, theta_closed: float, designs: np.ndarray,
                 threads: int | None = None, early_exit: bool = True) -> np.ndarray:
@@ -268,7 +260,6 @@ def run_strokes(table: CoefficientTable, method: Method, step: float, t_max: flo
     """
     lib = load()
     designs = np.ascontiguousarray(np.atleast_2d(designs), float)
-    _no_end_damper(designs)
     dcc = _lid_masses(designs, table)
     xcc = _extra(designs, table)
     cc, ranges = table.cc_kernel, table.cell_ranges      # held here while C reads them
@@ -331,7 +322,6 @@ def run_stroke_trajectory(table, method, step, t_max, theta0, theta_closed, desi
     """
     lib = load()
     design = np.ascontiguousarray(np.atleast_1d(design), float)
-    _no_end_damper(design[None, :])
     dcc = _lid_masses(design[None, :], table)
     xcc = _extra(design[None, :], table)
     cc, ranges = table.cc_kernel, table.cell_ranges
