@@ -52,6 +52,12 @@ def keep_out_of(cfg) -> tuple:
     return tuple(tuple(tuple(float(c) for c in v) for v in poly) for poly in polys)
 
 
+def _phase2(N, M2):
+    """Phase 2's (intervals, sub-steps) of a two-phase NLP: N as phase 1, M2 (None: one
+    phase)."""
+    return None if M2 is None else (N, M2)
+
+
 def has_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
             substeps2: int | None = None) -> bool:
     return nlp_key(cfg, nodes, substeps, substeps2) in _NLPS
@@ -64,7 +70,7 @@ def build_nlp(cfg, nodes: int, substeps: int, substeps2: int | None = None) -> S
                        o.max_iter, els=nlp_elements(cfg),
                        opening=o.opening_force_max is not None, free=free_layout(cfg),
                        placement=placement_layout(cfg), keep_out=keep_out_of(cfg),
-                       substeps2=nlp_key(cfg, nodes, substeps, substeps2)[-6])
+                       phase2=_phase2(nodes, nlp_key(cfg, nodes, substeps, substeps2)[-6]))
 
 
 def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
@@ -92,7 +98,7 @@ def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
                                   opening=o.opening_force_max is not None,
                                   free=free_layout(cfg), library=lib, meta=meta,
                                   placement=placement_layout(cfg), keep_out=keep_out_of(cfg),
-                                  substeps2=M2)
+                                  phase2=_phase2(N, M2))
             except Exception:   # noqa: BLE001  (a damaged or foreign library: build anew)
                 buildcache.forget_nlp(disk)
                 nlp = None

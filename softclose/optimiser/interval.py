@@ -80,11 +80,13 @@ def end_damper_mode(cfg) -> str | None:
     - None: it does not act, or the angle is at or below the rim (it never engages: the
       NLP leaves it out, :func:`nlp_elements`).
 
-    A free angle without a damper, or a free coefficient of a damper that never engages,
-    would be a variable that changes nothing: refused (ConfigError)."""
+    A free coefficient makes the stroke two phases even with bounds [0, 0] (the two-phase
+    NLP of a lid without end damper: today's one-phase answer). A free angle without a
+    damper, or a free coefficient of a damper that never engages, would be a variable that
+    changes nothing: refused (ConfigError)."""
     free = {k: (lo, hi) for k, lo, hi in cfg.optimise.free or ()}
-    c_free = END_C in free and free[END_C][1] > 0
-    acts = c_free or cfg.design.end_damper_c > 0
+    c_free = END_C in free
+    acts = free[END_C][1] > 0 if c_free else cfg.design.end_damper_c > 0
     if END_ANGLE in free:
         if not acts:
             raise ConfigError(f"optimise.free: {END_ANGLE} is free but the end damper does not "
@@ -93,7 +95,7 @@ def end_damper_mode(cfg) -> str | None:
                               "): give it a coefficient or free design.end_damper_c too")
         angle_bounds(cfg, *free[END_ANGLE])
         return "two-phase"
-    if not acts:
+    if not acts and not c_free:
         return None
     st, a = cfg.stroke, cfg.design.end_damper_angle_deg
     if a >= st.theta0_deg:

@@ -309,20 +309,21 @@ class ShootingNLP:
                  linear_solver: str = "mumps", max_iter: int = 500, tol: float = 1e-10,
                  els=None, opening: bool = False, free: tuple = (), library=None,
                  meta: dict | None = None, placement: tuple = (), keep_out: tuple = (),
-                 substeps2: int | None = None):
+                 phase2: tuple | None = None):
         """Built symbolically (CasADi's virtual machine evaluates it), or -- ``library`` a
         compiled library of this NLP (:mod:`softclose.buildcache`) and ``meta`` what
         :meth:`meta` stored when it was built -- loaded: nothing symbolic is built, the
-        solves call the compiled functions. ``substeps2``: a two-phase stroke (module
-        docstring) with ``nodes`` intervals per phase and these sub-steps in phase 2."""
+        solves call the compiled functions. ``phase2``: a two-phase stroke (module docstring):
+        phase 2's (intervals, sub-steps); phase 1 has ``nodes`` x ``substeps``."""
         t0 = time.perf_counter()
         check_linear_solver(linear_solver)
-        self.two_phase = substeps2 is not None
-        # nodes: intervals per phase; N: every node (both phases); M, M2: sub-steps
+        self.two_phase = phase2 is not None
+        # nodes: phase 1's intervals (the only phase's); N: every node (both phases); N2,
+        # M2: phase 2's intervals and sub-steps
         self.model, self.nodes, self.M = model, nodes, substeps
-        self.M2 = substeps2
-        self.N = N = 2 * nodes if self.two_phase else nodes
-        M = substeps
+        self.N2, self.M2 = (int(phase2[0]), int(phase2[1])) if self.two_phase else (0, None)
+        self.N = N = nodes + self.N2
+        M, substeps2 = substeps, self.M2
         # the design variables: k, l0, c, then the free ones (optimise.free: free_layout)
         self.free = tuple(free)
         # the free attachment points (optimise.free geometry.*: placement_layout), last
@@ -387,15 +388,15 @@ class ShootingNLP:
             xe, a, b, sp = self.interval.map(N)(Xs, ca.repmat(design, 1, N), T * grid.T / M,
                                                 *gin)
         else:   # phase 1 without the end damper (c_e = 0), phase 2 with it
-            n1 = nodes
+            n1, n2 = nodes, self.N2
             off = list(entries)
             off[PARAM_COLUMNS[END_C]] = ca.MX(0.0)
             design1 = ca.vertcat(*off)
-            g1 = [gi[:, :n1] for gi in gin]
             o1 = self.interval.map(n1)(Xs[:, :n1], ca.repmat(design1, 1, n1),
-                                       T1 * grid[:n1].T / M, *g1)
-            o2 = self.interval2.map(n1)(Xs[:, n1:], ca.repmat(design, 1, n1),
-                                        (T - T1) * grid[n1:].T / substeps2, *g1)
+                                       T1 * grid[:n1].T / M, *[gi[:, :n1] for gi in gin])
+            o2 = self.interval2.map(n2)(Xs[:, n1:], ca.repmat(design, 1, n2),
+                                        (T - T1) * grid[n1:].T / substeps2,
+                                        *[gi[:, n1:] for gi in gin])
             xe = ca.horzcat(o1[0], o2[0])
             a, b, sp = (ca.vertcat(ca.vec(o1[k]), ca.vec(o2[k])) for k in (1, 2, 3))
             theta_e = elements.params(design)["end_damper_angle_deg"]
@@ -621,7 +622,9 @@ class ShootingNLP:
         limited by RK4's stability on the damper (h |lambda| < 2.79, lambda = c dd / M up
         to ~70 1/s), so long strokes need more steps anyway (see :func:`discretisation`).
         """
-        return np.full(self.N, 1.0 / self.nodes)
+        if not self.two_phase:
+            return np.full(self.N, 1.0 / self.N)
+        return np.r_[np.full(self.nodes, 1.0 / self.nodes), np.full(self.N2, 1.0 / self.N2)]
 
     @staticmethod
     def grid_of(p) -> np.ndarray:

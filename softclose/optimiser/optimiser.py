@@ -16,11 +16,12 @@ import numpy as np
 
 from .. import statics
 from ..errors import ConfigError, NumericalError, SoftcloseError
-from ..problem import DESIGN_KEYS, SCALES, UNITS, describe
+from ..problem import DESIGN_KEYS, PARAM_COLUMNS, SCALES, UNITS, describe
 from ..progress import Progress
 from .cache import get_model, get_nlp, has_nlp, stroke_simulator
 from ..parts import spring_part
 from .diagnose import diagnose
+from .interval import END_C
 from . import sidebyside
 from .kinds import kind_config
 from .nlp import J_INDEX, Discretisation, Run, ShootingNLP, check_options, discretisation
@@ -72,7 +73,9 @@ def claims(nlp: ShootingNLP, cfg, run: Run) -> tuple[dict, dict, float]:
          "holding_moment": model.holding_moment(p),
          "opening_force": statics.opening_force_exact(model, p)}
     eng = nlp.engagement(run.x)
-    if eng is not None:     # two phases: the node between them is the engagement
+    if eng is not None and p[PARAM_COLUMNS[END_C]] != 0:
+        # two phases: the node between them is the end damper's engagement (a damper of
+        # no coefficient engages nothing: the reference has no event then)
         m["engage_time"], m["engage_theta_dot"] = eng
     return nlp.design_dict(cfg, d), m, nlp_objective(nlp, cfg, run)
 
