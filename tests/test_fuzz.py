@@ -517,6 +517,16 @@ def _refinement_seconds(o) -> float:
     return seconds
 
 
+def _nlp_steps(cfg) -> int:
+    """RK4 steps of cfg's NLP: nodes x substeps, and with an end damper engaging inside the
+    stroke phase 2's too (its sub-steps raised for RK4's stability on the end damper)."""
+    from softclose.optimiser.nlp import discretisation
+    try:
+        return max(discretisation(cfg).steps, cfg.optimise.nodes * cfg.optimise.substeps)
+    except Exception:                # refused when the run starts (exit 2, at once)
+        return cfg.optimise.nodes * cfg.optimise.substeps
+
+
 def work_seconds(command: str, cfg, argv: list[str]) -> float:
     """Seconds a run of ``command`` on ``cfg`` may take: a floor for start-up plus its work
     at generous per-step costs (the machine is shared; the point is to catch a run whose
@@ -524,7 +534,7 @@ def work_seconds(command: str, cfg, argv: list[str]) -> float:
     steps = steps_per_stroke(cfg)
     o = cfg.optimise
     stroke = 3e-6 * steps                          # h and h/2 for the estimate, radau5 worst
-    grid = o.starts * o.nodes * o.substeps * 0.1   # an NLP: ~10 ms a grid step a start
+    grid = o.starts * _nlp_steps(cfg) * 0.1        # an NLP: ~10 ms a grid step a start
     refine = _refinement_seconds(o)                # (`optimise`'s polish of its answer)
     batch = strokes_of(command, cfg, argv) * stroke
     if command == "state":
