@@ -23,7 +23,8 @@
  * (four coefficients per cell); a row at m0 never touches it (bit-identical results).
  *
  * EARLY EXIT ("skip what the scene doesn't need -- exactly"). With V = Vg + k (l - l0)^2 / 2
- * and E = M th'^2 / 2 + V, the equation gives dE/dt = -(c dd + c_rot) th'^2 <= 0. Hence, for
+ * and E = M th'^2 / 2 + V, the equation gives dE/dt = -(c dd + c_rot [+ c_e while engaged])
+ * th'^2 <= 0. Hence, for
  * every later time t' >= t of the exact flow:
  *   (1) V(th(t')) <= E(t') <= E(t), and th is continuous, so th(t') stays in the connected
  *       component R(t) of {th : V(th) <= E(t)} that contains th(t);
@@ -44,7 +45,11 @@
  * step gains more than twice the worst one so far (the motion only decays); the tests check
  * that the rest of every exited stroke stays below E_hat. An undamped design (c = c_rot = 0)
  * keeps its energy: the rule is not applied (its extremes and peak over [0, t_max] depend
- * on the method's drift) and it runs to t_max.
+ * on the method's drift) and it runs to t_max. An end damper counts from its first
+ * engagement (ELEM_DISSIPATES, lane_engage). A lane stopped above theta_e may cross it again
+ * later: that only dissipates, so R(t) and the bounds above still hold, and the first
+ * engagement is final (th_min < theta_e means it has happened; theta_e <= th_min is out of
+ * reach).
  * The same bound with tau = 1 keeps theta_dot_max final, and E_hat < V(th_max) <= E_max
  * keeps energy_rise final: only steps and stop_time tell that a stroke stopped early.
  * A lid that creeps towards an equilibrium without turning back keeps moving th_min (and

@@ -58,7 +58,7 @@ class LidParameters:
     pivot: str = "O"                 # O, B, A or C
     Tf: float = 0.0                  # Coulomb friction moment on the lid's rotation (N m)
     c_end: float = 0.0               # end damper on the lid's rotation (N m s/rad) ...
-    theta_end: float = 0.0           # ... acting while theta < theta_end (rad)
+    theta_end: float = 0.08726646259971647   # ... acting while theta < theta_end (rad; 5 deg)
 
 
 #: a pin's bodies: (body a, body b) with psi = angle(a) - angle(b); -1 = ground
