@@ -521,6 +521,9 @@ def test_simulate_command_reports_the_engagement(tmp_path):
     assert rc == 0 and m["engage_time"] == pytest.approx(0.1127588, abs=1e-7)
     assert m["engage_theta_dot"] == pytest.approx(-2.424226, abs=1e-6)
     assert m["accuracy"]["engage_time"] < 1e-9 and "end_damper" not in m
+    f = softclose.simulate(cfg_of(**SPRING, **end(0.8, 10.0))).to_frame()
+    assert f["engage_time"][0] == m["engage_time"]
+    assert "engage_time" not in softclose.simulate(cfg_of(**SPRING)).to_frame()
     rc, text, _ = _cli("simulate", *sets, "--out", str(tmp_path / "o"))
     assert rc == 0
     assert "engage_time         0.1127588 s  (± " in text
