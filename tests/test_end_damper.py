@@ -65,6 +65,10 @@ DESIGNS = {
     "well": {**WELL, **end(0.05, 12.0)},
     "well, one-way": {**WELL, **end(0.05, 12.0), "design.damper_one_way": True},
     "well, friction": {**WELL, **end(0.05, 12.0), "friction.torque": 0.05},
+    # released engaged, pushed open past theta_e (released there), held open above it
+    "pushed open past it": {"design.spring_k": 3000.0, "design.spring_rest_length": 0.1,
+                            **end(0.02, 19.0), "design.damper_one_way": True,
+                            "stroke.t_max": 1.0},
 }
 
 
@@ -95,6 +99,7 @@ def test_kernel_matches_the_reference(cases, name):
             assert abs(a - b) < TARGETS["impact_theta_dot"], (k, a, b)
     assert r.peak_tip_speed == pytest.approx(rr.peak_tip_speed, rel=1e-6)
     assert r.theta_min == pytest.approx(rr.theta_min, abs=1e-9)
+    assert r.theta_max == pytest.approx(rr.theta_max, abs=1e-9)
     for k in ("min_spring_length", "max_spring_length"):
         assert getattr(r, k) == pytest.approx(getattr(rr, k), abs=1e-9)
     theta_e = math.radians(cfg.design.end_damper_angle_deg)
