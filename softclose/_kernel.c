@@ -23,7 +23,8 @@
  * (four coefficients per cell); a row at m0 never touches it (bit-identical results).
  *
  * EARLY EXIT ("skip what the scene doesn't need -- exactly"). With V = Vg + k (l - l0)^2 / 2
- * and E = M th'^2 / 2 + V, the equation gives dE/dt = -(c dd + c_rot) th'^2 <= 0. Hence, for
+ * and E = M th'^2 / 2 + V, the equation gives dE/dt = -(c dd + c_rot [+ c_e while engaged])
+ * th'^2 <= 0. Hence, for
  * every later time t' >= t of the exact flow:
  *   (1) V(th(t')) <= E(t') <= E(t), and th is continuous, so th(t') stays in the connected
  *       component R(t) of {th : V(th) <= E(t)} that contains th(t);
@@ -44,7 +45,11 @@
  * step gains more than twice the worst one so far (the motion only decays); the tests check
  * that the rest of every exited stroke stays below E_hat. An undamped design (c = c_rot = 0)
  * keeps its energy: the rule is not applied (its extremes and peak over [0, t_max] depend
- * on the method's drift) and it runs to t_max.
+ * on the method's drift) and it runs to t_max. An end damper counts from its first
+ * engagement (ELEM_DISSIPATES, lane_engage). A lane stopped above theta_e may cross it again
+ * later: that only dissipates, so R(t) and the bounds above still hold, and the first
+ * engagement is final (th_min < theta_e means it has happened; theta_e <= th_min is out of
+ * reach).
  * The same bound with tau = 1 keeps theta_dot_max final, and E_hat < V(th_max) <= E_max
  * keeps energy_rise final: only steps and stop_time tell that a stroke stopped early.
  * A lid that creeps towards an equilibrium without turning back keeps moving th_min (and
@@ -904,6 +909,7 @@ typedef struct {
     double *traj;
     int status, early, wait, reason;
     int early_req; /* the early exit was asked for (it applies once the row dissipates) */
+    long nev;      /* crossings of the end damper's angle so far */
 } Lane;
 
 /* theta'', tip speed g = tau |th'|, its rate dg, the energy and the potential at a node:
@@ -975,7 +981,7 @@ static int lane_start(const Table *T, Lane *L, const double *d, int ncol, double
     L->gain = 0.0; L->t_max = t_max; L->dt = dt; L->inv_dt = 1.0 / dt;
     /* the energy rule needs dissipation (c dd + c_rot > 0 on the stroke; an end damper from
      * its first engagement on: lane_engage) */
-    L->early_req = early;
+    L->early_req = early; L->nev = 0;
     L->early = early && ELEM_DISSIPATES(&L->p) && ELEM_DAMPERS_VALID(&L->p)
                && !ELEM_STICKS(&L->p);
     for (int j = 0; j < NOUT; j++) out[j] = NAN;
@@ -1135,12 +1141,28 @@ __attribute__((noinline)) static int lane_engage(const Table *T, const Method *m
     Par *p = &L->p;
     const double th = L->th, thd = L->thd, the = p->the;
     double a = 0.0, b = h, y0 = th1, y1 = thd1, tau = h;
-    /* theta - theta_e is < 0 on the engaged side, >= 0 on the other; at 0 the lane sits on
-     * the angle (an earlier crossing) on the side of its state */
+    /* theta - theta_e: < 0 on the engaged side, >= 0 on the other */
     double fa = th - the, fb = th1 - the;
-    if (fa == 0.0) fa = p->eg ? -1e-300 : 1e-300;
+    if (fa == 0.0) {
+        /* the lane sits on theta_e (an earlier crossing) and moves into its side: the root
+         * at tau = 0 is not a crossing, the one where it comes back is. An unstable step
+         * (an explicit method beyond its stability at a stiff end damper) can return past
+         * theta_e at once: taken at 0, that would switch the lane back and forth without
+         * time passing. The bracket starts where the step is on the lane's side (halving
+         * tau); none (it leaves its side at once): the crossing is at 0 */
+        fa = 0.0;
+        for (double sh = 0.5 * h; sh > 1e-15 * h; sh *= 0.5) {
+            double z0, z1;
+            if (step(T, m, p, sh, th, thd, &z0, &z1)) { L->status = S_RANGE; return 1; }
+            double r = z0 - the;
+            if (p->eg ? r < 0 : r > 0) { a = sh; fa = r; break; }
+            b = sh; fb = r; y0 = z0; y1 = z1;
+        }
+        if (fa == 0.0) { tau = 0.0; y0 = th; y1 = thd; fb = 0.0; }
+        else tau = b;
+    }
     int side = 0;
-    if (fb != 0.0) /* (0: the step ends on theta_e, the crossing is its end) */
+    if (fb != 0.0) /* (0: theta_e is reached at b itself: the crossing is there) */
         for (int it = 0; it < 200 && b - a > 1e-15 * h; it++) {
             tau = a - fa * (b - a) / (fb - fa);
             if (!(tau > a && tau < b)) tau = 0.5 * (a + b);
@@ -1150,6 +1172,9 @@ __attribute__((noinline)) static int lane_engage(const Table *T, const Method *m
             if ((r > 0) == (fa > 0)) { a = tau; fa = r; if (side == -1) fb *= 0.5; side = -1; }
             else { b = tau; fb = r; if (side == 1) fa *= 0.5; side = 1; }
         }
+    /* an event of no length, again and again, would never end: a lane that crosses more
+     * often than it has steps is unstable (an explicit method at a stiff end damper) */
+    if (++L->nev > (long)(L->t_max * L->inv_dt) + 64) { L->status = S_UNSTABLE; return 1; }
     if (!isfinite(y0) || !isfinite(y1)) { L->status = S_NONFINITE; return 1; }
     /* a rest of dry friction first: the lane no longer moves its friction's way there */
     if (ELEM_STICKS(p) && thd1 * p->fs < 0 && !(y1 * p->fs > 0))

@@ -110,6 +110,22 @@ class Reference:
                         lambda a, b, tau, r: (r == 0 or b - a < 1e-14 * max(1.0, b)
                                               or abs(r) < 1e-15), 200)
 
+    def _cross_time(self, x0, p, h, angle, engaged):
+        """When theta crosses an end damper's ``angle`` in (0, h] from the node x0, the damper
+        ``engaged`` (theta < angle) or not (theta >= angle). A node on the angle itself (a
+        release at theta0 = angle) is on the side of its state: it crosses at once (0) if
+        it leaves that side at once, else where it comes back (the bracket starts where the
+        flow is on its side)."""
+        residual = lambda y: y[0] - angle  # noqa: E731
+        if x0[0] != angle:
+            return self._newton_time(x0, p, h, residual)
+        own, s = (-1.0 if engaged else 1.0), 0.5 * h
+        while s > 1e-15 * h:
+            if own * residual(self.flow(x0, p, s)) > 0:
+                return self._newton_time(x0, p, h, residual, lo=s)
+            s *= 0.5
+        return 0.0
+
     def simulate(self, p=None, cfg=None) -> StrokeResult:
         """The metrics of one stroke (plus ``theta_min``, ``theta_max``), adaptively.
 
@@ -158,12 +174,12 @@ class Reference:
             if len(cross) and T_f > 0 and x1[1] * self._moving < 0:
                 # a rest in the same step: the event that comes first is taken
                 tr = self._newton_time(x, p, h, lambda y: y[1] * self._moving, lo=0.0)
-                te = min(self._newton_time(x, p, h, lambda y, a=angles[j]: y[0] - a)
+                te = min(self._cross_time(x, p, h, angles[j], self._engaged[j] > 0)
                          for j in cross)
                 if tr < te:
                     cross = cross[:0]
             if len(cross):
-                taus = [self._newton_time(x, p, h, lambda y, a=angles[j]: y[0] - a)
+                taus = [self._cross_time(x, p, h, angles[j], self._engaged[j] > 0)
                         for j in cross]
                 j, tau = cross[int(np.argmin(taus))], min(taus)
                 xe = self.flow(x, p, tau)

@@ -125,6 +125,9 @@ class StrokeResult(Displayed):
         import pandas as pd
         row = self.metrics()
         row["status"] = self.status.text
+        for k in ("engage_time", "engage_theta_dot"):   # (as in the JSON: where it engages)
+            if getattr(self, k) is not None:
+                row[k] = getattr(self, k)
         return pd.DataFrame([row])
 
     def trajectory_frame(self):

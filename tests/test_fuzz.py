@@ -176,8 +176,8 @@ def _keys() -> list[tuple[str, str]]:
                 out.append((f"{name}[{n}]", "component"))          # index out of range
     for key, (kind, _default) in TOLERANCE_OPTIONS.items():
         out.append((f"tolerance.{key}", kind))
-    for key in ("design.spring_k", "design.damper_c", "mass.lid", "geometry.pivot_b[0]",
-                "stroke.t_max", "simulate.step"):
+    for key in ("design.spring_k", "design.damper_c", "design.end_damper_c", "mass.lid",
+                "geometry.pivot_b[0]", "stroke.t_max", "simulate.step"):
         out.append((f"tolerance.{key}", "spread"))
     return out
 
@@ -775,6 +775,23 @@ ISSUE_CASES = [
     ("fit", [("mass.lid", "in_range", "0.6")], ["--starts=2"]),
     ("fit", [], [str(BAD_DATA / "backwards.csv")]),
     ("fit", [("geometry.crank_oa", "in_range", "0.03")], [str(FIT_DATA / "gyroscope.csv")]),
+    # the end damper (issue 23): engaging inside the stroke, from the release (its angle at
+    # or above theta0), never (at or below the rim), stiff enough that rk4 is unstable
+    # (exit 3 with the step: its crossings must not chatter without time passing), refused
+    # values, a grid over both keys, the state below the angle
+    ("simulate", [("design.end_damper_c", "in_range", "0.8"),
+                  ("design.end_damper_angle_deg", "in_range", "10.0")], []),
+    ("simulate", [("design.end_damper_c", "in_range", "2.0"),
+                  ("design.end_damper_angle_deg", "edge", "360.0")], []),
+    ("simulate", [("design.end_damper_c", "in_range", "2.0"),
+                  ("design.end_damper_angle_deg", "edge", "-360.0")], []),
+    ("simulate", [("design.end_damper_c", "edge", "100000.0")], []),
+    ("simulate", [("design.end_damper_c", "negative", "-1.0")], []),
+    ("simulate", [("design.end_damper_angle_deg", "outside", "360.5")], []),
+    ("simulate", [("design.end_damper_angle_deg", "string", '"low"')], []),
+    ("sweep", [], ["--grid=design.end_damper_angle_deg=-10:30:3",
+                   "--grid=design.end_damper_c=0:1e5:3"]),
+    ("state", [("design.end_damper_c", "in_range", "1.0")], ["--theta-deg=2", "--theta-dot=-3"]),
 ]
 
 

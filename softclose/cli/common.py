@@ -157,6 +157,12 @@ def format_metrics(m: dict) -> str:
             e = acc.get(key)
             err = f"  (± {e:.1e})" if e is not None else ""
             out.append(f"  {key:<19} {v:.7g} {UNITS[key]}{err}")
+    # the end damper's first engagement, where the lid reaches it (StrokeResult.engage_time)
+    for key, unit in (("engage_time", "s"), ("engage_theta_dot", "rad/s")):
+        if m.get(key) is not None:
+            e = acc.get(key)
+            err = f"  (± {e:.1e})" if e is not None else ""
+            out.append(f"  {key:<19} {m[key]:.7g} {unit}{err}")
     if m.get("reason"):
         why = "invalid design" if m.get("status") == "invalid design" else "why not closed"
         out.append(f"  {why}: {m['reason']}")

@@ -96,7 +96,8 @@ class EndDamper(Element):
                 "theta < end_damper_angle_deg", lo=0.0, hi=1e5, spread=0.20),
             Key("design", "end_damper_angle_deg", "real", 5.0, "deg",
                 "engagement angle theta_e of the end damper: it acts below it (the lid meets "
-                "the plunger there)", lo=-360.0, hi=360.0))
+                "the plunger there); at or above `stroke.theta0_deg` it acts from the "
+                "release, at or below `stroke.theta_closed_deg` never", lo=-360.0, hi=360.0))
     params = (Param("end_damper_c"), Param("end_damper_angle_deg", math.pi / 180))
     acting_params = ("end_damper_c",)
     columns = ()
