@@ -792,6 +792,12 @@ ISSUE_CASES = [
     ("sweep", [], ["--grid=design.end_damper_angle_deg=-10:30:3",
                    "--grid=design.end_damper_c=0:1e5:3"]),
     ("state", [("design.end_damper_c", "in_range", "1.0")], ["--theta-deg=2", "--theta-dot=-3"]),
+    # the optimiser with the end damper (issue 23 item 2): its two phases with both keys
+    # free; an angle free without a damper (refused at the run); a damper so stiff that
+    # phase 2's RK4 steps exceed the NLP's budget (refused, naming the end damper)
+    ("optimise", [], ["--free=design.end_damper_c=0:2", "--free=design.end_damper_angle_deg=1:10"]),
+    ("optimise", [], ["--free=design.end_damper_angle_deg=1:10"]),
+    ("optimise", [("design.end_damper_c", "edge", "100000.0")], []),
 ]
 
 

@@ -73,6 +73,13 @@ def off(cfg, nlp: ShootingNLP, run: Run, rs) -> str:
         ref = getattr(rs, k)
         if k in ERROR_KEYS and abs(v - ref) > REFINE_SHARE * agreement_tolerance(k, ref):
             return f"{k} {v:.6g} differs from the simulated {ref:.6g} by {abs(v - ref):.1e}"
+    eng = nlp.engagement(run.x)
+    if eng is not None and getattr(rs, "engage_time", None) is not None:
+        # two phases: the node between them against the simulated engagement
+        for k, v in zip(("engage_time", "engage_theta_dot"), eng):
+            ref = getattr(rs, k)
+            if abs(v - ref) > REFINE_SHARE * agreement_tolerance(k, ref):
+                return f"{k} {v:.6g} differs from the simulated {ref:.6g} by {abs(v - ref):.1e}"
     return ""
 
 
