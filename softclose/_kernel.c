@@ -10,16 +10,21 @@
  *     kind 2: symplectic Euler (Euler-Cromer: velocity first).
  * Events are located by a last step of solved length (Newton on the step length), so
  * their accuracy is that of the method itself; the same for the peak tip speed and the
- * lowest angle of a stroke that turns back. Nothing is integrated past the event.
+ * lowest angle of a stroke that turns back. Nothing is integrated past the event. The
+ * same for the events inside a stroke where its equation changes: a rest of dry friction
+ * and a crossing of the end damper's engagement angle (the lane goes on from there with
+ * the other law, never a smoothed switch).
  *
- * A design row is (k, l0, c, c_rot, s, F0, k_t, psi_free, one_way, T_f, e_tol[, m_lid]) (LAYOUT): the
+ * A design row is (k, l0, c, c_rot, s, F0, k_t, psi_free, one_way, T_f, c_e, theta_e, e_tol
+ * [, m_lid]) (LAYOUT): the
  * parameters of the machine elements (see THE MACHINE ELEMENTS below), then e_tol, then
  * m_lid (kg, NaN = the table's own mass m0), which selects the lid mass. M, dM, Vg and dVg are affine in the lid's mass, so the
  * coefficients of a row are c(m0) + (m_lid - m0) dc/dm, with dc/dm from a second table
  * (four coefficients per cell); a row at m0 never touches it (bit-identical results).
  *
  * EARLY EXIT ("skip what the scene doesn't need -- exactly"). With V = Vg + k (l - l0)^2 / 2
- * and E = M th'^2 / 2 + V, the equation gives dE/dt = -(c dd + c_rot) th'^2 <= 0. Hence, for
+ * and E = M th'^2 / 2 + V, the equation gives dE/dt = -(c dd + c_rot [+ c_e while engaged])
+ * th'^2 <= 0. Hence, for
  * every later time t' >= t of the exact flow:
  *   (1) V(th(t')) <= E(t') <= E(t), and th is continuous, so th(t') stays in the connected
  *       component R(t) of {th : V(th) <= E(t)} that contains th(t);
@@ -40,7 +45,11 @@
  * step gains more than twice the worst one so far (the motion only decays); the tests check
  * that the rest of every exited stroke stays below E_hat. An undamped design (c = c_rot = 0)
  * keeps its energy: the rule is not applied (its extremes and peak over [0, t_max] depend
- * on the method's drift) and it runs to t_max.
+ * on the method's drift) and it runs to t_max. An end damper counts from its first
+ * engagement (ELEM_DISSIPATES, lane_engage). A lane stopped above theta_e may cross it again
+ * later: that only dissipates, so R(t) and the bounds above still hold, and the first
+ * engagement is final (th_min < theta_e means it has happened; theta_e <= th_min is out of
+ * reach).
  * The same bound with tau = 1 keeps theta_dot_max final, and E_hat < V(th_max) <= E_max
  * keeps energy_rise final: only steps and stop_time tell that a stroke stopped early.
  * A lid that creeps towards an equilibrium without turning back keeps moving th_min (and
@@ -73,7 +82,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define KERNEL_ABI 3 /* bumped when the exported signatures or outputs change */
+#define KERNEL_ABI 4 /* bumped when the exported signatures or outputs change */
 #define NC 8 /* M, dM, Vg, dVg, l, dl, dd, tau */
 enum { C_M, C_DM, C_VG, C_DVG, C_L, C_DL, C_DD, C_TAU };
 #define NMASS 4 /* M, dM, Vg, dVg: the coefficients that depend on the lid's mass */
@@ -83,12 +92,14 @@ enum { C_M, C_DM, C_VG, C_DVG, C_L, C_DL, C_DD, C_TAU };
 #define SMAX 4
 /* every layout constant the Python side shares, checked there when the kernel is loaded */
 static const char LAYOUT[] =
-    "abi=3;meta=ncell,lo,h,m0,rotary_at_pivot;cc=M,dM,Vg,dVg,l,dl,dd,tau;mass=M,dM,Vg,dVg;"
+    "abi=4;meta=ncell,lo,h,m0,rotary_at_pivot;cc=M,dM,Vg,dVg,l,dl,dd,tau;mass=M,dM,Vg,dVg;"
     "xcc=psi,dpsi,dpr2,-;"
     "row=spring_k,spring_rest_length,damper_c,rotary_damper_c,spring_kind,spring_preload,"
-    "torsion_k,torsion_free_angle,damper_one_way,friction_torque,energy_tol,lid_mass;out=status,closing_time,impact_theta_dot,impact_tip_speed,"
+    "torsion_k,torsion_free_angle,damper_one_way,friction_torque,end_damper_c,end_damper_angle,"
+    "energy_tol,lid_mass;out=status,closing_time,impact_theta_dot,impact_tip_speed,"
     "peak_tip_speed,min_spring_length,max_spring_length,steps,energy_rise,theta_min,"
-    "theta_dot_max,theta_max,stop_reason,stop_theta,stop_time;nrng=18";
+    "theta_dot_max,theta_max,stop_reason,stop_theta,stop_time,engage_time,engage_theta_dot;"
+    "nrng=18";
 
 /* outputs per design */
 enum { O_STATUS, O_TIME, O_THD, O_TIP, O_PEAK, O_LMIN, O_LMAX, O_NSTEP, O_EDRIFT, O_THMIN,
@@ -97,6 +108,9 @@ enum { O_STATUS, O_TIME, O_THD, O_TIP, O_PEAK, O_LMIN, O_LMAX, O_NSTEP, O_EDRIFT
        O_REASON, /* why it does not close: 0 undecided/closed, 1 barrier, 2 held open */
        O_STHETA, /* the barrier top (1) or the equilibrium (2), rad */
        O_STIME,  /* time at which integration stopped (event, early exit, t_max, failure) */
+       O_ETIME,  /* the end damper's first engagement moving down (s; 0 when released below
+                  * its angle; NaN: never, or no end damper) */
+       O_ETHD,   /* theta' there (rad/s; 0 when released engaged) */
        NOUT };
 /* status codes */
 enum { S_CLOSED = 0, S_OPEN = 1, S_UNSTABLE = 2, S_RANGE = 3, S_NONFINITE = 4, S_NEWTON = 5 };
@@ -160,6 +174,13 @@ typedef struct {
  *   torsion   psi at its pivot   psi, dpsi (x)    V = k_t (q - psi0)^2 / 2, T = k_t (q - psi0)
  *   dashpot   |C - O|            dd = q'^2        B = c
  *   rotary    psi at its pivot   dpr2 = q'^2 (x)  B = c_rot (at the lid, q' = 1: no column)
+ *   end       theta              (q' = 1)         B = c_e while the lane is engaged (below the
+ *   damper                                        engagement angle theta_e), else 0: a state
+ *                                                 of the lane, switched at each crossing of
+ *                                                 theta_e, located as an event to the method's
+ *                                                 order (lane_engage); engaged from the release
+ *                                                 when theta0 < theta_e, never when theta_e <=
+ *                                                 theta_closed
  *   (with one_way, the dampers act only while the lid closes: their damping is 0 for th' > 0)
  *   friction  theta              (q' = 1)         a moment -T_f fs against the motion: fs = the
  *                                                 direction the lid moves, a state of the stroke;
@@ -180,8 +201,8 @@ typedef struct {
  * by ELEM_SLOPE_X ..., added where a row has them (Par.x; Par4.anyx for a group). */
 
 /* the design-row columns: the elements' parameters (in the registry's order), e_tol, m_lid */
-enum { D_K, D_L0, D_C, D_CR, D_KIND, D_F0, D_KT, D_PSI0, D_OW, D_TF, D_ETOL, D_MLID,
-       NDESIGN };
+enum { D_K, D_L0, D_C, D_CR, D_KIND, D_F0, D_KT, D_PSI0, D_OW, D_TF, D_EC, D_EA, D_ETOL,
+       D_MLID, NDESIGN };
 /* the extra table's columns: the torsion spring's psi and dpsi at its pivot, the rotary
  * damper's psi'^2 at its pivot */
 enum { X_PSI, X_DPSI, X_DR2 };
@@ -190,13 +211,18 @@ enum { X_PSI, X_DPSI, X_DR2 };
  * rotary damper at the lid / at a pivot (the table says which: rotary_at_pivot); ow: the
  * dampers are one-way; Tf: dry friction, fs: the way the lid moves (its state: set at the
  * release and at every turning point); dm = m_lid - m0: 0 for a row at the table's mass; x:
- * the row has an element of the extra table */
-typedef struct { double k, l0, F, c, cr, crp, kt, psi0, Tf, fs, dm; int x, ow; } Par;
+ * the row has an element of the extra table; the end damper: ce (c_e), the (theta_e), e: it
+ * can engage on this stroke (ce != 0, theta_e above theta_closed: ELEM_ENGAGE_START), eg: the
+ * lane is engaged (its state, switched at each crossing of theta_e), cen = eg ? ce : 0 (the
+ * damping it adds now) */
+typedef struct { double k, l0, F, c, cr, crp, kt, psi0, Tf, fs, dm, ce, the, cen;
+                 int x, ow, e, eg; } Par;
 /* the lanes' parameters as vectors; any: a lane at another lid mass; anyx: a lane with
  * element columns (its element terms are added for every lane of the group: the others add
- * a zero, k_t = 0) */
-typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs; v4l ow; double dm[VW];
-                 int any, anyx, anyow, anyf; } Par4;
+ * a zero, k_t = 0); anye: a lane with an end damper (cen added for every lane of the group:
+ * the others add a zero; the = -inf and egm = 0 in them, so no crossing is ever seen) */
+typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs, cen, the; v4l ow, egm;
+                 double dm[VW]; int any, anyx, anyow, anyf, anye; } Par4;
 /* read a design row d of table T into p (not dm) */
 #define ELEM_READ(p, d, T) do { \
         (p)->k = (d)[D_K]; (p)->l0 = (d)[D_L0]; (p)->c = (d)[D_C]; (p)->cr = (d)[D_CR]; \
@@ -206,13 +232,34 @@ typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs; v4l ow; double dm[VW
         (p)->kt = (d)[D_KT]; (p)->psi0 = (d)[D_PSI0]; (p)->ow = (d)[D_OW] != 0.0; \
         (p)->Tf = (d)[D_TF]; (p)->fs = 0.0; \
         (p)->x = (p)->kt != 0.0 || (p)->crp != 0.0; \
+        (p)->ce = (d)[D_EC]; (p)->the = (d)[D_EA]; (p)->e = 0; (p)->eg = 0; (p)->cen = 0.0; \
     } while (0)
+/* the end damper's state at the release from th0 (stroke ending at thc): it can engage if
+ * c_e != 0 and theta_e lies above the rim (else it never acts: the lid closes first, as in
+ * the reference); engaged from the start when th0 < theta_e */
+#define ELEM_ENGAGE_START(p, th0, thc) do { \
+        (p)->e = (p)->ce != 0.0 && (p)->the > (thc); \
+        (p)->eg = (p)->e && (th0) < (p)->the; \
+        (p)->cen = (p)->eg ? (p)->ce : 0.0; \
+    } while (0)
+/* switch the end damper's state (at a crossing of theta_e) */
+#define ELEM_ENGAGE_SWITCH(p) do { \
+        (p)->eg = !(p)->eg; (p)->cen = (p)->eg ? (p)->ce : 0.0; \
+    } while (0)
+/* has the lane crossed theta_e (th1: the angle at the end of its step)? */
+#define ELEM_CROSSED(p, th1) ((p)->e && ((th1) < (p)->the) != (p)->eg)
 /* copy row p into lane q of the group G (then G->anyx |= p->x) */
 #define ELEM_LANE(G, q, p) do { \
         (G)->k[q] = (p)->k; (G)->l0[q] = (p)->l0; (G)->c[q] = (p)->c; (G)->cr[q] = (p)->cr; \
         (G)->F[q] = (p)->F; \
         (G)->kt[q] = (p)->kt; (G)->psi0[q] = (p)->psi0; (G)->crp[q] = (p)->crp; \
         (G)->ow[q] = -(long long)(p)->ow; (G)->Tf[q] = (p)->Tf; (G)->fs[q] = (p)->fs; \
+        ELEM_LANE_ENGAGE(G, q, p); \
+    } while (0)
+/* the end damper's state of lane q (also after each of its crossings) */
+#define ELEM_LANE_ENGAGE(G, q, p) do { \
+        (G)->cen[q] = (p)->cen; (G)->the[q] = (p)->e ? (p)->the : -INFINITY; \
+        (G)->egm[q] = -(long long)(p)->eg; \
     } while (0)
 #define LAW_LINEAR_T(k, q0, q) ((k) * ((q) - (q0)))                  /* T = dV/dq */
 #define LAW_LINEAR_V(k, q0, q) (0.5 * (k) * ((q) - (q0)) * ((q) - (q0)))
@@ -239,6 +286,9 @@ typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs; v4l ow; double dm[VW
  * damper at a pivot, from x[]); a one-way row's damping is 0 while th' > 0 */
 #define ELEM_DAMPING(P, cv) ((P)->c * (cv)[C_DD] + (P)->cr)
 #define ELEM_DAMPING_X(P, x) ((P)->crp * (x)[X_DR2])
+/* the end damper's damping now (0 unless the lane is engaged): added after the others, where
+ * a row has one (Par.e; Par4.anye for a group) */
+#define ELEM_DAMPING_E(P) ((P)->cen)
 #define ELEM_ONE_WAY(p, thd, damp) ((p)->ow && (thd) > 0 ? 0.0 : (damp))
 /* dry friction's moment against the motion (fs: the lane's direction, set at its rests) */
 #define ELEM_FRICTION(p) ((p)->Tf * (p)->fs)
@@ -250,11 +300,13 @@ typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs; v4l ow; double dm[VW
     LAW_LINEAR_DSLOPE((P)->kt, (P)->psi0, (x)[X_PSI], (dx)[X_PSI], (x)[X_DPSI], (dx)[X_DPSI])
 #define ELEM_DDAMPING(P, dcv) ((P)->c * (dcv)[C_DD])
 #define ELEM_DDAMPING_X(P, dx) ((P)->crp * (dx)[X_DR2])
-/* does the row dissipate (the early exit's condition)? */
-#define ELEM_DISSIPATES(P) ((P)->c > 0 || (P)->cr > 0 || (P)->crp > 0)
+/* does the row dissipate (the early exit's condition)? The end damper counts once the lane
+ * is engaged (cen > 0: checked at the release and at each engagement): a lid that never
+ * reaches theta_e is undamped, and runs to t_max as one without the end damper */
+#define ELEM_DISSIPATES(P) ((P)->c > 0 || (P)->cr > 0 || (P)->crp > 0 || (P)->cen > 0)
 /* a friction row stops at its first stick, exactly: the energy rule is not used for it */
 #define ELEM_STICKS(P) ((P)->Tf > 0)
-#define ELEM_DAMPERS_VALID(P) ((P)->c >= 0 && (P)->cr >= 0 && (P)->crp >= 0)
+#define ELEM_DAMPERS_VALID(P) ((P)->c >= 0 && (P)->cr >= 0 && (P)->crp >= 0 && (P)->ce >= 0)
 /* the size of the springs' potential terms (the energy's rounding scale) */
 #define ELEM_SIZE(P, cv) (fabs((cv)[C_VG]) + 0.5 * fabs((P)->k) * ((cv)[C_L] - (P)->l0) \
                           * ((cv)[C_L] - (P)->l0) + fabs((P)->F * (cv)[C_L]))
@@ -374,6 +426,7 @@ static inline int rhs(const Table *T, const Par *p, double th, double thd, doubl
     if (tab_eval_x(T, p, th, v, J ? dv : NULL, x, J ? dx : NULL)) return 1;
     double damp = ELEM_DAMPING(p, v), slope = ELEM_SLOPE(p, v);
     if (p->x) { slope += ELEM_SLOPE_X(p, x); damp += ELEM_DAMPING_X(p, x); }
+    if (p->e) damp += ELEM_DAMPING_E(p); /* (constant in theta: no term in ddamp) */
     damp = ELEM_ONE_WAY(p, thd, damp);
     double N = -slope - 0.5 * v[C_DM] * thd * thd - damp * thd;
     if (p->Tf != 0.0) N -= ELEM_FRICTION(p);
@@ -855,6 +908,8 @@ typedef struct {
     long n, nt, traj_cap;
     double *traj;
     int status, early, wait, reason;
+    int early_req; /* the early exit was asked for (it applies once the row dissipates) */
+    long nev;      /* crossings of the end damper's angle so far */
 } Lane;
 
 /* theta'', tip speed g = tau |th'|, its rate dg, the energy and the potential at a node:
@@ -884,6 +939,7 @@ static inline int node_eval(const Table *T, const Par *p, double th, double thd,
         slope += ELEM_SLOPE_X(p, x); damp += ELEM_DAMPING_X(p, x);
         Vn += ELEM_POTENTIAL_X(p, x); En += ELEM_POTENTIAL_X(p, x);
     }
+    if (p->e) damp += ELEM_DAMPING_E(p);
     damp = ELEM_ONE_WAY(p, thd, damp);
     double N = -slope - 0.5 * dM * thd * thd - damp * thd;
     if (p->Tf != 0.0) N -= ELEM_FRICTION(p);
@@ -905,12 +961,14 @@ static inline void lane_record(Lane *L)
     }
 }
 
-/* start a stroke from rest at th0; returns 1 if it is already over (not tabulated) */
+/* start a stroke from rest at th0 (the rim at thc); returns 1 if it is already over (not
+ * tabulated) */
 static int lane_start(const Table *T, Lane *L, const double *d, int ncol, double *out,
-                      double th0, double dt, double t_max, int early, double *traj,
-                      long traj_cap)
+                      double th0, double thc, double dt, double t_max, int early,
+                      double *traj, long traj_cap)
 {
     ELEM_READ(&L->p, d, T);
+    ELEM_ENGAGE_START(&L->p, th0, thc);
     L->e_tol = d[D_ETOL];
     L->p.dm = 0.0;
     if (ncol > D_MLID && isfinite(d[D_MLID]) && d[D_MLID] != T->m0) L->p.dm = d[D_MLID] - T->m0;
@@ -921,10 +979,13 @@ static int lane_start(const Table *T, Lane *L, const double *d, int ncol, double
     L->n = 0; L->nt = 0; L->traj = traj; L->traj_cap = traj_cap; L->thd_max = -INFINITY;
     L->status = S_OPEN; L->reason = R_NONE; L->stop_theta = NAN; L->wait = 0;
     L->gain = 0.0; L->t_max = t_max; L->dt = dt; L->inv_dt = 1.0 / dt;
-    /* the energy rule needs dissipation (c dd + c_rot > 0 on the stroke) */
+    /* the energy rule needs dissipation (c dd + c_rot > 0 on the stroke; an end damper from
+     * its first engagement on: lane_engage) */
+    L->early_req = early; L->nev = 0;
     L->early = early && ELEM_DISSIPATES(&L->p) && ELEM_DAMPERS_VALID(&L->p)
                && !ELEM_STICKS(&L->p);
     for (int j = 0; j < NOUT; j++) out[j] = NAN;
+    if (L->p.eg) { out[O_ETIME] = 0.0; out[O_ETHD] = 0.0; } /* released engaged, at rest */
     lane_record(L);
     double E0, V0;
     if (ELEM_STICKS(&L->p)) { /* released from rest: it moves only if |V'| exceeds T_f */
@@ -1062,6 +1123,117 @@ __attribute__((noinline)) static int lane_friction_rest(const Table *T, const Me
     return 0;
 }
 
+/* THE END DAMPER'S ENGAGEMENT (an event, as the friction rest and the closing event).
+ * The lane's step of length h from (th, thd) to (th1, thd1) crossed theta_e against its
+ * state (ELEM_CROSSED: moving down into the damper, or up out of it). Its law changes
+ * there, so nothing is integrated across it: the crossing is located by a step of solved
+ * length tau (Illinois false position on theta(tau) - theta_e, the flow of the lane's state
+ * before the crossing), so to the method's own order; the lane's node moves to (t + tau,
+ * theta_e, theta'(tau)) -- the peak tip speed, turning points and visited range of that
+ * shorter step as after any step --, its state switches, and it goes on from there with the
+ * other law (theta'' and the tip speed's rate at the node are the new law's). The first
+ * engagement moving down is the stroke's engage_time / engage_theta_dot. With dry friction a
+ * rest may come first in the same step: then it is that event (lane_friction_rest), and the
+ * crossing is found by the next step. 1 = the stroke is over (a failure). */
+__attribute__((noinline)) static int lane_engage(const Table *T, const Method *m, Lane *L,
+                                                 double h, double th1, double thd1)
+{
+    Par *p = &L->p;
+    const double th = L->th, thd = L->thd, the = p->the;
+    double a = 0.0, b = h, y0 = th1, y1 = thd1, tau = h;
+    /* theta - theta_e: < 0 on the engaged side, >= 0 on the other */
+    double fa = th - the, fb = th1 - the;
+    if (fa == 0.0) {
+        /* the lane sits on theta_e (an earlier crossing) and moves into its side: the root
+         * at tau = 0 is not a crossing, the one where it comes back is. An unstable step
+         * (an explicit method beyond its stability at a stiff end damper) can return past
+         * theta_e at once: taken at 0, that would switch the lane back and forth without
+         * time passing. The bracket starts where the step is on the lane's side (halving
+         * tau); none (it leaves its side at once): the crossing is at 0 */
+        fa = 0.0;
+        for (double sh = 0.5 * h; sh > 1e-15 * h; sh *= 0.5) {
+            double z0, z1;
+            if (step(T, m, p, sh, th, thd, &z0, &z1)) { L->status = S_RANGE; return 1; }
+            double r = z0 - the;
+            if (p->eg ? r < 0 : r > 0) { a = sh; fa = r; break; }
+            b = sh; fb = r; y0 = z0; y1 = z1;
+        }
+        if (fa == 0.0) { tau = 0.0; y0 = th; y1 = thd; fb = 0.0; }
+        else tau = b;
+    }
+    int side = 0;
+    if (fb != 0.0) /* (0: theta_e is reached at b itself: the crossing is there) */
+        for (int it = 0; it < 200 && b - a > 1e-15 * h; it++) {
+            tau = a - fa * (b - a) / (fb - fa);
+            if (!(tau > a && tau < b)) tau = 0.5 * (a + b);
+            if (step(T, m, p, tau, th, thd, &y0, &y1)) { L->status = S_RANGE; return 1; }
+            double r = y0 - the;
+            if (r == 0.0 || fabs(r) <= 1e-15 * (1.0 + fabs(the))) break;
+            if ((r > 0) == (fa > 0)) { a = tau; fa = r; if (side == -1) fb *= 0.5; side = -1; }
+            else { b = tau; fb = r; if (side == 1) fa *= 0.5; side = 1; }
+        }
+    /* an event of no length, again and again, would never end: a lane that crosses more
+     * often than it has steps is unstable (an explicit method at a stiff end damper) */
+    if (++L->nev > (long)(L->t_max * L->inv_dt) + 64) { L->status = S_UNSTABLE; return 1; }
+    if (!isfinite(y0) || !isfinite(y1)) { L->status = S_NONFINITE; return 1; }
+    /* a rest of dry friction first: the lane no longer moves its friction's way there */
+    if (ELEM_STICKS(p) && thd1 * p->fs < 0 && !(y1 * p->fs > 0))
+        return lane_friction_rest(T, m, L, h, th1, thd1);
+    /* the tip speed at the crossing and its rate on the side of the step: a peak between
+     * the previous node and the crossing (as at the closing event) */
+    double gi, dgi;
+    if (quantity(T, p, 0, the, y1, &gi, &dgi)) { L->status = S_RANGE; return 1; }
+    double g = L->g, dg = L->dg;
+    if (g > L->peak) L->peak = g;
+    if (L->n > 1 && g >= L->gp && g > gi)
+        refine_extremum(T, m, p, 0, L->thp, L->thdp, L->hp + tau, &L->peak);
+    else if (dg > 0 && dgi < 0)
+        refine_extremum(T, m, p, 0, th, thd, tau, &L->peak);
+    if (gi > L->peak) L->peak = gi;
+    /* a turning point inside the shorter step (as after a full step) */
+    if (thd < 0 && y1 >= 0) {
+        double lowest = the < th ? the : th;
+        refine_extremum(T, m, p, 1, th, thd, tau, &lowest);
+        if (lowest < L->th_min) {
+            L->th_min = lowest;
+            if (potential(T, p, lowest, &L->Vlo, NULL)) L->Vlo = -INFINITY;
+        }
+    }
+    if (thd > 0 && y1 <= 0) {
+        double neg = -(the > th ? the : th);
+        refine_extremum(T, m, p, 2, th, thd, tau, &neg);
+        if (-neg > L->th_max) {
+            L->th_max = -neg;
+            if (potential(T, p, -neg, &L->Vhi, NULL)) L->Vhi = -INFINITY;
+        }
+    }
+    /* the switch: engaged moving into the damper, released moving out */
+    int down = !p->eg;
+    ELEM_ENGAGE_SWITCH(p);
+    double a1, g1, dg1, E1, V1;
+    if (node_eval(T, p, the, y1, &a1, &g1, &dg1, &E1, &V1) || !isfinite(E1)) {
+        L->status = S_RANGE; return 1;
+    }
+    if (the < L->th_min) { L->th_min = the; L->Vlo = V1; }
+    if (the > L->th_max) { L->th_max = the; L->Vhi = V1; }
+    if (y1 > L->thd_max) L->thd_max = y1;
+    if (E1 > L->Emax) L->Emax = E1;
+    if (E1 - L->E > L->gain) L->gain = E1 - L->E;
+    L->t += tau; L->th = the; L->thd = y1;
+    if (E1 - L->E0 > L->e_tol) { L->status = S_UNSTABLE; return 1; }
+    if (down && isnan(L->out[O_ETIME])) { L->out[O_ETIME] = L->t; L->out[O_ETHD] = y1; }
+    /* the law changed at this node: a maximum of the tip speed is looked for from here on
+     * (never by a step across it), as from a node before it */
+    L->gp = -INFINITY; L->thp = the; L->thdp = y1; L->hp = 0.0;
+    L->g = g1; L->dg = dg1; L->a = a1; L->E = E1;
+    lane_record(L);
+    /* the energy rule applies from the first engagement of a row whose only damper is this */
+    if (!L->early)
+        L->early = L->early_req && ELEM_DISSIPATES(p) && ELEM_DAMPERS_VALID(p)
+                   && !ELEM_STICKS(p);
+    return 0;
+}
+
 /* the node quantities of node_eval, computed for all lanes at once (or not: ok = -1) */
 typedef struct { double a, g, dg, E, V; int ok; } Node;
 
@@ -1075,6 +1247,9 @@ ALWAYS int lane_after_step(const Table *T, const Method *m, Lane *L, double h, d
     L->n++;
     if (st) { L->status = st; return 1; }
     if (!isfinite(th1) || !isfinite(thd1)) { L->status = S_NONFINITE; return 1; }
+    /* the end damper's engagement angle crossed inside this step (before the rim, which lies
+     * below it): that event first */
+    if (ELEM_CROSSED(p, th1)) return lane_engage(T, m, L, h, th1, thd1);
     if (th1 <= thc) { /* closing event inside this step: solve its length */
         double tau = h * (th - thc) / (th - th1), y0 = th1, y1 = thd1;
         int ok = 0;
@@ -1265,6 +1440,7 @@ ALWAYS v4 rhs4(const Table *T, const Par4 *P, v4 th, v4 thd, v4l *okm)
         xcoef4(T, b, s, x);
         slope += ELEM_SLOPE_X(P, x); damp += ELEM_DAMPING_X(P, x);
     }
+    if (P->anye) damp += ELEM_DAMPING_E(P);
     if (P->anyow) damp = one_way4(P, thd, damp);
     v4 N = -slope - 0.5 * c[C_DM] * thd * thd - damp * thd;
     if (P->anyf) N -= ELEM_FRICTION(P);
@@ -1289,6 +1465,7 @@ ALWAYS void node4(const Table *T, const Par4 *P, v4 th, v4 thd, v4 *a, v4 *g, v4
         slope += ELEM_SLOPE_X(P, x); damp += ELEM_DAMPING_X(P, x);
         En += ELEM_POTENTIAL_X(P, x); Vn += ELEM_POTENTIAL_X(P, x);
     }
+    if (P->anye) damp += ELEM_DAMPING_E(P);
     if (P->anyow) damp = one_way4(P, thd, damp);
     v4 N = -slope - 0.5 * dM * thd * thd - damp * thd;
     if (P->anyf) N -= ELEM_FRICTION(P);
@@ -1332,6 +1509,7 @@ ALWAYS int rhs_fast(const Table *T, const Par *p, double th, double thd, double 
         xtab_eval(T, i, s, x, NULL);
         slope += ELEM_SLOPE_X(p, x); damp += ELEM_DAMPING_X(p, x);
     }
+    if (p->e) damp += ELEM_DAMPING_E(p);
     damp = ELEM_ONE_WAY(p, thd, damp);
     double N = -slope - 0.5 * dM * thd * thd - damp * thd;
     if (p->Tf != 0.0) N -= ELEM_FRICTION(p);
@@ -1494,6 +1672,8 @@ ALWAYS void after_steps_vec(const Table *T, const Method *m, Lane *lanes, Soa *S
             v4l refine = ((n + one) > one) & (gg >= gp) & (gg > g1);
             v4l turn = ((thd < zero) & (z1 >= zero)) | ((thd > zero) & (z1 <= zero));
             if (P[g].anyf) turn |= z1 * P[g].fs < zero; /* a rest (also right after one) */
+            /* a crossing of the end damper's engagement angle (ELEM_CROSSED): an event */
+            if (P[g].anye) turn |= (z0 < P[g].the) ^ P[g].egm;
             f = ok & (abs4(z0) < inf) & (abs4(z1) < inf) & (z0 > c4) & ~refine & ~turn
                 & (abs4(E1) < inf) & ~((E1 - ld4(S->E0 + b)) > ld4(S->e_tol + b));
             v4 peak = ld4(S->peak + b), thmin = ld4(S->th_min + b), thmax = ld4(S->th_max + b);
@@ -1551,6 +1731,7 @@ ALWAYS void after_steps_vec(const Table *T, const Method *m, Lane *lanes, Soa *S
             } else {
                 soa_out(S, L, k);
                 P[g].fs[q] = L->p.fs;     /* a rest of dry friction sets the direction */
+                ELEM_LANE_ENGAGE(&P[g], q, &L->p); /* a crossing of theta_e, the state */
             }
         }
     }
@@ -1607,17 +1788,19 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
                 used[k] = 1;
                 Lane *L = &lanes[k];
                 int over = lane_start(T, L, design + (size_t)ncol * next, ncol,
-                                      out + NOUT * next, th0, dt, t_max, early, traj, traj_cap);
+                                      out + NOUT * next, th0, thc, dt, t_max, early, traj,
+                                      traj_cap);
                 Par4 *G = &P[k / VW];
                 int q = k % VW;
                 ELEM_LANE(G, q, &L->p);
                 G->dm[q] = L->p.dm;
-                G->any = 0; G->anyx = 0; G->anyow = 0; G->anyf = 0;
+                G->any = 0; G->anyx = 0; G->anyow = 0; G->anyf = 0; G->anye = 0;
                 for (int e = 0; e < VW; e++) {
                     G->any |= G->dm[e] != 0.0;
                     G->anyx |= lanes[k - q + e].p.x && used[k - q + e];
                     G->anyow |= lanes[k - q + e].p.ow && used[k - q + e];
                     G->anyf |= lanes[k - q + e].p.Tf != 0.0 && used[k - q + e];
+                    G->anye |= lanes[k - q + e].p.e && used[k - q + e];
                 }
                 if (over) {
                     lane_finish(T, L, thc, t_max);
@@ -1778,7 +1961,8 @@ void sc_stroke_traj(const double *tab_meta, const double *cc, const double *dcc,
     free(crit);
 }
 
-/* one step (for tests): x1 = step(x0, h); design: a full row (ROW_LAYOUT, with m_lid) */
+/* one step (for tests): x1 = step(x0, h); design: a full row (ROW_LAYOUT, with m_lid); the
+ * end damper engaged as at x0 (theta < theta_e), for the whole step */
 int sc_step(const double *tab_meta, const double *cc, const double *dcc, const double *xcc,
             const double *tableau, const double *design, double h, const double *x0,
             double *x1)
@@ -1787,6 +1971,7 @@ int sc_step(const double *tab_meta, const double *cc, const double *dcc, const d
     make(tab_meta, cc, dcc, xcc, NULL, tableau, &T, &m);
     Par p;
     ELEM_READ(&p, design, &T);
+    ELEM_ENGAGE_START(&p, x0[0], -INFINITY);
     p.dm = 0.0;
     if (p.x && !xcc) return S_RANGE;
     if (isfinite(design[D_MLID]) && design[D_MLID] != T.m0) {

@@ -74,15 +74,16 @@ def coordinates(theta, cfg, sigma, ps: Pose | None = None) -> dict:
     return out
 
 
-def coordinates_of_columns(columns: dict, cfg) -> dict:
+def coordinates_of_columns(columns: dict, cfg, theta=None) -> dict:
     """Each element's :class:`Coord` in ``cfg`` from tabulated columns (``columns[name]``:
     numbers or arrays): what the element declares it tabulates (its q, q' or q'^2); an element
-    on the lid's own angle has q' = 1. An element whose columns are not in ``columns`` (the
-    extra table, not read) is left out."""
+    on the lid's own angle has q' = 1 (and q = ``theta``, the angle of the columns, when
+    given). An element whose columns are not in ``columns`` (the extra table, not read) is
+    left out."""
     out = {}
     for e in ELEMENTS:
         if not e.columns or e.unit_rate(cfg):
-            out[e.name] = Coord(None, 1.0, 1.0)
+            out[e.name] = Coord(theta, 1.0, 1.0)
         elif all(col in columns for col, _ in e.columns):
             out[e.name] = Coord(**{what: columns[col] for col, what in e.columns})
     return out
@@ -126,9 +127,28 @@ def slope(coords, P):
                 if e.name in coords)
 
 
-def damping(coords, P):
-    """sum B_e q_e'^2 over the dampers: the generalised damping on theta (N m s/rad)."""
-    return _sum(e.viscous(P) * coords[e.name].dq2 for e in DAMPERS if e.name in coords)
+def damping(coords, P, engaged=None):
+    """sum B_e q_e'^2 over the dampers: the generalised damping on theta (N m s/rad).
+
+    A damper that acts only below its engagement angle (the end damper,
+    :attr:`~softclose.elements.base.Element.engagement`) counts where it is engaged:
+    ``engaged`` gives that as {element name: 1 or 0} -- an integrator's state between the
+    events at which the lid crosses the angle --, or, when it is None, the element's own
+    coordinate (the lid's angle) decides (a discontinuous function of theta: the exact
+    equation, which an integrator must not step across without locating the crossing)."""
+    return _sum(e.viscous(P) * coords[e.name].dq2 * _engaged(e, coords[e.name], P, engaged)
+                for e in DAMPERS if e.name in coords)
+
+
+def _engaged(e, coord, P, engaged):
+    """1 where damper e acts (always, unless it has an engagement angle), else 0."""
+    if e.engagement is None:
+        return 1.0
+    if engaged is not None:
+        return engaged[e.name]
+    if coord.q is None:
+        raise ValueError(f"the {e.name}'s engagement needs the lid's angle (theta)")
+    return e.engaged(coord.q, P)
 
 
 def friction(coords, P):
@@ -154,15 +174,17 @@ def potential(coords, P):
     return _sum(e.potential(coords[e.name].q, P) for e in SPRINGS if e.name in coords)
 
 
-def theta_ddot(cf, theta_d, p, moving=None):
+def theta_ddot(cf, theta_d, p, moving=None, engaged=None):
     """theta'' from the coefficients ``cf`` (dict), theta' and the parameter vector p.
 
     Dry friction opposes the motion: ``moving`` is the way the lid moves (+1 up, -1 down;
     default sign(theta'), which at rest applies none: the stick is the integrator's event).
+    ``engaged``: {name: 1 or 0} of the dampers with an engagement angle (:func:`damping`;
+    default: by the lid's angle).
     """
     P = elements.params(p)
-    Q = -slope(cf["coords"], P) - damping(cf["coords"], P) * elements.one_way(P, theta_d) \
-        * theta_d
+    Q = -slope(cf["coords"], P) - damping(cf["coords"], P, engaged) \
+        * elements.one_way(P, theta_d) * theta_d
     fr = friction(cf["coords"], P)
     if fr is not None:
         Q = Q - fr * (direction(theta_d) if moving is None else moving)
@@ -217,7 +239,7 @@ def newton_euler_system(theta, theta_d, p, cfg, sigma):
         q = coord.value(ps)
         f = -e.tension(q, P)
         if e.viscous(P) is not None:
-            f = f - e.viscous(P) * elements.one_way(P, theta_d) \
+            f = f - e.viscous(P) * e.engaged(theta, P) * elements.one_way(P, theta_d) \
                 * _rate(coord, ps, omega, A, phi_d, theta_d)
         if e.coulomb(P) is not None:
             f = f - e.coulomb(P) * direction(_rate(coord, ps, omega, A, phi_d, theta_d))

@@ -6,7 +6,10 @@ that the loop closes without a toggle from the assembly angle over every angle t
 visits, and builds the CasADi functions the rest of softclose calls:
 
 - ``ode(x, p) -> x'`` with x = (theta, theta') and p the parameter vector of
-  :data:`softclose.elements.PARAMS` (k, l0, c, c_rot, then the elements added since) (SX, cheap);
+  :data:`softclose.elements.PARAMS` (k, l0, c, c_rot, then the elements added since) (SX,
+  cheap): the exact equation, an end damper acting where theta lies below its engagement
+  angle (discontinuous there); ``ode_moving(x, p, moving, engaged)`` the smooth flow between
+  two events, with dry friction's direction and each end damper's engagement given;
 - ``coeffs(theta) -> (M, dM, Vg, dVg, l, dl, dd, tau)`` and their theta-derivatives, which the
   fast kernels tabulate, and ``xcoeffs`` the same for the columns of the elements added
   since the seed (:data:`softclose.dynamics.EXTRA_COEFFS`);
@@ -264,11 +267,15 @@ class LidModel:
         cf = dyn.coefficients(th, self.cfg, s)
         tdd = dyn.theta_ddot(cf, thd, p)
         self.ode = ca.Function("ode", [x, p], [ca.vertcat(thd, tdd)], ["x", "p"], ["xdot"])
-        # the same with dry friction for a given direction of motion (+1 up, -1 down): what
-        # an integrator takes between two rests of a stroke with friction
-        mv = ca.SX.sym("moving")
-        self.ode_moving = ca.Function("ode_moving", [x, p, mv],
-                                      [ca.vertcat(thd, dyn.theta_ddot(cf, thd, p, mv))])
+        # the same with dry friction for a given direction of motion (+1 up, -1 down) and
+        # each damper with an engagement angle engaged or not (1/0, elements.ENGAGING): what
+        # an integrator takes between two events of a stroke (a rest, a crossing of an
+        # engagement angle)
+        mv, eg = ca.SX.sym("moving"), ca.SX.sym("engaged", len(elements.ENGAGING))
+        engaged = {e.name: eg[i] for i, e in enumerate(elements.ENGAGING)}
+        self.ode_moving = ca.Function(
+            "ode_moving", [x, p, mv, eg],
+            [ca.vertcat(thd, dyn.theta_ddot(cf, thd, p, mv, engaged))])
         vec = ca.vertcat(*[cf[k] for k in dyn.COEFFS])
         self.coeffs = ca.Function("coeffs", [th], [vec, ca.jacobian(vec, th)],
                                   ["theta"], ["c", "dc"])

@@ -12,7 +12,12 @@ Design rows
 
 The kernel takes p in SI (an angle given in degrees in radians: :func:`kernel_rows`
 converts); its laws are the registry's (:mod:`softclose.elements`), stated once in the
-element section of ``_kernel.c``.
+element section of ``_kernel.c``. The end damper (``end_damper_c``, ``end_damper_angle``)
+acts while the lid is below its angle: the kernel carries the engagement as a state of the
+stroke, locates each crossing of the angle as an event (a last step of solved length, like
+the closing: to the method's order) and reports the first engagement moving down as
+``engage_time`` / ``engage_theta_dot`` (0 and 0 when released below the angle, NaN when it
+never engages; an angle at or below ``theta_closed`` never acts).
 
 ``energy_tol`` is the energy rise that flags the stroke unstable (and the margin of the
 early exit, below). ``lid_mass`` is the lid's mass for that row; NaN, or a missing column,
@@ -26,8 +31,8 @@ model rebuild. A row at the table's mass never reads that table (bit-identical r
 Early exit -- why it is exact
 -----------------------------
 With V the elements' potential (gravity and the springs) and E = M theta'^2 / 2 + V, the
-equation of motion gives dE/dt = -(damping) theta'^2 <= 0 (c dd + c_rot): the dampers only
-dissipate. So at every later time
+equation of motion gives dE/dt = -(damping) theta'^2 <= 0 (c dd + c_rot, + c_e below the
+end damper's angle): the dampers only dissipate. So at every later time
 t' >= t, V(theta(t')) <= E(t') <= E(t), and since theta is continuous it stays in the
 connected component R(t) of {theta : V(theta) <= E(t)} that contains theta(t); its tip
 speed tau |theta'| = tau sqrt(2 (E - V) / M) is at most G(t) = max over R(t) of
@@ -49,7 +54,13 @@ of a design grid, for each method, that the rest of the stroke never rises above
 (``energy_tol``, 5 % of the energy the stroke releases, would be far too coarse a margin:
 a lid held open in a shallow well would never be stopped.) An undamped design
 (c = c_rot = 0) keeps its energy, so the rule is not applied to it at all: its metrics over
-[0, t_max] depend on the method's drift, and it runs to t_max. Likewise a lid that
+[0, t_max] depend on the method's drift, and it runs to t_max. A row whose only damper is
+the end damper is undamped until it first engages, and the rule applies from then on (a lid
+that never reaches the angle runs to t_max, as the row without it). A stroke stopped above
+the angle may still cross it again later -- that dissipates more and changes none of the
+metrics (the reachable set is bounded by the energy alone), nor the first engagement, which
+happened before it could have gone below the angle at all (or never will: then the angle
+lies below theta_min, out of reach). Likewise a lid that
 creeps monotonically towards an equilibrium never turns back, so theta_min (and a spring
 extreme) keeps moving until t_max and the stroke is integrated to the end. A step that
 returns its start state bit for bit (at rest at a fixed point of the step map) skips the
@@ -94,7 +105,7 @@ from .table import NX, CoefficientTable
 OUT_FIELDS = ("status", "closing_time", "impact_theta_dot", "impact_tip_speed",
               "peak_tip_speed", "min_spring_length", "max_spring_length", "steps",
               "energy_rise", "theta_min", "theta_dot_max", "theta_max",
-              "stop_reason", "stop_theta", "stop_time")
+              "stop_reason", "stop_theta", "stop_time", "engage_time", "engage_theta_dot")
 STATUS = {0: "closed", 1: "not closed", 2: "unstable", 3: "left the tabulated range",
           4: "non-finite", 5: "implicit solve failed"}
 #: ``stop_reason`` codes: why a stroke does not close (0: it closed, failed, or is undecided)
@@ -106,7 +117,7 @@ DESIGN_COLUMNS = tuple(q.name.removesuffix("_deg") for q in elements.PARAMS) + (
 #: the SI factor of each parameter column (an angle given in degrees: pi/180)
 _SI = np.array([q.si for q in elements.PARAMS])
 #: version of the exported C signatures; a built extension reporting another is not used
-KERNEL_ABI = 3
+KERNEL_ABI = 4
 #: every layout constant this module shares with the kernel (``sc_layout()`` must equal it)
 LAYOUT = (f"abi={KERNEL_ABI};meta=ncell,lo,h,m0,{','.join(elements.KERNEL_META)};"
           f"cc={','.join(COEFFS)};mass={','.join(COEFFS[:4])};"

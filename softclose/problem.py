@@ -92,10 +92,18 @@ METRICS = (
            "the lid slowly from closed to theta0"),
 )
 METRIC_KEYS = tuple(m.key for m in METRICS)
+#: with an end damper that engages inside the stroke (``design.end_damper_c`` > 0 below
+#: ``design.end_damper_angle_deg``): when the lid first reaches its angle and how fast
+#: (:class:`softclose.stroke.StrokeResult`; the two-phase NLP's node between its phases)
+ENGAGE_METRICS = (
+    Metric("engage_time", "s", "when the lid first reaches the end damper's engagement angle"),
+    Metric("engage_theta_dot", "rad/s", "theta' there (negative): the engagement speed"),
+)
+ENGAGE_KEYS = tuple(m.key for m in ENGAGE_METRICS)
 
 #: units of the metrics, the objective and the design values (by name and by full config key)
 UNITS: dict[str, str] = {
-    **{m.key: m.unit for m in METRICS},
+    **{m.key: m.unit for m in METRICS + ENGAGE_METRICS},
     "objective": "",
     **{k.name: k.unit for k in KEYS if k.section == "design"},
     **{k.full: k.unit for k in KEYS if k.section == "design"},

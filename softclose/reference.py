@@ -8,7 +8,11 @@ turns back are located the same way on the root of their time derivative. With d
 the direction of motion is a parameter of the flow: each rest (theta' = 0) is an event,
 located the same way, where the lid sticks if the driving moment |dV/dtheta| does not exceed
 the friction moment T_f, and otherwise moves on the way -dV/dtheta drives it (so also at the
-release). Used by tests, by ``optimise``'s verification and by ``bench``.
+release). An end damper acts only below its engagement angle: each crossing of that angle
+is an event, located the same way, at which the damper engages (moving down) or lets go
+(moving up); its first engagement gives ``engage_time`` and ``engage_theta_dot``. Between
+events the flow is smooth (CVODES never steps across the switch). Used by tests, by
+``optimise``'s verification and by ``bench``.
 """
 
 from __future__ import annotations
@@ -40,11 +44,13 @@ class Reference:
         self.tol = tol if tol is not None else model.cfg.simulate.reference_tol
         self.grid_step = grid_step
         x, tau, s = ca.SX.sym("x", 2), ca.SX.sym("tau"), ca.SX.sym("moving")
+        eg = ca.SX.sym("engaged", len(elements.ENGAGING))
         p = ca.SX.sym("p", len(elements.PARAMS))
-        # s: the way the lid moves (+1 up, -1 down), which sets dry friction's sign
-        f = model.ode_moving(x, p, s)
+        # s: the way the lid moves (+1 up, -1 down), which sets dry friction's sign; eg: each
+        # end damper engaged (1) or not (0)
+        f = model.ode_moving(x, p, s, eg)
         opts = {"abstol": self.tol, "reltol": self.tol, "max_num_steps": 200000}
-        dae = {"x": x, "p": ca.vertcat(p, s, tau), "ode": tau * f}
+        dae = {"x": x, "p": ca.vertcat(p, s, eg, tau), "ode": tau * f}
         self._flow = ca.integrator("ref_flow", "cvodes", dae, 0.0, 1.0, opts)
         # the same flow with CHUNK grid nodes in one call: CVODES carries on through the
         # nodes instead of starting afresh at each (a start costs ~0.5 ms: its first steps
@@ -60,12 +66,13 @@ class Reference:
         a_T = ca.jtimes(v_T, x, f)
         speed = ca.norm_2(v_T)
         dspeed = ca.if_else(speed > 0, ca.dot(v_T, a_T) / speed, ca.norm_2(a_T))
-        self._speed_fn = ca.Function("speed", [x, p, s], [speed, dspeed])
+        self._speed_fn = ca.Function("speed", [x, p, s, eg], [speed, dspeed])
         self._moving = -1.0
+        self._engaged = np.zeros(len(elements.ENGAGING))
 
     def _speed(self, x, p):
         """(|v_T|, d|v_T|/dt) at the state x, moving the stroke's current way."""
-        return self._speed_fn(x, p, self._moving)
+        return self._speed_fn(x, p, self._moving, self._engaged)
 
     def flow(self, x0, p, tau):
         """State after integrating for ``tau`` seconds from ``x0`` (moving the way of the
@@ -73,7 +80,8 @@ class Reference:
         if tau <= 0:
             return np.asarray(x0, float)
         try:
-            return np.asarray(self._flow(x0=x0, p=np.r_[p, self._moving, tau])["xf"]).ravel()
+            return np.asarray(self._flow(x0=x0, p=np.r_[p, self._moving, self._engaged, tau]
+                                         )["xf"]).ravel()
         except RuntimeError as exc:   # (a step towards a toggle position: the equation is NaN)
             raise NumericalError(f"the reference integrator (CVODES) failed from theta = "
                                  f"{math.degrees(float(x0[0])):.4g} deg "
@@ -84,7 +92,7 @@ class Reference:
         run over the next :data:`CHUNK` nodes) when ``x0`` is the node it has reached, else
         by a new chunk; singly where a chunk fails (it may run past the rim into a toggle
         position) -- a single step that fails raises as :meth:`flow` does."""
-        key = (h, self._moving)
+        key = (h, self._moving, tuple(self._engaged))
         if self._ahead and self._ahead_key == key and np.array_equal(self._ahead_x, x0):
             self._ahead_x = self._ahead.pop(0)
             return self._ahead_x
@@ -93,7 +101,8 @@ class Reference:
             self._chunk_off -= 1
             return self.flow(x0, p, h)
         try:
-            xs = np.asarray(self._chunk_flow(x0=x0, p=np.r_[p, self._moving, CHUNK * h])["xf"])
+            xs = np.asarray(self._chunk_flow(x0=x0, p=np.r_[p, self._moving, self._engaged,
+                                                            CHUNK * h])["xf"])
         except RuntimeError:
             xs = None
         if xs is None or not np.all(np.isfinite(xs)):
@@ -112,6 +121,22 @@ class Reference:
         return illinois(lambda tau: residual(self.flow(x0, p, tau)), lo, hi, r_lo, r_hi,
                         lambda a, b, tau, r: (r == 0 or b - a < 1e-14 * max(1.0, b)
                                               or abs(r) < 1e-15), 200)
+
+    def _cross_time(self, x0, p, h, angle, engaged):
+        """When theta crosses an end damper's ``angle`` in (0, h] from the node x0, the damper
+        ``engaged`` (theta < angle) or not (theta >= angle). A node on the angle itself (a
+        release at theta0 = angle) is on the side of its state: it crosses at once (0) if
+        it leaves that side at once, else where it comes back (the bracket starts where the
+        flow is on its side)."""
+        residual = lambda y: y[0] - angle  # noqa: E731
+        if x0[0] != angle:
+            return self._newton_time(x0, p, h, residual)
+        own, s = (-1.0 if engaged else 1.0), 0.5 * h
+        while s > 1e-15 * h:
+            if own * residual(self.flow(x0, p, s)) > 0:
+                return self._newton_time(x0, p, h, residual, lo=s)
+            s *= 0.5
+        return 0.0
 
     def simulate(self, p=None, cfg=None) -> StrokeResult:
         """The metrics of one stroke (plus ``theta_min``, ``theta_max``), adaptively.
@@ -141,6 +166,14 @@ class Reference:
             return invalid
         T_f = sum(float(e.coulomb(elements.params(p))) for e in elements.FRICTIONS)
         self._moving, self._ahead, self._chunk_off = -1.0, [], 0
+        # the end dampers' engagement angles (none where a damper has no coefficient): a
+        # crossing is an event; engaged where the lid is below the angle
+        Pn = elements.params(p)
+        angles = np.array([float(Pn[e.engagement]) if float(e.viscous(Pn)) != 0.0 else -np.inf
+                           for e in elements.ENGAGING])
+        self._engaged = (st.theta0 < angles).astype(float)
+        # (t, theta') of the first engagement moving down; released engaged: at once, at rest
+        engage = (0.0, 0.0) if self._engaged.any() else None
         if T_f > 0:  # released from rest: it moves only if the driving moment exceeds T_f
             stuck, self._moving = self._rest(st.theta0, p, T_f)
             t = t_max if stuck is not None else t
@@ -153,6 +186,42 @@ class Reference:
             if not np.all(np.isfinite(x1)):
                 raise NumericalError(f"the reference integrator diverged at t = {t:.4g} s")
             g, g1 = (speed(x) if g_x is None else g_x), speed(x1)
+            # an end damper's engagement angle crossed inside (t, t+h] (before the rim: the
+            # angle lies above it, else the damper never acts)
+            cross = np.flatnonzero((angles > thc) & ((x1[0] < angles) != (self._engaged > 0)))
+            if len(cross) and T_f > 0 and x1[1] * self._moving < 0:
+                # a rest in the same step: the event that comes first is taken
+                tr = self._newton_time(x, p, h, lambda y: y[1] * self._moving, lo=0.0)
+                te = min(self._cross_time(x, p, h, angles[j], self._engaged[j] > 0)
+                         for j in cross)
+                if tr < te:
+                    cross = cross[:0]
+            if len(cross):
+                taus = [self._cross_time(x, p, h, angles[j], self._engaged[j] > 0)
+                        for j in cross]
+                j, tau = cross[int(np.argmin(taus))], min(taus)
+                xe = self.flow(x, p, tau)
+                ge = speed(xe)
+                if prev is not None and g >= prev[2] and g > 0:
+                    tp, xp, _ = prev
+                    if dspeed(xp) > 0 > dspeed(xe):
+                        tm = self._newton_time(xp, p, t + tau - tp, dspeed)
+                        peak = max(peak, speed(self.flow(xp, p, tm)))
+                elif dspeed(x) > 0 > dspeed(xe):
+                    tm = self._newton_time(x, p, tau, dspeed, 0.0, tau)
+                    peak = max(peak, speed(self.flow(x, p, tm)))
+                peak = max(peak, g, ge)
+                th_min, th_max = min(th_min, float(xe[0])), max(th_max, float(xe[0]))
+                down = self._engaged[j] == 0
+                if down and engage is None:
+                    engage = (t + tau, float(xe[1]))
+                self._engaged = self._engaged.copy()
+                self._engaged[j] = 1.0 if down else 0.0
+                # the flow changes here: nothing carries across (chunks; a maximum of the
+                # tip speed is looked for from this node on, as from a node before it)
+                t, x, g_x, self._ahead = t + tau, np.array(xe, float), ge, []
+                prev = (t, x, -math.inf)
+                continue
             if T_f > 0 and x1[1] * self._moving < 0:  # came to rest inside (t, t+h]
                 tau = self._newton_time(x, p, h, lambda y: y[1] * self._moving, lo=0.0)
                 xe = self.flow(x, p, tau)
@@ -205,8 +274,11 @@ class Reference:
             prev = (t, x, g)
             t, x, g_x = t + h, x1, g1
         self._moving = -1.0
+        self._engaged = np.zeros(len(elements.ENGAGING))
+        eng = {} if engage is None else {"engage_time": engage[0],
+                                         "engage_theta_dot": engage[1]}
         lmin, lmax = self._l_extremes(th_min, th_max)
-        invalid = self._invalid(p, cfg, lmin, lmax, th_min, th_max)
+        invalid = self._invalid(p, cfg, lmin, lmax, th_min, th_max, **eng)
         if invalid is not None:
             return invalid
         why = None if stuck is None else f"held by friction at theta = {math.degrees(stuck):.1f} deg"
@@ -219,12 +291,12 @@ class Reference:
             holding_moment=m.holding_moment(p),
             status=StrokeStatus.CLOSED if closed else StrokeStatus.NOT_CLOSED,
             method="cvodes", tolerance=self.tol, theta_min=float(th_min),
-            theta_max=float(th_max))
+            theta_max=float(th_max), **eng)
 
-    def _invalid(self, p, cfg, lmin, lmax, th_min, th_max) -> StrokeResult | None:
+    def _invalid(self, p, cfg, lmin, lmax, th_min, th_max, **eng) -> StrokeResult | None:
         """The result of a stroke over [th_min, th_max] whose spring lengths lmin..lmax leave
-        an element's valid range (``cfg``'s, else the model's): an invalid design; None if
-        the stroke is valid."""
+        an element's valid range (``cfg``'s, else the model's): an invalid design (with the
+        engagement ``eng`` of its end damper, if any); None if the stroke is valid."""
         m = self.model
         _, why = statics.out_of_range(
             lambda e, t: np.asarray(m.coordinate_fns[e.name].map(t.size)(t.ravel())[0]).ravel(),
@@ -239,7 +311,7 @@ class Reference:
             holding_moment=m.holding_moment(p), status=StrokeStatus.OUT_OF_RANGE,
             method="cvodes", tolerance=self.tol, opening_force=statics.opening_force_exact(m, p),
             message=f"invalid design: {why[0]}", reason=why[0], theta_min=float(th_min),
-            theta_max=float(th_max))
+            theta_max=float(th_max), **eng)
 
     def _invalid_throughout(self, p, cfg, a, b) -> StrokeResult | None:
         """:meth:`_invalid` for a spring whose every length over theta in [a, b] lies outside

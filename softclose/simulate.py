@@ -259,7 +259,9 @@ class Simulator:
             message=None if ok else self.diagnose(status, p), reason=reason,
             theta_min=col["theta_min"] if ok else None, theta_max=col["theta_max"] if ok else None,
             theta_dot_max=col["theta_dot_max"] if ok else None,
-            stop_theta=col["stop_theta"] if status is StrokeStatus.NOT_CLOSED else None)
+            stop_theta=col["stop_theta"] if status is StrokeStatus.NOT_CLOSED else None,
+            engage_time=col["engage_time"] if ok else None,
+            engage_theta_dot=col["engage_theta_dot"] if ok else None)
 
     def friction_gain(self, p) -> float:
         """How much dry friction amplifies the table's relative error in a stroke's metrics:
@@ -284,7 +286,10 @@ class Simulator:
         q = 2.0 ** self.method.order
         tab = self.table.max_rel_error * self.friction_gain(p)
         est = {}
-        for k in ERROR_KEYS:  # step error (Richardson) + what the table error can cause
+        # the end damper's engagement (an event of the stroke, located to the method's order
+        # like the closing): estimated the same way where the lid reaches it; no target
+        engage = ("engage_time", "engage_theta_dot") if res.engage_time is not None else ()
+        for k in ERROR_KEYS + engage:  # step error (Richardson) + what the table error can cause
             a, b = getattr(res, k), getattr(r2, k)
             est[k] = None if a is None or b is None else abs(a - b) * q / (q - 1) + tab * abs(a)
         est["table_rel_error"] = self.table.max_rel_error
@@ -357,7 +362,8 @@ class Simulator:
                         f"step is too coarse to resolve the stroke; use a simulate.step at least "
                         f"10 times smaller (the default is {DEFAULT_STEP:g} s)")
             h_ok = _round_down(0.9 * h_ok)  # a margin inside the stability boundary
-            stiff = ("lower design.spring_k, design.damper_c or design.rotary_damper_c, or "
+            stiff = ("lower design.spring_k, design.damper_c, design.rotary_damper_c or "
+                     "design.end_damper_c, or "
                      "raise the masses")
             if h_ok < MIN_STEP:  # no admissible step is stable: the method cannot do it
                 hint = (f"no admissible step (>= {MIN_STEP:g} s) is stable for it; "

@@ -33,7 +33,7 @@ def _at(table, theta, P, lid_mass):
     P = as_params(np.atleast_2d(np.asarray(P, float)))
     cfg = table.model.cfg
     cols = columns(table, theta, len(P), lid_mass, elements.needs_extra(P, cfg))
-    return cols, coordinates_of_columns(cols, cfg), elements.params(P)
+    return cols, coordinates_of_columns(cols, cfg, theta), elements.params(P)
 
 
 def potential_energy(table, theta, P, lid_mass=None) -> np.ndarray:

@@ -84,6 +84,11 @@ class StrokeResult(Displayed):
     #: the angle the ``reason`` of a stroke that did not close names (rad): where friction
     #: holds the lid, the well that holds it open, the top of the barrier it cannot pass
     stop_theta: float | None = None
+    #: with an end damper (``design.end_damper_c`` > 0): when the lid first reaches its
+    #: engagement angle moving down (s) and theta' there (rad/s, the engagement speed); None
+    #: when it has none or never gets there
+    engage_time: float | None = None
+    engage_theta_dot: float | None = None
     trajectory: dict | None = field(default=None, repr=False, compare=False)
 
     @property
@@ -109,7 +114,7 @@ class StrokeResult(Displayed):
         out = self.metrics()
         out.update({"status": self.status.text, "method": self.method, "step": self.step,
                     "steps": self.steps, "accuracy": self.accuracy})
-        for k in ("tolerance", "message", "reason"):
+        for k in ("tolerance", "message", "reason", "engage_time", "engage_theta_dot"):
             if getattr(self, k) is not None:
                 out[k] = getattr(self, k)
         return jsonable(out)
@@ -120,6 +125,9 @@ class StrokeResult(Displayed):
         import pandas as pd
         row = self.metrics()
         row["status"] = self.status.text
+        for k in ("engage_time", "engage_theta_dot"):   # (as in the JSON: where it engages)
+            if getattr(self, k) is not None:
+                row[k] = getattr(self, k)
         return pd.DataFrame([row])
 
     def trajectory_frame(self):
@@ -139,6 +147,9 @@ class StrokeResult(Displayed):
         facts += [(k, with_unit(getattr(self, k), u)) for k, u in
                   (("closing_time", "s"), ("impact_tip_speed", "m/s"), ("peak_tip_speed", "m/s"))
                   if getattr(self, k) is not None]
+        if self.engage_time is not None:
+            facts.append(("end damper engages", f"at t = {self.engage_time:.6g} s, theta' = "
+                          f"{self.engage_theta_dot:.6g} rad/s"))
         if self.reason:
             facts.append(("why not closed", self.reason))
         note = ("± is the estimated distance from the converged answer (Richardson at half "

@@ -90,4 +90,4 @@ def test_cli_reports_the_free_variables_and_refuses_them_for_robust(capsys):
     out = json.loads(capsys.readouterr().out)
     assert 0 <= out["design"]["torsion_k"] <= 2 and out["success"]
     assert cli.main(["optimise", "--robust", "--free", "design.spring_preload=0:10"]) == 2
-    assert "robust design chooses k, l0, c and the attachment points" in capsys.readouterr().err
+    assert "robust design chooses k, l0, c, the attachment points" in capsys.readouterr().err

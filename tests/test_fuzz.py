@@ -176,8 +176,8 @@ def _keys() -> list[tuple[str, str]]:
                 out.append((f"{name}[{n}]", "component"))          # index out of range
     for key, (kind, _default) in TOLERANCE_OPTIONS.items():
         out.append((f"tolerance.{key}", kind))
-    for key in ("design.spring_k", "design.damper_c", "mass.lid", "geometry.pivot_b[0]",
-                "stroke.t_max", "simulate.step"):
+    for key in ("design.spring_k", "design.damper_c", "design.end_damper_c", "mass.lid",
+                "geometry.pivot_b[0]", "stroke.t_max", "simulate.step"):
         out.append((f"tolerance.{key}", "spread"))
     return out
 
@@ -517,6 +517,16 @@ def _refinement_seconds(o) -> float:
     return seconds
 
 
+def _nlp_steps(cfg) -> int:
+    """RK4 steps of cfg's NLP: nodes x substeps, and with an end damper engaging inside the
+    stroke phase 2's too (its sub-steps raised for RK4's stability on the end damper)."""
+    from softclose.optimiser.nlp import discretisation
+    try:
+        return max(discretisation(cfg).steps, cfg.optimise.nodes * cfg.optimise.substeps)
+    except Exception:                # refused when the run starts (exit 2, at once)
+        return cfg.optimise.nodes * cfg.optimise.substeps
+
+
 def work_seconds(command: str, cfg, argv: list[str]) -> float:
     """Seconds a run of ``command`` on ``cfg`` may take: a floor for start-up plus its work
     at generous per-step costs (the machine is shared; the point is to catch a run whose
@@ -524,7 +534,7 @@ def work_seconds(command: str, cfg, argv: list[str]) -> float:
     steps = steps_per_stroke(cfg)
     o = cfg.optimise
     stroke = 3e-6 * steps                          # h and h/2 for the estimate, radau5 worst
-    grid = o.starts * o.nodes * o.substeps * 0.1   # an NLP: ~10 ms a grid step a start
+    grid = o.starts * _nlp_steps(cfg) * 0.1        # an NLP: ~10 ms a grid step a start
     refine = _refinement_seconds(o)                # (`optimise`'s polish of its answer)
     batch = strokes_of(command, cfg, argv) * stroke
     if command == "state":
@@ -765,6 +775,29 @@ ISSUE_CASES = [
     ("fit", [("mass.lid", "in_range", "0.6")], ["--starts=2"]),
     ("fit", [], [str(BAD_DATA / "backwards.csv")]),
     ("fit", [("geometry.crank_oa", "in_range", "0.03")], [str(FIT_DATA / "gyroscope.csv")]),
+    # the end damper (issue 23): engaging inside the stroke, from the release (its angle at
+    # or above theta0), never (at or below the rim), stiff enough that rk4 is unstable
+    # (exit 3 with the step: its crossings must not chatter without time passing), refused
+    # values, a grid over both keys, the state below the angle
+    ("simulate", [("design.end_damper_c", "in_range", "0.8"),
+                  ("design.end_damper_angle_deg", "in_range", "10.0")], []),
+    ("simulate", [("design.end_damper_c", "in_range", "2.0"),
+                  ("design.end_damper_angle_deg", "edge", "360.0")], []),
+    ("simulate", [("design.end_damper_c", "in_range", "2.0"),
+                  ("design.end_damper_angle_deg", "edge", "-360.0")], []),
+    ("simulate", [("design.end_damper_c", "edge", "100000.0")], []),
+    ("simulate", [("design.end_damper_c", "negative", "-1.0")], []),
+    ("simulate", [("design.end_damper_angle_deg", "outside", "360.5")], []),
+    ("simulate", [("design.end_damper_angle_deg", "string", '"low"')], []),
+    ("sweep", [], ["--grid=design.end_damper_angle_deg=-10:30:3",
+                   "--grid=design.end_damper_c=0:1e5:3"]),
+    ("state", [("design.end_damper_c", "in_range", "1.0")], ["--theta-deg=2", "--theta-dot=-3"]),
+    # the optimiser with the end damper (issue 23 item 2): its two phases with both keys
+    # free; an angle free without a damper (refused at the run); a damper so stiff that
+    # phase 2's RK4 steps exceed the NLP's budget (refused, naming the end damper)
+    ("optimise", [], ["--free=design.end_damper_c=0:2", "--free=design.end_damper_angle_deg=1:10"]),
+    ("optimise", [], ["--free=design.end_damper_angle_deg=1:10"]),
+    ("optimise", [("design.end_damper_c", "edge", "100000.0")], []),
 ]
 
 

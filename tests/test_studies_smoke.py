@@ -256,9 +256,10 @@ def test_calibration_study(tmp_path):
 
 
 def test_co_design_study(tmp_path):
-    """The placement levers: every answer verified, the spring's points lower the robust
+    """The co-design levers: every answer verified, the spring's points lower the robust
     worst case below today's points (0.1255 -> 0.1137) and the nominal J (0.0229 ->
-    0.0207), the dashpot's lower the nominal J, and the files are written."""
+    0.0207), the dashpot's lower the nominal J, the end damper (engagement angle) lowers it
+    (0.0229 -> 0.0174) engaging at its lowest angle, and the files are written."""
     script = STUDIES / "co_design.py"
     out = tmp_path / "co_design"
     t0 = time.time()
@@ -271,4 +272,7 @@ def test_co_design_study(tmp_path):
     assert rows[("robust", "spring")]["gain"] < -0.05
     assert rows[("nominal", "spring")]["gain"] < -0.05
     assert rows[("nominal", "dashpot")]["gain"] < -0.05
-    assert "not built" in json.loads(p.stdout)["not_built"]
+    end = rows[("nominal", "end_damper")]
+    assert end["gain"] < -0.15
+    assert json.loads(end["end_damper"])["end_damper_angle_deg"] == pytest.approx(1.0)
+    assert json.loads(end["engage"])["theta_dot"] < 0

@@ -35,7 +35,15 @@ OPT = {"spring_k": 1914.7092215178668, "spring_rest_length": 0.07925707423701324
 def test_default_tolerances():
     tol = default_config().tolerance
     assert [(s.key, s.value, s.relative) for s in tol.spreads] == [
-        ("design.spring_k", 0.10, True), ("design.damper_c", 0.20, True), ("mass.lid", 0.05, True)]
+        ("design.spring_k", 0.10, True), ("design.damper_c", 0.20, True),
+        ("design.end_damper_c", 0.20, True), ("mass.lid", 0.05, True)]
+    # a lid without an end damper (c_e = 0, not chosen by the optimiser): its spread spans
+    # nothing and leaves the box, which keeps the three keys (8 corners) of a lid without it
+    assert box_of(default_config().with_design(**OPT)).keys == (
+        "design.spring_k", "design.damper_c", "mass.lid")
+    assert box_of(default_config().with_design(**OPT, end_damper_c=1.0)).half[2] == 0.2
+    free = default_config().set("optimise.free", {"design.end_damper_c": [0, 2]})
+    assert "design.end_damper_c" in box_of(free).keys
     assert (tol.distribution, tol.required_yield, tol.samples, tol.robust_objective) == \
         ("uniform", 0.99, 10000, "worst")
 
@@ -46,7 +54,8 @@ def test_tolerance_file_and_set(tmp_path):
                  'distribution = "normal"\n')
     cfg = load_config(f, ["tolerance.mass.lid=0.02", "tolerance.samples=500"])
     tol = cfg.tolerance
-    assert tol.keys == ("design.spring_k", "mass.lid", "geometry.pivot_b[0]")
+    assert tol.keys == ("design.spring_k", "design.end_damper_c", "mass.lid",
+                        "geometry.pivot_b[0]")
     box = box_of(cfg.with_design(**OPT))
     assert box.half == pytest.approx([0.1 * OPT["spring_k"], 0.02 * 0.5, 5e-4])
     assert box.nominal[2] == 0.060 and tol.distribution == "normal" and tol.samples == 500

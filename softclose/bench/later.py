@@ -1,6 +1,6 @@
 """The later features' entries of the benchmark, each through its public function: sweep
 throughput on the 40,000-design grid (the kernel, the in-process sweep, the command line end
-to end), robust optimisation, Monte Carlo yield, Sobol indices and the calibration's fits
+to end), robust optimisation, the co-design commands, Monte Carlo yield, Sobol indices and the calibration's fits
 (:mod:`.fitting`) (:func:`later_entries`);
 and the optimiser's shooting intervals N and sub-steps against the error of the optimal
 objective and the solve time (:func:`optimiser_study`).
@@ -44,8 +44,10 @@ def sweep_axes() -> dict[str, np.ndarray]:
 
 def later_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
     """Sweep throughput on the 40,000-design grid (the kernel, the in-process sweep, and
-    the command line end to end with its CSV and maps), robust optimisation, Monte Carlo
-    yield of 1e5 samples and Sobol indices at N = 1024, each through its public function.
+    the command line end to end with its CSV and maps), robust optimisation, the co-design
+    commands end to end (the attachment points, the end damper; nominal and robust:
+    :func:`_co_design_rows`), Monte Carlo yield of 1e5 samples and Sobol indices at
+    N = 1024, each through its public function.
 
     Yield and Sobol indices are measured at the nominal optimum (``softclose.optimise``'s
     design): the default config's own design has no spring and no damper, so relative
@@ -122,6 +124,7 @@ def later_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
         rob = timed("robust_optimise", what + ": softclose.optimise(cfg, robust=True), "
                     "one problem per spring kind (compression, extension)",
                     lambda: optimise_robust(cfg), 1)
+    _co_design_rows(cfg, rows, quick, log)
     what_mc = "Monte Carlo yield: tolerance_analysis(cfg, samples=100000)"
     what_s = "Sobol indices: sensitivity(cfg, samples=1024)"
     at, note = _nominal_optimum(cfg)
@@ -154,6 +157,66 @@ def later_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
     from .fitting import fit_entries
     fit_entries(rows, timed, 1 if quick else 5)
     return rows
+
+
+#: the co-design commands (issue 23): the attachment points' four keys, the end damper's two
+CO_DESIGN = {
+    "points": ["--free", "geometry.spring_anchor[0]=-0.09:-0.03",
+               "--free", "geometry.spring_anchor[1]=-0.01:0.05",
+               "--free", "geometry.lid_e[0]=-0.006:0.044", "--free", "geometry.lid_e[1]=0.004:0.024"],
+    "end_damper": ["--free", "design.end_damper_c=0:2",
+                   "--free", "design.end_damper_angle_deg=1:10"],
+}
+
+
+def _co_design_rows(cfg: Config, rows: list, quick: bool = False, log=None) -> None:
+    """The co-design commands end to end in a fresh interpreter (``softclose optimise
+    [--robust] --free ... --json``), after one run of each and with each spring kind's
+    nominal NLP compiled (:func:`softclose.optimiser.cache.prepare`): what a user's second
+    and later runs take. Nominal: the median of 3 runs; robust: one run (its scenario NLPs
+    are built in each run, never compiled)."""
+    from .calls import cli_time
+    log = log or (lambda *a: None)
+    for lever, free in CO_DESIGN.items():
+        for robust in (False, True):
+            key = f"co_design_{lever}" + ("_robust" if robust else "")
+            what = (f"`softclose optimise{' --robust' if robust else ''} "
+                    f"{' '.join(free)} --json` end to end (fresh interpreter, NLPs compiled)")
+            if quick or cfg != _default():
+                rows.append(not_measured(key, what, "not run with --quick" if quick else
+                                         "measured on the default config only"))
+                continue
+            argv = ["optimise", *(["--robust"] if robust else []), *free, "--json"]
+            try:
+                if not robust:
+                    _prepare(cfg, free)
+                with OtherLoad():
+                    t = cli_time(argv, 1 if robust else 3)
+            except Exception as exc:    # reported in the table, the bench goes on
+                rows.append(not_measured(key, what, f"failed: {type(exc).__name__}: "
+                                                    f"{str(exc).splitlines()[0][:200]}"))
+                continue
+            rows.append(speed_row(key, what, t, 1 if robust else 3))
+            log(f"  {what}: {t:.2f} s")
+
+
+def _default() -> Config:
+    from ..config import default_config
+    return default_config()
+
+
+def _prepare(cfg: Config, free: list) -> None:
+    """Compile the nominal NLP of each spring kind of ``cfg`` with the ``--free`` options
+    ``free`` (one run before first, so the compiled library is what the timed runs load)."""
+    from ..config.free import parse_free_option
+    from ..optimiser.cache import prepare
+    from ..optimiser.kinds import kind_config
+    table = dict(parse_free_option(free[i + 1]) for i in range(0, len(free), 2))
+    c = cfg.set("optimise.free", table)
+    for kind in c.optimise.spring_kinds:
+        ck, why = kind_config(c, kind)
+        if why is None:
+            prepare(ck)
 
 
 def _select_row(cfg: Config, timed, rows: list, quick: bool = False) -> None:

@@ -157,6 +157,12 @@ def format_metrics(m: dict) -> str:
             e = acc.get(key)
             err = f"  (± {e:.1e})" if e is not None else ""
             out.append(f"  {key:<19} {v:.7g} {UNITS[key]}{err}")
+    # the end damper's first engagement, where the lid reaches it (StrokeResult.engage_time)
+    for key, unit in (("engage_time", "s"), ("engage_theta_dot", "rad/s")):
+        if m.get(key) is not None:
+            e = acc.get(key)
+            err = f"  (± {e:.1e})" if e is not None else ""
+            out.append(f"  {key:<19} {m[key]:.7g} {unit}{err}")
     if m.get("reason"):
         why = "invalid design" if m.get("status") == "invalid design" else "why not closed"
         out.append(f"  {why}: {m['reason']}")
@@ -191,6 +197,9 @@ def metrics_line(m: dict | None, J: float | None) -> str:
     return (f"closes in {m['closing_time']:.7g} s, impact tip speed "
             f"{m['impact_tip_speed']:.4g} m/s, peak tip speed {m['peak_tip_speed']:.4g} m/s, "
             f"holding moment {m['holding_moment']:.7g} N m"
+            + (f", the end damper engages at {m['engage_time']:.7g} s at theta' = "
+               f"{m['engage_theta_dot']:.5g} rad/s" if m.get("engage_time") is not None
+               else "")
             + (f"; J = {J:.7g}" if J is not None else ""))
 
 
@@ -204,7 +213,9 @@ def write_design(path, cfg, what: str, lines=()) -> Path:
     d = cfg.design
     head = [f"softclose {__version__}: {what}",
             f"design: spring_k = {d.spring_k!r} N/m, spring_rest_length = "
-            f"{d.spring_rest_length!r} m, damper_c = {d.damper_c!r} N s/m",
+            f"{d.spring_rest_length!r} m, damper_c = {d.damper_c!r} N s/m"
+            + (f", end_damper_c = {d.end_damper_c!r} N m s/rad below end_damper_angle_deg = "
+               f"{d.end_damper_angle_deg!r} deg" if d.end_damper_c else ""),
             *[x for x in lines if x],
             f"Every command takes this file: softclose yield --config {path.name}, "
             f"softclose sensitivity --config {path.name}, softclose simulate --config "

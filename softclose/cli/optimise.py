@@ -156,7 +156,7 @@ def _v(x, fmt=".9g") -> str:
 def format_result(res) -> str:
     """The optimisation as text: verdict, problem, design, objective, the verified metrics
     beside the optimiser's own, constraints, active limits, starts, notes."""
-    from ..problem import METRIC_KEYS, UNITS, VERIFY_RTOL
+    from ..problem import ENGAGE_KEYS, METRIC_KEYS, UNITS, VERIFY_RTOL
     head = ("optimum found and verified" if res.success else
             "optimum found, NOT verified" if res.verification is None and res.design else
             "NO verified optimum")
@@ -187,7 +187,9 @@ def format_result(res) -> str:
         agr = ver.agreement if ver is not None else {}
         lines.append(f"  {'metric':<19} {'verified':>15} {'optimiser':>15} {'difference':>11} "
                      f"{'allowed':>9}  unit   (verified = adaptive reference, CVODES)")
-        for k in METRIC_KEYS:
+        engage = tuple(k for k in ENGAGE_KEYS if res.optimiser.get(k) is not None
+                       or (res.metrics or {}).get(k) is not None)
+        for k in METRIC_KEYS + engage:
             a = agr.get(k, {})
             vv = res.metrics.get(k) if res.metrics else None
             diff = a.get("difference")
@@ -223,8 +225,12 @@ def format_result(res) -> str:
                          f"{s['status']}, {s['iterations']} it, {s['solve_time']:.3f} s, J = {J}")
     for n in res.notes:
         lines.append(f"  note: {n}")
-    lines.append(f"  ({res.nodes} shooting intervals x {res.substeps} RK4 sub-steps, "
-                 f"{res.hessian} Hessian; total {res.total_time:.2f} s)")
+    grid = (f"{res.nodes} shooting intervals x {res.substeps} RK4 sub-steps" if not
+            getattr(res, "substeps2", None) else
+            f"two phases switched at the end damper's engagement: {res.nodes} shooting "
+            f"intervals x {res.substeps} RK4 sub-steps before it, {res.nodes} x "
+            f"{res.substeps2} after it")
+    lines.append(f"  ({grid}, {res.hessian} Hessian; total {res.total_time:.2f} s)")
     return "\n".join(lines)
 
 

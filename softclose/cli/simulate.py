@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 
 from .common import (Outcome, add_common, add_out, add_slow_motion, format_metrics,
                      prepare_out, slow_motion, wrote)
@@ -25,6 +26,28 @@ def register(sub) -> None:
     p.set_defaults(run=run)
 
 
+def end_damper_note(cfg, res) -> str | None:
+    """What the end damper did when that is not a crossing on the way down (none without
+    one): engaged from the release (its angle at or above theta0), never (at or below the
+    rim), or not reached (the lid stays above it). An angle outside the stroke is not an
+    error: it says where the damper acts."""
+    d, st = cfg.design, cfg.stroke
+    if not d.end_damper_c:
+        return None
+    at = f"end_damper_angle_deg = {d.end_damper_angle_deg:g}"
+    if d.end_damper_angle_deg <= st.theta_closed_deg:
+        return (f"never acts: {at} is not above the rim (stroke.theta_closed_deg = "
+                f"{st.theta_closed_deg:g})")
+    if (res.engage_time is not None and res.engage_time < 1e-12
+            and d.end_damper_angle_deg >= st.theta0_deg):
+        return (f"acts from the release: {at} is not below stroke.theta0_deg = "
+                f"{st.theta0_deg:g}")
+    if res.engage_time is None and res.theta_min is not None:
+        return (f"never engaged: the lid stays above {at} (lowest angle "
+                f"{math.degrees(res.theta_min):.2f} deg)")
+    return None
+
+
 def run(cfg, args) -> Outcome:
     from ..simulate import Simulator
     factor = slow_motion(args)
@@ -44,6 +67,10 @@ def run(cfg, args) -> Outcome:
         files = write_stroke_outputs(sim.model, res, out, slow_motion=factor)
         payload["files"] = [str(f) for f in files]
     text = format_metrics(payload)
+    note = end_damper_note(cfg, res)
+    if note:
+        payload["end_damper"] = note
+        text += f"\n  end damper: {note}"
     if res.message:
         payload["warning"] = res.message
         text += f"\n  {res.message}"

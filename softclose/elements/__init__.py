@@ -17,15 +17,16 @@ from __future__ import annotations
 
 from ..keys import Key
 from .base import Element, Param, Params
-from .dampers import Dashpot, RotaryDamper
+from .dampers import Dashpot, EndDamper, RotaryDamper
 from .friction import Friction
 from .gravity import Gravity
 from .springs import Spring, TorsionSpring
 
 #: every element, in the order their contributions are summed (gravity first, then the
-#: springs, then the dampers: the order of the seed's equation, so its sums are unchanged)
+#: springs, then the dampers: the order of the seed's equation, so its sums are unchanged);
+#: the end damper, added last, puts its parameters after every earlier one in p
 ELEMENTS: tuple[Element, ...] = (Gravity(), Spring(), TorsionSpring(), Dashpot(),
-                                 RotaryDamper(), Friction())
+                                 RotaryDamper(), Friction(), EndDamper())
 BY_NAME = {e.name: e for e in ELEMENTS}
 #: the seed's parameters, which come first in p: (k, l0, c, c_rot)
 SEED = ("spring_k", "spring_rest_length", "damper_c", "rotary_damper_c")
@@ -42,6 +43,8 @@ KEYS: tuple[Key, ...] = tuple(k for e in ELEMENTS for k in e.keys)
 SPRINGS = tuple(e for e in ELEMENTS if e.affine.__func__ is not Element.affine)
 DAMPERS = tuple(e for e in ELEMENTS if e.viscous.__func__ is not Element.viscous)
 FRICTIONS = tuple(e for e in ELEMENTS if e.coulomb.__func__ is not Element.coulomb)
+#: the elements that act only below an engagement angle (:attr:`Element.engagement`)
+ENGAGING = tuple(e for e in ELEMENTS if e.engagement is not None)
 
 
 def params(p) -> Params:
@@ -97,5 +100,5 @@ def one_way(P, theta_d):
     return 1 - ow * (np.asarray(theta_d) > 0)
 
 
-__all__ = ["ELEMENTS", "BY_NAME", "FRICTIONS", "EXTRA", "needs_extra", "one_way", "PARAMS", "PARAM_NAMES", "KEYS", "SPRINGS", "DAMPERS",
+__all__ = ["ELEMENTS", "BY_NAME", "ENGAGING", "FRICTIONS", "EXTRA", "needs_extra", "one_way", "PARAMS", "PARAM_NAMES", "KEYS", "SPRINGS", "DAMPERS",
            "Element", "Param", "Params", "params", "structure", "acting"]

@@ -180,6 +180,21 @@ class Element:
     # -- when it acts -----------------------------------------------------------------------
     #: the parameters whose non-zero value makes the element act (None: any of them)
     acting_params: tuple[str, ...] | None = None
+    #: an element that acts only while the lid is below an angle (an end damper that the lid
+    #: meets near the rim): the name of that parameter in P (rad); None: it acts everywhere.
+    #: The switch is a discontinuity in theta that every integrator locates as an event and
+    #: the NLP makes a phase boundary (:meth:`engaged`)
+    engagement: str | None = None
+
+    def engaged(self, theta, P):
+        """1 where the element acts at angle ``theta``, else 0 (numbers, arrays or CasADi
+        expressions); always 1 for an element without :attr:`engagement`."""
+        if self.engagement is None:
+            return 1.0
+        if hasattr(theta, "is_symbolic") or hasattr(P[self.engagement], "is_symbolic"):
+            import casadi as ca
+            return ca.if_else(theta < P[self.engagement], 1, 0)
+        return (np.asarray(theta) < P[self.engagement]) * 1.0
 
     def acts(self, values: dict):
         """Whether the element exerts any force with these parameter values (a dict of

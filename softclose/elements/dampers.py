@@ -1,4 +1,5 @@
-"""Dampers: a dashpot on a length, a rotary damper at a pivot (or on the lid's rotation).
+"""Dampers: a dashpot on a length, a rotary damper at a pivot (or on the lid's rotation), an
+end damper that engages near the rim.
 
 Both are viscous: the force along q is ``-B q-dot`` with B = c, so their generalised force on
 theta is ``-c q'^2 theta'`` and they only dissipate (power ``-c q'^2 theta'^2``). With
@@ -7,6 +8,8 @@ a monotone closing stroke is the same either way, a stroke that turns back is no
 """
 
 from __future__ import annotations
+
+import math
 
 from ..keys import Key
 from .base import Element, Param
@@ -73,3 +76,39 @@ class RotaryDamper(Element):
 
     def viscous(self, P):
         return P["rotary_damper_c"]
+
+
+class EndDamper(Element):
+    """The soft-close part proper: a plunger (or a rotary damper with a free travel) that the
+    lid meets near the rim. It acts on the lid's own rotation, a moment ``-c_e theta'``, only
+    while the lid is below its engagement angle theta_e (``design.end_damper_angle_deg``):
+    the lid falls freely to theta_e and lands slowly. The switch is a discontinuity of the
+    equation of motion in theta, never smoothed: the integrators locate the crossing of
+    theta_e as an event (the reference and the fixed-step kernel to their own accuracy) and
+    the NLP puts a phase boundary there (two-phase multiple shooting). With
+    ``design.damper_one_way`` it resists only closing, as the other dampers."""
+
+    name = "end_damper"
+    doc = ("end damper: a moment -c_e theta' on the lid's rotation while theta is below the "
+           "engagement angle (the soft-close plunger that engages near the rim)")
+    keys = (Key("design", "end_damper_c", "nonneg", 0.0, "N m s/rad",
+                "end damper coefficient c_e (>= 0): a moment -c_e theta' on the lid while "
+                "theta < end_damper_angle_deg", lo=0.0, hi=1e5, spread=0.20),
+            Key("design", "end_damper_angle_deg", "real", 5.0, "deg",
+                "engagement angle theta_e of the end damper: it acts below it (the lid meets "
+                "the plunger there); at or above `stroke.theta0_deg` it acts from the "
+                "release, at or below `stroke.theta_closed_deg` never", lo=-360.0, hi=360.0))
+    params = (Param("end_damper_c"), Param("end_damper_angle_deg", math.pi / 180))
+    acting_params = ("end_damper_c",)
+    columns = ()
+    #: the parameter (in P) of the angle below which the element acts (module docstring)
+    engagement = "end_damper_angle_deg"
+
+    def coordinate(self, cfg):
+        return PivotAngle("lid")
+
+    def unit_rate(self, cfg) -> bool:
+        return True
+
+    def viscous(self, P):
+        return P["end_damper_c"]

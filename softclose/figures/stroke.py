@@ -11,7 +11,8 @@ from . import plt
 
 
 def plot_time_histories(res, title: str = "Closing stroke"):
-    """theta, theta' and the tip speed against time, with the event and the peak marked;
+    """theta, theta' and the tip speed against time, with the event and the peak marked (and
+    the end damper's engagement, where it has one that engages: a dotted line, theta' there);
     each label sits where it touches no curve (:func:`softclose.figures.place_label`)."""
     from . import place_label
     tr = res.trajectory
@@ -31,6 +32,11 @@ def plot_time_histories(res, title: str = "Closing stroke"):
         ax[0].plot([res.closing_time], [np.degrees(tr["theta"][-1])], "k|", ms=8)
         ax[1].plot([res.closing_time], [res.impact_theta_dot], "ko")
     ax[2].plot([tr["t"][i]], [res.peak_tip_speed], "kv", ms=5)
+    engage = getattr(res, "engage_time", None)
+    if engage is not None:
+        for a in ax:
+            a.axvline(engage, color="C4", ls=":", lw=1.2)
+        ax[1].plot([engage], [res.engage_theta_dot], "s", color="C4", ms=5)
     for a in ax:                     # room for the labels above and below the curves
         lo, hi = a.get_ylim()
         a.set_ylim(lo - 0.12 * (hi - lo), hi + 0.22 * (hi - lo))
@@ -44,6 +50,11 @@ def plot_time_histories(res, title: str = "Closing stroke"):
                                       (res.closing_time, res.impact_theta_dot)))
     fig.labels.append(place_label(ax[2], f"peak {res.peak_tip_speed:.3f} m/s",
                                   (tr["t"][i], res.peak_tip_speed)))
+    if engage is not None:
+        text = (f"end damper on: {engage:.4f} s, {res.engage_theta_dot:.3f} rad/s"
+                if engage > 0 else "end damper engaged from the release")
+        fig.labels.append(place_label(ax[1], text, (engage, res.engage_theta_dot),
+                                      avoid=[a for a in fig.labels if a.axes is ax[1]]))
     return fig
 
 

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from ..model import LidModel, model_key
 from ..simulate import Simulator
-from .interval import free_layout, nlp_elements
-from .nlp import ShootingNLP
+from .interval import end_damper_mode, free_layout, nlp_elements
+from .nlp import ShootingNLP, phase_two_substeps
 from .placement import placement_layout
 
 _MODELS: dict = {}
@@ -27,13 +27,20 @@ def get_model(cfg) -> LidModel:
     return _MODELS[key]
 
 
-def nlp_key(cfg, nodes: int | None = None, substeps: int | None = None) -> tuple:
+def nlp_key(cfg, nodes: int | None = None, substeps: int | None = None,
+            substeps2: int | None = None) -> tuple:
+    """The NLP's structure: the model, the elements it carries, the free variables, the
+    discretisation (with an end damper engaging inside the stroke: two phases, phase 2's
+    sub-steps ``substeps2``, by default :func:`.nlp.phase_two_substeps`), the solver."""
     o = cfg.optimise
+    N, M = nodes or o.nodes, substeps or o.substeps
+    M2 = None
+    if end_damper_mode(cfg) == "two-phase":
+        M2 = int(substeps2 or phase_two_substeps(cfg, N, M))
     return model_key(cfg) + (tuple(e.name for e in nlp_elements(cfg)),
                              o.opening_force_max is not None, free_layout(cfg),
-                             placement_layout(cfg), keep_out_of(cfg),
-                             nodes or o.nodes, substeps or o.substeps, o.hessian,
-                             o.linear_solver, o.max_iter)
+                             placement_layout(cfg), keep_out_of(cfg), M2,
+                             N, M, o.hessian, o.linear_solver, o.max_iter)
 
 
 def keep_out_of(cfg) -> tuple:
@@ -45,20 +52,29 @@ def keep_out_of(cfg) -> tuple:
     return tuple(tuple(tuple(float(c) for c in v) for v in poly) for poly in polys)
 
 
-def has_nlp(cfg, nodes: int | None = None, substeps: int | None = None) -> bool:
-    return nlp_key(cfg, nodes, substeps) in _NLPS
+def _phase2(N, M2):
+    """Phase 2's (intervals, sub-steps) of a two-phase NLP: N as phase 1, M2 (None: one
+    phase)."""
+    return None if M2 is None else (N, M2)
 
 
-def build_nlp(cfg, nodes: int, substeps: int) -> ShootingNLP:
+def has_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
+            substeps2: int | None = None) -> bool:
+    return nlp_key(cfg, nodes, substeps, substeps2) in _NLPS
+
+
+def build_nlp(cfg, nodes: int, substeps: int, substeps2: int | None = None) -> ShootingNLP:
     """The ShootingNLP of cfg's geometry and discretisation, built symbolically."""
     o = cfg.optimise
     return ShootingNLP(get_model(cfg), nodes, substeps, o.hessian, o.linear_solver,
                        o.max_iter, els=nlp_elements(cfg),
                        opening=o.opening_force_max is not None, free=free_layout(cfg),
-                       placement=placement_layout(cfg), keep_out=keep_out_of(cfg))
+                       placement=placement_layout(cfg), keep_out=keep_out_of(cfg),
+                       phase2=_phase2(nodes, nlp_key(cfg, nodes, substeps, substeps2)[-6]))
 
 
-def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None) -> ShootingNLP:
+def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
+            substeps2: int | None = None) -> ShootingNLP:
     """The ShootingNLP of cfg's geometry and discretisation (built once, then cached).
 
     Its compiled library, when this software compiled it before, is loaded instead of
@@ -68,9 +84,9 @@ def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None) -> Shoot
     """
     from .. import buildcache
     o = cfg.optimise
-    key = nlp_key(cfg, nodes, substeps)
+    key = nlp_key(cfg, nodes, substeps, substeps2)
     if key not in _NLPS:
-        N, M = key[-5], key[-4]
+        N, M, M2 = key[-5], key[-4], key[-6]
         disk = buildcache.key_of("nlp", key)
         nlp = None
         lib = buildcache.compiled_nlp(disk)
@@ -81,18 +97,19 @@ def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None) -> Shoot
                                   o.max_iter, els=nlp_elements(cfg),
                                   opening=o.opening_force_max is not None,
                                   free=free_layout(cfg), library=lib, meta=meta,
-                                  placement=placement_layout(cfg), keep_out=keep_out_of(cfg))
+                                  placement=placement_layout(cfg), keep_out=keep_out_of(cfg),
+                                  phase2=_phase2(N, M2))
             except Exception:   # noqa: BLE001  (a damaged or foreign library: build anew)
                 buildcache.forget_nlp(disk)
                 nlp = None
         if nlp is None:
-            nlp = build_nlp(cfg, N, M)
+            nlp = build_nlp(cfg, N, M, M2)
             if buildcache.compile_enabled():
                 if not buildcache.has("nlpmeta", disk):
                     buildcache.store("nlpmeta", disk, nlp.meta())
                 from ..config import to_dict
                 buildcache.request_nlp(disk, {"config": to_dict(cfg), "nodes": N,
-                                              "substeps": M})
+                                              "substeps": M, "substeps2": M2})
         nlp.key = key
         _NLPS[key] = nlp
     return _NLPS[key]
@@ -108,7 +125,7 @@ def prepare(cfg, nodes: int | None = None, substeps: int | None = None):
     lib = buildcache.compiled_nlp(disk)
     if lib is not None or not buildcache.compile_enabled():
         return lib
-    nlp = build_nlp(cfg, key[-5], key[-4])
+    nlp = build_nlp(cfg, key[-5], key[-4], key[-6])
     if not buildcache.has("nlpmeta", disk):
         buildcache.store("nlpmeta", disk, nlp.meta())
     return buildcache.compile_nlp(nlp.solver, disk)

@@ -22,7 +22,8 @@ def main(lock: str) -> int:
         spec = json.loads(Path(lock).read_text())
         from ..config import from_dict
         from .cache import build_nlp
-        nlp = build_nlp(from_dict(spec["config"]), spec["nodes"], spec["substeps"])
+        nlp = build_nlp(from_dict(spec["config"]), spec["nodes"], spec["substeps"],
+                        spec.get("substeps2"))
         compile_nlp(nlp.solver, spec["key"])
     finally:
         _remove(Path(lock))

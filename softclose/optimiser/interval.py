@@ -9,7 +9,8 @@ geometric functions are fitted once per geometry as Chebyshev series to machine 
 (:class:`ChebyshevFit`); the elements' parameters -- design variables or NLP parameters --
 combine them once per interval (:func:`interval_function`). Which elements the NLP carries
 (:func:`nlp_elements`) and which further design variables it has (``optimise.free``:
-:func:`free_layout`) are read from the config here.
+:func:`free_layout`) are read from the config here, and whether an end damper makes the
+stroke two phases (:func:`end_damper_mode`).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ import numpy as np
 
 from .. import elements
 from ..dynamics import coefficients
+from ..errors import ConfigError
 from ..problem import PARAM_KEYS
 from .hermite import hermite_max
 
@@ -30,9 +32,82 @@ FIT_MARGIN_DEG = 3.0
 #: accumulated (mapaccum), so that building the NLP does not grow with the sub-steps
 UNROLL_MAX = 8
 
+#: the end damper's keys (:class:`softclose.elements.dampers.EndDamper`)
+END_C, END_ANGLE = "design.end_damper_c", "design.end_damper_angle_deg"
+#: a free engagement angle is bounded this far (a fraction of the stroke) inside the stroke:
+#: each phase keeps a length, and the answer's lid meets the plunger between release and rim
+ANGLE_MARGIN = 0.01
+
+
 def free_of(cfg) -> tuple:
-    """``optimise.free``: the further design variables (key, lo, hi), possibly none."""
-    return tuple(cfg.optimise.free or ())
+    """``optimise.free``: the further design variables (key, lo, hi), possibly none; a free
+    engagement angle's bounds clipped into the stroke (:func:`angle_bounds`)."""
+    out = []
+    for k, lo, hi in cfg.optimise.free or ():
+        if k == END_ANGLE:
+            lo, hi = angle_bounds(cfg, lo, hi)
+        out.append((k, lo, hi))
+    return tuple(out)
+
+
+def angle_bounds(cfg, lo: float, hi: float) -> tuple[float, float]:
+    """The bounds (deg) of a free engagement angle within the stroke: [lo, hi] clipped to
+    [theta_closed + m, theta0 - m], m = :data:`ANGLE_MARGIN` of the stroke. Outside it the
+    end damper would act always or never -- a one-phase problem in which the angle does
+    nothing -- so bounds that lie wholly outside are refused."""
+    st = cfg.stroke
+    a, b = st.theta_closed_deg, st.theta0_deg
+    m = ANGLE_MARGIN * (b - a)
+    lo2, hi2 = max(lo, a + m), min(hi, b - m)
+    if lo2 > hi2:
+        raise ConfigError(
+            f"optimise.free {END_ANGLE} = [{lo:g}, {hi:g}] deg lies outside the stroke "
+            f"({a:g} .. {b:g} deg, less {m:.3g} deg at each end): the end damper would act "
+            "over the whole stroke or never, and its angle would change nothing; bound it "
+            "inside the stroke")
+    return lo2, hi2
+
+
+def end_damper_mode(cfg) -> str | None:
+    """How the NLP carries the end damper (:class:`~softclose.elements.dampers.EndDamper`):
+
+    - ``"two-phase"``: it acts (c_e > 0, or ``design.end_damper_c`` free) and its engagement
+      angle lies inside the stroke (or is free: bounded inside it): phase 1 from the release
+      to the angle without it, phase 2 from the angle to the rim with it, a node at the
+      switch whose time is free (:class:`softclose.optimiser.nlp.ShootingNLP`);
+    - ``"always"``: it acts and the angle is at or above the release angle: a damper on the
+      lid over the whole stroke (one phase);
+    - None: it does not act, or the angle is at or below the rim (it never engages: the
+      NLP leaves it out, :func:`nlp_elements`).
+
+    A free coefficient makes the stroke two phases even with bounds [0, 0] (the two-phase
+    NLP of a lid without end damper: today's one-phase answer). A free angle without a
+    damper, or a free coefficient of a damper that never engages, would be a variable that
+    changes nothing: refused (ConfigError)."""
+    free = {k: (lo, hi) for k, lo, hi in cfg.optimise.free or ()}
+    c_free = END_C in free
+    acts = free[END_C][1] > 0 if c_free else cfg.design.end_damper_c > 0
+    if END_ANGLE in free:
+        if not acts:
+            raise ConfigError(f"optimise.free: {END_ANGLE} is free but the end damper does not "
+                              f"act (design.end_damper_c = {cfg.design.end_damper_c:g}"
+                              + (", its bounds [0, 0]" if END_C in free else "") +
+                              "): give it a coefficient or free design.end_damper_c too")
+        angle_bounds(cfg, *free[END_ANGLE])
+        return "two-phase"
+    if not acts and not c_free:
+        return None
+    st, a = cfg.stroke, cfg.design.end_damper_angle_deg
+    if a >= st.theta0_deg:
+        return "always"
+    if a <= st.theta_closed_deg:
+        if c_free:
+            raise ConfigError(
+                f"optimise.free: {END_C} is free but the end damper engages at "
+                f"{END_ANGLE} = {a:g} deg, at or below the rim ({st.theta_closed_deg:g} deg): "
+                "it never acts; set the angle inside the stroke or free it too")
+        return None
+    return "two-phase"
 
 
 def free_layout(cfg) -> tuple:
@@ -51,7 +126,9 @@ def nlp_elements(cfg) -> tuple:
     extra = {k.split(".", 1)[1]: max(abs(lo), abs(hi)) for k, lo, hi in free_of(cfg)
              if k.startswith("design.")}
     acting = elements.acting(cfg, extra)
-    return tuple(e for e in elements.ELEMENTS if e.seed or e in acting)
+    never = end_damper_mode(cfg) is None        # an end damper that never engages
+    return tuple(e for e in elements.ELEMENTS if e.seed or e in acting and not (
+        never and e in elements.ENGAGING))
 
 
 def series_terms(els) -> list[tuple[str, str, str]]:
@@ -277,5 +354,6 @@ def interval_function(model, substeps: int, fit: ChebyshevFit | None = None,
     return (interval, f) if with_ode else interval
 
 
-__all__ = ["FIT_MARGIN_DEG", "UNROLL_MAX", "free_of", "free_layout", "nlp_elements",
+__all__ = ["FIT_MARGIN_DEG", "UNROLL_MAX", "END_C", "END_ANGLE", "ANGLE_MARGIN", "angle_bounds",
+           "end_damper_mode", "free_of", "free_layout", "nlp_elements",
            "series_terms", "ChebyshevFit", "hermite_max", "interval_function"]

@@ -34,6 +34,23 @@ time grid) is an NLP parameter, and closing-time bounds, design bounds and
 holding_moment_min are bounds: one NLP per geometry and (N, M) serves multistart, warm
 re-solves and Pareto fronts (:func:`softclose.optimiser.cache.get_nlp`).
 
+**Two phases: an end damper that engages near the rim.** An end damper
+(:class:`softclose.elements.dampers.EndDamper`: a moment -c_e theta' on the lid below its
+engagement angle theta_e) switches the equation of motion at theta_e, a discontinuity that
+the NLP never smooths: with c_e > 0 (or ``design.end_damper_c`` free) and theta_e inside the
+stroke (:func:`softclose.optimiser.interval.end_damper_mode`), the stroke is two phases --
+phase 1 from the release to theta_e without the end damper, phase 2 from theta_e to the rim
+with it -- of N intervals each (``optimise.nodes``), with their own durations: the variables
+are the closing time T and the engagement time T1 (phase 2 lasts T - T1 >=
+:data:`PHASE_FLOOR`), and the node between the phases lies on theta_e (the constraint
+``engagement``: theta(T1) = theta_e, a parameter, or a design variable when
+``design.end_damper_angle_deg`` is free). Phase 1's intervals see the design with c_e = 0,
+phase 2's with it; every constraint of the one-phase NLP holds at every sub-step of both
+(the tip speed, which typically peaks at the engagement, is a node value of both phases, and
+each phase's Hermite maxima use that phase's own equation). Phase 2's sub-steps M2 are M
+doubled until RK4 is as stable on the end damper as on the dashpot (:func:`phase_two_substeps`).
+w = (d, T, T1, X (2N nodes), s).
+
 Attachment points freed in ``optimise.free`` (``geometry.spring_anchor[i]``, ``lid_e[i]``,
 ``dashpot_anchor[i]``, ``dashpot_lid[i]``) are design variables after the others: the spring
 and the dashpot then act through the points (:mod:`softclose.optimiser.placement`), the
@@ -52,8 +69,10 @@ import numpy as np
 
 from ..config import NLP_BUDGET
 from ..errors import ConfigError
-from ..problem import DESIGN_KEYS, PARAM_KEYS, SCALES, params_of
-from .interval import ChebyshevFit, free_of, hermite_max, interval_function, nlp_elements
+from ..problem import DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, SCALES, params_of
+from .. import elements
+from .interval import (END_C, ChebyshevFit, end_damper_mode, free_of, hermite_max,
+                       interval_function, nlp_elements)
 from .keep_out import keep_out_constraints
 from .placement import placed_config, placed_constraints, slot_values
 
@@ -78,6 +97,9 @@ WARM_OPTIONS = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-8,
                 "ipopt.warm_start_slack_bound_push": 1e-9}
 #: smallest closing time the NLP may take (s): T = 0 would make every step vanish
 T_FLOOR = 1e-3
+#: shortest phase of a two-phase stroke (s): the engagement time T1 and T - T1 (a phase of
+#: no duration would be a node on both sides of the switch)
+PHASE_FLOOR = 1e-4
 #: intervals of the angle grid over which the opening effort is bounded (when
 #: optimise.opening_force_max is set): the nodes and the cubic Hermite maxima between them
 OPENING_INTERVALS = 32
@@ -103,6 +125,43 @@ H_MAX = 0.025
 #: most RK4 steps (nodes x substeps) of one NLP, the config's budget: ~0.2 ms per step and
 #: Ipopt iteration, so one solve at the limit takes ~10 s; larger grids are refused
 MAX_STEPS = NLP_BUDGET
+#: the damper's rate H_MAX is sized for (1/s): c dd / M of the dashpot at damper_c = 5000
+#: N s/m reaches 67 1/s on the default lid; h lambda <= H_MAX * 70 = 1.75 (RK4 is stable to
+#: 2.79 on the real axis) is the margin every RK4 step of the NLP keeps
+LAMBDA_REF = 70.0
+
+
+def phase_two_rate(cfg) -> float:
+    """The largest damping rate of phase 2 (1/s): max over theta in [theta_closed, the
+    highest engagement angle] of (c_max q_d'^2 + c_e,max) / M(theta) -- the dashpot at its
+    upper bound and the end damper at its largest coefficient (its upper bound when free)."""
+    from .cache import get_model
+    from ..dynamics import COEFFS
+    o, st = cfg.optimise, cfg.stroke
+    free = {k: (lo, hi) for k, lo, hi in free_of(cfg)}
+    ce = free[END_C][1] if END_C in free else cfg.design.end_damper_c
+    a_hi = free.get("design.end_damper_angle_deg", (0, cfg.design.end_damper_angle_deg))[1]
+    th = np.radians(np.linspace(st.theta_closed_deg, min(a_hi, st.theta0_deg), 101))
+    C = np.asarray(get_model(cfg).coeffs.map(len(th))(th)[0])
+    M, dd = C[COEFFS.index("M")], C[COEFFS.index("dd")]
+    return float(np.max((o.damper_c[1] * dd + ce) / M))
+
+
+def phase_two_substeps(cfg, nodes: int, substeps: int, t_limit: float | None = None) -> int:
+    """Phase 2's RK4 sub-steps: ``substeps`` doubled until its step at the closing-time
+    limit, t_limit / (N M2), keeps h lambda_2 <= H_MAX LAMBDA_REF (the margin the
+    one-phase NLP keeps on the dashpot: :data:`H_MAX`) with lambda_2 the end damper's and
+    the dashpot's largest rate (:func:`phase_two_rate`), and h <= H_MAX. Phase 2 may last up
+    to the whole limit (T1 is free), so the rule is the one-phase rule with the end
+    damper's rate added."""
+    if t_limit is None:
+        t_limit = min(cfg.optimise.closing_time_max, cfg.stroke.t_max)
+    h_max = min(H_MAX, H_MAX * LAMBDA_REF / max(phase_two_rate(cfg), 1e-12))
+    need = t_limit / (nodes * h_max * (1 + 1e-9))
+    M2 = int(substeps)
+    if M2 < need:
+        M2 *= 2 ** math.ceil(math.log2(need / M2))
+    return M2
 
 
 # -- the discretisation ----------------------------------------------------------------------
@@ -118,10 +177,13 @@ class Discretisation:
     substeps: int
     t_limit: float
     notes: tuple[str, ...] = ()
+    #: a two-phase stroke (an end damper engaging inside it): phase 2's sub-steps (its
+    #: nodes are ``nodes`` as phase 1's); None for one phase
+    substeps2: int | None = None
 
     @property
     def steps(self) -> int:
-        return self.nodes * self.substeps
+        return self.nodes * (self.substeps + (self.substeps2 or 0))
 
 
 def discretisation(cfg, nodes: int | None = None, substeps: int | None = None) -> Discretisation:
@@ -149,17 +211,31 @@ def discretisation(cfg, nodes: int | None = None, substeps: int | None = None) -
             if N * M <= MAX_STEPS:
                 notes.append(f"substeps raised from {o.substeps} to {M} so that the RK4 step "
                              f"stays <= {H_MAX:g} s for closing times up to {t_limit:g} s")
-    if N * M > MAX_STEPS:
-        if substeps or M == o.substeps:
+    M2 = None
+    if end_damper_mode(cfg) == "two-phase":
+        M2 = phase_two_substeps(cfg, N, M, t_limit)
+        notes.append(f"two phases (the end damper engages inside the stroke): {N} intervals "
+                     f"of {M} RK4 sub-steps each before the engagement, {N} of {M2} after it"
+                     + (" (raised so that RK4 is as stable on the end damper as on the "
+                        "dashpot)" if M2 > M else ""))
+    steps = N * (M + (M2 or 0))
+    if steps > MAX_STEPS:
+        if M2 is None and (substeps or M == o.substeps):
             raise ConfigError(
                 f"optimise.nodes x optimise.substeps = {N} x {M} = {N * M} RK4 steps exceeds "
                 f"the limit of {MAX_STEPS}; lower optimise.nodes or optimise.substeps")
+        if M2 is not None:
+            raise ConfigError(
+                f"the two phases of the end damper's stroke need {N} x {M} + {N} x {M2} = "
+                f"{steps} RK4 steps, more than the limit of {MAX_STEPS}; lower "
+                "optimise.nodes, optimise.substeps, optimise.closing_time_max or the end "
+                "damper's upper bound (design.end_damper_c)")
         raise ConfigError(
             f"optimise.closing_time_max: closing times up to {t_limit:g} s need "
             f"{N} x {M} = {N * M} RK4 steps of at most {H_MAX:g} s, more than the limit of "
             f"{MAX_STEPS}; lower optimise.closing_time_max (or stroke.t_max) or "
             "optimise.nodes")
-    return Discretisation(N, M, t_limit, tuple(notes))
+    return Discretisation(N, M, t_limit, tuple(notes), M2)
 
 
 def check_linear_solver(name: str) -> None:
@@ -232,15 +308,22 @@ class ShootingNLP:
     def __init__(self, model, nodes: int, substeps: int, hessian: str = "exact",
                  linear_solver: str = "mumps", max_iter: int = 500, tol: float = 1e-10,
                  els=None, opening: bool = False, free: tuple = (), library=None,
-                 meta: dict | None = None, placement: tuple = (), keep_out: tuple = ()):
+                 meta: dict | None = None, placement: tuple = (), keep_out: tuple = (),
+                 phase2: tuple | None = None):
         """Built symbolically (CasADi's virtual machine evaluates it), or -- ``library`` a
         compiled library of this NLP (:mod:`softclose.buildcache`) and ``meta`` what
         :meth:`meta` stored when it was built -- loaded: nothing symbolic is built, the
-        solves call the compiled functions."""
+        solves call the compiled functions. ``phase2``: a two-phase stroke (module docstring):
+        phase 2's (intervals, sub-steps); phase 1 has ``nodes`` x ``substeps``."""
         t0 = time.perf_counter()
         check_linear_solver(linear_solver)
-        self.model, self.N, self.M = model, nodes, substeps
-        N, M = nodes, substeps
+        self.two_phase = phase2 is not None
+        # nodes: phase 1's intervals (the only phase's); N: every node (both phases); N2,
+        # M2: phase 2's intervals and sub-steps
+        self.model, self.nodes, self.M = model, nodes, substeps
+        self.N2, self.M2 = (int(phase2[0]), int(phase2[1])) if self.two_phase else (0, None)
+        self.N = N = nodes + self.N2
+        M, substeps2 = substeps, self.M2
         # the design variables: k, l0, c, then the free ones (optimise.free: free_layout)
         self.free = tuple(free)
         # the free attachment points (optimise.free geometry.*: placement_layout), last
@@ -250,7 +333,9 @@ class ShootingNLP:
         self.nd = len(DESIGN_KEYS) + len(self.free) + len(self.place)
         self.scales = np.r_[SCALES, [sc for _, _, sc in self.free],
                             [sc for _, _, sc in self.place]]
-        self.iT = self.nd                       # w = (d, T, X (node-major), s)
+        self.iT = self.nd                       # w = (d, T, [T1], X (node-major), s)
+        self.iT1 = self.nd + 1 if self.two_phase else None
+        self.iX = self.nd + (2 if self.two_phase else 1)
         self.ipopt_options = {"print_time": False, "show_eval_warnings": False,
                               "calc_lam_p": False,
                               "ipopt.print_level": 0, "ipopt.sb": "yes",
@@ -274,8 +359,12 @@ class ShootingNLP:
         self.fit = ChebyshevFit(model, els=els, pose=self.placed)
         self.interval, self.f = interval_function(model, substeps, self.fit, with_ode=True,
                                                   placement=self.placed)
+        if self.two_phase:
+            self.interval2 = self.interval if substeps2 == substeps else interval_function(
+                model, substeps2, self.fit, placement=self.placed)
         # the NLP: MX graph over the SX interval, mapped over the N intervals
         d, T = ca.MX.sym("d", self.nd), ca.MX.sym("T")
+        T1 = ca.MX.sym("T1") if self.two_phase else None
         X, s = ca.MX.sym("X", 2, N), ca.MX.sym("s")
         npar = len(NLP_PARAMS)
         P = ca.MX.sym("P", npar + N)
@@ -295,8 +384,22 @@ class ShootingNLP:
                 gl[slot] = d[len(DESIGN_KEYS) + len(self.free) + j] * sc
             gvec = ca.vertcat(*gl)
             gin = [ca.repmat(gvec, 1, N)]
-        xe, a, b, sp = self.interval.map(N)(Xs, ca.repmat(design, 1, N), T * grid.T / M,
-                                            *gin)
+        if not self.two_phase:
+            xe, a, b, sp = self.interval.map(N)(Xs, ca.repmat(design, 1, N), T * grid.T / M,
+                                                *gin)
+        else:   # phase 1 without the end damper (c_e = 0), phase 2 with it
+            n1, n2 = nodes, self.N2
+            off = list(entries)
+            off[PARAM_COLUMNS[END_C]] = ca.MX(0.0)
+            design1 = ca.vertcat(*off)
+            o1 = self.interval.map(n1)(Xs[:, :n1], ca.repmat(design1, 1, n1),
+                                       T1 * grid[:n1].T / M, *[gi[:, :n1] for gi in gin])
+            o2 = self.interval2.map(n2)(Xs[:, n1:], ca.repmat(design, 1, n2),
+                                        (T - T1) * grid[n1:].T / substeps2,
+                                        *[gi[:, n1:] for gi in gin])
+            xe = ca.horzcat(o1[0], o2[0])
+            a, b, sp = (ca.vertcat(ca.vec(o1[k]), ca.vec(o2[k])) for k in (1, 2, 3))
+            theta_e = elements.params(design)["end_damper_angle_deg"]
         if self.placed:     # the holding moment: the spring's part at the points g
             g_all = placed_constraints(self, model, design, gvec, theta0, thc)
             if keep_out:    # the lines with a free point clear the regions
@@ -312,12 +415,15 @@ class ShootingNLP:
                  **g_all}      # holding moment >= holding_moment_min, release <= 0, ...
         if opening:        # the opening effort (optimise.opening_force_max): <= the bound
             g_all["opening_force"] = opening_bound(model, theta0, thc, design)
+        if self.two_phase:  # the node between the phases on theta_e; phase 2 lasts
+            g_all["engagement"] = X[0, nodes - 1] - theta_e           # = 0
+            g_all["phase_two"] = T - T1                               # >= PHASE_FLOOR
         self.g_names = list(g_all)
         self.g_sizes = [int(v.numel()) for v in g_all.values()]
         # softclose.problem.objective with the weights as NLP parameters (+ a time term that
         # only the infeasibility diagnosis uses: fastest / slowest stroke)
         J = wi * X[1, N - 1] ** 2 + wp * s ** 2 + wt * T
-        w = ca.vertcat(d, T, ca.vec(X), s)
+        w = ca.vertcat(d, T, *([T1] if self.two_phase else []), ca.vec(X), s)
         self.nw = int(w.numel())
         # the largest sub-step speed or Hermite maximum: the NLP's own peak tip speed
         self._peak = ca.Function("peak", [w, P], [ca.mmax(sp)])
@@ -357,9 +463,12 @@ class ShootingNLP:
     def __getattr__(self, name):
         """``interval`` and ``f`` of an NLP loaded from its compiled library: built on first
         use (tests and reports ask for them; the solves do not)."""
-        if name in ("interval", "f") and self.__dict__.get("library") is not None:
+        if name in ("interval", "f", "interval2") and self.__dict__.get("library") is not None:
             self.interval, self.f = interval_function(self.model, self.M, self.fit,
                                                       with_ode=True, placement=self.placed)
+            if self.two_phase:
+                self.interval2 = interval_function(self.model, self.M2, self.fit,
+                                                   placement=self.placed)
             return getattr(self, name)
         raise AttributeError(name)
 
@@ -371,21 +480,40 @@ class ShootingNLP:
                 "peak": self._peak.serialize().encode()}
 
     # -- packing -------------------------------------------------------------------------
-    def pack(self, design, T, X, s) -> np.ndarray:
+    def pack(self, design, T, X, s, T1: float | None = None) -> np.ndarray:
         """The point w of ``design`` (the design variables, or a whole parameter vector),
-        T, X (2, N) and s."""
+        T, X (2, N) and s; ``T1`` the engagement time of a two-phase stroke."""
         d = np.asarray(design, float)
         if len(d) == len(PARAM_KEYS):
             d = np.r_[d[:len(DESIGN_KEYS)], [d[col] for _, col, _ in self.free],
                       [self.g0[slot] for _, slot, _ in self.place]]
-        return np.r_[d[:self.nd] / self.scales, T, np.asarray(X, float).T.ravel(), s]
+        t1 = [] if not self.two_phase else [0.5 * T if T1 is None else T1]
+        return np.r_[d[:self.nd] / self.scales, T, t1, np.asarray(X, float).T.ravel(), s]
 
     def unpack(self, w):
         """(design (k, l0, c, then the free variables), T, X (2, N), s) of a point ``w``."""
         w = np.asarray(w, float).ravel()
-        N, i = self.N, self.iT
-        X = w[i + 1:i + 1 + 2 * N].reshape(N, 2).T
+        N, i, j = self.N, self.iT, self.iX
+        X = w[j:j + 2 * N].reshape(N, 2).T
         return w[:i] * self.scales, float(w[i]), X, float(w[-1])
+
+    def engagement(self, w) -> tuple[float, float] | None:
+        """(time, theta') of the node between the phases at ``w``: the NLP's own engagement
+        time and speed (None for one phase)."""
+        if not self.two_phase:
+            return None
+        w = np.asarray(w, float).ravel()
+        return float(w[self.iT1]), float(w[self.iX + 2 * (self.nodes - 1) + 1])
+
+    def node_times(self, p, T: float, T1: float | None = None) -> np.ndarray:
+        """The times (s) of the nodes 1..N on the time grid of ``p`` for closing time T (and
+        engagement time T1: phase 1's grid is a fraction of T1, phase 2's of T - T1)."""
+        g = self.grid_of(p)
+        if not self.two_phase:
+            return T * np.minimum(np.cumsum(g), 1.0)
+        n = self.nodes
+        return np.r_[T1 * np.minimum(np.cumsum(g[:n]), 1.0),
+                     T1 + (T - T1) * np.minimum(np.cumsum(g[n:]), 1.0)]
 
     def full_design(self, cfg, design) -> np.ndarray:
         """The design variables of ``design``: as given when it has them all; (k, l0, c)
@@ -441,19 +569,23 @@ class ShootingNLP:
         lbx, ubx = np.full(self.nw, -np.inf), np.full(self.nw, np.inf)
         for i, (lo, hi) in enumerate(self.design_bounds(cfg)):
             lbx[i], ubx[i] = lo / self.scales[i], hi / self.scales[i]
-        i = self.iT
+        i, j = self.iT, self.iX
         lbx[i] = max(o.closing_time_min if t_min is None else t_min, T_FLOOR)
         ubx[i] = min(o.closing_time_max, st.t_max) if t_max is None else t_max
-        lbx[i + 1:i + 1 + 2 * N:2], ubx[i + 1:i + 1 + 2 * N:2] = st.theta_closed, st.theta0
-        ubx[i + 2:i + 2 + 2 * N:2] = 0.0
-        lbx[i + 1 + 2 * (N - 1)] = ubx[i + 1 + 2 * (N - 1)] = st.theta_closed
+        if self.two_phase:
+            lbx[self.iT1], ubx[self.iT1] = PHASE_FLOOR, ubx[i]
+        lbx[j:j + 2 * N:2], ubx[j:j + 2 * N:2] = st.theta_closed, st.theta0
+        ubx[j + 1:j + 1 + 2 * N:2] = 0.0
+        lbx[j + 2 * (N - 1)] = ubx[j + 2 * (N - 1)] = st.theta_closed
         lbx[-1] = 0.0
         lo = {"continuity": 0.0, "theta_above_closed": 0.0, "theta_dot_nonpositive": -np.inf,
               "peak_tip_speed": 0.0, "holding_moment": o.holding_moment_min,
-              "release_downwards": -np.inf, "opening_force": -np.inf}
+              "release_downwards": -np.inf, "opening_force": -np.inf, "engagement": 0.0,
+              "phase_two": PHASE_FLOOR}
         hi = {"continuity": 0.0, "theta_above_closed": np.inf, "theta_dot_nonpositive": 0.0,
               "peak_tip_speed": np.inf, "holding_moment": np.inf, "release_downwards": 0.0,
-              "opening_force": np.inf if o.opening_force_max is None else o.opening_force_max}
+              "opening_force": np.inf if o.opening_force_max is None else o.opening_force_max,
+              "engagement": 0.0, "phase_two": np.inf}
         if self.placed:
             from .placement import placed_bounds
             placed_bounds(cfg, lo, hi)
@@ -482,14 +614,17 @@ class ShootingNLP:
                      self.time_grid()]
 
     def time_grid(self) -> np.ndarray:
-        """Fractions of T of the N intervals: uniform.
+        """Fractions of T of the N intervals: uniform (two phases: each phase's N intervals
+        fractions of its own duration, uniform).
 
         The grid is an NLP parameter, so graded grids need no rebuild; but a graded grid
         does not pay here: the tip speed peaks early (~0.1 s) while the creep to the rim is
         limited by RK4's stability on the damper (h |lambda| < 2.79, lambda = c dd / M up
         to ~70 1/s), so long strokes need more steps anyway (see :func:`discretisation`).
         """
-        return np.full(self.N, 1.0 / self.N)
+        if not self.two_phase:
+            return np.full(self.N, 1.0 / self.N)
+        return np.r_[np.full(self.nodes, 1.0 / self.nodes), np.full(self.N2, 1.0 / self.N2)]
 
     @staticmethod
     def grid_of(p) -> np.ndarray:

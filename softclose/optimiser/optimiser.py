@@ -16,11 +16,12 @@ import numpy as np
 
 from .. import statics
 from ..errors import ConfigError, NumericalError, SoftcloseError
-from ..problem import DESIGN_KEYS, SCALES, UNITS, describe
+from ..problem import DESIGN_KEYS, PARAM_COLUMNS, SCALES, UNITS, describe
 from ..progress import Progress
 from .cache import get_model, get_nlp, has_nlp, stroke_simulator
 from ..parts import spring_part
 from .diagnose import diagnose
+from .interval import END_C
 from . import sidebyside
 from .kinds import kind_config
 from .nlp import J_INDEX, Discretisation, Run, ShootingNLP, check_options, discretisation
@@ -71,6 +72,11 @@ def claims(nlp: ShootingNLP, cfg, run: Run) -> tuple[dict, dict, float]:
          "min_spring_length": lmin, "max_spring_length": lmax,
          "holding_moment": model.holding_moment(p),
          "opening_force": statics.opening_force_exact(model, p)}
+    eng = nlp.engagement(run.x)
+    if eng is not None and p[PARAM_COLUMNS[END_C]] != 0:
+        # two phases: the node between them is the end damper's engagement (a damper of
+        # no coefficient engages nothing: the reference has no event then)
+        m["engage_time"], m["engage_theta_dot"] = eng
     return nlp.design_dict(cfg, d), m, nlp_objective(nlp, cfg, run)
 
 
@@ -117,7 +123,7 @@ def active_set(nlp: ShootingNLP, cfg, run: Run, t_limit: float) -> tuple[Active,
     elif lam < -ACTIVE_LAM:
         out.append(Active("closing_time_min", "constraint", "lower", o.closing_time_min, "s",
                           Jr * lam))
-    N = nlp.N
+    N, iX = nlp.N, nlp.iX
     groups = dict(nlp.groups())
     lam_hm = float(lam_g[groups["holding_moment"]].sum())
     if lam_hm < -ACTIVE_LAM:
@@ -125,11 +131,11 @@ def active_set(nlp: ShootingNLP, cfg, run: Run, t_limit: float) -> tuple[Active,
                           "N m", Jr * lam_hm))
     # theta' <= 0 at every sub-step and node: relaxed together (theta' <= eps everywhere)
     lam_rb = float(np.maximum(lam_g[groups["theta_dot_nonpositive"]], 0).sum()
-                   + np.maximum(lam_x[iT + 2:iT + 2 + 2 * N:2], 0).sum())
+                   + np.maximum(lam_x[iX + 1:iX + 1 + 2 * N:2], 0).sum())
     if lam_rb > ACTIVE_LAM:
         out.append(Active("no_rebound", "constraint", "upper", 0.0, "rad/s", -Jr * lam_rb))
     lam_rim = float(np.minimum(lam_g[groups["theta_above_closed"]], 0).sum()
-                    + np.minimum(lam_x[iT + 1:iT + 1 + 2 * (N - 1):2], 0).sum())
+                    + np.minimum(lam_x[iX:iX + 2 * (N - 1):2], 0).sum())
     if lam_rim < -ACTIVE_LAM:
         out.append(Active("theta_above_closed", "constraint", "lower", st.theta_closed, "rad",
                           Jr * lam_rim))
@@ -189,7 +195,8 @@ def finish(cfg, nlp: ShootingNLP, run: Run, disc: Discretisation, *, verify: boo
     # the closing-time bounds the NLP was solved with: closing_time_min raised to the NLP's
     # floor, the limit moved by the discretisation error (tighten)
     problem["closing_time_solved"] = [float(run.bounds[0][nlp.iT]), float(run.bounds[1][nlp.iT])]
-    common = dict(nodes=nlp.N, substeps=nlp.M, hessian=cfg.optimise.hessian,
+    common = dict(nodes=nlp.nodes, substeps=nlp.M, substeps2=nlp.M2,
+                  hessian=cfg.optimise.hessian,
                   iterations=base.pop("iterations", run.iterations),
                   solve_time=base.pop("solve_time", run.time), problem=problem,
                   config=cfg, run=run, nlp_key=nlp.key, active=active, **base)
@@ -506,7 +513,8 @@ def optimise_kind(cfg, *, starts: int | None = None, verify: bool = True,
             best = min(runs, key=lambda r: sum(r.violations.values()))
             inf = dict(inf or {}, least_violation=float(sum(best.violations.values())))
             failed = OptimiseResult(
-                False, msg, best.status, None, None, nodes=nlp.N, substeps=nlp.M,
+                False, msg, best.status, None, None, nodes=nlp.nodes, substeps=nlp.M,
+                substeps2=nlp.M2,
                 hessian=o.hessian, iterations=sum(r.iterations for r in runs),
                 solve_time=sum(r.time for r in runs), problem=describe(cfg),
                 infeasibility=inf, notes=tuple(notes), config=cfg,
@@ -581,7 +589,8 @@ def solve(cfg, nodes: int | None = None, substeps: int | None = None,
         res = OptimiseResult(
             False, f"Ipopt stopped with status {r.status} after {r.iterations} iterations; "
             "use optimise() (several starts) or raise optimise.max_iter", r.status, None, None,
-            nodes=nlp.N, substeps=nlp.M, hessian=cfg.optimise.hessian, iterations=r.iterations,
+            nodes=nlp.nodes, substeps=nlp.M, substeps2=nlp.M2, hessian=cfg.optimise.hessian,
+            iterations=r.iterations,
             solve_time=r.time, problem=describe(cfg), config=cfg, run=r, nlp_key=nlp.key,
             notes=disc.notes, **base)
     else:

@@ -97,12 +97,18 @@ def _continue(cfg, prev: OptimiseResult) -> OptimiseResult:
     # the previous optimum, its states moved to the new grid (same normalised time)
     st = cfg.stroke
     d_old, T_old, X_old, s_old = nlp.unpack(prev.run.x)      # same N: the same layout
-    tau_old = np.r_[0.0, np.cumsum(ShootingNLP.grid_of(prev.run.p))]
-    tau_new = np.cumsum(nlp.grid_of(p))
-    Xo = np.column_stack([[st.theta0, 0.0], X_old])
-    Xn = np.vstack([np.interp(tau_new, tau_old, Xo[0]), np.interp(tau_new, tau_old, Xo[1])])
+    T_new = float(np.clip(T_old, lbx[nlp.iT], ubx[nlp.iT]))
+    if nlp.two_phase:   # each phase's states at the same fractions of its duration
+        Xn, T1 = X_old.copy(), nlp.engagement(prev.run.x)[0] * T_new / T_old
+    else:
+        tau_old = np.r_[0.0, np.cumsum(ShootingNLP.grid_of(prev.run.p))]
+        tau_new = np.cumsum(nlp.grid_of(p))
+        Xo = np.column_stack([[st.theta0, 0.0], X_old])
+        Xn = np.vstack([np.interp(tau_new, tau_old, Xo[0]),
+                        np.interp(tau_new, tau_old, Xo[1])])
+        T1 = None
     Xn[0, -1] = st.theta_closed
-    x0 = nlp.pack(d_old, float(np.clip(T_old, lbx[nlp.iT], ubx[nlp.iT])), Xn, s_old)
+    x0 = nlp.pack(d_old, T_new, Xn, s_old, T1)
     runs = [nlp.solve(x0, p, *bounds, origin="previous optimum")]
     starts = [d_old]
     J0s = [None]
@@ -128,7 +134,8 @@ def _continue(cfg, prev: OptimiseResult) -> OptimiseResult:
         return OptimiseResult(False, f"Ipopt did not converge ({runs[0].status}) from the "
                               "previous optimum or the best sweep point; solve this point "
                               "alone with optimise()", runs[0].status, None, None,
-                              nodes=nlp.N, substeps=nlp.M, hessian=o.hessian,
+                              nodes=nlp.nodes, substeps=nlp.M, substeps2=nlp.M2,
+                              hessian=o.hessian,
                               problem=describe(cfg), config=cfg, notes=tuple(notes), **base)
     best = runs[min(ok, key=lambda i: rows[i]["objective"])]
     return finish(cfg, nlp, best, disc, verify=True, polish=True, notes=notes, **base)

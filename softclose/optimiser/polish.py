@@ -73,6 +73,13 @@ def off(cfg, nlp: ShootingNLP, run: Run, rs) -> str:
         ref = getattr(rs, k)
         if k in ERROR_KEYS and abs(v - ref) > REFINE_SHARE * agreement_tolerance(k, ref):
             return f"{k} {v:.6g} differs from the simulated {ref:.6g} by {abs(v - ref):.1e}"
+    eng = nlp.engagement(run.x)
+    if eng is not None and getattr(rs, "engage_time", None) is not None:
+        # two phases: the node between them against the simulated engagement
+        for k, v in zip(("engage_time", "engage_theta_dot"), eng):
+            ref = getattr(rs, k)
+            if abs(v - ref) > REFINE_SHARE * agreement_tolerance(k, ref):
+                return f"{k} {v:.6g} differs from the simulated {ref:.6g} by {abs(v - ref):.1e}"
     return ""
 
 
@@ -88,15 +95,18 @@ def refine(cfg, nlp: ShootingNLP, run: Run, sim, notes: list) -> tuple[ShootingN
         why = off(cfg, nlp, run, rs)
         if not why:
             return nlp, run
-        if 2 * nlp.N * nlp.M > MAX_STEPS:
+        if 2 * nlp.nodes * (nlp.M + (nlp.M2 or 0)) > MAX_STEPS:
             notes.append(f"{why}, but doubling the sub-steps would exceed {MAX_STEPS} RK4 "
                          "steps: not refined")
             return nlp, run
-        fine = get_nlp(cfg, nlp.N, 2 * nlp.M)
+        # (two phases: both phases' sub-steps doubled)
+        fine = get_nlp(cfg, nlp.nodes, 2 * nlp.M, 2 * nlp.M2 if nlp.M2 else None)
         r = fine.solve(run.x, run.p, *fine.bounds(cfg, *_time_bounds(nlp, run)))
         if not r.success:
             return nlp, run
-        notes.append(f"{why}: sub-steps doubled to {fine.M} ({r.iterations} iterations)")
+        notes.append(f"{why}: sub-steps doubled to {fine.M}"
+                     + (f" (phase 2: {fine.M2})" if fine.M2 else "")
+                     + f" ({r.iterations} iterations)")
         nlp, run = fine, _merge(r, run)
     return nlp, run
 

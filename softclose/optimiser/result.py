@@ -12,7 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from ..display import Display, Displayed, Table, num, pm, with_unit
-from ..problem import DESIGN_KEYS, METRIC_KEYS, METRICS, UNITS
+from ..problem import DESIGN_KEYS, ENGAGE_KEYS, ENGAGE_METRICS, METRIC_KEYS, METRICS, UNITS
 from .verify import Verification
 
 
@@ -75,6 +75,9 @@ class OptimiseResult(Displayed):
     starts: tuple = ()
     nodes: int = 0
     substeps: int = 0
+    #: a two-phase stroke (an end damper engaging inside it): phase 2's sub-steps (each
+    #: phase has ``nodes`` intervals); None for one phase
+    substeps2: int | None = None
     hessian: str = ""
     iterations: int = 0
     solve_time: float = 0.0
@@ -111,14 +114,22 @@ class OptimiseResult(Displayed):
                "kinds": list(self.kinds)}
         for k in METRIC_KEYS:
             out[k] = None if self.metrics is None else self.metrics.get(k)
+        for k in ENGAGE_KEYS:       # an end damper that engages: when, and how fast
+            if (self.metrics or self.optimiser or {}).get(k) is not None:
+                out[k] = None if self.metrics is None else self.metrics.get(k)
         out["optimiser"] = self.optimiser
         out["verification"] = None if self.verification is None else self.verification.to_json()
         out["active"] = [a.to_json() for a in self.active]
         out["problem"] = self.problem
         out["starts"] = list(self.starts)
         out["sweep"] = self.sweep
-        out["solver"] = {"method": "direct multiple shooting, RK4, Ipopt",
+        out["solver"] = {"method": "direct multiple shooting, RK4, Ipopt" + (
+                             ", two phases (switched at the end damper's engagement angle, "
+                             "its time free)" if self.substeps2 else ""),
                          "nodes": self.nodes, "substeps": self.substeps,
+                         **({"phases": [{"nodes": self.nodes, "substeps": self.substeps},
+                                        {"nodes": self.nodes, "substeps": self.substeps2}]}
+                            if self.substeps2 else {}),
                          "hessian": self.hessian, "iterations": self.iterations,
                          "solve_time": self.solve_time, "build_time": self.build_time,
                          "total_time": self.total_time}
@@ -134,6 +145,8 @@ class OptimiseResult(Displayed):
         row["spring_kind"] = self.kind
         row["objective"] = self.objective
         row.update({k: (self.metrics or {}).get(k) for k in METRIC_KEYS})
+        row.update({k: (self.metrics or {}).get(k) for k in ENGAGE_KEYS
+                    if (self.metrics or self.optimiser or {}).get(k) is not None})
         ver = self.verification.to_json() if self.verification is not None else {}
         row.update({"success": self.success, "verified_objective": self.verified_objective,
                     "objective_relative_difference": ver.get("objective_relative_difference"),
@@ -171,17 +184,28 @@ class OptimiseResult(Displayed):
         if self.verification is not None and self.verification.objective is not None:
             facts.append(("verified J", f"{num(self.verification.objective)} (adaptive "
                           "reference)"))
+        eng = self.metrics if (self.metrics or {}).get("engage_time") is not None else \
+            self.optimiser if (self.optimiser or {}).get("engage_time") is not None else None
+        if eng is not None:
+            facts.append(("end damper engages", f"at t = {num(eng['engage_time'])} s, theta' = "
+                          f"{num(eng['engage_theta_dot'])} rad/s"
+                          + (" (verified)" if eng is self.metrics else " (the optimiser's)")))
         tables = []
         if self.design:
+            free = {k.split(".", 1)[1]: (lo, hi)
+                    for k, lo, hi in (getattr(self.config, "optimise", None) and
+                                      self.config.optimise.free or ())}
             tables.append(Table("design", ("key", "value", "unit", "bounds"), [
-                (k, num(self.design[k], 7), UNITS[k],
-                 " … ".join(num(b) for b in bounds[k]) if k in bounds else "")
-                for k in DESIGN_KEYS]))
+                (k, num(self.design[k], 7), UNITS.get(k, "m"),
+                 " … ".join(num(b) for b in (bounds.get(k) or free.get(k) or ())))
+                for k in self.design]))
         if self.metrics is not None or self.optimiser is not None:
             ver = self.verification
             agree = ver.agreement if ver is not None else {}
             rows = []
-            for m in METRICS:
+            engage = [m for m in ENGAGE_METRICS
+                      if (self.metrics or self.optimiser or {}).get(m.key) is not None]
+            for m in METRICS + tuple(engage):
                 ref = (self.metrics or {}).get(m.key)
                 own = (self.optimiser or {}).get(m.key)
                 a = agree.get(m.key, {})

@@ -5,16 +5,56 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import statics
+from .. import elements, statics
 from ..dynamics import COEFFS
-from ..problem import DESIGN_KEYS, objective, with_designs
+from ..problem import DESIGN_KEYS, PARAM_COLUMNS, objective, with_designs
 from .cache import stroke_simulator
-from .nlp import T_FLOOR, ShootingNLP
+from .interval import END_ANGLE, END_C, free_of
+from .nlp import PHASE_FLOOR, T_FLOOR, ShootingNLP
 
 #: the coarse sweep of the design box: points along (spring_k, spring_rest_length, damper_c)
 SWEEP_SHAPE = (8, 6, 8)
 #: most starts one optimisation may solve (each is a full Ipopt solve, ~0.1 s)
 MAX_STARTS = 100
+#: a free end damper's keys are swept too, at their bounds and midpoint each (its
+#: landscape has several basins: the strongest damper engaging as late as allowed; one
+#: engaged over most of the stroke; none), with the coarser (k, l0, c) grid of
+#: :data:`SWEEP_SHAPE_ENGAGING`. A coefficient's lower bound 0 is left out: a damper of
+#: no coefficient makes its angle a variable of no effect, from which Ipopt took 60-90
+#: iterations (against 20-25) to today's optimum, which the other starts reach as well when
+#: the end damper does not pay (c_e falls to 0 from 0.5 N m s/rad in 14 iterations)
+END_LEVELS = 3
+SWEEP_SHAPE_ENGAGING = (6, 5, 6)
+
+
+def _levels(key: str, lo: float, hi: float) -> np.ndarray:
+    """The sweep's values of a free end-damper key (:data:`END_LEVELS`)."""
+    v = np.linspace(lo, hi, END_LEVELS)
+    return v[1:] if key == END_C and lo == 0 and hi > 0 else v
+
+
+def swept_keys(cfg) -> tuple:
+    """The free keys the sweep of starts varies beside (k, l0, c): the end damper's
+    (``optimise.free``), with their bounds: ((key, lo, hi), ...)."""
+    return tuple((k, lo, hi) for k, lo, hi in free_of(cfg) if k in (END_C, END_ANGLE))
+
+
+def design_rows(cfg, G: np.ndarray, keys=()) -> np.ndarray:
+    """Rows of the NLP's design variables (k, l0, c, the free element parameters, the free
+    points: :func:`~softclose.optimiser.interval.free_layout`, ``placement_layout``) from
+    rows of (k, l0, c, then the columns of ``keys``): every other free variable at cfg's
+    value clipped into its bounds."""
+    from ..config.free import config_value
+    from .interval import free_layout
+    from .placement import placement_layout
+    bounds = {k: (lo, hi) for k, lo, hi in free_of(cfg)}
+    layout = [k for k, _, _ in free_layout(cfg)] + [k for k, _, _ in placement_layout(cfg)]
+    swept = [k for k, _, _ in keys]
+    G = np.atleast_2d(np.asarray(G, float))
+    cols = [G[:, 3 + swept.index(k)] if k in swept else
+            np.full(len(G), float(np.clip(config_value(cfg, k), *bounds[k])))
+            for k in layout]
+    return np.column_stack([G[:, :3]] + cols) if cols else G[:, :3].copy()
 
 
 def sweep_time(cfg, t_limit: float) -> float:
@@ -29,13 +69,21 @@ def sweep_starts(cfg, count: int, t_limit: float, sim=None,
     The feasible points (closed within the closing-time bounds, holding moment, moving down
     at release, no rebound) are ranked by objective and picked greedily so that each start
     lies at least 0.2 (in box-normalised units) from the ones before; with too few feasible
-    points the least infeasible ones fill up. Returns (designs (count, 3), info).
+    points the least infeasible ones fill up. A free end damper's coefficient and angle
+    are swept as well (:func:`swept_keys`). Returns (designs (count, the NLP's design
+    variables: :func:`design_rows`), info).
     """
     o = cfg.optimise
     sim = sim or stroke_simulator(cfg, sweep_time(cfg, t_limit))
-    axes = [np.linspace(*getattr(o, k), n) for k, n in zip(DESIGN_KEYS, shape)]
-    G = np.array(np.meshgrid(*axes, indexing="ij")).reshape(3, -1).T
+    keys = swept_keys(cfg)
+    if keys and shape == SWEEP_SHAPE:
+        shape = SWEEP_SHAPE_ENGAGING
+    axes = [np.linspace(*getattr(o, k), n) for k, n in zip(DESIGN_KEYS, shape)] + \
+        [_levels(k, lo, hi) for k, lo, hi in keys]
+    G = np.array(np.meshgrid(*axes, indexing="ij")).reshape(len(axes), -1).T
     P = with_designs(cfg, G)
+    for j, (k, _, _) in enumerate(keys):
+        P[:, PARAM_COLUMNS[k]] = G[:, 3 + j]
     r = sim.run_batch(P)
     st = cfg.stroke
     release = -statics.slopes(sim.table, st.theta0, P)         # M theta'' at release
@@ -53,8 +101,9 @@ def sweep_starts(cfg, count: int, t_limit: float, sim=None,
     viol = np.where(np.isfinite(viol), viol, 1e3)
     feasible = viol == 0
     order = np.lexsort((np.where(np.isfinite(J), J, np.inf), viol))
-    lo = np.array([getattr(o, k)[0] for k in DESIGN_KEYS])
-    span = np.maximum(np.array([getattr(o, k)[1] for k in DESIGN_KEYS]) - lo, 1e-12)
+    lo = np.array([getattr(o, k)[0] for k in DESIGN_KEYS] + [a for _, a, _ in keys])
+    span = np.maximum(np.array([getattr(o, k)[1] for k in DESIGN_KEYS]
+                               + [b for _, _, b in keys]) - lo, 1e-12)
     picked: list[int] = []
     for min_dist in (0.2, 0.1, 0.0):
         for i in order:
@@ -65,11 +114,12 @@ def sweep_starts(cfg, count: int, t_limit: float, sim=None,
             z = (G[i] - lo) / span
             if all(np.linalg.norm(z - (G[j] - lo) / span) >= min_dist for j in picked):
                 picked.append(int(i))
-    info = {"grid": [int(n) for n in shape], "evaluated": int(len(G)),
+    info = {"grid": [len(a) for a in axes],
+            "evaluated": int(len(G)),
             "feasible": int(feasible.sum()),
             "best_feasible_objective": float(J[feasible].min()) if feasible.any() else None,
             "fastest_closing_time": float(T.min()) if np.isfinite(T).any() else None}
-    return G[picked], info
+    return design_rows(cfg, G[picked], keys), info
 
 
 def initial_guess(nlp: ShootingNLP, cfg, design, sim, p: np.ndarray,
@@ -77,25 +127,39 @@ def initial_guess(nlp: ShootingNLP, cfg, design, sim, p: np.ndarray,
     """Primal start from the simulated stroke of ``design`` on the time grid of ``p``
     (closing time clipped into [closing_time_min, t_max]): (w0, the stroke's objective)."""
     o, st = cfg.optimise, cfg.stroke
-    frac = np.minimum(np.cumsum(nlp.grid_of(p)), 1.0)   # node times / T
     q = nlp.param_vector(cfg, design)
     r = sim.run(q, trajectory=("tip_speed",), estimate_error=False)
     N = nlp.N
-    J0 = None
+    J0 = T1 = None
+    # a two-phase stroke: the node between the phases on the engagement angle
+    th_e = float(elements.params(q)["end_damper_angle_deg"]) if nlp.two_phase else None
     if r.ok and r.trajectory is not None:
         tr = r.trajectory
         T = r.closing_time if r.closed else tr["t"][-1]
         T = float(np.clip(T, max(o.closing_time_min, T_FLOOR), t_max))
-        tn = T * frac
+        if nlp.two_phase:       # where the simulated stroke first crosses theta_e
+            below = np.flatnonzero(tr["theta"] <= th_e)
+            T1 = T * (st.theta0 - th_e) / (st.theta0 - st.theta_closed)
+            if len(below) and below[0] > 0:
+                i = below[0]
+                t0, t1, a, b = tr["t"][i - 1], tr["t"][i], tr["theta"][i - 1], tr["theta"][i]
+                T1 = float(t0 + (t1 - t0) * (a - th_e) / (a - b)) if a != b else float(t1)
+            T1 = float(np.clip(T1, PHASE_FLOOR, T - PHASE_FLOOR))
+        tn = nlp.node_times(p, T, T1)
         X = np.vstack([np.interp(tn, tr["t"], tr["theta"]),
                        np.minimum(np.interp(tn, tr["t"], tr["theta_dot"]), 0.0)])
         peak = float(np.max(tr["tip_speed"][tr["t"] <= T + 1e-12]))
         J0 = objective(o, float(X[1, -1]), peak)
     else:  # not integrable at this step: a straight line in theta
         T = t_max
-        X = np.vstack([st.theta0 + frac * (st.theta_closed - st.theta0),
+        if nlp.two_phase:
+            T1 = T * (st.theta0 - th_e) / (st.theta0 - st.theta_closed)
+        tn = nlp.node_times(p, T, T1)
+        X = np.vstack([st.theta0 + tn / T * (st.theta_closed - st.theta0),
                        np.full(N, (st.theta_closed - st.theta0) / T)])
         peak = 1.0
+    if nlp.two_phase:           # the node between the phases exactly on theta_e
+        X[0, nlp.nodes - 1] = th_e
     X[0, -1] = st.theta_closed
     J0 = J0 if J0 is not None and np.isfinite(J0) else 1.0
-    return nlp.pack(q, T, X, peak), float(J0)
+    return nlp.pack(q, T, X, peak, T1), float(J0)

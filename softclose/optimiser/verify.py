@@ -22,8 +22,8 @@ import casadi as ca
 import numpy as np
 
 from ..errors import NumericalError
-from ..problem import (CONSTRAINT_TOL, DESIGN_KEYS, METRIC_KEYS, UNITS, VERIFY_RTOL,
-                       PARAM_KEYS, agreement_tolerance, objective, params_of)
+from ..problem import (CONSTRAINT_TOL, DESIGN_KEYS, ENGAGE_KEYS, METRIC_KEYS, UNITS,
+                       VERIFY_RTOL, PARAM_KEYS, agreement_tolerance, objective, params_of)
 from ..stroke import StrokeResult, StrokeStatus
 from .cache import get_model
 
@@ -130,8 +130,14 @@ class Verification:
 
     @property
     def metrics(self) -> dict | None:
-        """The verified §4 metrics (the reference's)."""
-        return None if self.stroke is None else self.stroke.metrics()
+        """The verified §4 metrics (the reference's), with the end damper's engagement time
+        and speed when it engages (:data:`softclose.problem.ENGAGE_KEYS`)."""
+        if self.stroke is None:
+            return None
+        out = self.stroke.metrics()
+        out.update({k: getattr(self.stroke, k) for k in ENGAGE_KEYS
+                    if getattr(self.stroke, k) is not None})
+        return out
 
     @property
     def failures(self) -> tuple[str, ...]:
@@ -252,7 +258,9 @@ def verify(cfg, design: dict, claims: dict | None = None,
                                      "ok": of <= o.opening_force_max + CONSTRAINT_TOL}
     agreement = {}
     if claims is not None:
-        for k in METRIC_KEYS:
+        # the engagement (two phases): its time and speed as the NLP's node between the
+        # phases has them, against the reference's located event
+        for k in METRIC_KEYS + tuple(k for k in ENGAGE_KEYS if k in claims):
             a, b = claims.get(k), getattr(ref, k)
             if k == "closed":
                 agreement[k] = {"optimiser": a, "reference": b, "difference": None,

@@ -48,8 +48,8 @@ def active_set(run, labels) -> tuple[Active, ...]:
     N, S = nlp.N, nlp.S
     per_T = np.array([float(lam_x[nlp.offset(s)]) for s in range(S)])
     groups = _groups(nlp, lam_g)
-    thd = [lam_x[nlp.offset(s) + 2:nlp.offset(s) + 2 + 2 * N:2] for s in range(S)]
-    th = [lam_x[nlp.offset(s) + 1:nlp.offset(s) + 1 + 2 * (N - 1):2] for s in range(S)]
+    thd = [lam_x[nlp.x_offset(s) + 1:nlp.x_offset(s) + 1 + 2 * N:2] for s in range(S)]
+    th = [lam_x[nlp.x_offset(s):nlp.x_offset(s) + 2 * (N - 1):2] for s in range(S)]
 
     def add(name, bound, value, unit, lam_s, sign):
         """One shared limit from the scenarios' multipliers ``lam_s`` (> 0 at an upper,

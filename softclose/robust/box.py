@@ -107,14 +107,24 @@ class Box:
 
 def box_of(cfg: Config, design: dict | None = None, tolerance: Tolerance | None = None,
            scale: float = 1.0) -> Box:
-    """The tolerance box of ``cfg``'s design (``design`` overrides it), spreads x ``scale``."""
+    """The tolerance box of ``cfg``'s design (``design`` overrides it), spreads x ``scale``.
+
+    A relative spread of a design value that is zero and stays zero -- an element the design
+    does not have (``design.end_damper_c`` = 0, a default spread) and the optimiser does not
+    choose (not k, l0, c, nor in ``optimise.free``) -- spans nothing: it is left out, so it
+    adds no corners and no sample columns (the box of a lid without an end damper is the
+    box without its key)."""
     tol = tolerance or cfg.tolerance
+    free = {k for k, _, _ in (cfg.optimise.free or ())}
     keys, nominal, half, z_min, rel, spreads = [], [], [], [], [], []
     for s in tol.spreads:
         v = config_value(cfg, s.key)
         name = s.key.removeprefix("design.")
         if design is not None and name in design:
             v = float(design[name])
+        if (s.relative and v == 0.0 and s.key.startswith("design.")
+                and name not in DESIGN_KEYS and s.key not in free):
+            continue
         h = scale * s.half_width(v)
         keys.append(s.key)
         nominal.append(v)

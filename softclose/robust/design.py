@@ -58,14 +58,16 @@ import numpy as np
 
 from ..config import Config, check_batch
 from ..errors import ConfigError
-from ..problem import DESIGN_KEYS, METRIC_KEYS, VERIFY_RTOL, describe, design_of, params_of
+from ..problem import (DESIGN_KEYS, ENGAGE_KEYS, METRIC_KEYS, VERIFY_RTOL, describe, design_of,
+                       params_of)
 from .active import active_set
 from .analysis import YieldResult, analyse_samples
 from .box import box_of
 from .evaluate import slow_keys
 from .infeasible import diagnose
 from .nlp import T_FLOOR, discretise, t_limit
-from .policy import MAX_CORNERS, MAX_WIDEN, SLOW_YIELD_SAMPLES, WIDEN, YIELD_REFERENCE, check_keys
+from .policy import (MAX_WIDEN, SLOW_YIELD_SAMPLES, WIDEN, YIELD_REFERENCE, check_keys,
+                     max_corners)
 from .result import RobustResult, box_summary
 from .scenarios import initial_scenarios
 from .solve import Problem, Run, solve_box, start_design
@@ -92,17 +94,20 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     check_batch(cfg, int(samples or cfg.tolerance.samples),
                 "--samples" if samples else "tolerance.samples")
     check_keys(cfg)
+    from ..optimiser.interval import END_ANGLE, END_C
     from ..optimiser.placement import SLOTS, placed_config
-    others = [k for k, _, _ in cfg.optimise.free or () if k not in SLOTS]
+    others = [k for k, _, _ in cfg.optimise.free or () if k not in SLOTS + (END_C, END_ANGLE)]
     if others:
         raise ConfigError(
-            "optimise.free: the robust design chooses k, l0, c and the attachment points "
-            f"(geometry.*) only; fix {', '.join(others)} (e.g. at the nominal optimum's "
-            "values: softclose optimise --free ...) and run --robust without them")
+            "optimise.free: the robust design chooses k, l0, c, the attachment points "
+            "(geometry.*) and the end damper (design.end_damper_c, end_damper_angle_deg) "
+            f"only; fix {', '.join(others)} (e.g. at the nominal optimum's values: softclose "
+            "optimise --free ...) and run --robust without them")
     placed = bool(cfg.optimise.free)
     if placed:
         toleranced = [k for k in cfg.tolerance.keys if any(
-            s.startswith(k.split("[")[0]) for s in (k2 for k2, _, _ in cfg.optimise.free))]
+            s.startswith(k.split("[")[0]) for s in (k2 for k2, _, _ in cfg.optimise.free
+                                                    if k2 in SLOTS))]
         if toleranced:
             raise ConfigError(f"[tolerance]: {toleranced[0]} is a free attachment point; a "
                               "point the optimiser chooses carries no tolerance here")
@@ -127,7 +132,7 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
             continue
         r = optimise_robust_kind(c, progress=progress, samples=samples, seed=seed,
                                  verify=verify)
-        if placed:                       # stage 2 ran at the points: report them
+        if placed:              # stage 2 ran at the points (end damper): report them
             r = replace(r, design={**(r.design or {}), **{k.split(".", 1)[1]: v
                                                           for k, v in points.items()}},
                         notes=tuple(stage_notes) + r.notes)
@@ -150,10 +155,12 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
         for r in rows),)
     times = dict(best.times, total=time.perf_counter() - t_start)
     out_cfg = cfg.set("design.spring_kind", kind)         # (not the kind's bounds)
-    if placed:                          # with the points set, no longer free
+    if placed:                          # with the points (end damper) set, no longer free
         from .placement import fixed_points
-        out_cfg = fixed_points(out_cfg, {f"geometry.{k}": v for k, v in (best.design or {}).items()
-                                         if f"geometry.{k}" in SLOTS})
+        chosen = {k for k, _, _ in cfg.optimise.free}
+        out_cfg = fixed_points(out_cfg, {full: v for k, v in (best.design or {}).items()
+                                         for full in (f"geometry.{k}", f"design.{k}")
+                                         if full in chosen})
     return replace(best, kind=kind, kinds=tuple(rows), part=part, notes=notes, times=times,
                    config=out_cfg)
 
@@ -359,8 +366,9 @@ def _reported_metrics(nom: dict) -> dict:
     verified (as the nominal optimiser reports them; the NLP's own sit in `scenarios`), else
     the NLP's, with what it does not compute as None."""
     ref = nom.get("reference") or {}
-    return ({k: ref.get(k) for k in METRIC_KEYS} if ref else
-            {k: nom["metrics"].get(k) for k in METRIC_KEYS})
+    keys = METRIC_KEYS + tuple(k for k in ENGAGE_KEYS if (ref or nom["metrics"]).get(k)
+                               is not None)
+    return ({k: ref.get(k) for k in keys} if ref else {k: nom["metrics"].get(k) for k in keys})
 
 
 def _corner_guarantee(cfg: Config, scale: float, problem: Problem, run: Run, log: _Log) -> dict:
@@ -372,7 +380,7 @@ def _corner_guarantee(cfg: Config, scale: float, problem: Problem, run: Run, log
     n_corners = 2 ** problem.box.dim if problem.box.dim else 0
     in_nlp = sum(1 for sc in problem.scenarios if sc.z and all(abs(v) == 1.0 for v in sc.z))
     corner_check.update(in_nlp=in_nlp, scenarios=len(problem.scenarios))
-    if n_corners > MAX_CORNERS:
+    if n_corners > max_corners(cfg):
         log.notes.append(f"{len(problem.scenarios)} scenarios instead of {n_corners + 1}: the "
                          f"nominal lid, {in_nlp} of the {n_corners} corners and "
                          f"{len(problem.scenarios) - 1 - in_nlp} interior points; all "

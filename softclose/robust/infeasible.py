@@ -15,7 +15,7 @@ from ..errors import NumericalError
 from ..problem import DESIGN_KEYS
 from .box import box_of
 from .evaluate import evaluate
-from .policy import MAX_CORNERS, MC_TOL
+from .policy import MC_TOL, max_corners
 from .scenarios import corner_columns, initial_scenarios
 from .solve import Problem, Run, start_design
 from .stats import margins
@@ -47,7 +47,7 @@ def diagnose(cfg: Config, run: Run, problem: Problem, N: int, M: int, seed: int)
     violation at the full spreads of the best design found."""
     o = cfg.optimise
     lo, hi, best = 0.0, 1.0, None
-    subset = 2 ** problem.box.dim > MAX_CORNERS
+    subset = 2 ** problem.box.dim > max_corners(cfg)
 
     def holds(a, design) -> bool:
         """With a subset of the corners as scenarios, a design counts only if every corner

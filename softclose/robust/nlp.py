@@ -30,6 +30,13 @@ problem share their discretisation (N, M); only the node grid differs (:func:`ti
 the first two intervals are half as long, for the release transient of the stiffly damped
 scenarios). The NLP is built for a given list of scenario models
 (:func:`get_scenario_nlp` caches it); the a_s, b_s are parameters.
+
+With an end damper that engages inside the stroke every scenario is two-phase as in the
+nominal NLP (:mod:`softclose.optimiser.nlp`): its own engagement time T1_s, the node
+between its phases on its own engagement angle, phase 1 without the end damper (graded
+grid), phase 2 with it (uniform grid, sub-steps M2). The end damper's coefficient and
+angle may be shared design variables (``optimise.free``; the robust optimiser's first
+stage, :mod:`softclose.robust.placement`), after (k, l0, c) and before the points.
 """
 
 from __future__ import annotations
@@ -55,7 +62,8 @@ T_FLOOR = 1e-3
 #: per-scenario constraint groups, in order
 GROUPS = ("continuity", "theta_above_closed", "theta_dot_nonpositive", "peak_tip_speed",
           "holding_moment", "release_downwards", "epigraph", "opening_force",
-          "spring_long", "spring_short", "spring_length", "keep_out")
+          "spring_long", "spring_short", "spring_length", "keep_out", "engagement",
+          "phase_two")
 CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 WARM_OPTIONS = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
                 "ipopt.warm_start_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9,
@@ -93,8 +101,24 @@ def t_limit(cfg: Config) -> float:
     return min(cfg.optimise.closing_time_max, cfg.stroke.t_max)
 
 
+def phase_grid(N: int, two_phase: bool) -> np.ndarray:
+    """The node grid of a scenario: :func:`time_grid` (fractions of T_s), or with two
+    phases phase 1's graded grid (fractions of T1_s) and phase 2's uniform one (fractions
+    of T_s - T1_s)."""
+    return np.r_[time_grid(N), np.full(N, 1.0 / N)] if two_phase else time_grid(N)
+
+
+def node_times(N: int, two_phase: bool, T: float, T1: float | None = None) -> np.ndarray:
+    """The times (s) of a scenario's nodes on :func:`phase_grid`."""
+    g = np.minimum(np.cumsum(time_grid(N)), 1.0)
+    if not two_phase:
+        return T * g
+    return np.r_[T1 * g, T1 + (T - T1) * np.arange(1, N + 1) / N]
+
+
 def discretise(cfg: Config) -> tuple[int, int, float, list[str]]:
-    """(N, M, closing-time limit, notes) of the nominal optimiser's discretisation."""
+    """(N, M, closing-time limit, notes) of the nominal optimiser's discretisation (with two
+    phases, phase 2's sub-steps follow from cfg: :func:`phase_two`)."""
     from ..optimiser.nlp import discretisation
     d = discretisation(cfg)
     if isinstance(d, tuple):                    # the optimiser module before its split
@@ -118,49 +142,87 @@ def _model_key(cfg: Config) -> tuple:
     return model_key(cfg) + (tuple(e.name for e in nlp_elements(cfg)),)
 
 
-def interval_of(cfg_model: Config, nodes: int, substeps: int, placement: bool = False):
-    """(model, shooting-interval Function) of a scenario's model: the nominal optimiser's;
-    with ``placement`` also its fit and ODE (the attachment points an input: the fit is of
-    the closure, which the points do not change)."""
+def two_phase(cfg: Config) -> bool:
+    """Is cfg's stroke two phases (an end damper engaging inside it)?"""
+    from ..optimiser.interval import end_damper_mode
+    return end_damper_mode(cfg) == "two-phase"
+
+
+def phase_two(cfg: Config, nodes: int, substeps: int) -> int | None:
+    """Phase 2's sub-steps (the nominal optimiser's rule), None for one phase."""
+    if not two_phase(cfg):
+        return None
+    from ..optimiser.nlp import phase_two_substeps
+    return phase_two_substeps(cfg, nodes, substeps)
+
+
+def interval_of(cfg_model: Config, nodes: int, substeps: int, placement: bool = False,
+                substeps2: int | None = None):
+    """(model, {"f": shooting-interval Function, "f2": phase 2's (``substeps2`` sub-steps;
+    None for one phase), "fit", "ode"}) of a scenario's model: the nominal optimiser's (with
+    ``placement`` the attachment points an input: the fit is of the closure, which the
+    points do not change)."""
     from ..optimiser.cache import get_model
     from ..optimiser.interval import ChebyshevFit, interval_function, nlp_elements
     model = get_model(cfg_model)
     fit = ChebyshevFit(model, els=nlp_elements(cfg_model), pose=placement)
-    if not placement:
-        return model, interval_function(model, substeps, fit)
-    f, ode = interval_function(model, substeps, fit, with_ode=True, placement=True)
-    return model, (f, fit, ode)
+    f, ode = interval_function(model, substeps, fit, with_ode=True, placement=placement)
+    f2 = None
+    if substeps2 is not None:
+        f2 = f if substeps2 == substeps else interval_function(model, substeps2, fit,
+                                                               placement=placement)
+    return model, {"f": f, "f2": f2, "fit": fit, "ode": ode}
 
 
 class ScenarioNLP:
     """The multiple-shooting NLP of S scenarios (see the module docstring).
 
     ``models`` lists the scenarios' model configs (equal configs share a model and its
-    interval Function). Variables: w = (d (3), t, then per scenario T_s, X_s (2N), s_s).
+    interval Function). Variables: w = (d, t, then per scenario T_s, [T1_s], X_s (2N_all),
+    s_s); d = (k, l0, c, the free end damper's c_e and angle, the free points), scaled.
+    ``nodes``: intervals (per phase); ``substeps2``: phase 2's sub-steps (two phases: by
+    default :func:`phase_two` of ``cfg``).
     """
 
     def __init__(self, cfg: Config, model_cfgs: list[Config], nodes: int, substeps: int,
-                 robust_objective: str = "worst", tol: float = 1e-10):
+                 robust_objective: str = "worst", tol: float = 1e-10,
+                 substeps2: int | None = None):
         t0 = time.perf_counter()
         o = cfg.optimise
-        self.N, self.M, self.S = nodes, substeps, len(model_cfgs)
+        self.two_phase = two_phase(cfg)
+        self.M2 = (substeps2 or phase_two(cfg, nodes, substeps)) if self.two_phase else None
+        # nodes: intervals of a phase; N: nodes of a scenario (both phases)
+        self.nodes, self.M, self.S = nodes, substeps, len(model_cfgs)
+        self.N = 2 * nodes if self.two_phase else nodes
         self.robust_objective = robust_objective
-        N, M, S = nodes, substeps, self.S
+        n1, M, S, N = nodes, substeps, self.S, self.N
         # free attachment points (optimise.free geometry.*), shared by every scenario
         from ..optimiser.placement import (length_bounds, placement_layout, slot_values,
                                            spring_moment)
+        from ..optimiser.interval import END_C, END_ANGLE, free_layout
+        from ..problem import PARAM_COLUMNS
+        # the free end damper (optimise.free), shared by every scenario
+        self.free = tuple(x for x in free_layout(cfg) if x[0] in (END_C, END_ANGLE))
         self.place = placement_layout(cfg)
         self.placed = bool(self.place)
         self.g0 = slot_values(cfg)
-        self.nd = 3 + len(self.place)
-        self.scales = np.r_[SCALES, [sc for _, _, sc in self.place]]
+        self.nd = 3 + len(self.free) + len(self.place)
+        from ..config.free import config_value
+        from ..optimiser.interval import free_of
+        bounds = {k: (lo, hi) for k, lo, hi in free_of(cfg)}
+        #: the free variables' values when a design gives only (k, l0, c): cfg's, clipped
+        self.free_values = np.r_[[float(np.clip(config_value(cfg, k), *bounds[k]))
+                                  for k, _, _ in self.free],
+                                 [self.g0[slot] for _, slot, _ in self.place]]
+        self.scales = np.r_[SCALES, [sc for _, _, sc in self.free],
+                            [sc for _, _, sc in self.place]]
         # one interval Function per distinct model
         keys, self.model_index, funcs, models = [], [], [], []
         for c in model_cfgs:
             key = _model_key(c)
             if key not in keys:
                 keys.append(key)
-                model, f = interval_of(c, N, M, self.placed)
+                model, f = interval_of(c, n1, M, self.placed, self.M2)
                 models.append(model)
                 funcs.append(f)
             self.model_index.append(keys.index(key))
@@ -175,29 +237,52 @@ class ScenarioNLP:
         B = ca.reshape(P[npar + N + NP * S:], NP, S)
         d, t = ca.MX.sym("d", self.nd), ca.MX.sym("t")
         T = [ca.MX.sym(f"T{s}") for s in range(S)]
+        T1 = [ca.MX.sym(f"T1_{s}") for s in range(S)] if self.two_phase else []
         X = [ca.MX.sym(f"X{s}", 2, N) for s in range(S)]
         pk = [ca.MX.sym(f"s{s}") for s in range(S)]
-        q = ca.vertcat(d[:3] * ca.DM(SCALES), fixed)
+        entries = [d[i] * SCALES[i] for i in range(3)] + [fixed[i] for i in range(len(FIXED))]
+        for j, (_, col, sc) in enumerate(self.free):
+            entries[col] = d[3 + j] * sc
+        q = ca.vertcat(*entries)
         if self.placed:
             gl = [ca.MX(float(v)) for v in self.g0]
             for j, (_, slot, sc) in enumerate(self.place):
-                gl[slot] = d[3 + j] * sc
+                gl[slot] = d[3 + len(self.free) + j] * sc
             gvec = ca.vertcat(*gl)
         ps = [A[:, s] * q + B[:, s] for s in range(S)]
-        # the shooting intervals, one map per model over all of its scenarios' intervals
+        if self.two_phase:      # phase 1 without the end damper
+            off = np.ones(NP)
+            off[PARAM_COLUMNS[END_C]] = 0.0
+            ps1 = [p_ * ca.DM(off) for p_ in ps]
+        # the shooting intervals, one map per model (and phase) over all of its scenarios'
+        # intervals
         outs: list = [None] * S
-        for m, f in enumerate(funcs):
+        for m, fn in enumerate(funcs):
             ss = [s for s in range(S) if self.model_index[s] == m]
             if not ss:
                 continue
-            X0 = ca.horzcat(*[ca.horzcat(ca.vertcat(theta0, 0), X[s][:, :N - 1]) for s in ss])
-            Q = ca.horzcat(*[ca.repmat(ps[s], 1, N) for s in ss])
-            H = ca.horzcat(*[T[s] * grid.T / M for s in ss])
-            gin = [ca.repmat(gvec, 1, N * len(ss))] if self.placed else []
-            xe, a, b, sp = (f[0] if self.placed else f).map(N * len(ss))(X0, Q, H, *gin)
+            gin = [ca.repmat(gvec, 1, n1 * len(ss))] if self.placed else []
+            X0 = [ca.horzcat(ca.vertcat(theta0, 0), X[s][:, :N - 1]) for s in ss]
+            if not self.two_phase:
+                Q = ca.horzcat(*[ca.repmat(ps[s], 1, N) for s in ss])
+                H = ca.horzcat(*[T[s] * grid.T / M for s in ss])
+                res = fn["f"].map(N * len(ss))(ca.horzcat(*X0), Q, H, *gin)
+                for j, s in enumerate(ss):
+                    cols = slice(j * N, (j + 1) * N)
+                    outs[s] = tuple(r[:, cols] for r in res)
+                continue
+            Q1 = ca.horzcat(*[ca.repmat(ps1[s], 1, n1) for s in ss])
+            H1 = ca.horzcat(*[T1[s] * grid[:n1].T / M for s in ss])
+            r1 = fn["f"].map(n1 * len(ss))(ca.horzcat(*[x[:, :n1] for x in X0]), Q1, H1, *gin)
+            Q2 = ca.horzcat(*[ca.repmat(ps[s], 1, n1) for s in ss])
+            H2 = ca.horzcat(*[(T[s] - T1[s]) * grid[n1:].T / self.M2 for s in ss])
+            r2 = fn["f2"].map(n1 * len(ss))(ca.horzcat(*[x[:, n1:] for x in X0]), Q2, H2,
+                                            *gin)
             for j, s in enumerate(ss):
-                cols = slice(j * N, (j + 1) * N)
-                outs[s] = (xe[:, cols], a[:, cols], b[:, cols], sp[:, cols])
+                cols = slice(j * n1, (j + 1) * n1)
+                outs[s] = (ca.horzcat(r1[0][:, cols], r2[0][:, cols]),
+                           *(ca.vertcat(ca.vec(r1[k][:, cols]), ca.vec(r2[k][:, cols]))
+                             for k in (1, 2, 3)))
         g, self.g_sizes, J, peaks = [], [], [], []
         for s in range(S):
             xe, a, b, sp = outs[s]
@@ -208,8 +293,7 @@ class ScenarioNLP:
             none = ca.MX(0, 1)
             if self.placed:     # the spring at the shared points g (optimiser.placement)
                 from .. import elements
-                from ..problem import PARAM_COLUMNS
-                _, fit, ode = funcs[self.model_index[s]]
+                fit, ode = funcs[self.model_index[s]]["fit"], funcs[self.model_index[s]]["ode"]
                 mask = np.ones(NP)
                 mask[[PARAM_COLUMNS["design.spring_k"], PARAM_COLUMNS["design.spring_preload"]]] = 0
                 sa, sb = elements.BY_NAME["spring"].affine(elements.params(ps[s]))
@@ -223,12 +307,18 @@ class ScenarioNLP:
             else:
                 hold, release = model.dV(thc, ps[s]), model.ode(ca.vertcat(theta0, 0), ps[s])[1]
                 lengths = [none, none, none]
+            if self.two_phase:  # the node between the phases on the scenario's theta_e
+                from .. import elements
+                phases = [X[s][0, n1 - 1] - elements.params(ps[s])["end_damper_angle_deg"],
+                          T[s] - T1[s]]
+            else:
+                phases = [none, none]
             blocks = [ca.vec(xe - X[s]), ca.vec(a) - thc, ca.vec(b), pk[s] - ca.vec(sp),
                       hold, release, t - Js / Jref,
                       opening_bound(model, theta0, thc, ps[s]) if o.opening_force_max
                       is not None and not self.placed else none] + lengths + [
                           self._keep_out(cfg, fit, theta0, thc, gvec) if self.placed and s == 0
-                          else none]
+                          else none] + phases
             g += blocks
             self.g_sizes.append([int(v.numel()) for v in blocks])
         self.block = sum(self.g_sizes[0])
@@ -236,7 +326,8 @@ class ScenarioNLP:
             f_obj = t
         else:
             f_obj = sum(J) / (S * Jref)
-        w = ca.vertcat(d, t, *[ca.vertcat(T[s], ca.vec(X[s]), pk[s]) for s in range(S)])
+        w = ca.vertcat(d, t, *[ca.vertcat(T[s], *(T1[s:s + 1]), ca.vec(X[s]), pk[s])
+                               for s in range(S)])
         self.nw = int(w.numel())
         # each scenario's own peak tip speed (not s_s) and its objective with that peak
         pv = ca.vertcat(*peaks)
@@ -273,21 +364,28 @@ class ScenarioNLP:
     # -- layout ------------------------------------------------------------------------
     @property
     def per(self) -> int:
-        """Variables per scenario: T, X (2N), s."""
-        return 2 * self.N + 2
+        """Variables per scenario: T, [T1], X (2N), s."""
+        return 2 * self.N + 2 + int(self.two_phase)
 
     def offset(self, s: int) -> int:
+        """Where scenario s's variables start (its T)."""
         return self.nd + 1 + s * self.per
 
-    def pack(self, design, t, states) -> np.ndarray:
-        """w from the design (SI; k, l0, c alone: the free points from the config), t, and
-        per scenario (T, X (2, N), s)."""
+    def x_offset(self, s: int) -> int:
+        """Where scenario s's states X start."""
+        return self.offset(s) + 1 + int(self.two_phase)
+
+    def pack(self, design, t, states, T1s=None) -> np.ndarray:
+        """w from the design (SI; k, l0, c alone: the free variables from the config), t,
+        and per scenario (T, X (2, N), s) (and its engagement time, ``T1s``, with two
+        phases)."""
         d = np.asarray(design, float)
         if len(d) < self.nd:
-            d = np.r_[d[:3], [self.g0[slot] for _, slot, _ in self.place]]
+            d = np.r_[d[:3], self.free_values[:self.nd - 3]]
         parts = [d[:self.nd] / self.scales, [t]]
-        for T, X, pk in states:
-            parts += [[T], np.asarray(X, float).T.ravel(), [pk]]
+        for s, (T, X, pk) in enumerate(states):
+            t1 = [] if not self.two_phase else [0.5 * T if T1s is None else T1s[s]]
+            parts += [[T], t1, np.asarray(X, float).T.ravel(), [pk]]
         return np.concatenate([np.atleast_1d(np.asarray(p, float)) for p in parts])
 
     def unpack(self, w):
@@ -296,10 +394,18 @@ class ScenarioNLP:
         N = self.N
         states = []
         for s in range(self.S):
-            i = self.offset(s)
-            states.append((float(w[i]), w[i + 1:i + 1 + 2 * N].reshape(N, 2).T,
-                           float(w[i + 1 + 2 * N])))
+            i, j = self.offset(s), self.x_offset(s)
+            states.append((float(w[i]), w[j:j + 2 * N].reshape(N, 2).T, float(w[j + 2 * N])))
         return w[:self.nd] * self.scales, float(w[self.nd]), states
+
+    def engagements(self, w) -> list | None:
+        """Per scenario (T1_s, theta' at the node between the phases): each scenario's own
+        engagement time and speed (None for one phase)."""
+        if not self.two_phase:
+            return None
+        w = np.asarray(w, float).ravel()
+        return [(float(w[self.offset(s) + 1]),
+                 float(w[self.x_offset(s) + 2 * (self.nodes - 1) + 1])) for s in range(self.S)]
 
     def params(self, cfg: Config, maps: list[tuple[np.ndarray, np.ndarray]],
                J_ref: float = 1.0) -> np.ndarray:
@@ -307,7 +413,8 @@ class ScenarioNLP:
         A = np.concatenate([np.asarray(a, float) for a, _ in maps])
         B = np.concatenate([np.asarray(b, float) for _, b in maps])
         return np.r_[st.theta0, st.theta_closed, o.weight_impact, o.weight_peak_tip,
-                     params_of(cfg)[len(DESIGN_KEYS):], J_ref, time_grid(self.N), A, B]
+                     params_of(cfg)[len(DESIGN_KEYS):], J_ref,
+                     phase_grid(self.nodes, self.two_phase), A, B]
 
     def bounds(self, cfg: Config, t_hi: list[float] | None = None,
                t_lo: list[float] | None = None, design_lb=None):
@@ -321,30 +428,35 @@ class ScenarioNLP:
             if design_lb is not None:
                 lo = max(lo, design_lb[i])
             lbx[i], ubx[i] = lo / SCALES[i], hi / SCALES[i]
-        free = {k: (lo, hi) for k, lo, hi in (o.free or ())}
-        for j, (k, _, sc) in enumerate(self.place):
+        from ..optimiser.interval import free_of
+        free = {k: (lo, hi) for k, lo, hi in free_of(cfg)}
+        for j, (k, _, sc) in enumerate(self.free + self.place):
             lbx[3 + j], ubx[3 + j] = free[k][0] / sc, free[k][1] / sc
         if self.robust_objective != "worst":
             lbx[self.nd] = ubx[self.nd] = 0.0
+        from ..optimiser.nlp import PHASE_FLOOR
         for s in range(self.S):
-            i = self.offset(s)
+            i, j = self.offset(s), self.x_offset(s)
             lbx[i] = max(o.closing_time_min if t_lo is None else t_lo[s], T_FLOOR)
             ubx[i] = t_limit(cfg) if t_hi is None else t_hi[s]
-            th = slice(i + 1, i + 1 + 2 * N, 2)
-            thd = slice(i + 2, i + 2 + 2 * N, 2)
+            if self.two_phase:
+                lbx[i + 1], ubx[i + 1] = PHASE_FLOOR, ubx[i]
+            th = slice(j, j + 2 * N, 2)
+            thd = slice(j + 1, j + 1 + 2 * N, 2)
             lbx[th], ubx[th] = st.theta_closed, st.theta0
             ubx[thd] = 0.0
-            lbx[i + 1 + 2 * (N - 1)] = ubx[i + 1 + 2 * (N - 1)] = st.theta_closed
-            lbx[i + 1 + 2 * N] = 0.0
+            lbx[j + 2 * (N - 1)] = ubx[j + 2 * (N - 1)] = st.theta_closed
+            lbx[j + 2 * N] = 0.0
         lo = {"continuity": 0.0, "theta_above_closed": 0.0, "theta_dot_nonpositive": -np.inf,
               "peak_tip_speed": 0.0, "holding_moment": o.holding_moment_min,
               "release_downwards": -np.inf,
               "epigraph": 0.0 if self.robust_objective == "worst" else -np.inf,
-              "opening_force": -np.inf}
+              "opening_force": -np.inf, "engagement": 0.0, "phase_two": PHASE_FLOOR}
         hi = {"continuity": 0.0, "theta_above_closed": np.inf, "theta_dot_nonpositive": 0.0,
               "peak_tip_speed": np.inf, "holding_moment": np.inf, "release_downwards": 0.0,
               "epigraph": np.inf,
-              "opening_force": np.inf if o.opening_force_max is None else o.opening_force_max}
+              "opening_force": np.inf if o.opening_force_max is None else o.opening_force_max,
+              "engagement": 0.0, "phase_two": np.inf}
         from ..optimiser.placement import placed_bounds
         placed_bounds(cfg, lo, hi)
         lbg = np.concatenate([np.full(n, lo[k]) for sizes in self.g_sizes
@@ -403,18 +515,22 @@ _NLPS: dict = {}
 
 
 def get_scenario_nlp(cfg: Config, model_cfgs: list[Config], nodes: int, substeps: int,
-                     robust_objective: str) -> tuple[ScenarioNLP, bool]:
-    """The ScenarioNLP of these scenario models (cached); (nlp, was it cached)."""
+                     robust_objective: str, substeps2: int | None = None
+                     ) -> tuple[ScenarioNLP, bool]:
+    """The ScenarioNLP of these scenario models (cached); (nlp, was it cached).
+    ``substeps2``: phase 2's sub-steps of a two-phase stroke (default :func:`phase_two`)."""
     o = cfg.optimise
+    from ..optimiser.interval import free_layout
     from ..optimiser.placement import placement_layout
+    M2 = (substeps2 or phase_two(cfg, nodes, substeps)) if two_phase(cfg) else None
     key = (tuple(_model_key(c)
-                 for c in model_cfgs), nodes, substeps, robust_objective, o.hessian,
+                 for c in model_cfgs), nodes, substeps, M2, robust_objective, o.hessian,
            o.linear_solver, o.max_iter, o.opening_force_max is not None,
-           placement_layout(cfg))
+           placement_layout(cfg), free_layout(cfg))
     if key in _NLPS:
         return _NLPS[key], True
     if len(_NLPS) > 16:
         _NLPS.clear()
-    nlp = ScenarioNLP(cfg, model_cfgs, nodes, substeps, robust_objective)
+    nlp = ScenarioNLP(cfg, model_cfgs, nodes, substeps, robust_objective, substeps2=M2)
     _NLPS[key] = nlp
     return nlp, False

@@ -21,6 +21,18 @@ from .nlp import t_limit
 #: (:func:`softclose.robust.worst_cases.check_corners`: 2^d strokes, milliseconds), the
 #: violating ones joining the scenarios.
 MAX_CORNERS = 16
+
+
+def max_corners(cfg: Config) -> int:
+    """The corners that enter the scenario NLP all together: :data:`MAX_CORNERS` one-phase
+    scenarios' worth of RK4 steps. A two-phase scenario (an end damper engaging inside the
+    stroke) costs N (M + M2) steps instead of N M, so fewer of its corners enter together
+    (16 M / (M + M2): 5 at M2 = 2M, with a fourth toleranced key's 16 corners the worst-corner
+    start of d > 4); the corner check still simulates all 2^d after every solve."""
+    from .nlp import discretise, phase_two
+    N, M, _, _ = discretise(cfg)
+    M2 = phase_two(cfg, N, M)
+    return MAX_CORNERS if M2 is None else int(MAX_CORNERS * M / (M + M2))
 #: most toleranced keys that need a model per value (geometry, crank masses, stroke
 #: angles): each corner check builds 2^s models (~0.04 s each; 2^8: ~10 s). With the five
 #: kernel-column keys (design, rotary damper, lid mass) that bounds d by 13 (8192 corners,

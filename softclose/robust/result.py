@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from ..display import Display, Displayed, Table, interval, num, percent, with_unit
-from ..problem import DESIGN_KEYS, METRIC_KEYS, METRICS, UNITS
+from ..problem import DESIGN_KEYS, ENGAGE_KEYS, ENGAGE_METRICS, METRIC_KEYS, METRICS, UNITS
 from .analysis import YieldResult, yield_tables
 from .box import Box
 from .stats import CI_METHOD
@@ -78,6 +78,9 @@ class RobustResult(Displayed):
                "kinds": list(self.kinds)}
         for k in METRIC_KEYS:
             out[k] = None if self.metrics is None else self.metrics.get(k)
+        for k in ENGAGE_KEYS:       # the nominal lid's end damper engages: when, how fast
+            if (self.metrics or {}).get(k) is not None:
+                out[k] = self.metrics[k]
         y = self.yield_result
         out.update({
             "verification": self.verification,
@@ -117,7 +120,7 @@ class RobustResult(Displayed):
         return pd.DataFrame(rows)
 
     def _display(self) -> Display:
-        facts = [(k, with_unit(v, UNITS[k])) for k, v in (self.design or {}).items()]
+        facts = [(k, with_unit(v, UNITS.get(k, "m"))) for k, v in (self.design or {}).items()]
         facts.append((f"objective ({self.robust_objective} case)" if self.robust_objective
                        else "objective", num(self.objective)))
         y, ny = self.yield_result, self.nominal_yield
@@ -139,7 +142,8 @@ class RobustResult(Displayed):
             tables.append(Table("verified metrics of the nominal lid (adaptive reference)",
                                 ("metric", "value"),
                                 [(m.key, with_unit(self.metrics.get(m.key), m.unit, 7))
-                                 for m in METRICS]))
+                                 for m in METRICS + ENGAGE_METRICS
+                                 if m in METRICS or self.metrics.get(m.key) is not None]))
         if self.scenarios:
             tables.append(Table("scenarios", ("scenario", "origin", "objective", "verified"), [
                 (s.get("label"), s.get("origin"), num(s.get("objective")),

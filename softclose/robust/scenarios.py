@@ -18,7 +18,7 @@ from ..config import Config
 from ..problem import DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, with_designs
 from .box import Box, box_of
 from .evaluate import evaluate
-from .policy import MAX_CORNERS, t_end
+from .policy import MAX_CORNERS, max_corners, t_end
 
 
 @dataclass(frozen=True)
@@ -134,7 +134,8 @@ def badness(cfg: Config, cols: dict) -> dict:
 def initial_scenarios(box: Box, cfg: Config | None = None, designs=(),
                       scale: float = 1.0) -> list[Scenario]:
     """The scenarios the NLP starts from: the nominal lid and every corner of the box when
-    there are at most :data:`MAX_CORNERS` of them (or no ``cfg`` is given).
+    there are at most :data:`MAX_CORNERS` of them (:func:`~.policy.max_corners` with two
+    phases; or no ``cfg`` is given).
 
     Beyond, the nominal lid and, at each of ``designs``, the corners worst for each
     constraint and for the objective (:func:`_worst_corners`); in mean mode also a
@@ -152,7 +153,7 @@ def initial_scenarios(box: Box, cfg: Config | None = None, designs=(),
     out = [Scenario(tuple([0.0] * box.dim), "nominal")]
     if not box.dim:
         return out
-    if 2 ** box.dim <= MAX_CORNERS or cfg is None:
+    if cfg is None or 2 ** box.dim <= max_corners(cfg):
         return out + [Scenario(tuple(map(float, z)), "corner") for z in box.corners()]
     seen = {out[0].z}
     for design in designs:

@@ -24,7 +24,8 @@ from ..config import Config
 from ..problem import DESIGN_KEYS, objective, with_designs
 from .box import Box, box_of
 from .evaluate import evaluate, simulator, slow_keys
-from .nlp import T_FLOOR, ScenarioNLP, get_scenario_nlp, model_config, t_limit, time_grid
+from .nlp import (T_FLOOR, ScenarioNLP, get_scenario_nlp, model_config, node_times, t_limit,
+                  time_grid)
 from .policy import (AGREE_RTOL, CHECK_SAMPLES, MAX_REFINE, MAX_ROUNDS, REFINE_RTOL,
                      SLOW_CHECK_SAMPLES, t_end)
 from .scenarios import Scenario, maps, scenario_rows
@@ -56,40 +57,63 @@ def start_design(cfg: Config, box: Box, Z: np.ndarray,
                   "start_worst_objective": float(Jw[i]) if feasible.any() else None}
 
 
-def _guess(cfg_m: Config, p: np.ndarray, N: int, t_lo: float, t_hi: float):
-    """(T, X (2, N), peak, J) of a scenario from its simulated stroke at parameters p."""
+def _guess(cfg_m: Config, p: np.ndarray, N: int, t_lo: float, t_hi: float,
+           two_phase: bool = False):
+    """(T, X (2, N), peak, J, T1) of a scenario from its simulated stroke at parameters p
+    (N intervals per phase; with ``two_phase`` T1 is where the stroke first reaches the
+    end damper's angle, else None)."""
+    from .. import elements
+    from ..optimiser.nlp import PHASE_FLOOR
     st, o = cfg_m.stroke, cfg_m.optimise
     sim = simulator(cfg_m)
-    frac = np.minimum(np.cumsum(time_grid(N)), 1.0)     # node times / T
     r = sim.run(p, trajectory=True, estimate_error=False)
+    th_e = float(elements.params(np.asarray(p, float))["end_damper_angle_deg"]) \
+        if two_phase else None
+    T1 = None
     if r.ok and r.trajectory is not None:
         tr = r.trajectory
         T = r.closing_time if r.closed else tr["t"][-1]
         T = float(np.clip(T, t_lo, t_hi))
-        tn = T * frac
+        if two_phase:
+            T1 = T * (st.theta0 - th_e) / (st.theta0 - st.theta_closed)
+            below = np.flatnonzero(tr["theta"] <= th_e)
+            if len(below) and below[0] > 0:
+                i = below[0]
+                t0, t1, a, b = tr["t"][i - 1], tr["t"][i], tr["theta"][i - 1], tr["theta"][i]
+                T1 = float(t0 + (t1 - t0) * (a - th_e) / (a - b)) if a != b else float(t1)
+            T1 = float(np.clip(T1, PHASE_FLOOR, T - PHASE_FLOOR))
+        tn = node_times(N, two_phase, T, T1)
         X = np.vstack([np.interp(tn, tr["t"], tr["theta"]),
                        np.minimum(np.interp(tn, tr["t"], tr["theta_dot"]), 0.0)])
         peak = float(np.max(tr["tip_speed"][tr["t"] <= T + 1e-12]))
     else:
         T = t_hi
-        X = np.vstack([st.theta0 + frac * (st.theta_closed - st.theta0),
-                       np.full(N, (st.theta_closed - st.theta0) / T)])
+        if two_phase:
+            T1 = T * (st.theta0 - th_e) / (st.theta0 - st.theta_closed)
+        tn = node_times(N, two_phase, T, T1)
+        X = np.vstack([st.theta0 + tn / T * (st.theta_closed - st.theta0),
+                       np.full(len(tn), (st.theta_closed - st.theta0) / T)])
         peak = 1.0
+    if two_phase:
+        X[0, N - 1] = th_e
     X[0, -1] = st.theta_closed
     J = objective(o, float(X[1, -1]), peak)
-    return T, X, peak, (J if J is not None and math.isfinite(J) else 1.0)
+    return T, X, peak, (J if J is not None and math.isfinite(J) else 1.0), T1
 
 
 class Problem:
     """The scenario set of one box and the solves over it (state carried between rounds)."""
 
-    def __init__(self, cfg: Config, scale: float, scenarios: list[Scenario], N: int, M: int):
+    def __init__(self, cfg: Config, scale: float, scenarios: list[Scenario], N: int, M: int,
+                 M2: int | None = None):
         self.cfg, self.scale, self.scenarios, self.N, self.M = cfg, scale, scenarios, N, M
         self.box = box = box_of(cfg, scale=scale)
         self.maps = [maps(box, np.asarray(s.z)) for s in scenarios]
         self.model_cfgs = [model_config(cfg, v) for _, _, v in self.maps]
         self.nlp, cached = get_scenario_nlp(cfg, self.model_cfgs, N, M,
-                                            cfg.tolerance.robust_objective)
+                                            cfg.tolerance.robust_objective, M2)
+        #: phase 2's sub-steps (two phases), None for one phase
+        self.M2 = self.nlp.M2
         self.build_time = 0.0 if cached else self.nlp.build_time
         o = cfg.optimise
         self.t_hi = [t_limit(cfg)] * len(scenarios)
@@ -102,7 +126,14 @@ class Problem:
                 self.design_lb[DESIGN_KEYS.index(name)] = box.spreads[j]
 
     def param(self, design) -> np.ndarray:
-        return with_designs(self.cfg, np.asarray(design, float)[:3])
+        """The parameter vector of a design (k, l0, c, then the NLP's free end damper, when
+        given)."""
+        from ..problem import PARAM_COLUMNS
+        d = np.asarray(design, float)
+        p = with_designs(self.cfg, d[:3])
+        for j, (k, _, _) in enumerate(self.nlp.free):
+            p[PARAM_COLUMNS[k]] = d[3 + j] if len(d) > 3 + j else self.nlp.free_values[j]
+        return p
 
     def scenario_params(self, design, s: int) -> np.ndarray:
         a, b, _ = self.maps[s]
@@ -112,7 +143,7 @@ class Problem:
         """Primal start: a previous answer's states where it has them, simulated strokes
         for the new scenarios."""
         o = self.cfg.optimise
-        states, Js = [], []
+        states, Js, T1s = [], [], []
         for s in range(len(self.scenarios)):
             if prev is not None and s < prev.problem.nlp.S:
                 # s_s from the scenario's own peak (the epigraph variable may be anywhere
@@ -120,15 +151,17 @@ class Problem:
                 T, X, _ = prev.states[s]
                 pk = float(prev.peaks[s])
                 states.append((T, X, pk))
+                T1s.append(prev.engage[s][0] if prev.engage else None)
                 Js.append(objective(o, float(X[1, -1]), pk))
                 continue
-            T, X, pk, J = _guess(self.model_cfgs[s], self.scenario_params(design, s), self.N,
-                                 self.t_lo[s], self.t_hi[s])
+            T, X, pk, J, T1 = _guess(self.model_cfgs[s], self.scenario_params(design, s),
+                                     self.N, self.t_lo[s], self.t_hi[s], self.nlp.two_phase)
             states.append((T, X, pk))
+            T1s.append(T1)
             Js.append(J)
         J_ref = prev.J_ref if prev is not None else max(max(Js), 1e-8)
         t = max(Js) / J_ref
-        return self.nlp.pack(design, t, states), J_ref
+        return self.nlp.pack(design, t, states, T1s), J_ref
 
     def solve(self, x0, J_ref, lam=None) -> "Run":
         nlp = self.nlp
@@ -148,6 +181,8 @@ class Run:
         self.problem, self.r, self.p, self.J_ref, self.bounds = problem, r, p, J_ref, bounds
         self.success = r["success"]
         self.design, self.t, self.states = problem.nlp.unpack(r["x"])
+        #: per scenario (engagement time, theta' there) with two phases, else None
+        self.engage = problem.nlp.engagements(r["x"])
         # each scenario's own peak tip speed and objective (sub-step speeds and Hermite
         # maxima, not the epigraph variables: see softclose.robust.nlp)
         self.peaks = problem.nlp.peaks(r["x"], p)
@@ -215,7 +250,7 @@ def _polish(problem: Problem, run: Run, notes: list) -> tuple[Problem, Run]:
         if why is None:
             break
         finer = Problem(problem.cfg, problem.scale, problem.scenarios, problem.N,
-                        2 * problem.M)
+                        2 * problem.M, 2 * problem.M2 if problem.M2 else None)
         finer.t_hi, finer.t_lo = list(problem.t_hi), list(problem.t_lo)
         r2 = finer.solve(run.r["x"], run.J_ref)
         if not r2.success:
@@ -276,7 +311,7 @@ def solve_box(cfg: Config, scale: float, scenarios: list, N: int, M: int, start,
         scen = problem.scenarios + [Scenario(z, f"Monte Carlo, round {k + 1}") for z in new] \
             + [Scenario(z, f"corner check, round {k + 1}") for z in corners]
         n_new = len(new) + len(corners)
-        bigger = Problem(cfg, scale, scen, problem.N, problem.M)
+        bigger = Problem(cfg, scale, scen, problem.N, problem.M, problem.M2)
         bigger.t_hi = problem.t_hi + [t_limit(cfg)] * n_new
         bigger.t_lo = problem.t_lo + [max(cfg.optimise.closing_time_min, T_FLOOR)] * n_new
         x0, _ = bigger.initial(run.design, run)

@@ -18,8 +18,9 @@ import numpy as np
 
 from .. import statics
 from ..config import Config
-from ..problem import (DESIGN_KEYS, METRIC_KEYS, VERIFY_RTOL, agreement_tolerance, design_of,
-                       params_of)
+from ..problem import (DESIGN_KEYS, ENGAGE_KEYS, METRIC_KEYS, VERIFY_RTOL, agreement_tolerance,
+                       design_of, params_of)
+from ..problem import PARAM_COLUMNS
 from .box import box_of
 from .evaluate import with_values
 
@@ -35,7 +36,8 @@ def point_config(cfg: Config, keys, x) -> Config:
 
 
 #: the metrics a solver's claims are compared on (those the scenario NLP has of its own)
-CLAIMED = ("closing_time", "impact_theta_dot", "peak_tip_speed", "holding_moment")
+CLAIMED = ("closing_time", "impact_theta_dot", "peak_tip_speed", "holding_moment",
+           *ENGAGE_KEYS)
 
 
 def agreement(claims: dict, reference: dict) -> dict:
@@ -72,7 +74,8 @@ def reference_check(cfg: Config, keys, x, label: str = "", kernel: dict | None =
     if "error" in ver:
         out.update(ok=False, error=ver["error"])
         return out
-    out["reference"] = {k: ver.get(k) for k in METRIC_KEYS}
+    out["reference"] = {k: ver.get(k) for k in METRIC_KEYS + ENGAGE_KEYS
+                        if k in METRIC_KEYS or ver.get(k) is not None}
     out["reference"]["objective"] = ver.get("objective")
     out["constraints"] = ver.get("constraints", {})
     out["ok"] = bool(ver.get("constraints_ok"))
@@ -109,6 +112,9 @@ def scenario_report(cfg, problem, run, verify: bool) -> tuple[list, bool]:
                    "peak_tip_speed": float(run.peaks[s]),
                    "holding_moment": model.holding_moment(p),
                    "opening_force": statics.opening_force_exact(model, p)}
+        if run.engage is not None and p[PARAM_COLUMNS["design.end_damper_c"]] != 0:
+            # two phases: the node between them, against the reference's engagement
+            metrics["engage_time"], metrics["engage_theta_dot"] = run.engage[s]
         entry = {"label": box_d.label(z), "origin": sc.origin,
                  "values": {k: float(v) for k, v in zip(box_d.keys, box_d.values(z)[0])},
                  "z": list(map(float, z)), "metrics": metrics, "objective": float(run.J[s]),

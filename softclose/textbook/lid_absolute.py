@@ -7,9 +7,12 @@ one degree of freedom.  The augmented equations
     M q'' + Phi_q^T lambda = Q,     Phi_q q'' = gamma_c
 
 are solved for q'' (and the multipliers), from which theta'' = q''[2].  Q holds gravity on all
-three bodies, the spring E-D, the dashpot C-O, the rotary damper on the lid and a torsion spring
-at one of the pins (a moment on the two bodies' relative angle, read off q).  Nothing here is
-shared with the reduced model in softclose.model or the element registry.
+three bodies, the spring E-D, the dashpot C-O, the rotary damper on the lid, a torsion spring
+at one of the pins (a moment on the two bodies' relative angle, read off q), friction on the
+lid's rotation, and the end damper: a moment -c_e theta' on the lid while its angle q[2] is
+below the engagement angle theta_e (acting on theta' itself, read off q'; one-way like the
+other dampers).  Nothing here is shared with the reduced model in softclose.model or the
+element registry.
 """
 
 from __future__ import annotations
@@ -54,6 +57,8 @@ class LidParameters:
     psi0: float = 0.0                # its free angle (rad)
     pivot: str = "O"                 # O, B, A or C
     Tf: float = 0.0                  # Coulomb friction moment on the lid's rotation (N m)
+    c_end: float = 0.0               # end damper on the lid's rotation (N m s/rad) ...
+    theta_end: float = 0.08726646259971647   # ... acting while theta < theta_end (rad; 5 deg)
 
 
 #: a pin's bodies: (body a, body b) with psi = angle(a) - angle(b); -1 = ground
@@ -72,7 +77,8 @@ def read_parameters(cfg) -> LidParameters:
         F={"extension": 1.0, "compression": -1.0}.get(d.spring_kind, 0.0) * d.spring_preload,
         rot_pivot=d.rotary_damper_pivot, one_way=d.damper_one_way,
         kt=d.torsion_k, psi0=np.radians(d.torsion_free_angle_deg), pivot=d.torsion_pivot,
-        Tf=cfg.friction.torque)
+        Tf=cfg.friction.torque, c_end=d.end_damper_c,
+        theta_end=np.radians(d.end_damper_angle_deg))
 
 
 def default_parameters(**design) -> LidParameters:
@@ -130,7 +136,8 @@ def solve_configuration(p: LidParameters, theta: float, theta_dot: float = 0.0,
 
 def evaluate_applied_forces(p: LidParameters, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
     """Generalised forces Q: gravity, spring E-D, dashpot C-O, rotary damper, torsion spring,
-    friction on the lid's rotation (all but gravity on the lid or at a pin)."""
+    friction and the end damper on the lid's rotation (all but gravity on the lid or at a
+    pin)."""
     Q = np.zeros(9)
     for body, m in enumerate((p.m1, p.m2, p.m3)):
         add_point_force(Q, q, body, (0.0, 0.0), np.array([0.0, -m * p.g]))
@@ -162,6 +169,8 @@ def evaluate_applied_forces(p: LidParameters, q: np.ndarray, qd: np.ndarray) -> 
             add_moment(Q, b, -moment)
     if p.Tf:                                         # dry friction against the lid's turning
         add_moment(Q, 0, -p.Tf * np.sign(qd[2]))
+    if p.c_end and q[2] < p.theta_end:               # the end damper, below its angle
+        add_moment(Q, 0, -on * p.c_end * qd[2])
     return Q
 
 

@@ -21,6 +21,10 @@ from softclose.reference import Reference
 from softclose.simulate import Simulator
 
 OUT = Path(__file__).with_name("golden.npz")
+#: the kernel's output columns the file holds (those of b33652c: the columns added since, the
+#: end damper's engagement, are NaN on these rows, which have none)
+GOLDEN_FIELDS = tuple(k for k in native.OUT_FIELDS if k not in ("engage_time",
+                                                                 "engage_theta_dot"))
 #: a second geometry (the test suite's cfg2, its assembly angles as computed there)
 GEOMETRY2 = {"crank_oa": 0.05, "crank_bc": 0.09, "pivot_b": [0.065, 0.02],
              "spring_anchor": [-0.05, 0.03]}
@@ -59,10 +63,10 @@ def compute() -> dict[str, np.ndarray]:
         for method in ("rk4", "euler_cromer", "gauss4", "radau5"):
             s = Simulator(c, model=sim.model, integrator=method)
             r = s.run_batch(P)
-            out[f"{tag}_{method}"] = np.column_stack([r[k] for k in native.OUT_FIELDS])
+            out[f"{tag}_{method}"] = np.column_stack([r[k] for k in GOLDEN_FIELDS])
         masses = np.random.default_rng(3).uniform(0.3, 0.8, len(P))
         r = sim.run_batch(P, lid_mass=masses)
-        out[f"{tag}_rk4_masses"] = np.column_stack([r[k] for k in native.OUT_FIELDS])
+        out[f"{tag}_rk4_masses"] = np.column_stack([r[k] for k in GOLDEN_FIELDS])
         out[f"{tag}_masses"] = masses
         out[f"{tag}_holding"] = sim.holding_moments(P)
         out[f"{tag}_holding_masses"] = sim.holding_moments(P, masses)
