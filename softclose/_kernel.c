@@ -73,7 +73,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define KERNEL_ABI 3 /* bumped when the exported signatures or outputs change */
+#define KERNEL_ABI 4 /* bumped when the exported signatures or outputs change */
 #define NC 8 /* M, dM, Vg, dVg, l, dl, dd, tau */
 enum { C_M, C_DM, C_VG, C_DVG, C_L, C_DL, C_DD, C_TAU };
 #define NMASS 4 /* M, dM, Vg, dVg: the coefficients that depend on the lid's mass */
@@ -83,10 +83,12 @@ enum { C_M, C_DM, C_VG, C_DVG, C_L, C_DL, C_DD, C_TAU };
 #define SMAX 4
 /* every layout constant the Python side shares, checked there when the kernel is loaded */
 static const char LAYOUT[] =
-    "abi=3;meta=ncell,lo,h,m0,rotary_at_pivot;cc=M,dM,Vg,dVg,l,dl,dd,tau;mass=M,dM,Vg,dVg;"
-    "xcc=psi,dpsi,dpr2,-;"
+    "abi=4;meta=ncell,lo,h,m0,rotary_at_pivot;cc=M,dM,Vg,dVg,l,dl,dd,tau;mass=M,dM,Vg,dVg;"
+    "xcc=psi,dpsi,dpr2,-;pose=Ax,Ay,dAx,dAy,cos,sin,-,-;"
     "row=spring_k,spring_rest_length,damper_c,rotary_damper_c,spring_kind,spring_preload,"
-    "torsion_k,torsion_free_angle,damper_one_way,friction_torque,energy_tol,lid_mass;out=status,closing_time,impact_theta_dot,impact_tip_speed,"
+    "torsion_k,torsion_free_angle,damper_one_way,friction_torque,energy_tol,lid_mass,"
+    "spring_anchor_x,spring_anchor_y,lid_e_x,lid_e_y,dashpot_anchor_x,dashpot_anchor_y,"
+    "dashpot_lid_x,dashpot_lid_y;out=status,closing_time,impact_theta_dot,impact_tip_speed,"
     "peak_tip_speed,min_spring_length,max_spring_length,steps,energy_rise,theta_min,"
     "theta_dot_max,theta_max,stop_reason,stop_theta,stop_time;nrng=18";
 
@@ -110,6 +112,9 @@ typedef struct {
                         * dd, tau), or NULL */
     const double *rng; /* ncell * NRNG: ranges of some pieces over each whole cell (or NULL) */
     const double *xcc; /* ncell * 4 * NX: the element columns' pieces (X_*), or NULL */
+    const double *pcc; /* ncell * 4 * NPOSE: the pose pieces (PER-ROW ATTACHMENT POINTS), or
+                        * NULL */
+    double pA1, pA2;   /* bounds of |A'| and |A''| over the table (with pcc) */
     const int *crit;   /* the cells where l' may vanish (R_LCRIT), ascending (with rng) */
     int rot_pivot;     /* the rotary damper acts at a pivot (its psi'^2 in xcc), not the lid */
     int ncrit;
@@ -122,6 +127,10 @@ typedef struct {
 enum { R_TAU = 0, R_M = 2, R_VG = 4, R_L = 6, R_DVG = 8, R_DL = 10, R_MID = 12, R_LCRIT = 16,
        NRNG = 18 };
 #define CQ(base, i, e, j) ((base)[((size_t)(i) * 4 + (e)) * NC + (j)])
+/* the pose table's columns (PER-ROW ATTACHMENT POINTS): the crank pin A, its slope A', cos
+ * and sin of theta; NPOSE per power (two vectors of four), the last two zero */
+enum { P_AX, P_AY, P_DAX, P_DAY, P_COS, P_SIN, P_USED };
+#define NPOSE 8
 #define XQ(base, i, e, j) ((base)[((size_t)(i) * 4 + (e)) * NX + (j)])
 
 /* lanes of the stroke loop are advanced as NG SIMD vectors of VW (see the stroke loop) */
@@ -182,6 +191,10 @@ typedef struct {
 /* the design-row columns: the elements' parameters (in the registry's order), e_tol, m_lid */
 enum { D_K, D_L0, D_C, D_CR, D_KIND, D_F0, D_KT, D_PSI0, D_OW, D_TF, D_ETOL, D_MLID,
        NDESIGN };
+/* then, optionally, the row's own attachment points (PER-ROW ATTACHMENT POINTS, below): the
+ * spring's anchor D (world) and lid point E (lid frame, from A), the dashpot's anchor F
+ * (world) and lid point H (lid frame), x and y each; NaN: the table's own */
+enum { D_PT = NDESIGN, NPT = 8 };
 /* the extra table's columns: the torsion spring's psi and dpsi at its pivot, the rotary
  * damper's psi'^2 at its pivot */
 enum { X_PSI, X_DPSI, X_DR2 };
@@ -191,12 +204,14 @@ enum { X_PSI, X_DPSI, X_DR2 };
  * dampers are one-way; Tf: dry friction, fs: the way the lid moves (its state: set at the
  * release and at every turning point); dm = m_lid - m0: 0 for a row at the table's mass; x:
  * the row has an element of the extra table */
-typedef struct { double k, l0, F, c, cr, crp, kt, psi0, Tf, fs, dm; int x, ow; } Par;
+typedef struct { double k, l0, F, c, cr, crp, kt, psi0, Tf, fs, dm; int x, ow;
+                 int ps, pd; double pt[NPT]; /* own spring / dashpot points (D_PT ...) */ } Par;
 /* the lanes' parameters as vectors; any: a lane at another lid mass; anyx: a lane with
  * element columns (its element terms are added for every lane of the group: the others add
  * a zero, k_t = 0) */
 typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs; v4l ow; double dm[VW];
-                 int any, anyx, anyow, anyf; } Par4;
+                 int any, anyx, anyow, anyf;
+                 v4 pt[NPT]; v4l psm, pdm; int anyps, anypd; /* the lanes' own points */ } Par4;
 /* read a design row d of table T into p (not dm) */
 #define ELEM_READ(p, d, T) do { \
         (p)->k = (d)[D_K]; (p)->l0 = (d)[D_L0]; (p)->c = (d)[D_C]; (p)->cr = (d)[D_CR]; \
@@ -337,6 +352,225 @@ static inline void xtab_eval(const Table *T, int i, double s, double *x, double 
     }
 }
 
+/* ===== PER-ROW ATTACHMENT POINTS ===========================================================
+ * A row may carry its own spring points (anchor D, world; lid point E, lid frame from pin A)
+ * and dashpot points (anchor F, world; lid point H, lid frame) after m_lid (D_PT, NPT; NaN,
+ * or no such columns: the table's own l, dl, dd, read as always -- bit-identical). Every lid
+ * point is P(th) = A(th) + R(th) p, A the crank pin, so the pose table (pcc: cubic Hermite
+ * pieces of A, A' = dA/dth, cos th, sin th on the table's cells, built like the other
+ * columns from the CasADi model with exact derivatives, so exact at the nodes) gives at any
+ * angle, for a lid point p and a ground point G,
+ *     r = A + R p - G,   r' = A' + z x (R p),   l = |r|,   l' = r.r' / l,
+ * and the dashpot's q'^2 = (r.r')^2 / |r|^2: the columns a table built at the row's points
+ * interpolates (agreeing to the tables' interpolation error, ~1e-10 relative). They replace
+ * l, dl (spring) and dd (dashpot) of the coefficient values of that row wherever the kernel
+ * reads them (pts_eval; the SIMD lanes: pts4, the same operations in the same order). The
+ * implicit methods' Jacobian takes their theta-derivatives from r'' = A'' - R p (A'' the
+ * slope of the A' pieces). The early exit stays exact: over a piece of a cell, the ranges of
+ * l and l' come from interval arithmetic on the ranges of the pose pieces (pts_ranges), and
+ * the spring-length extremes over [th_min, th_max] from the row's own cubic Hermite pieces
+ * of l (its values and slopes at the nodes: what a table at those points holds), searched
+ * only in the cells where a mean-value bound of l' does not rule an extremum out
+ * (l_extremes_pts). A length that vanishes (a lid point through its anchor) makes l'
+ * non-finite: the stroke stops (S_NONFINITE), never a number from it. */
+
+/* r and r' of a lid point (px, py) and a ground point (gx, gy) from the pose values a[] --
+ * numbers or lanes: one statement for the scalar code and the SIMD lanes */
+#define PT_R(a, px, py, gx, gy, rx, ry, ux, uy) do { \
+        __typeof__(rx) qx_ = (a)[P_COS] * (px) - (a)[P_SIN] * (py); \
+        __typeof__(rx) qy_ = (a)[P_SIN] * (px) + (a)[P_COS] * (py); \
+        (rx) = (a)[P_AX] + qx_ - (gx); (ry) = (a)[P_AY] + qy_ - (gy); \
+        (ux) = (a)[P_DAX] - qy_; (uy) = (a)[P_DAY] + qx_; \
+    } while (0)
+
+#define PCUB(q, j, s) ((q)[j] + (s) * ((q)[NPOSE + (j)] + (s) * ((q)[2 * NPOSE + (j)] \
+                       + (s) * (q)[3 * NPOSE + (j)])))
+#define PDCUB(q, j, s, ih) (((q)[NPOSE + (j)] + (s) * (2.0 * (q)[2 * NPOSE + (j)] \
+                            + (s) * 3.0 * (q)[3 * NPOSE + (j)])) * (ih))
+
+/* read the row's own points (columns D_PT.. of a row of ncol columns) into p */
+static inline void pts_read(Par *p, const double *d, int ncol)
+{
+    p->ps = p->pd = 0;
+    if (ncol < D_PT + NPT) return;
+    for (int j = 0; j < NPT; j++) p->pt[j] = d[D_PT + j];
+    p->ps = isfinite(d[D_PT]) && isfinite(d[D_PT + 1]) && isfinite(d[D_PT + 2])
+            && isfinite(d[D_PT + 3]);
+    p->pd = isfinite(d[D_PT + 4]) && isfinite(d[D_PT + 5]) && isfinite(d[D_PT + 6])
+            && isfinite(d[D_PT + 7]);
+}
+
+/* one length of a row's points from the pose values a (and their theta-derivatives da, or
+ * NULL): l and l' (spring: dash = 0), or q'^2 (dashpot: dash = 1) into v, their
+ * theta-derivatives into dv (with da) */
+static inline void pt_length(const double *a, const double *da, const double *g, int dash,
+                             double *v, double *dv)
+{
+    double rx, ry, ux, uy;
+    PT_R(a, g[2], g[3], g[0], g[1], rx, ry, ux, uy);
+    double l2 = rx * rx + ry * ry, w = rx * ux + ry * uy;
+    double l = 0.0, dl = 0.0;
+    if (dash) v[C_DD] = w * w / l2;
+    else { l = sqrt(l2); dl = w / l; v[C_L] = l; v[C_DL] = dl; }
+    if (!da) return;
+    /* r'' = A'' - R p (the slope of z x R p is -R p) */
+    double qx = a[P_COS] * g[2] - a[P_SIN] * g[3], qy = a[P_SIN] * g[2] + a[P_COS] * g[3];
+    double wd = ux * ux + uy * uy + rx * (da[P_DAX] - qx) + ry * (da[P_DAY] - qy);
+    if (dash) dv[C_DD] = 2.0 * w * (wd * l2 - w * w) / (l2 * l2);
+    else { dv[C_L] = dl; dv[C_DL] = (wd - dl * dl) / l; }
+}
+
+/* replace the spring's (p->ps) and the dashpot's (p->pd) columns of the values v (and of
+ * their theta-derivatives dv, if not NULL) by those of the row's own points, cell i at s */
+static inline void pts_eval(const Table *T, const Par *p, int i, double s, double *v, double *dv)
+{
+    const double *q = T->pcc + (size_t)i * 4 * NPOSE;
+    double a[P_USED], da[P_USED];
+    for (int j = 0; j < P_USED; j++) {
+        a[j] = PCUB(q, j, s);
+        if (dv) da[j] = PDCUB(q, j, s, T->inv_h);
+    }
+    if (p->ps) pt_length(a, dv ? da : NULL, p->pt, 0, v, dv);
+    if (p->pd) pt_length(a, dv ? da : NULL, p->pt + 4, 1, v, dv);
+}
+
+/* intervals, for the early exit's bounds on a piece */
+typedef struct { double lo, hi; } Iv;
+static inline Iv iv_scale(Iv a, double k)
+{
+    double x = a.lo * k, y = a.hi * k;
+    return x < y ? (Iv){x, y} : (Iv){y, x};
+}
+static inline Iv iv_add(Iv a, Iv b) { return (Iv){a.lo + b.lo, a.hi + b.hi}; }
+static inline Iv iv_mul(Iv a, Iv b)
+{
+    double x1 = a.lo * b.lo, x2 = a.lo * b.hi, x3 = a.hi * b.lo, x4 = a.hi * b.hi;
+    return (Iv){MIN2(MIN2(x1, x2), MIN2(x3, x4)), MAX2(MAX2(x1, x2), MAX2(x3, x4))};
+}
+static inline double iv_mag(Iv a) { return MAX2(fabs(a.lo), fabs(a.hi)); }
+/* the distance of 0 from the interval (0 inside it) */
+static inline double iv_gap(Iv a) { return a.lo > 0 ? a.lo : (a.hi < 0 ? -a.hi : 0.0); }
+
+/* ranges of the row's spring length l and its slope l' over cell i, s in [s0, s1] (interval
+ * arithmetic on the ranges of the pose pieces, widened for rounding); 0 if l may vanish */
+static int pts_ranges(const Table *T, const Par *p, int i, double s0, double s1,
+                      double *llo, double *lhi, double *dllo, double *dlhi)
+{
+    Iv a[P_USED];
+    for (int j = 0; j < P_USED; j++) {
+        double q[4];
+        for (int e = 0; e < 4; e++) q[e] = T->pcc[((size_t)i * 4 + e) * NPOSE + j];
+        cubic_range(q, s0, s1, &a[j].lo, &a[j].hi);
+    }
+    const double *g = p->pt;
+    /* R p = (c px - s py, s px + c py); r = A + R p - D; r' = A' + (-(R p)_y, (R p)_x) */
+    Iv qx = iv_add(iv_scale(a[P_COS], g[2]), iv_scale(a[P_SIN], -g[3]));
+    Iv qy = iv_add(iv_scale(a[P_SIN], g[2]), iv_scale(a[P_COS], g[3]));
+    Iv rx = iv_add(iv_add(a[P_AX], qx), (Iv){-g[0], -g[0]});
+    Iv ry = iv_add(iv_add(a[P_AY], qy), (Iv){-g[1], -g[1]});
+    Iv ux = iv_add(a[P_DAX], iv_scale(qy, -1.0)), uy = iv_add(a[P_DAY], qx);
+    double lmin = hypot(iv_gap(rx), iv_gap(ry)), lmax = hypot(iv_mag(rx), iv_mag(ry));
+    Iv w = iv_add(iv_mul(rx, ux), iv_mul(ry, uy));
+    double pad = 1e-12 * (lmax + iv_mag(w)) + 1e-300;
+    lmin -= 1e-12 * lmax;
+    if (!(lmin > 0) || !isfinite(lmax) || !isfinite(w.lo) || !isfinite(w.hi)) return 0;
+    double d1 = w.lo / lmin, d2 = w.lo / lmax, d3 = w.hi / lmin, d4 = w.hi / lmax;
+    *llo = lmin; *lhi = lmax + pad;
+    *dllo = MIN2(MIN2(d1, d2), MIN2(d3, d4)) - pad / lmin;
+    *dlhi = MAX2(MAX2(d1, d2), MAX2(d3, d4)) + pad / lmin;
+    return 1;
+}
+
+/* bounds of |A'| and |A''| over the table (T->pA1, T->pA2), from the ranges of the pose
+ * pieces of A' and of their slopes, widened by 1 % (the mean-value test of l_extremes_pts) */
+static void pts_bounds(Table *T)
+{
+    double m1 = 0.0, m2x = 0.0, m2y = 0.0, m1x = 0.0, m1y = 0.0;
+    for (int i = 0; i < T->ncell; i++) {
+        for (int j = P_DAX; j <= P_DAY; j++) {
+            double q[4], dq[4], lo, hi;
+            for (int e = 0; e < 4; e++) q[e] = T->pcc[((size_t)i * 4 + e) * NPOSE + j];
+            cubic_range(q, 0.0, 1.0, &lo, &hi);
+            double mag = MAX2(fabs(lo), fabs(hi));
+            if (j == P_DAX) m1x = MAX2(m1x, mag); else m1y = MAX2(m1y, mag);
+            dq[0] = q[1]; dq[1] = 2.0 * q[2]; dq[2] = 3.0 * q[3]; dq[3] = 0.0;
+            cubic_range(dq, 0.0, 1.0, &lo, &hi);
+            mag = MAX2(fabs(lo), fabs(hi)) * T->inv_h;
+            if (j == P_DAX) m2x = MAX2(m2x, mag); else m2y = MAX2(m2y, mag);
+        }
+    }
+    m1 = hypot(m1x, m1y);
+    T->pA1 = 1.01 * m1;
+    T->pA2 = 1.01 * hypot(m2x, m2y);
+}
+
+/* the row's spring length and slope at node j = 0..ncell (the pose pieces' end values) */
+static inline void pts_node(const Table *T, const Par *p, int j, double *l, double *dl)
+{
+    double v[NC] = {0};
+    if (j < T->ncell) pts_eval(T, p, j, 0.0, v, NULL);
+    else pts_eval(T, p, T->ncell - 1, 1.0, v, NULL);
+    *l = v[C_L]; *dl = v[C_DL];
+}
+
+static void cubic_extremes(const double *q, int i, const Table *T, double a, double b,
+                           double *lmin, double *lmax);
+
+/* l_extremes for a row with its own spring points: the extremes over [a, b] of the row's
+ * Hermite pieces of l (node values and slopes), in the cells [j0, j1) where l' may vanish:
+ * on a run of cells whose middle has |l'| above the largest |l''| (<= |r'|^2 / |r| + |r''|,
+ * |r'| <= |A'| + |e|, |r''| <= |A''| + |e|) times its half width, l is monotone */
+static void pts_scan(const Table *T, const Par *p, int j0, int j1, double a, double b,
+                     double *lmin, double *lmax, int depth)
+{
+    if (j1 <= j0) return;
+    double x0 = T->lo + j0 * T->h, x1 = T->lo + j1 * T->h;
+    if (j1 - j0 > 1 && depth < 40) {
+        double xm = 0.5 * (x0 + x1), hw = 0.5 * (x1 - x0), s, v[NC];
+        int i = cell_index(T, xm, &s);
+        if (i >= 0) {
+            pts_eval(T, p, i, s, v, NULL);
+            double e = hypot(p->pt[2], p->pt[3]), R1 = T->pA1 + e, R2 = T->pA2 + e;
+            double lower = v[C_L] - R1 * hw;
+            if (lower > 0 && isfinite(v[C_DL])) {
+                double L2 = R1 * R1 / lower + R2;
+                if (fabs(v[C_DL]) > L2 * hw * (1.0 + 1e-6) + 1e-12 * v[C_L]) return;
+            }
+        }
+        int jm = (j0 + j1) / 2;
+        pts_scan(T, p, j0, jm, a, b, lmin, lmax, depth + 1);
+        pts_scan(T, p, jm, j1, a, b, lmin, lmax, depth + 1);
+        return;
+    }
+    for (int i = j0; i < j1; i++) { /* the row's Hermite piece of l on cell i */
+        double f0, d0, f1, d1, q[4];
+        pts_node(T, p, i, &f0, &d0);
+        pts_node(T, p, i + 1, &f1, &d1);
+        d0 *= T->h; d1 *= T->h;
+        q[0] = f0; q[1] = d0; q[2] = 3 * (f1 - f0) - 2 * d0 - d1; q[3] = 2 * (f0 - f1) + d0 + d1;
+        cubic_extremes(q, i, T, a, b, lmin, lmax);
+    }
+}
+
+static void l_extremes_pts(const Table *T, const Par *p, double a, double b, double *lmin,
+                           double *lmax)
+{
+    double ends[2] = {a, b}, s, v[NC];
+    *lmin = INFINITY; *lmax = -INFINITY;
+    for (int e = 0; e < 2; e++) {
+        int i = cell_index(T, ends[e], &s);
+        if (i < 0) continue;
+        pts_eval(T, p, i, s, v, NULL);
+        if (v[C_L] < *lmin) *lmin = v[C_L];
+        if (v[C_L] > *lmax) *lmax = v[C_L];
+    }
+    int i0 = (int)floor((a - T->lo) / T->h), i1 = (int)floor((b - T->lo) / T->h);
+    if (i0 < 0) i0 = 0;
+    if (i1 > T->ncell - 1) i1 = T->ncell - 1;
+    pts_scan(T, p, i0, i1 + 1, a, b, lmin, lmax, 0);
+}
+/* ===== (end of the per-row attachment points) ================================================ */
+
 /* coefficient values v[NC] and theta-derivatives dv[NC] (dv may be NULL) of the row p
  * (p may be NULL: the table's own mass), and -- when x is not NULL and the row has them --
  * the element columns x[NX] and their derivatives dx */
@@ -352,6 +586,7 @@ static inline int tab_eval_x(const Table *T, const Par *p, double th, double *v,
         if (dv) dv[j] = DCUB(q, j, s, T->inv_h);
     }
     if (x && p && p->x) xtab_eval(T, i, s, x, dx);
+    if (p && (p->ps | p->pd)) pts_eval(T, p, i, s, v, dv);
     if (p && p->dm != 0.0) {
         const double *r = T->dcc + (size_t)i * 4 * NC;
         for (int j = 0; j < NMASS; j++) {
@@ -398,6 +633,7 @@ static inline void potential_at(const Table *T, const Par *p, int i, double s, d
     double c[NC], x[NX] = {0};
     c[C_VG] = CUB(q, C_VG, s); c[C_L] = CUB(q, C_L, s);
     c[C_DVG] = dV ? CUB(q, C_DVG, s) : 0.0; c[C_DL] = dV ? CUB(q, C_DL, s) : 0.0;
+    if (p->ps) pts_eval(T, p, i, s, c, NULL); /* (its l and l'; its dd is not read) */
     if (p->dm != 0.0) {
         const double *r = T->dcc + (size_t)i * 4 * NC;
         c[C_VG] += p->dm * CUB(r, C_VG, s);
@@ -606,6 +842,27 @@ static void l_extremes(const Table *T, double a, double b, double *lmin, double 
     }
 }
 
+/* the interior extremes of the cubic q on cell i within [a, b] into lmin, lmax (the same
+ * operations as l_extremes: a row's own Hermite pieces of l, PER-ROW ATTACHMENT POINTS) */
+static void cubic_extremes(const double *q, int i, const Table *T, double a, double b,
+                           double *lmin, double *lmax)
+{
+    double A = 3 * q[3], B = 2 * q[2], C = q[1], r[2];
+    int nr = 0;
+    if (fabs(A) < 1e-300) { if (B != 0) r[nr++] = -C / B; }
+    else {
+        double D = B * B - 4 * A * C;
+        if (D >= 0) { double sq = sqrt(D); r[nr++] = (-B + sq) / (2 * A); r[nr++] = (-B - sq) / (2 * A); }
+    }
+    for (int j = 0; j < nr; j++) {
+        double th = T->lo + (i + r[j]) * T->h;
+        if (r[j] < 0 || r[j] > 1 || th < a || th > b) continue;
+        double l = q[0] + r[j] * (q[1] + r[j] * (q[2] + r[j] * q[3]));
+        if (l < *lmin) *lmin = l;
+        if (l > *lmax) *lmax = l;
+    }
+}
+
 /* ---- early exit: what the rest of a stroke can still reach ------------------------- */
 
 /* range of the cubic q0 + q1 s + q2 s^2 + q3 s^3 over [s0, s1] (ends and interior extrema) */
@@ -654,7 +911,8 @@ static int speed_piece_ok(const Table *T, const Par *p, int i, double s0, double
     if (--*budget < 0) return 0;
     double q[4], glo, ghi, llo, lhi, dglo, dghi, dllo, dlhi, tlo, thi, Mlo, Mhi, v[NC];
     double x[NX] = {0};
-    const double *R = depth == 0 && p->dm == 0.0 && T->rng ? T->rng + (size_t)i * NRNG : NULL;
+    const double *R = depth == 0 && p->dm == 0.0 && !p->ps && T->rng
+                      ? T->rng + (size_t)i * NRNG : NULL; /* (the table's own l, dl) */
     /* (with R, the middle values are the whole cell's: its middle is where x is read) */
     double sm = R ? 0.5 : 0.5 * (s0 + s1), hw = 0.5 * (s1 - s0) * T->h;
     if (R) { /* the whole cell's precomputed ranges (a superset of [s0, s1]) */
@@ -666,9 +924,13 @@ static int speed_piece_ok(const Table *T, const Par *p, int i, double s0, double
     } else {
         if (tab_eval(T, p, T->lo + (i + sm) * T->h, v, NULL)) return 0;
         piece(T, p, i, C_VG, q); cubic_range(q, s0, s1, &glo, &ghi);
-        piece(T, p, i, C_L, q); cubic_range(q, s0, s1, &llo, &lhi);
         piece(T, p, i, C_DVG, q); cubic_range(q, s0, s1, &dglo, &dghi);
-        piece(T, p, i, C_DL, q); cubic_range(q, s0, s1, &dllo, &dlhi);
+        if (p->ps) { /* the row's own spring points: PER-ROW ATTACHMENT POINTS */
+            if (!pts_ranges(T, p, i, s0, s1, &llo, &lhi, &dllo, &dlhi)) return 0;
+        } else {
+            piece(T, p, i, C_L, q); cubic_range(q, s0, s1, &llo, &lhi);
+            piece(T, p, i, C_DL, q); cubic_range(q, s0, s1, &dllo, &dlhi);
+        }
         piece(T, p, i, C_TAU, q); cubic_range(q, s0, s1, &tlo, &thi);
         piece(T, p, i, C_M, q); cubic_range(q, s0, s1, &Mlo, &Mhi);
     }
@@ -877,6 +1139,7 @@ static inline int node_eval(const Table *T, const Par *p, double th, double thd,
     double dtau = DCUB(q, C_TAU, s, T->inv_h);
     double c[NC], x[NX];
     c[C_VG] = Vg; c[C_DVG] = dVg; c[C_L] = l; c[C_DL] = dl; c[C_DD] = dd;
+    if (p->ps | p->pd) pts_eval(T, p, i, s, c, NULL);
     double damp = ELEM_DAMPING(p, c), slope = ELEM_SLOPE(p, c);
     double Vn = ELEM_POTENTIAL(p, c), En = ELEM_ENERGY(p, c, 0.5 * M * thd * thd);
     if (p->x) {
@@ -911,6 +1174,7 @@ static int lane_start(const Table *T, Lane *L, const double *d, int ncol, double
                       long traj_cap)
 {
     ELEM_READ(&L->p, d, T);
+    pts_read(&L->p, d, ncol);
     L->e_tol = d[D_ETOL];
     L->p.dm = 0.0;
     if (ncol > D_MLID && isfinite(d[D_MLID]) && d[D_MLID] != T->m0) L->p.dm = d[D_MLID] - T->m0;
@@ -929,7 +1193,7 @@ static int lane_start(const Table *T, Lane *L, const double *d, int ncol, double
     double E0, V0;
     if (ELEM_STICKS(&L->p)) { /* released from rest: it moves only if |V'| exceeds T_f */
         double Vr, dVr;
-        if ((L->p.dm != 0.0 && !T->dcc) || (L->p.x && !T->xcc)
+        if ((L->p.dm != 0.0 && !T->dcc) || (L->p.x && !T->xcc) || ((L->p.ps | L->p.pd) && !T->pcc)
             || potential(T, &L->p, th0, &Vr, &dVr)) {
             L->E0 = L->Emax = NAN; L->status = S_RANGE; return 1;
         }
@@ -940,7 +1204,7 @@ static int lane_start(const Table *T, Lane *L, const double *d, int ncol, double
         }
         L->p.fs = dVr < 0 ? 1.0 : -1.0;     /* it moves the way -V' drives it */
     }
-    if ((L->p.dm != 0.0 && !T->dcc) || (L->p.x && !T->xcc)
+    if ((L->p.dm != 0.0 && !T->dcc) || (L->p.x && !T->xcc) || ((L->p.ps | L->p.pd) && !T->pcc)
         || node_eval(T, &L->p, th0, 0.0, &L->a, &L->g, &L->dg, &E0, &V0) || !isfinite(E0)) {
         L->E0 = L->Emax = NAN; L->status = S_RANGE; return 1;
     }
@@ -969,7 +1233,8 @@ static void lane_finish(const Table *T, Lane *L, double thc, double t_max)
     out[O_STIME] = L->t;
     if (L->status == S_CLOSED || L->status == S_OPEN) {
         double lmin, lmax;
-        l_extremes(T, L->th_min, L->th_max, &lmin, &lmax);
+        if (L->p.ps) l_extremes_pts(T, &L->p, L->th_min, L->th_max, &lmin, &lmax);
+        else l_extremes(T, L->th_min, L->th_max, &lmin, &lmax);
         out[O_LMIN] = lmin; out[O_LMAX] = lmax;
     }
     if (L->status == S_OPEN && L->reason == R_NONE && L->t >= t_max * (1 - 1e-12)) {
@@ -1210,6 +1475,43 @@ ALWAYS void transpose4(const v4 *r, v4 *c)
 
 
 
+/* pts_eval for the lanes (cells b, local variables *sv): the spring's l, l' and the
+ * dashpot's q'^2 of the lanes with their own points replace those in c (the others keep
+ * theirs, bit for bit); each lane's pose pieces evaluated as rows (Horner in s, as PCUB),
+ * then transposed. Not inlined: inlined, its code slowed the strokes without points by ~10 %
+ * (it is only reached from the vector path, hence compiled for it) */
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+__attribute__((target("avx2")))
+#endif
+__attribute__((noinline)) static void pts4(const Table *T, const Par4 *P,
+                                           const double *const *b, const v4 *sv, v4 *c)
+{
+    const v4 s = *sv;
+    v4 lo[VW], hi[VW], a[NPOSE];
+    for (int q = 0; q < VW; q++) {
+        const double *r = T->pcc + (size_t)((b[q] - T->cc) / NC) * NPOSE;
+        double sq = s[q];
+        lo[q] = ld4(r) + sq * (ld4(r + NPOSE) + sq * (ld4(r + 2 * NPOSE) + sq * ld4(r + 3 * NPOSE)));
+        hi[q] = ld4(r + 4) + sq * (ld4(r + NPOSE + 4) + sq * (ld4(r + 2 * NPOSE + 4)
+                                                             + sq * ld4(r + 3 * NPOSE + 4)));
+    }
+    transpose4(lo, a);
+    transpose4(hi, a + 4);
+    v4 rx, ry, ux, uy;
+    if (P->anyps) {
+        PT_R(a, P->pt[2], P->pt[3], P->pt[0], P->pt[1], rx, ry, ux, uy);
+        v4 l2 = rx * rx + ry * ry, w = rx * ux + ry * uy, l;
+        for (int q = 0; q < VW; q++) l[q] = sqrt(l2[q]);
+        c[C_L] = sel4(P->psm, l, c[C_L]);
+        c[C_DL] = sel4(P->psm, w / l, c[C_DL]);
+    }
+    if (P->anypd) {
+        PT_R(a, P->pt[6], P->pt[7], P->pt[4], P->pt[5], rx, ry, ux, uy);
+        v4 l2 = rx * rx + ry * ry, w = rx * ux + ry * uy;
+        c[C_DD] = sel4(P->pdm, w * w / l2, c[C_DD]);
+    }
+}
+
 /* the NC coefficients of the lanes at th as columns c[j] (four lanes each): each lane's
  * cubic pieces are evaluated as rows (Horner in s, as CUB), mass-corrected where dm != 0,
  * then transposed; okm as cells4's */
@@ -1232,6 +1534,7 @@ ALWAYS void coef4(const Table *T, const Par4 *P, v4 th, v4 *c, const double **b,
     }
     transpose4(lo, c);
     transpose4(hi, c + 4);
+    if (P->anyps | P->anypd) pts4(T, P, b, s, c);
 }
 
 /* ELEM_ONE_WAY for lanes: 0 where the lane's dampers are one-way and th' > 0 */
@@ -1326,6 +1629,7 @@ ALWAYS int rhs_fast(const Table *T, const Par *p, double th, double thd, double 
     }
     double c[NC];
     c[C_DVG] = dVg; c[C_L] = l; c[C_DL] = dl; c[C_DD] = dd;
+    if (p->ps | p->pd) pts_eval(T, p, i, s, c, NULL);
     double damp = ELEM_DAMPING(p, c), slope = ELEM_SLOPE(p, c);
     if (p->x) {
         double x[NX];
@@ -1612,8 +1916,12 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
                 int q = k % VW;
                 ELEM_LANE(G, q, &L->p);
                 G->dm[q] = L->p.dm;
-                G->any = 0; G->anyx = 0; G->anyow = 0; G->anyf = 0;
+                for (int j = 0; j < NPT; j++) G->pt[j][q] = L->p.pt[j];
+                G->psm[q] = -(long long)L->p.ps; G->pdm[q] = -(long long)L->p.pd;
+                G->any = 0; G->anyx = 0; G->anyow = 0; G->anyf = 0; G->anyps = 0; G->anypd = 0;
                 for (int e = 0; e < VW; e++) {
+                    G->anyps |= lanes[k - q + e].p.ps && used[k - q + e];
+                    G->anypd |= lanes[k - q + e].p.pd && used[k - q + e];
                     G->any |= G->dm[e] != 0.0;
                     G->anyx |= lanes[k - q + e].p.x && used[k - q + e];
                     G->anyow |= lanes[k - q + e].p.ow && used[k - q + e];
@@ -1718,14 +2026,16 @@ static void run(const Table *T, const Method *m, double dt, double t_max, double
  * NRNG (see the Table) or NULL */
 
 static void make(const double *tab_meta, const double *cc, const double *dcc,
-                 const double *xcc, const double *rng, const double *tableau, Table *T,
-                 Method *m)
+                 const double *xcc, const double *rng, const double *pcc,
+                 const double *tableau, Table *T, Method *m)
 {
     T->crit = NULL; T->ncrit = 0;
-    T->cc = cc; T->dcc = dcc; T->xcc = xcc; T->rng = rng;
+    T->cc = cc; T->dcc = dcc; T->xcc = xcc; T->rng = rng; T->pcc = pcc;
     T->ncell = (int)tab_meta[0]; T->lo = tab_meta[1];
     T->h = tab_meta[2]; T->m0 = tab_meta[3]; T->rot_pivot = tab_meta[4] != 0.0;
     T->inv_h = 1.0 / T->h;
+    T->pA1 = T->pA2 = 0.0;
+    if (pcc) pts_bounds(T);
     m->kind = (int)tableau[0]; m->s = (int)tableau[1];
     int s = m->s;
     for (int i = 0; i < s; i++) {
@@ -1752,12 +2062,12 @@ static int *critical_cells(Table *T)
 }
 
 void sc_strokes(const double *tab_meta, const double *cc, const double *dcc,
-                const double *xcc, const double *rng, const double *tableau, double dt,
-                double t_max, double th0, double thc, long n, long ncol, const double *design,
-                long early, double *out)
+                const double *xcc, const double *rng, const double *pcc, const double *tableau,
+                double dt, double t_max, double th0, double thc, long n, long ncol,
+                const double *design, long early, double *out)
 {
     Table T; Method m;
-    make(tab_meta, cc, dcc, xcc, rng, tableau, &T, &m);
+    make(tab_meta, cc, dcc, xcc, rng, pcc, tableau, &T, &m);
     int *crit = critical_cells(&T);
     run(&T, &m, dt, t_max, th0, thc, n, (int)ncol, design, (int)early, out, NULL, 0, NULL);
     free(crit);
@@ -1765,12 +2075,13 @@ void sc_strokes(const double *tab_meta, const double *cc, const double *dcc,
 
 /* one stroke with its trajectory */
 void sc_stroke_traj(const double *tab_meta, const double *cc, const double *dcc,
-                    const double *xcc, const double *rng, const double *tableau, double dt,
-                    double t_max, double th0, double thc, long ncol, const double *design,
-                    long early, double *out, double *traj, long traj_cap, long *traj_len)
+                    const double *xcc, const double *rng, const double *pcc,
+                    const double *tableau, double dt, double t_max, double th0, double thc,
+                    long ncol, const double *design, long early, double *out, double *traj,
+                    long traj_cap, long *traj_len)
 {
     Table T; Method m;
-    make(tab_meta, cc, dcc, xcc, rng, tableau, &T, &m);
+    make(tab_meta, cc, dcc, xcc, rng, pcc, tableau, &T, &m);
     int *crit = critical_cells(&T);
     *traj_len = 0;
     run(&T, &m, dt, t_max, th0, thc, 1, (int)ncol, design, (int)early, out, traj, traj_cap,
@@ -1778,17 +2089,20 @@ void sc_stroke_traj(const double *tab_meta, const double *cc, const double *dcc,
     free(crit);
 }
 
-/* one step (for tests): x1 = step(x0, h); design: a full row (ROW_LAYOUT, with m_lid) */
+/* one step (for tests): x1 = step(x0, h); design: a full row (LAYOUT, with m_lid and the
+ * point columns) */
 int sc_step(const double *tab_meta, const double *cc, const double *dcc, const double *xcc,
-            const double *tableau, const double *design, double h, const double *x0,
-            double *x1)
+            const double *pcc, const double *tableau, const double *design, double h,
+            const double *x0, double *x1)
 {
     Table T; Method m;
-    make(tab_meta, cc, dcc, xcc, NULL, tableau, &T, &m);
+    make(tab_meta, cc, dcc, xcc, NULL, pcc, tableau, &T, &m);
     Par p;
     ELEM_READ(&p, design, &T);
+    pts_read(&p, design, D_PT + NPT);
     p.dm = 0.0;
     if (p.x && !xcc) return S_RANGE;
+    if ((p.ps | p.pd) && !pcc) return S_RANGE;
     if (isfinite(design[D_MLID]) && design[D_MLID] != T.m0) {
         if (!dcc) return S_RANGE;
         p.dm = design[D_MLID] - T.m0;
