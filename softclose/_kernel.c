@@ -1501,7 +1501,11 @@ __attribute__((noinline)) static void pts4(const Table *T, const Par4 *P,
     if (P->anyps) {
         PT_R(a, P->pt[2], P->pt[3], P->pt[0], P->pt[1], rx, ry, ux, uy);
         v4 l2 = rx * rx + ry * ry, w = rx * ux + ry * uy, l;
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+        l = __builtin_ia32_sqrtpd256(l2); /* (IEEE: sqrt() of each lane, without errno) */
+#else
         for (int q = 0; q < VW; q++) l[q] = sqrt(l2[q]);
+#endif
         c[C_L] = sel4(P->psm, l, c[C_L]);
         c[C_DL] = sel4(P->psm, w / l, c[C_DL]);
     }
