@@ -6,6 +6,12 @@ this module evaluates it (and V, and the damping) from the tabulated columns of 
 the rim, the energy a stroke releases, theta'' at rest (the release check, the equilibria and
 the linearisation of the stability check). The CasADi model's ``dV`` is the same sum on exact
 expressions.
+
+Every function takes ``points``: the rows' own attachment points in the kernel's convention
+(:func:`softclose.native.point_rows`: the spring's four columns, or the dashpot's, NaN for
+the table's own), whose lengths come from the table's pose pieces
+(:meth:`~softclose.table.CoefficientTable.point_columns`) as the kernel takes them: the same
+numbers as a table built at those points, to the tables' interpolation error.
 """
 
 from __future__ import annotations
@@ -18,60 +24,85 @@ from .problem import as_params
 from .roots import illinois
 
 
-def columns(table, theta, n: int, lid_mass=None, extra: bool = False) -> dict:
+#: the kernel's point columns of each element that may have its own (spring: D, E;
+#: dashpot: F, H), and the table columns they replace
+POINT_BLOCKS = {"spring": (slice(0, 4), ("l", "dl")), "dashpot": (slice(4, 8), ("dd",))}
+
+
+def with_points(table, theta, points, cols: dict) -> dict:
+    """``cols`` (columns at ``theta`` for rows) with the spring's l, dl and the dashpot's dd
+    of the rows that have their own points (``points``, the kernel's convention, or None)."""
+    if points is None:
+        return cols
+    pts = np.atleast_2d(np.asarray(points, float))
+    pc = table.point_columns(theta, pts)
+    out = dict(cols)
+    for blk, names in POINT_BLOCKS.values():
+        has = ~np.isnan(pts[:, blk.start])
+        if has.any():
+            has = has.reshape((-1,) + (1,) * (pc[names[0]].ndim - 1))
+            for name in names:
+                out[name] = np.where(has, pc[name], cols[name])
+    return out
+
+
+def columns(table, theta, n: int, lid_mass=None, extra: bool = False, points=None) -> dict:
     """The named columns at ``theta`` (scalar or one per row) for ``n`` rows at ``lid_mass``,
-    with the element columns of the extra table when ``extra``."""
+    with the element columns of the extra table when ``extra``, and the rows' own points'
+    lengths (``points``)."""
     c = table.rows(theta, n, lid_mass)
     out = {name: c[:, j] for j, name in enumerate(COEFFS)}
     if extra:
         x = table.rows_extra(theta, n)
         out.update({name: x[:, j] for j, name in enumerate(EXTRA_COEFFS)})
-    return out
+    return with_points(table, theta, points, out)
 
 
-def _at(table, theta, P, lid_mass):
+def _at(table, theta, P, lid_mass, points=None):
     P = as_params(np.atleast_2d(np.asarray(P, float)))
     cfg = table.model.cfg
-    cols = columns(table, theta, len(P), lid_mass, elements.needs_extra(P, cfg))
+    cols = columns(table, theta, len(P), lid_mass, elements.needs_extra(P, cfg), points)
     return cols, coordinates_of_columns(cols, cfg), elements.params(P)
 
 
-def potential_energy(table, theta, P, lid_mass=None) -> np.ndarray:
+def potential_energy(table, theta, P, lid_mass=None, points=None) -> np.ndarray:
     """V (J) at ``theta`` (scalar or one per row) for rows of P, at ``lid_mass`` (scalar, one
     per row, or None: the table's mass)."""
-    _, co, Pn = _at(table, theta, P, lid_mass)
+    _, co, Pn = _at(table, theta, P, lid_mass, points)
     return potential(co, Pn)
 
 
-def slopes(table, theta, P, lid_mass=None) -> np.ndarray:
+def slopes(table, theta, P, lid_mass=None, points=None) -> np.ndarray:
     """dV/dtheta (N m) at ``theta`` for rows of P; at theta_closed, > 0 presses the lid shut."""
-    _, co, Pn = _at(table, theta, P, lid_mass)
+    _, co, Pn = _at(table, theta, P, lid_mass, points)
     return slope(co, Pn)
 
 
-def holding_moments(table, theta_closed: float, P, lid_mass=None) -> np.ndarray:
+def holding_moments(table, theta_closed: float, P, lid_mass=None, points=None) -> np.ndarray:
     """dV/dtheta at ``theta_closed`` (N m, > 0 presses the lid shut) for rows of P."""
-    return slopes(table, float(theta_closed), P, lid_mass)
+    return slopes(table, float(theta_closed), P, lid_mass, points)
 
 
-def rest_theta_ddot(table, theta, P, lid_mass=None) -> np.ndarray:
+def rest_theta_ddot(table, theta, P, lid_mass=None, points=None) -> np.ndarray:
     """theta'' at rest, -V'(theta) / M, at ``theta`` (one per row, or a scalar) for rows of P:
     > 0 pushes the lid open."""
-    cols, co, Pn = _at(table, theta, P, lid_mass)
+    cols, co, Pn = _at(table, theta, P, lid_mass, points)
     return -slope(co, Pn) / cols["M"]
 
 
-def rest_jacobian(table, theta, p, lid_mass=None) -> tuple[np.ndarray, np.ndarray]:
+def rest_jacobian(table, theta, p, lid_mass=None, points=None) -> tuple[np.ndarray, np.ndarray]:
     """The linearised (theta, theta') Jacobian entries at rest at the angles ``theta`` for
-    one design p: d theta''/d theta (central difference of -V'/M) and d theta''/d theta'
-    (-damping / M)."""
+    one design p (with its own ``points``, one row of the kernel's convention, or None):
+    d theta''/d theta (central difference of -V'/M) and d theta''/d theta' (-damping / M)."""
     theta = np.asarray(theta, float)
     P = np.tile(np.asarray(p, float), (len(theta), 1))
+    pts = None if points is None else \
+        np.tile(np.asarray(points, float).reshape(1, -1), (len(theta), 1))
     eps = 1e-6
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        a = (rest_theta_ddot(table, theta + eps, P, lid_mass)
-             - rest_theta_ddot(table, theta - eps, P, lid_mass)) / (2 * eps)
-        cols, co, Pn = _at(table, theta, P, lid_mass)
+        a = (rest_theta_ddot(table, theta + eps, P, lid_mass, pts)
+             - rest_theta_ddot(table, theta - eps, P, lid_mass, pts)) / (2 * eps)
+        cols, co, Pn = _at(table, theta, P, lid_mass, pts)
         return a, -damping(co, Pn) / cols["M"]
 
 
@@ -113,7 +144,10 @@ def out_of_range(coordinate, cfg, P, metrics: dict, explain: bool = True
             continue
         th = np.column_stack([np.atleast_1d(np.asarray(metrics[k], float))[bad]
                               for k in ("theta_min", "theta_max")])
-        edge, worst = _leaves(lambda t: coordinate(e, t), th,
+        rows_q = (lambda t, r: coordinate(e, t, bad[r])) if getattr(coordinate, "per_row",
+                                                                    False) else \
+            (lambda t, r: coordinate(e, t))
+        edge, worst = _leaves(rows_q, th,
                               np.where(short, lo[bad], hi[bad]), short)
         for j, i in enumerate(bad):
             where = (None if np.isnan(edge[j]) else float(edge[j]), float(worst[j]))
@@ -122,11 +156,24 @@ def out_of_range(coordinate, cfg, P, metrics: dict, explain: bool = True
     return excess, text
 
 
-def table_coordinate(table):
-    """``coordinate(element, thetas)`` from the table's column of each element's q."""
-    def q(element, th):
+def table_coordinate(table, points=None):
+    """``coordinate(element, thetas, rows)`` from the table's column of each element's q; for
+    the rows (indices into ``points``, the kernel's convention) that have their own points,
+    the spring's length from the table's pose pieces."""
+    def q(element, th, rows=None):
         col = COEFFS.index(next(c for c, what in element.columns if what == "q"))
-        return table.evaluate_column(th, col)
+        out = table.evaluate_column(th, col)
+        blk = POINT_BLOCKS.get(element.name)
+        if points is None or rows is None or blk is None or "l" not in blk[1]:
+            return out
+        pts = np.asarray(points, float)[rows]
+        has = ~np.isnan(pts[:, blk[0].start])
+        if not has.any():
+            return out
+        th = np.asarray(th, float)
+        l = table.point_columns(th.reshape(len(pts), -1), pts)["l"].reshape(th.shape)
+        return np.where(has.reshape((-1,) + (1,) * (th.ndim - 1)), l, out)
+    q.per_row = True
     return q
 
 
@@ -136,7 +183,8 @@ LEAVE_GRID = 101
 
 
 def _leaves(q_of, theta_ranges, bound, short, chunk: int = 4096):
-    """Per row: (where the coordinate crosses ``bound`` -- the edge of the region beyond it
+    """Per row (``q_of(thetas, rows)``: the coordinate of those rows at their angles):
+    (where the coordinate crosses ``bound`` -- the edge of the region beyond it
     nearest its worst point; NaN when it is beyond over the whole range --, where it lies
     furthest beyond it), rad, over the row's ``theta_ranges`` (m, 2), on a grid of
     LEAVE_GRID angles (rows in chunks: the coordinate is evaluated for a chunk at once)."""
@@ -151,7 +199,7 @@ def _leaves(q_of, theta_ranges, bound, short, chunk: int = 4096):
         lo, hi = theta_ranges[r, :1], theta_ranges[r, 1:]
         th = lo + (hi - lo) * u                        # (rows, grid)
         th[:, -1] = hi[:, 0]
-        q = np.asarray(q_of(th), float).reshape(th.shape)
+        q = np.asarray(q_of(th, np.arange(r.start, r.stop)), float).reshape(th.shape)
         b = np.where(short[r, None], bound[r, None] - q, q - bound[r, None])
         rows = np.arange(len(th))
         w = np.argmax(b, axis=1)
@@ -180,21 +228,24 @@ OPENING_GRID = 241
 OPENING_CHUNK = 2048
 
 
-def opening_forces(table, cfg, P, lid_mass=None) -> np.ndarray:
+def opening_forces(table, cfg, P, lid_mass=None, points=None) -> np.ndarray:
     """The opening effort of each design (N): the largest hand force at the tip, along its
     path, that lifts the lid slowly from theta_closed to theta0 against gravity, every spring
     and friction: max over theta of (dV/dtheta + T_f) / |dr_T/dtheta| (SPEC §9).
 
     The slope is affine in the parameters element by element (T_e = a_e + b_e q_e), so for
     many designs it is a small matrix product over a fixed grid of angles, refined by a
-    parabola through the largest grid value and its neighbours.
+    parabola through the largest grid value and its neighbours; a row with its own points
+    (``points``) adds its spring's term T(l) l' from its own l, l' on that grid.
     """
     P = as_params(np.atleast_2d(np.asarray(P, float)))
     if len(P) > OPENING_CHUNK:          # (rows in chunks: the angle grid times the rows)
         m = None if lid_mass is None else np.broadcast_to(np.asarray(lid_mass, float),
                                                           (len(P),))
+        pts = None if points is None else np.asarray(points, float)
         return np.concatenate([opening_forces(table, cfg, P[i:i + OPENING_CHUNK],
-                                              None if m is None else m[i:i + OPENING_CHUNK])
+                                              None if m is None else m[i:i + OPENING_CHUNK],
+                                              None if pts is None else pts[i:i + OPENING_CHUNK])
                                for i in range(0, len(P), OPENING_CHUNK)])
     st = cfg.stroke
     th = np.linspace(st.theta_closed, st.theta0, OPENING_GRID)
@@ -207,14 +258,26 @@ def opening_forces(table, cfg, P, lid_mass=None) -> np.ndarray:
     co = coordinates_of_columns(cols, table.model.cfg)
     Pn = elements.params(P)
     slope = np.zeros((len(P), len(th)))
+    own = None                                 # the rows whose spring has its own points
+    if points is not None:
+        pts = np.asarray(points, float)
+        has = ~np.isnan(pts[:, 0])
+        if has.any():
+            own = np.flatnonzero(has)
+            pl = table.point_columns(th[None, :], pts[own])
     for e in elements.SPRINGS:
         if e.name not in co:
             continue
         q, dq = co[e.name].q, co[e.name].dq
         a, b = e.affine(Pn)
-        slope += np.multiply.outer(np.broadcast_to(np.asarray(a, float), (len(P),)), dq)
+        a = np.broadcast_to(np.asarray(a, float), (len(P),))
+        slope += np.multiply.outer(a, dq)
         if not (np.ndim(b) == 0 and b == 0.0):
             slope += np.multiply.outer(np.asarray(b, float), q * dq)
+        if own is not None and e.name == "spring":     # its own l, l' instead
+            b_own = np.broadcast_to(np.asarray(b, float), (len(P),))[own, None]
+            slope[own] += (a[own, None] + b_own * pl["l"]) * pl["dl"] \
+                - (a[own, None] + b_own * q) * dq
     dm = table.mass_offsets(lid_mass, (len(P),))
     if dm is not None:               # gravity's slope at another lid mass: affine in it
         slope += np.multiply.outer(dm, table.mass_slope_at(th)[:, COEFFS.index("dVg")])
