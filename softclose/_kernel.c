@@ -204,14 +204,17 @@ enum { X_PSI, X_DPSI, X_DR2 };
  * dampers are one-way; Tf: dry friction, fs: the way the lid moves (its state: set at the
  * release and at every turning point); dm = m_lid - m0: 0 for a row at the table's mass; x:
  * the row has an element of the extra table */
+/* a row's own pieces of l, dl, dd on the last two cells it read (PER-ROW ATTACHMENT POINTS) */
+typedef struct { int cell[2], next; double blk[2][4 * NC]; } PtCache;
 typedef struct { double k, l0, F, c, cr, crp, kt, psi0, Tf, fs, dm; int x, ow;
-                 int ps, pd; double pt[NPT]; /* own spring / dashpot points (D_PT ...) */ } Par;
+                 int ps, pd; double pt[NPT]; /* own spring / dashpot points (D_PT ...) */
+                 PtCache *pc; /* their pieces (with ps or pd) */ } Par;
 /* the lanes' parameters as vectors; any: a lane at another lid mass; anyx: a lane with
  * element columns (its element terms are added for every lane of the group: the others add
  * a zero, k_t = 0) */
 typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs; v4l ow; double dm[VW];
                  int any, anyx, anyow, anyf;
-                 v4 pt[NPT]; v4l psm, pdm; int anyps, anypd; /* the lanes' own points */ } Par4;
+                 const Par *lp[VW]; int anyp; /* the lanes' rows, when one has points */ } Par4;
 /* read a design row d of table T into p (not dm) */
 #define ELEM_READ(p, d, T) do { \
         (p)->k = (d)[D_K]; (p)->l0 = (d)[D_L0]; (p)->c = (d)[D_C]; (p)->cr = (d)[D_CR]; \
@@ -358,27 +361,32 @@ static inline void xtab_eval(const Table *T, int i, double s, double *x, double 
  * or no such columns: the table's own l, dl, dd, read as always -- bit-identical). Every lid
  * point is P(th) = A(th) + R(th) p, A the crank pin, so the pose table (pcc: cubic Hermite
  * pieces of A, A' = dA/dth, cos th, sin th on the table's cells, built like the other
- * columns from the CasADi model with exact derivatives, so exact at the nodes) gives at any
- * angle, for a lid point p and a ground point G,
- *     r = A + R p - G,   r' = A' + z x (R p),   l = |r|,   l' = r.r' / l,
- * and the dashpot's q'^2 = (r.r')^2 / |r|^2: the columns a table built at the row's points
- * interpolates (agreeing to the tables' interpolation error, ~1e-10 relative). They replace
- * l, dl (spring) and dd (dashpot) of the coefficient values of that row wherever the kernel
- * reads them (pts_eval; the SIMD lanes: pts4, the same operations in the same order). The
- * implicit methods' Jacobian takes their theta-derivatives from r'' = A'' - R p (A'' the
- * slope of the A' pieces). The early exit stays exact: over a piece of a cell, the ranges of
- * l and l' come from interval arithmetic on the ranges of the pose pieces (pts_ranges), and
- * the spring-length extremes over [th_min, th_max] from the row's own cubic Hermite pieces
- * of l (its values and slopes at the nodes: what a table at those points holds), searched
- * only in the cells where a mean-value bound of l' does not rule an extremum out
- * (l_extremes_pts). A length that vanishes (a lid point through its anchor) makes l'
- * non-finite: the stroke stops (S_NONFINITE), never a number from it. */
+ * columns from the CasADi model with exact derivatives) holds at each node the exact A, A',
+ * A'', cos, sin; from them, for a lid point p and a ground point G,
+ *     r = A + R p - G,   r' = A' + z x (R p),   r'' = A'' - R p,
+ *     l = |r|,   l' = r.r' / l,   l'' = (|r'|^2 + r.r'' - l'^2) / l,
+ *     dashpot: q'^2 = (r.r')^2 / |r|^2 and its slope.
+ * A row's own cubic Hermite pieces of l, dl (spring) and dd (dashpot) on a cell are built
+ * from these node values and slopes exactly as the table builds its own (table.py _pieces),
+ * so a row's pieces are those of a table built at its points, to the rounding of the node
+ * values. They are built when a stroke first enters a cell (pt_piece: each lane keeps the
+ * last two cells, PtCache; a stroke visits a few hundred of the table's cells, and a lid
+ * creeping towards an equilibrium stays in one for many steps), in the table's power-major
+ * layout with the table's tau beside them, so the kernel reads them wherever it reads l, dl,
+ * dd: the scalar code from the row's piece (CUB), the SIMD lanes from it as their second
+ * vector (coef4) -- the same operations as for the table's columns, so the scalar and SIMD
+ * paths agree bit for bit and a row's numbers do not depend on which cells were kept. The
+ * early exit stays exact: the ranges of l and l' over a piece are those of the row's cubic
+ * pieces (as for the table's), and the spring-length extremes over [th_min, th_max] are
+ * found on the row's pieces in the cells where a mean-value bound of l' (from bounds of
+ * |A'|, |A''| over the table) does not rule an extremum out (l_extremes_pts). A length that
+ * vanishes (a lid point through its anchor) makes l' non-finite: the stroke stops
+ * (S_NONFINITE or S_RANGE), never a number from it. */
 
-/* r and r' of a lid point (px, py) and a ground point (gx, gy) from the pose values a[] --
- * numbers or lanes: one statement for the scalar code and the SIMD lanes */
+/* r and r' of a lid point (px, py) and a ground point (gx, gy) from the pose values a[] */
 #define PT_R(a, px, py, gx, gy, rx, ry, ux, uy) do { \
-        __typeof__(rx) qx_ = (a)[P_COS] * (px) - (a)[P_SIN] * (py); \
-        __typeof__(rx) qy_ = (a)[P_SIN] * (px) + (a)[P_COS] * (py); \
+        double qx_ = (a)[P_COS] * (px) - (a)[P_SIN] * (py); \
+        double qy_ = (a)[P_SIN] * (px) + (a)[P_COS] * (py); \
         (rx) = (a)[P_AX] + qx_ - (gx); (ry) = (a)[P_AY] + qy_ - (gy); \
         (ux) = (a)[P_DAX] - qy_; (uy) = (a)[P_DAY] + qx_; \
     } while (0)
@@ -388,16 +396,20 @@ static inline void xtab_eval(const Table *T, int i, double s, double *x, double 
 #define PDCUB(q, j, s, ih) (((q)[NPOSE + (j)] + (s) * (2.0 * (q)[2 * NPOSE + (j)] \
                             + (s) * 3.0 * (q)[3 * NPOSE + (j)])) * (ih))
 
+/* set the row's own points pt[NPT] (NaN: the table's) into p, its cache emptied */
+static inline void pts_set(Par *p, const double *pt)
+{
+    for (int j = 0; j < NPT; j++) p->pt[j] = pt[j];
+    p->ps = isfinite(pt[0]) && isfinite(pt[1]) && isfinite(pt[2]) && isfinite(pt[3]);
+    p->pd = isfinite(pt[4]) && isfinite(pt[5]) && isfinite(pt[6]) && isfinite(pt[7]);
+    if (p->pc) { p->pc->cell[0] = p->pc->cell[1] = -1; p->pc->next = 0; }
+}
+
 /* read the row's own points (columns D_PT.. of a row of ncol columns) into p */
 static inline void pts_read(Par *p, const double *d, int ncol)
 {
     p->ps = p->pd = 0;
-    if (ncol < D_PT + NPT) return;
-    for (int j = 0; j < NPT; j++) p->pt[j] = d[D_PT + j];
-    p->ps = isfinite(d[D_PT]) && isfinite(d[D_PT + 1]) && isfinite(d[D_PT + 2])
-            && isfinite(d[D_PT + 3]);
-    p->pd = isfinite(d[D_PT + 4]) && isfinite(d[D_PT + 5]) && isfinite(d[D_PT + 6])
-            && isfinite(d[D_PT + 7]);
+    if (ncol >= D_PT + NPT) pts_set(p, d + D_PT);
 }
 
 /* one length of a row's points from the pose values a (and their theta-derivatives da, or
@@ -413,79 +425,82 @@ static inline void pt_length(const double *a, const double *da, const double *g,
     if (dash) v[C_DD] = w * w / l2;
     else { l = sqrt(l2); dl = w / l; v[C_L] = l; v[C_DL] = dl; }
     if (!da) return;
-    /* r'' = A'' - R p (the slope of z x R p is -R p) */
     double qx = a[P_COS] * g[2] - a[P_SIN] * g[3], qy = a[P_SIN] * g[2] + a[P_COS] * g[3];
     double wd = ux * ux + uy * uy + rx * (da[P_DAX] - qx) + ry * (da[P_DAY] - qy);
     if (dash) dv[C_DD] = 2.0 * w * (wd * l2 - w * w) / (l2 * l2);
     else { dv[C_L] = dl; dv[C_DL] = (wd - dl * dl) / l; }
 }
 
-/* replace the spring's (p->ps) and the dashpot's (p->pd) columns of the values v (and of
- * their theta-derivatives dv, if not NULL) by those of the row's own points, cell i at s */
+/* the pose at node j = 0..ncell (values a, theta-derivatives da): the ends of the pieces,
+ * which hold the exact node values and slopes (the right end from the next cell's start) */
+static inline void pose_node(const Table *T, int j, double *a, double *da)
+{
+    if (j < T->ncell) {
+        const double *q = T->pcc + (size_t)j * 4 * NPOSE;
+        for (int k = 0; k < P_USED; k++) { a[k] = q[k]; da[k] = q[NPOSE + k] * T->inv_h; }
+    } else {
+        const double *q = T->pcc + (size_t)(T->ncell - 1) * 4 * NPOSE;
+        for (int k = 0; k < P_USED; k++) {
+            a[k] = PCUB(q, k, 1.0);
+            da[k] = PDCUB(q, k, 1.0, T->inv_h);
+        }
+    }
+}
+
+/* build the row's pieces on cell i into a free slot of its cache (noinline: once a cell) */
+__attribute__((noinline)) static const double *pt_build(const Table *T, const Par *p, int i)
+{
+    PtCache *c = p->pc;
+    int k = c->next;
+    c->next ^= 1;
+    c->cell[k] = i;
+    double *b = c->blk[k];
+    const double *t = T->cc + (size_t)i * 4 * NC;
+    for (int e = 0; e < 4; e++)
+        for (int j = C_L; j <= C_TAU; j++) b[e * NC + j] = t[e * NC + j]; /* the table's */
+    double f[2][NC], d[2][NC], a[P_USED], da[P_USED];
+    for (int n = 0; n < 2; n++) {
+        pose_node(T, i + n, a, da);
+        if (p->ps) pt_length(a, da, p->pt, 0, f[n], d[n]);
+        if (p->pd) pt_length(a, da, p->pt + 4, 1, f[n], d[n]);
+    }
+    for (int j = C_L; j <= C_DD; j++) {
+        if (j == C_DD ? !p->pd : !p->ps) continue;
+        double f0 = f[0][j], f1 = f[1][j], d0 = d[0][j] * T->h, d1 = d[1][j] * T->h;
+        b[j] = f0; b[NC + j] = d0;
+        b[2 * NC + j] = 3 * (f1 - f0) - 2 * d0 - d1;
+        b[3 * NC + j] = 2 * (f0 - f1) + d0 + d1;
+    }
+    return b;
+}
+
+/* the row's pieces on cell i: a block laid out as the table's cell (power-major, NC a
+ * power), whose columns l, dl, dd, tau are the row's (its own where it has points) */
+static inline const double *pt_piece(const Table *T, const Par *p, int i)
+{
+    const PtCache *c = p->pc;
+    if (c->cell[0] == i) return c->blk[0];
+    if (c->cell[1] == i) return c->blk[1];
+    return pt_build(T, p, i);
+}
+
+/* the row's own columns of the values v (and their theta-derivatives dv, or NULL) in cell i
+ * at s, from its pieces */
 static inline void pts_eval(const Table *T, const Par *p, int i, double s, double *v, double *dv)
 {
-    const double *q = T->pcc + (size_t)i * 4 * NPOSE;
-    double a[P_USED], da[P_USED];
-    for (int j = 0; j < P_USED; j++) {
-        a[j] = PCUB(q, j, s);
-        if (dv) da[j] = PDCUB(q, j, s, T->inv_h);
+    const double *q = pt_piece(T, p, i);
+    for (int j = C_L; j <= C_DD; j++) {
+        if (j == C_DD ? !p->pd : !p->ps) continue;
+        v[j] = CUB(q, j, s);
+        if (dv) dv[j] = DCUB(q, j, s, T->inv_h);
     }
-    if (p->ps) pt_length(a, dv ? da : NULL, p->pt, 0, v, dv);
-    if (p->pd) pt_length(a, dv ? da : NULL, p->pt + 4, 1, v, dv);
-}
-
-/* intervals, for the early exit's bounds on a piece */
-typedef struct { double lo, hi; } Iv;
-static inline Iv iv_scale(Iv a, double k)
-{
-    double x = a.lo * k, y = a.hi * k;
-    return x < y ? (Iv){x, y} : (Iv){y, x};
-}
-static inline Iv iv_add(Iv a, Iv b) { return (Iv){a.lo + b.lo, a.hi + b.hi}; }
-static inline Iv iv_mul(Iv a, Iv b)
-{
-    double x1 = a.lo * b.lo, x2 = a.lo * b.hi, x3 = a.hi * b.lo, x4 = a.hi * b.hi;
-    return (Iv){MIN2(MIN2(x1, x2), MIN2(x3, x4)), MAX2(MAX2(x1, x2), MAX2(x3, x4))};
-}
-static inline double iv_mag(Iv a) { return MAX2(fabs(a.lo), fabs(a.hi)); }
-/* the distance of 0 from the interval (0 inside it) */
-static inline double iv_gap(Iv a) { return a.lo > 0 ? a.lo : (a.hi < 0 ? -a.hi : 0.0); }
-
-/* ranges of the row's spring length l and its slope l' over cell i, s in [s0, s1] (interval
- * arithmetic on the ranges of the pose pieces, widened for rounding); 0 if l may vanish */
-static int pts_ranges(const Table *T, const Par *p, int i, double s0, double s1,
-                      double *llo, double *lhi, double *dllo, double *dlhi)
-{
-    Iv a[P_USED];
-    for (int j = 0; j < P_USED; j++) {
-        double q[4];
-        for (int e = 0; e < 4; e++) q[e] = T->pcc[((size_t)i * 4 + e) * NPOSE + j];
-        cubic_range(q, s0, s1, &a[j].lo, &a[j].hi);
-    }
-    const double *g = p->pt;
-    /* R p = (c px - s py, s px + c py); r = A + R p - D; r' = A' + (-(R p)_y, (R p)_x) */
-    Iv qx = iv_add(iv_scale(a[P_COS], g[2]), iv_scale(a[P_SIN], -g[3]));
-    Iv qy = iv_add(iv_scale(a[P_SIN], g[2]), iv_scale(a[P_COS], g[3]));
-    Iv rx = iv_add(iv_add(a[P_AX], qx), (Iv){-g[0], -g[0]});
-    Iv ry = iv_add(iv_add(a[P_AY], qy), (Iv){-g[1], -g[1]});
-    Iv ux = iv_add(a[P_DAX], iv_scale(qy, -1.0)), uy = iv_add(a[P_DAY], qx);
-    double lmin = hypot(iv_gap(rx), iv_gap(ry)), lmax = hypot(iv_mag(rx), iv_mag(ry));
-    Iv w = iv_add(iv_mul(rx, ux), iv_mul(ry, uy));
-    double pad = 1e-12 * (lmax + iv_mag(w)) + 1e-300;
-    lmin -= 1e-12 * lmax;
-    if (!(lmin > 0) || !isfinite(lmax) || !isfinite(w.lo) || !isfinite(w.hi)) return 0;
-    double d1 = w.lo / lmin, d2 = w.lo / lmax, d3 = w.hi / lmin, d4 = w.hi / lmax;
-    *llo = lmin; *lhi = lmax + pad;
-    *dllo = MIN2(MIN2(d1, d2), MIN2(d3, d4)) - pad / lmin;
-    *dlhi = MAX2(MAX2(d1, d2), MAX2(d3, d4)) + pad / lmin;
-    return 1;
 }
 
 /* bounds of |A'| and |A''| over the table (T->pA1, T->pA2), from the ranges of the pose
  * pieces of A' and of their slopes, widened by 1 % (the mean-value test of l_extremes_pts) */
 static void pts_bounds(Table *T)
 {
-    double m1 = 0.0, m2x = 0.0, m2y = 0.0, m1x = 0.0, m1y = 0.0;
+    double m2x = 0.0, m2y = 0.0, m1x = 0.0, m1y = 0.0;
     for (int i = 0; i < T->ncell; i++) {
         for (int j = P_DAX; j <= P_DAY; j++) {
             double q[4], dq[4], lo, hi;
@@ -499,34 +514,24 @@ static void pts_bounds(Table *T)
             if (j == P_DAX) m2x = MAX2(m2x, mag); else m2y = MAX2(m2y, mag);
         }
     }
-    m1 = hypot(m1x, m1y);
-    T->pA1 = 1.01 * m1;
+    T->pA1 = 1.01 * hypot(m1x, m1y);
     T->pA2 = 1.01 * hypot(m2x, m2y);
-}
-
-/* the row's spring length and slope at node j = 0..ncell (the pose pieces' end values) */
-static inline void pts_node(const Table *T, const Par *p, int j, double *l, double *dl)
-{
-    double v[NC] = {0};
-    if (j < T->ncell) pts_eval(T, p, j, 0.0, v, NULL);
-    else pts_eval(T, p, T->ncell - 1, 1.0, v, NULL);
-    *l = v[C_L]; *dl = v[C_DL];
 }
 
 static void cubic_extremes(const double *q, int i, const Table *T, double a, double b,
                            double *lmin, double *lmax);
 
-/* l_extremes for a row with its own spring points: the extremes over [a, b] of the row's
- * Hermite pieces of l (node values and slopes), in the cells [j0, j1) where l' may vanish:
- * on a run of cells whose middle has |l'| above the largest |l''| (<= |r'|^2 / |r| + |r''|,
- * |r'| <= |A'| + |e|, |r''| <= |A''| + |e|) times its half width, l is monotone */
+/* l_extremes for a row with its own spring points, on the cells [j0, j1): a run of cells
+ * whose middle has |l'| above the largest |l''| (<= |r'|^2 / |r| + |r''|, with
+ * |r'| <= |A'| + |e|, |r''| <= |A''| + |e|, |r| >= l(mid) - |r'| half width) times its half
+ * width has l monotone; the others are halved down to cells, whose pieces are searched */
 static void pts_scan(const Table *T, const Par *p, int j0, int j1, double a, double b,
                      double *lmin, double *lmax, int depth)
 {
     if (j1 <= j0) return;
-    double x0 = T->lo + j0 * T->h, x1 = T->lo + j1 * T->h;
     if (j1 - j0 > 1 && depth < 40) {
-        double xm = 0.5 * (x0 + x1), hw = 0.5 * (x1 - x0), s, v[NC];
+        double x0 = T->lo + j0 * T->h, x1 = T->lo + j1 * T->h;
+        double xm = 0.5 * (x0 + x1), hw = 0.5 * (x1 - x0), s, v[NC] = {0};
         int i = cell_index(T, xm, &s);
         if (i >= 0) {
             pts_eval(T, p, i, s, v, NULL);
@@ -534,7 +539,7 @@ static void pts_scan(const Table *T, const Par *p, int j0, int j1, double a, dou
             double lower = v[C_L] - R1 * hw;
             if (lower > 0 && isfinite(v[C_DL])) {
                 double L2 = R1 * R1 / lower + R2;
-                if (fabs(v[C_DL]) > L2 * hw * (1.0 + 1e-6) + 1e-12 * v[C_L]) return;
+                if (fabs(v[C_DL]) > L2 * hw * (1.0 + 1e-6) + 1e-9 * v[C_L]) return;
             }
         }
         int jm = (j0 + j1) / 2;
@@ -542,12 +547,9 @@ static void pts_scan(const Table *T, const Par *p, int j0, int j1, double a, dou
         pts_scan(T, p, jm, j1, a, b, lmin, lmax, depth + 1);
         return;
     }
-    for (int i = j0; i < j1; i++) { /* the row's Hermite piece of l on cell i */
-        double f0, d0, f1, d1, q[4];
-        pts_node(T, p, i, &f0, &d0);
-        pts_node(T, p, i + 1, &f1, &d1);
-        d0 *= T->h; d1 *= T->h;
-        q[0] = f0; q[1] = d0; q[2] = 3 * (f1 - f0) - 2 * d0 - d1; q[3] = 2 * (f0 - f1) + d0 + d1;
+    for (int i = j0; i < j1; i++) {
+        const double *r = pt_piece(T, p, i);
+        double q[4] = {r[C_L], r[NC + C_L], r[2 * NC + C_L], r[3 * NC + C_L]};
         cubic_extremes(q, i, T, a, b, lmin, lmax);
     }
 }
@@ -555,7 +557,7 @@ static void pts_scan(const Table *T, const Par *p, int j0, int j1, double a, dou
 static void l_extremes_pts(const Table *T, const Par *p, double a, double b, double *lmin,
                            double *lmax)
 {
-    double ends[2] = {a, b}, s, v[NC];
+    double ends[2] = {a, b}, s, v[NC] = {0};
     *lmin = INFINITY; *lmax = -INFINITY;
     for (int e = 0; e < 2; e++) {
         int i = cell_index(T, ends[e], &s);
@@ -892,6 +894,11 @@ static void cubic_range(const double *q, double s0, double s1, double *lo, doubl
 /* the cubic of coefficient j in cell i for the row p (mass-corrected) */
 static inline void piece(const Table *T, const Par *p, int i, int j, double *q)
 {
+    if ((p->ps && (j == C_L || j == C_DL)) || (p->pd && j == C_DD)) { /* the row's own */
+        const double *b = pt_piece(T, p, i);
+        for (int e = 0; e < 4; e++) q[e] = b[e * NC + j];
+        return;
+    }
     for (int e = 0; e < 4; e++) q[e] = CQ(T->cc, i, e, j);
     if (j < NMASS && p->dm != 0.0)
         for (int e = 0; e < 4; e++) q[e] += p->dm * CQ(T->dcc, i, e, j);
@@ -925,12 +932,8 @@ static int speed_piece_ok(const Table *T, const Par *p, int i, double s0, double
         if (tab_eval(T, p, T->lo + (i + sm) * T->h, v, NULL)) return 0;
         piece(T, p, i, C_VG, q); cubic_range(q, s0, s1, &glo, &ghi);
         piece(T, p, i, C_DVG, q); cubic_range(q, s0, s1, &dglo, &dghi);
-        if (p->ps) { /* the row's own spring points: PER-ROW ATTACHMENT POINTS */
-            if (!pts_ranges(T, p, i, s0, s1, &llo, &lhi, &dllo, &dlhi)) return 0;
-        } else {
-            piece(T, p, i, C_L, q); cubic_range(q, s0, s1, &llo, &lhi);
-            piece(T, p, i, C_DL, q); cubic_range(q, s0, s1, &dllo, &dlhi);
-        }
+        piece(T, p, i, C_L, q); cubic_range(q, s0, s1, &llo, &lhi);
+        piece(T, p, i, C_DL, q); cubic_range(q, s0, s1, &dllo, &dlhi);
         piece(T, p, i, C_TAU, q); cubic_range(q, s0, s1, &tlo, &thi);
         piece(T, p, i, C_M, q); cubic_range(q, s0, s1, &Mlo, &Mhi);
     }
@@ -1475,47 +1478,6 @@ ALWAYS void transpose4(const v4 *r, v4 *c)
 
 
 
-/* pts_eval for the lanes (cells b, local variables *sv): the spring's l, l' and the
- * dashpot's q'^2 of the lanes with their own points replace those in c (the others keep
- * theirs, bit for bit); each lane's pose pieces evaluated as rows (Horner in s, as PCUB),
- * then transposed. Not inlined: inlined, its code slowed the strokes without points by ~10 %
- * (it is only reached from the vector path, hence compiled for it) */
-#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
-__attribute__((target("avx2")))
-#endif
-__attribute__((noinline)) static void pts4(const Table *T, const Par4 *P,
-                                           const double *const *b, const v4 *sv, v4 *c)
-{
-    const v4 s = *sv;
-    v4 lo[VW], hi[VW], a[NPOSE];
-    for (int q = 0; q < VW; q++) {
-        const double *r = T->pcc + (size_t)((b[q] - T->cc) / NC) * NPOSE;
-        double sq = s[q];
-        lo[q] = ld4(r) + sq * (ld4(r + NPOSE) + sq * (ld4(r + 2 * NPOSE) + sq * ld4(r + 3 * NPOSE)));
-        hi[q] = ld4(r + 4) + sq * (ld4(r + NPOSE + 4) + sq * (ld4(r + 2 * NPOSE + 4)
-                                                             + sq * ld4(r + 3 * NPOSE + 4)));
-    }
-    transpose4(lo, a);
-    transpose4(hi, a + 4);
-    v4 rx, ry, ux, uy;
-    if (P->anyps) {
-        PT_R(a, P->pt[2], P->pt[3], P->pt[0], P->pt[1], rx, ry, ux, uy);
-        v4 l2 = rx * rx + ry * ry, w = rx * ux + ry * uy, l;
-#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
-        l = __builtin_ia32_sqrtpd256(l2); /* (IEEE: sqrt() of each lane, without errno) */
-#else
-        for (int q = 0; q < VW; q++) l[q] = sqrt(l2[q]);
-#endif
-        c[C_L] = sel4(P->psm, l, c[C_L]);
-        c[C_DL] = sel4(P->psm, w / l, c[C_DL]);
-    }
-    if (P->anypd) {
-        PT_R(a, P->pt[6], P->pt[7], P->pt[4], P->pt[5], rx, ry, ux, uy);
-        v4 l2 = rx * rx + ry * ry, w = rx * ux + ry * uy;
-        c[C_DD] = sel4(P->pdm, w * w / l2, c[C_DD]);
-    }
-}
-
 /* the NC coefficients of the lanes at th as columns c[j] (four lanes each): each lane's
  * cubic pieces are evaluated as rows (Horner in s, as CUB), mass-corrected where dm != 0,
  * then transposed; okm as cells4's */
@@ -1525,11 +1487,14 @@ ALWAYS void coef4(const Table *T, const Par4 *P, v4 th, v4 *c, const double **b,
     v4 lo[VW], hi[VW];
     cells4(T, th, b, s, okm);
     for (int q = 0; q < VW; q++) {
-        const double *r = b[q];
+        const double *r = b[q], *rh = r; /* rh: l, dl, dd, tau: the table's, or the row's own
+                                          * pieces (PER-ROW ATTACHMENT POINTS) */
+        if (P->anyp && (P->lp[q]->ps | P->lp[q]->pd))
+            rh = pt_piece(T, P->lp[q], (int)((r - T->cc) / (4 * NC)));
         double sq = (*s)[q];
         lo[q] = ld4(r) + sq * (ld4(r + NC) + sq * (ld4(r + 2 * NC) + sq * ld4(r + 3 * NC)));
-        hi[q] = ld4(r + 4) + sq * (ld4(r + NC + 4) + sq * (ld4(r + 2 * NC + 4)
-                                                          + sq * ld4(r + 3 * NC + 4)));
+        hi[q] = ld4(rh + 4) + sq * (ld4(rh + NC + 4) + sq * (ld4(rh + 2 * NC + 4)
+                                                            + sq * ld4(rh + 3 * NC + 4)));
         if (P->any && P->dm[q] != 0.0) { /* M, dM, Vg, dVg only */
             const double *rm = T->dcc + (r - T->cc);
             lo[q] += P->dm[q] * (ld4(rm) + sq * (ld4(rm + NC) + sq * (ld4(rm + 2 * NC)
@@ -1538,7 +1503,6 @@ ALWAYS void coef4(const Table *T, const Par4 *P, v4 th, v4 *c, const double **b,
     }
     transpose4(lo, c);
     transpose4(hi, c + 4);
-    if (P->anyps | P->anypd) pts4(T, P, b, s, c);
 }
 
 /* ELEM_ONE_WAY for lanes: 0 where the lane's dampers are one-way and th' > 0 */
@@ -1872,6 +1836,7 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
                    double *traj, long traj_cap, long *traj_len, const int vec)
 {
     Lane lanes[LANES];
+    PtCache pcache[LANES];
     Par4 P[NG];
     int used[LANES] = {0};
     long next = 0;
@@ -1914,18 +1879,18 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
                 if (next >= n) break;
                 used[k] = 1;
                 Lane *L = &lanes[k];
+                L->p.pc = &pcache[k]; /* (its own pieces, with points: emptied by lane_start) */
                 int over = lane_start(T, L, design + (size_t)ncol * next, ncol,
                                       out + NOUT * next, th0, dt, t_max, early, traj, traj_cap);
                 Par4 *G = &P[k / VW];
                 int q = k % VW;
                 ELEM_LANE(G, q, &L->p);
                 G->dm[q] = L->p.dm;
-                for (int j = 0; j < NPT; j++) G->pt[j][q] = L->p.pt[j];
-                G->psm[q] = -(long long)L->p.ps; G->pdm[q] = -(long long)L->p.pd;
-                G->any = 0; G->anyx = 0; G->anyow = 0; G->anyf = 0; G->anyps = 0; G->anypd = 0;
+                G->lp[q] = &L->p;
+                G->any = 0; G->anyx = 0; G->anyow = 0; G->anyf = 0; G->anyp = 0;
                 for (int e = 0; e < VW; e++) {
-                    G->anyps |= lanes[k - q + e].p.ps && used[k - q + e];
-                    G->anypd |= lanes[k - q + e].p.pd && used[k - q + e];
+                    G->lp[e] = &lanes[k - q + e].p;
+                    G->anyp |= (lanes[k - q + e].p.ps | lanes[k - q + e].p.pd) && used[k - q + e];
                     G->any |= G->dm[e] != 0.0;
                     G->anyx |= lanes[k - q + e].p.x && used[k - q + e];
                     G->anyow |= lanes[k - q + e].p.ow && used[k - q + e];
@@ -2102,7 +2067,9 @@ int sc_step(const double *tab_meta, const double *cc, const double *dcc, const d
     Table T; Method m;
     make(tab_meta, cc, dcc, xcc, NULL, pcc, tableau, &T, &m);
     Par p;
+    PtCache pc;
     ELEM_READ(&p, design, &T);
+    p.pc = &pc;
     pts_read(&p, design, D_PT + NPT);
     p.dm = 0.0;
     if (p.x && !xcc) return S_RANGE;
@@ -2112,6 +2079,34 @@ int sc_step(const double *tab_meta, const double *cc, const double *dcc, const d
         p.dm = design[D_MLID] - T.m0;
     }
     return step(&T, &m, &p, h, x0[0], x0[1], &x1[0], &x1[1]);
+}
+
+/* the spring's l, dl and the dashpot's dd of rows with their own points (pts: n x NPT, the
+ * row convention) at angles th (n x G, or G shared by the rows), from the rows' pieces as the
+ * strokes read them: out n x G x 3 (NaN where the row has the table's, or outside it) */
+void sc_point_columns(const double *tab_meta, const double *cc, const double *pcc, long n,
+                      const double *pts, long G, const double *th, long shared, double *out)
+{
+    static const double tableau[5] = {0, 1, 0, 1, 0};
+    Table T; Method m;
+    make(tab_meta, cc, NULL, NULL, NULL, pcc, tableau, &T, &m);
+    for (long r = 0; r < n; r++) {
+        Par p;
+        PtCache pc;
+        memset(&p, 0, sizeof p);
+        p.pc = &pc;
+        pts_set(&p, pts + (size_t)r * NPT);
+        for (long g = 0; g < G; g++) {
+            double x = shared ? th[g] : th[(size_t)r * G + g], s, v[NC];
+            double *o = out + ((size_t)r * G + g) * 3;
+            o[0] = o[1] = o[2] = NAN;
+            int i = cell_index(&T, x, &s);
+            if (i < 0) continue;
+            pts_eval(&T, &p, i, s, v, NULL);
+            if (p.ps) { o[0] = v[C_L]; o[1] = v[C_DL]; }
+            if (p.pd) o[2] = v[C_DD];
+        }
+    }
 }
 
 int sc_nout(void) { return NOUT; }

@@ -205,6 +205,8 @@ def load():
         lib.sc_stroke_traj.restype = None
         lib.sc_step.argtypes = [dp, dp, dp, dp, dp, dp, dp, d, dp, dp]
         lib.sc_step.restype = ctypes.c_int
+        lib.sc_point_columns.argtypes = [dp, dp, dp, l, dp, l, dp, l, dp]
+        lib.sc_point_columns.restype = None
         check_layout(lib)
         _lib = lib
         return lib
@@ -314,6 +316,39 @@ def point_rows(table: CoefficientTable, points, n: int) -> np.ndarray | None:
         blk[~given.any(axis=1) | (blk == own[g]).all(axis=1)] = np.nan
         X[:, g] = blk
     return X if not np.isnan(X).all() else None
+
+
+def point_columns(table: CoefficientTable, theta, points) -> np.ndarray:
+    """The spring's l, dl and the dashpot's dd of rows with their own points (``points``
+    (n, NPT), the kernel's convention) at ``theta`` -- a scalar, one per row (n,), a grid per
+    row (n, G) or a grid shared by the rows (1, G) -- from the rows' own pieces as the
+    kernel's strokes read them: array (n, G, 3) (G = 1 for a scalar or (n,)), NaN where a
+    row has the table's own (or outside the table). Rows split across threads."""
+    lib = load()
+    pts = np.ascontiguousarray(np.atleast_2d(np.asarray(points, float)))
+    n = len(pts)
+    th = np.asarray(theta, float)
+    shared = th.ndim == 0 or (th.ndim == 2 and th.shape[0] == 1 and n != 1)
+    th2 = np.ascontiguousarray(th.reshape(1, -1) if th.ndim == 0 else
+                               (th.reshape(n, -1) if not shared else th))
+    G = th2.shape[1]
+    out = np.empty((n, G, 3))
+    pcc, cc = table.pose_kernel, table.cc_kernel
+
+    def work(a, b):
+        lib.sc_point_columns(_ptr(table.meta), _ptr(cc), _ptr(pcc), b - a,
+                             _ptr(pts[a:b]), G, _ptr(th2 if shared else th2[a:b]),
+                             int(shared), _ptr(out[a:b]))
+    if n * G < 20000:
+        work(0, n)
+    else:
+        import threading
+        half = n // 2
+        t = threading.Thread(target=work, args=(half, n))
+        t.start()
+        work(0, half)
+        t.join()
+    return out
 
 
 def _pose(designs: np.ndarray, table: CoefficientTable) -> np.ndarray | None:

@@ -329,36 +329,22 @@ class CoefficientTable:
 
     def point_columns(self, theta, points) -> dict:
         """The spring's l, dl and the dashpot's dd of rows with their own attachment points
-        at ``theta`` (one per row, or a grid per row: shape (n,) or (n, G); or a scalar).
+        at ``theta`` (one per row, or a grid per row: shape (n,) or (n, G); or a scalar), from
+        the rows' own pieces as the kernel reads them (:func:`softclose.native.point_columns`:
+        the pieces a table built at the row's points holds).
 
         A grid shared by the rows is given as shape (1, G) (the pose is evaluated once).
         ``points`` (n, 8) in the kernel's convention (:func:`softclose.native.point_rows`):
         the spring's four columns, or the dashpot's, NaN where the row has the table's own.
         Returns {"l", "dl", "dd"}: arrays of theta's broadcast shape (n, ...), NaN where the
         row has the table's own (the caller keeps the table's column there)."""
+        from .native import point_columns
         pts = np.atleast_2d(np.asarray(points, float))
         n = len(pts)
         th = np.asarray(theta, float)
         shape = (n,) if th.ndim <= 1 else (n, th.shape[1])
-        a = np.broadcast_to(self.pose_at(th), shape + (len(POSE),))   # (a grid (1, G): once)
-        A_x, A_y, dA_x, dA_y, c, s = (a[..., j] for j in range(len(POSE)))
-        extra = (None,) * (len(shape) - 1)
-
-        def r(g):
-            g = [pts[(slice(None), j) + extra] for j in g]
-            qx, qy = c * g[2] - s * g[3], s * g[2] + c * g[3]
-            rx, ry = A_x + qx - g[0], A_y + qy - g[1]
-            return rx, ry, dA_x - qy, dA_y + qx
-
-        with np.errstate(invalid="ignore", divide="ignore"):
-            rx, ry, ux, uy = r(range(0, 4))
-            l2, w = rx * rx + ry * ry, rx * ux + ry * uy
-            l = np.sqrt(l2)
-            out = {"l": l, "dl": w / l}
-            rx, ry, ux, uy = r(range(4, 8))
-            l2, w = rx * rx + ry * ry, rx * ux + ry * uy
-            out["dd"] = w * w / l2
-        return out
+        c = point_columns(self, th, pts)
+        return {name: c[..., j].reshape(shape) for j, name in enumerate(("l", "dl", "dd"))}
 
     def rows_extra(self, theta, n: int) -> np.ndarray:
         """The element columns of the extra table at ``theta`` (scalar or one per row), n rows."""
