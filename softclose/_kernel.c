@@ -205,7 +205,7 @@ enum { X_PSI, X_DPSI, X_DR2 };
  * release and at every turning point); dm = m_lid - m0: 0 for a row at the table's mass; x:
  * the row has an element of the extra table */
 /* a row's own pieces of l, dl, dd on the last two cells it read (PER-ROW ATTACHMENT POINTS) */
-typedef struct { int cell[2], next; double blk[2][4 * NC]; } PtCache;
+typedef struct { int cell[2], next, node[2], nnext; double blk[2][4 * NC], nv[2][2][3]; } PtCache;
 typedef struct { double k, l0, F, c, cr, crp, kt, psi0, Tf, fs, dm; int x, ow;
                  int ps, pd; double pt[NPT]; /* own spring / dashpot points (D_PT ...) */
                  PtCache *pc; /* their pieces (with ps or pd) */ } Par;
@@ -402,7 +402,10 @@ static inline void pts_set(Par *p, const double *pt)
     for (int j = 0; j < NPT; j++) p->pt[j] = pt[j];
     p->ps = isfinite(pt[0]) && isfinite(pt[1]) && isfinite(pt[2]) && isfinite(pt[3]);
     p->pd = isfinite(pt[4]) && isfinite(pt[5]) && isfinite(pt[6]) && isfinite(pt[7]);
-    if (p->pc) { p->pc->cell[0] = p->pc->cell[1] = -1; p->pc->next = 0; }
+    if (p->pc) {
+        p->pc->cell[0] = p->pc->cell[1] = p->pc->node[0] = p->pc->node[1] = -1;
+        p->pc->next = p->pc->nnext = 0;
+    }
 }
 
 /* read the row's own points (columns D_PT.. of a row of ncol columns) into p */
@@ -447,6 +450,25 @@ static inline void pose_node(const Table *T, int j, double *a, double *da)
     }
 }
 
+/* the row's l, dl, dd (f) and their slopes (d) at node j (columns C_L..C_DD of f[NC],
+ * d[NC]), kept for the last two nodes (a stroke's neighbouring cells share one) */
+static inline void pt_node(const Table *T, const Par *p, int j, double *f, double *d)
+{
+    PtCache *c = p->pc;
+    int k = c->node[0] == j ? 0 : (c->node[1] == j ? 1 : -1);
+    if (k < 0) {
+        double a[P_USED], da[P_USED];
+        pose_node(T, j, a, da);
+        if (p->ps) pt_length(a, da, p->pt, 0, f, d);
+        if (p->pd) pt_length(a, da, p->pt + 4, 1, f, d);
+        k = c->nnext;
+        c->nnext ^= 1;
+        c->node[k] = j;
+        for (int m = 0; m < 3; m++) { c->nv[k][0][m] = f[C_L + m]; c->nv[k][1][m] = d[C_L + m]; }
+    }
+    for (int m = 0; m < 3; m++) { f[C_L + m] = c->nv[k][0][m]; d[C_L + m] = c->nv[k][1][m]; }
+}
+
 /* build the row's pieces on cell i into a free slot of its cache (noinline: once a cell) */
 __attribute__((noinline)) static const double *pt_build(const Table *T, const Par *p, int i)
 {
@@ -458,12 +480,8 @@ __attribute__((noinline)) static const double *pt_build(const Table *T, const Pa
     const double *t = T->cc + (size_t)i * 4 * NC;
     for (int e = 0; e < 4; e++)
         for (int j = C_L; j <= C_TAU; j++) b[e * NC + j] = t[e * NC + j]; /* the table's */
-    double f[2][NC], d[2][NC], a[P_USED], da[P_USED];
-    for (int n = 0; n < 2; n++) {
-        pose_node(T, i + n, a, da);
-        if (p->ps) pt_length(a, da, p->pt, 0, f[n], d[n]);
-        if (p->pd) pt_length(a, da, p->pt + 4, 1, f[n], d[n]);
-    }
+    double f[2][NC] = {{0}}, d[2][NC] = {{0}};
+    for (int n = 0; n < 2; n++) pt_node(T, p, i + n, f[n], d[n]);
     for (int j = C_L; j <= C_DD; j++) {
         if (j == C_DD ? !p->pd : !p->ps) continue;
         double f0 = f[0][j], f1 = f[1][j], d0 = d[0][j] * T->h, d1 = d[1][j] * T->h;
@@ -2107,6 +2125,85 @@ void sc_point_columns(const double *tab_meta, const double *cc, const double *pc
             if (p.pd) o[2] = v[C_DD];
         }
     }
+}
+
+/* the same columns for many rows over a grid of angles shared by the rows, from the pose
+ * pieces interpolated at the angles (not the rows' pieces: within the tables' interpolation
+ * error, ~1e-10 relative, of them; for the statics that scan a stroke: the opening effort,
+ * where a spring leaves its range): pose_g (G x P_USED) the pose at the grid, out n x G x 3 */
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+#define PG_SQRT(x) __builtin_ia32_sqrtpd256(x)
+__attribute__((target("avx2")))
+#else
+#define PG_SQRT(x) ({ v4 y_ = (x); for (int q_ = 0; q_ < VW; q_++) y_[q_] = sqrt(y_[q_]); y_; })
+#endif
+static void point_grid_rows(const double *pose_g, long G, long n, const double *pts,
+                            double *out)
+{ /* (four angles at a time: G a multiple of 4, the pose padded) */
+    const double *Ax = pose_g, *Ay = pose_g + G, *dAx = pose_g + 2 * G, *dAy = pose_g + 3 * G,
+                 *cs = pose_g + 4 * G, *sn = pose_g + 5 * G;
+    for (long r = 0; r < n; r++) {
+        const double *g = pts + (size_t)r * NPT;
+        double *o = out + (size_t)r * G * 3;
+        int ps = isfinite(g[0]) && isfinite(g[1]) && isfinite(g[2]) && isfinite(g[3]);
+        int pd = isfinite(g[4]) && isfinite(g[5]) && isfinite(g[6]) && isfinite(g[7]);
+        for (long k = 0; k < G; k += VW) {
+            v4 c = ld4(cs + k), sv = ld4(sn + k), ax = ld4(Ax + k), ay = ld4(Ay + k);
+            v4 dx = ld4(dAx + k), dy = ld4(dAy + k), l = {NAN, NAN, NAN, NAN}, dl = l, dd = l;
+            if (ps) {
+                v4 qx = c * g[2] - sv * g[3], qy = sv * g[2] + c * g[3];
+                v4 rx = ax + qx - g[0], ry = ay + qy - g[1], ux = dx - qy, uy = dy + qx;
+                l = PG_SQRT(rx * rx + ry * ry);
+                dl = (rx * ux + ry * uy) / l;
+            }
+            if (pd) {
+                v4 qx = c * g[6] - sv * g[7], qy = sv * g[6] + c * g[7];
+                v4 rx = ax + qx - g[4], ry = ay + qy - g[5], ux = dx - qy, uy = dy + qx;
+                v4 w = rx * ux + ry * uy;
+                dd = w * w / (rx * rx + ry * ry);
+            }
+            for (int q = 0; q < VW; q++) {
+                o[3 * (k + q)] = l[q]; o[3 * (k + q) + 1] = dl[q]; o[3 * (k + q) + 2] = dd[q];
+            }
+        }
+    }
+}
+
+void sc_point_grid(const double *tab_meta, const double *pcc, long n, const double *pts,
+                   long G, const double *th, long per_row, double *out)
+{ /* (th: G angles shared by the rows, or n x G with per_row) */
+    long G4 = (G + VW - 1) / VW * VW; /* (padded to whole vectors) */
+    double *pose_g = calloc((size_t)(G4 > 0 ? G4 : 1) * P_USED, sizeof(double));
+    double *o4 = G4 == G ? out : malloc(sizeof(double) * (size_t)(n > 0 ? n : 1) * G4 * 3);
+    if (!pose_g || !o4) {
+        for (size_t k = 0; k < (size_t)n * G * 3; k++) out[k] = NAN;
+        free(pose_g);
+        if (o4 != out) free(o4);
+        return;
+    }
+    int ncell = (int)tab_meta[0];
+    double lo = tab_meta[1], h = tab_meta[2];
+    for (long r = 0; r < (per_row ? n : 1); r++) {
+    for (long k = 0; k < G; k++) {
+        double x = (th[(size_t)r * G * (per_row != 0) + k] - lo) / h;
+        if (x < 0) x = 0;
+        if (x > ncell) x = ncell;
+        int i = (int)x;
+        if (i >= ncell) i = ncell - 1;
+        double s = x - i;
+        const double *q = pcc + (size_t)i * 4 * NPOSE;
+        for (int j = 0; j < P_USED; j++) pose_g[j * G4 + k] = PCUB(q, j, s);
+    }
+    for (long k = G; k < G4; k++) pose_g[4 * G4 + k] = 1.0; /* (a harmless padding) */
+    if (per_row) point_grid_rows(pose_g, G4, 1, pts + (size_t)r * NPT, o4 + (size_t)r * G4 * 3);
+    }
+    if (!per_row) point_grid_rows(pose_g, G4, n, pts, o4);
+    if (o4 != out) {
+        for (long r = 0; r < n; r++)
+            memcpy(out + (size_t)r * G * 3, o4 + (size_t)r * G4 * 3, sizeof(double) * G * 3);
+        free(o4);
+    }
+    free(pose_g);
 }
 
 int sc_nout(void) { return NOUT; }

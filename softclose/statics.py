@@ -170,8 +170,9 @@ def table_coordinate(table, points=None):
         has = ~np.isnan(pts[:, blk[0].start])
         if not has.any():
             return out
+        from .native import point_grid
         th = np.asarray(th, float)
-        l = table.point_columns(th.reshape(len(pts), -1), pts)["l"].reshape(th.shape)
+        l = point_grid(table, th.reshape(len(pts), -1), pts)[..., 0].reshape(th.shape)
         return np.where(has.reshape((-1,) + (1,) * (th.ndim - 1)), l, out)
     q.per_row = True
     return q
@@ -264,7 +265,9 @@ def opening_forces(table, cfg, P, lid_mass=None, points=None) -> np.ndarray:
         has = ~np.isnan(pts[:, 0])
         if has.any():
             own = np.flatnonzero(has)
-            pl = table.point_columns(th[None, :], pts[own])
+            from .native import point_grid
+            g = point_grid(table, th, pts[own])
+            pl = {"l": g[..., 0], "dl": g[..., 1]}
     for e in elements.SPRINGS:
         if e.name not in co:
             continue
