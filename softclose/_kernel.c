@@ -143,6 +143,7 @@ typedef double v4 __attribute__((vector_size(VW * sizeof(double))));
 typedef long long v4l __attribute__((vector_size(VW * sizeof(long long))));
 typedef int v4i __attribute__((vector_size(VW * sizeof(int))));
 #define ALWAYS static inline __attribute__((always_inline))
+ALWAYS v4 ld4(const double *a) { v4 v; memcpy(&v, a, sizeof v); return v; }
 #define MIN2(a, b) ((a) < (b) ? (a) : (b))
 #define MAX2(a, b) ((a) > (b) ? (a) : (b))
 #if defined(__GNUC__) && !defined(__clang__)
@@ -205,7 +206,8 @@ enum { X_PSI, X_DPSI, X_DR2 };
  * release and at every turning point); dm = m_lid - m0: 0 for a row at the table's mass; x:
  * the row has an element of the extra table */
 /* a row's own pieces of l, dl, dd on the last two cells it read (PER-ROW ATTACHMENT POINTS) */
-typedef struct { int cell[2], next, node[2], nnext; double blk[2][4 * NC], nv[2][2][3]; } PtCache;
+#define PKB 8 /* cells a block of a row's own pieces holds */
+typedef struct { int base, nb; double blk[PKB][4 * NC]; } PtCache;
 typedef struct { double k, l0, F, c, cr, crp, kt, psi0, Tf, fs, dm; int x, ow;
                  int ps, pd; double pt[NPT]; /* own spring / dashpot points (D_PT ...) */
                  PtCache *pc; /* their pieces (with ps or pd) */ } Par;
@@ -402,10 +404,7 @@ static inline void pts_set(Par *p, const double *pt)
     for (int j = 0; j < NPT; j++) p->pt[j] = pt[j];
     p->ps = isfinite(pt[0]) && isfinite(pt[1]) && isfinite(pt[2]) && isfinite(pt[3]);
     p->pd = isfinite(pt[4]) && isfinite(pt[5]) && isfinite(pt[6]) && isfinite(pt[7]);
-    if (p->pc) {
-        p->pc->cell[0] = p->pc->cell[1] = p->pc->node[0] = p->pc->node[1] = -1;
-        p->pc->next = p->pc->nnext = 0;
-    }
+    if (p->pc) p->pc->base = p->pc->nb = 0;
 }
 
 /* read the row's own points (columns D_PT.. of a row of ncol columns) into p */
@@ -450,46 +449,98 @@ static inline void pose_node(const Table *T, int j, double *a, double *da)
     }
 }
 
-/* the row's l, dl, dd (f) and their slopes (d) at node j (columns C_L..C_DD of f[NC],
- * d[NC]), kept for the last two nodes (a stroke's neighbouring cells share one) */
-static inline void pt_node(const Table *T, const Par *p, int j, double *f, double *d)
+/* the row's l, dl, dd (f[m][k], m = 0, 1, 2) and their slopes (d[m][k]) at the nodes
+ * j0 + k, k < nn <= PKB + 1: pt_length node by node, or (pt_nodes_avx2) four nodes a vector
+ * with the same operations in the same order -- the same numbers bit for bit */
+#define PNN 12 /* PKB + 1 nodes, rounded up to whole vectors */
+static void pt_nodes_any(const Table *T, const Par *p, int j0, int nn, double f[3][PNN],
+                         double d[3][PNN])
 {
-    PtCache *c = p->pc;
-    int k = c->node[0] == j ? 0 : (c->node[1] == j ? 1 : -1);
-    if (k < 0) {
-        double a[P_USED], da[P_USED];
-        pose_node(T, j, a, da);
-        if (p->ps) pt_length(a, da, p->pt, 0, f, d);
-        if (p->pd) pt_length(a, da, p->pt + 4, 1, f, d);
-        k = c->nnext;
-        c->nnext ^= 1;
-        c->node[k] = j;
-        for (int m = 0; m < 3; m++) { c->nv[k][0][m] = f[C_L + m]; c->nv[k][1][m] = d[C_L + m]; }
+    for (int k = 0; k < nn; k++) {
+        double a[P_USED], da[P_USED], v[NC], dv[NC];
+        pose_node(T, j0 + k, a, da);
+        v[C_L] = v[C_DL] = v[C_DD] = dv[C_L] = dv[C_DL] = dv[C_DD] = 0.0;
+        if (p->ps) pt_length(a, da, p->pt, 0, v, dv);
+        if (p->pd) pt_length(a, da, p->pt + 4, 1, v, dv);
+        for (int m = 0; m < 3; m++) { f[m][k] = v[C_L + m]; d[m][k] = dv[C_L + m]; }
     }
-    for (int m = 0; m < 3; m++) { f[C_L + m] = c->nv[k][0][m]; d[C_L + m] = c->nv[k][1][m]; }
 }
 
-/* build the row's pieces on cell i into a free slot of its cache (noinline: once a cell) */
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+#define PT_AVX2 1
+__attribute__((target("avx2"), noinline))
+static void pt_nodes_avx2(const Table *T, const Par *p, int j0, int nn, double f[3][PNN],
+                          double d[3][PNN])
+{
+    double a[P_USED][PNN], da[P_USED][PNN];
+    for (int k = 0; k < PNN; k++) {
+        double x[P_USED], dx[P_USED];
+        pose_node(T, k < nn ? j0 + k : j0, x, dx);
+        for (int j = 0; j < P_USED; j++) { a[j][k] = x[j]; da[j][k] = dx[j]; }
+    }
+    const v4 two = {2.0, 2.0, 2.0, 2.0}, zero = {0.0, 0.0, 0.0, 0.0};
+    for (int k = 0; k < PNN; k += VW) {
+        v4 c = ld4(a[P_COS] + k), sn = ld4(a[P_SIN] + k), ax = ld4(a[P_AX] + k),
+           ay = ld4(a[P_AY] + k), dx = ld4(a[P_DAX] + k), dy = ld4(a[P_DAY] + k),
+           ddx = ld4(da[P_DAX] + k), ddy = ld4(da[P_DAY] + k);
+        v4 fl = zero, fdl = zero, fdd = zero, dl_ = zero, ddl = zero, ddd = zero;
+        for (int dash = 0; dash < 2; dash++) { /* pt_length's operations, as vectors */
+            if (dash ? !p->pd : !p->ps) continue;
+            const double *g = p->pt + 4 * dash;
+            v4 qx = c * g[2] - sn * g[3], qy = sn * g[2] + c * g[3];
+            v4 rx = ax + qx - g[0], ry = ay + qy - g[1], ux = dx - qy, uy = dy + qx;
+            v4 l2 = rx * rx + ry * ry, w = rx * ux + ry * uy;
+            v4 qx2 = c * g[2] - sn * g[3], qy2 = sn * g[2] + c * g[3];
+            v4 wd = ux * ux + uy * uy + rx * (ddx - qx2) + ry * (ddy - qy2);
+            if (dash) {
+                fdd = w * w / l2;
+                ddd = two * w * (wd * l2 - w * w) / (l2 * l2);
+            } else {
+                v4 l = __builtin_ia32_sqrtpd256(l2), dl = w / l;
+                fl = l; fdl = dl; dl_ = dl;
+                ddl = (wd - dl * dl) / l;
+            }
+        }
+        memcpy(f[0] + k, &fl, sizeof fl); memcpy(f[1] + k, &fdl, sizeof fl);
+        memcpy(f[2] + k, &fdd, sizeof fl); memcpy(d[0] + k, &dl_, sizeof fl);
+        memcpy(d[1] + k, &ddl, sizeof fl); memcpy(d[2] + k, &ddd, sizeof fl);
+    }
+}
+#endif
+
+static int use_vec;
+
+/* build the row's pieces on a block of PKB cells holding cell i (ahead of it in the way the
+ * stroke goes: below it when it came from above) -- noinline: once a block */
 __attribute__((noinline)) static const double *pt_build(const Table *T, const Par *p, int i)
 {
     PtCache *c = p->pc;
-    int k = c->next;
-    c->next ^= 1;
-    c->cell[k] = i;
-    double *b = c->blk[k];
-    const double *t = T->cc + (size_t)i * 4 * NC;
-    for (int e = 0; e < 4; e++)
-        for (int j = C_L; j <= C_TAU; j++) b[e * NC + j] = t[e * NC + j]; /* the table's */
-    double f[2][NC] = {{0}}, d[2][NC] = {{0}};
-    for (int n = 0; n < 2; n++) pt_node(T, p, i + n, f[n], d[n]);
-    for (int j = C_L; j <= C_DD; j++) {
-        if (j == C_DD ? !p->pd : !p->ps) continue;
-        double f0 = f[0][j], f1 = f[1][j], d0 = d[0][j] * T->h, d1 = d[1][j] * T->h;
-        b[j] = f0; b[NC + j] = d0;
-        b[2 * NC + j] = 3 * (f1 - f0) - 2 * d0 - d1;
-        b[3 * NC + j] = 2 * (f0 - f1) + d0 + d1;
+    int base = c->nb && i < c->base ? i - PKB + 1 : i;
+    if (base > T->ncell - PKB) base = T->ncell - PKB;
+    if (base < 0) base = 0;
+    int nb = T->ncell - base < PKB ? T->ncell - base : PKB;
+    c->base = base; c->nb = nb;
+    double f[3][PNN], d[3][PNN];
+#ifdef PT_AVX2
+    if (use_vec > 0) pt_nodes_avx2(T, p, base, nb + 1, f, d);
+    else
+#endif
+        pt_nodes_any(T, p, base, nb + 1, f, d);
+    for (int k = 0; k < nb; k++) {
+        double *b = c->blk[k];
+        const double *t = T->cc + (size_t)(base + k) * 4 * NC;
+        for (int e = 0; e < 4; e++)
+            for (int j = C_L; j <= C_TAU; j++) b[e * NC + j] = t[e * NC + j]; /* the table's */
+        for (int j = C_L; j <= C_DD; j++) {
+            if (j == C_DD ? !p->pd : !p->ps) continue;
+            int m = j - C_L;
+            double f0 = f[m][k], f1 = f[m][k + 1], d0 = d[m][k] * T->h, d1 = d[m][k + 1] * T->h;
+            b[j] = f0; b[NC + j] = d0;
+            b[2 * NC + j] = 3 * (f1 - f0) - 2 * d0 - d1;
+            b[3 * NC + j] = 2 * (f0 - f1) + d0 + d1;
+        }
     }
-    return b;
+    return c->blk[i - base];
 }
 
 /* the row's pieces on cell i: a block laid out as the table's cell (power-major, NC a
@@ -497,8 +548,7 @@ __attribute__((noinline)) static const double *pt_build(const Table *T, const Pa
 static inline const double *pt_piece(const Table *T, const Par *p, int i)
 {
     const PtCache *c = p->pc;
-    if (c->cell[0] == i) return c->blk[0];
-    if (c->cell[1] == i) return c->blk[1];
+    if ((unsigned)(i - c->base) < (unsigned)c->nb) return c->blk[i - c->base];
     return pt_build(T, p, i);
 }
 
@@ -1469,7 +1519,6 @@ ALWAYS void cells4(const Table *T, v4 th, const double **b, v4 *s, v4l *okm)
     for (int q = 0; q < VW; q++) b[q] = T->cc + (size_t)ii[q] * 4 * NC;
 }
 
-ALWAYS v4 ld4(const double *a) { v4 v; memcpy(&v, a, sizeof v); return v; }
 ALWAYS v4 abs4(v4 x)
 {
     v4l mask = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL, 0x7fffffffffffffffLL,
@@ -1988,6 +2037,7 @@ static void strokes_any(const Table *T, const Method *m, double dt, double t_max
 }
 
 static int use_vec = -1; /* -1: not decided; SC_SCALAR=1 in the environment forces 0 */
+/* (pt_build reads it: decided before any stroke, and run() is the only way to a stroke) */
 
 static void run(const Table *T, const Method *m, double dt, double t_max, double th0,
                 double thc, long n, int ncol, const double *design, int early, double *out,
