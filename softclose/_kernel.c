@@ -2187,17 +2187,18 @@ __attribute__((target("avx2")))
 #else
 #define PG_SQRT(x) ({ v4 y_ = (x); for (int q_ = 0; q_ < VW; q_++) y_[q_] = sqrt(y_[q_]); y_; })
 #endif
-static void point_grid_rows(const double *pose_g, long G, long n, const double *pts,
-                            double *out)
-{ /* (four angles at a time: G a multiple of 4, the pose padded) */
-    const double *Ax = pose_g, *Ay = pose_g + G, *dAx = pose_g + 2 * G, *dAy = pose_g + 3 * G,
-                 *cs = pose_g + 4 * G, *sn = pose_g + 5 * G;
+static void point_grid_rows(const double *pose_g, long G4, long G, long n, const double *pts,
+                            int mode, const double *ab, double *out)
+{ /* (four angles at a time: the pose padded to G4, a multiple of 4; G angles written; mode
+   * 0: l, dl, dd an angle; 1: l; 2: the spring's slope term (a + b l) l', ab: a, b a row) */
+    const double *Ax = pose_g, *Ay = pose_g + G4, *dAx = pose_g + 2 * G4,
+                 *dAy = pose_g + 3 * G4, *cs = pose_g + 4 * G4, *sn = pose_g + 5 * G4;
     for (long r = 0; r < n; r++) {
         const double *g = pts + (size_t)r * NPT;
-        double *o = out + (size_t)r * G * 3;
+        double *o = out + (size_t)r * G * (mode ? 1 : 3);
         int ps = isfinite(g[0]) && isfinite(g[1]) && isfinite(g[2]) && isfinite(g[3]);
         int pd = isfinite(g[4]) && isfinite(g[5]) && isfinite(g[6]) && isfinite(g[7]);
-        for (long k = 0; k < G; k += VW) {
+        for (long k = 0; k < G4; k += VW) {
             v4 c = ld4(cs + k), sv = ld4(sn + k), ax = ld4(Ax + k), ay = ld4(Ay + k);
             v4 dx = ld4(dAx + k), dy = ld4(dAy + k), l = {NAN, NAN, NAN, NAN}, dl = l, dd = l;
             if (ps) {
@@ -2212,23 +2213,27 @@ static void point_grid_rows(const double *pose_g, long G, long n, const double *
                 v4 w = rx * ux + ry * uy;
                 dd = w * w / (rx * rx + ry * ry);
             }
-            for (int q = 0; q < VW; q++) {
-                o[3 * (k + q)] = l[q]; o[3 * (k + q) + 1] = dl[q]; o[3 * (k + q) + 2] = dd[q];
+            if (mode == 0)
+                for (int q = 0; q < VW && k + q < G; q++) {
+                    o[3 * (k + q)] = l[q]; o[3 * (k + q) + 1] = dl[q];
+                    o[3 * (k + q) + 2] = dd[q];
+                }
+            else {
+                v4 x = mode == 1 ? l : (ab[2 * r] + ab[2 * r + 1] * l) * dl;
+                for (int q = 0; q < VW && k + q < G; q++) o[k + q] = x[q];
             }
         }
     }
 }
 
 void sc_point_grid(const double *tab_meta, const double *pcc, long n, const double *pts,
-                   long G, const double *th, long per_row, double *out)
-{ /* (th: G angles shared by the rows, or n x G with per_row) */
+                   long G, const double *th, long per_row, long mode, const double *ab,
+                   double *out)
+{ /* (th: G angles shared by the rows, or n x G with per_row; mode, ab: point_grid_rows) */
     long G4 = (G + VW - 1) / VW * VW; /* (padded to whole vectors) */
     double *pose_g = calloc((size_t)(G4 > 0 ? G4 : 1) * P_USED, sizeof(double));
-    double *o4 = G4 == G ? out : malloc(sizeof(double) * (size_t)(n > 0 ? n : 1) * G4 * 3);
-    if (!pose_g || !o4) {
-        for (size_t k = 0; k < (size_t)n * G * 3; k++) out[k] = NAN;
-        free(pose_g);
-        if (o4 != out) free(o4);
+    if (!pose_g) {
+        for (size_t k = 0; k < (size_t)n * G * (mode ? 1 : 3); k++) out[k] = NAN;
         return;
     }
     int ncell = (int)tab_meta[0];
@@ -2245,14 +2250,11 @@ void sc_point_grid(const double *tab_meta, const double *pcc, long n, const doub
         for (int j = 0; j < P_USED; j++) pose_g[j * G4 + k] = PCUB(q, j, s);
     }
     for (long k = G; k < G4; k++) pose_g[4 * G4 + k] = 1.0; /* (a harmless padding) */
-    if (per_row) point_grid_rows(pose_g, G4, 1, pts + (size_t)r * NPT, o4 + (size_t)r * G4 * 3);
+    if (per_row)
+        point_grid_rows(pose_g, G4, G, 1, pts + (size_t)r * NPT, (int)mode,
+                        ab ? ab + 2 * r : NULL, out + (size_t)r * G * (mode ? 1 : 3));
     }
-    if (!per_row) point_grid_rows(pose_g, G4, n, pts, o4);
-    if (o4 != out) {
-        for (long r = 0; r < n; r++)
-            memcpy(out + (size_t)r * G * 3, o4 + (size_t)r * G4 * 3, sizeof(double) * G * 3);
-        free(o4);
-    }
+    if (!per_row) point_grid_rows(pose_g, G4, G, n, pts, (int)mode, ab, out);
     free(pose_g);
 }
 

@@ -207,7 +207,7 @@ def load():
         lib.sc_step.restype = ctypes.c_int
         lib.sc_point_columns.argtypes = [dp, dp, dp, l, dp, l, dp, l, dp]
         lib.sc_point_columns.restype = None
-        lib.sc_point_grid.argtypes = [dp, dp, l, dp, l, dp, l, dp]
+        lib.sc_point_grid.argtypes = [dp, dp, l, dp, l, dp, l, l, dp, dp]
         lib.sc_point_grid.restype = None
         check_layout(lib)
         _lib = lib
@@ -353,22 +353,27 @@ def point_columns(table: CoefficientTable, theta, points) -> np.ndarray:
     return out
 
 
-def point_grid(table: CoefficientTable, theta, points) -> np.ndarray:
+def point_grid(table: CoefficientTable, theta, points, what: str = "all",
+               ab=None) -> np.ndarray:
     """:func:`point_columns` on a grid of angles -- (G,) shared by the rows, or (n, G) one
     per row -- from the pose pieces interpolated there rather than the rows' own pieces
     (to the tables' interpolation error, ~1e-10 relative, of them; no piece is built, so a
     grid over a whole stroke costs a few ns an angle): for the statics that scan a stroke
-    (the opening effort, where a spring leaves its valid range). Array (n, G, 3)."""
+    (the opening effort, where a spring leaves its valid range). Array (n, G, 3); with
+    ``what="l"`` the spring's length alone (n, G); with ``what="slope"`` its term of the
+    slope dV/dtheta, (a + b l) l' with ``ab`` (n, 2) the rows' affine law T = a + b l."""
     lib = load()
     pts = np.ascontiguousarray(np.atleast_2d(np.asarray(points, float)))
     n = len(pts)
     th = np.ascontiguousarray(np.asarray(theta, float))
     per_row = th.ndim == 2
     G = th.shape[-1]
-    out = np.empty((n, G, 3))
+    mode = {"all": 0, "l": 1, "slope": 2}[what]
+    out = np.empty((n, G, 3) if mode == 0 else (n, G))
+    ab = None if ab is None else np.ascontiguousarray(ab, float)
     pcc = table.pose_kernel
     lib.sc_point_grid(_ptr(table.meta), _ptr(pcc), n, _ptr(pts), G, _ptr(th), int(per_row),
-                      _ptr(out))
+                      mode, _ptr(ab), _ptr(out))
     return out
 
 

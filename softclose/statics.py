@@ -162,18 +162,21 @@ def table_coordinate(table, points=None):
     the spring's length from the table's pose pieces."""
     def q(element, th, rows=None):
         col = COEFFS.index(next(c for c, what in element.columns if what == "q"))
-        out = table.evaluate_column(th, col)
         blk = POINT_BLOCKS.get(element.name)
         if points is None or rows is None or blk is None or "l" not in blk[1]:
-            return out
+            return table.evaluate_column(th, col)
         pts = np.asarray(points, float)[rows]
         has = ~np.isnan(pts[:, blk[0].start])
-        if not has.any():
-            return out
-        from .native import point_grid
         th = np.asarray(th, float)
-        l = point_grid(table, th.reshape(len(pts), -1), pts)[..., 0].reshape(th.shape)
-        return np.where(has.reshape((-1,) + (1,) * (th.ndim - 1)), l, out)
+        if not has.any():
+            return table.evaluate_column(th, col)
+        from .native import point_grid
+        out = np.empty(th.shape)
+        out[has] = point_grid(table, th[has].reshape(int(has.sum()), -1), pts[has],
+                              "l").reshape(th[has].shape)
+        if not has.all():
+            out[~has] = table.evaluate_column(th[~has], col)
+        return out
     q.per_row = True
     return q
 
@@ -261,26 +264,23 @@ def opening_forces(table, cfg, P, lid_mass=None, points=None) -> np.ndarray:
     slope = np.zeros((len(P), len(th)))
     own = None                                 # the rows whose spring has its own points
     if points is not None:
-        pts = np.asarray(points, float)
-        has = ~np.isnan(pts[:, 0])
-        if has.any():
-            own = np.flatnonzero(has)
-            from .native import point_grid
-            g = point_grid(table, th, pts[own])
-            pl = {"l": g[..., 0], "dl": g[..., 1]}
+        has = ~np.isnan(np.asarray(points, float)[:, 0])
+        own = np.flatnonzero(has) if has.any() else None
     for e in elements.SPRINGS:
         if e.name not in co:
             continue
         q, dq = co[e.name].q, co[e.name].dq
         a, b = e.affine(Pn)
         a = np.broadcast_to(np.asarray(a, float), (len(P),))
+        if own is not None and e.name == "spring":   # its term from its own l, l' instead
+            from .native import point_grid
+            b = np.broadcast_to(np.asarray(b, float), (len(P),))
+            slope[own] += point_grid(table, th, np.asarray(points, float)[own], "slope",
+                                     np.column_stack([a[own], b[own]]))
+            a, b = np.where(has, 0.0, a), np.where(has, 0.0, b)
         slope += np.multiply.outer(a, dq)
         if not (np.ndim(b) == 0 and b == 0.0):
             slope += np.multiply.outer(np.asarray(b, float), q * dq)
-        if own is not None and e.name == "spring":     # its own l, l' instead
-            b_own = np.broadcast_to(np.asarray(b, float), (len(P),))[own, None]
-            slope[own] += (a[own, None] + b_own * pl["l"]) * pl["dl"] \
-                - (a[own, None] + b_own * q) * dq
     dm = table.mass_offsets(lid_mass, (len(P),))
     if dm is not None:               # gravity's slope at another lid mass: affine in it
         slope += np.multiply.outer(dm, table.mass_slope_at(th)[:, COEFFS.index("dVg")])
