@@ -2258,6 +2258,53 @@ void sc_point_grid(const double *tab_meta, const double *pcc, long n, const doub
     free(pose_g);
 }
 
+/* the opening effort of rows with their own spring points (pts n x NPT, ab their affine law
+ * T = a + b l): per row, the largest (base[idx] + (a + b l) l') / tau over the grid th (G
+ * angles; base u x G: the other elements' slope and friction of the row's parameters, tau
+ * the tip's lever there), refined by the parabola through it and its neighbours -- as
+ * softclose.statics.opening_forces does for the table's spring */
+void sc_point_opening(const double *tab_meta, const double *pcc, long n, const double *pts,
+                      const double *ab, long G, const double *th, const double *base,
+                      const long *idx, const double *tau, double *out)
+{
+    double *buf = malloc(sizeof(double) * (size_t)(G > 0 ? G : 1));
+    if (!buf) { for (long r = 0; r < n; r++) out[r] = NAN; return; }
+    long G4 = (G + VW - 1) / VW * VW;
+    double *pose_g = calloc((size_t)(G4 > 0 ? G4 : 1) * P_USED, sizeof(double));
+    if (!pose_g) { free(buf); for (long r = 0; r < n; r++) out[r] = NAN; return; }
+    int ncell = (int)tab_meta[0];
+    double lo = tab_meta[1], h = tab_meta[2];
+    for (long k = 0; k < G; k++) {
+        double x = (th[k] - lo) / h;
+        if (x < 0) x = 0;
+        if (x > ncell) x = ncell;
+        int i = (int)x;
+        if (i >= ncell) i = ncell - 1;
+        double s = x - i;
+        const double *q = pcc + (size_t)i * 4 * NPOSE;
+        for (int j = 0; j < P_USED; j++) pose_g[j * G4 + k] = PCUB(q, j, s);
+    }
+    for (long k = G; k < G4; k++) pose_g[4 * G4 + k] = 1.0;
+    for (long r = 0; r < n; r++) {
+        point_grid_rows(pose_g, G4, G, 1, pts + (size_t)r * NPT, 2, ab + 2 * r, buf);
+        const double *bs = base + (size_t)idx[r] * G;
+        long j = 0;
+        double best = -INFINITY;
+        for (long k = 0; k < G; k++) {
+            buf[k] = (bs[k] + buf[k]) / tau[k];
+            if (k == 0 || buf[k] > best) { best = buf[k]; j = k; } /* (the first largest) */
+        }
+        if (j > 0 && j < G - 1) {
+            double y0 = buf[j - 1], y1 = buf[j], y2 = buf[j + 1], den = y0 - 2 * y1 + y2;
+            double peak = den < 0 ? y1 - (y2 - y0) * (y2 - y0) / (8 * den) : y1;
+            if (peak > best) best = peak;
+        }
+        out[r] = best;
+    }
+    free(pose_g);
+    free(buf);
+}
+
 int sc_nout(void) { return NOUT; }
 int sc_abi(void) { return KERNEL_ABI; }
 /* every layout constant shared with softclose/native.py, as one string (checked at load) */

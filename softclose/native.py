@@ -209,6 +209,8 @@ def load():
         lib.sc_point_columns.restype = None
         lib.sc_point_grid.argtypes = [dp, dp, l, dp, l, dp, l, l, dp, dp]
         lib.sc_point_grid.restype = None
+        lib.sc_point_opening.argtypes = [dp, dp, l, dp, dp, l, dp, dp, lp, dp, dp]
+        lib.sc_point_opening.restype = None
         check_layout(lib)
         _lib = lib
         return lib
@@ -374,6 +376,28 @@ def point_grid(table: CoefficientTable, theta, points, what: str = "all",
     pcc = table.pose_kernel
     lib.sc_point_grid(_ptr(table.meta), _ptr(pcc), n, _ptr(pts), G, _ptr(th), int(per_row),
                       mode, _ptr(ab), _ptr(out))
+    return out
+
+
+def point_opening(table: CoefficientTable, theta, points, ab, base, idx, tau) -> np.ndarray:
+    """The opening effort of rows with their own spring points (:func:`point_grid`'s lengths
+    on the grid ``theta`` (G,)): per row, the largest (base[idx] + (a + b l) l') / tau,
+    refined by the parabola through it and its neighbours (``ab`` (n, 2): the spring's affine
+    law of each row; ``base`` (u, G): the slope of the other elements and friction of the
+    rows' parameter sets, ``idx`` (n,) which; ``tau`` (G,): the tip's lever)."""
+    lib = load()
+    pts = np.ascontiguousarray(np.atleast_2d(np.asarray(points, float)))
+    n = len(pts)
+    th = np.ascontiguousarray(theta, float)
+    ab = np.ascontiguousarray(ab, float)
+    base = np.ascontiguousarray(base, float)
+    idx = np.ascontiguousarray(idx, np.int64)
+    tau = np.ascontiguousarray(tau, float)
+    out = np.empty(n)
+    lib.sc_point_opening(_ptr(table.meta), _ptr(table.pose_kernel), n, _ptr(pts), _ptr(ab),
+                         len(th), _ptr(th), _ptr(base),
+                         idx.ctypes.data_as(ctypes.POINTER(ctypes.c_long)), _ptr(tau),
+                         _ptr(out))
     return out
 
 

@@ -253,6 +253,41 @@ def opening_forces(table, cfg, P, lid_mass=None, points=None) -> np.ndarray:
                                for i in range(0, len(P), OPENING_CHUNK)])
     st = cfg.stroke
     th = np.linspace(st.theta_closed, st.theta0, OPENING_GRID)
+    own = None                                 # the rows whose spring has its own points
+    if points is not None:
+        pts = np.asarray(points, float)
+        has = ~np.isnan(pts[:, 0])
+        own = np.flatnonzero(has) if has.any() else None
+    if own is None:
+        slope, tau = _opening_slopes(table, P, lid_mass, th)
+        return _parabola_max(slope / tau, th)
+    # rows with their own spring points: the other elements' slope once per distinct set of
+    # parameters (and lid mass), the spring's term and the maximum in C (sc_point_opening)
+    F = np.empty(len(P))
+    m = None if lid_mass is None else np.broadcast_to(np.asarray(lid_mass, float), (len(P),))
+    if m is not None:                          # (NaN: the table's own mass)
+        m = np.where(np.isfinite(m), m, table.lid_mass)
+    rest = np.flatnonzero(~has)
+    if len(rest):
+        F[rest] = opening_forces(table, cfg, P[rest], None if m is None else m[rest])
+    key = P[own] if m is None else np.column_stack([P[own], m[own]])
+    if (key == key[0]).all():                  # (a sweep over the points alone: one set)
+        uniq, inv = key[:1], np.zeros(len(key), np.int64)
+    else:
+        uniq, inv = np.unique(key, axis=0, return_inverse=True)
+    Pu = uniq[:, :P.shape[1]]
+    base, tau = _opening_slopes(table, Pu, None if m is None else uniq[:, -1], th,
+                                skip="spring")
+    a, b = elements.BY_NAME["spring"].affine(elements.params(P[own]))
+    ab = np.column_stack([np.broadcast_to(np.asarray(v, float), (len(own),)) for v in (a, b)])
+    from .native import point_opening
+    F[own] = point_opening(table, th, pts[own], ab, base, np.asarray(inv).ravel(), tau)
+    return F
+
+
+def _opening_slopes(table, P, lid_mass, th, skip: str | None = None):
+    """(dV/dtheta + friction of rows of P over the angles th, (len(P), len(th)); the tip's
+    lever tau there), leaving out the element ``skip``."""
     extra = elements.needs_extra(P, table.model.cfg)
     c = table.evaluate(th)
     cols = {name: c[:, j] for j, name in enumerate(COEFFS)}
@@ -262,22 +297,12 @@ def opening_forces(table, cfg, P, lid_mass=None, points=None) -> np.ndarray:
     co = coordinates_of_columns(cols, table.model.cfg)
     Pn = elements.params(P)
     slope = np.zeros((len(P), len(th)))
-    own = None                                 # the rows whose spring has its own points
-    if points is not None:
-        has = ~np.isnan(np.asarray(points, float)[:, 0])
-        own = np.flatnonzero(has) if has.any() else None
     for e in elements.SPRINGS:
-        if e.name not in co:
+        if e.name not in co or e.name == skip:
             continue
         q, dq = co[e.name].q, co[e.name].dq
         a, b = e.affine(Pn)
         a = np.broadcast_to(np.asarray(a, float), (len(P),))
-        if own is not None and e.name == "spring":   # its term from its own l, l' instead
-            from .native import point_grid
-            b = np.broadcast_to(np.asarray(b, float), (len(P),))
-            slope[own] += point_grid(table, th, np.asarray(points, float)[own], "slope",
-                                     np.column_stack([a[own], b[own]]))
-            a, b = np.where(has, 0.0, a), np.where(has, 0.0, b)
         slope += np.multiply.outer(a, dq)
         if not (np.ndim(b) == 0 and b == 0.0):
             slope += np.multiply.outer(np.asarray(b, float), q * dq)
@@ -287,8 +312,7 @@ def opening_forces(table, cfg, P, lid_mass=None, points=None) -> np.ndarray:
     fr = [e.coulomb(Pn) for e in elements.FRICTIONS]     # (on the lid's angle: q' = 1)
     for f in fr:
         slope += np.asarray(f, float)[:, None]
-    F = slope / cols["tau"]
-    return _parabola_max(F, th)
+    return slope, cols["tau"]
 
 
 def _parabola_max(F: np.ndarray, th: np.ndarray) -> np.ndarray:
