@@ -38,6 +38,13 @@ TABLE_TOL = 1e-7
 STIFF_H_LAMBDA = 1.0
 #: the smallest step the config admits (simulate.step): no recommendation goes below it
 MIN_STEP = RANGES["simulate.step"][0]
+#: the shortest spring length a stroke at a row's own points may reach (m; shorter: the row
+#: is reported as invalid, Simulator.run_batch's ``points``). Near a lid point passing by its
+#: anchor at a distance d, l is sqrt(d^2 + v^2 t^2): a cubic piece over a cell (the lid point
+#: moves v h ~ 0.1 mm) is off by ~(v h / d)^4 / 384 relative, 1.6e-8 at d = 2 mm, within
+#: TABLE_TOL. A table built at such points refines its cells; a row's own pieces do not, so
+#: shorter strokes are refused (no spring one can buy is 2 mm long)
+MIN_POINT_LENGTH = 2e-3
 
 
 def amplification(method: Method, hJ: np.ndarray) -> np.ndarray:
@@ -172,12 +179,31 @@ class Simulator:
         res = {name: out[:, i] for i, name in enumerate(native.OUT_FIELDS)}
         res["status"] = out[:, 0].astype(int)
         res["reason"] = native.not_closed_reasons(out)
+        if X is not None:
+            self._check_lengths(X, res)
         self._check_ranges(P, res, explain, X)
         res["closed"] = res["status"] == StrokeStatus.CLOSED
         res["holding_moment"] = self.holding_moments(P, m, X)
         if X is not None:
             res["points"] = X
         return res
+
+    def _check_lengths(self, X, res: dict) -> None:
+        """Rows with their own spring points whose stroke takes the spring's length below
+        MIN_POINT_LENGTH (its lid point passes by or through its anchor) become OUT_OF_RANGE
+        with that reason; a length that vanishes exactly has already stopped the stroke (not
+        finite), which :meth:`diagnose` explains."""
+        ok = np.isin(res["status"], (StrokeStatus.CLOSED, StrokeStatus.NOT_CLOSED))
+        with np.errstate(invalid="ignore"):
+            bad = np.flatnonzero(ok & ~np.isnan(X[:, 0])
+                                 & ~(res["min_spring_length"] >= MIN_POINT_LENGTH))
+        for i in bad:
+            res["status"][i] = StrokeStatus.OUT_OF_RANGE
+            res["reason"][i] = (f"geometry.spring_anchor and geometry.lid_e: the spring's "
+                                f"length vanishes on the stroke (its lid point passes within "
+                                f"{max(res['min_spring_length'][i], 0.0) * 1e3:.2g} mm of its "
+                                f"anchor, below {MIN_POINT_LENGTH * 1e3:g} mm); move either "
+                                "point")
 
     def _check_ranges(self, P, res: dict, explain: bool = True, points=None) -> None:
         """Strokes that take an element outside its valid range become OUT_OF_RANGE, their
@@ -368,7 +394,7 @@ class Simulator:
         if lid_mass == self.table.lid_mass:
             lid_mass = None
         X = native.point_rows(self.table, points, 1)
-        if status is StrokeStatus.NONFINITE and X is not None:
+        if status is StrokeStatus.NON_FINITE and X is not None:
             why = self.vanishing_length(X[0])
             if why:
                 return why
