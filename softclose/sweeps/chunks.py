@@ -163,7 +163,8 @@ def evaluate_chunk(cfg_dict: dict, keys: list[str], ids: np.ndarray, X: np.ndarr
             points = {keys[j]: X[rows, j] for j in jp} or None
             if len(rows) == 0:
                 continue
-        res = sim.run_batch(P[rows], threads=threads, lid_mass=masses, points=points)
+        kw = {k: v for k, v in (("lid_mass", masses), ("points", points)) if v is not None}
+        res = sim.run_batch(P[rows], threads=threads, **kw)
         res["opening_force"] = sim.opening_forces(P[rows], masses, res.get("points"))
         _store(out, rows, res, cfg, sim, P[rows], masses, res.get("points"))
     return out
