@@ -12,9 +12,11 @@
  * their accuracy is that of the method itself; the same for the peak tip speed and the
  * lowest angle of a stroke that turns back. Nothing is integrated past the event.
  *
- * A design row is (k, l0, c, c_rot, s, F0, k_t, psi_free, one_way, T_f, e_tol[, m_lid]) (LAYOUT): the
- * parameters of the machine elements (see THE MACHINE ELEMENTS below), then e_tol, then
- * m_lid (kg, NaN = the table's own mass m0), which selects the lid mass. M, dM, Vg and dVg are affine in the lid's mass, so the
+ * A design row is (k, l0, c, c_rot, s, F0, k_t, psi_free, one_way, T_f, e_tol[, m_lid[, D, E,
+ * F, H]]) (LAYOUT): the parameters of the machine elements (see THE MACHINE ELEMENTS below),
+ * then e_tol, then m_lid (kg, NaN = the table's own mass m0), which selects the lid mass, then
+ * the row's own attachment points (x, y each; NaN = the table's own: PER-ROW ATTACHMENT
+ * POINTS below). M, dM, Vg and dVg are affine in the lid's mass, so the
  * coefficients of a row are c(m0) + (m_lid - m0) dc/dm, with dc/dm from a second table
  * (four coefficients per cell); a row at m0 never touches it (bit-identical results).
  *

@@ -108,6 +108,42 @@ def _table(model: LidModel, cached: bool) -> CoefficientTable:
     return table
 
 
+#: rows of a batch's blocks: the statics of one while the kernel integrates the next
+PIPE_ROWS = 4096
+
+
+def _pipeline(kernel, statics_of, bounds) -> list:
+    """[statics_of(a, b, kernel(a, b)) for each block [a, b) of ``bounds``], the kernel of
+    the next block running in a thread (its C code releases the GIL) while this one's
+    statics run here."""
+    import threading
+    blocks = list(zip(bounds[:-1], bounds[1:]))
+    if len(blocks) == 1:
+        (a, b), = blocks
+        return [statics_of(a, b, kernel(a, b))]
+    box: dict = {}
+
+    def start(j):
+        def work():
+            try:
+                box[j] = kernel(*blocks[j])
+            except BaseException as exc:   # noqa: BLE001  (raised below, in this thread)
+                box[j] = exc
+        t = threading.Thread(target=work, daemon=True)
+        t.start()
+        return t
+    out, t = [], start(0)
+    for j, (a, b) in enumerate(blocks):
+        t.join()
+        got = box.pop(j)
+        if isinstance(got, BaseException):
+            raise got
+        if j + 1 < len(blocks):
+            t = start(j + 1)
+        out.append(statics_of(a, b, got))
+    return out
+
+
 class Simulator:
     """Strokes of one config's geometry with one fixed-step method."""
 
@@ -140,7 +176,8 @@ class Simulator:
         return 0.05 * scale
 
     def run_batch(self, P, threads: int | None = None, lid_mass=None,
-                  early_exit: bool = True, explain: bool = True, points=None) -> dict:
+                  early_exit: bool = True, explain: bool = True, points=None,
+                  opening: bool = False) -> dict:
         """Metrics for rows of P (the parameter vector, :data:`softclose.problem.PARAM_KEYS`):
         a dict of arrays (the metric keys,
         ``status`` as :class:`~softclose.stroke.StrokeStatus` codes, ``reason`` why an open
@@ -162,6 +199,11 @@ class Simulator:
         (to the tables' interpolation error, ~1e-10 relative); a row at the config's own
         points gives the same bits as without them. A row whose spring or dashpot length
         vanishes on the stroke (a lid point through its anchor) is reported as not finite.
+
+        ``opening=True`` adds ``opening_force`` (:meth:`opening_forces`). A large batch runs
+        in blocks of PIPE_ROWS, the statics of one block (reasons, valid ranges, holding
+        moments, opening efforts) while the kernel's threads integrate the next: the same
+        numbers, a row's depend on that row alone.
         """
         P = as_params(np.atleast_2d(np.asarray(P, float)))
         st = self.cfg.stroke
@@ -173,17 +215,32 @@ class Simulator:
             cols.append(np.full(len(P), np.nan) if m is None else m)
         if X is not None:
             cols.append(X)
-        out = native.run_strokes(self.table, self.method, self.step, st.t_max, st.theta0,
-                                 st.theta_closed, np.column_stack(cols), threads,
-                                 early_exit=early_exit)
-        res = {name: out[:, i] for i, name in enumerate(native.OUT_FIELDS)}
-        res["status"] = out[:, 0].astype(int)
-        res["reason"] = native.not_closed_reasons(out)
-        if X is not None:
-            self._check_lengths(X, res)
-        self._check_ranges(P, res, explain, X)
-        res["closed"] = res["status"] == StrokeStatus.CLOSED
-        res["holding_moment"] = self.holding_moments(P, m, X)
+        D = np.column_stack(cols)
+        n = len(P)
+
+        def kernel(a, b):
+            return native.run_strokes(self.table, self.method, self.step, st.t_max, st.theta0,
+                                      st.theta_closed, D[a:b], threads, early_exit=early_exit)
+
+        def statics_of(a, b, out):
+            r = slice(a, b)
+            Xr, mr = None if X is None else X[r], None if m is None else m[r]
+            res = {name: out[:, i] for i, name in enumerate(native.OUT_FIELDS)}
+            res["status"] = out[:, 0].astype(int)
+            res["reason"] = native.not_closed_reasons(out)
+            if Xr is not None:
+                self._check_lengths(Xr, res)
+            self._check_ranges(P[r], res, explain, Xr)
+            res["closed"] = res["status"] == StrokeStatus.CLOSED
+            res["holding_moment"] = self.holding_moments(P[r], mr, Xr)
+            if opening:
+                res["opening_force"] = self.opening_forces(P[r], mr, Xr)
+            return res
+
+        bounds = list(range(0, n, PIPE_ROWS)) + [n] if n > 2 * PIPE_ROWS else [0, n]
+        parts = _pipeline(kernel, statics_of, bounds)
+        res = parts[0] if len(parts) == 1 else \
+            {k: np.concatenate([q[k] for q in parts]) for k in parts[0]}
         if X is not None:
             res["points"] = X
         return res

@@ -121,10 +121,7 @@ def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
         prow = None if pts is None else {k: v[rows] for k, v in pts.items()}
         out = sim.run_batch(P[rows], threads=threads,
                             lid_mass=None if masses is None else masses[rows],
-                            explain=explain, points=prow)
-        out["opening_force"] = sim.opening_forces(P[rows],
-                                                  None if masses is None else masses[rows],
-                                                  out.get("points"))
+                            explain=explain, points=prow, opening=True)
         status = np.asarray(out["status"], int)
         ok = (status == 0) | (status == 1)
         for k in METRIC_KEYS[1:] + ("theta_dot_max", "theta_min"):

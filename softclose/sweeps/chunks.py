@@ -164,8 +164,7 @@ def evaluate_chunk(cfg_dict: dict, keys: list[str], ids: np.ndarray, X: np.ndarr
             if len(rows) == 0:
                 continue
         kw = {k: v for k, v in (("lid_mass", masses), ("points", points)) if v is not None}
-        res = sim.run_batch(P[rows], threads=threads, **kw)
-        res["opening_force"] = sim.opening_forces(P[rows], masses, res.get("points"))
+        res = sim.run_batch(P[rows], threads=threads, opening=True, **kw)
         _store(out, rows, res, cfg, sim, P[rows], masses, res.get("points"))
     return out
 
