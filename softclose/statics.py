@@ -149,10 +149,9 @@ def out_of_range(coordinate, cfg, P, metrics: dict, explain: bool = True
             (lambda t, r: coordinate(e, t))
         edge, worst = _leaves(rows_q, th,
                               np.where(short, lo[bad], hi[bad]), short)
-        for j, i in enumerate(bad):
-            where = (None if np.isnan(edge[j]) else float(edge[j]), float(worst[j]))
-            text[i] = text[i] or e.range_message(Pn, cfg, i, bool(short[j]), where,
-                                                 float(beyond[j]))
+        words = e.range_messages(Pn, cfg, bad, short, edge, worst, beyond)
+        free = text[bad] == ""                 # (the first element out of range says it)
+        text[bad[free]] = np.array(words, dtype=object)[free]
     return excess, text
 
 
