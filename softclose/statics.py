@@ -170,6 +170,8 @@ def table_coordinate(table, points=None):
         if not has.any():
             return table.evaluate_column(th, col)
         from .native import point_grid
+        if has.all():
+            return point_grid(table, th.reshape(len(pts), -1), pts, "l").reshape(th.shape)
         out = np.empty(th.shape)
         out[has] = point_grid(table, th[has].reshape(int(has.sum()), -1), pts[has],
                               "l").reshape(th[has].shape)
