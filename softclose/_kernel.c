@@ -1547,19 +1547,20 @@ ALWAYS void transpose4(const v4 *r, v4 *c)
 
 
 
-/* the NC coefficients of the lanes at th as columns c[j] (four lanes each): each lane's
- * cubic pieces are evaluated as rows (Horner in s, as CUB), mass-corrected where dm != 0,
- * then transposed; okm as cells4's */
-ALWAYS void coef4(const Table *T, const Par4 *P, v4 th, v4 *c, const double **b, v4 *s,
-                  v4l *okm)
+/* coef4's rows of a group with a lane that has its own points: the same operations, with a
+ * lane's l, dl, dd, tau read from its row's own pieces (PER-ROW ATTACHMENT POINTS) -- apart,
+ * and not inlined: inside coef4's loop the lookup slowed the lanes without points by 6 % */
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+__attribute__((target("avx2")))
+#endif
+__attribute__((noinline)) static void coef4_pts(const Table *T, const Par4 *P,
+                                                const double *const *b, const v4 *s, v4 *lo,
+                                                v4 *hi)
 {
-    v4 lo[VW], hi[VW];
-    cells4(T, th, b, s, okm);
     for (int q = 0; q < VW; q++) {
-        const double *r = b[q], *rh = r; /* rh: l, dl, dd, tau: the table's, or the row's own
-                                          * pieces (PER-ROW ATTACHMENT POINTS) */
-        if (P->anyp && (P->lp[q]->ps | P->lp[q]->pd))
-            rh = pt_piece(T, P->lp[q], (int)((r - T->cc) / (4 * NC)));
+        const double *r = b[q], *rh = r;
+        const Par *p = P->lp[q];
+        if (p->ps | p->pd) rh = pt_piece(T, p, (int)((r - T->cc) / (4 * NC)));
         double sq = (*s)[q];
         lo[q] = ld4(r) + sq * (ld4(r + NC) + sq * (ld4(r + 2 * NC) + sq * ld4(r + 3 * NC)));
         hi[q] = ld4(rh + 4) + sq * (ld4(rh + NC + 4) + sq * (ld4(rh + 2 * NC + 4)
@@ -1568,6 +1569,32 @@ ALWAYS void coef4(const Table *T, const Par4 *P, v4 th, v4 *c, const double **b,
             const double *rm = T->dcc + (r - T->cc);
             lo[q] += P->dm[q] * (ld4(rm) + sq * (ld4(rm + NC) + sq * (ld4(rm + 2 * NC)
                                                                      + sq * ld4(rm + 3 * NC))));
+        }
+    }
+}
+
+/* the NC coefficients of the lanes at th as columns c[j] (four lanes each): each lane's
+ * cubic pieces are evaluated as rows (Horner in s, as CUB), mass-corrected where dm != 0,
+ * then transposed; okm as cells4's */
+ALWAYS void coef4(const Table *T, const Par4 *P, v4 th, v4 *c, const double **b, v4 *s,
+                  v4l *okm)
+{
+    v4 lo[VW], hi[VW];
+    cells4(T, th, b, s, okm);
+    if (__builtin_expect(P->anyp, 0)) { /* a lane with its own points: coef4_pts */
+        coef4_pts(T, P, b, s, lo, hi);
+    } else {
+        for (int q = 0; q < VW; q++) {
+            const double *r = b[q];
+            double sq = (*s)[q];
+            lo[q] = ld4(r) + sq * (ld4(r + NC) + sq * (ld4(r + 2 * NC) + sq * ld4(r + 3 * NC)));
+            hi[q] = ld4(r + 4) + sq * (ld4(r + NC + 4) + sq * (ld4(r + 2 * NC + 4)
+                                                              + sq * ld4(r + 3 * NC + 4)));
+            if (P->any && P->dm[q] != 0.0) { /* M, dM, Vg, dVg only */
+                const double *rm = T->dcc + (r - T->cc);
+                lo[q] += P->dm[q] * (ld4(rm) + sq * (ld4(rm + NC) + sq * (ld4(rm + 2 * NC)
+                                                                         + sq * ld4(rm + 3 * NC))));
+            }
         }
     }
     transpose4(lo, c);
