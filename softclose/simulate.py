@@ -196,9 +196,11 @@ class Simulator:
         a mapping {placement key: a value or one per row} (:func:`softclose.native.point_rows`).
         Every number of such a row -- the stroke, the spring's extremes and valid range, the
         holding moment, energy_tol -- is that of a simulator of the config with those points
-        (to the tables' interpolation error, ~1e-10 relative); a row at the config's own
-        points gives the same bits as without them. A row whose spring or dashpot length
-        vanishes on the stroke (a lid point through its anchor) is reported as not finite.
+        (each row's own pieces of the lengths are those of a table at its points, to the
+        rounding of their node values); a row at the config's own points gives the same bits
+        as without them. A row whose spring comes shorter than MIN_POINT_LENGTH on the stroke
+        is OUT_OF_RANGE with that reason; one whose dashpot's length vanishes stops as not
+        finite (:meth:`diagnose` says why).
 
         ``opening=True`` adds ``opening_force`` (:meth:`opening_forces`). A large batch runs
         in blocks of PIPE_ROWS, the statics of one block (reasons, valid ranges, holding

@@ -9,9 +9,11 @@ expressions.
 
 Every function takes ``points``: the rows' own attachment points in the kernel's convention
 (:func:`softclose.native.point_rows`: the spring's four columns, or the dashpot's, NaN for
-the table's own), whose lengths come from the table's pose pieces
-(:meth:`~softclose.table.CoefficientTable.point_columns`) as the kernel takes them: the same
-numbers as a table built at those points, to the tables' interpolation error.
+the table's own), whose lengths come from the rows' own pieces as the kernel reads them
+(:meth:`~softclose.table.CoefficientTable.point_columns`: the same numbers as a table built at
+those points, to the rounding of the node values); the scans over a stroke (the opening
+effort, where a spring leaves its range) read them from the pose pieces on their grid
+(:func:`softclose.native.point_grid`, within ~1e-10 relative of those).
 """
 
 from __future__ import annotations
