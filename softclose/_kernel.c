@@ -603,8 +603,11 @@ static void pts_scan(const Table *T, const Par *p, int j0, int j1, double a, dou
         double x0 = T->lo + j0 * T->h, x1 = T->lo + j1 * T->h;
         double xm = 0.5 * (x0 + x1), hw = 0.5 * (x1 - x0), s, v[NC] = {0};
         int i = cell_index(T, xm, &s);
-        if (i >= 0) {
-            pts_eval(T, p, i, s, v, NULL);
+        if (i >= 0) { /* (l, l' from the pose interpolated at xm: a bound, no pieces built) */
+            const double *q = T->pcc + (size_t)i * 4 * NPOSE;
+            double a[P_USED];
+            for (int j = 0; j < P_USED; j++) a[j] = PCUB(q, j, s);
+            pt_length(a, NULL, p->pt, 0, v, NULL);
             double e = hypot(p->pt[2], p->pt[3]), R1 = T->pA1 + e, R2 = T->pA2 + e;
             double lower = v[C_L] - R1 * hw;
             if (lower > 0 && isfinite(v[C_DL])) {
