@@ -218,7 +218,8 @@ typedef struct { double k, l0, F, c, cr, crp, kt, psi0, Tf, fs, dm; int x, ow;
  * a zero, k_t = 0) */
 typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs; v4l ow; double dm[VW];
                  int any, anyx, anyow, anyf;
-                 const Par *lp[VW]; int anyp; /* the lanes' rows, when one has points */ } Par4;
+                 const Par *lp[VW]; int lpts[VW], anyp; /* the lanes' rows; which have
+                                                          * points; any of them */ } Par4;
 /* read a design row d of table T into p (not dm) */
 #define ELEM_READ(p, d, T) do { \
         (p)->k = (d)[D_K]; (p)->l0 = (d)[D_L0]; (p)->c = (d)[D_C]; (p)->cr = (d)[D_CR]; \
@@ -1551,19 +1552,19 @@ ALWAYS void transpose4(const v4 *r, v4 *c)
 
 
 /* coef4's rows of a group with a lane that has its own points: the same operations, with a
- * lane's l, dl, dd, tau read from its row's own pieces (PER-ROW ATTACHMENT POINTS) -- apart,
- * and not inlined: inside coef4's loop the lookup slowed the lanes without points by 6 % */
-#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
-__attribute__((target("avx2")))
-#endif
-__attribute__((noinline)) static void coef4_pts(const Table *T, const Par4 *P,
-                                                const double *const *b, const v4 *s, v4 *lo,
-                                                v4 *hi)
+ * lane's l, dl, dd, tau read from its row's own pieces (PER-ROW ATTACHMENT POINTS) -- a loop
+ * of its own: inside coef4's loop the lookup slowed the lanes without points by 6 % */
+ALWAYS void coef4_pts(const Table *T, const Par4 *P, const double *const *b, const v4 *s,
+                      v4 *lo, v4 *hi)
 {
     for (int q = 0; q < VW; q++) {
         const double *r = b[q], *rh = r;
-        const Par *p = P->lp[q];
-        if (p->ps | p->pd) rh = pt_piece(T, p, (int)((r - T->cc) / (4 * NC)));
+        if (P->lpts[q]) {
+            const PtCache *c = P->lp[q]->pc;
+            int i = (int)((r - T->cc) / (4 * NC));
+            rh = (unsigned)(i - c->base) < (unsigned)c->nb ? c->blk[i - c->base]
+                                                           : pt_build(T, P->lp[q], i);
+        }
         double sq = (*s)[q];
         lo[q] = ld4(r) + sq * (ld4(r + NC) + sq * (ld4(r + 2 * NC) + sq * ld4(r + 3 * NC)));
         hi[q] = ld4(rh + 4) + sq * (ld4(rh + NC + 4) + sq * (ld4(rh + 2 * NC + 4)
@@ -1989,6 +1990,7 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
                 G->any = 0; G->anyx = 0; G->anyow = 0; G->anyf = 0; G->anyp = 0;
                 for (int e = 0; e < VW; e++) {
                     G->lp[e] = &lanes[k - q + e].p;
+                    G->lpts[e] = lanes[k - q + e].p.ps | lanes[k - q + e].p.pd;
                     G->anyp |= (lanes[k - q + e].p.ps | lanes[k - q + e].p.pd) && used[k - q + e];
                     G->any |= G->dm[e] != 0.0;
                     G->anyx |= lanes[k - q + e].p.x && used[k - q + e];
