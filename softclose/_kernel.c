@@ -928,7 +928,10 @@ static void cubic_extremes(const double *q, int i, const Table *T, double a, dou
     if (fabs(A) < 1e-300) { if (B != 0) r[nr++] = -C / B; }
     else {
         double D = B * B - 4 * A * C;
-        if (D >= 0) { double sq = sqrt(D); r[nr++] = (-B + sq) / (2 * A); r[nr++] = (-B - sq) / (2 * A); }
+        if (D >= 0) {
+            double sq = sqrt(D);
+            r[nr++] = (-B + sq) / (2 * A); r[nr++] = (-B - sq) / (2 * A);
+        }
     }
     for (int j = 0; j < nr; j++) {
         double th = T->lo + (i + r[j]) * T->h;

@@ -494,7 +494,8 @@ def run_stroke_trajectory(table, method, step, t_max, theta0, theta_closed, desi
     nt = ctypes.c_long(0)
     tab = method.packed()
     lib.sc_stroke_traj(_ptr(table.meta), _ptr(cc), _ptr(dcc), _ptr(xcc), _ptr(ranges),
-                       _ptr(pcc), _ptr(tab), step, t_max, theta0, theta_closed, len(design), _ptr(design),
+                       _ptr(pcc), _ptr(tab), step, t_max, theta0, theta_closed, len(design),
+                       _ptr(design),
                        int(early_exit), _ptr(out), _ptr(traj), cap, ctypes.byref(nt))
     return out, traj[:nt.value].copy()
 

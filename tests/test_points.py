@@ -29,7 +29,7 @@ from softclose import native
 from softclose.config import default_config
 from softclose.config.free import PLACEMENT_KEYS
 from softclose.errors import ConfigError
-from softclose.problem import ERROR_KEYS, as_params, params_of, target
+from softclose.problem import ERROR_KEYS, params_of, target
 from softclose.reference import Reference
 from softclose.robust.evaluate import evaluate, slow_keys
 from softclose.simulate import Simulator

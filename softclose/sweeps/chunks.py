@@ -10,9 +10,9 @@ result depends on nothing but its arguments.
 How a chunk is evaluated (metric only, batched):
 
 - rows are grouped by their values of the keys that change the model (neither design keys,
-  ``mass.lid`` nor an attachment point's component); each group gets the config with those values (validated as if from a
-  file) and a simulator (model + coefficient table, about 0.1 s, cached: groups that differ
-  only in ``optimise.*`` keys share one);
+  ``mass.lid`` nor an attachment point's component); each group gets the config with those
+  values (validated as if from a file) and a simulator (model + coefficient table, about
+  0.1 s, cached: groups that differ only in ``optimise.*`` keys share one);
 - a group whose values the config or the model refuse (a loop that cannot close, a toggle
   on the stroke) gets status ``invalid`` and the one-line reason -- the sweep goes on;
 - the design keys (``design.spring_k``, ``design.spring_rest_length``, ``design.damper_c``,
