@@ -1584,11 +1584,11 @@ ALWAYS void coef4_pts(const Table *T, const Par4 *P, const double *const *b, con
  * cubic pieces are evaluated as rows (Horner in s, as CUB), mass-corrected where dm != 0,
  * then transposed; okm as cells4's */
 ALWAYS void coef4(const Table *T, const Par4 *P, v4 th, v4 *c, const double **b, v4 *s,
-                  v4l *okm)
-{
+                  v4l *okm, const int pts)
+{ /* (pts: the group has a lane with its own points -- a literal: see rhs4, node4) */
     v4 lo[VW], hi[VW];
     cells4(T, th, b, s, okm);
-    if (__builtin_expect(P->anyp, 0)) { /* a lane with its own points: coef4_pts */
+    if (pts) {
         coef4_pts(T, P, b, s, lo, hi);
     } else {
         for (int q = 0; q < VW; q++) {
@@ -1628,11 +1628,11 @@ ALWAYS void xcoef4(const Table *T, const double *const *b, v4 s, v4 *x)
 }
 
 /* theta'' of the lanes (as rhs()); okm as cells4's */
-ALWAYS v4 rhs4(const Table *T, const Par4 *P, v4 th, v4 thd, v4l *okm)
+ALWAYS v4 rhs4_impl(const Table *T, const Par4 *P, v4 th, v4 thd, v4l *okm, const int pts)
 {
     v4 c[NC], s;
     const double *b[VW];
-    coef4(T, P, th, c, b, &s, okm);
+    coef4(T, P, th, c, b, &s, okm, pts);
     v4 damp = ELEM_DAMPING(P, c), slope = ELEM_SLOPE(P, c);
     if (P->anyx) {
         v4 x[NX];
@@ -1645,15 +1645,39 @@ ALWAYS v4 rhs4(const Table *T, const Par4 *P, v4 th, v4 thd, v4l *okm)
     return N / c[C_M];
 }
 
+/* a group with a lane that has its own points runs rhs4 and node4 in functions of their own
+ * (PER-ROW ATTACHMENT POINTS): inlined beside the others, its code slowed the groups without
+ * points by a few per cent (both compiled for the vector path, the only one that calls them) */
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+#define PTS_TARGET __attribute__((target("avx2"), noinline))
+#else
+#define PTS_TARGET __attribute__((noinline))
+#endif
+PTS_TARGET static void rhs4_pts(const Table *T, const Par4 *P, const v4 *th, const v4 *thd,
+                                v4l *okm, v4 *out)
+{
+    *out = rhs4_impl(T, P, *th, *thd, okm, 1);
+}
+
+ALWAYS v4 rhs4(const Table *T, const Par4 *P, v4 th, v4 thd, v4l *okm)
+{
+    if (__builtin_expect(P->anyp, 0)) {
+        v4 r;
+        rhs4_pts(T, P, &th, &thd, okm, &r);
+        return r;
+    }
+    return rhs4_impl(T, P, th, thd, okm, 0);
+}
+
 /* node_eval() of the lanes: theta'', tip speed, its rate, energy, potential, as vectors
  * (ok: 1 inside the table, 0 outside) -- the same operations as node_eval() lane by lane */
-ALWAYS void node4(const Table *T, const Par4 *P, v4 th, v4 thd, v4 *a, v4 *g, v4 *dg, v4 *Ev,
-                  v4 *Vv, v4 *ok)
+ALWAYS void node4_impl(const Table *T, const Par4 *P, v4 th, v4 thd, v4 *a, v4 *g, v4 *dg,
+                       v4 *Ev, v4 *Vv, v4 *ok, const int pts)
 {
     v4 c[NC], s;
     const double *b[VW];
     v4l okm;
-    coef4(T, P, th, c, b, &s, &okm);
+    coef4(T, P, th, c, b, &s, &okm, pts);
     v4 M = c[C_M], dM = c[C_DM], tau = c[C_TAU];
     v4 damp = ELEM_DAMPING(P, c), slope = ELEM_SLOPE(P, c);
     v4 En = ELEM_ENERGY(P, c, 0.5 * M * thd * thd), Vn = ELEM_POTENTIAL(P, c);
@@ -1682,6 +1706,19 @@ ALWAYS void node4(const Table *T, const Par4 *P, v4 th, v4 thd, v4 *a, v4 *g, v4
     *g = tau * abs4(thd);
     *dg = sg * (dtau * thd * thd + tau * acc);
     *ok = sel4(okm, one, zero);
+}
+
+PTS_TARGET static void node4_pts(const Table *T, const Par4 *P, const v4 *th, const v4 *thd,
+                                 v4 *a, v4 *g, v4 *dg, v4 *Ev, v4 *Vv, v4 *ok)
+{
+    node4_impl(T, P, *th, *thd, a, g, dg, Ev, Vv, ok, 1);
+}
+
+ALWAYS void node4(const Table *T, const Par4 *P, v4 th, v4 thd, v4 *a, v4 *g, v4 *dg, v4 *Ev,
+                  v4 *Vv, v4 *ok)
+{
+    if (__builtin_expect(P->anyp, 0)) node4_pts(T, P, &th, &thd, a, g, dg, Ev, Vv, ok);
+    else node4_impl(T, P, th, thd, a, g, dg, Ev, Vv, ok, 0);
 }
 
 /* theta'' only, from the six coefficients it needs (the scalar hot path) */
