@@ -207,7 +207,7 @@ enum { X_PSI, X_DPSI, X_DR2 };
  * dampers are one-way; Tf: dry friction, fs: the way the lid moves (its state: set at the
  * release and at every turning point); dm = m_lid - m0: 0 for a row at the table's mass; x:
  * the row has an element of the extra table */
-/* a row's own pieces of l, dl, dd on the last two cells it read (PER-ROW ATTACHMENT POINTS) */
+/* a row's own pieces of l, dl, dd on a block of PKB cells (PER-ROW ATTACHMENT POINTS) */
 #define PKB 8 /* cells a block of a row's own pieces holds */
 typedef struct { int base, nb; double blk[PKB][4 * NC]; } PtCache;
 typedef struct { double k, l0, F, c, cr, crp, kt, psi0, Tf, fs, dm; int x, ow;
@@ -374,13 +374,16 @@ static inline void xtab_eval(const Table *T, int i, double s, double *x, double 
  * A row's own cubic Hermite pieces of l, dl (spring) and dd (dashpot) on a cell are built
  * from these node values and slopes exactly as the table builds its own (table.py _pieces),
  * so a row's pieces are those of a table built at its points, to the rounding of the node
- * values. They are built when a stroke first enters a cell (pt_piece: each lane keeps the
- * last two cells, PtCache; a stroke visits a few hundred of the table's cells, and a lid
- * creeping towards an equilibrium stays in one for many steps), in the table's power-major
- * layout with the table's tau beside them, so the kernel reads them wherever it reads l, dl,
- * dd: the scalar code from the row's piece (CUB), the SIMD lanes from it as their second
- * vector (coef4) -- the same operations as for the table's columns, so the scalar and SIMD
- * paths agree bit for bit and a row's numbers do not depend on which cells were kept. The
+ * values. They are built when a stroke first enters a cell, for a block of PKB = 8 cells
+ * ahead of it in the way it goes (pt_piece, pt_build; the nodes four a vector, pt_nodes_avx2,
+ * the same numbers as node by node, pt_nodes_any): a stroke visits a few hundred of the
+ * table's cells, and a lid creeping towards an equilibrium stays in one for many steps. They
+ * are laid out as the table's cells (power-major, with the table's tau beside them), so the
+ * kernel reads them wherever it reads l, dl, dd: the scalar code from the row's piece (CUB),
+ * the SIMD lanes from it as their second vector (coef4_pts, in rhs4_pts / node4_pts: a group
+ * with points runs its own copy, the others keep theirs) -- the same operations as for the
+ * table's columns, so the scalar and SIMD paths agree bit for bit and a row's numbers do
+ * not depend on which cells were kept. The
  * early exit stays exact: the ranges of l and l' over a piece are those of the row's cubic
  * pieces (as for the table's), and the spring-length extremes over [th_min, th_max] are
  * found on the row's pieces in the cells where a mean-value bound of l' (from bounds of
