@@ -16,9 +16,10 @@
  * the other law, never a smoothed switch).
  *
  * A design row is (k, l0, c, c_rot, s, F0, k_t, psi_free, one_way, T_f, c_e, theta_e, e_tol
- * [, m_lid]) (LAYOUT): the
- * parameters of the machine elements (see THE MACHINE ELEMENTS below), then e_tol, then
- * m_lid (kg, NaN = the table's own mass m0), which selects the lid mass. M, dM, Vg and dVg are affine in the lid's mass, so the
+ * [, m_lid[, D, E, F, H]]) (LAYOUT): the parameters of the machine elements (see THE MACHINE
+ * ELEMENTS below), then e_tol, then m_lid (kg, NaN = the table's own mass m0), which selects
+ * the lid mass, then the row's own attachment points (x, y each; NaN = the table's own:
+ * PER-ROW ATTACHMENT POINTS below). M, dM, Vg and dVg are affine in the lid's mass, so the
  * coefficients of a row are c(m0) + (m_lid - m0) dc/dm, with dc/dm from a second table
  * (four coefficients per cell); a row at m0 never touches it (bit-identical results).
  *
@@ -82,7 +83,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define KERNEL_ABI 4 /* bumped when the exported signatures or outputs change */
+#define KERNEL_ABI 5 /* bumped when the exported signatures or outputs change */
 #define NC 8 /* M, dM, Vg, dVg, l, dl, dd, tau */
 enum { C_M, C_DM, C_VG, C_DVG, C_L, C_DL, C_DD, C_TAU };
 #define NMASS 4 /* M, dM, Vg, dVg: the coefficients that depend on the lid's mass */
@@ -92,11 +93,13 @@ enum { C_M, C_DM, C_VG, C_DVG, C_L, C_DL, C_DD, C_TAU };
 #define SMAX 4
 /* every layout constant the Python side shares, checked there when the kernel is loaded */
 static const char LAYOUT[] =
-    "abi=4;meta=ncell,lo,h,m0,rotary_at_pivot;cc=M,dM,Vg,dVg,l,dl,dd,tau;mass=M,dM,Vg,dVg;"
-    "xcc=psi,dpsi,dpr2,-;"
+    "abi=5;meta=ncell,lo,h,m0,rotary_at_pivot;cc=M,dM,Vg,dVg,l,dl,dd,tau;mass=M,dM,Vg,dVg;"
+    "xcc=psi,dpsi,dpr2,-;pose=Ax,Ay,dAx,dAy,cos,sin,-,-;"
     "row=spring_k,spring_rest_length,damper_c,rotary_damper_c,spring_kind,spring_preload,"
     "torsion_k,torsion_free_angle,damper_one_way,friction_torque,end_damper_c,end_damper_angle,"
-    "energy_tol,lid_mass;out=status,closing_time,impact_theta_dot,impact_tip_speed,"
+    "energy_tol,lid_mass,"
+    "spring_anchor_x,spring_anchor_y,lid_e_x,lid_e_y,dashpot_anchor_x,dashpot_anchor_y,"
+    "dashpot_lid_x,dashpot_lid_y;out=status,closing_time,impact_theta_dot,impact_tip_speed,"
     "peak_tip_speed,min_spring_length,max_spring_length,steps,energy_rise,theta_min,"
     "theta_dot_max,theta_max,stop_reason,stop_theta,stop_time,engage_time,engage_theta_dot;"
     "nrng=18";
@@ -124,6 +127,9 @@ typedef struct {
                         * dd, tau), or NULL */
     const double *rng; /* ncell * NRNG: ranges of some pieces over each whole cell (or NULL) */
     const double *xcc; /* ncell * 4 * NX: the element columns' pieces (X_*), or NULL */
+    const double *pcc; /* ncell * 4 * NPOSE: the pose pieces (PER-ROW ATTACHMENT POINTS), or
+                        * NULL */
+    double pA1, pA2;   /* bounds of |A'| and |A''| over the table (with pcc) */
     const int *crit;   /* the cells where l' may vanish (R_LCRIT), ascending (with rng) */
     int rot_pivot;     /* the rotary damper acts at a pivot (its psi'^2 in xcc), not the lid */
     int ncrit;
@@ -136,6 +142,10 @@ typedef struct {
 enum { R_TAU = 0, R_M = 2, R_VG = 4, R_L = 6, R_DVG = 8, R_DL = 10, R_MID = 12, R_LCRIT = 16,
        NRNG = 18 };
 #define CQ(base, i, e, j) ((base)[((size_t)(i) * 4 + (e)) * NC + (j)])
+/* the pose table's columns (PER-ROW ATTACHMENT POINTS): the crank pin A, its slope A', cos
+ * and sin of theta; NPOSE per power (two vectors of four), the last two zero */
+enum { P_AX, P_AY, P_DAX, P_DAY, P_COS, P_SIN, P_USED };
+#define NPOSE 8
 #define XQ(base, i, e, j) ((base)[((size_t)(i) * 4 + (e)) * NX + (j)])
 
 /* lanes of the stroke loop are advanced as NG SIMD vectors of VW (see the stroke loop) */
@@ -148,6 +158,7 @@ typedef double v4 __attribute__((vector_size(VW * sizeof(double))));
 typedef long long v4l __attribute__((vector_size(VW * sizeof(long long))));
 typedef int v4i __attribute__((vector_size(VW * sizeof(int))));
 #define ALWAYS static inline __attribute__((always_inline))
+ALWAYS v4 ld4(const double *a) { v4 v; memcpy(&v, a, sizeof v); return v; }
 #define MIN2(a, b) ((a) < (b) ? (a) : (b))
 #define MAX2(a, b) ((a) > (b) ? (a) : (b))
 #if defined(__GNUC__) && !defined(__clang__)
@@ -203,6 +214,10 @@ typedef struct {
 /* the design-row columns: the elements' parameters (in the registry's order), e_tol, m_lid */
 enum { D_K, D_L0, D_C, D_CR, D_KIND, D_F0, D_KT, D_PSI0, D_OW, D_TF, D_EC, D_EA, D_ETOL,
        D_MLID, NDESIGN };
+/* then, optionally, the row's own attachment points (PER-ROW ATTACHMENT POINTS, below): the
+ * spring's anchor D (world) and lid point E (lid frame, from A), the dashpot's anchor F
+ * (world) and lid point H (lid frame), x and y each; NaN: the table's own */
+enum { D_PT = NDESIGN, NPT = 8 };
 /* the extra table's columns: the torsion spring's psi and dpsi at its pivot, the rotary
  * damper's psi'^2 at its pivot */
 enum { X_PSI, X_DPSI, X_DR2 };
@@ -214,15 +229,22 @@ enum { X_PSI, X_DPSI, X_DR2 };
  * the row has an element of the extra table; the end damper: ce (c_e), the (theta_e), e: it
  * can engage on this stroke (ce != 0, theta_e above theta_closed: ELEM_ENGAGE_START), eg: the
  * lane is engaged (its state, switched at each crossing of theta_e), cen = eg ? ce : 0 (the
- * damping it adds now) */
+ * damping it adds now); ps, pd: the row has its own spring / dashpot points */
+/* a row's own pieces of l, dl, dd on a block of PKB cells (PER-ROW ATTACHMENT POINTS) */
+#define PKB 8 /* cells a block of a row's own pieces holds */
+typedef struct { int base, nb; double blk[PKB][4 * NC]; } PtCache;
 typedef struct { double k, l0, F, c, cr, crp, kt, psi0, Tf, fs, dm, ce, the, cen;
-                 int x, ow, e, eg; } Par;
+                 int x, ow, e, eg;
+                 int ps, pd; double pt[NPT]; /* own spring / dashpot points (D_PT ...) */
+                 PtCache *pc; /* their pieces (with ps or pd) */ } Par;
 /* the lanes' parameters as vectors; any: a lane at another lid mass; anyx: a lane with
  * element columns (its element terms are added for every lane of the group: the others add
  * a zero, k_t = 0); anye: a lane with an end damper (cen added for every lane of the group:
  * the others add a zero; the = -inf and egm = 0 in them, so no crossing is ever seen) */
 typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs, cen, the; v4l ow, egm;
-                 double dm[VW]; int any, anyx, anyow, anyf, anye; } Par4;
+                 double dm[VW]; int any, anyx, anyow, anyf, anye;
+                 const Par *lp[VW]; int lpts[VW], anyp; /* the lanes' rows; which have
+                                                          * points; any of them */ } Par4;
 /* read a design row d of table T into p (not dm) */
 #define ELEM_READ(p, d, T) do { \
         (p)->k = (d)[D_K]; (p)->l0 = (d)[D_L0]; (p)->c = (d)[D_C]; (p)->cr = (d)[D_CR]; \
@@ -389,6 +411,296 @@ static inline void xtab_eval(const Table *T, int i, double s, double *x, double 
     }
 }
 
+/* ===== PER-ROW ATTACHMENT POINTS ===========================================================
+ * A row may carry its own spring points (anchor D, world; lid point E, lid frame from pin A)
+ * and dashpot points (anchor F, world; lid point H, lid frame) after m_lid (D_PT, NPT; NaN,
+ * or no such columns: the table's own l, dl, dd, read as always -- bit-identical). Every lid
+ * point is P(th) = A(th) + R(th) p, A the crank pin, so the pose table (pcc: cubic Hermite
+ * pieces of A, A' = dA/dth, cos th, sin th on the table's cells, built like the other
+ * columns from the CasADi model with exact derivatives) holds at each node the exact A, A',
+ * A'', cos, sin; from them, for a lid point p and a ground point G,
+ *     r = A + R p - G,   r' = A' + z x (R p),   r'' = A'' - R p,
+ *     l = |r|,   l' = r.r' / l,   l'' = (|r'|^2 + r.r'' - l'^2) / l,
+ *     dashpot: q'^2 = (r.r')^2 / |r|^2 and its slope.
+ * A row's own cubic Hermite pieces of l, dl (spring) and dd (dashpot) on a cell are built
+ * from these node values and slopes exactly as the table builds its own (table.py _pieces),
+ * so a row's pieces are those of a table built at its points, to the rounding of the node
+ * values. They are built when a stroke first enters a cell, for a block of PKB = 8 cells
+ * ahead of it in the way it goes (pt_piece, pt_build; the nodes four a vector, pt_nodes_avx2,
+ * the same numbers as node by node, pt_nodes_any): a stroke visits a few hundred of the
+ * table's cells, and a lid creeping towards an equilibrium stays in one for many steps. They
+ * are laid out as the table's cells (power-major, with the table's tau beside them), so the
+ * kernel reads them wherever it reads l, dl, dd: the scalar code from the row's piece (CUB),
+ * the SIMD lanes from it as their second vector (coef4_pts, in rhs4_pts / node4_pts: a group
+ * with points runs its own copy, the others keep theirs) -- the same operations as for the
+ * table's columns, so the scalar and SIMD paths agree bit for bit and a row's numbers do
+ * not depend on which cells were kept. The
+ * early exit stays exact: the ranges of l and l' over a piece are those of the row's cubic
+ * pieces (as for the table's), and the spring-length extremes over [th_min, th_max] are
+ * found on the row's pieces in the cells where a mean-value bound of l' (from bounds of
+ * |A'|, |A''| over the table) does not rule an extremum out (l_extremes_pts). A length that
+ * vanishes (a lid point through its anchor) makes l' non-finite: the stroke stops
+ * (S_NONFINITE or S_RANGE), never a number from it. */
+
+/* r and r' of a lid point (px, py) and a ground point (gx, gy) from the pose values a[] */
+#define PT_R(a, px, py, gx, gy, rx, ry, ux, uy) do { \
+        double qx_ = (a)[P_COS] * (px) - (a)[P_SIN] * (py); \
+        double qy_ = (a)[P_SIN] * (px) + (a)[P_COS] * (py); \
+        (rx) = (a)[P_AX] + qx_ - (gx); (ry) = (a)[P_AY] + qy_ - (gy); \
+        (ux) = (a)[P_DAX] - qy_; (uy) = (a)[P_DAY] + qx_; \
+    } while (0)
+
+#define PCUB(q, j, s) ((q)[j] + (s) * ((q)[NPOSE + (j)] + (s) * ((q)[2 * NPOSE + (j)] \
+                       + (s) * (q)[3 * NPOSE + (j)])))
+#define PDCUB(q, j, s, ih) (((q)[NPOSE + (j)] + (s) * (2.0 * (q)[2 * NPOSE + (j)] \
+                            + (s) * 3.0 * (q)[3 * NPOSE + (j)])) * (ih))
+
+/* set the row's own points pt[NPT] (NaN: the table's) into p, its cache emptied */
+static inline void pts_set(Par *p, const double *pt)
+{
+    for (int j = 0; j < NPT; j++) p->pt[j] = pt[j];
+    p->ps = isfinite(pt[0]) && isfinite(pt[1]) && isfinite(pt[2]) && isfinite(pt[3]);
+    p->pd = isfinite(pt[4]) && isfinite(pt[5]) && isfinite(pt[6]) && isfinite(pt[7]);
+    if (p->pc) p->pc->base = p->pc->nb = 0;
+}
+
+/* read the row's own points (columns D_PT.. of a row of ncol columns) into p */
+static inline void pts_read(Par *p, const double *d, int ncol)
+{
+    p->ps = p->pd = 0;
+    if (ncol >= D_PT + NPT) pts_set(p, d + D_PT);
+}
+
+/* one length of a row's points from the pose values a (and their theta-derivatives da, or
+ * NULL): l and l' (spring: dash = 0), or q'^2 (dashpot: dash = 1) into v, their
+ * theta-derivatives into dv (with da) */
+static inline void pt_length(const double *a, const double *da, const double *g, int dash,
+                             double *v, double *dv)
+{
+    double rx, ry, ux, uy;
+    PT_R(a, g[2], g[3], g[0], g[1], rx, ry, ux, uy);
+    double l2 = rx * rx + ry * ry, w = rx * ux + ry * uy;
+    double l = 0.0, dl = 0.0;
+    if (dash) v[C_DD] = w * w / l2;
+    else { l = sqrt(l2); dl = w / l; v[C_L] = l; v[C_DL] = dl; }
+    if (!da) return;
+    double qx = a[P_COS] * g[2] - a[P_SIN] * g[3], qy = a[P_SIN] * g[2] + a[P_COS] * g[3];
+    double wd = ux * ux + uy * uy + rx * (da[P_DAX] - qx) + ry * (da[P_DAY] - qy);
+    if (dash) dv[C_DD] = 2.0 * w * (wd * l2 - w * w) / (l2 * l2);
+    else { dv[C_L] = dl; dv[C_DL] = (wd - dl * dl) / l; }
+}
+
+/* the pose at node j = 0..ncell (values a, theta-derivatives da): the ends of the pieces,
+ * which hold the exact node values and slopes (the right end from the next cell's start) */
+static inline void pose_node(const Table *T, int j, double *a, double *da)
+{
+    if (j < T->ncell) {
+        const double *q = T->pcc + (size_t)j * 4 * NPOSE;
+        for (int k = 0; k < P_USED; k++) { a[k] = q[k]; da[k] = q[NPOSE + k] * T->inv_h; }
+    } else {
+        const double *q = T->pcc + (size_t)(T->ncell - 1) * 4 * NPOSE;
+        for (int k = 0; k < P_USED; k++) {
+            a[k] = PCUB(q, k, 1.0);
+            da[k] = PDCUB(q, k, 1.0, T->inv_h);
+        }
+    }
+}
+
+/* the row's l, dl, dd (f[m][k], m = 0, 1, 2) and their slopes (d[m][k]) at the nodes
+ * j0 + k, k < nn <= PKB + 1: pt_length node by node, or (pt_nodes_avx2) four nodes a vector
+ * with the same operations in the same order -- the same numbers bit for bit */
+#define PNN 12 /* PKB + 1 nodes, rounded up to whole vectors */
+static void pt_nodes_any(const Table *T, const Par *p, int j0, int nn, double f[3][PNN],
+                         double d[3][PNN])
+{
+    for (int k = 0; k < nn; k++) {
+        double a[P_USED], da[P_USED], v[NC], dv[NC];
+        pose_node(T, j0 + k, a, da);
+        v[C_L] = v[C_DL] = v[C_DD] = dv[C_L] = dv[C_DL] = dv[C_DD] = 0.0;
+        if (p->ps) pt_length(a, da, p->pt, 0, v, dv);
+        if (p->pd) pt_length(a, da, p->pt + 4, 1, v, dv);
+        for (int m = 0; m < 3; m++) { f[m][k] = v[C_L + m]; d[m][k] = dv[C_L + m]; }
+    }
+}
+
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+#define PT_AVX2 1
+__attribute__((target("avx2"), noinline))
+static void pt_nodes_avx2(const Table *T, const Par *p, int j0, int nn, double f[3][PNN],
+                          double d[3][PNN])
+{
+    double a[P_USED][PNN], da[P_USED][PNN];
+    for (int k = 0; k < PNN; k++) {
+        double x[P_USED], dx[P_USED];
+        pose_node(T, k < nn ? j0 + k : j0, x, dx);
+        for (int j = 0; j < P_USED; j++) { a[j][k] = x[j]; da[j][k] = dx[j]; }
+    }
+    const v4 two = {2.0, 2.0, 2.0, 2.0}, zero = {0.0, 0.0, 0.0, 0.0};
+    for (int k = 0; k < PNN; k += VW) {
+        v4 c = ld4(a[P_COS] + k), sn = ld4(a[P_SIN] + k), ax = ld4(a[P_AX] + k),
+           ay = ld4(a[P_AY] + k), dx = ld4(a[P_DAX] + k), dy = ld4(a[P_DAY] + k),
+           ddx = ld4(da[P_DAX] + k), ddy = ld4(da[P_DAY] + k);
+        v4 fl = zero, fdl = zero, fdd = zero, dl_ = zero, ddl = zero, ddd = zero;
+        for (int dash = 0; dash < 2; dash++) { /* pt_length's operations, as vectors */
+            if (dash ? !p->pd : !p->ps) continue;
+            const double *g = p->pt + 4 * dash;
+            v4 qx = c * g[2] - sn * g[3], qy = sn * g[2] + c * g[3];
+            v4 rx = ax + qx - g[0], ry = ay + qy - g[1], ux = dx - qy, uy = dy + qx;
+            v4 l2 = rx * rx + ry * ry, w = rx * ux + ry * uy;
+            v4 qx2 = c * g[2] - sn * g[3], qy2 = sn * g[2] + c * g[3];
+            v4 wd = ux * ux + uy * uy + rx * (ddx - qx2) + ry * (ddy - qy2);
+            if (dash) {
+                fdd = w * w / l2;
+                ddd = two * w * (wd * l2 - w * w) / (l2 * l2);
+            } else {
+                v4 l = __builtin_ia32_sqrtpd256(l2), dl = w / l;
+                fl = l; fdl = dl; dl_ = dl;
+                ddl = (wd - dl * dl) / l;
+            }
+        }
+        memcpy(f[0] + k, &fl, sizeof fl); memcpy(f[1] + k, &fdl, sizeof fl);
+        memcpy(f[2] + k, &fdd, sizeof fl); memcpy(d[0] + k, &dl_, sizeof fl);
+        memcpy(d[1] + k, &ddl, sizeof fl); memcpy(d[2] + k, &ddd, sizeof fl);
+    }
+}
+#endif
+
+static int use_vec;
+
+/* build the row's pieces on a block of PKB cells holding cell i (ahead of it in the way the
+ * stroke goes: below it when it came from above) -- noinline: once a block */
+__attribute__((noinline)) static const double *pt_build(const Table *T, const Par *p, int i)
+{
+    PtCache *c = p->pc;
+    int base = c->nb && i < c->base ? i - PKB + 1 : i;
+    if (base > T->ncell - PKB) base = T->ncell - PKB;
+    if (base < 0) base = 0;
+    int nb = T->ncell - base < PKB ? T->ncell - base : PKB;
+    c->base = base; c->nb = nb;
+    double f[3][PNN], d[3][PNN];
+#ifdef PT_AVX2
+    if (use_vec > 0) pt_nodes_avx2(T, p, base, nb + 1, f, d);
+    else
+#endif
+        pt_nodes_any(T, p, base, nb + 1, f, d);
+    for (int k = 0; k < nb; k++) {
+        double *b = c->blk[k];
+        const double *t = T->cc + (size_t)(base + k) * 4 * NC;
+        for (int e = 0; e < 4; e++)
+            for (int j = C_L; j <= C_TAU; j++) b[e * NC + j] = t[e * NC + j]; /* the table's */
+        for (int j = C_L; j <= C_DD; j++) {
+            if (j == C_DD ? !p->pd : !p->ps) continue;
+            int m = j - C_L;
+            double f0 = f[m][k], f1 = f[m][k + 1], d0 = d[m][k] * T->h, d1 = d[m][k + 1] * T->h;
+            b[j] = f0; b[NC + j] = d0;
+            b[2 * NC + j] = 3 * (f1 - f0) - 2 * d0 - d1;
+            b[3 * NC + j] = 2 * (f0 - f1) + d0 + d1;
+        }
+    }
+    return c->blk[i - base];
+}
+
+/* the row's pieces on cell i: a block laid out as the table's cell (power-major, NC a
+ * power), whose columns l, dl, dd, tau are the row's (its own where it has points) */
+static inline const double *pt_piece(const Table *T, const Par *p, int i)
+{
+    const PtCache *c = p->pc;
+    if ((unsigned)(i - c->base) < (unsigned)c->nb) return c->blk[i - c->base];
+    return pt_build(T, p, i);
+}
+
+/* the row's own columns of the values v (and their theta-derivatives dv, or NULL) in cell i
+ * at s, from its pieces */
+static inline void pts_eval(const Table *T, const Par *p, int i, double s, double *v, double *dv)
+{
+    const double *q = pt_piece(T, p, i);
+    for (int j = C_L; j <= C_DD; j++) {
+        if (j == C_DD ? !p->pd : !p->ps) continue;
+        v[j] = CUB(q, j, s);
+        if (dv) dv[j] = DCUB(q, j, s, T->inv_h);
+    }
+}
+
+/* bounds of |A'| and |A''| over the table (T->pA1, T->pA2), from the ranges of the pose
+ * pieces of A' and of their slopes, widened by 1 % (the mean-value test of l_extremes_pts) */
+static void pts_bounds(Table *T)
+{
+    double m2x = 0.0, m2y = 0.0, m1x = 0.0, m1y = 0.0;
+    for (int i = 0; i < T->ncell; i++) {
+        for (int j = P_DAX; j <= P_DAY; j++) {
+            double q[4], dq[4], lo, hi;
+            for (int e = 0; e < 4; e++) q[e] = T->pcc[((size_t)i * 4 + e) * NPOSE + j];
+            cubic_range(q, 0.0, 1.0, &lo, &hi);
+            double mag = MAX2(fabs(lo), fabs(hi));
+            if (j == P_DAX) m1x = MAX2(m1x, mag); else m1y = MAX2(m1y, mag);
+            dq[0] = q[1]; dq[1] = 2.0 * q[2]; dq[2] = 3.0 * q[3]; dq[3] = 0.0;
+            cubic_range(dq, 0.0, 1.0, &lo, &hi);
+            mag = MAX2(fabs(lo), fabs(hi)) * T->inv_h;
+            if (j == P_DAX) m2x = MAX2(m2x, mag); else m2y = MAX2(m2y, mag);
+        }
+    }
+    T->pA1 = 1.01 * hypot(m1x, m1y);
+    T->pA2 = 1.01 * hypot(m2x, m2y);
+}
+
+static void cubic_extremes(const double *q, int i, const Table *T, double a, double b,
+                           double *lmin, double *lmax);
+
+/* l_extremes for a row with its own spring points, on the cells [j0, j1): a run of cells
+ * whose middle has |l'| above the largest |l''| (<= |r'|^2 / |r| + |r''|, with
+ * |r'| <= |A'| + |e|, |r''| <= |A''| + |e|, |r| >= l(mid) - |r'| half width) times its half
+ * width has l monotone; the others are halved down to cells, whose pieces are searched */
+static void pts_scan(const Table *T, const Par *p, int j0, int j1, double a, double b,
+                     double *lmin, double *lmax, int depth)
+{
+    if (j1 <= j0) return;
+    if (j1 - j0 > 1 && depth < 40) {
+        double x0 = T->lo + j0 * T->h, x1 = T->lo + j1 * T->h;
+        double xm = 0.5 * (x0 + x1), hw = 0.5 * (x1 - x0), s, v[NC] = {0};
+        int i = cell_index(T, xm, &s);
+        if (i >= 0) { /* (l, l' from the pose interpolated at xm: a bound, no pieces built) */
+            const double *q = T->pcc + (size_t)i * 4 * NPOSE;
+            double a[P_USED];
+            for (int j = 0; j < P_USED; j++) a[j] = PCUB(q, j, s);
+            pt_length(a, NULL, p->pt, 0, v, NULL);
+            double e = hypot(p->pt[2], p->pt[3]), R1 = T->pA1 + e, R2 = T->pA2 + e;
+            double lower = v[C_L] - R1 * hw;
+            if (lower > 0 && isfinite(v[C_DL])) {
+                double L2 = R1 * R1 / lower + R2;
+                if (fabs(v[C_DL]) > L2 * hw * (1.0 + 1e-6) + 1e-9 * v[C_L]) return;
+            }
+        }
+        int jm = (j0 + j1) / 2;
+        pts_scan(T, p, j0, jm, a, b, lmin, lmax, depth + 1);
+        pts_scan(T, p, jm, j1, a, b, lmin, lmax, depth + 1);
+        return;
+    }
+    for (int i = j0; i < j1; i++) {
+        const double *r = pt_piece(T, p, i);
+        double q[4] = {r[C_L], r[NC + C_L], r[2 * NC + C_L], r[3 * NC + C_L]};
+        cubic_extremes(q, i, T, a, b, lmin, lmax);
+    }
+}
+
+static void l_extremes_pts(const Table *T, const Par *p, double a, double b, double *lmin,
+                           double *lmax)
+{
+    double ends[2] = {a, b}, s, v[NC] = {0};
+    *lmin = INFINITY; *lmax = -INFINITY;
+    for (int e = 0; e < 2; e++) {
+        int i = cell_index(T, ends[e], &s);
+        if (i < 0) continue;
+        pts_eval(T, p, i, s, v, NULL);
+        if (v[C_L] < *lmin) *lmin = v[C_L];
+        if (v[C_L] > *lmax) *lmax = v[C_L];
+    }
+    int i0 = (int)floor((a - T->lo) / T->h), i1 = (int)floor((b - T->lo) / T->h);
+    if (i0 < 0) i0 = 0;
+    if (i1 > T->ncell - 1) i1 = T->ncell - 1;
+    pts_scan(T, p, i0, i1 + 1, a, b, lmin, lmax, 0);
+}
+/* ===== (end of the per-row attachment points) ================================================ */
+
 /* coefficient values v[NC] and theta-derivatives dv[NC] (dv may be NULL) of the row p
  * (p may be NULL: the table's own mass), and -- when x is not NULL and the row has them --
  * the element columns x[NX] and their derivatives dx */
@@ -404,6 +716,7 @@ static inline int tab_eval_x(const Table *T, const Par *p, double th, double *v,
         if (dv) dv[j] = DCUB(q, j, s, T->inv_h);
     }
     if (x && p && p->x) xtab_eval(T, i, s, x, dx);
+    if (p && (p->ps | p->pd)) pts_eval(T, p, i, s, v, dv);
     if (p && p->dm != 0.0) {
         const double *r = T->dcc + (size_t)i * 4 * NC;
         for (int j = 0; j < NMASS; j++) {
@@ -451,6 +764,7 @@ static inline void potential_at(const Table *T, const Par *p, int i, double s, d
     double c[NC], x[NX] = {0};
     c[C_VG] = CUB(q, C_VG, s); c[C_L] = CUB(q, C_L, s);
     c[C_DVG] = dV ? CUB(q, C_DVG, s) : 0.0; c[C_DL] = dV ? CUB(q, C_DL, s) : 0.0;
+    if (p->ps) pts_eval(T, p, i, s, c, NULL); /* (its l and l'; its dd is not read) */
     if (p->dm != 0.0) {
         const double *r = T->dcc + (size_t)i * 4 * NC;
         c[C_VG] += p->dm * CUB(r, C_VG, s);
@@ -659,6 +973,30 @@ static void l_extremes(const Table *T, double a, double b, double *lmin, double 
     }
 }
 
+/* the interior extremes of the cubic q on cell i within [a, b] into lmin, lmax (the same
+ * operations as l_extremes: a row's own Hermite pieces of l, PER-ROW ATTACHMENT POINTS) */
+static void cubic_extremes(const double *q, int i, const Table *T, double a, double b,
+                           double *lmin, double *lmax)
+{
+    double A = 3 * q[3], B = 2 * q[2], C = q[1], r[2];
+    int nr = 0;
+    if (fabs(A) < 1e-300) { if (B != 0) r[nr++] = -C / B; }
+    else {
+        double D = B * B - 4 * A * C;
+        if (D >= 0) {
+            double sq = sqrt(D);
+            r[nr++] = (-B + sq) / (2 * A); r[nr++] = (-B - sq) / (2 * A);
+        }
+    }
+    for (int j = 0; j < nr; j++) {
+        double th = T->lo + (i + r[j]) * T->h;
+        if (r[j] < 0 || r[j] > 1 || th < a || th > b) continue;
+        double l = q[0] + r[j] * (q[1] + r[j] * (q[2] + r[j] * q[3]));
+        if (l < *lmin) *lmin = l;
+        if (l > *lmax) *lmax = l;
+    }
+}
+
 /* ---- early exit: what the rest of a stroke can still reach ------------------------- */
 
 /* range of the cubic q0 + q1 s + q2 s^2 + q3 s^3 over [s0, s1] (ends and interior extrema) */
@@ -688,6 +1026,11 @@ static void cubic_range(const double *q, double s0, double s1, double *lo, doubl
 /* the cubic of coefficient j in cell i for the row p (mass-corrected) */
 static inline void piece(const Table *T, const Par *p, int i, int j, double *q)
 {
+    if ((p->ps && (j == C_L || j == C_DL)) || (p->pd && j == C_DD)) { /* the row's own */
+        const double *b = pt_piece(T, p, i);
+        for (int e = 0; e < 4; e++) q[e] = b[e * NC + j];
+        return;
+    }
     for (int e = 0; e < 4; e++) q[e] = CQ(T->cc, i, e, j);
     if (j < NMASS && p->dm != 0.0)
         for (int e = 0; e < 4; e++) q[e] += p->dm * CQ(T->dcc, i, e, j);
@@ -707,7 +1050,8 @@ static int speed_piece_ok(const Table *T, const Par *p, int i, double s0, double
     if (--*budget < 0) return 0;
     double q[4], glo, ghi, llo, lhi, dglo, dghi, dllo, dlhi, tlo, thi, Mlo, Mhi, v[NC];
     double x[NX] = {0};
-    const double *R = depth == 0 && p->dm == 0.0 && T->rng ? T->rng + (size_t)i * NRNG : NULL;
+    const double *R = depth == 0 && p->dm == 0.0 && !p->ps && T->rng
+                      ? T->rng + (size_t)i * NRNG : NULL; /* (the table's own l, dl) */
     /* (with R, the middle values are the whole cell's: its middle is where x is read) */
     double sm = R ? 0.5 : 0.5 * (s0 + s1), hw = 0.5 * (s1 - s0) * T->h;
     if (R) { /* the whole cell's precomputed ranges (a superset of [s0, s1]) */
@@ -719,8 +1063,8 @@ static int speed_piece_ok(const Table *T, const Par *p, int i, double s0, double
     } else {
         if (tab_eval(T, p, T->lo + (i + sm) * T->h, v, NULL)) return 0;
         piece(T, p, i, C_VG, q); cubic_range(q, s0, s1, &glo, &ghi);
-        piece(T, p, i, C_L, q); cubic_range(q, s0, s1, &llo, &lhi);
         piece(T, p, i, C_DVG, q); cubic_range(q, s0, s1, &dglo, &dghi);
+        piece(T, p, i, C_L, q); cubic_range(q, s0, s1, &llo, &lhi);
         piece(T, p, i, C_DL, q); cubic_range(q, s0, s1, &dllo, &dlhi);
         piece(T, p, i, C_TAU, q); cubic_range(q, s0, s1, &tlo, &thi);
         piece(T, p, i, C_M, q); cubic_range(q, s0, s1, &Mlo, &Mhi);
@@ -932,6 +1276,7 @@ static inline int node_eval(const Table *T, const Par *p, double th, double thd,
     double dtau = DCUB(q, C_TAU, s, T->inv_h);
     double c[NC], x[NX];
     c[C_VG] = Vg; c[C_DVG] = dVg; c[C_L] = l; c[C_DL] = dl; c[C_DD] = dd;
+    if (p->ps | p->pd) pts_eval(T, p, i, s, c, NULL);
     double damp = ELEM_DAMPING(p, c), slope = ELEM_SLOPE(p, c);
     double Vn = ELEM_POTENTIAL(p, c), En = ELEM_ENERGY(p, c, 0.5 * M * thd * thd);
     if (p->x) {
@@ -969,6 +1314,7 @@ static int lane_start(const Table *T, Lane *L, const double *d, int ncol, double
 {
     ELEM_READ(&L->p, d, T);
     ELEM_ENGAGE_START(&L->p, th0, thc);
+    pts_read(&L->p, d, ncol);
     L->e_tol = d[D_ETOL];
     L->p.dm = 0.0;
     if (ncol > D_MLID && isfinite(d[D_MLID]) && d[D_MLID] != T->m0) L->p.dm = d[D_MLID] - T->m0;
@@ -990,7 +1336,7 @@ static int lane_start(const Table *T, Lane *L, const double *d, int ncol, double
     double E0, V0;
     if (ELEM_STICKS(&L->p)) { /* released from rest: it moves only if |V'| exceeds T_f */
         double Vr, dVr;
-        if ((L->p.dm != 0.0 && !T->dcc) || (L->p.x && !T->xcc)
+        if ((L->p.dm != 0.0 && !T->dcc) || (L->p.x && !T->xcc) || ((L->p.ps | L->p.pd) && !T->pcc)
             || potential(T, &L->p, th0, &Vr, &dVr)) {
             L->E0 = L->Emax = NAN; L->status = S_RANGE; return 1;
         }
@@ -1001,7 +1347,7 @@ static int lane_start(const Table *T, Lane *L, const double *d, int ncol, double
         }
         L->p.fs = dVr < 0 ? 1.0 : -1.0;     /* it moves the way -V' drives it */
     }
-    if ((L->p.dm != 0.0 && !T->dcc) || (L->p.x && !T->xcc)
+    if ((L->p.dm != 0.0 && !T->dcc) || (L->p.x && !T->xcc) || ((L->p.ps | L->p.pd) && !T->pcc)
         || node_eval(T, &L->p, th0, 0.0, &L->a, &L->g, &L->dg, &E0, &V0) || !isfinite(E0)) {
         L->E0 = L->Emax = NAN; L->status = S_RANGE; return 1;
     }
@@ -1030,7 +1376,8 @@ static void lane_finish(const Table *T, Lane *L, double thc, double t_max)
     out[O_STIME] = L->t;
     if (L->status == S_CLOSED || L->status == S_OPEN) {
         double lmin, lmax;
-        l_extremes(T, L->th_min, L->th_max, &lmin, &lmax);
+        if (L->p.ps) l_extremes_pts(T, &L->p, L->th_min, L->th_max, &lmin, &lmax);
+        else l_extremes(T, L->th_min, L->th_max, &lmin, &lmax);
         out[O_LMIN] = lmin; out[O_LMAX] = lmax;
     }
     if (L->status == S_OPEN && L->reason == R_NONE && L->t >= t_max * (1 - 1e-12)) {
@@ -1358,7 +1705,6 @@ ALWAYS void cells4(const Table *T, v4 th, const double **b, v4 *s, v4l *okm)
     for (int q = 0; q < VW; q++) b[q] = T->cc + (size_t)ii[q] * 4 * NC;
 }
 
-ALWAYS v4 ld4(const double *a) { v4 v; memcpy(&v, a, sizeof v); return v; }
 ALWAYS v4 abs4(v4 x)
 {
     v4l mask = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL, 0x7fffffffffffffffLL,
@@ -1385,24 +1731,54 @@ ALWAYS void transpose4(const v4 *r, v4 *c)
 
 
 
-/* the NC coefficients of the lanes at th as columns c[j] (four lanes each): each lane's
- * cubic pieces are evaluated as rows (Horner in s, as CUB), mass-corrected where dm != 0,
- * then transposed; okm as cells4's */
-ALWAYS void coef4(const Table *T, const Par4 *P, v4 th, v4 *c, const double **b, v4 *s,
-                  v4l *okm)
+/* coef4's rows of a group with a lane that has its own points: the same operations, with a
+ * lane's l, dl, dd, tau read from its row's own pieces (PER-ROW ATTACHMENT POINTS) -- a loop
+ * of its own: inside coef4's loop the lookup slowed the lanes without points by 6 % */
+ALWAYS void coef4_pts(const Table *T, const Par4 *P, const double *const *b, const v4 *s,
+                      v4 *lo, v4 *hi)
 {
-    v4 lo[VW], hi[VW];
-    cells4(T, th, b, s, okm);
     for (int q = 0; q < VW; q++) {
-        const double *r = b[q];
+        const double *r = b[q], *rh = r;
+        if (P->lpts[q]) {
+            const PtCache *c = P->lp[q]->pc;
+            int i = (int)((r - T->cc) / (4 * NC));
+            rh = (unsigned)(i - c->base) < (unsigned)c->nb ? c->blk[i - c->base]
+                                                           : pt_build(T, P->lp[q], i);
+        }
         double sq = (*s)[q];
         lo[q] = ld4(r) + sq * (ld4(r + NC) + sq * (ld4(r + 2 * NC) + sq * ld4(r + 3 * NC)));
-        hi[q] = ld4(r + 4) + sq * (ld4(r + NC + 4) + sq * (ld4(r + 2 * NC + 4)
-                                                          + sq * ld4(r + 3 * NC + 4)));
+        hi[q] = ld4(rh + 4) + sq * (ld4(rh + NC + 4) + sq * (ld4(rh + 2 * NC + 4)
+                                                            + sq * ld4(rh + 3 * NC + 4)));
         if (P->any && P->dm[q] != 0.0) { /* M, dM, Vg, dVg only */
             const double *rm = T->dcc + (r - T->cc);
             lo[q] += P->dm[q] * (ld4(rm) + sq * (ld4(rm + NC) + sq * (ld4(rm + 2 * NC)
                                                                      + sq * ld4(rm + 3 * NC))));
+        }
+    }
+}
+
+/* the NC coefficients of the lanes at th as columns c[j] (four lanes each): each lane's
+ * cubic pieces are evaluated as rows (Horner in s, as CUB), mass-corrected where dm != 0,
+ * then transposed; okm as cells4's */
+ALWAYS void coef4(const Table *T, const Par4 *P, v4 th, v4 *c, const double **b, v4 *s,
+                  v4l *okm, const int pts)
+{ /* (pts: the group has a lane with its own points -- a literal: see rhs4, node4) */
+    v4 lo[VW], hi[VW];
+    cells4(T, th, b, s, okm);
+    if (pts) {
+        coef4_pts(T, P, b, s, lo, hi);
+    } else {
+        for (int q = 0; q < VW; q++) {
+            const double *r = b[q];
+            double sq = (*s)[q];
+            lo[q] = ld4(r) + sq * (ld4(r + NC) + sq * (ld4(r + 2 * NC) + sq * ld4(r + 3 * NC)));
+            hi[q] = ld4(r + 4) + sq * (ld4(r + NC + 4) + sq * (ld4(r + 2 * NC + 4)
+                                                              + sq * ld4(r + 3 * NC + 4)));
+            if (P->any && P->dm[q] != 0.0) { /* M, dM, Vg, dVg only */
+                const double *rm = T->dcc + (r - T->cc);
+                lo[q] += P->dm[q] * (ld4(rm) + sq * (ld4(rm + NC) + sq * (ld4(rm + 2 * NC)
+                                                                         + sq * ld4(rm + 3 * NC))));
+            }
         }
     }
     transpose4(lo, c);
@@ -1429,11 +1805,11 @@ ALWAYS void xcoef4(const Table *T, const double *const *b, v4 s, v4 *x)
 }
 
 /* theta'' of the lanes (as rhs()); okm as cells4's */
-ALWAYS v4 rhs4(const Table *T, const Par4 *P, v4 th, v4 thd, v4l *okm)
+ALWAYS v4 rhs4_impl(const Table *T, const Par4 *P, v4 th, v4 thd, v4l *okm, const int pts)
 {
     v4 c[NC], s;
     const double *b[VW];
-    coef4(T, P, th, c, b, &s, okm);
+    coef4(T, P, th, c, b, &s, okm, pts);
     v4 damp = ELEM_DAMPING(P, c), slope = ELEM_SLOPE(P, c);
     if (P->anyx) {
         v4 x[NX];
@@ -1447,15 +1823,39 @@ ALWAYS v4 rhs4(const Table *T, const Par4 *P, v4 th, v4 thd, v4l *okm)
     return N / c[C_M];
 }
 
+/* a group with a lane that has its own points runs rhs4 and node4 in functions of their own
+ * (PER-ROW ATTACHMENT POINTS): inlined beside the others, its code slowed the groups without
+ * points by a few per cent (both compiled for the vector path, the only one that calls them) */
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+#define PTS_TARGET __attribute__((target("avx2"), noinline))
+#else
+#define PTS_TARGET __attribute__((noinline))
+#endif
+PTS_TARGET static void rhs4_pts(const Table *T, const Par4 *P, const v4 *th, const v4 *thd,
+                                v4l *okm, v4 *out)
+{
+    *out = rhs4_impl(T, P, *th, *thd, okm, 1);
+}
+
+ALWAYS v4 rhs4(const Table *T, const Par4 *P, v4 th, v4 thd, v4l *okm)
+{
+    if (__builtin_expect(P->anyp, 0)) {
+        v4 r;
+        rhs4_pts(T, P, &th, &thd, okm, &r);
+        return r;
+    }
+    return rhs4_impl(T, P, th, thd, okm, 0);
+}
+
 /* node_eval() of the lanes: theta'', tip speed, its rate, energy, potential, as vectors
  * (ok: 1 inside the table, 0 outside) -- the same operations as node_eval() lane by lane */
-ALWAYS void node4(const Table *T, const Par4 *P, v4 th, v4 thd, v4 *a, v4 *g, v4 *dg, v4 *Ev,
-                  v4 *Vv, v4 *ok)
+ALWAYS void node4_impl(const Table *T, const Par4 *P, v4 th, v4 thd, v4 *a, v4 *g, v4 *dg,
+                       v4 *Ev, v4 *Vv, v4 *ok, const int pts)
 {
     v4 c[NC], s;
     const double *b[VW];
     v4l okm;
-    coef4(T, P, th, c, b, &s, &okm);
+    coef4(T, P, th, c, b, &s, &okm, pts);
     v4 M = c[C_M], dM = c[C_DM], tau = c[C_TAU];
     v4 damp = ELEM_DAMPING(P, c), slope = ELEM_SLOPE(P, c);
     v4 En = ELEM_ENERGY(P, c, 0.5 * M * thd * thd), Vn = ELEM_POTENTIAL(P, c);
@@ -1487,6 +1887,19 @@ ALWAYS void node4(const Table *T, const Par4 *P, v4 th, v4 thd, v4 *a, v4 *g, v4
     *ok = sel4(okm, one, zero);
 }
 
+PTS_TARGET static void node4_pts(const Table *T, const Par4 *P, const v4 *th, const v4 *thd,
+                                 v4 *a, v4 *g, v4 *dg, v4 *Ev, v4 *Vv, v4 *ok)
+{
+    node4_impl(T, P, *th, *thd, a, g, dg, Ev, Vv, ok, 1);
+}
+
+ALWAYS void node4(const Table *T, const Par4 *P, v4 th, v4 thd, v4 *a, v4 *g, v4 *dg, v4 *Ev,
+                  v4 *Vv, v4 *ok)
+{
+    if (__builtin_expect(P->anyp, 0)) node4_pts(T, P, &th, &thd, a, g, dg, Ev, Vv, ok);
+    else node4_impl(T, P, th, thd, a, g, dg, Ev, Vv, ok, 0);
+}
+
 /* theta'' only, from the six coefficients it needs (the scalar hot path) */
 ALWAYS int rhs_fast(const Table *T, const Par *p, double th, double thd, double *thdd)
 {
@@ -1503,6 +1916,7 @@ ALWAYS int rhs_fast(const Table *T, const Par *p, double th, double thd, double 
     }
     double c[NC];
     c[C_DVG] = dVg; c[C_L] = l; c[C_DL] = dl; c[C_DD] = dd;
+    if (p->ps | p->pd) pts_eval(T, p, i, s, c, NULL);
     double damp = ELEM_DAMPING(p, c), slope = ELEM_SLOPE(p, c);
     if (p->x) {
         double x[NX];
@@ -1745,6 +2159,7 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
                    double *traj, long traj_cap, long *traj_len, const int vec)
 {
     Lane lanes[LANES];
+    PtCache pcache[LANES];
     Par4 P[NG];
     int used[LANES] = {0};
     long next = 0;
@@ -1787,6 +2202,7 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
                 if (next >= n) break;
                 used[k] = 1;
                 Lane *L = &lanes[k];
+                L->p.pc = &pcache[k]; /* (its own pieces, with points: emptied by lane_start) */
                 int over = lane_start(T, L, design + (size_t)ncol * next, ncol,
                                       out + NOUT * next, th0, thc, dt, t_max, early, traj,
                                       traj_cap);
@@ -1794,8 +2210,12 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
                 int q = k % VW;
                 ELEM_LANE(G, q, &L->p);
                 G->dm[q] = L->p.dm;
-                G->any = 0; G->anyx = 0; G->anyow = 0; G->anyf = 0; G->anye = 0;
+                G->lp[q] = &L->p;
+                G->any = 0; G->anyx = 0; G->anyow = 0; G->anyf = 0; G->anye = 0; G->anyp = 0;
                 for (int e = 0; e < VW; e++) {
+                    G->lp[e] = &lanes[k - q + e].p;
+                    G->lpts[e] = lanes[k - q + e].p.ps | lanes[k - q + e].p.pd;
+                    G->anyp |= (lanes[k - q + e].p.ps | lanes[k - q + e].p.pd) && used[k - q + e];
                     G->any |= G->dm[e] != 0.0;
                     G->anyx |= lanes[k - q + e].p.x && used[k - q + e];
                     G->anyow |= lanes[k - q + e].p.ow && used[k - q + e];
@@ -1876,6 +2296,7 @@ static void strokes_any(const Table *T, const Method *m, double dt, double t_max
 }
 
 static int use_vec = -1; /* -1: not decided; SC_SCALAR=1 in the environment forces 0 */
+/* (pt_build reads it: decided before any stroke, and run() is the only way to a stroke) */
 
 static void run(const Table *T, const Method *m, double dt, double t_max, double th0,
                 double thc, long n, int ncol, const double *design, int early, double *out,
@@ -1901,14 +2322,16 @@ static void run(const Table *T, const Method *m, double dt, double t_max, double
  * NRNG (see the Table) or NULL */
 
 static void make(const double *tab_meta, const double *cc, const double *dcc,
-                 const double *xcc, const double *rng, const double *tableau, Table *T,
-                 Method *m)
+                 const double *xcc, const double *rng, const double *pcc,
+                 const double *tableau, Table *T, Method *m)
 {
     T->crit = NULL; T->ncrit = 0;
-    T->cc = cc; T->dcc = dcc; T->xcc = xcc; T->rng = rng;
+    T->cc = cc; T->dcc = dcc; T->xcc = xcc; T->rng = rng; T->pcc = pcc;
     T->ncell = (int)tab_meta[0]; T->lo = tab_meta[1];
     T->h = tab_meta[2]; T->m0 = tab_meta[3]; T->rot_pivot = tab_meta[4] != 0.0;
     T->inv_h = 1.0 / T->h;
+    T->pA1 = T->pA2 = 0.0;
+    if (pcc) pts_bounds(T);
     m->kind = (int)tableau[0]; m->s = (int)tableau[1];
     int s = m->s;
     for (int i = 0; i < s; i++) {
@@ -1935,12 +2358,12 @@ static int *critical_cells(Table *T)
 }
 
 void sc_strokes(const double *tab_meta, const double *cc, const double *dcc,
-                const double *xcc, const double *rng, const double *tableau, double dt,
-                double t_max, double th0, double thc, long n, long ncol, const double *design,
-                long early, double *out)
+                const double *xcc, const double *rng, const double *pcc, const double *tableau,
+                double dt, double t_max, double th0, double thc, long n, long ncol,
+                const double *design, long early, double *out)
 {
     Table T; Method m;
-    make(tab_meta, cc, dcc, xcc, rng, tableau, &T, &m);
+    make(tab_meta, cc, dcc, xcc, rng, pcc, tableau, &T, &m);
     int *crit = critical_cells(&T);
     run(&T, &m, dt, t_max, th0, thc, n, (int)ncol, design, (int)early, out, NULL, 0, NULL);
     free(crit);
@@ -1948,12 +2371,13 @@ void sc_strokes(const double *tab_meta, const double *cc, const double *dcc,
 
 /* one stroke with its trajectory */
 void sc_stroke_traj(const double *tab_meta, const double *cc, const double *dcc,
-                    const double *xcc, const double *rng, const double *tableau, double dt,
-                    double t_max, double th0, double thc, long ncol, const double *design,
-                    long early, double *out, double *traj, long traj_cap, long *traj_len)
+                    const double *xcc, const double *rng, const double *pcc,
+                    const double *tableau, double dt, double t_max, double th0, double thc,
+                    long ncol, const double *design, long early, double *out, double *traj,
+                    long traj_cap, long *traj_len)
 {
     Table T; Method m;
-    make(tab_meta, cc, dcc, xcc, rng, tableau, &T, &m);
+    make(tab_meta, cc, dcc, xcc, rng, pcc, tableau, &T, &m);
     int *crit = critical_cells(&T);
     *traj_len = 0;
     run(&T, &m, dt, t_max, th0, thc, 1, (int)ncol, design, (int)early, out, traj, traj_cap,
@@ -1961,24 +2385,184 @@ void sc_stroke_traj(const double *tab_meta, const double *cc, const double *dcc,
     free(crit);
 }
 
-/* one step (for tests): x1 = step(x0, h); design: a full row (ROW_LAYOUT, with m_lid); the
- * end damper engaged as at x0 (theta < theta_e), for the whole step */
+/* one step (for tests): x1 = step(x0, h); design: a full row (LAYOUT, with m_lid and the
+ * point columns); the end damper engaged as at x0 (theta < theta_e), for the whole step */
 int sc_step(const double *tab_meta, const double *cc, const double *dcc, const double *xcc,
-            const double *tableau, const double *design, double h, const double *x0,
-            double *x1)
+            const double *pcc, const double *tableau, const double *design, double h,
+            const double *x0, double *x1)
 {
     Table T; Method m;
-    make(tab_meta, cc, dcc, xcc, NULL, tableau, &T, &m);
+    make(tab_meta, cc, dcc, xcc, NULL, pcc, tableau, &T, &m);
     Par p;
+    PtCache pc;
     ELEM_READ(&p, design, &T);
     ELEM_ENGAGE_START(&p, x0[0], -INFINITY);
+    p.pc = &pc;
+    pts_read(&p, design, D_PT + NPT);
     p.dm = 0.0;
     if (p.x && !xcc) return S_RANGE;
+    if ((p.ps | p.pd) && !pcc) return S_RANGE;
     if (isfinite(design[D_MLID]) && design[D_MLID] != T.m0) {
         if (!dcc) return S_RANGE;
         p.dm = design[D_MLID] - T.m0;
     }
     return step(&T, &m, &p, h, x0[0], x0[1], &x1[0], &x1[1]);
+}
+
+/* the spring's l, dl and the dashpot's dd of rows with their own points (pts: n x NPT, the
+ * row convention) at angles th (n x G, or G shared by the rows), from the rows' pieces as the
+ * strokes read them: out n x G x 3 (NaN where the row has the table's, or outside it) */
+void sc_point_columns(const double *tab_meta, const double *cc, const double *pcc, long n,
+                      const double *pts, long G, const double *th, long shared, double *out)
+{
+    static const double tableau[5] = {0, 1, 0, 1, 0};
+    Table T; Method m;
+    make(tab_meta, cc, NULL, NULL, NULL, pcc, tableau, &T, &m);
+    for (long r = 0; r < n; r++) {
+        Par p;
+        PtCache pc;
+        memset(&p, 0, sizeof p);
+        p.pc = &pc;
+        pts_set(&p, pts + (size_t)r * NPT);
+        for (long g = 0; g < G; g++) {
+            double x = shared ? th[g] : th[(size_t)r * G + g], s, v[NC];
+            double *o = out + ((size_t)r * G + g) * 3;
+            o[0] = o[1] = o[2] = NAN;
+            int i = cell_index(&T, x, &s);
+            if (i < 0) continue;
+            pts_eval(&T, &p, i, s, v, NULL);
+            if (p.ps) { o[0] = v[C_L]; o[1] = v[C_DL]; }
+            if (p.pd) o[2] = v[C_DD];
+        }
+    }
+}
+
+/* the same columns for many rows over a grid of angles shared by the rows, from the pose
+ * pieces interpolated at the angles (not the rows' pieces: within the tables' interpolation
+ * error, ~1e-10 relative, of them; for the statics that scan a stroke: the opening effort,
+ * where a spring leaves its range): pose_g (G x P_USED) the pose at the grid, out n x G x 3 */
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+#define PG_SQRT(x) __builtin_ia32_sqrtpd256(x)
+__attribute__((target("avx2")))
+#else
+#define PG_SQRT(x) ({ v4 y_ = (x); for (int q_ = 0; q_ < VW; q_++) y_[q_] = sqrt(y_[q_]); y_; })
+#endif
+static void point_grid_rows(const double *pose_g, long G4, long G, long n, const double *pts,
+                            int mode, const double *ab, double *out)
+{ /* (four angles at a time: the pose padded to G4, a multiple of 4; G angles written; mode
+   * 0: l, dl, dd an angle; 1: l; 2: the spring's slope term (a + b l) l', ab: a, b a row) */
+    const double *Ax = pose_g, *Ay = pose_g + G4, *dAx = pose_g + 2 * G4,
+                 *dAy = pose_g + 3 * G4, *cs = pose_g + 4 * G4, *sn = pose_g + 5 * G4;
+    for (long r = 0; r < n; r++) {
+        const double *g = pts + (size_t)r * NPT;
+        double *o = out + (size_t)r * G * (mode ? 1 : 3);
+        int ps = isfinite(g[0]) && isfinite(g[1]) && isfinite(g[2]) && isfinite(g[3]);
+        int pd = isfinite(g[4]) && isfinite(g[5]) && isfinite(g[6]) && isfinite(g[7]);
+        for (long k = 0; k < G4; k += VW) {
+            v4 c = ld4(cs + k), sv = ld4(sn + k), ax = ld4(Ax + k), ay = ld4(Ay + k);
+            v4 dx = ld4(dAx + k), dy = ld4(dAy + k), l = {NAN, NAN, NAN, NAN}, dl = l, dd = l;
+            if (ps) {
+                v4 qx = c * g[2] - sv * g[3], qy = sv * g[2] + c * g[3];
+                v4 rx = ax + qx - g[0], ry = ay + qy - g[1], ux = dx - qy, uy = dy + qx;
+                l = PG_SQRT(rx * rx + ry * ry);
+                dl = (rx * ux + ry * uy) / l;
+            }
+            if (pd) {
+                v4 qx = c * g[6] - sv * g[7], qy = sv * g[6] + c * g[7];
+                v4 rx = ax + qx - g[4], ry = ay + qy - g[5], ux = dx - qy, uy = dy + qx;
+                v4 w = rx * ux + ry * uy;
+                dd = w * w / (rx * rx + ry * ry);
+            }
+            if (mode == 0)
+                for (int q = 0; q < VW && k + q < G; q++) {
+                    o[3 * (k + q)] = l[q]; o[3 * (k + q) + 1] = dl[q];
+                    o[3 * (k + q) + 2] = dd[q];
+                }
+            else {
+                v4 x = mode == 1 ? l : (ab[2 * r] + ab[2 * r + 1] * l) * dl;
+                for (int q = 0; q < VW && k + q < G; q++) o[k + q] = x[q];
+            }
+        }
+    }
+}
+
+void sc_point_grid(const double *tab_meta, const double *pcc, long n, const double *pts,
+                   long G, const double *th, long per_row, long mode, const double *ab,
+                   double *out)
+{ /* (th: G angles shared by the rows, or n x G with per_row; mode, ab: point_grid_rows) */
+    long G4 = (G + VW - 1) / VW * VW; /* (padded to whole vectors) */
+    double *pose_g = calloc((size_t)(G4 > 0 ? G4 : 1) * P_USED, sizeof(double));
+    if (!pose_g) {
+        for (size_t k = 0; k < (size_t)n * G * (mode ? 1 : 3); k++) out[k] = NAN;
+        return;
+    }
+    int ncell = (int)tab_meta[0];
+    double lo = tab_meta[1], h = tab_meta[2];
+    for (long r = 0; r < (per_row ? n : 1); r++) {
+    for (long k = 0; k < G; k++) {
+        double x = (th[(size_t)r * G * (per_row != 0) + k] - lo) / h;
+        if (x < 0) x = 0;
+        if (x > ncell) x = ncell;
+        int i = (int)x;
+        if (i >= ncell) i = ncell - 1;
+        double s = x - i;
+        const double *q = pcc + (size_t)i * 4 * NPOSE;
+        for (int j = 0; j < P_USED; j++) pose_g[j * G4 + k] = PCUB(q, j, s);
+    }
+    for (long k = G; k < G4; k++) pose_g[4 * G4 + k] = 1.0; /* (a harmless padding) */
+    if (per_row)
+        point_grid_rows(pose_g, G4, G, 1, pts + (size_t)r * NPT, (int)mode,
+                        ab ? ab + 2 * r : NULL, out + (size_t)r * G * (mode ? 1 : 3));
+    }
+    if (!per_row) point_grid_rows(pose_g, G4, G, n, pts, (int)mode, ab, out);
+    free(pose_g);
+}
+
+/* the opening effort of rows with their own spring points (pts n x NPT, ab their affine law
+ * T = a + b l): per row, the largest (base[idx] + (a + b l) l') / tau over the grid th (G
+ * angles; base u x G: the other elements' slope and friction of the row's parameters, tau
+ * the tip's lever there), refined by the parabola through it and its neighbours -- as
+ * softclose.statics.opening_forces does for the table's spring */
+void sc_point_opening(const double *tab_meta, const double *pcc, long n, const double *pts,
+                      const double *ab, long G, const double *th, const double *base,
+                      const long *idx, const double *tau, double *out)
+{
+    double *buf = malloc(sizeof(double) * (size_t)(G > 0 ? G : 1));
+    if (!buf) { for (long r = 0; r < n; r++) out[r] = NAN; return; }
+    long G4 = (G + VW - 1) / VW * VW;
+    double *pose_g = calloc((size_t)(G4 > 0 ? G4 : 1) * P_USED, sizeof(double));
+    if (!pose_g) { free(buf); for (long r = 0; r < n; r++) out[r] = NAN; return; }
+    int ncell = (int)tab_meta[0];
+    double lo = tab_meta[1], h = tab_meta[2];
+    for (long k = 0; k < G; k++) {
+        double x = (th[k] - lo) / h;
+        if (x < 0) x = 0;
+        if (x > ncell) x = ncell;
+        int i = (int)x;
+        if (i >= ncell) i = ncell - 1;
+        double s = x - i;
+        const double *q = pcc + (size_t)i * 4 * NPOSE;
+        for (int j = 0; j < P_USED; j++) pose_g[j * G4 + k] = PCUB(q, j, s);
+    }
+    for (long k = G; k < G4; k++) pose_g[4 * G4 + k] = 1.0;
+    for (long r = 0; r < n; r++) {
+        point_grid_rows(pose_g, G4, G, 1, pts + (size_t)r * NPT, 2, ab + 2 * r, buf);
+        const double *bs = base + (size_t)idx[r] * G;
+        long j = 0;
+        double best = -INFINITY;
+        for (long k = 0; k < G; k++) {
+            buf[k] = (bs[k] + buf[k]) / tau[k];
+            if (k == 0 || buf[k] > best) { best = buf[k]; j = k; } /* (the first largest) */
+        }
+        if (j > 0 && j < G - 1) {
+            double y0 = buf[j - 1], y1 = buf[j], y2 = buf[j + 1], den = y0 - 2 * y1 + y2;
+            double peak = den < 0 ? y1 - (y2 - y0) * (y2 - y0) / (8 * den) : y1;
+            if (peak > best) best = peak;
+        }
+        out[r] = best;
+    }
+    free(pose_g);
+    free(buf);
 }
 
 int sc_nout(void) { return NOUT; }

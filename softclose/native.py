@@ -8,7 +8,9 @@ Design rows
 :func:`run_strokes` integrates one stroke per row of a float array (:data:`DESIGN_COLUMNS`)::
 
     the parameter vector p (:data:`softclose.elements.PARAMS`: k (N/m), l0 (m), c (N s/m),
-    c_rot (N m s/rad), then the elements' added since), energy_tol (J)[, lid_mass (kg)]
+    c_rot (N m s/rad), then the elements' added since), energy_tol (J)[, lid_mass (kg)
+    [, the attachment points (m): spring_anchor_x, _y, lid_e_x, _y, dashpot_anchor_x, _y,
+    dashpot_lid_x, _y]]
 
 The kernel takes p in SI (an angle given in degrees in radians: :func:`kernel_rows`
 converts); its laws are the registry's (:mod:`softclose.elements`), stated once in the
@@ -27,6 +29,23 @@ I_lid = m L^2 / 12 when it is derived, or fixed when ``mass.inertia_lid`` is con
 a row's coefficients are ``c(m0) + (m - m0) dc/dm`` with dc/dm from
 :attr:`~softclose.table.CoefficientTable.mass_derivative`: 10^5 Monte Carlo samples of ``mass.lid`` need no
 model rebuild. A row at the table's mass never reads that table (bit-identical results).
+
+The point columns (:data:`POINT_COLUMNS`; after ``lid_mass``, which must then be present,
+NaN for the table's) give a row its own attachment points: the spring's anchor D (world) and
+lid point E (lid frame, from pin A), the dashpot's anchor F and lid point H. The spring's
+four, or the dashpot's, are NaN for the table's own points (:func:`point_rows` turns a row's
+points into this form: a partly given set is completed from the table's config, and a set
+equal to the table's own becomes NaN, so such a row gives the same bits as without the
+columns). Every lid point is P = A(theta) + R(theta) p, so from the table's pose pieces
+(:attr:`~softclose.table.CoefficientTable.pose`: the crank pin A, its slope, cos, sin, exact
+at the nodes) each stroke builds its own cubic pieces of the spring's l, dl/dtheta and the
+dashpot's (dl_d/dtheta)^2 on the cells it visits, from the node values and slopes, as a table
+built at those points builds its own: a sample over placements needs no model per value, and
+agrees with a model at those points to the rounding of the node values (0 to 4e-13 relative
+measured). The early exit stays exact for such rows (the ranges of its own pieces; the
+spring-length extremes searched on them: the kernel's section PER-ROW ATTACHMENT POINTS).
+A stroke at a row's points that takes the spring below 2 mm is reported as invalid
+(:data:`softclose.simulate.MIN_POINT_LENGTH`).
 
 Early exit -- why it is exact
 -----------------------------
@@ -99,7 +118,7 @@ from . import elements
 from .dynamics import COEFFS, EXTRA_COEFFS
 from .errors import ConfigError, NumericalError
 from .integrators import Method
-from .table import NX, CoefficientTable
+from .table import NPOSE, NX, POINT_NAMES, POSE, CoefficientTable
 
 #: output columns of the kernel, in order
 OUT_FIELDS = ("status", "closing_time", "impact_theta_dot", "impact_tip_speed",
@@ -110,18 +129,23 @@ STATUS = {0: "closed", 1: "not closed", 2: "unstable", 3: "left the tabulated ra
           4: "non-finite", 5: "implicit solve failed"}
 #: ``stop_reason`` codes: why a stroke does not close (0: it closed, failed, or is undecided)
 STOP_REASONS = {0: "", 1: "energy below the barrier", 2: "held open", 3: "held by friction"}
-#: the design-row columns, in order: the parameter vector (SI), then energy_tol and the
-#: optional lid_mass
+#: the optional point columns after lid_mass (a row's own attachment points, m; NaN: the
+#: table's): D, E, F, H of :data:`softclose.table.POINT_NAMES`, x and y each
+POINT_COLUMNS = tuple(f"{name}_{xy}" for name in POINT_NAMES for xy in "xy")
+NPT = len(POINT_COLUMNS)
+#: the design-row columns, in order: the parameter vector (SI), then energy_tol, the
+#: optional lid_mass and the optional point columns
 DESIGN_COLUMNS = tuple(q.name.removesuffix("_deg") for q in elements.PARAMS) + (
-    "energy_tol", "lid_mass")
+    "energy_tol", "lid_mass") + POINT_COLUMNS
 #: the SI factor of each parameter column (an angle given in degrees: pi/180)
 _SI = np.array([q.si for q in elements.PARAMS])
 #: version of the exported C signatures; a built extension reporting another is not used
-KERNEL_ABI = 4
+KERNEL_ABI = 5
 #: every layout constant this module shares with the kernel (``sc_layout()`` must equal it)
 LAYOUT = (f"abi={KERNEL_ABI};meta=ncell,lo,h,m0,{','.join(elements.KERNEL_META)};"
           f"cc={','.join(COEFFS)};mass={','.join(COEFFS[:4])};"
           f"xcc={','.join(EXTRA_COEFFS + ('-',) * (NX - len(EXTRA_COEFFS)))};"
+          f"pose={','.join(POSE + ('-',) * (NPOSE - len(POSE)))};"
           f"row={','.join(DESIGN_COLUMNS)};out={','.join(OUT_FIELDS)};nrng=18")
 
 _lib = None
@@ -187,13 +211,19 @@ def load():
         lib = ctypes.CDLL(str(path))
         dp, lp = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_long)
         d, l = ctypes.c_double, ctypes.c_long
-        lib.sc_strokes.argtypes = [dp, dp, dp, dp, dp, dp, d, d, d, d, l, l, dp, l, dp]
+        lib.sc_strokes.argtypes = [dp, dp, dp, dp, dp, dp, dp, d, d, d, d, l, l, dp, l, dp]
         lib.sc_strokes.restype = None
-        lib.sc_stroke_traj.argtypes = [dp, dp, dp, dp, dp, dp, d, d, d, d, l, dp, l, dp, dp, l,
-                                       lp]
+        lib.sc_stroke_traj.argtypes = [dp, dp, dp, dp, dp, dp, dp, d, d, d, d, l, dp, l, dp, dp,
+                                       l, lp]
         lib.sc_stroke_traj.restype = None
-        lib.sc_step.argtypes = [dp, dp, dp, dp, dp, dp, d, dp, dp]
+        lib.sc_step.argtypes = [dp, dp, dp, dp, dp, dp, dp, d, dp, dp]
         lib.sc_step.restype = ctypes.c_int
+        lib.sc_point_columns.argtypes = [dp, dp, dp, l, dp, l, dp, l, dp]
+        lib.sc_point_columns.restype = None
+        lib.sc_point_grid.argtypes = [dp, dp, l, dp, l, dp, l, l, dp, dp]
+        lib.sc_point_grid.restype = None
+        lib.sc_point_opening.argtypes = [dp, dp, l, dp, dp, l, dp, dp, lp, dp, dp]
+        lib.sc_point_opening.restype = None
         check_layout(lib)
         _lib = lib
         return lib
@@ -247,9 +277,9 @@ def _lid_masses(designs: np.ndarray, table: CoefficientTable) -> np.ndarray | No
     """Validate the optional lid-mass column; the derivative table if any row needs it."""
     if designs.shape[1] == _NP + 1:
         return None
-    if designs.shape[1] != _NP + 2:
-        raise ConfigError(f"design rows: expected {_NP + 1} or {_NP + 2} columns "
-                          f"({', '.join(DESIGN_COLUMNS)}), got {designs.shape[1]}")
+    if designs.shape[1] not in (_NP + 2, _NP + 2 + NPT):
+        raise ConfigError(f"design rows: expected {_NP + 1}, {_NP + 2} or {_NP + 2 + NPT} "
+                          f"columns ({', '.join(DESIGN_COLUMNS)}), got {designs.shape[1]}")
     m = designs[:, _NP + 1]
     given = ~np.isnan(m)
     if np.any(given & ~(np.isfinite(m) & (m > 0))):
@@ -258,6 +288,137 @@ def _lid_masses(designs: np.ndarray, table: CoefficientTable) -> np.ndarray | No
     if np.any(given & (m != table.lid_mass)):
         return table.mass_derivative_kernel
     return None
+
+
+#: the placement keys of the point columns, in order (``geometry.spring_anchor[0]`` ...)
+POINT_KEYS = tuple(f"geometry.{name}[{i}]" for name in POINT_NAMES for i in (0, 1))
+_POINT_INDEX = {**{k: j for j, k in enumerate(POINT_KEYS)},
+                **{k.removeprefix("geometry."): j for j, k in enumerate(POINT_KEYS)}}
+
+
+def point_rows(table: CoefficientTable, points, n: int) -> np.ndarray | None:
+    """A batch's own attachment points as the kernel's point columns (n, NPT), or None
+    when no row has points other than the table's.
+
+    ``points``: None; an array (n, 8) or (8,) in the order of :data:`POINT_KEYS` (m; NaN:
+    the table's own component); or a mapping {placement key (``geometry.lid_e[0]`` or
+    ``lid_e[0]``): a value or one per row}. A spring (or dashpot) whose points are partly
+    given takes the others from the table's config; one whose points are the table's own
+    becomes NaN (it reads the table's columns: the same bits as without points). A given
+    component must be a finite number within the key's range (ConfigError naming it)."""
+    if points is None:
+        return None
+    if hasattr(points, "keys"):
+        X = np.full((n, NPT), np.nan)
+        for k, v in points.items():
+            if k not in _POINT_INDEX:
+                raise ConfigError(f"points: {k} is not an attachment point's component "
+                                  f"(one of {', '.join(POINT_KEYS)})")
+            X[:, _POINT_INDEX[k]] = np.broadcast_to(np.asarray(v, float), (n,))
+    else:
+        X = np.array(np.broadcast_to(np.asarray(points, float), (n, NPT)))
+    from .config import RANGES
+    for j, k in enumerate(POINT_KEYS):
+        lo, hi, unit = RANGES[k.split("[")[0]]
+        x = X[:, j]
+        bad = ~np.isnan(x) & ~((x >= lo) & (x <= hi))
+        if bad.any():
+            raise ConfigError(f"{k}: must be a finite number of {unit} within [{lo:g}, {hi:g}], "
+                              f"got {x[bad][0]}")
+    own = table.own_points
+    for g in (slice(0, 4), slice(4, 8)):
+        blk = X[:, g]
+        given = ~np.isnan(blk)
+        blk = np.where(given, blk, own[g])
+        blk[~given.any(axis=1) | (blk == own[g]).all(axis=1)] = np.nan
+        X[:, g] = blk
+    return X if not np.isnan(X).all() else None
+
+
+def point_columns(table: CoefficientTable, theta, points) -> np.ndarray:
+    """The spring's l, dl and the dashpot's dd of rows with their own points (``points``
+    (n, NPT), the kernel's convention) at ``theta`` -- a scalar, one per row (n,), a grid per
+    row (n, G) or a grid shared by the rows (1, G) -- from the rows' own pieces as the
+    kernel's strokes read them: array (n, G, 3) (G = 1 for a scalar or (n,)), NaN where a
+    row has the table's own (or outside the table). Rows split across threads."""
+    lib = load()
+    pts = np.ascontiguousarray(np.atleast_2d(np.asarray(points, float)))
+    n = len(pts)
+    th = np.asarray(theta, float)
+    shared = th.ndim == 0 or (th.ndim == 2 and th.shape[0] == 1 and n != 1)
+    th2 = np.ascontiguousarray(th.reshape(1, -1) if th.ndim == 0 else
+                               (th.reshape(n, -1) if not shared else th))
+    G = th2.shape[1]
+    out = np.empty((n, G, 3))
+    pcc, cc = table.pose_kernel, table.cc_kernel
+
+    def work(a, b):
+        lib.sc_point_columns(_ptr(table.meta), _ptr(cc), _ptr(pcc), b - a,
+                             _ptr(pts[a:b]), G, _ptr(th2 if shared else th2[a:b]),
+                             int(shared), _ptr(out[a:b]))
+    if n * G < 20000:
+        work(0, n)
+    else:
+        import threading
+        half = n // 2
+        t = threading.Thread(target=work, args=(half, n))
+        t.start()
+        work(0, half)
+        t.join()
+    return out
+
+
+def point_grid(table: CoefficientTable, theta, points, what: str = "all",
+               ab=None) -> np.ndarray:
+    """:func:`point_columns` on a grid of angles -- (G,) shared by the rows, or (n, G) one
+    per row -- from the pose pieces interpolated there rather than the rows' own pieces
+    (to the tables' interpolation error, ~1e-10 relative, of them; no piece is built, so a
+    grid over a whole stroke costs a few ns an angle): for the statics that scan a stroke
+    (the opening effort, where a spring leaves its valid range). Array (n, G, 3); with
+    ``what="l"`` the spring's length alone (n, G); with ``what="slope"`` its term of the
+    slope dV/dtheta, (a + b l) l' with ``ab`` (n, 2) the rows' affine law T = a + b l."""
+    lib = load()
+    pts = np.ascontiguousarray(np.atleast_2d(np.asarray(points, float)))
+    n = len(pts)
+    th = np.ascontiguousarray(np.asarray(theta, float))
+    per_row = th.ndim == 2
+    G = th.shape[-1]
+    mode = {"all": 0, "l": 1, "slope": 2}[what]
+    out = np.empty((n, G, 3) if mode == 0 else (n, G))
+    ab = None if ab is None else np.ascontiguousarray(ab, float)
+    pcc = table.pose_kernel
+    lib.sc_point_grid(_ptr(table.meta), _ptr(pcc), n, _ptr(pts), G, _ptr(th), int(per_row),
+                      mode, _ptr(ab), _ptr(out))
+    return out
+
+
+def point_opening(table: CoefficientTable, theta, points, ab, base, idx, tau) -> np.ndarray:
+    """The opening effort of rows with their own spring points (:func:`point_grid`'s lengths
+    on the grid ``theta`` (G,)): per row, the largest (base[idx] + (a + b l) l') / tau,
+    refined by the parabola through it and its neighbours (``ab`` (n, 2): the spring's affine
+    law of each row; ``base`` (u, G): the slope of the other elements and friction of the
+    rows' parameter sets, ``idx`` (n,) which; ``tau`` (G,): the tip's lever)."""
+    lib = load()
+    pts = np.ascontiguousarray(np.atleast_2d(np.asarray(points, float)))
+    n = len(pts)
+    th = np.ascontiguousarray(theta, float)
+    ab = np.ascontiguousarray(ab, float)
+    base = np.ascontiguousarray(base, float)
+    idx = np.ascontiguousarray(idx, np.int64)
+    tau = np.ascontiguousarray(tau, float)
+    out = np.empty(n)
+    lib.sc_point_opening(_ptr(table.meta), _ptr(table.pose_kernel), n, _ptr(pts), _ptr(ab),
+                         len(th), _ptr(th), _ptr(base),
+                         idx.ctypes.data_as(ctypes.POINTER(ctypes.c_long)), _ptr(tau),
+                         _ptr(out))
+    return out
+
+
+def _pose(designs: np.ndarray, table: CoefficientTable) -> np.ndarray | None:
+    """The pose table in the kernel's layout if any row has its own points, else None."""
+    if designs.shape[1] != _NP + 2 + NPT or np.isnan(designs[:, _NP + 2:]).all():
+        return None
+    return table.pose_kernel
 
 
 def run_strokes(table: CoefficientTable, method: Method, step: float, t_max: float,
@@ -273,6 +434,7 @@ def run_strokes(table: CoefficientTable, method: Method, step: float, t_max: flo
     designs = np.ascontiguousarray(np.atleast_2d(designs), float)
     dcc = _lid_masses(designs, table)
     xcc = _extra(designs, table)
+    pcc = _pose(designs, table)
     cc, ranges = table.cc_kernel, table.cell_ranges      # held here while C reads them
     n, ncol = designs.shape
     out = np.empty((n, len(OUT_FIELDS)))
@@ -283,7 +445,7 @@ def run_strokes(table: CoefficientTable, method: Method, step: float, t_max: flo
 
     def work(a, b):
         lib.sc_strokes(_ptr(table.meta), _ptr(cc), _ptr(dcc), _ptr(xcc), _ptr(ranges),
-                       _ptr(tab), step, t_max, theta0, theta_closed, b - a, ncol,
+                       _ptr(pcc), _ptr(tab), step, t_max, theta0, theta_closed, b - a, ncol,
                        _ptr(designs[a:b]), int(early_exit), _ptr(out[a:b]))
 
     if threads == 1:
@@ -335,6 +497,7 @@ def run_stroke_trajectory(table, method, step, t_max, theta0, theta_closed, desi
     design = np.ascontiguousarray(np.atleast_1d(design), float)
     dcc = _lid_masses(design[None, :], table)
     xcc = _extra(design[None, :], table)
+    pcc = _pose(design[None, :], table)
     cc, ranges = table.cc_kernel, table.cell_ranges
     cap = int(math.ceil(t_max / step)) + 3
     traj = np.empty((cap, 3))
@@ -342,24 +505,28 @@ def run_stroke_trajectory(table, method, step, t_max, theta0, theta_closed, desi
     nt = ctypes.c_long(0)
     tab = method.packed()
     lib.sc_stroke_traj(_ptr(table.meta), _ptr(cc), _ptr(dcc), _ptr(xcc), _ptr(ranges),
-                       _ptr(tab), step, t_max, theta0, theta_closed, len(design), _ptr(design),
+                       _ptr(pcc), _ptr(tab), step, t_max, theta0, theta_closed, len(design),
+                       _ptr(design),
                        int(early_exit), _ptr(out), _ptr(traj), cap, ctypes.byref(nt))
     return out, traj[:nt.value].copy()
 
 
-def kernel_step(table, method, p, h, x0, lid_mass=None) -> np.ndarray:
+def kernel_step(table, method, p, h, x0, lid_mass=None, points=None) -> np.ndarray:
     """One step of the kernel (for tests); ``p`` the parameter vector (config units),
-    ``lid_mass`` None for the table's own."""
+    ``lid_mass`` None for the table's own, ``points`` as :func:`point_rows` takes them."""
     lib = load()
     x1 = np.empty(2)
     mass = np.nan if lid_mass is None else float(lid_mass)
     from .problem import as_params
-    d = np.ascontiguousarray(np.r_[kernel_rows(as_params(p)), 0.0, mass], float)
+    pts = point_rows(table, points, 1)
+    pts = np.full(NPT, np.nan) if pts is None else pts[0]
+    d = np.ascontiguousarray(np.r_[kernel_rows(as_params(p)), 0.0, mass, pts], float)
     dcc = _lid_masses(d[None, :], table)
     xcc = _extra(d[None, :], table)
+    pcc = _pose(d[None, :], table)
     cc, tab, x0 = table.cc_kernel, method.packed(), np.ascontiguousarray(x0, float)
-    st = lib.sc_step(_ptr(table.meta), _ptr(cc), _ptr(dcc), _ptr(xcc), _ptr(tab), _ptr(d), h,
-                     _ptr(x0), _ptr(x1))
+    st = lib.sc_step(_ptr(table.meta), _ptr(cc), _ptr(dcc), _ptr(xcc), _ptr(pcc), _ptr(tab),
+                     _ptr(d), h, _ptr(x0), _ptr(x1))
     if st:
         raise NumericalError(f"kernel step failed: {STATUS.get(st, st)}")
     return x1

@@ -38,6 +38,13 @@ TABLE_TOL = 1e-7
 STIFF_H_LAMBDA = 1.0
 #: the smallest step the config admits (simulate.step): no recommendation goes below it
 MIN_STEP = RANGES["simulate.step"][0]
+#: the shortest spring length a stroke at a row's own points may reach (m; shorter: the row
+#: is reported as invalid, Simulator.run_batch's ``points``). Near a lid point passing by its
+#: anchor at a distance d, l is sqrt(d^2 + v^2 t^2): a cubic piece over a cell (the lid point
+#: moves v h ~ 0.1 mm) is off by ~(v h / d)^4 / 384 relative, 1.6e-8 at d = 2 mm, within
+#: TABLE_TOL. A table built at such points refines its cells; a row's own pieces do not, so
+#: shorter strokes are refused (no spring one can buy is 2 mm long)
+MIN_POINT_LENGTH = 2e-3
 
 
 def amplification(method: Method, hJ: np.ndarray) -> np.ndarray:
@@ -101,6 +108,42 @@ def _table(model: LidModel, cached: bool) -> CoefficientTable:
     return table
 
 
+#: rows of a batch's blocks: the statics of one while the kernel integrates the next
+PIPE_ROWS = 4096
+
+
+def _pipeline(kernel, statics_of, bounds) -> list:
+    """[statics_of(a, b, kernel(a, b)) for each block [a, b) of ``bounds``], the kernel of
+    the next block running in a thread (its C code releases the GIL) while this one's
+    statics run here."""
+    import threading
+    blocks = list(zip(bounds[:-1], bounds[1:]))
+    if len(blocks) == 1:
+        (a, b), = blocks
+        return [statics_of(a, b, kernel(a, b))]
+    box: dict = {}
+
+    def start(j):
+        def work():
+            try:
+                box[j] = kernel(*blocks[j])
+            except BaseException as exc:   # noqa: BLE001  (raised below, in this thread)
+                box[j] = exc
+        t = threading.Thread(target=work, daemon=True)
+        t.start()
+        return t
+    out, t = [], start(0)
+    for j, (a, b) in enumerate(blocks):
+        t.join()
+        got = box.pop(j)
+        if isinstance(got, BaseException):
+            raise got
+        if j + 1 < len(blocks):
+            t = start(j + 1)
+        out.append(statics_of(a, b, got))
+    return out
+
+
 class Simulator:
     """Strokes of one config's geometry with one fixed-step method."""
 
@@ -123,16 +166,18 @@ class Simulator:
                 "(geometry, stroke.theta0_deg, stroke.theta_closed_deg)")
 
     # -- batches ---------------------------------------------------------------------
-    def energy_tol(self, P: np.ndarray, lid_mass=None) -> np.ndarray:
-        """Energy rise that flags an unstable stroke: 5 % of the energy to be released."""
+    def energy_tol(self, P: np.ndarray, lid_mass=None, points=None) -> np.ndarray:
+        """Energy rise that flags an unstable stroke: 5 % of the energy to be released
+        (``points``: the rows' own attachment points, the kernel's convention)."""
         st = self.cfg.stroke
-        E0 = statics.potential_energy(self.table, st.theta0, P, lid_mass)
-        Vc = statics.potential_energy(self.table, st.theta_closed, P, lid_mass)
+        E0 = statics.potential_energy(self.table, st.theta0, P, lid_mass, points)
+        Vc = statics.potential_energy(self.table, st.theta_closed, P, lid_mass, points)
         scale = np.maximum(np.abs(E0 - Vc), 1e-6 * (np.abs(E0) + np.abs(Vc)) + 1e-12)
         return 0.05 * scale
 
     def run_batch(self, P, threads: int | None = None, lid_mass=None,
-                  early_exit: bool = True, explain: bool = True) -> dict:
+                  early_exit: bool = True, explain: bool = True, points=None,
+                  opening: bool = False) -> dict:
         """Metrics for rows of P (the parameter vector, :data:`softclose.problem.PARAM_KEYS`):
         a dict of arrays (the metric keys,
         ``status`` as :class:`~softclose.stroke.StrokeStatus` codes, ``reason`` why an open
@@ -144,31 +189,91 @@ class Simulator:
         longer change (see :mod:`softclose.native`); the metrics are the same either way.
         ``explain=False``: a stroke that takes an element out of its valid range says only
         that, not where (:func:`softclose.statics.out_of_range`; faster for large screens).
+
+        ``points`` gives rows their own attachment points without a model per point: an
+        array (n, 8) or (8,) of ``geometry.spring_anchor[0]``, ``[1]``, ``lid_e[0]``, ``[1]``,
+        ``dashpot_anchor[0]``, ``[1]``, ``dashpot_lid[0]``, ``[1]`` (m; NaN: the config's), or
+        a mapping {placement key: a value or one per row} (:func:`softclose.native.point_rows`).
+        Every number of such a row -- the stroke, the spring's extremes and valid range, the
+        holding moment, energy_tol -- is that of a simulator of the config with those points
+        (each row's own pieces of the lengths are those of a table at its points, to the
+        rounding of their node values); a row at the config's own points gives the same bits
+        as without them. A row whose spring comes shorter than MIN_POINT_LENGTH on the stroke
+        is OUT_OF_RANGE with that reason; one whose dashpot's length vanishes stops as not
+        finite (:meth:`diagnose` says why).
+
+        ``opening=True`` adds ``opening_force`` (:meth:`opening_forces`). A large batch runs
+        in blocks of PIPE_ROWS, the statics of one block (reasons, valid ranges, holding
+        moments, opening efforts) while the kernel's threads integrate the next: the same
+        numbers, a row's depend on that row alone.
         """
         P = as_params(np.atleast_2d(np.asarray(P, float)))
         st = self.cfg.stroke
         m = None if lid_mass is None else \
             np.broadcast_to(np.asarray(lid_mass, float), (len(P),)).copy()
-        cols = [native.kernel_rows(P), self.energy_tol(P, m)] + ([m] if m is not None else [])
-        out = native.run_strokes(self.table, self.method, self.step, st.t_max, st.theta0,
-                                 st.theta_closed, np.column_stack(cols), threads,
-                                 early_exit=early_exit)
-        res = {name: out[:, i] for i, name in enumerate(native.OUT_FIELDS)}
-        res["status"] = out[:, 0].astype(int)
-        res["reason"] = native.not_closed_reasons(out)
-        self._check_ranges(P, res, explain)
-        res["closed"] = res["status"] == StrokeStatus.CLOSED
-        res["holding_moment"] = self.holding_moments(P, m)
+        X = native.point_rows(self.table, points, len(P))
+        cols = [native.kernel_rows(P), self.energy_tol(P, m, X)]
+        if m is not None or X is not None:
+            cols.append(np.full(len(P), np.nan) if m is None else m)
+        if X is not None:
+            cols.append(X)
+        D = np.column_stack(cols)
+        n = len(P)
+
+        def kernel(a, b):
+            return native.run_strokes(self.table, self.method, self.step, st.t_max, st.theta0,
+                                      st.theta_closed, D[a:b], threads, early_exit=early_exit)
+
+        def statics_of(a, b, out):
+            r = slice(a, b)
+            Xr, mr = None if X is None else X[r], None if m is None else m[r]
+            res = {name: out[:, i] for i, name in enumerate(native.OUT_FIELDS)}
+            res["status"] = out[:, 0].astype(int)
+            res["reason"] = native.not_closed_reasons(out)
+            if Xr is not None:
+                self._check_lengths(Xr, res)
+            self._check_ranges(P[r], res, explain, Xr)
+            res["closed"] = res["status"] == StrokeStatus.CLOSED
+            res["holding_moment"] = self.holding_moments(P[r], mr, Xr)
+            if opening:
+                res["opening_force"] = self.opening_forces(P[r], mr, Xr)
+            return res
+
+        bounds = list(range(0, n, PIPE_ROWS)) + [n] if n > 2 * PIPE_ROWS else [0, n]
+        parts = _pipeline(kernel, statics_of, bounds)
+        res = parts[0] if len(parts) == 1 else \
+            {k: np.concatenate([q[k] for q in parts]) for k in parts[0]}
+        if X is not None:
+            res["points"] = X
         return res
 
-    def _check_ranges(self, P, res: dict, explain: bool = True) -> None:
+    def _check_lengths(self, X, res: dict) -> None:
+        """Rows with their own spring points whose stroke takes the spring's length below
+        MIN_POINT_LENGTH (its lid point passes by or through its anchor) become OUT_OF_RANGE
+        with that reason; a length that vanishes exactly has already stopped the stroke (not
+        finite), which :meth:`diagnose` explains."""
+        ok = np.isin(res["status"], (StrokeStatus.CLOSED, StrokeStatus.NOT_CLOSED))
+        with np.errstate(invalid="ignore"):
+            bad = np.flatnonzero(ok & ~np.isnan(X[:, 0])
+                                 & ~(res["min_spring_length"] >= MIN_POINT_LENGTH))
+        for i in bad:
+            res["status"][i] = StrokeStatus.OUT_OF_RANGE
+            res["reason"][i] = (f"geometry.spring_anchor and geometry.lid_e: the spring's "
+                                f"length vanishes on the stroke (its lid point passes within "
+                                f"{max(res['min_spring_length'][i], 0.0) * 1e3:.2g} mm of its "
+                                f"anchor, below {MIN_POINT_LENGTH * 1e3:g} mm); move either "
+                                "point")
+
+    def _check_ranges(self, P, res: dict, explain: bool = True, points=None) -> None:
         """Strokes that take an element outside its valid range become OUT_OF_RANGE, their
         reason saying where and by how much (:func:`softclose.statics.out_of_range`)."""
         ok = np.isin(res["status"], (StrokeStatus.CLOSED, StrokeStatus.NOT_CLOSED))
         if not ok.any():
             return
         idx = np.flatnonzero(ok)
-        _, why = statics.out_of_range(statics.table_coordinate(self.table), self.cfg, P[idx],
+        coord = statics.table_coordinate(self.table, None if points is None else
+                                         np.asarray(points)[idx])
+        _, why = statics.out_of_range(coord, self.cfg, P[idx],
                                       {k: np.asarray(v)[idx] for k, v in res.items()
                                        if k in native.OUT_FIELDS}, explain)
         bad = why != ""
@@ -176,15 +281,19 @@ class Simulator:
             res["status"][idx[bad]] = StrokeStatus.OUT_OF_RANGE
             res["reason"][idx[bad]] = why[bad]
 
-    def opening_forces(self, P: np.ndarray, lid_mass=None) -> np.ndarray:
+    def opening_forces(self, P: np.ndarray, lid_mass=None, points=None) -> np.ndarray:
         """The opening effort (N) of rows of P (:func:`softclose.statics.opening_forces`): not
-        part of :meth:`run_batch` (statics, which a search of designs does not need)."""
-        return statics.opening_forces(self.table, self.cfg, as_params(P), lid_mass)
+        part of :meth:`run_batch` (statics, which a search of designs does not need);
+        ``points`` as :meth:`run_batch` takes them."""
+        P = as_params(np.atleast_2d(np.asarray(P, float)))
+        return statics.opening_forces(self.table, self.cfg, P, lid_mass,
+                                      native.point_rows(self.table, points, len(P)))
 
-    def holding_moments(self, P: np.ndarray, lid_mass=None) -> np.ndarray:
-        """dV/dtheta at theta_closed (N m) for rows of P."""
-        return statics.holding_moments(self.table, self.cfg.stroke.theta_closed, as_params(P),
-                                       lid_mass)
+    def holding_moments(self, P: np.ndarray, lid_mass=None, points=None) -> np.ndarray:
+        """dV/dtheta at theta_closed (N m) for rows of P (``points`` as :meth:`run_batch`)."""
+        P = as_params(np.atleast_2d(np.asarray(P, float)))
+        return statics.holding_moments(self.table, self.cfg.stroke.theta_closed, P, lid_mass,
+                                       native.point_rows(self.table, points, len(P)))
 
     # -- one stroke ------------------------------------------------------------------
     def run(self, p=None, trajectory: bool = False, estimate_error: bool = True) -> StrokeResult:
@@ -321,42 +430,50 @@ class Simulator:
                          f"{where}")
         return est, None
 
-    def _jacobians(self, p, lid_mass=None):
+    def _jacobians(self, p, lid_mass=None, points=None):
         """Linearised (theta, theta') Jacobian entries at rest along the stroke (at
-        ``lid_mass``, kg; None: the table's own)."""
+        ``lid_mass``, kg; None: the table's own; ``points``: the design's own, as
+        :meth:`run_batch` takes them)."""
         th = np.linspace(self.cfg.stroke.theta_closed, self.cfg.stroke.theta0, 41)
-        return statics.rest_jacobian(self.table, th, p, lid_mass)
+        X = native.point_rows(self.table, points, 1)
+        return statics.rest_jacobian(self.table, th, p, lid_mass, None if X is None else X[0])
 
-    def max_rate(self, p, lid_mass=None) -> float:
+    def max_rate(self, p, lid_mass=None, points=None) -> float:
         """max |lambda| of the linearised stroke (1/s): what limits an explicit step
         (inf when the linearisation overflows)."""
-        a, b = self._jacobians(as_params(p), lid_mass)
+        a, b = self._jacobians(as_params(p), lid_mass, points)
         with np.errstate(over="ignore", invalid="ignore"):
             disc = np.sqrt((b * b + 4 * a).astype(complex))
             lam = np.abs(np.r_[(b + disc) / 2, (b - disc) / 2])
         return float(np.max(lam)) if np.all(np.isfinite(lam)) else math.inf
 
-    def diagnose(self, status: StrokeStatus, p, lid_mass=None) -> str:
+    def diagnose(self, status: StrokeStatus, p, lid_mass=None, points=None) -> str:
         """A one-line report of why a stroke failed and what to change (``lid_mass``: the
-        stroke ran at that lid mass, kg, through the table's lid-mass column)."""
+        stroke ran at that lid mass, kg, through the table's lid-mass column; ``points``:
+        at its own attachment points, as :meth:`run_batch` takes them)."""
         m, h = self.method, self.step
         st = self.cfg.stroke
         status = StrokeStatus(status)
         p = as_params(p)
         if lid_mass == self.table.lid_mass:
             lid_mass = None
+        X = native.point_rows(self.table, points, 1)
+        if status is StrokeStatus.NON_FINITE and X is not None:
+            why = self.vanishing_length(X[0])
+            if why:
+                return why
         a0 = 0.0   # theta'' at release: the model's, or at another lid mass the table's
         if status is StrokeStatus.LEFT_RANGE:
-            a0 = (self.model.theta_ddot(st.theta0, 0.0, p) if lid_mass is None else
-                  float(statics.rest_theta_ddot(self.table, st.theta0, np.asarray(p)[None, :],
-                                                lid_mass)[0]))
+            a0 = (self.model.theta_ddot(st.theta0, 0.0, p) if lid_mass is None and X is None
+                  else float(statics.rest_theta_ddot(self.table, st.theta0,
+                                                     np.asarray(p)[None, :], lid_mass, X)[0]))
         if a0 > 0:
             return (f"the lid does not close: released at stroke.theta0_deg = {st.theta0_deg} deg "
                     f"it is pushed open (theta'' = {a0:.4g} "
                     "rad/s^2 > 0 at release) and swings away from the rim; lower theta0_deg or "
                     "change the spring (spring_k, spring_rest_length)")
         if not status.ok:
-            h_ok = self.stable_step(p, lid_mass)
+            h_ok = self.stable_step(p, lid_mass, X)
             if h_ok >= h:  # linearly stable: the step is too coarse for the stroke itself
                 return (f"{m.name} at step {h:g} s cannot integrate this design ({status}): the "
                         f"step is too coarse to resolve the stroke; use a simulate.step at least "
@@ -381,10 +498,36 @@ class Simulator:
                     f"{hint}{alt}")
         return status.text
 
-    def stable_step(self, p, lid_mass=None) -> float:
+    def vanishing_length(self, points) -> str:
+        """Why a row's own attachment points (one row of the kernel's convention) make a
+        length vanish on the tabulated range -- its lid point passes through its anchor,
+        where the length has no slope -- or "" (the shortest length on a fine grid, against
+        the scale of the linkage)."""
+        th = np.linspace(self.table.lo, self.table.hi, 20 * self.table.ncell + 1)
+        X = np.asarray(points, float).reshape(1, -1)
+        A = self.table.pose_at(th)
+        scale = 1e-6 * max(self.cfg.geometry.crank_oa, self.cfg.geometry.crank_bc)
+        for name, (blk, _), key in (("spring", statics.POINT_BLOCKS["spring"],
+                                     "geometry.spring_anchor and geometry.lid_e"),
+                                    ("dashpot", statics.POINT_BLOCKS["dashpot"],
+                                     "geometry.dashpot_anchor and geometry.dashpot_lid")):
+            if np.isnan(X[0, blk.start]):
+                continue
+            g = X[0, blk]
+            rx = A[:, 0] + A[:, 4] * g[2] - A[:, 5] * g[3] - g[0]
+            ry = A[:, 1] + A[:, 5] * g[2] + A[:, 4] * g[3] - g[1]
+            l = np.hypot(rx, ry)
+            j = int(np.argmin(l))
+            if not (l[j] > scale):
+                return (f"{key}: the {name}'s length vanishes at theta = "
+                        f"{math.degrees(th[j]):.1f} deg (its lid point passes through its "
+                        f"anchor, {l[j] * 1e3:.2g} mm); move either point")
+        return ""
+
+    def stable_step(self, p, lid_mass=None, points=None) -> float:
         """Largest step at which the linearised stroke is stable (bisection on the step);
         0.0 when none down to 1e-12 s is, or the linearisation is not finite."""
-        f_th, f_v = self._jacobians(as_params(p), lid_mass)
+        f_th, f_v = self._jacobians(as_params(p), lid_mass, points)
         if not (np.all(np.isfinite(f_th)) and np.all(np.isfinite(f_v))):
             return 0.0
         Js = [np.array([[0.0, 1.0], [a, b]]) for a, b in zip(f_th, f_v)]

@@ -24,6 +24,14 @@ from .errors import NumericalError
 
 #: element columns per row of the extra table (the kernel's NX: its columns, then zeros)
 NX = 4
+#: the pose table's columns (per-row attachment points: :meth:`CoefficientTable.pose`), and
+#: its width in the kernel (NPOSE: those columns, then zeros)
+POSE = ("Ax", "Ay", "dAx", "dAy", "cos", "sin")
+NPOSE = 8
+#: the attachment points a row may carry, in the kernel's order: the spring's anchor D
+#: (world), its lid point E (lid frame, from A), the dashpot's anchor F (world), its lid
+#: point H (lid frame) -- x, y each (:data:`softclose.config.free.PLACEMENT_KEYS`)
+POINT_NAMES = ("spring_anchor", "lid_e", "dashpot_anchor", "dashpot_lid")
 
 
 def _kernel_layout(cc: np.ndarray) -> np.ndarray:
@@ -273,6 +281,70 @@ class CoefficientTable:
         c = c.copy()
         c[:, :4] += dm[:, None] * self.mass_slope(float(th))
         return c
+
+    # -- per-row attachment points ----------------------------------------------------------
+    @cached_property
+    def pose(self) -> np.ndarray:
+        """Cubic Hermite pieces (ncell, len(POSE), 4) of the crank pin A(theta), its slope
+        A'(theta), cos theta and sin theta on the table's cells: every lid point is
+        P = A + R(theta) p, so a row's own attachment points give their lengths from these
+        (:meth:`point_columns`; the kernel's ``pcc``). Built on first use, from the model's
+        closure with exact derivatives, like the coefficients."""
+        import casadi as ca
+        from .dynamics import pose
+        m = self.model
+        th = ca.SX.sym("theta")
+        A = pose(th, m.cfg.geometry, m.cfg.mass, m.sigma).points["A"]
+        dA = ca.jacobian(A, th)
+        vec = ca.vertcat(A, dA, ca.cos(th), ca.sin(th))
+        fn = ca.Function("pose", [th], [vec, ca.jacobian(vec, th)])
+        nodes = np.linspace(self.lo, self.hi, self.ncell + 1)
+        pc, _ = _pieces(m, nodes, self.h, fn)
+        if not np.all(np.isfinite(pc)):
+            raise NumericalError("the crank pin's position is not finite on the stroke range; "
+                                 "the geometry is at or near a toggle position")
+        return pc
+
+    @cached_property
+    def pose_kernel(self) -> np.ndarray:
+        """:attr:`pose` in the kernel's layout (ncell, 4, NPOSE), zero-padded."""
+        x = np.zeros((self.ncell, NPOSE, 4))
+        x[:, :len(POSE)] = self.pose
+        return _kernel_layout(x)
+
+    @cached_property
+    def own_points(self) -> np.ndarray:
+        """The config's attachment points (8,), in the order of :data:`POINT_NAMES` (x, y
+        each; the dashpot's lid point derived from ``lid_c`` when not given)."""
+        g = self.model.cfg.geometry
+        return np.array([float(v) for name in POINT_NAMES for v in getattr(g, name)])
+
+    def pose_at(self, theta) -> np.ndarray:
+        """The pose columns (:data:`POSE`) at angles ``theta`` (any shape): (..., 6)."""
+        th = np.asarray(theta, float)
+        i, s = self._cell(th.ravel())
+        q = self.pose[i]
+        a = q[..., 0] + s * (q[..., 1] + s * (q[..., 2] + s * q[..., 3]))
+        return a.reshape(th.shape + (len(POSE),))
+
+    def point_columns(self, theta, points) -> dict:
+        """The spring's l, dl and the dashpot's dd of rows with their own attachment points
+        at ``theta`` (one per row, or a grid per row: shape (n,) or (n, G); or a scalar), from
+        the rows' own pieces as the kernel reads them (:func:`softclose.native.point_columns`:
+        the pieces a table built at the row's points holds).
+
+        A grid shared by the rows is given as shape (1, G) (the pose is evaluated once).
+        ``points`` (n, 8) in the kernel's convention (:func:`softclose.native.point_rows`):
+        the spring's four columns, or the dashpot's, NaN where the row has the table's own.
+        Returns {"l", "dl", "dd"}: arrays of theta's broadcast shape (n, ...), NaN where the
+        row has the table's own (the caller keeps the table's column there)."""
+        from .native import point_columns
+        pts = np.atleast_2d(np.asarray(points, float))
+        n = len(pts)
+        th = np.asarray(theta, float)
+        shape = (n,) if th.ndim <= 1 else (n, th.shape[1])
+        c = point_columns(self, th, pts)
+        return {name: c[..., j].reshape(shape) for j, name in enumerate(("l", "dl", "dd"))}
 
     def rows_extra(self, theta, n: int) -> np.ndarray:
         """The element columns of the extra table at ``theta`` (scalar or one per row), n rows."""

@@ -308,11 +308,11 @@ def test_ctrl_c_keeps_finished_chunks(tmp_path, monkeypatch):
     calls = {"n": 0}
     orig = Simulator.run_batch
 
-    def flaky(self, P, threads=None):
+    def flaky(self, P, threads=None, **kw):
         calls["n"] += 1
         if calls["n"] == 3:
             raise KeyboardInterrupt
-        return orig(self, P, threads)
+        return orig(self, P, threads, **kw)
     monkeypatch.setattr(Simulator, "run_batch", flaky)
     axes = {"design.spring_k": np.linspace(0, 1000, 20),
             "design.damper_c": np.linspace(0, 3000, 10)}

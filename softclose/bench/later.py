@@ -32,6 +32,18 @@ SWEEP_GRID = {"design.spring_k": (500.0, 9500.0, 40),
               "design.spring_rest_length": (0.05, 0.09, 40),
               "design.damper_c": (100.0, 4000.0, 25)}
 
+#: the placement sample (issue 23): the co-design's box of the spring's points, at the
+#: README's robust design (a compression spring)
+PLACEMENT_BOX = {"geometry.spring_anchor[0]": (-0.09, -0.03),
+                 "geometry.spring_anchor[1]": (-0.01, 0.05),
+                 "geometry.lid_e[0]": (-0.006, 0.044), "geometry.lid_e[1]": (0.004, 0.024)}
+PLACEMENT_DESIGN = {"design.spring_kind": "compression", "design.spring_k": 4920.026,
+                    "design.spring_rest_length": 0.05843374, "design.damper_c": 4932.998}
+#: rows of the placement sample (the command end to end; --quick leaves it out) and of its
+#: kernel row (Simulator.run_batch with per-row points, in-process)
+PLACEMENT_ROWS = 1 << 20
+PLACEMENT_KERNEL_ROWS = 1 << 16
+
 #: optimiser settings of the N / sub-steps study
 OPT_NODES = (5, 10, 20, 40)
 OPT_SUBSTEPS = (1, 2, 4)
@@ -107,6 +119,7 @@ def later_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
         timed(key, f"Simulator.run_batch: the same {n_grid:,} strokes with {what}",
               lambda: sim_el.run_batch(P_el), rep, count=n_grid,
               note="invalid designs and their reasons included")
+    _placement_rows(cfg, rows, timed, quick)
     what = f"sweep(cfg, axes): the {n_grid:,}-design grid k × l0 × c, in-process"
     res = timed("sweep_40000", what, lambda: sweep(cfg, axes), rep, count=n_grid)
     if res is not None:
@@ -217,6 +230,54 @@ def _prepare(cfg: Config, free: list) -> None:
         ck, why = kind_config(c, kind)
         if why is None:
             prepare(ck)
+
+
+def _placement_rows(cfg: Config, rows: list, timed, quick: bool) -> None:
+    """Placements at kernel speed (issue 23): Simulator.run_batch over PLACEMENT_KERNEL_ROWS
+    Sobol points of the spring's attachment points (per-row point columns, in-process), and
+    ``softclose sweep --sample 1048576`` over the same box end to end (a fresh interpreter,
+    Parquet and maps; not with ``quick``)."""
+    import tempfile
+
+    from ..sweeps.space import make_sample
+    c = cfg.update(PLACEMENT_DESIGN)
+    n = PLACEMENT_KERNEL_ROWS
+    space = make_sample(PLACEMENT_BOX, n, "sobol", 0, c)
+    X = space.points(np.arange(n))
+    pts = {k: X[:, j] for j, k in enumerate(space.keys)}
+    sim = Simulator(c)
+    P = np.tile(params_of(c), (n, 1))
+    sim.run_batch(P[:1000], points={k: v[:1000] for k, v in pts.items()})    # warm-up
+    timed("kernel_placements", f"Simulator.run_batch(P, points=...): {n:,} Sobol placements "
+          "of the spring's anchor and lid point (the co-design's box), the README's robust "
+          "design, all cores", lambda: sim.run_batch(P, points=pts), 1 if quick else 3,
+          count=n, note="per-row point columns: no model per placement; most rows take the "
+          "compression spring past its free length (invalid, reasons located)")
+    what = (f"softclose sweep --sample {PLACEMENT_ROWS:,} over the spring's four placement "
+            "keys (the co-design's box), the README's robust design, --format parquet, fresh "
+            "interpreter, end to end")
+    if quick:
+        rows.append(not_measured("placement_sample_1e6", what, "not run with --quick"))
+        return
+    args = [f"--range={k}={lo:g}:{hi:g}" for k, (lo, hi) in PLACEMENT_BOX.items()]
+    args += [f"--set={k}={json.dumps(v)}" for k, v in PLACEMENT_DESIGN.items()]
+    with tempfile.TemporaryDirectory() as tmp:
+        def run():
+            r = subprocess.run([sys.executable, "-m", "softclose", "sweep", "--sample",
+                                str(PLACEMENT_ROWS), *args, "--format", "parquet", "--out",
+                                str(Path(tmp) / "placements"), "--json"], capture_output=True,
+                               text=True, env=fresh_env())
+            if r.returncode != 0:
+                raise RuntimeError(f"exit {r.returncode}: {r.stderr.strip()[-300:]}")
+            return json.loads(r.stdout)
+        res = timed("placement_sample_1e6", what, run, 1, count=PLACEMENT_ROWS,
+                    note="Parquet parts and six maps")
+    if res is not None:
+        st = res.get("stages", {})
+        rows[-1]["note"] = (f"evaluation {st.get('evaluate', 0):.1f} s "
+                            f"({res.get('designs_per_second') or 0:,.0f} designs/s), maps "
+                            f"{st.get('maps', 0):.1f} s; {res.get('feasible', 0):,} feasible, "
+                            f"{res.get('infeasible_reasons', {})}")
 
 
 def _select_row(cfg: Config, timed, rows: list, quick: bool = False) -> None:

@@ -31,6 +31,7 @@ SPEED_TARGETS = {
     "sweep_40000": {"min_per_s": 20000.0},
     "sweep_cli_40000": {"min_per_s": 20000.0},
     "sweep_maps": {"max_s": 1.0},
+    "placement_sample_1e6": {"min_per_s": 50000.0},   # issue 23: end to end, the command
     "robust_optimise": {"max_s": 10.0},      # both spring kinds one can buy
     # co-design (issue 23), end to end: nominal <= 3 s, robust <= 20 s
     "co_design_points": {"max_s": 3.0},

@@ -28,7 +28,7 @@ from ..config import Config
 from ..config.load import from_dict
 from ..elements.springs import KINDS
 from ..robust.box import Box, box_of
-from ..robust.evaluate import evaluate, simulator, slow_keys
+from ..robust.evaluate import evaluate, point_values, simulator, slow_keys
 
 #: the [tolerance] keys a catalog's own tolerances replace
 OWNED = ("design.spring_k", "design.spring_rest_length", "design.damper_c",
@@ -265,8 +265,9 @@ def range_texts(cfg, box: PairBox, items: list) -> list[str]:
             P = param_rows(c, len(js), keys, X[js])
             m = X[js, keys.index(LID_MASS)] if LID_MASS in keys else None
             sim = simulator(c)
-            res = sim.run_batch(P, lid_mass=m)
-            _, why = statics.out_of_range(statics.table_coordinate(sim.table),
+            res = sim.run_batch(P, lid_mass=m, points=point_values(keys, X[js]))
+            _, why = statics.out_of_range(statics.table_coordinate(sim.table,
+                                                                   res.get("points")),
                                           limits_view(c, lo, hi), P, res)
             for j, w in zip(js, why):
                 if w:

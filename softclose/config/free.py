@@ -41,6 +41,34 @@ def is_placement(key: str) -> bool:
     return key in PLACEMENT_KEYS
 
 
+def point_refusals(cfg, points: dict | None, n: int):
+    """Why ``cfg`` refuses each row's attachment points (its one-line message, as
+    ``cfg.update`` words it; "" where accepted), without a config per value: a component
+    is accepted when it is a finite number within its key's range."""
+    import numpy as np
+
+    from ..errors import SoftcloseError
+    from .schema import RANGES
+    out = np.full(n, "", dtype=object)
+    for k, v in (points or {}).items():
+        lo, hi, _ = RANGES[k.split("[")[0]]
+        v = np.asarray(v, float)
+        with np.errstate(invalid="ignore"):
+            bad = ~(np.isfinite(v) & (v >= lo) & (v <= hi)) & (out == "")
+        if not bad.any():
+            continue
+        u, inv = np.unique(v[bad], return_inverse=True)
+        words = []
+        for x in u:
+            try:
+                cfg.update({k: float(x)})
+                words.append(f"{k}: must be within [{lo:g}, {hi:g}], got {x:g}")
+            except SoftcloseError as exc:
+                words.append(str(exc).splitlines()[0])
+        out[bad] = np.array(words, dtype=object)[np.asarray(inv).ravel()]
+    return out
+
+
 def config_value(cfg, key: str) -> float:
     """The value of a numeric key (``section.name`` or ``section.name[i]``) in ``cfg``."""
     section, name = key.split(".", 1)

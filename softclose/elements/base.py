@@ -162,6 +162,13 @@ class Element:
         return (f"the {self.name} leaves its valid range ({side} it {edge}, by up to "
                 f"{excess:.3g} at theta = {math.degrees(where[1]):.1f} deg)")
 
+    def range_messages(self, P, cfg, rows, short, edge, worst, excess) -> list[str]:
+        """:meth:`range_message` of the designs ``rows`` (arrays: ``edge`` NaN for "over the
+        whole stroke"); an element may state them at once, faster for many rows."""
+        return [self.range_message(P, cfg, int(i), bool(sh),
+                                   (None if np.isnan(e) else float(e), float(w)), float(x))
+                for i, sh, e, w, x in zip(rows, short, edge, worst, excess)]
+
     def unit_rate(self, cfg) -> bool:
         """True when the element's coordinate is the lid's own angle in ``cfg`` (q' = 1: no
         column is read for it)."""

@@ -101,8 +101,27 @@ class Spring(Element):
 
     extremes = ("min_spring_length", "max_spring_length")
 
+    def range_messages(self, P, cfg, rows, short, edge, worst, excess):
+        """:meth:`range_message` of many rows at once (the same text; the parameters read
+        once, not per row)."""
+        s = np.asarray(P["spring_kind"], float)[rows].tolist()
+        l0 = np.asarray(P["spring_rest_length"], float)[rows].tolist()
+        edge, worst = np.degrees(edge).tolist(), np.degrees(worst).tolist()
+        d = cfg.design
+        out = []
+        for si, l0i, sh, e, w, x in zip(s, l0, np.asarray(short).tolist(), edge, worst,
+                                         np.asarray(excess, float).tolist()):
+            out.append(self._message(si, l0i, sh, d, None if e != e else e, w, x))
+        return out
+
     def range_message(self, P, cfg, i, short, where, excess):
         s, l0 = float(P["spring_kind"][i]), float(P["spring_rest_length"][i])
+        edge, worst = (None if a is None else math.degrees(a) for a in where)
+        return self._message(s, l0, short, cfg.design, edge, worst, excess)
+
+    @staticmethod
+    def _message(s, l0, short, d, edge, worst, excess):
+        """The text of :meth:`range_message` (``edge``, ``worst`` in degrees)."""
         if s > 0 and short:
             what = (f"the extension spring (it only pulls) would be shorter than its free "
                     f"length {l0 * 1e3:.2f} mm")
@@ -111,11 +130,10 @@ class Spring(Element):
                     f"length {l0 * 1e3:.2f} mm")
         elif short:
             what = (f"the spring would be shorter than its minimum length "
-                    f"(design.spring_min_length = {cfg.design.spring_min_length * 1e3:.2f} mm)")
+                    f"(design.spring_min_length = {d.spring_min_length * 1e3:.2f} mm)")
         else:
             what = (f"the spring would be longer than its maximum length "
-                    f"(design.spring_max_length = {cfg.design.spring_max_length * 1e3:.2f} mm)")
-        edge, worst = (None if a is None else math.degrees(a) for a in where)
+                    f"(design.spring_max_length = {d.spring_max_length * 1e3:.2f} mm)")
         span = ("over the whole stroke" if edge is None else
                 f"{'below' if worst < edge else 'above'} theta = {edge:.1f} deg")
         return f"{what} {span}, by up to {excess * 1e3:.2f} mm (at theta = {worst:.1f} deg)"

@@ -6,6 +6,10 @@ How each kind of key reaches the C kernel (fastest first):
   ``p = (k, l0, c, c_rot)``: one batch call for all samples;
 - ``mass.lid`` is the kernel's per-stroke lid-mass column (:mod:`softclose.native`: the
   tabulated coefficients are affine in the lid mass, so one table serves every mass, exactly);
+- the attachment points' components (``geometry.spring_anchor[i]``, ``lid_e[i]``,
+  ``dashpot_anchor[i]``, ``dashpot_lid[i]``) are the kernel's per-stroke point columns (the
+  lengths from the table's pose pieces: one table serves every placement,
+  :meth:`softclose.simulate.Simulator.run_batch`'s ``points``);
 - any other key (geometry, crank masses, stroke angles ...) changes the model: samples are
   grouped by their values and each group gets its own model, table and simulator (about
   0.03 s each; correct, slow when every sample has its own value).
@@ -21,7 +25,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..config import Config
-from ..errors import SoftcloseError
+from ..errors import ConfigError, SoftcloseError
+from ..config.free import PLACEMENT_KEYS, point_refusals
 from ..problem import LID_MASS, METRIC_KEYS, PARAM_COLUMNS, infeasibility, objective, params_of
 
 #: the kernel's output columns kept per sample
@@ -30,8 +35,19 @@ _SIMS: dict = {}
 
 
 def slow_keys(keys) -> list[str]:
-    """The keys that need a model per distinct value (neither design nor lid mass)."""
-    return [k for k in keys if k not in PARAM_COLUMNS and k != LID_MASS]
+    """The keys that need a model per distinct value (neither design, lid mass nor an
+    attachment point's component)."""
+    return [k for k in keys if k not in PARAM_COLUMNS and k != LID_MASS
+            and k not in PLACEMENT_KEYS]
+
+
+def point_values(keys, X) -> dict | None:
+    """The attachment points' components among ``keys`` as ``Simulator.run_batch``'s
+    ``points`` ({key: column of X}), or None when there are none."""
+    keys = list(keys)
+    X = np.asarray(X, float)
+    out = {k: X[:, j] for j, k in enumerate(keys) if k in PLACEMENT_KEYS}
+    return out or None
 
 
 def with_values(cfg: Config, values: dict[str, float]) -> Config:
@@ -79,8 +95,13 @@ def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
             P[:, PARAM_COLUMNS[k]] = X[:, j]
         elif k == LID_MASS:
             masses = X[:, j].copy()
-        else:
+        elif k not in PLACEMENT_KEYS:
             other.append(j)
+    pts = point_values(keys, X)
+    if pts is not None:
+        why = point_refusals(cfg, pts, n)
+        if (why != "").any():
+            raise ConfigError(f"tolerance box: {why[why != ''][0]}")
     cols = {k: np.full(n, np.nan) for k in METRIC_KEYS + ("theta_dot_max", "theta_min")}
     cols["closed"] = np.zeros(n, bool)
     cols["status"] = np.full(n, -1, int)
@@ -97,11 +118,10 @@ def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
         except SoftcloseError as exc:   # a sampled geometry that cannot close its loop
             where = ", ".join(f"{k} = {v:g}" for k, v in vals.items())
             raise type(exc)(f"tolerance box: at {where} {str(exc).splitlines()[0]}") from None
+        prow = None if pts is None else {k: v[rows] for k, v in pts.items()}
         out = sim.run_batch(P[rows], threads=threads,
                             lid_mass=None if masses is None else masses[rows],
-                            explain=explain)
-        out["opening_force"] = sim.opening_forces(P[rows],
-                                                  None if masses is None else masses[rows])
+                            explain=explain, points=prow, opening=True)
         status = np.asarray(out["status"], int)
         ok = (status == 0) | (status == 1)
         for k in METRIC_KEYS[1:] + ("theta_dot_max", "theta_min"):

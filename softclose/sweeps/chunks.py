@@ -9,19 +9,22 @@ result depends on nothing but its arguments.
 
 How a chunk is evaluated (metric only, batched):
 
-- rows are grouped by their values of the keys that change the model (neither design keys
-  nor ``mass.lid``); each group gets the config with those values (validated as if from a
-  file) and a simulator (model + coefficient table, about 0.1 s, cached: groups that differ
-  only in ``optimise.*`` keys share one);
+- rows are grouped by their values of the keys that change the model (neither design keys,
+  ``mass.lid`` nor an attachment point's component); each group gets the config with those
+  values (validated as if from a file) and a simulator (model + coefficient table, about
+  0.1 s, cached: groups that differ only in ``optimise.*`` keys share one);
 - a group whose values the config or the model refuse (a loop that cannot close, a toggle
   on the stroke) gets status ``invalid`` and the one-line reason -- the sweep goes on;
 - the design keys (``design.spring_k``, ``design.spring_rest_length``, ``design.damper_c``,
   ``design.rotary_damper_c``) go into the kernel's parameter rows, a swept ``mass.lid``
   into its per-stroke lid-mass column (the tabulated coefficients are affine in the lid
   mass, :mod:`softclose.native`: one table serves every mass, and a row at the table's own
-  mass gives the same bits as without the column), and the group's strokes run as one
-  batch in the C kernel (threads, nothing kept per step); a lid mass the config refuses
-  makes that row ``invalid`` with the config's one-line reason;
+  mass gives the same bits as without the column), swept attachment points
+  (``geometry.spring_anchor[i]``, ``lid_e[i]``, ``dashpot_anchor[i]``, ``dashpot_lid[i]``)
+  into its per-stroke point columns (the lengths from the table's pose pieces, as a table
+  built at those points would give them: one model serves every placement), and the group's
+  strokes run as one batch in the C kernel (threads, nothing kept per step); a lid mass or
+  a point the config refuses makes that row ``invalid`` with the config's one-line reason;
 - the objective and the feasibility come from :mod:`softclose.problem` (never restated);
   a stroke the method cannot integrate carries the simulator's diagnosis as its reason.
 """
@@ -33,6 +36,7 @@ from collections import OrderedDict
 
 import numpy as np
 
+from ..config.free import PLACEMENT_KEYS, point_refusals
 from ..problem import (LID_MASS, METRIC_KEYS, PARAM_COLUMNS, PARAM_KEYS, infeasibility, objective,
                        params_of)
 from ..stroke import StrokeStatus
@@ -124,7 +128,9 @@ def evaluate_chunk(cfg_dict: dict, keys: list[str], ids: np.ndarray, X: np.ndarr
         if k in PARAM_COLUMNS:
             P[:, PARAM_COLUMNS[k]] = X[:, j]
     jm = keys.index(LID_MASS) if LID_MASS in keys else None
-    other = [j for j, k in enumerate(keys) if k not in PARAM_COLUMNS and j != jm]
+    jp = [j for j, k in enumerate(keys) if k in PLACEMENT_KEYS]
+    other = [j for j, k in enumerate(keys) if k not in PARAM_COLUMNS and j != jm
+             and k not in PLACEMENT_KEYS]
     if other:
         uniq, inv = np.unique(X[:, other], axis=0, return_inverse=True)
         inv = np.asarray(inv).ravel()
@@ -142,20 +148,24 @@ def evaluate_chunk(cfg_dict: dict, keys: list[str], ids: np.ndarray, X: np.ndarr
             out["status"][rows] = INVALID
             out["reason"][rows] = str(exc).splitlines()[0]
             continue
-        masses = None
-        if jm is not None:
-            refused = lid_mass_refusals(cfg, X[rows, jm])
+        masses = points = None
+        if jm is not None or jp:
+            refused = lid_mass_refusals(cfg, X[rows, jm]) if jm is not None else \
+                np.full(len(rows), "", dtype=object)
+            if jp:
+                why = point_refusals(cfg, {keys[j]: X[rows, j] for j in jp}, len(rows))
+                refused = np.where(refused == "", why, refused)
             bad = refused != ""
             out["status"][rows[bad]] = INVALID
             out["reason"][rows[bad]] = refused[bad]
             rows = rows[~bad]
-            masses = X[rows, jm]
+            masses = X[rows, jm] if jm is not None else None
+            points = {keys[j]: X[rows, j] for j in jp} or None
             if len(rows) == 0:
                 continue
-        res = sim.run_batch(P[rows], threads=threads) if masses is None else \
-            sim.run_batch(P[rows], threads=threads, lid_mass=masses)
-        res["opening_force"] = sim.opening_forces(P[rows], masses)
-        _store(out, rows, res, cfg, sim, P[rows], masses)
+        kw = {k: v for k, v in (("lid_mass", masses), ("points", points)) if v is not None}
+        res = sim.run_batch(P[rows], threads=threads, opening=True, **kw)
+        _store(out, rows, res, cfg, sim, P[rows], masses, res.get("points"))
     return out
 
 
@@ -199,9 +209,10 @@ _STATUS_TEXT = np.array([StrokeStatus(s).text for s in range(len(StrokeStatus))]
 
 
 def _store(out: dict, rows: np.ndarray, res: dict, cfg, sim, P: np.ndarray,
-           masses: np.ndarray | None = None) -> None:
+           masses: np.ndarray | None = None, points: np.ndarray | None = None) -> None:
     """Fill ``rows`` of ``out`` from a kernel batch ``res`` of the group's config ``cfg``
-    (``masses``: the rows' lid masses, None for the config's own)."""
+    (``masses``: the rows' lid masses, None for the config's own; ``points``: the rows'
+    own attachment points, the kernel's convention, or None)."""
     status = np.asarray(res["status"], int)
     ok = (status == StrokeStatus.CLOSED) | (status == StrokeStatus.NOT_CLOSED)
     closed = status == StrokeStatus.CLOSED
@@ -226,7 +237,8 @@ def _store(out: dict, rows: np.ndarray, res: dict, cfg, sim, P: np.ndarray,
         s = StrokeStatus(int(status[i]))
         reason[i] = ("not closed (the lid swung beyond the stroke range)"
                      if s is StrokeStatus.LEFT_RANGE else
-                     sim.diagnose(s, P[i], None if masses is None else float(masses[i])))
+                     sim.diagnose(s, P[i], None if masses is None else float(masses[i]),
+                                  None if points is None else points[i]))
     out["status"][rows] = _STATUS_TEXT[np.clip(status, 0, len(_STATUS_TEXT) - 1)]
     out["status"][rows[invalid]] = INVALID
     out["reason"][rows] = reason
