@@ -32,6 +32,7 @@ from .equation import fit_ode
 
 #: Ipopt options of a fit
 IPOPT = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes", "show_eval_warnings": False,
+         "calc_lam_p": False,
          "ipopt.tol": 1e-10, "ipopt.acceptable_tol": 1e-7, "ipopt.max_iter": 200,
          "ipopt.mu_strategy": "adaptive"}
 

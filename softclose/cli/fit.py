@@ -3,6 +3,8 @@ measured closing strokes."""
 
 from __future__ import annotations
 
+import math
+
 import argparse
 from pathlib import Path
 
@@ -64,7 +66,8 @@ def format_fit(res, payload) -> str:
     w = max(len(k) for k in res.keys)
     for k in res.keys:
         p = payload["parameters"][k]
-        rel = f" ({p['std'] / abs(p['value']):.2%})" if p["value"] else ""
+        rel = (f" ({p['std'] / abs(p['value']):.2%})" if p["value"] and p["std"] is not None
+               and math.isfinite(p["std"]) else "")
         lines.append(f"  {k:<{w}} {num(p['value'], 7)} ± {num(p['std'], 3)}{rel}  "
                      f"95 %: [{num(p['ci95'][0], 6)}, {num(p['ci95'][1], 6)}] {p['unit']}")
     if len(res.keys) > 1:
@@ -76,7 +79,7 @@ def format_fit(res, payload) -> str:
     for s in res.strokes:
         lines.append(f"  {s.path}: release at {s.release_time:.4f} s from "
                      f"{s.release_angle_deg:.3f} deg, fitted up to {s.t_last:.4f} s, "
-                     f"{s.samples_used} samples, rms residual {s.residual_rms:.3g} {s.unit}"
+                     f"{s.samples_used} samples, rms residual {num(s.residual_rms, 3)} {s.unit}"
                      + (f", bias {s.bias:.4g} rad/s" if s.kind == "rate" else ""))
     lines.append(f"  ({res.iterations} Ipopt iterations, {res.substeps} sub-step(s) a frame: "
                  f"integration error {res.integration_error:.1e} of the noise)")
