@@ -955,30 +955,14 @@ static void l_extremes(const Table *T, double a, double b, double *lmin, double 
         if (i > i1) break;
         double q[4] = {CQ(T->cc, i, 0, C_L), CQ(T->cc, i, 1, C_L), CQ(T->cc, i, 2, C_L),
                        CQ(T->cc, i, 3, C_L)};
-        /* roots of q1 + 2 q2 s + 3 q3 s^2 */
-        double A = 3 * q[3], B = 2 * q[2], C = q[1], r[2];
-        int nr = 0;
-        if (fabs(A) < 1e-300) { if (B != 0) r[nr++] = -C / B; }
-        else {
-            double D = B * B - 4 * A * C;
-            if (D >= 0) { double sq = sqrt(D); r[nr++] = (-B + sq) / (2 * A); r[nr++] = (-B - sq) / (2 * A); }
-        }
-        for (int j = 0; j < nr; j++) {
-            double th = T->lo + (i + r[j]) * T->h;
-            if (r[j] < 0 || r[j] > 1 || th < a || th > b) continue;
-            double l = q[0] + r[j] * (q[1] + r[j] * (q[2] + r[j] * q[3]));
-            if (l < *lmin) *lmin = l;
-            if (l > *lmax) *lmax = l;
-        }
+        cubic_extremes(q, i, T, a, b, lmin, lmax);
     }
 }
 
-/* the interior extremes of the cubic q on cell i within [a, b] into lmin, lmax (the same
- * operations as l_extremes: a row's own Hermite pieces of l, PER-ROW ATTACHMENT POINTS) */
-static void cubic_extremes(const double *q, int i, const Table *T, double a, double b,
-                           double *lmin, double *lmax)
+/* the roots r (0, 1 or 2; returned) of the derivative q1 + 2 q2 s + 3 q3 s^2 of the cubic q */
+static inline int cubic_crit(const double *q, double r[2])
 {
-    double A = 3 * q[3], B = 2 * q[2], C = q[1], r[2];
+    double A = 3 * q[3], B = 2 * q[2], C = q[1];
     int nr = 0;
     if (fabs(A) < 1e-300) { if (B != 0) r[nr++] = -C / B; }
     else {
@@ -988,6 +972,16 @@ static void cubic_extremes(const double *q, int i, const Table *T, double a, dou
             r[nr++] = (-B + sq) / (2 * A); r[nr++] = (-B - sq) / (2 * A);
         }
     }
+    return nr;
+}
+
+/* the interior extremes of the cubic q (the pieces of l on cell i: the table's, or a row's
+ * own, PER-ROW ATTACHMENT POINTS) within [a, b] into lmin, lmax */
+static void cubic_extremes(const double *q, int i, const Table *T, double a, double b,
+                           double *lmin, double *lmax)
+{
+    double r[2];
+    int nr = cubic_crit(q, r);
     for (int j = 0; j < nr; j++) {
         double th = T->lo + (i + r[j]) * T->h;
         if (r[j] < 0 || r[j] > 1 || th < a || th > b) continue;
@@ -1005,16 +999,8 @@ static void cubic_range(const double *q, double s0, double s1, double *lo, doubl
     double a = q[0] + s0 * (q[1] + s0 * (q[2] + s0 * q[3]));
     double b = q[0] + s1 * (q[1] + s1 * (q[2] + s1 * q[3]));
     *lo = a < b ? a : b; *hi = a < b ? b : a;
-    double A = 3 * q[3], B = 2 * q[2], C = q[1], r[2];
-    int nr = 0;
-    if (fabs(A) < 1e-300) { if (B != 0) r[nr++] = -C / B; }
-    else {
-        double D = B * B - 4 * A * C;
-        if (D >= 0) {
-            double sq = sqrt(D);
-            r[nr++] = (-B + sq) / (2 * A); r[nr++] = (-B - sq) / (2 * A);
-        }
-    }
+    double r[2];
+    int nr = cubic_crit(q, r);
     for (int j = 0; j < nr; j++) {
         if (!(r[j] > s0 && r[j] < s1)) continue;
         double v = q[0] + r[j] * (q[1] + r[j] * (q[2] + r[j] * q[3]));
