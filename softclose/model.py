@@ -60,6 +60,18 @@ FUNCTIONS = ("ode", "ode_moving", "coeffs", "xcoeffs", "energy_fn", "power_fn", 
              "opening", "_u")
 
 
+_SHARED: dict = {}
+
+
+def shared_model(cfg: Config) -> "LidModel":
+    """The LidModel of cfg's geometry, mass and stroke, kept for the process (and on disk:
+    :meth:`LidModel.cached`): every model a process needs is built or loaded once."""
+    key = model_key(cfg)
+    if key not in _SHARED:
+        _SHARED[key] = LidModel.cached(cfg)
+    return _SHARED[key]
+
+
 class LidModel:
     """The lid linkage of one config (geometry + mass); design values are parameters."""
 

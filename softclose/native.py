@@ -368,6 +368,25 @@ def point_columns(table: CoefficientTable, theta, points) -> np.ndarray:
     return out
 
 
+def point_lengths(table: CoefficientTable, theta, points) -> dict:
+    """The spring's l, dl and the dashpot's dd of rows with their own attachment points at
+    ``theta`` (one per row, or a grid per row: shape (n,) or (n, G); or a scalar), from the
+    rows' own pieces as the kernel reads them (:func:`point_columns`: the pieces a table
+    built at the row's points holds).
+
+    A grid shared by the rows is given as shape (1, G) (the pose is evaluated once).
+    ``points`` (n, 8) in the kernel's convention (:func:`point_rows`): the spring's four
+    columns, or the dashpot's, NaN where the row has the table's own. Returns {"l", "dl",
+    "dd"}: arrays of theta's broadcast shape (n, ...), NaN where the row has the table's own
+    (the caller keeps the table's column there)."""
+    pts = np.atleast_2d(np.asarray(points, float))
+    n = len(pts)
+    th = np.asarray(theta, float)
+    shape = (n,) if th.ndim <= 1 else (n, th.shape[1])
+    c = point_columns(table, th, pts)
+    return {name: c[..., j].reshape(shape) for j, name in enumerate(("l", "dl", "dd"))}
+
+
 def point_grid(table: CoefficientTable, theta, points, what: str = "all",
                ab=None) -> np.ndarray:
     """:func:`point_columns` on a grid of angles -- (G,) shared by the rows, or (n, G) one

@@ -10,7 +10,7 @@ expressions.
 Every function takes ``points``: the rows' own attachment points in the kernel's convention
 (:func:`softclose.native.point_rows`: the spring's four columns, or the dashpot's, NaN for
 the table's own), whose lengths come from the rows' own pieces as the kernel reads them
-(:meth:`~softclose.table.CoefficientTable.point_columns`: the same numbers as a table built at
+(:func:`softclose.native.point_lengths`: the same numbers as a table built at
 those points, to the rounding of the node values); the scans over a stroke (the opening
 effort, where a spring leaves its range) read them from the pose pieces on their grid
 (:func:`softclose.native.point_grid`, within ~1e-10 relative of those).
@@ -36,8 +36,9 @@ def with_points(table, theta, points, cols: dict) -> dict:
     of the rows that have their own points (``points``, the kernel's convention, or None)."""
     if points is None:
         return cols
+    from .native import point_lengths
     pts = np.atleast_2d(np.asarray(points, float))
-    pc = table.point_columns(theta, pts)
+    pc = point_lengths(table, theta, pts)
     out = dict(cols)
     for blk, names in POINT_BLOCKS.values():
         has = ~np.isnan(pts[:, blk.start])

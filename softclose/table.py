@@ -288,7 +288,7 @@ class CoefficientTable:
         """Cubic Hermite pieces (ncell, len(POSE), 4) of the crank pin A(theta), its slope
         A'(theta), cos theta and sin theta on the table's cells: every lid point is
         P = A + R(theta) p, so a row's own attachment points give their lengths from these
-        (:meth:`point_columns`; the kernel's ``pcc``). Built on first use, from the model's
+        (:func:`softclose.native.point_lengths`; the kernel's ``pcc``). Built on first use, from the model's
         closure with exact derivatives, like the coefficients."""
         import casadi as ca
         from .dynamics import pose
@@ -326,25 +326,6 @@ class CoefficientTable:
         q = self.pose[i]
         a = q[..., 0] + s * (q[..., 1] + s * (q[..., 2] + s * q[..., 3]))
         return a.reshape(th.shape + (len(POSE),))
-
-    def point_columns(self, theta, points) -> dict:
-        """The spring's l, dl and the dashpot's dd of rows with their own attachment points
-        at ``theta`` (one per row, or a grid per row: shape (n,) or (n, G); or a scalar), from
-        the rows' own pieces as the kernel reads them (:func:`softclose.native.point_columns`:
-        the pieces a table built at the row's points holds).
-
-        A grid shared by the rows is given as shape (1, G) (the pose is evaluated once).
-        ``points`` (n, 8) in the kernel's convention (:func:`softclose.native.point_rows`):
-        the spring's four columns, or the dashpot's, NaN where the row has the table's own.
-        Returns {"l", "dl", "dd"}: arrays of theta's broadcast shape (n, ...), NaN where the
-        row has the table's own (the caller keeps the table's column there)."""
-        from .native import point_columns
-        pts = np.atleast_2d(np.asarray(points, float))
-        n = len(pts)
-        th = np.asarray(theta, float)
-        shape = (n,) if th.ndim <= 1 else (n, th.shape[1])
-        c = point_columns(self, th, pts)
-        return {name: c[..., j].reshape(shape) for j, name in enumerate(("l", "dl", "dd"))}
 
     def rows_extra(self, theta, n: int) -> np.ndarray:
         """The element columns of the extra table at ``theta`` (scalar or one per row), n rows."""

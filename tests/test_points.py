@@ -218,7 +218,7 @@ def test_early_exit_with_points(cfg, model, integrator, step):
         _, tr = native.run_stroke_trajectory(sim.table, sim.method, step, st.t_max, st.theta0,
                                              st.theta_closed, D[i], early_exit=False)
         c = sim.table.evaluate(tr[:, 1])
-        l = sim.table.point_columns(tr[:, 1], np.tile(X[i], (len(tr), 1)))["l"]
+        l = native.point_lengths(sim.table, tr[:, 1], np.tile(X[i], (len(tr), 1)))["l"]
         E = 0.5 * c[:, 0] * tr[:, 2] ** 2 + c[:, 2] + 0.5 * P[i, 0] * (l - P[i, 1]) ** 2
         n = int(on[i, COL["steps"]])
         gain = max(0.0, float(np.diff(E[:n + 1]).max()))

@@ -29,7 +29,7 @@ def _clear_memory():
     import importlib
     oc = importlib.import_module("softclose.optimiser.cache")
     verify = importlib.import_module("softclose.optimiser.verify")
-    oc._MODELS.clear()
+    importlib.import_module("softclose.model")._SHARED.clear()
     oc._NLPS.clear()
     verify._CHECKERS.clear()
 

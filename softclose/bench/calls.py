@@ -19,7 +19,7 @@ from ..model import LidModel
 from ..reference import Reference
 from ..simulate import Simulator
 from .later import later_entries
-from .timing import fresh_env, kernel_times, median_time, not_measured, speed_row
+from .timing import cli_time, fresh_env, kernel_times, median_time, not_measured, speed_row
 
 #: modules that ``softclose simulate`` must not import at start-up (they are imported lazily)
 HEAVY_MODULES = ("pandas", "pyarrow", "scipy", "SALib", "dask", "matplotlib")
@@ -138,18 +138,6 @@ def startup_rows(repeats: int = 9, log=None) -> list[dict]:
                               f"{how}", ratio=t / floor))
         log(f"  {what}: {t / floor:.2f} x import casadi")
     return rows
-
-
-def cli_time(argv: list[str], repeats: int) -> float:
-    """Median wall time of ``python -m softclose ARGV`` in a fresh interpreter, in s."""
-    cmd = [sys.executable, "-m", "softclose", *argv]
-    env = fresh_env()
-
-    def run():
-        r = subprocess.run(cmd, capture_output=True, env=env, text=True)
-        if r.returncode != 0:
-            raise RuntimeError(f"softclose {' '.join(argv)} failed: {r.stderr.strip()}")
-    return median_time(run, repeats)
 
 
 def startup_imports(argv: list[str], modules=HEAVY_MODULES) -> list[str]:

@@ -16,7 +16,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from .timing import fresh_env, not_measured
+from .timing import fresh_env
 
 #: the README's optimum as a built prototype (a compression spring)
 PROTOTYPE = {"design.spring_kind": "compression", "design.spring_k": 1914.709,

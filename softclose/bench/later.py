@@ -188,7 +188,7 @@ def _co_design_rows(cfg: Config, rows: list, quick: bool = False, log=None) -> N
     nominal NLP compiled (:func:`softclose.optimiser.cache.prepare`): what a user's second
     and later runs take. Nominal: the median of 3 runs; robust: one run (its scenario NLPs
     are built in each run, never compiled)."""
-    from .calls import cli_time
+    from .timing import cli_time
     log = log or (lambda *a: None)
     for lever, free in CO_DESIGN.items():
         for robust in (False, True):

@@ -8,6 +8,8 @@ from __future__ import annotations
 import math
 import os
 import statistics
+import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -175,3 +177,15 @@ def fresh_env() -> dict:
     env = dict(os.environ)
     env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
     return env
+
+
+def cli_time(argv: list[str], repeats: int) -> float:
+    """Median wall time of ``python -m softclose ARGV`` in a fresh interpreter, in s."""
+    cmd = [sys.executable, "-m", "softclose", *argv]
+    env = fresh_env()
+
+    def run():
+        r = subprocess.run(cmd, capture_output=True, env=env, text=True)
+        if r.returncode != 0:
+            raise RuntimeError(f"softclose {' '.join(argv)} failed: {r.stderr.strip()}")
+    return median_time(run, repeats)

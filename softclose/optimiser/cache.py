@@ -8,23 +8,17 @@ new problem -- other bounds, weights, closing-time limits -- reuses it.
 
 from __future__ import annotations
 
-from ..model import LidModel, model_key
+from ..model import model_key, shared_model
 from ..simulate import Simulator
+from .discretise import phase_two_substeps
 from .interval import end_damper_mode, free_layout, nlp_elements
-from .nlp import ShootingNLP, phase_two_substeps
+from .nlp import ShootingNLP
 from .placement import placement_layout
 
-_MODELS: dict = {}
 _NLPS: dict = {}
-
-
-def get_model(cfg) -> LidModel:
-    """The LidModel of cfg's geometry, mass and stroke (cached here, and on disk:
-    :meth:`LidModel.cached`)."""
-    key = model_key(cfg)
-    if key not in _MODELS:
-        _MODELS[key] = LidModel.cached(cfg)
-    return _MODELS[key]
+#: the LidModel of cfg's geometry, mass and stroke, kept for the process
+#: (:func:`softclose.model.shared_model`)
+get_model = shared_model
 
 
 def nlp_key(cfg, nodes: int | None = None, substeps: int | None = None,

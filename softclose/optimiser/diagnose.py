@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from ..problem import DESIGN_KEYS, design_of, with_designs
+from ..problem import DESIGN_KEYS, with_designs
 from .cache import stroke_simulator
 from .nlp import T_FLOOR, Run, ShootingNLP
 from .starts import initial_guess

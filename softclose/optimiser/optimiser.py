@@ -21,10 +21,11 @@ from ..progress import Progress
 from .cache import get_model, get_nlp, has_nlp, stroke_simulator
 from ..parts import spring_part
 from .diagnose import diagnose
+from .discretise import Discretisation, discretisation
 from .interval import END_C
 from . import sidebyside
 from .kinds import kind_config
-from .nlp import J_INDEX, Discretisation, Run, ShootingNLP, check_options, discretisation
+from .nlp import J_INDEX, Run, ShootingNLP, check_options
 from .polish import keep_clear, nlp_objective, refine, tighten
 from .result import Active, OptimiseResult
 from .starts import MAX_STARTS, initial_guess, sweep_starts, sweep_time
@@ -283,7 +284,7 @@ def optimise(cfg, *, starts: int | None = None, verify: bool = True,
             plan, share = None, ()
             if len(todo) == 2:      # one other kind: its process takes some of this one's
                 plan = plan_kind(todo[0][1], starts, nodes, substeps)   # starts too (first)
-                share = shared_starts(plan.n_starts)
+                share = sidebyside.shared_starts(plan.n_starts)
                 first = {"plan": plan}
             children = {kind: sidebyside.KindProcess(
                 functools.partial(solve, c, progress=False),
@@ -295,7 +296,7 @@ def optimise(cfg, *, starts: int | None = None, verify: bool = True,
             r, later = _kind_answer(children.get(kind), functools.partial(solve, **(
                 first if kind == todo[0][0] else {})), c, progress)
             if children and kind == todo[0][0] and later is not None and r.success:
-                later = ahead(later)    # polished and verified while the others finish
+                later = sidebyside.ahead(later)    # polished and verified while the others finish
             row = next(row for row in rows if row["kind"] == kind)
             row.update({"success": r.success, "objective": r.objective,
                         "message": r.message, "verified": False})
@@ -309,24 +310,6 @@ def optimise(cfg, *, starts: int | None = None, verify: bool = True,
     finally:
         for child in children.values():
             child.close()
-
-
-def shared_starts(n: int) -> tuple:
-    """Which of the first kind's ``n`` starts the other kind's process solves (before its
-    own): the last third -- this process polishes and verifies after its starts, about as
-    much work as two starts, and the other kinds' starts cost about as much as the first's."""
-    return tuple(range(n - n // 3, n))
-
-
-def ahead(later):
-    """``later`` done now, kept for when it is asked for (an exception too: raised then)."""
-    try:
-        done = later()
-    except Exception as exc:        # noqa: BLE001  (raised where the serial run raises it)
-        def again():
-            raise exc
-        return again
-    return lambda: done
 
 
 def _kind_answer(child, solve, c, progress):
@@ -372,7 +355,7 @@ def _best_kind(cfg, rows, results, pending, verify, t_start) -> OptimiseResult:
     good = [(k, r) for k, r in finished if r.success]
     pool = good or [(k, r) for k, r in finished if r.design is not None] or \
         [(k, r) for k, r in results if r.design is not None]
-    notes = [f"spring kinds: " + "; ".join(
+    notes = ["spring kinds: " + "; ".join(
         f"{row['kind']}: " + (f"J = {row['objective']:.8g}" if row["objective"] is not None
                               else "no design") + ("" if row["success"] else
                                                    f" ({row['message'] or 'failed'})")

@@ -20,8 +20,9 @@ from ..problem import describe
 from ..progress import Progress
 from ..parts import spring_part
 from .cache import get_nlp, stroke_simulator
+from .discretise import discretisation
 from .kinds import kind_config
-from .nlp import J_INDEX, ShootingNLP, discretisation
+from .nlp import J_INDEX, ShootingNLP
 from .optimiser import check_problem, finish, guarded, optimise, start_row
 from .polish import nlp_objective
 from .result import FrontResult, OptimiseResult

@@ -17,7 +17,8 @@ import numpy as np
 
 from ..problem import ERROR_KEYS, agreement_tolerance, objective
 from .cache import get_nlp
-from .nlp import MAX_STEPS, T_FLOOR, Run, ShootingNLP
+from .discretise import MAX_STEPS
+from .nlp import T_FLOOR, Run, ShootingNLP
 
 #: the NLP's objective must agree with an accurate simulation of its design to this
 #: (relative) before the answer goes to verification; else the sub-steps are doubled
@@ -156,7 +157,7 @@ def keep_clear(cfg, nlp: ShootingNLP, run: Run, notes: list) -> Run:
     graze a region. Checked exactly (:func:`softclose.optimiser.keep_out.clearance`); while
     a free line crosses one, the nodes' bound is raised by 1.5 times the crossing and the
     problem re-solved warm (at most :data:`MAX_TIGHTEN` times)."""
-    from .keep_out import LINES, clearance, free_lines
+    from .keep_out import clearance, free_lines
     groups = dict(nlp.groups())
     if not cfg.optimise.keep_out or "keep_out" not in groups:
         return run

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..display import Display, Displayed, Table, num, pm, with_unit
+from ..display import Display, Displayed, Table, num, with_unit
 from ..problem import DESIGN_KEYS, ENGAGE_KEYS, ENGAGE_METRICS, METRIC_KEYS, METRICS, UNITS
 from .verify import Verification
 

@@ -22,7 +22,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import NumericalError
-from ..problem import (CONSTRAINT_TOL, DESIGN_KEYS, ENGAGE_KEYS, METRIC_KEYS, UNITS,
+from ..problem import (CONSTRAINT_TOL, ENGAGE_KEYS, METRIC_KEYS, UNITS,
                        VERIFY_RTOL, PARAM_KEYS, agreement_tolerance, objective, params_of)
 from ..stroke import StrokeResult, StrokeStatus
 from .cache import get_model

@@ -119,7 +119,7 @@ def node_times(N: int, two_phase: bool, T: float, T1: float | None = None) -> np
 def discretise(cfg: Config) -> tuple[int, int, float, list[str]]:
     """(N, M, closing-time limit, notes) of the nominal optimiser's discretisation (with two
     phases, phase 2's sub-steps follow from cfg: :func:`phase_two`)."""
-    from ..optimiser.nlp import discretisation
+    from ..optimiser.discretise import discretisation
     d = discretisation(cfg)
     if isinstance(d, tuple):                    # the optimiser module before its split
         N, M, note = d
@@ -152,7 +152,7 @@ def phase_two(cfg: Config, nodes: int, substeps: int) -> int | None:
     """Phase 2's sub-steps (the nominal optimiser's rule), None for one phase."""
     if not two_phase(cfg):
         return None
-    from ..optimiser.nlp import phase_two_substeps
+    from ..optimiser.discretise import phase_two_substeps
     return phase_two_substeps(cfg, nodes, substeps)
 
 
