@@ -202,10 +202,10 @@ class Simulator:
         is OUT_OF_RANGE with that reason; one whose dashpot's length vanishes stops as not
         finite (:meth:`diagnose` says why).
 
-        ``opening=True`` adds ``opening_force`` (:meth:`opening_forces`). A large batch runs
-        in blocks of PIPE_ROWS, the statics of one block (reasons, valid ranges, holding
-        moments, opening efforts) while the kernel's threads integrate the next: the same
-        numbers, a row's depend on that row alone.
+        ``opening=True`` adds ``opening_force`` (:meth:`opening_forces`). A large batch of
+        rows with their own points runs in blocks of PIPE_ROWS, the statics of one block
+        (reasons, valid ranges, holding moments, opening efforts) while the kernel's threads
+        integrate the next: the same numbers, a row's depend on that row alone.
         """
         P = as_params(np.atleast_2d(np.asarray(P, float)))
         st = self.cfg.stroke
@@ -239,7 +239,10 @@ class Simulator:
                 res["opening_force"] = self.opening_forces(P[r], mr, Xr)
             return res
 
-        bounds = list(range(0, n, PIPE_ROWS)) + [n] if n > 2 * PIPE_ROWS else [0, n]
+        # (in blocks only with the rows' own points, whose statics weigh: a block's end is a
+        # barrier for the kernel's threads, ~15 % of a batch at the table's own points)
+        piped = X is not None and n > 2 * PIPE_ROWS
+        bounds = list(range(0, n, PIPE_ROWS)) + [n] if piped else [0, n]
         parts = _pipeline(kernel, statics_of, bounds)
         res = parts[0] if len(parts) == 1 else \
             {k: np.concatenate([q[k] for q in parts]) for k in parts[0]}
