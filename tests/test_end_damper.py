@@ -591,8 +591,11 @@ def test_time_history_figure_marks_the_engagement():
     from softclose.figures import plt
     from softclose.figures.stroke import plot_time_histories
     from test_figures_read import _clear
-    for sets, text in (({**SPRING, **end(0.8, 10.0)}, "end damper on: 0.1128 s, -2.424 rad/s"),
-                       ({**SPRING, **end(0.3, 25.0)}, "end damper engaged from the release")):
+    for sets, text in (({**SPRING, **end(0.8, 10.0)}, "end damper on\n0.1128 s, -2.424 rad/s"),
+                       ({**SPRING, **end(0.3, 25.0)}, "end damper engaged\nfrom the release"),
+                       ({"design.spring_k": 1914.709, "design.spring_rest_length": 0.07925707,
+                         "design.damper_c": 800.0, **end(0.4, 6.0)},
+                        "end damper on\n0.2230 s, -1.154 rad/s")):
         res = Simulator(default_config().update(sets)).run(trajectory=True)
         fig = plot_time_histories(res)
         assert [a.get_text() for a in fig.labels][-1] == text and len(fig.labels) == 4

@@ -51,8 +51,8 @@ def plot_time_histories(res, title: str = "Closing stroke"):
     fig.labels.append(place_label(ax[2], f"peak {res.peak_tip_speed:.3f} m/s",
                                   (tr["t"][i], res.peak_tip_speed)))
     if engage is not None:
-        text = (f"end damper on: {engage:.4f} s, {res.engage_theta_dot:.3f} rad/s"
-                if engage > 0 else "end damper engaged from the release")
+        text = (f"end damper on\n{engage:.4f} s, {res.engage_theta_dot:.3f} rad/s"
+                if engage > 0 else "end damper engaged\nfrom the release")
         fig.labels.append(place_label(ax[1], text, (engage, res.engage_theta_dot),
                                       avoid=[a for a in fig.labels if a.axes is ax[1]]))
     return fig
