@@ -256,10 +256,11 @@ def test_calibration_study(tmp_path):
 
 
 def test_co_design_study(tmp_path):
-    """The co-design levers: every answer verified, the spring's points lower the robust
-    worst case below today's points (0.1255 -> 0.1137) and the nominal J (0.0229 ->
-    0.0207), the dashpot's lower the nominal J, the end damper (engagement angle) lowers it
-    (0.0229 -> 0.0174) engaging at its lowest angle, and the files are written."""
+    """The co-design levers: every answer verified, today's robust worst case (0.1255), the
+    spring's points lower the nominal J (0.0229 -> 0.0207), the dashpot's lower it, the end
+    damper (engagement angle) lowers it (0.0229 -> 0.0174) engaging at its lowest angle, and
+    the files are written. (--fast leaves out the robust co-design of the spring's points,
+    which tests/test_placement.py solves: 0.1255 -> 0.1137.)"""
     script = STUDIES / "co_design.py"
     out = tmp_path / "co_design"
     t0 = time.time()
@@ -269,7 +270,7 @@ def test_co_design_study(tmp_path):
     rows = {(r["problem"], r["lever"]): r for r in json.loads(p.stdout)["levers"]}
     assert all(r["success"] for r in rows.values())
     assert rows[("robust", "today")]["objective"] == pytest.approx(0.12548, rel=1e-3)
-    assert rows[("robust", "spring")]["gain"] < -0.05
+    assert ("robust", "spring") not in rows
     assert rows[("nominal", "spring")]["gain"] < -0.05
     assert rows[("nominal", "dashpot")]["gain"] < -0.05
     end = rows[("nominal", "end_damper")]
