@@ -365,3 +365,21 @@ def test_the_default_robust_design_is_a_spring_one_can_buy(robust, robust_linear
         r = _reference_of(default_config().set("design.spring_kind", "compression"),
                           robust.design, s["values"])
         assert r.ok and r.max_spring_length <= robust.design["spring_rest_length"] + 1e-12
+
+
+def test_a_trial_stopped_at_its_iteration_cap_counts_as_not_shown_feasible(monkeypatch):
+    """The diagnosis' bisection counts a trial only when Ipopt solves it within
+    TRIAL_MAX_ITER iterations: with a cap of 1 no scenario NLP solves a trial, so only the
+    kernel sweep's certificates count (x0.3125 here) -- the scale comes out lower than the
+    x0.390625 of the full solves (80 iterations), never higher."""
+    from softclose.robust import infeasible
+    monkeypatch.setattr(infeasible, "TRIAL_MAX_ITER", 1)
+    cfg = default_config().update({"optimise.closing_time_min": 0.7,
+                                   "optimise.closing_time_max": 0.9,
+                                   "optimise.spring_kinds": ["compression"],
+                                   "tolerance.samples": 200})
+    r = optimise_robust(cfg)
+    assert not r.success
+    scale = r.infeasibility["feasible_scale"]
+    assert 0.25 <= scale < 0.390625
+    assert f"spreads up to x{scale:.2f} of the configured ones" in r.message

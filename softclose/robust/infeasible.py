@@ -57,7 +57,7 @@ def diagnose(cfg: Config, run: Run, problem: Problem, N: int, M: int, seed: int)
     violation at the full spreads of the best design found."""
     o = cfg.optimise
     trial_cfg = cfg.set("optimise.max_iter", min(o.max_iter, TRIAL_MAX_ITER))
-    lo, hi, best = 0.0, 1.0, None
+    lo, hi, best, capped = 0.0, 1.0, None, 0
     subset = 2 ** problem.box.dim > max_corners(cfg)
 
     def holds(a, design) -> bool:
@@ -90,6 +90,7 @@ def diagnose(cfg: Config, run: Run, problem: Problem, N: int, M: int, seed: int)
             lo, best = a, ra.design
         else:
             hi = a
+            capped += ra is not None and ra.r["status"] == "Maximum_Iterations_Exceeded"
     design = best if best is not None else run.design
     box1 = box_of(cfg, dict(zip(DESIGN_KEYS, design)))
     Z = box1.corners()
@@ -118,6 +119,9 @@ def diagnose(cfg: Config, run: Run, problem: Problem, N: int, M: int, seed: int)
         parts.append(f"a robust design exists for spreads up to x{lo:.2f} of the configured "
                      f"ones ({spreads})")
     else:
+        cap = (f" (trials stop at {TRIAL_MAX_ITER} Ipopt iterations; {capped} of them "
+               "did)") if capped else ""
         parts.append("no robust design was found even for spreads of x0.02 of the configured "
-                     "ones: check that the nominal problem has a solution (softclose optimise)")
+                     f"ones{cap}: check that the nominal problem has a solution (softclose "
+                     "optimise)")
     return "no design meets every constraint over the tolerance box: " + "; ".join(parts), info
