@@ -225,10 +225,12 @@ def work_precision(cfg: Config, quick: bool = False, repeats: int | None = None,
 def cheapest_setting(rows: list, designs: list) -> dict:
     """The cheapest (method, step) that meets the targets on every design of ``designs``.
 
-    Cost is the total kernel run time over the designs, each the fastest of its repeats
-    (``time_min``: the least disturbed by other load on the machine). ``per_method`` gives
-    the cheapest passing step of each method. ``method`` and ``step`` are None when nothing
-    passes.
+    Within a method the cheapest is its largest passing step (a fixed-step stroke's work is
+    its step count times the method's stages: no timing noise decides between two steps of
+    one method); between methods, the total kernel run time over the designs at those steps,
+    each the fastest of its repeats (``time_min``: the least disturbed by other load on the
+    machine). ``per_method`` gives the cheapest passing step of each method. ``method`` and
+    ``step`` are None when nothing passes.
     """
     per = {}
     for r in rows:
@@ -239,12 +241,15 @@ def cheapest_setting(rows: list, designs: list) -> dict:
         e["ok"] &= bool(r["meets_targets"])
         e["time"] += r.get("time_min", r["time_per_stroke"])
         e["designs"] += 1
-    good = sorted((e for e in per.values() if e["ok"] and e["designs"] == len(designs)),
-                  key=lambda e: e["time"])
-    per_method = {}
-    for e in good:
-        per_method.setdefault(e["method"], {"step": e["step"],
-                                            "mean_time_per_stroke": e["time"] / len(designs)})
+    best: dict = {}
+    for e in per.values():
+        if e["ok"] and e["designs"] == len(designs) and \
+                e["step"] > best.get(e["method"], {"step": -1.0})["step"]:
+            best[e["method"]] = e
+    good = sorted(best.values(), key=lambda e: e["time"])
+    per_method = {e["method"]: {"step": e["step"],
+                                "mean_time_per_stroke": e["time"] / len(designs)}
+                  for e in good}
     if not good:
         return {"method": None, "step": None, "mean_time_per_stroke": None,
                 "per_method": per_method}
