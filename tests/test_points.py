@@ -15,11 +15,7 @@ sweeps, samples, the tolerance analysis with a placement key; bad points reporte
 
 from __future__ import annotations
 
-import json
 import math
-import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -34,6 +30,8 @@ from softclose.reference import Reference
 from softclose.robust.evaluate import evaluate, slow_keys
 from softclose.simulate import Simulator
 from softclose.stroke import StrokeStatus
+
+from kernel_checks import energy_rise_ratio, scalar_strokes
 
 #: the issue's placement box (the co-design's --free bounds), m
 BOX = {"geometry.spring_anchor[0]": (-0.09, -0.03), "geometry.spring_anchor[1]": (-0.01, 0.05),
@@ -220,27 +218,10 @@ def test_early_exit_with_points(cfg, model, integrator, step):
         c = sim.table.evaluate(tr[:, 1])
         l = native.point_lengths(sim.table, tr[:, 1], np.tile(X[i], (len(tr), 1)))["l"]
         E = 0.5 * c[:, 0] * tr[:, 2] ** 2 + c[:, 2] + 0.5 * P[i, 0] * (l - P[i, 1]) ** 2
-        n = int(on[i, COL["steps"]])
-        gain = max(0.0, float(np.diff(E[:n + 1]).max()))
         scale = abs(c[0, 2]) + 0.5 * P[i, 0] * (l[0] - P[i, 1]) ** 2 + abs(E[0])
-        margin = 2 * ((st.t_max - tr[n, 0]) / step + 1) * gain + 1e-12 * scale
-        rise = float(E[n + 1:].max() - E[n])
-        assert rise <= margin + 1e-15 * scale, (i, rise, margin)
-        worst = max(worst, rise / margin)
+        worst = max(worst, energy_rise_ratio(E, tr[:, 0], int(on[i, COL["steps"]]), st.t_max,
+                                             step, scale))
     assert worst < 0.9
-
-
-_SCALAR_RUN = """
-import json, sys
-import numpy as np
-from softclose import native
-from softclose.config import default_config
-from softclose.simulate import Simulator
-sim = Simulator(default_config()); st = sim.cfg.stroke
-D = np.array(json.loads(sys.stdin.read()))
-out = native.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0, st.theta_closed, D)
-sys.stdout.write(json.dumps(out.tobytes().hex()))
-"""
 
 
 def test_scalar_and_simd_agree_on_point_rows(sim):
@@ -252,12 +233,7 @@ def test_scalar_and_simd_agree_on_point_rows(sim):
     ec = native.DESIGN_COLUMNS.index("end_damper_c")       # some with an end damper
     D[1::4, ec], D[1::4, ec + 1] = 0.3, math.radians(7.0)
     on = _strokes(sim, D)
-    env = dict(os.environ, SC_SCALAR="1")
-    res = subprocess.run([sys.executable, "-c", _SCALAR_RUN], input=json.dumps(
-        np.where(np.isnan(D), None, D).tolist()), capture_output=True, text=True, env=env,
-        check=True)
-    scalar = np.frombuffer(bytes.fromhex(json.loads(res.stdout)), float).reshape(on.shape)
-    assert np.array_equal(scalar, on, equal_nan=True)
+    assert np.array_equal(scalar_strokes(D), on, equal_nan=True)
     one = np.vstack([_strokes(sim, D[i:i + 1]) for i in range(0, 96, 13)])
     assert np.array_equal(one, on[::13], equal_nan=True)
 
