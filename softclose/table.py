@@ -288,8 +288,8 @@ class CoefficientTable:
         """Cubic Hermite pieces (ncell, len(POSE), 4) of the crank pin A(theta), its slope
         A'(theta), cos theta and sin theta on the table's cells: every lid point is
         P = A + R(theta) p, so a row's own attachment points give their lengths from these
-        (:func:`softclose.native.point_lengths`; the kernel's ``pcc``). Built on first use, from the model's
-        closure with exact derivatives, like the coefficients."""
+        (:func:`softclose.native.point_lengths`; the kernel's ``pcc``). Built on first use,
+        from the model's closure with exact derivatives, like the coefficients."""
         import casadi as ca
         from .dynamics import pose
         m = self.model

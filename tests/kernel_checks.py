@@ -41,11 +41,12 @@ def scalar_strokes(D: np.ndarray) -> np.ndarray:
 
 
 def energy_rise_ratio(E: np.ndarray, t: np.ndarray, n: int, t_max: float, step: float,
-                      scale: float) -> float:
+                      scale: float, row=None) -> float:
     """Asserts that the energies ``E`` at the nodes ``t`` of a whole stroke never rise after
-    the exit node ``n`` above E[n] + margin; returns the rise over the margin."""
+    the exit node ``n`` above E[n] + margin (a failure names ``row``); returns the rise over
+    the margin."""
     gain = max(0.0, float(np.diff(E[:n + 1]).max()))
     margin = 2 * ((t_max - t[n]) / step + 1) * gain + 1e-12 * scale
     rise = float(E[n + 1:].max() - E[n])
-    assert rise <= margin + 1e-15 * scale, (rise, margin)
+    assert rise <= margin + 1e-15 * scale, (row, rise, margin)
     return rise / margin

@@ -220,7 +220,7 @@ def test_early_exit_with_points(cfg, model, integrator, step):
         E = 0.5 * c[:, 0] * tr[:, 2] ** 2 + c[:, 2] + 0.5 * P[i, 0] * (l - P[i, 1]) ** 2
         scale = abs(c[0, 2]) + 0.5 * P[i, 0] * (l[0] - P[i, 1]) ** 2 + abs(E[0])
         worst = max(worst, energy_rise_ratio(E, tr[:, 0], int(on[i, COL["steps"]]), st.t_max,
-                                             step, scale))
+                                             step, scale, i))
     assert worst < 0.9
 
 

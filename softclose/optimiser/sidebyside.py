@@ -166,8 +166,6 @@ class KindProcess:
         self.close(wait=0.0 if exc_type is not None else 1.0)
 
 
-__all__ = ["KindProcess", "available", "ENV", "shared_starts", "ahead"]
-
 
 def shared_starts(n: int) -> tuple:
     """Which of the first kind's ``n`` starts the other kind's process solves (before its
@@ -187,3 +185,6 @@ def ahead(later):
             raise err
         return again
     return lambda: done
+
+
+__all__ = ["KindProcess", "available", "ENV", "shared_starts", "ahead"]

@@ -121,9 +121,6 @@ def discretise(cfg: Config) -> tuple[int, int, float, list[str]]:
     phases, phase 2's sub-steps follow from cfg: :func:`phase_two`)."""
     from ..optimiser.discretise import discretisation
     d = discretisation(cfg)
-    if isinstance(d, tuple):                    # the optimiser module before its split
-        N, M, note = d
-        return N, M, cfg.optimise.closing_time_max, [note] if note else []
     return d.nodes, d.substeps, d.t_limit, list(d.notes)
 
 
