@@ -16,7 +16,10 @@ loads them instead of building them:
   not help: it is 12 MB and takes as long to load as to build (~0.1 s). Compiling takes
   seconds, so it is never done while a command waits: the second time an NLP is used (in
   another process), a background process (``nice``, its own session) compiles it, and runs
-  after that load it.
+  after that load it. The robust optimiser's scenario NLPs (:mod:`softclose.robust.nlp`)
+  are kept the same way, compiled with :data:`SCENARIO_CFLAGS` (the robust co-design's
+  joint NLP: ~100 s and ~3 GB of compiler memory, once; its solve then takes 6 s instead
+  of 12 s, and nothing is built: 0.02 s instead of 2 s).
 
 Every entry is keyed by the config's part that it depends on and by a fingerprint of the
 software that built it (CasADi's and numpy's versions, Python, and the size and time of
@@ -44,6 +47,11 @@ MAX_ENTRIES = 64
 #: compiler flags of the NLP: -O1 compiles the default NLP in ~10 s and solves 2.3x faster
 #: than the virtual machine (-O2: 50 s to compile, 3.4x; -O0: 4 s, 1.5x)
 CFLAGS = ("-O1", "-shared", "-fPIC")
+#: compiler flags of the robust optimiser's scenario NLPs: their C is ~20 times the
+#: optimiser's (9 scenarios of 3 models, the points free: 39 MB), which -O1 compiles in
+#: ~7 min; -O0 in ~100 s, and their solves still run ~2x faster than the virtual machine
+#: (the co-design's joint NLP: 6.0 s against 11.9 s, the same 89 iterations and bits)
+SCENARIO_CFLAGS = ("-O0", "-shared", "-fPIC", "-pthread")
 #: a compile lock older than this (s) belongs to a process that died
 STALE_LOCK = 900.0
 
@@ -274,11 +282,13 @@ def forget_nlp(key: str) -> None:
         _remove(where / f"nlp-{key}.so")
 
 
-def request_nlp(key: str, spec: dict) -> bool:
+def request_nlp(key: str, spec: dict, module: str = "softclose.optimiser.compile") -> bool:
     """The NLP ``key`` was used (and is not compiled): the second time -- a marker remembers
     the first -- start its compilation in the background, unless another one is running
-    (one at a time). ``spec``: what builds it (the config as a dict, nodes, substeps). True
-    when a compilation was started."""
+    (one at a time). ``spec``: what builds it (the config as a dict, nodes, substeps);
+    ``module``: the one that builds and compiles it (``python -m module LOCK``: the
+    optimiser's, or :mod:`softclose.robust.compile`). True when a compilation was
+    started."""
     if not compile_enabled():
         return False
     where = folder()
@@ -305,7 +315,7 @@ def request_nlp(key: str, spec: dict) -> bool:
     with os.fdopen(fd, "w") as f:
         json.dump({"key": key, **spec}, f)
     try:
-        subprocess.Popen([sys.executable, "-m", "softclose.optimiser.compile", str(lock)],
+        subprocess.Popen([sys.executable, "-m", module, str(lock)],
                          stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                          stderr=subprocess.DEVNULL, start_new_session=True, close_fds=True,
                          env={**os.environ, ENV_FOLDER: os.environ.get(ENV_FOLDER, "")})
@@ -315,9 +325,10 @@ def request_nlp(key: str, spec: dict) -> bool:
     return True
 
 
-def compile_nlp(solver, key: str) -> Path | None:
-    """Generate the C of ``solver``'s functions, compile it and put the library in the cache
-    as the NLP ``key`` (here and now: seconds). None when there is no cache or no compiler."""
+def compile_nlp(solver, key: str, flags: tuple = CFLAGS) -> Path | None:
+    """Generate the C of ``solver``'s functions, compile it (``flags``) and put the library
+    in the cache as the NLP ``key`` (here and now: seconds). None when there is no cache or
+    no compiler."""
     import shutil
     import subprocess
     import tempfile
@@ -336,7 +347,7 @@ def compile_nlp(solver, key: str) -> Path | None:
             os.chdir(old)
         src, out = Path(tmp) / f"nlp_{key}.c", Path(tmp) / f"nlp-{key}.so"
         try:
-            subprocess.run([cc, *CFLAGS, str(src), "-o", str(out), "-lm"], check=True,
+            subprocess.run([cc, *flags, str(src), "-o", str(out), "-lm"], check=True,
                            capture_output=True)
         except (OSError, subprocess.CalledProcessError):
             return None

@@ -1,0 +1,33 @@
+"""The background compilation of a scenario NLP (``python -m softclose.robust.compile LOCK``):
+:func:`softclose.buildcache.request_nlp` starts it the second time the robust optimiser
+builds the same scenario NLP (:func:`softclose.robust.nlp.get_scenario_nlp`); it builds the
+NLP the lock file names, compiles it into the cache (:data:`softclose.buildcache.
+SCENARIO_CFLAGS`) and removes the lock. The optimiser's own NLPs have
+:mod:`softclose.optimiser.compile`."""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from pathlib import Path
+
+
+def main(lock: str) -> int:
+    """Build the scenario NLP the lock file ``lock`` names, compile it, remove the lock."""
+    from ..buildcache import SCENARIO_CFLAGS, _remove, compile_nlp
+    try:
+        os.nice(10)
+    except OSError:
+        pass
+    try:
+        spec = json.loads(Path(lock).read_text())
+        from .nlp import build_from_spec
+        compile_nlp(build_from_spec(spec).solver, spec["key"], SCENARIO_CFLAGS)
+    finally:
+        _remove(Path(lock))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1]))

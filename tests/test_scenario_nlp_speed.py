@@ -1,0 +1,124 @@
+"""The robust optimiser's scenario NLP, faster and the same: its shooting intervals evaluated
+in threads give the same solve bit for bit; the second time the same scenario NLP is built a
+background process compiles it (softclose.robust.compile); the compiled library solves to the
+same point in the same iterations, and a damaged one is dropped, never an error."""
+
+from __future__ import annotations
+
+import importlib
+import os
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from softclose import buildcache
+from softclose.config import from_dict
+
+rnlp = importlib.import_module("softclose.robust.nlp")
+
+#: a small problem: 2 scenarios of the default box, 4 intervals of 2 sub-steps (the
+#: compiled library of it takes a few seconds; the co-design's takes ~100 s)
+NODES, SUBSTEPS = 4, 2
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    monkeypatch.setenv(buildcache.ENV_FOLDER, str(tmp_path))
+    rnlp._NLPS.clear()
+    yield tmp_path
+    rnlp._NLPS.clear()
+
+
+def _problem(cfg):
+    from softclose.robust.box import box_of
+    from softclose.robust.scenarios import initial_scenarios
+    from softclose.robust.solve import Problem
+    design = [cfg.design.spring_k, cfg.design.spring_rest_length, cfg.design.damper_c]
+    scen = initial_scenarios(box_of(cfg), cfg, [design], 1.0)
+    assert len(scen) >= 2
+    return Problem(cfg, 1.0, scen[:2], NODES, SUBSTEPS), design
+
+
+def _solve(cfg):
+    problem, design = _problem(cfg)
+    x0, J_ref = problem.initial(design)
+    return problem, problem.solve(x0, J_ref)
+
+
+def test_threads_give_the_same_solve(cache, cfg, monkeypatch):
+    monkeypatch.setenv(buildcache.ENV_COMPILE, "0")
+    monkeypatch.setattr(rnlp, "MAX_MAP_THREADS", 1)
+    assert rnlp.map_threads() == 1
+    _, one = _solve(cfg)
+    rnlp._NLPS.clear()
+    monkeypatch.setattr(rnlp, "MAX_MAP_THREADS", 4)
+    monkeypatch.setattr(rnlp, "map_threads", lambda: 3)     # threads even on one core
+    _, three = _solve(cfg)
+    assert one.success and three.success
+    assert three.r["iterations"] == one.r["iterations"]
+    assert np.array_equal(three.r["x"], one.r["x"])
+    assert np.array_equal(three.J, one.J) and np.array_equal(three.peaks, one.peaks)
+
+
+def test_the_second_build_of_a_scenario_nlp_compiles_it_in_the_background(cache, cfg,
+                                                                          monkeypatch):
+    monkeypatch.setenv(buildcache.ENV_COMPILE, "1")
+    started = []
+
+    class Popen:
+        def __init__(self, cmd, **kw):
+            started.append(cmd)
+    monkeypatch.setattr(subprocess, "Popen", Popen)
+    first, _ = _problem(cfg)                 # first build: remembered, nothing compiled
+    assert not started and list(cache.glob(f"*/seen-{first.nlp.key}"))
+    assert list(cache.glob(f"*/nlpmeta-{first.nlp.key}.bin"))
+    rnlp._NLPS.clear()
+    again, _ = _problem(cfg)                 # second (another process): compile it
+    assert len(started) == 1 and started[0][1:3] == ["-m", "softclose.robust.compile"]
+    spec = __import__("json").loads(open(started[0][3]).read())
+    assert spec["kind"] == "scenario" and spec["key"] == again.nlp.key
+    assert from_dict(spec["config"]) == cfg
+    assert [from_dict(m) for m in spec["models"]] == again.model_cfgs
+    # the spec builds the same NLP: the same constraint groups and variables
+    built = rnlp.build_from_spec(spec)
+    assert built.g_sizes == again.nlp.g_sizes and built.nw == again.nlp.nw
+
+
+@pytest.mark.slow
+def test_the_compiled_scenario_nlp_gives_the_same_solve(cache, cfg, monkeypatch):
+    if shutil.which(os.environ.get("CC", "cc")) is None:
+        pytest.skip("no C compiler")
+    monkeypatch.setenv(buildcache.ENV_COMPILE, "1")
+    monkeypatch.setattr(buildcache, "request_nlp", lambda *a, **k: False)   # no background
+    vm_problem, vm = _solve(cfg)
+    assert vm_problem.nlp.library is None and vm.success
+    spec = rnlp.compile_spec(cfg, vm_problem.model_cfgs, NODES, SUBSTEPS,
+                             cfg.tolerance.robust_objective, vm_problem.M2)
+    key = vm_problem.nlp.key
+    assert buildcache.compile_nlp(rnlp.build_from_spec(spec).solver, key,
+                                  buildcache.SCENARIO_CFLAGS) is not None
+    rnlp._NLPS.clear()
+    problem, fast = _solve(cfg)
+    assert problem.nlp.library is not None and problem.nlp.build_time < 0.5
+    assert fast.r["iterations"] == vm.r["iterations"]
+    np.testing.assert_allclose(fast.r["x"], vm.r["x"], rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(fast.J, vm.J, rtol=1e-12)
+    np.testing.assert_allclose(fast.peaks, vm.peaks, rtol=1e-12)
+    assert problem.nlp.g_sizes == vm_problem.nlp.g_sizes
+    # the warm solver of the library: a warm start at the answer stays there (the design
+    # and every scenario's objective; an epigraph variable nothing pins may move)
+    warm = problem.solve(fast.r["x"], fast.J_ref, (fast.r["lam_x"], fast.r["lam_g"]))
+    assert warm.success and warm.r["iterations"] <= 3
+    np.testing.assert_allclose(warm.design, fast.design, rtol=1e-7)
+    np.testing.assert_allclose(warm.J, fast.J, rtol=1e-7)
+    # a library of another NLP (its numbers say other dimensions) is dropped and the NLP
+    # built again: the same answer (a damaged file fails the same way, in dlopen)
+    meta = dict(buildcache.load("nlpmeta", key))
+    meta["nw"] = meta["nw"] + 1
+    buildcache.store("nlpmeta", key, meta)
+    rnlp._NLPS.clear()
+    problem, again = _solve(cfg)
+    assert problem.nlp.library is None and buildcache.compiled_nlp(key) is None
+    assert np.array_equal(again.r["x"], vm.r["x"])
