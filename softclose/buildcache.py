@@ -16,7 +16,8 @@ loads them instead of building them:
   not help: it is 12 MB and takes as long to load as to build (~0.1 s). Compiling takes
   seconds, so it is never done while a command waits: the second time an NLP is used (in
   another process), a background process (``nice``, its own session) compiles it, and runs
-  after that load it. The robust optimiser's scenario NLPs (:mod:`softclose.robust.nlp`)
+  after that load it (one compilation at a time; up to :data:`MAX_PENDING` more asked for
+  meanwhile wait their turn, :func:`chain`). The robust optimiser's scenario NLPs (:mod:`softclose.robust.nlp`)
   are kept the same way, compiled with :data:`SCENARIO_CFLAGS` (the robust co-design's
   joint NLP: ~100 s and ~3 GB of compiler memory, once; its solve then takes 6 s instead
   of 12 s, and nothing is built: 0.02 s instead of 2 s).
@@ -301,7 +302,9 @@ def request_nlp(key: str, spec: dict, module: str = "softclose.optimiser.compile
         _prune(where, "seen-*")
         return False
     # one compilation at a time on this machine (a grid of lids run twice must not start a
-    # compiler per lid): a later use asks again
+    # compiler per lid): while one runs, a few more wait their turn (pending-*), and a later
+    # use asks again
+    import json
     lock = where / "compiling.lock"
     try:
         import time
@@ -309,8 +312,8 @@ def request_nlp(key: str, spec: dict, module: str = "softclose.optimiser.compile
             _remove(lock)
         fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
     except OSError:                   # being compiled by another process (or no room)
+        _queue(where, key, {**spec, "module": module})
         return False
-    import json
     import subprocess
     with os.fdopen(fd, "w") as f:
         json.dump({"key": key, **spec}, f)
@@ -323,6 +326,58 @@ def request_nlp(key: str, spec: dict, module: str = "softclose.optimiser.compile
         _remove(lock)
         return False
     return True
+
+
+#: compilations waiting while one runs, at most (each ~10 s to ~2 min of a background core)
+MAX_PENDING = 4
+
+
+def _queue(where: Path, key: str, spec: dict) -> None:
+    """Ask for the NLP ``key`` to be compiled after the running compilation (:func:`chain`):
+    a pending-KEY file with its spec and the module that compiles it, unless it is asked
+    already or :data:`MAX_PENDING` are."""
+    import json
+    path = where / f"pending-{key}"
+    try:
+        if path.exists() or len(list(where.glob("pending-*"))) >= MAX_PENDING:
+            return
+        tmp = where / f".pending-{key}.{os.getpid()}.tmp"
+        tmp.write_text(json.dumps({"key": key, **spec}))
+        os.replace(tmp, path)
+    except OSError:
+        pass
+
+
+def chain(lock: Path) -> None:
+    """The end of a background compilation holding ``lock``: the next waiting one
+    (:func:`_queue`, oldest first) takes this process's place (``exec``; the lock stays held
+    and names it); none left, the lock goes. Called by the compile modules last."""
+    import json
+    import time
+    where = lock.parent
+    try:
+        waiting = sorted(where.glob("pending-*"), key=lambda p: p.stat().st_mtime)
+    except OSError:
+        waiting = []
+    for path in waiting:
+        try:
+            spec = json.loads(path.read_text())
+            module = spec.pop("module")
+            key = spec["key"]
+            if (where / f"nlp-{key}.so").exists():
+                raise ValueError("compiled already")
+            lock.write_text(json.dumps(spec))
+            path.unlink()
+            now = time.time()
+            os.utime(lock, (now, now))
+        except (OSError, ValueError, KeyError, TypeError):
+            _remove(path)
+            continue
+        try:
+            os.execv(sys.executable, [sys.executable, "-m", module, str(lock)])
+        except OSError:
+            break
+    _remove(lock)
 
 
 def compile_nlp(solver, key: str, flags: tuple = CFLAGS) -> Path | None:

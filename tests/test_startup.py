@@ -138,6 +138,59 @@ def test_the_second_use_of_an_nlp_compiles_it_in_the_background(cache, cfg, monk
     _clear_memory()
 
 
+def test_compilations_asked_for_while_one_runs_wait_their_turn(cache, cfg, monkeypatch):
+    """While one NLP compiles, the second use of another queues it (at most MAX_PENDING);
+    the running compilation's end hands the lock to the oldest waiting one (exec, the lock
+    held), and to none once none waits."""
+    monkeypatch.setenv(buildcache.ENV_COMPILE, "1")
+    started = []
+
+    class Popen:
+        def __init__(self, cmd, **kw):
+            started.append(cmd)
+    import json
+    import subprocess
+    monkeypatch.setattr(subprocess, "Popen", Popen)
+    for _ in range(2):                                # the first NLP: compiling
+        assert not buildcache.request_nlp("first", {"nodes": 1}) or len(started) == 1
+    lock = Path(started[0][3])
+    assert lock.exists() and len(started) == 1
+    for i in range(buildcache.MAX_PENDING + 2):       # more, while it runs: queued
+        for _ in range(2):
+            assert not buildcache.request_nlp(f"k{i}", {"nodes": i}, "softclose.robust.compile")
+        if i < buildcache.MAX_PENDING:                # (the order they were asked in)
+            os.utime(buildcache.folder() / f"pending-k{i}", (time.time() + i,) * 2)
+    waiting = sorted(p.name for p in buildcache.folder().glob("pending-*"))
+    assert waiting == [f"pending-k{i}" for i in range(buildcache.MAX_PENDING)]
+    assert len(started) == 1
+    execs = []
+
+    class Exec(Exception):
+        """exec does not return: this process became the next compilation"""
+
+    def execv(exe, argv):
+        execs.append(argv)
+        raise Exec
+    monkeypatch.setattr(os, "execv", execv)
+
+    def end():
+        try:
+            buildcache.chain(lock)
+        except Exec:
+            pass
+    (buildcache.folder() / "nlp-k0.so").write_bytes(b"")   # k0 got compiled meanwhile
+    end()                                             # the first one ends: k1 is next
+    assert execs[-1][1:] == ["-m", "softclose.robust.compile", str(lock)]
+    assert json.loads(lock.read_text()) == {"key": "k1", "nodes": 1}
+    assert not (buildcache.folder() / "pending-k0").exists()
+    for _ in range(buildcache.MAX_PENDING - 2):
+        end()
+    assert json.loads(lock.read_text())["key"] == f"k{buildcache.MAX_PENDING - 1}"
+    end()                                             # none waits: the lock goes
+    assert not lock.exists() and not list(buildcache.folder().glob("pending-*"))
+    assert len(execs) == buildcache.MAX_PENDING - 1
+
+
 @pytest.mark.slow
 def test_the_compiled_nlp_gives_the_same_optimum(cache, cfg, monkeypatch):
     """The NLP compiled to C (a few seconds here) solves to the same optimum as CasADi's

@@ -223,9 +223,9 @@ SETTLE_WAIT = 1200.0
 
 def _settle(argv: list[str], log) -> None:
     """Run ``softclose ARGV`` until a run starts no background compile: the second use of
-    each of its NLPs compiles it (:func:`softclose.buildcache.request_nlp`, one at a time:
-    the robust co-design's joint scenario NLP takes ~100 s), and a user's later runs load
-    them. Waits for each compile to end."""
+    each of its NLPs compiles it (:func:`softclose.buildcache.request_nlp`, one at a time,
+    the others waiting their turn: the robust co-design's joint scenario NLP takes ~100 s),
+    and a user's later runs load them. Waits for the compiles to end."""
     from .. import buildcache
     from .timing import cli_time
     where = buildcache.folder()

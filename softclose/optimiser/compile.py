@@ -1,6 +1,7 @@
 """The background compilation of an NLP (``python -m softclose.optimiser.compile LOCK``):
 :func:`softclose.buildcache.request_nlp` starts it the second time an NLP is used; it builds
-the NLP the lock file names, compiles it into the cache and removes the lock. It lives with
+the NLP the lock file names, compiles it into the cache, and hands the lock to the next
+compilation that waits (:func:`softclose.buildcache.chain`) or removes it. It lives with
 the optimiser, which it builds: the cache below it only stores and finds files."""
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from pathlib import Path
 
 def main(lock: str) -> int:
     """Build the NLP the lock file ``lock`` names, compile it, remove the lock."""
-    from ..buildcache import _remove, compile_nlp
+    from ..buildcache import chain, compile_nlp
     try:
         os.nice(10)
     except OSError:
@@ -26,7 +27,7 @@ def main(lock: str) -> int:
                         spec.get("substeps2"))
         compile_nlp(nlp.solver, spec["key"])
     finally:
-        _remove(Path(lock))
+        chain(Path(lock))      # the next waiting compilation in this one's place, or none
     return 0
 
 

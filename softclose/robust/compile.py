@@ -2,7 +2,8 @@
 :func:`softclose.buildcache.request_nlp` starts it the second time the robust optimiser
 builds the same scenario NLP (:func:`softclose.robust.nlp.get_scenario_nlp`); it builds the
 NLP the lock file names, compiles it into the cache (:data:`softclose.buildcache.
-SCENARIO_CFLAGS`) and removes the lock. The optimiser's own NLPs have
+SCENARIO_CFLAGS`), and hands the lock to the next compilation that waits
+(:func:`softclose.buildcache.chain`) or removes it. The optimiser's own NLPs have
 :mod:`softclose.optimiser.compile`."""
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from pathlib import Path
 
 def main(lock: str) -> int:
     """Build the scenario NLP the lock file ``lock`` names, compile it, remove the lock."""
-    from ..buildcache import SCENARIO_CFLAGS, _remove, compile_nlp
+    from ..buildcache import SCENARIO_CFLAGS, chain, compile_nlp
     try:
         os.nice(10)
     except OSError:
@@ -25,7 +26,7 @@ def main(lock: str) -> int:
         from .nlp import build_from_spec
         compile_nlp(build_from_spec(spec).solver, spec["key"], SCENARIO_CFLAGS)
     finally:
-        _remove(Path(lock))
+        chain(Path(lock))      # the next waiting compilation in this one's place, or none
     return 0
 
 
