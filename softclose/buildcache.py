@@ -17,10 +17,11 @@ loads them instead of building them:
   seconds, so it is never done while a command waits: the second time an NLP is used (in
   another process), a background process (``nice``, its own session) compiles it, and runs
   after that load it (one compilation at a time; up to :data:`MAX_PENDING` more asked for
-  meanwhile wait their turn, :func:`chain`). The robust optimiser's scenario NLPs (:mod:`softclose.robust.nlp`)
-  are kept the same way, compiled with :data:`SCENARIO_CFLAGS` (the robust co-design's
-  joint NLP: ~100 s and ~3 GB of compiler memory, once; its solve then takes 6 s instead
-  of 12 s, and nothing is built: 0.02 s instead of 2 s).
+  meanwhile wait their turn, :func:`chain`). The robust optimiser's scenario NLPs
+  (:mod:`softclose.robust.nlp`) are kept the same way, compiled with
+  :data:`SCENARIO_CFLAGS` (the robust co-design's joint NLP: ~100 s and ~3 GB of compiler
+  memory, once; its solve then takes 6 s instead of 12 s, and nothing is built: 0.02 s
+  instead of 2 s).
 
 Every entry is keyed by the config's part that it depends on and by a fingerprint of the
 software that built it (CasADi's and numpy's versions, Python, and the size and time of

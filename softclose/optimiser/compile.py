@@ -13,7 +13,7 @@ from pathlib import Path
 
 
 def main(lock: str) -> int:
-    """Build the NLP the lock file ``lock`` names, compile it, remove the lock."""
+    """Build the NLP the lock file ``lock`` names, compile it, hand the lock on."""
     from ..buildcache import chain, compile_nlp
     try:
         os.nice(10)

@@ -15,7 +15,7 @@ from pathlib import Path
 
 
 def main(lock: str) -> int:
-    """Build the scenario NLP the lock file ``lock`` names, compile it, remove the lock."""
+    """Build the scenario NLP the lock file ``lock`` names, compile it, hand the lock on."""
     from ..buildcache import SCENARIO_CFLAGS, chain, compile_nlp
     try:
         os.nice(10)
