@@ -381,6 +381,44 @@ def chain(lock: Path) -> None:
     _remove(lock)
 
 
+def load_or_build(disk: str, restore, build, spec, module: str = "softclose.optimiser.compile"):
+    """The NLP kept as ``disk``: ``restore(library, meta)`` when this software compiled it
+    (a damaged or foreign library is dropped), else ``build()`` -- its ``meta()`` stored and
+    its background compilation asked for (:func:`request_nlp` with ``spec()``, the module
+    ``module``). The one way the optimiser's and the robust optimiser's NLPs are kept."""
+    lib = compiled_nlp(disk)
+    meta = load("nlpmeta", disk) if lib is not None else None
+    if meta is not None:
+        try:
+            return restore(lib, meta)
+        except Exception:   # noqa: BLE001  (a damaged or foreign library: build anew)
+            forget_nlp(disk)
+    nlp = build()
+    if compile_enabled():
+        if not has("nlpmeta", disk):
+            store("nlpmeta", disk, nlp.meta())
+        request_nlp(disk, spec(), module)
+    return nlp
+
+
+def compile_locked(lock: str, build, flags: tuple = CFLAGS) -> int:
+    """The body of a background compilation (``python -m MODULE LOCK``, started by
+    :func:`request_nlp`): at low priority, ``build(spec)`` the NLP the lock file names (an
+    object with ``solver``), compile it into the cache with ``flags``, and hand the lock
+    on (:func:`chain`)."""
+    import json
+    try:
+        os.nice(10)
+    except OSError:
+        pass
+    try:
+        spec = json.loads(Path(lock).read_text())
+        compile_nlp(build(spec).solver, spec["key"], flags)
+    finally:
+        chain(Path(lock))      # the next waiting compilation in this one's place, or none
+    return 0
+
+
 def compile_nlp(solver, key: str, flags: tuple = CFLAGS) -> Path | None:
     """Generate the C of ``solver``'s functions, compile it (``flags``) and put the library
     in the cache as the NLP ``key`` (here and now: seconds). None when there is no cache or

@@ -82,28 +82,19 @@ def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
     if key not in _NLPS:
         N, M, M2 = key[-5], key[-4], key[-6]
         disk = buildcache.key_of("nlp", key)
-        nlp = None
-        lib = buildcache.compiled_nlp(disk)
-        meta = buildcache.load("nlpmeta", disk) if lib is not None else None
-        if meta is not None:
-            try:
-                nlp = ShootingNLP(get_model(cfg), N, M, o.hessian, o.linear_solver,
-                                  o.max_iter, els=nlp_elements(cfg),
-                                  opening=o.opening_force_max is not None,
-                                  free=free_layout(cfg), library=lib, meta=meta,
-                                  placement=placement_layout(cfg), keep_out=keep_out_of(cfg),
-                                  phase2=_phase2(N, M2))
-            except Exception:   # noqa: BLE001  (a damaged or foreign library: build anew)
-                buildcache.forget_nlp(disk)
-                nlp = None
-        if nlp is None:
-            nlp = build_nlp(cfg, N, M, M2)
-            if buildcache.compile_enabled():
-                if not buildcache.has("nlpmeta", disk):
-                    buildcache.store("nlpmeta", disk, nlp.meta())
-                from ..config import to_dict
-                buildcache.request_nlp(disk, {"config": to_dict(cfg), "nodes": N,
-                                              "substeps": M, "substeps2": M2})
+
+        def spec():
+            from ..config import to_dict
+            return {"config": to_dict(cfg), "nodes": N, "substeps": M, "substeps2": M2}
+        nlp = buildcache.load_or_build(
+            disk,
+            lambda lib, meta: ShootingNLP(
+                get_model(cfg), N, M, o.hessian, o.linear_solver, o.max_iter,
+                els=nlp_elements(cfg), opening=o.opening_force_max is not None,
+                free=free_layout(cfg), library=lib, meta=meta,
+                placement=placement_layout(cfg), keep_out=keep_out_of(cfg),
+                phase2=_phase2(N, M2)),
+            lambda: build_nlp(cfg, N, M, M2), spec)
         nlp.key = key
         _NLPS[key] = nlp
     return _NLPS[key]

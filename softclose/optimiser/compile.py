@@ -6,29 +6,21 @@ the optimiser, which it builds: the cache below it only stores and finds files."
 
 from __future__ import annotations
 
-import json
-import os
 import sys
-from pathlib import Path
+
+
+def build(spec: dict):
+    """The optimiser's NLP a background compilation's spec names."""
+    from ..config import from_dict
+    from .cache import build_nlp
+    return build_nlp(from_dict(spec["config"]), spec["nodes"], spec["substeps"],
+                     spec.get("substeps2"))
 
 
 def main(lock: str) -> int:
     """Build the NLP the lock file ``lock`` names, compile it, hand the lock on."""
-    from ..buildcache import chain, compile_nlp
-    try:
-        os.nice(10)
-    except OSError:
-        pass
-    try:
-        spec = json.loads(Path(lock).read_text())
-        from ..config import from_dict
-        from .cache import build_nlp
-        nlp = build_nlp(from_dict(spec["config"]), spec["nodes"], spec["substeps"],
-                        spec.get("substeps2"))
-        compile_nlp(nlp.solver, spec["key"])
-    finally:
-        chain(Path(lock))      # the next waiting compilation in this one's place, or none
-    return 0
+    from ..buildcache import compile_locked
+    return compile_locked(lock, build)
 
 
 if __name__ == "__main__":

@@ -8,26 +8,14 @@ SCENARIO_CFLAGS`), and hands the lock to the next compilation that waits
 
 from __future__ import annotations
 
-import json
-import os
 import sys
-from pathlib import Path
 
 
 def main(lock: str) -> int:
     """Build the scenario NLP the lock file ``lock`` names, compile it, hand the lock on."""
-    from ..buildcache import SCENARIO_CFLAGS, chain, compile_nlp
-    try:
-        os.nice(10)
-    except OSError:
-        pass
-    try:
-        spec = json.loads(Path(lock).read_text())
-        from .nlp import build_from_spec
-        compile_nlp(build_from_spec(spec).solver, spec["key"], SCENARIO_CFLAGS)
-    finally:
-        chain(Path(lock))      # the next waiting compilation in this one's place, or none
-    return 0
+    from ..buildcache import SCENARIO_CFLAGS, compile_locked
+    from .nlp import build_from_spec
+    return compile_locked(lock, build_from_spec, SCENARIO_CFLAGS)
 
 
 if __name__ == "__main__":

@@ -598,24 +598,13 @@ def get_scenario_nlp(cfg: Config, model_cfgs: list[Config], nodes: int, substeps
         _NLPS.clear()
     from .. import buildcache
     disk = buildcache.key_of("scenario-nlp", key)
-    nlp = None
-    lib = buildcache.compiled_nlp(disk)
-    meta = buildcache.load("nlpmeta", disk) if lib is not None else None
-    if meta is not None:
-        try:
-            nlp = ScenarioNLP(cfg, model_cfgs, nodes, substeps, robust_objective,
-                              substeps2=M2, library=lib, meta=meta)
-        except Exception:   # noqa: BLE001  (a damaged or foreign library: build anew)
-            buildcache.forget_nlp(disk)
-            nlp = None
-    if nlp is None:
-        nlp = ScenarioNLP(cfg, model_cfgs, nodes, substeps, robust_objective, substeps2=M2)
-        if buildcache.compile_enabled():
-            if not buildcache.has("nlpmeta", disk):
-                buildcache.store("nlpmeta", disk, nlp.meta())
-            buildcache.request_nlp(disk, compile_spec(cfg, model_cfgs, nodes, substeps,
-                                                      robust_objective, M2),
-                                   "softclose.robust.compile")
+    nlp = buildcache.load_or_build(
+        disk,
+        lambda lib, meta: ScenarioNLP(cfg, model_cfgs, nodes, substeps, robust_objective,
+                                      substeps2=M2, library=lib, meta=meta),
+        lambda: ScenarioNLP(cfg, model_cfgs, nodes, substeps, robust_objective, substeps2=M2),
+        lambda: compile_spec(cfg, model_cfgs, nodes, substeps, robust_objective, M2),
+        "softclose.robust.compile")
     nlp.key = disk
     _NLPS[key] = nlp
     return nlp, False
