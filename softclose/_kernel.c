@@ -53,6 +53,10 @@
  * reach).
  * The same bound with tau = 1 keeps theta_dot_max final, and E_hat < V(th_max) <= E_max
  * keeps energy_rise final: only steps and stop_time tell that a stroke stopped early.
+ * A spring of a kind (extension or compression) outside its valid range at every angle
+ * from the rim to the release makes the design invalid whatever the stroke does: such a
+ * stroke is not integrated at all, as the reference has it (lane_invalid_throughout; its
+ * extremes are those over [th_closed, th0], steps 0).
  * A lid that creeps towards an equilibrium without turning back keeps moving th_min (and
  * a spring extreme) until t_max: it is integrated to the end. When a step returns its own
  * start state bit for bit (at rest at a fixed point of the step map), the remaining full
@@ -83,7 +87,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define KERNEL_ABI 5 /* bumped when the exported signatures or outputs change */
+#define KERNEL_ABI 6 /* bumped when the exported signatures or outputs change */
 #define NC 8 /* M, dM, Vg, dVg, l, dl, dd, tau */
 enum { C_M, C_DM, C_VG, C_DVG, C_L, C_DL, C_DD, C_TAU };
 #define NMASS 4 /* M, dM, Vg, dVg: the coefficients that depend on the lid's mass */
@@ -93,7 +97,7 @@ enum { C_M, C_DM, C_VG, C_DVG, C_L, C_DL, C_DD, C_TAU };
 #define SMAX 4
 /* every layout constant the Python side shares, checked there when the kernel is loaded */
 static const char LAYOUT[] =
-    "abi=5;meta=ncell,lo,h,m0,rotary_at_pivot;cc=M,dM,Vg,dVg,l,dl,dd,tau;mass=M,dM,Vg,dVg;"
+    "abi=6;meta=ncell,lo,h,m0,rotary_at_pivot;cc=M,dM,Vg,dVg,l,dl,dd,tau;mass=M,dM,Vg,dVg;"
     "xcc=psi,dpsi,dpr2,-;pose=Ax,Ay,dAx,dAy,cos,sin,-,-;"
     "row=spring_k,spring_rest_length,damper_c,rotary_damper_c,spring_kind,spring_preload,"
     "torsion_k,torsion_free_angle,damper_one_way,friction_torque,end_damper_c,end_damper_angle,"
@@ -1292,6 +1296,27 @@ static inline void lane_record(Lane *L)
     }
 }
 
+/* A spring of a kind (s > 0 extension: valid while l >= l0; s < 0 compression: l <= l0)
+ * outside that range at every angle from the rim thc to the release th0 is an invalid
+ * design whatever its stroke does, as the reference has it: the stroke is not integrated
+ * (1: the lane is over, not closed, having "visited" [thc, th0], whose spring extremes
+ * lane_finish reports; no step taken: peak 0, 0 steps, stop_time 0). Decided with a
+ * margin of 1e-6 max(|l|, 1) beyond the rounding scale the statics test with, so every
+ * such row is out of range there too. */
+static int lane_invalid_throughout(const Table *T, Lane *L, double s, double th0, double thc)
+{
+    if (!(th0 > thc) || (L->p.ps && !T->pcc)) return 0;
+    double lmin, lmax;
+    if (L->p.ps) l_extremes_pts(T, &L->p, thc, th0, &lmin, &lmax);
+    else l_extremes(T, thc, th0, &lmin, &lmax);
+    double margin = 1e-6 * MAX2(MAX2(fabs(lmin), fabs(lmax)), 1.0);
+    if (!(s < 0 ? lmin > L->p.l0 + margin : lmax < L->p.l0 - margin)) return 0;
+    L->th_min = thc; L->th_max = th0;
+    L->E0 = L->Emax = 0.0; L->thd_max = 0.0;
+    lane_record(L); /* (a trajectory of its release alone) */
+    return 1;
+}
+
 /* start a stroke from rest at th0 (the rim at thc); returns 1 if it is already over (not
  * tabulated) */
 static int lane_start(const Table *T, Lane *L, const double *d, int ncol, double *out,
@@ -1317,6 +1342,7 @@ static int lane_start(const Table *T, Lane *L, const double *d, int ncol, double
     L->early = early && ELEM_DISSIPATES(&L->p) && ELEM_DAMPERS_VALID(&L->p)
                && !ELEM_STICKS(&L->p);
     for (int j = 0; j < NOUT; j++) out[j] = NAN;
+    if (d[D_KIND] != 0.0 && lane_invalid_throughout(T, L, d[D_KIND], th0, thc)) return 1;
     if (L->p.eg) { out[O_ETIME] = 0.0; out[O_ETHD] = 0.0; } /* released engaged, at rest */
     lane_record(L);
     double E0, V0;
@@ -2485,7 +2511,10 @@ void sc_point_grid(const double *tab_meta, const double *pcc, long n, const doub
     int ncell = (int)tab_meta[0];
     double lo = tab_meta[1], h = tab_meta[2];
     for (long r = 0; r < (per_row ? n : 1); r++) {
-    for (long k = 0; k < G; k++) {
+    /* (a row on the previous row's angles -- rows over the same stroke -- keeps its pose) */
+    int same = r > 0 && !memcmp(th + (size_t)r * G, th + (size_t)(r - 1) * G,
+                                sizeof(double) * (size_t)G);
+    for (long k = 0; k < G && !same; k++) {
         double x = (th[(size_t)r * G * (per_row != 0) + k] - lo) / h;
         if (x < 0) x = 0;
         if (x > ncell) x = ncell;
@@ -2549,6 +2578,52 @@ void sc_point_opening(const double *tab_meta, const double *pcc, long n, const d
     }
     free(pose_g);
     free(buf);
+}
+
+/* where each row's coordinate q (m x G, on its angles th, m x G) leaves its valid range
+ * beyond bound (short: below it, else above): the edge of the region beyond it nearest its
+ * worst point (interpolated between two angles; NaN when beyond on the whole grid) and the
+ * worst point (refined by the parabola through it and its neighbours) -- the arithmetic of
+ * softclose.statics._leaves, row by row (b = how far beyond; the first largest b is the
+ * worst, a NaN b counting as the largest, as numpy's argmax does) */
+void sc_leaves(long m, long G, const double *th, const double *q, const double *bound,
+               const double *shrt, double *edge, double *worst)
+{
+    for (long r = 0; r < m; r++) {
+        const double *t = th + (size_t)r * G, *qr = q + (size_t)r * G;
+        double bd = bound[r], best = 0.0;
+        int sh = shrt[r] != 0.0;
+        long w = 0;
+#define LV_B(j) (sh ? bd - qr[j] : qr[j] - bd)
+        for (long j = 0; j < G; j++) {
+            double b = LV_B(j);
+            if (b != b) { w = j; break; }
+            if (j == 0 || b > best) { best = b; if (j) w = j; }
+        }
+        long jb = -1, db = G + 2;
+        for (long j = 0; j < G; j++) { /* the nearest angle to w not beyond the bound */
+            double b = LV_B(j);
+            long d = b <= 0 ? (j > w ? j - w : w - j) : G + 1;
+            if (d < db) { db = d; jb = j; }
+        }
+        if (db <= G) {
+            long k = jb < w ? jb + 1 : jb - 1;
+            if (k < 0) k = 0;
+            if (k > G - 1) k = G - 1;
+            double bj = LV_B(jb), bk = LV_B(k);
+            double f = bk != bj ? -bj / (bk - bj) : 0.5;
+            if (f < 0) f = 0; else if (f > 1) f = 1;
+            edge[r] = t[jb] + f * (t[k] - t[jb]);
+        } else
+            edge[r] = NAN;
+        long wl = w > 0 ? w - 1 : 0, wr = w < G - 1 ? w + 1 : G - 1;
+        double bl = LV_B(wl), bw = LV_B(w), br = LV_B(wr);
+        double c = bl - 2 * bw + br, d = 0.0;
+        if (w > 0 && w < G - 1 && c < 0) d = 0.5 * (bl - br) / c;
+        if (d < -1) d = -1; else if (d > 1) d = 1;
+        worst[r] = t[w] + d * (t[1] - t[0]);
+#undef LV_B
+    }
 }
 
 int sc_nout(void) { return NOUT; }

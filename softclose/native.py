@@ -47,6 +47,14 @@ spring-length extremes searched on them: the kernel's section PER-ROW ATTACHMENT
 A stroke at a row's points that takes the spring below 2 mm is reported as invalid
 (:data:`softclose.simulate.MIN_POINT_LENGTH`).
 
+A spring of a kind (extension: valid while l >= l0; compression: l <= l0) outside that range
+at every angle from ``theta_closed`` to ``theta0`` makes the design invalid whatever its
+stroke does: the kernel does not integrate it, as the adaptive reference does not (0 steps,
+stop_time 0; its visited range is [theta_closed, theta0], the spring's extremes are those
+over it, and the statics then give the reference's reason, "over the whole stroke"). It is
+decided with a margin of 1e-6 max(|l|, 1) m, so that every such row is invalid there too; a
+row nearer its free length is integrated and judged after its stroke, as before.
+
 Early exit -- why it is exact
 -----------------------------
 With V the elements' potential (gravity and the springs) and E = M theta'^2 / 2 + V, the
@@ -140,7 +148,7 @@ DESIGN_COLUMNS = tuple(q.name.removesuffix("_deg") for q in elements.PARAMS) + (
 #: the SI factor of each parameter column (an angle given in degrees: pi/180)
 _SI = np.array([q.si for q in elements.PARAMS])
 #: version of the exported C signatures; a built extension reporting another is not used
-KERNEL_ABI = 5
+KERNEL_ABI = 6
 #: every layout constant this module shares with the kernel (``sc_layout()`` must equal it)
 LAYOUT = (f"abi={KERNEL_ABI};meta=ncell,lo,h,m0,{','.join(elements.KERNEL_META)};"
           f"cc={','.join(COEFFS)};mass={','.join(COEFFS[:4])};"
@@ -224,6 +232,8 @@ def load():
         lib.sc_point_grid.restype = None
         lib.sc_point_opening.argtypes = [dp, dp, l, dp, dp, l, dp, dp, lp, dp, dp]
         lib.sc_point_opening.restype = None
+        lib.sc_leaves.argtypes = [l, l, dp, dp, dp, dp, dp, dp]
+        lib.sc_leaves.restype = None
         check_layout(lib)
         _lib = lib
         return lib
@@ -549,6 +559,23 @@ def kernel_step(table, method, p, h, x0, lid_mass=None, points=None) -> np.ndarr
     if st:
         raise NumericalError(f"kernel step failed: {STATUS.get(st, st)}")
     return x1
+
+
+def leaves(theta, q, bound, short) -> tuple[np.ndarray, np.ndarray]:
+    """Per row of ``q`` (m, G), a coordinate on the row's angles ``theta`` (m, G): where it
+    crosses ``bound`` (m,) -- the edge of the region beyond it (``short`` (m,): below it,
+    else above) nearest its worst point, NaN when it is beyond on the whole grid -- and
+    where it lies furthest beyond (refined by a parabola), rad: the arithmetic of
+    :func:`softclose.statics._leaves` in C (``sc_leaves``), the same numbers."""
+    lib = load()
+    th = np.ascontiguousarray(theta, float)
+    qq = np.ascontiguousarray(q, float)
+    m, G = th.shape
+    b = np.ascontiguousarray(np.broadcast_to(np.asarray(bound, float), (m,)))
+    sh = np.ascontiguousarray(np.broadcast_to(np.asarray(short, float), (m,)))
+    edge, worst = np.empty(m), np.empty(m)
+    lib.sc_leaves(m, G, _ptr(th), _ptr(qq), _ptr(b), _ptr(sh), _ptr(edge), _ptr(worst))
+    return edge, worst
 
 
 def not_closed_reasons(out) -> np.ndarray:

@@ -234,9 +234,12 @@ class Simulator:
                 self._check_lengths(Xr, res)
             self._check_ranges(P[r], res, explain, Xr)
             res["closed"] = res["status"] == StrokeStatus.CLOSED
-            res["holding_moment"] = self.holding_moments(P[r], mr, Xr)
+            # (Xr is already the kernel's point columns: not checked again)
+            res["holding_moment"] = statics.holding_moments(
+                self.table, self.cfg.stroke.theta_closed, P[r], mr, Xr)
             if opening:
-                res["opening_force"] = self.opening_forces(P[r], mr, Xr)
+                res["opening_force"] = statics.opening_forces(self.table, self.cfg, P[r], mr,
+                                                              Xr)
             return res
 
         # (in blocks only with the rows' own points, whose statics weigh: a block's end is a

@@ -195,38 +195,50 @@ def _leaves(q_of, theta_ranges, bound, short, chunk: int = 4096):
     (where the coordinate crosses ``bound`` -- the edge of the region beyond it
     nearest its worst point; NaN when it is beyond over the whole range --, where it lies
     furthest beyond it), rad, over the row's ``theta_ranges`` (m, 2), on a grid of
-    LEAVE_GRID angles (rows in chunks: the coordinate is evaluated for a chunk at once)."""
+    LEAVE_GRID angles (rows in chunks: the coordinate is evaluated for a chunk at once; the
+    search on the grid is the kernel's ``sc_leaves``, the arithmetic of :func:`_leaves_numpy`
+    bit for bit)."""
     theta_ranges = np.atleast_2d(np.asarray(theta_ranges, float))
     m, G = len(theta_ranges), LEAVE_GRID
     bound = np.broadcast_to(np.asarray(bound, float), (m,))
     short = np.broadcast_to(np.asarray(short, bool), (m,))
     edge, worst = np.full(m, np.nan), np.empty(m)
-    u, idx = np.linspace(0.0, 1.0, G), np.arange(G)
+    u = np.linspace(0.0, 1.0, G)
+    from .native import leaves
     for a in range(0, m, chunk):
         r = slice(a, min(a + chunk, m))
         lo, hi = theta_ranges[r, :1], theta_ranges[r, 1:]
         th = lo + (hi - lo) * u                        # (rows, grid)
         th[:, -1] = hi[:, 0]
         q = np.asarray(q_of(th, np.arange(r.start, r.stop)), float).reshape(th.shape)
-        b = np.where(short[r, None], bound[r, None] - q, q - bound[r, None])
-        rows = np.arange(len(th))
-        w = np.argmax(b, axis=1)
-        dist = np.where(b <= 0, np.abs(idx - w[:, None]), G + 1)
-        j = np.argmin(dist, axis=1)
-        has = dist[rows, j] <= G
-        k = np.clip(np.where(j < w, j + 1, j - 1), 0, G - 1)   # towards the worst point
-        bj, bk = b[rows, j], b[rows, k]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            f = np.where(bk != bj, -bj / (bk - bj), 0.5)       # b crosses 0 between j and k
-        edge[r] = np.where(has, th[rows, j] + np.clip(f, 0, 1) * (th[rows, k] - th[rows, j]),
-                           np.nan)
-        wl, wr = np.clip(w - 1, 0, G - 1), np.clip(w + 1, 0, G - 1)
-        c = b[rows, wl] - 2 * b[rows, w] + b[rows, wr]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            d = np.where((w > 0) & (w < G - 1) & (c < 0),
-                         0.5 * (b[rows, wl] - b[rows, wr]) / c, 0.0)
-        worst[r] = th[rows, w] + np.clip(d, -1, 1) * (th[:, 1] - th[:, 0])
+        edge[r], worst[r] = leaves(th, q, bound[r], short[r])
     return edge, worst
+
+
+def _leaves_numpy(theta, q, bound, short):
+    """The arithmetic of :func:`_leaves` on given angles ``theta`` and values ``q`` (m, G)
+    in numpy: the second formulation the kernel's ``sc_leaves`` is tested against."""
+    th, q = np.asarray(theta, float), np.asarray(q, float)
+    G = th.shape[1]
+    idx = np.arange(G)
+    b = np.where(np.asarray(short, bool)[:, None], np.asarray(bound, float)[:, None] - q,
+                 q - np.asarray(bound, float)[:, None])
+    rows = np.arange(len(th))
+    w = np.argmax(b, axis=1)
+    dist = np.where(b <= 0, np.abs(idx - w[:, None]), G + 1)
+    j = np.argmin(dist, axis=1)
+    has = dist[rows, j] <= G
+    k = np.clip(np.where(j < w, j + 1, j - 1), 0, G - 1)   # towards the worst point
+    bj, bk = b[rows, j], b[rows, k]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        f = np.where(bk != bj, -bj / (bk - bj), 0.5)       # b crosses 0 between j and k
+    edge = np.where(has, th[rows, j] + np.clip(f, 0, 1) * (th[rows, k] - th[rows, j]), np.nan)
+    wl, wr = np.clip(w - 1, 0, G - 1), np.clip(w + 1, 0, G - 1)
+    c = b[rows, wl] - 2 * b[rows, w] + b[rows, wr]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        d = np.where((w > 0) & (w < G - 1) & (c < 0), 0.5 * (b[rows, wl] - b[rows, wr]) / c,
+                     0.0)
+    return edge, th[rows, w] + np.clip(d, -1, 1) * (th[:, 1] - th[:, 0])
 
 
 #: angles of the opening-force search over [theta_closed, theta0] (then a parabola at the

@@ -102,16 +102,50 @@ class Spring(Element):
     extremes = ("min_spring_length", "max_spring_length")
 
     def range_messages(self, P, cfg, rows, short, edge, worst, excess):
-        """:meth:`range_message` of many rows at once (the same text; the parameters read
-        once, not per row)."""
-        s = np.asarray(P["spring_kind"], float)[rows].tolist()
-        l0 = np.asarray(P["spring_rest_length"], float)[rows].tolist()
-        edge, worst = np.degrees(edge).tolist(), np.degrees(worst).tolist()
+        """:meth:`range_message` of many rows at once: the same text, each row's formatted
+        by the template of its case (which limit, over the whole stroke or on which side of
+        the edge) with %-formatting, which rounds as the f-strings of :meth:`_message` do."""
+        s = np.asarray(P["spring_kind"], float)[rows]
+        short = np.asarray(short, bool)
+        edge, worst = np.degrees(np.asarray(edge, float)), np.degrees(np.asarray(worst, float))
+        l0 = (np.asarray(P["spring_rest_length"], float)[rows] * 1e3).tolist()
+        x = (np.asarray(excess, float) * 1e3).tolist()
+        case = np.where((s > 0) & short, 0, np.where((s < 0) & ~short, 1,
+                                                     np.where(short, 2, 3)))
+        whole = np.isnan(edge)
+        with np.errstate(invalid="ignore"):
+            below = worst < edge
         d = cfg.design
-        out = []
-        for si, l0i, sh, e, w, x in zip(s, l0, np.asarray(short).tolist(), edge, worst,
-                                         np.asarray(excess, float).tolist()):
-            out.append(self._message(si, l0i, sh, d, None if e != e else e, w, x))
+        heads = ("the extension spring (it only pulls) would be shorter than its free "
+                 "length %.2f mm",
+                 "the compression spring (it only pushes) would be longer than its free "
+                 "length %.2f mm",
+                 "the spring would be shorter than its minimum length (design.spring_min_length"
+                 " = " + (f"{d.spring_min_length * 1e3:.2f}" if d.spring_min_length is not None
+                          else "None") + " mm)",
+                 "the spring would be longer than its maximum length (design.spring_max_length"
+                 " = " + (f"{d.spring_max_length * 1e3:.2f}" if d.spring_max_length is not None
+                          else "None") + " mm)")
+        out = [""] * len(case)
+        e, w = edge.tolist(), worst.tolist()
+        key = case * 3 + np.where(whole, 0, np.where(below, 1, 2))
+        for g in np.unique(key).tolist():
+            c, span = divmod(g, 3)
+            head = heads[c] if c < 2 else heads[c].replace("%", "%%")
+            tail = ("over the whole stroke" if span == 0 else
+                    ("below" if span == 1 else "above") + " theta = %.1f deg")
+            t = f"{head} {tail}, by up to %.2f mm (at theta = %.1f deg)"
+            idx = np.flatnonzero(key == g).tolist()
+            if c < 2 and span:
+                args = [(l0[i], e[i], x[i], w[i]) for i in idx]
+            elif c < 2:
+                args = [(l0[i], x[i], w[i]) for i in idx]
+            elif span:
+                args = [(e[i], x[i], w[i]) for i in idx]
+            else:
+                args = [(x[i], w[i]) for i in idx]
+            for i, a in zip(idx, args):
+                out[i] = t % a
         return out
 
     def range_message(self, P, cfg, i, short, where, excess):

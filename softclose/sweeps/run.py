@@ -35,9 +35,33 @@ Mapper = Callable[[dict, list, Iterable, "int | None"], Iterator[tuple[int, dict
 
 
 def local_map(cfg_dict: dict, keys: list[str], tasks, threads: int | None = None):
-    """Evaluate the chunks here, one after the other (the kernel runs them in threads)."""
-    for c, ids, X in tasks:
-        yield c, evaluate_chunk(cfg_dict, keys, ids, X, threads=threads)
+    """Evaluate the chunks here, one after the other (the kernel runs them in threads); the
+    next chunk is evaluated in a thread while the caller stores the last one, so the
+    kernel's threads do not wait for the writing and the tallies between chunks."""
+    tasks = iter(tasks)
+    box: list = []
+
+    def work():
+        try:
+            task = next(tasks, None)
+            box.append(None if task is None else
+                       (task[0], evaluate_chunk(cfg_dict, keys, task[1], task[2],
+                                                threads=threads)))
+        except BaseException as exc:   # noqa: BLE001  (raised below, in the caller's thread)
+            box.append(exc)
+
+    t = threading.Thread(target=work, daemon=True)
+    t.start()
+    while True:
+        t.join()
+        got = box.pop()
+        if isinstance(got, BaseException):
+            raise got
+        if got is None:
+            return
+        t = threading.Thread(target=work, daemon=True)
+        t.start()
+        yield got
 
 
 def chunk_ids(c: int, n: int, chunk: int) -> np.ndarray:

@@ -152,11 +152,18 @@ def _arrow(x: np.ndarray, t, nulls: bool):
     import pyarrow as pa
     n = len(x)
     if pa.types.is_string(t):
-        b = [str(v).encode() for v in x]
         offsets = np.zeros(n + 1, np.int32)
-        np.cumsum(np.fromiter(map(len, b), np.int32, count=n), out=offsets[1:])
-        return pa.Array.from_buffers(t, n, [None, pa.py_buffer(offsets),
-                                            pa.py_buffer(b"".join(b))])
+        try:                           # (all str and ASCII, the usual case: one join)
+            data = "".join(x.tolist())
+            if not data.isascii():
+                raise TypeError
+            data = data.encode("ascii")
+            np.cumsum(np.fromiter(map(len, x.tolist()), np.int32, count=n), out=offsets[1:])
+        except TypeError:
+            b = [str(v).encode() for v in x]
+            np.cumsum(np.fromiter(map(len, b), np.int32, count=n), out=offsets[1:])
+            data = b"".join(b)
+        return pa.Array.from_buffers(t, n, [None, pa.py_buffer(offsets), pa.py_buffer(data)])
     if pa.types.is_boolean(t):
         bits = np.packbits(np.asarray(x, bool), bitorder="little")
         return pa.Array.from_buffers(t, n, [None, pa.py_buffer(bits)])
