@@ -96,6 +96,22 @@ def wrap_deg(a):
     return (a + 180.0) % 360.0 - 180.0
 
 
+@pytest.fixture
+def compiles_started(monkeypatch) -> list:
+    """Background compiles turned on, but none started: each ``subprocess.Popen`` a build
+    cache would start is recorded (its command) in the list this returns."""
+    import subprocess
+    from softclose import buildcache
+    monkeypatch.setenv(buildcache.ENV_COMPILE, "1")
+    started: list = []
+
+    class Popen:
+        def __init__(self, cmd, **kw):
+            started.append(cmd)
+    monkeypatch.setattr(subprocess, "Popen", Popen)
+    return started
+
+
 @pytest.fixture(scope="session")
 def cfg():
     return default_config()

@@ -8,7 +8,6 @@ from __future__ import annotations
 import importlib
 import os
 import shutil
-import subprocess
 
 import numpy as np
 import pytest
@@ -62,15 +61,9 @@ def test_threads_give_the_same_solve(cache, cfg, monkeypatch):
     assert np.array_equal(three.J, one.J) and np.array_equal(three.peaks, one.peaks)
 
 
-def test_the_second_build_of_a_scenario_nlp_compiles_it_in_the_background(cache, cfg,
-                                                                          monkeypatch):
-    monkeypatch.setenv(buildcache.ENV_COMPILE, "1")
-    started = []
-
-    class Popen:
-        def __init__(self, cmd, **kw):
-            started.append(cmd)
-    monkeypatch.setattr(subprocess, "Popen", Popen)
+def test_the_second_build_of_a_scenario_nlp_compiles_it_in_the_background(
+        cache, cfg, compiles_started):
+    started = compiles_started
     first, _ = _problem(cfg)                 # first build: remembered, nothing compiled
     assert not started and list(cache.glob(f"*/seen-{first.nlp.key}"))
     assert list(cache.glob(f"*/nlpmeta-{first.nlp.key}.bin"))

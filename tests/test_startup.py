@@ -102,15 +102,8 @@ def test_the_cache_can_be_turned_off(monkeypatch, cfg):
     assert "_serialised" not in sim.model.__dict__
 
 
-def test_the_second_use_of_an_nlp_compiles_it_in_the_background(cache, cfg, monkeypatch):
-    monkeypatch.setenv(buildcache.ENV_COMPILE, "1")
-    started = []
-
-    class Popen:
-        def __init__(self, cmd, **kw):
-            started.append(cmd)
-    import subprocess
-    monkeypatch.setattr(subprocess, "Popen", Popen)
+def test_the_second_use_of_an_nlp_compiles_it_in_the_background(cache, cfg, compiles_started):
+    started = compiles_started
     from softclose.optimiser.cache import get_nlp
     _clear_memory()
     get_nlp(cfg)                        # first use: remembered, nothing compiled
@@ -138,19 +131,13 @@ def test_the_second_use_of_an_nlp_compiles_it_in_the_background(cache, cfg, monk
     _clear_memory()
 
 
-def test_compilations_asked_for_while_one_runs_wait_their_turn(cache, cfg, monkeypatch):
+def test_compilations_asked_for_while_one_runs_wait_their_turn(cache, cfg, monkeypatch,
+                                                               compiles_started):
     """While one NLP compiles, the second use of another queues it (at most MAX_PENDING);
     the running compilation's end hands the lock to the oldest waiting one (exec, the lock
     held), and to none once none waits."""
-    monkeypatch.setenv(buildcache.ENV_COMPILE, "1")
-    started = []
-
-    class Popen:
-        def __init__(self, cmd, **kw):
-            started.append(cmd)
+    started = compiles_started
     import json
-    import subprocess
-    monkeypatch.setattr(subprocess, "Popen", Popen)
     for _ in range(2):                                # the first NLP: compiling
         assert not buildcache.request_nlp("first", {"nodes": 1}) or len(started) == 1
     lock = Path(started[0][3])
