@@ -102,49 +102,25 @@ class Spring(Element):
     extremes = ("min_spring_length", "max_spring_length")
 
     def range_messages(self, P, cfg, rows, short, edge, worst, excess):
-        """:meth:`range_message` of many rows at once: the same text, each row's formatted
-        by the template of its case (which limit, over the whole stroke or on which side of
-        the edge) with %-formatting, which rounds as the f-strings of :meth:`_message` do."""
+        """:meth:`range_message` of many rows at once: the rows of each case (:meth:`_case`)
+        formatted by its one template (:meth:`_template`), the parameters read once."""
         s = np.asarray(P["spring_kind"], float)[rows]
         short = np.asarray(short, bool)
         edge, worst = np.degrees(np.asarray(edge, float)), np.degrees(np.asarray(worst, float))
-        l0 = (np.asarray(P["spring_rest_length"], float)[rows] * 1e3).tolist()
-        x = (np.asarray(excess, float) * 1e3).tolist()
         case = np.where((s > 0) & short, 0, np.where((s < 0) & ~short, 1,
                                                      np.where(short, 2, 3)))
-        whole = np.isnan(edge)
         with np.errstate(invalid="ignore"):
-            below = worst < edge
-        d = cfg.design
-        heads = ("the extension spring (it only pulls) would be shorter than its free "
-                 "length %.2f mm",
-                 "the compression spring (it only pushes) would be longer than its free "
-                 "length %.2f mm",
-                 "the spring would be shorter than its minimum length (design.spring_min_length"
-                 " = " + (f"{d.spring_min_length * 1e3:.2f}" if d.spring_min_length is not None
-                          else "None") + " mm)",
-                 "the spring would be longer than its maximum length (design.spring_max_length"
-                 " = " + (f"{d.spring_max_length * 1e3:.2f}" if d.spring_max_length is not None
-                          else "None") + " mm)")
+            span = np.where(np.isnan(edge), 0, np.where(worst < edge, 1, 2))
+        l0 = (np.asarray(P["spring_rest_length"], float)[rows] * 1e3).tolist()
+        x, e, w = (np.asarray(excess, float) * 1e3).tolist(), edge.tolist(), worst.tolist()
         out = [""] * len(case)
-        e, w = edge.tolist(), worst.tolist()
-        key = case * 3 + np.where(whole, 0, np.where(below, 1, 2))
+        key = case * 3 + span
         for g in np.unique(key).tolist():
-            c, span = divmod(g, 3)
-            head = heads[c] if c < 2 else heads[c].replace("%", "%%")
-            tail = ("over the whole stroke" if span == 0 else
-                    ("below" if span == 1 else "above") + " theta = %.1f deg")
-            t = f"{head} {tail}, by up to %.2f mm (at theta = %.1f deg)"
+            c, sp = divmod(g, 3)
+            t = self._template(c, sp, cfg.design)
             idx = np.flatnonzero(key == g).tolist()
-            if c < 2 and span:
-                args = [(l0[i], e[i], x[i], w[i]) for i in idx]
-            elif c < 2:
-                args = [(l0[i], x[i], w[i]) for i in idx]
-            elif span:
-                args = [(e[i], x[i], w[i]) for i in idx]
-            else:
-                args = [(x[i], w[i]) for i in idx]
-            for i, a in zip(idx, args):
+            cols = ([l0] if c < 2 else []) + ([e] if sp else []) + [x, w]
+            for i, a in zip(idx, zip(*([col[i] for i in idx] for col in cols))):
                 out[i] = t % a
         return out
 
@@ -154,23 +130,44 @@ class Spring(Element):
         return self._message(s, l0, short, cfg.design, edge, worst, excess)
 
     @staticmethod
-    def _message(s, l0, short, d, edge, worst, excess):
-        """The text of :meth:`range_message` (``edge``, ``worst`` in degrees)."""
-        if s > 0 and short:
-            what = (f"the extension spring (it only pulls) would be shorter than its free "
-                    f"length {l0 * 1e3:.2f} mm")
-        elif s < 0 and not short:
-            what = (f"the compression spring (it only pushes) would be longer than its free "
-                    f"length {l0 * 1e3:.2f} mm")
-        elif short:
+    def _case(s, short) -> int:
+        """Which limit a spring of kind ``s`` passes (``short``: below its range): 0 an
+        extension spring's free length, 1 a compression spring's, 2 the minimum length,
+        3 the maximum length."""
+        return 0 if s > 0 and short else 1 if s < 0 and not short else 2 if short else 3
+
+    @staticmethod
+    def _template(case: int, span: int, d) -> str:
+        """The %-template of a range message: ``case`` (:meth:`_case`), ``span`` 0 over the
+        whole stroke, 1 below the edge, 2 above it. Its fields, in order: the free length
+        (mm; cases 0 and 1), the edge (deg; span 1 and 2), the excess (mm), the worst angle
+        (deg)."""
+        if case == 0:
+            what = "the extension spring (it only pulls) would be shorter than its free " \
+                   "length %.2f mm"
+        elif case == 1:
+            what = "the compression spring (it only pushes) would be longer than its free " \
+                   "length %.2f mm"
+        elif case == 2:
             what = (f"the spring would be shorter than its minimum length "
                     f"(design.spring_min_length = {d.spring_min_length * 1e3:.2f} mm)")
         else:
             what = (f"the spring would be longer than its maximum length "
                     f"(design.spring_max_length = {d.spring_max_length * 1e3:.2f} mm)")
-        span = ("over the whole stroke" if edge is None else
-                f"{'below' if worst < edge else 'above'} theta = {edge:.1f} deg")
-        return f"{what} {span}, by up to {excess * 1e3:.2f} mm (at theta = {worst:.1f} deg)"
+        where = ("over the whole stroke" if span == 0 else
+                 f"{'below' if span == 1 else 'above'} theta = %.1f deg")
+        return f"{what.replace('%', '%%') if case >= 2 else what} {where}, " \
+               "by up to %.2f mm (at theta = %.1f deg)"
+
+    @classmethod
+    def _message(cls, s, l0, short, d, edge, worst, excess):
+        """The text of :meth:`range_message` (``edge``, ``worst`` in degrees; ``edge`` None:
+        beyond the range over the whole stroke)."""
+        case = cls._case(s, short)
+        span = 0 if edge is None else 1 if worst < edge else 2
+        args = ((l0 * 1e3,) if case < 2 else ()) + ((edge,) if span else ()) + \
+            (excess * 1e3, worst)
+        return cls._template(case, span, d) % args
 
     def valid(self, P, cfg=None):
         """(lo, hi) of l, per design: an extension spring from l0 up to its maximum length, a
