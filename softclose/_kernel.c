@@ -2598,7 +2598,7 @@ void sc_leaves(long m, long G, const double *th, const double *q, const double *
         for (long j = 0; j < G; j++) {
             double b = LV_B(j);
             if (b != b) { w = j; break; }
-            if (j == 0 || b > best) { best = b; if (j) w = j; }
+            if (j == 0 || b > best) { best = b; w = j; }
         }
         long jb = -1, db = G + 2;
         for (long j = 0; j < G; j++) { /* the nearest angle to w not beyond the bound */

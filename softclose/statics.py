@@ -196,8 +196,8 @@ def _leaves(q_of, theta_ranges, bound, short, chunk: int = 4096):
     nearest its worst point; NaN when it is beyond over the whole range --, where it lies
     furthest beyond it), rad, over the row's ``theta_ranges`` (m, 2), on a grid of
     LEAVE_GRID angles (rows in chunks: the coordinate is evaluated for a chunk at once; the
-    search on the grid is the kernel's ``sc_leaves``, the arithmetic of :func:`_leaves_numpy`
-    bit for bit)."""
+    search on the grid is the kernel's ``sc_leaves``: bit for bit the numpy arithmetic it
+    replaced, which ``tests/test_invalid_skip.py`` keeps as its second formulation)."""
     theta_ranges = np.atleast_2d(np.asarray(theta_ranges, float))
     m, G = len(theta_ranges), LEAVE_GRID
     bound = np.broadcast_to(np.asarray(bound, float), (m,))
@@ -213,32 +213,6 @@ def _leaves(q_of, theta_ranges, bound, short, chunk: int = 4096):
         q = np.asarray(q_of(th, np.arange(r.start, r.stop)), float).reshape(th.shape)
         edge[r], worst[r] = leaves(th, q, bound[r], short[r])
     return edge, worst
-
-
-def _leaves_numpy(theta, q, bound, short):
-    """The arithmetic of :func:`_leaves` on given angles ``theta`` and values ``q`` (m, G)
-    in numpy: the second formulation the kernel's ``sc_leaves`` is tested against."""
-    th, q = np.asarray(theta, float), np.asarray(q, float)
-    G = th.shape[1]
-    idx = np.arange(G)
-    b = np.where(np.asarray(short, bool)[:, None], np.asarray(bound, float)[:, None] - q,
-                 q - np.asarray(bound, float)[:, None])
-    rows = np.arange(len(th))
-    w = np.argmax(b, axis=1)
-    dist = np.where(b <= 0, np.abs(idx - w[:, None]), G + 1)
-    j = np.argmin(dist, axis=1)
-    has = dist[rows, j] <= G
-    k = np.clip(np.where(j < w, j + 1, j - 1), 0, G - 1)   # towards the worst point
-    bj, bk = b[rows, j], b[rows, k]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        f = np.where(bk != bj, -bj / (bk - bj), 0.5)       # b crosses 0 between j and k
-    edge = np.where(has, th[rows, j] + np.clip(f, 0, 1) * (th[rows, k] - th[rows, j]), np.nan)
-    wl, wr = np.clip(w - 1, 0, G - 1), np.clip(w + 1, 0, G - 1)
-    c = b[rows, wl] - 2 * b[rows, w] + b[rows, wr]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        d = np.where((w > 0) & (w < G - 1) & (c < 0), 0.5 * (b[rows, wl] - b[rows, wr]) / c,
-                     0.0)
-    return edge, th[rows, w] + np.clip(d, -1, 1) * (th[:, 1] - th[:, 0])
 
 
 #: angles of the opening-force search over [theta_closed, theta0] (then a parabola at the

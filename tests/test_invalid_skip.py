@@ -112,10 +112,36 @@ def _cases(m=4000, G=statics.LEAVE_GRID, seed=7):
     return th, q, bound, short
 
 
+def leaves_numpy(theta, q, bound, short):
+    """The search of ``statics._leaves`` on given angles ``theta`` and values ``q`` (m, G)
+    in numpy (as it was before ``sc_leaves``): the second formulation of the kernel's."""
+    th, q = np.asarray(theta, float), np.asarray(q, float)
+    G = th.shape[1]
+    idx = np.arange(G)
+    b = np.where(np.asarray(short, bool)[:, None], np.asarray(bound, float)[:, None] - q,
+                 q - np.asarray(bound, float)[:, None])
+    rows = np.arange(len(th))
+    w = np.argmax(b, axis=1)
+    dist = np.where(b <= 0, np.abs(idx - w[:, None]), G + 1)
+    j = np.argmin(dist, axis=1)
+    has = dist[rows, j] <= G
+    k = np.clip(np.where(j < w, j + 1, j - 1), 0, G - 1)   # towards the worst point
+    bj, bk = b[rows, j], b[rows, k]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        f = np.where(bk != bj, -bj / (bk - bj), 0.5)       # b crosses 0 between j and k
+    edge = np.where(has, th[rows, j] + np.clip(f, 0, 1) * (th[rows, k] - th[rows, j]), np.nan)
+    wl, wr = np.clip(w - 1, 0, G - 1), np.clip(w + 1, 0, G - 1)
+    c = b[rows, wl] - 2 * b[rows, w] + b[rows, wr]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        d = np.where((w > 0) & (w < G - 1) & (c < 0), 0.5 * (b[rows, wl] - b[rows, wr]) / c,
+                     0.0)
+    return edge, th[rows, w] + np.clip(d, -1, 1) * (th[:, 1] - th[:, 0])
+
+
 def test_the_kernels_leaves_are_the_numpy_arithmetic_bit_for_bit():
     th, q, bound, short = _cases()
     e1, w1 = native.leaves(th, q, bound, short)
-    e0, w0 = statics._leaves_numpy(th, q, bound, short)
+    e0, w0 = leaves_numpy(th, q, bound, short)
     assert np.array_equal(e1, e0, equal_nan=True)
     assert np.array_equal(w1, w0, equal_nan=True)
     assert np.isnan(e1[:50]).all() and np.isnan(e1[200:250]).all()   # beyond throughout

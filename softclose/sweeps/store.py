@@ -154,11 +154,12 @@ def _arrow(x: np.ndarray, t, nulls: bool):
     if pa.types.is_string(t):
         offsets = np.zeros(n + 1, np.int32)
         try:                           # (all str and ASCII, the usual case: one join)
-            data = "".join(x.tolist())
+            values = x.tolist()
+            data = "".join(values)
             if not data.isascii():
                 raise TypeError
             data = data.encode("ascii")
-            np.cumsum(np.fromiter(map(len, x.tolist()), np.int32, count=n), out=offsets[1:])
+            np.cumsum(np.fromiter(map(len, values), np.int32, count=n), out=offsets[1:])
         except TypeError:
             b = [str(v).encode() for v in x]
             np.cumsum(np.fromiter(map(len, b), np.int32, count=n), out=offsets[1:])
