@@ -57,14 +57,17 @@ def has_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
     return nlp_key(cfg, nodes, substeps, substeps2) in _NLPS
 
 
-def build_nlp(cfg, nodes: int, substeps: int, substeps2: int | None = None) -> ShootingNLP:
-    """The ShootingNLP of cfg's geometry and discretisation, built symbolically."""
+def build_nlp(cfg, nodes: int, substeps: int, substeps2: int | None = None, library=None,
+              meta=None) -> ShootingNLP:
+    """The ShootingNLP of cfg's geometry and discretisation, built symbolically (or its
+    compiled ``library`` loaded, with its ``meta``)."""
     o = cfg.optimise
     return ShootingNLP(get_model(cfg), nodes, substeps, o.hessian, o.linear_solver,
                        o.max_iter, els=nlp_elements(cfg),
                        opening=o.opening_force_max is not None, free=free_layout(cfg),
                        placement=placement_layout(cfg), keep_out=keep_out_of(cfg),
-                       phase2=_phase2(nodes, nlp_key(cfg, nodes, substeps, substeps2)[-6]))
+                       phase2=_phase2(nodes, nlp_key(cfg, nodes, substeps, substeps2)[-6]),
+                       library=library, meta=meta)
 
 
 def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
@@ -77,24 +80,18 @@ def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
     process compiles it for the runs after that.
     """
     from .. import buildcache
-    o = cfg.optimise
     key = nlp_key(cfg, nodes, substeps, substeps2)
     if key not in _NLPS:
         N, M, M2 = key[-5], key[-4], key[-6]
         disk = buildcache.key_of("nlp", key)
 
+        def make(library=None, meta=None):
+            return build_nlp(cfg, N, M, M2, library=library, meta=meta)
+
         def spec():
             from ..config import to_dict
             return {"config": to_dict(cfg), "nodes": N, "substeps": M, "substeps2": M2}
-        nlp = buildcache.load_or_build(
-            disk,
-            lambda lib, meta: ShootingNLP(
-                get_model(cfg), N, M, o.hessian, o.linear_solver, o.max_iter,
-                els=nlp_elements(cfg), opening=o.opening_force_max is not None,
-                free=free_layout(cfg), library=lib, meta=meta,
-                placement=placement_layout(cfg), keep_out=keep_out_of(cfg),
-                phase2=_phase2(N, M2)),
-            lambda: build_nlp(cfg, N, M, M2), spec)
+        nlp = buildcache.load_or_build(disk, make, make, spec)
         nlp.key = key
         _NLPS[key] = nlp
     return _NLPS[key]

@@ -598,11 +598,11 @@ def get_scenario_nlp(cfg: Config, model_cfgs: list[Config], nodes: int, substeps
         _NLPS.clear()
     from .. import buildcache
     disk = buildcache.key_of("scenario-nlp", key)
+    def make(library=None, meta=None):
+        return ScenarioNLP(cfg, model_cfgs, nodes, substeps, robust_objective, substeps2=M2,
+                           library=library, meta=meta)
     nlp = buildcache.load_or_build(
-        disk,
-        lambda lib, meta: ScenarioNLP(cfg, model_cfgs, nodes, substeps, robust_objective,
-                                      substeps2=M2, library=lib, meta=meta),
-        lambda: ScenarioNLP(cfg, model_cfgs, nodes, substeps, robust_objective, substeps2=M2),
+        disk, make, make,
         lambda: compile_spec(cfg, model_cfgs, nodes, substeps, robust_objective, M2),
         "softclose.robust.compile")
     nlp.key = disk
