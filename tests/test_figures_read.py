@@ -103,6 +103,18 @@ def test_sweep_map_names_each_fixed_key_s_unit():
     assert unit("geometry.assembly[1]") == "deg" and unit("geometry.pivot_b[0]") == "m"
 
 
+def test_sweep_map_note_gives_a_word_key_no_unit():
+    """A kind held fixed reads "spring_kind = compression", numbers keep their units."""
+    from softclose.figures.sweep import _views
+    from softclose.sweeps import sweep
+    cfg = default_config().update({"design.spring_kind": "compression",
+                                   "design.spring_rest_length": 0.09})
+    res = sweep(cfg, {"design.damper_c": [1000.0, 4000.0]})
+    note = _views(res)[0].note.split("not swept: ", 1)[1]
+    assert note.endswith("spring_kind = compression") and "compression -" not in note
+    assert "spring_k = 0 N/m" in note and "spring_rest_length = 0.09 m" in note
+
+
 def test_the_default_stroke_shows_at_least_60_frames(tmp_path):
     from PIL import Image
 

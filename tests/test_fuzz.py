@@ -22,7 +22,8 @@ commands -- pareto, optimise --robust, bench -- get only values the config refus
 work-size keys are kept to the refused kinds for the optimisers); ``-m fuzz`` runs the long
 profile (every kind everywhere, more cases). Cases are counted by kind and outcome; the
 counts go to ``fuzz-counts.json`` in pytest's base temp folder (and to the path in the
-environment variable ``SOFTCLOSE_FUZZ_COUNTS`` if set). The issue's three inputs are explicit
+environment variable ``SOFTCLOSE_FUZZ_COUNTS`` if set; with ``-n``, one file per test process,
+the worker's name before the suffix: ``counts-gw0.json``). The issue's three inputs are explicit
 examples, and a sample runs as real ``python -m softclose`` processes to check stderr for
 tracebacks.
 """
@@ -720,7 +721,11 @@ def _counts_file(tmp_path_factory):
     text = json.dumps(data, indent=1, sort_keys=True)
     (tmp_path_factory.getbasetemp() / "fuzz-counts.json").write_text(text)
     if os.environ.get("SOFTCLOSE_FUZZ_COUNTS"):
-        Path(os.environ["SOFTCLOSE_FUZZ_COUNTS"]).write_text(text)
+        path = Path(os.environ["SOFTCLOSE_FUZZ_COUNTS"])
+        worker = os.environ.get("PYTEST_XDIST_WORKER")   # (-n: one file per test process)
+        if worker:
+            path = path.with_name(f"{path.stem}-{worker}{path.suffix}")
+        path.write_text(text)
 
 
 @pytest.fixture(scope="module", autouse=True)

@@ -14,7 +14,6 @@ import pytest
 import softclose
 from softclose import buildcache
 from softclose.config import from_dict, to_dict
-from softclose.model import LidModel
 from softclose.simulate import Simulator
 
 

@@ -451,7 +451,8 @@ def _views(res) -> list[_View]:
     in_memory = res.columns is not None and res.kind == "grid" and res.computed == res.points
     views = _views_from_columns(res) if in_memory else _views_from_bins(res)
     if res.fixed:       # the design keys not swept, at the config's values
-        fixed = ", ".join(f"{k.split('.')[1]} = {_fmt(v)} {unit(k)}"
+        fixed = ", ".join(f"{k.split('.')[1]} = {_fmt(v)}"
+                          + ("" if isinstance(v, str) else f" {unit(k)}")   # (a word: none)
                           for k, v in res.fixed.items())
         for v in views:
             v.note += f"\nnot swept: {fixed}"
