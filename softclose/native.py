@@ -268,6 +268,16 @@ def kernel_rows(P: np.ndarray) -> np.ndarray:
     return P
 
 
+def cores() -> int:
+    """The cores this process may use (its CPU affinity), at least 1."""
+    n = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    return max(1, n or 1)
+
+
+#: most kernel threads a batch uses by default
+MAX_THREADS = 8
+
+
 def _ptr(a: np.ndarray | None):
     if a is None:
         return ctypes.POINTER(ctypes.c_double)()
@@ -468,8 +478,7 @@ def run_strokes(table: CoefficientTable, method: Method, step: float, t_max: flo
     n, ncol = designs.shape
     out = np.empty((n, len(OUT_FIELDS)))
     tab = method.packed()
-    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    threads = threads or min(cpus or 1, 8)
+    threads = threads or min(cores(), MAX_THREADS)
     threads = max(1, min(threads, n // 64 or 1))
 
     def work(a, b):

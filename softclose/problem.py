@@ -296,15 +296,18 @@ def categorise(status: np.ndarray, reason: np.ndarray) -> np.ndarray:
     """Category code per row: -1 feasible, else an index into :data:`CATEGORIES`."""
     reason = np.asarray(reason, dtype=object)
     out = np.full(len(reason), CATEGORIES.index("not integrated"), np.int64)
-    known = np.zeros(len(reason), bool)
+    invalid = np.asarray(status, dtype=object) == "invalid"
+    valid = np.flatnonzero(~invalid)     # (an invalid row's reason, often its own, is not read)
+    why = reason[valid]
+    known = np.zeros(len(valid), bool)
     for code, r in ((-1, ""),) + tuple(enumerate(REASONS)):   # the common cases, vectorised
-        m = reason == r
-        out[m] = code
+        m = why == r
+        out[valid[m]] = code
         known |= m
     rest = np.flatnonzero(~known)
     if rest.size:   # e.g. "not closed (held open at ...)", a stroke's diagnosis
-        closed_not = {r: str(r).startswith("not closed") for r in set(reason[rest].tolist())}
-        nc = np.array([closed_not[r] for r in reason[rest].tolist()], bool)
-        out[rest[nc]] = REASONS.index("not closed")
-    out[np.asarray(status, dtype=object) == "invalid"] = CATEGORIES.index("invalid")
+        closed_not = {r: str(r).startswith("not closed") for r in set(why[rest].tolist())}
+        nc = np.array([closed_not[r] for r in why[rest].tolist()], bool)
+        out[valid[rest[nc]]] = REASONS.index("not closed")
+    out[invalid] = CATEGORIES.index("invalid")
     return out

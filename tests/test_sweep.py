@@ -305,12 +305,14 @@ def test_geometry_and_mass_keys_and_invalid_geometry():
 
 
 def test_ctrl_c_keeps_finished_chunks(tmp_path, monkeypatch):
-    calls = {"n": 0}
+    """Ctrl-C while the third chunk (ids 100..149) runs: the first two are kept. (Chunks run
+    in threads, several at once: the third is told by its first spring_k, not by the order
+    of the calls.)"""
     orig = Simulator.run_batch
+    third = np.linspace(0, 1000, 20)[10]
 
     def flaky(self, P, threads=None, **kw):
-        calls["n"] += 1
-        if calls["n"] == 3:
+        if P[0, 0] == third:
             raise KeyboardInterrupt
         return orig(self, P, threads, **kw)
     monkeypatch.setattr(Simulator, "run_batch", flaky)
@@ -320,7 +322,6 @@ def test_ctrl_c_keeps_finished_chunks(tmp_path, monkeypatch):
     assert res.interrupted and not res.success and res.computed == 100
     assert np.array_equal(res.columns["id"], np.arange(100))
     assert "interrupted" in res.message
-    calls["n"] = 0
     code = main(["sweep", "--grid", "design.spring_k=0:1000:20", "--grid",
                  "design.damper_c=0:3000:10", "--chunk", "50", "--out", str(tmp_path), "--json"])
     assert code == 130
@@ -534,3 +535,62 @@ def test_lid_mass_sweep_diagnoses_a_failed_stroke_at_its_own_mass():
         assert out["status"][i] == "unstable" and r["status"][0] == 2
         assert out["reason"][i] == sim.diagnose(r["status"][0], p)
     assert out["reason"][0] != out["reason"][1]       # the stable step depends on the mass
+
+
+def test_categories_of_rows():
+    """Each row's category: feasible (-1), the first reason that applies, "not closed" for
+    a stroke's own diagnosis, "invalid" by the status whatever the reason says, and "not
+    integrated" for the method's failures."""
+    from softclose.problem import CATEGORIES, categorise
+    rows = [("closed", "", -1), ("closed", "too slow", CATEGORIES.index("too slow")),
+            ("closed", "rebound", CATEGORIES.index("rebound")),
+            ("not closed", "not closed (held open at theta = 12.3 deg)",
+             CATEGORIES.index("not closed")),
+            ("not closed", "not closed", CATEGORIES.index("not closed")),
+            ("invalid", "the compression spring (it only pushes) would be longer than its "
+             "free length 58.43 mm over the whole stroke, by up to 1.00 mm (at theta = 2.0 "
+             "deg)", CATEGORIES.index("invalid")),
+            ("invalid", "too slow", CATEGORIES.index("invalid")),
+            ("invalid", "not closed (x)", CATEGORIES.index("invalid")),
+            ("failed", "the step diverged: use a smaller simulate.step",
+             CATEGORIES.index("not integrated"))]
+    status = np.array([r[0] for r in rows] * 3, dtype=object)
+    reason = np.array([r[1] for r in rows] * 3, dtype=object)
+    assert categorise(status, reason).tolist() == [r[2] for r in rows] * 3
+    assert categorise(np.array([], dtype=object), np.array([], dtype=object)).tolist() == []
+
+
+def test_local_map_evaluates_chunks_at_once_and_yields_them_in_order(monkeypatch):
+    """As many chunks at once as kernel threads, one thread each (one chunk's Python runs
+    beside the others' kernels); fewer chunks than threads share them; the first chunk is
+    yielded first even when it finishes last; a chunk's error reaches the caller."""
+    import threading
+    import time
+
+    from softclose.sweeps import run as runner
+    running, most, shares, lock = [0], [0], {}, threading.Lock()
+
+    def fake(cfg_dict, keys, ids, X, threads=None):
+        with lock:
+            running[0] += 1
+            most[0] = max(most[0], running[0])
+            shares[int(ids[0]) // 10] = threads
+        time.sleep(0.2 if ids[0] == 0 else 0.05)      # the first chunk is the slowest
+        with lock:
+            running[0] -= 1
+        if ids[0] == 40:
+            raise ValueError("chunk 4 failed")
+        return {"id": ids}
+    monkeypatch.setattr(runner, "evaluate_chunk", fake)
+    tasks = [(c, np.arange(10 * c, 10 * c + 10), None) for c in range(4)]
+    got = [c for c, cols in runner.local_map({}, [], iter(tasks), threads=2)]
+    assert got == [0, 1, 2, 3] and most[0] == 2 and set(shares.values()) == {1}
+    shares.clear()
+    got = [c for c, cols in runner.local_map({}, [], iter(tasks[:1]), threads=4)]
+    assert got == [0] and shares == {0: 4}               # one chunk: every thread
+    shares.clear()
+    list(runner.local_map({}, [], iter(tasks[:2]), threads=4))
+    assert shares == {0: 2, 1: 2}
+    bad = runner.local_map({}, [], iter(tasks + [(4, np.arange(40, 50), None)]), threads=2)
+    with pytest.raises(ValueError, match="chunk 4 failed"):
+        list(bad)

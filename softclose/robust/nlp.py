@@ -42,7 +42,6 @@ stage, :mod:`softclose.robust.placement`), after (k, l0, c) and before the point
 from __future__ import annotations
 
 import math
-import os
 import time
 
 import casadi as ca
@@ -74,8 +73,8 @@ WARM_OPTIONS = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
 def map_threads() -> int:
     """Threads that evaluate the scenario NLP's shooting intervals: the cores this process
     may use, at most :data:`MAX_MAP_THREADS`."""
-    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    return max(1, min(cpus or 1, MAX_MAP_THREADS))
+    from ..native import cores
+    return min(cores(), MAX_MAP_THREADS)
 
 
 #: at most this many threads per map (the intervals of 9 scenarios are ~90 calls)

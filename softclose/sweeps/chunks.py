@@ -32,12 +32,13 @@ How a chunk is evaluated (metric only, batched):
 from __future__ import annotations
 
 import json
+import threading
 from collections import OrderedDict
 
 import numpy as np
 
 from ..config.free import PLACEMENT_KEYS, point_refusals
-from ..problem import (LID_MASS, METRIC_KEYS, PARAM_COLUMNS, PARAM_KEYS, infeasibility, objective,
+from ..problem import (LID_MASS, METRIC_KEYS, PARAM_COLUMNS, infeasibility, objective,
                        params_of)
 from ..stroke import StrokeStatus
 
@@ -52,6 +53,7 @@ TAIL = METRIC_KEYS + ("objective", "feasible", "status", "reason")
 _CACHE_SIZE = 16
 _sims: OrderedDict = OrderedDict()
 _cfgs: OrderedDict = OrderedDict()
+_cache_lock = threading.RLock()
 
 
 def columns(keys) -> list[str]:
@@ -61,14 +63,15 @@ def columns(keys) -> list[str]:
 
 
 def _lru(cache: OrderedDict, key, make):
-    if key in cache:
-        cache.move_to_end(key)
-        return cache[key]
-    value = make()
-    cache[key] = value
-    if len(cache) > _CACHE_SIZE:
-        cache.popitem(last=False)
-    return value
+    with _cache_lock:        # (chunks are evaluated in threads: one of them builds it)
+        if key in cache:
+            cache.move_to_end(key)
+            return cache[key]
+        value = make()
+        cache[key] = value
+        if len(cache) > _CACHE_SIZE:
+            cache.popitem(last=False)
+        return value
 
 
 def _config(cfg_dict: dict):

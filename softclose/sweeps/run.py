@@ -3,8 +3,8 @@
 A *mapper* is any callable ``mapper(cfg_dict, keys, tasks, threads)`` that evaluates the
 ``tasks`` -- an iterator of ``(c, ids, X)``: chunk number, design ids, swept values -- with
 :func:`softclose.sweeps.chunks.evaluate_chunk` and yields ``(c, columns)`` as chunks finish,
-in any order. :func:`local_map` evaluates them one after the other in this process (the
-kernel uses its threads); a distributed mapper sends the same plain values to workers.
+in any order. :func:`local_map` evaluates them in this process, as many at once as it has
+kernel threads; a distributed mapper sends the same plain values to workers.
 
 For each finished chunk the runner updates the :class:`~softclose.sweeps.tally.Tally` and
 the :class:`~softclose.sweeps.tally.Bins`, hands the rows to a ``sink`` (a Parquet part
@@ -14,6 +14,7 @@ chunks: every finished chunk is kept and the result says ``interrupted``.
 
 from __future__ import annotations
 
+import collections
 import signal
 import threading
 import time
@@ -35,32 +36,54 @@ Mapper = Callable[[dict, list, Iterable, "int | None"], Iterator[tuple[int, dict
 
 
 def local_map(cfg_dict: dict, keys: list[str], tasks, threads: int | None = None):
-    """Evaluate the chunks here, one after the other (the kernel runs them in threads); the
-    next chunk is evaluated in a thread while the caller stores the last one, so the
-    kernel's threads do not wait for the writing and the tallies between chunks."""
+    """Evaluate the chunks here, several at once, each in a thread of its own; yields them
+    in task order. ``threads``: the kernel threads in all (default: one per core, at most
+    ``native.MAX_THREADS``).
+
+    A chunk spends about two thirds of its CPU time in the kernel, which releases the GIL,
+    and the rest in Python (the statics, the reasons, the columns). One chunk at a time with
+    the kernel on every core leaves all but one core idle while its Python runs. So as many
+    chunks as threads are evaluated at once, one kernel thread each: while one chunk's
+    Python runs the others' strokes are integrated, and the caller stores the last finished
+    chunk meanwhile. Where fewer chunks are left than threads, they share the threads (a
+    sweep of one chunk has them all)."""
+    from ..native import MAX_THREADS, cores
+    total = threads or min(cores(), MAX_THREADS)
     tasks = iter(tasks)
-    box: list = []
+    ahead: collections.deque = collections.deque()      # tasks drawn, not started
+    flight: collections.deque = collections.deque()     # (thread, box) in task order
 
-    def work():
-        try:
+    def start() -> None:
+        while len(ahead) < total:               # (look ahead: how many chunks are left)
             task = next(tasks, None)
-            box.append(None if task is None else
-                       (task[0], evaluate_chunk(cfg_dict, keys, task[1], task[2],
-                                                threads=threads)))
-        except BaseException as exc:   # noqa: BLE001  (raised below, in the caller's thread)
-            box.append(exc)
-
-    t = threading.Thread(target=work, daemon=True)
-    t.start()
-    while True:
-        t.join()
-        got = box.pop()
-        if isinstance(got, BaseException):
-            raise got
-        if got is None:
+            if task is None:
+                break
+            ahead.append(task)
+        if not ahead:
             return
+        task = ahead.popleft()
+        share = max(1, total // min(total, len(flight) + 1 + len(ahead)))
+        box: list = []
+
+        def work():
+            try:
+                box.append((task[0], evaluate_chunk(cfg_dict, keys, task[1], task[2],
+                                                    threads=share)))
+            except BaseException as exc:   # noqa: BLE001  (raised in the caller's thread)
+                box.append(exc)
         t = threading.Thread(target=work, daemon=True)
         t.start()
+        flight.append((t, box))
+
+    for _ in range(total):
+        start()
+    while flight:
+        t, box = flight.popleft()
+        t.join()
+        got = box[0]
+        if isinstance(got, BaseException):
+            raise got
+        start()
         yield got
 
 
