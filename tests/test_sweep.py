@@ -594,3 +594,25 @@ def test_local_map_evaluates_chunks_at_once_and_yields_them_in_order(monkeypatch
     bad = runner.local_map({}, [], iter(tasks + [(4, np.arange(40, 50), None)]), threads=2)
     with pytest.raises(ValueError, match="chunk 4 failed"):
         list(bad)
+
+
+def test_parquet_parts_encode_only_the_status_as_a_dictionary(tmp_path):
+    """A part file keeps every value (NaN where a metric has none), and only the status
+    column is dictionary-encoded (a dictionary on numbers that hardly repeat cost time)."""
+    pq = pytest.importorskip("pyarrow.parquet")
+    res = sweep(default_config(), {"design.spring_k": [0.0, 900.0, 5000.0],
+                                   "design.damper_c": [0.0, 2000.0]})
+    sink = store.ParquetSink(tmp_path, res.keys)
+    path = sink.write(0, dict(res.columns))
+    meta = pq.ParquetFile(path).metadata.row_group(0)
+    dict_cols = {meta.column(j).path_in_schema for j in range(meta.num_columns)
+                 if "RLE_DICTIONARY" in meta.column(j).encodings
+                 or "PLAIN_DICTIONARY" in meta.column(j).encodings}
+    assert dict_cols == {"status"}
+    back = pq.read_table(path).to_pydict()
+    for k, v in res.columns.items():
+        got = np.asarray(back[k], dtype=v.dtype)
+        if v.dtype.kind == "f":
+            assert np.array_equal(got, v, equal_nan=True), k
+        else:
+            assert got.tolist() == v.tolist(), k

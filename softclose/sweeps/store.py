@@ -275,6 +275,14 @@ def part_path(out: Path, c: int) -> Path:
     return Path(out) / DATASET / f"part-{c:06d}.parquet"
 
 
+#: the columns a part file stores dictionary-encoded: the status (a few words). Every other
+#: column plain: Parquet's default tries a dictionary on each and gives it up on numbers that
+#: hardly repeat (or on the reasons, each its own), which took half the time of a part's
+#: write and made it 12 % larger (16,384 rows of the placement sample: 16 -> 8 ms, 1.52 ->
+#: 1.35 MB)
+DICTIONARY = ["status"]
+
+
 class ParquetSink:
     """Writes each finished chunk as one part file of the dataset ``out/sweep.parquet``."""
 
@@ -287,7 +295,7 @@ class ParquetSink:
         import pyarrow.parquet as pq
         path = part_path(self.dir.parent, c)
         tmp = path.with_name(f".{path.name}.tmp")
-        pq.write_table(arrow_table(cols, self.keys), tmp)
+        pq.write_table(arrow_table(cols, self.keys), tmp, use_dictionary=DICTIONARY)
         os.replace(tmp, path)
         return path
 
