@@ -433,7 +433,12 @@ def solve_start(plan: Plan, i: int) -> tuple[Run, dict]:
 
 def solve_starts(plan: Plan, which) -> dict:
     """The starts ``which`` of ``plan``: {index: (run, row)} (for another process)."""
-    return {i: solve_start(plan, i) for i in which}
+    from ..interrupt import check
+    out = {}
+    for i in which:
+        check()                       # Ctrl-C between starts (Ipopt may have swallowed it)
+        out[i] = solve_start(plan, i)
+    return out
 
 
 @guarded
@@ -468,10 +473,12 @@ def optimise_kind(cfg, *, starts: int | None = None, verify: bool = True,
     notes = list(disc.notes)
     away, collect = elsewhere if elsewhere else ((), None)
     solved: dict = {}
+    from ..interrupt import check
     with bar:
         for i in range(plan.n_starts):
             if i in away:
                 continue
+            check()                   # Ctrl-C between starts (Ipopt may have swallowed it)
             bar.update(len(solved), f"start {i + 1} of {plan.n_starts}: solving "
                                     f"({disc.nodes} x {disc.substeps} RK4 steps)", force=True)
             solved[i] = r, _ = solve_start(plan, i)
