@@ -242,3 +242,31 @@ def test_sigint_handler_swaps_for_the_block_and_restores():
         assert seen == [mine]
     finally:
         signal.signal(signal.SIGINT, previous)
+
+
+def test_a_swallowed_ctrl_c_stops_the_multistart_before_its_next_start(monkeypatch):
+    """Ctrl-C noted (Ipopt swallowed its KeyboardInterrupt, and no re-send came): the
+    optimiser's multistart raises it before the next start, not after the remaining ones."""
+    from softclose import interrupt
+    from softclose.config import default_config
+    from softclose.optimiser import optimiser as opt
+    solved = []
+    real = opt.solve_start
+
+    def counting(plan, i):
+        solved.append(i)
+        if len(solved) == 2:           # Ctrl-C lands in the second start's solve
+            interrupt._pending.set()
+        return real(plan, i)
+    monkeypatch.setattr(opt, "solve_start", counting)
+    monkeypatch.setenv("SOFTCLOSE_SIDE_BY_SIDE", "0")
+    quiet = interrupt._quiet.is_set()
+    interrupt._quiet.clear()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            opt.optimise_kind(default_config().update({"optimise.starts": 6}), verify=False)
+    finally:
+        interrupt._pending.clear()
+        if quiet:
+            interrupt._quiet.set()
+    assert solved == [0, 1]
