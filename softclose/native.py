@@ -278,6 +278,11 @@ def cores() -> int:
 MAX_THREADS = 8
 
 
+def kernel_threads(threads: int | None = None) -> int:
+    """The kernel threads asked for, or by default one per core, at most MAX_THREADS."""
+    return threads or min(cores(), MAX_THREADS)
+
+
 def _ptr(a: np.ndarray | None):
     if a is None:
         return ctypes.POINTER(ctypes.c_double)()
@@ -478,7 +483,7 @@ def run_strokes(table: CoefficientTable, method: Method, step: float, t_max: flo
     n, ncol = designs.shape
     out = np.empty((n, len(OUT_FIELDS)))
     tab = method.packed()
-    threads = threads or min(cores(), MAX_THREADS)
+    threads = kernel_threads(threads)
     threads = max(1, min(threads, n // 64 or 1))
 
     def work(a, b):

@@ -254,10 +254,11 @@ def test_a_swallowed_ctrl_c_stops_the_multistart_before_its_next_start(monkeypat
     real = opt.solve_start
 
     def counting(plan, i):
+        out = real(plan, i)
         solved.append(i)
-        if len(solved) == 2:           # Ctrl-C lands in the second start's solve
+        if len(solved) == 2:           # Ctrl-C landed in the second start's solve
             interrupt._pending.set()
-        return real(plan, i)
+        return out
     monkeypatch.setattr(opt, "solve_start", counting)
     monkeypatch.setenv("SOFTCLOSE_SIDE_BY_SIDE", "0")
     quiet = interrupt._quiet.is_set()

@@ -421,7 +421,10 @@ def plan_kind(cfg, starts: int | None = None, nodes: int | None = None,
 
 def solve_start(plan: Plan, i: int) -> tuple[Run, dict]:
     """Start ``i`` of ``plan``: its initial guess from the simulated stroke, one Ipopt solve,
-    and its row of the report. The same numbers in whichever process runs it."""
+    and its row of the report. The same numbers in whichever process runs it. A Ctrl-C noted
+    before it (one that Ipopt swallowed in the start before) is raised here, first."""
+    from ..interrupt import check
+    check()
     nlp, cfg, d0 = plan.nlp, plan.cfg, plan.designs[i]
     p = nlp.params(cfg)
     w0, J0 = initial_guess(nlp, cfg, d0, plan.sim, p, plan.disc.t_limit)
@@ -433,12 +436,7 @@ def solve_start(plan: Plan, i: int) -> tuple[Run, dict]:
 
 def solve_starts(plan: Plan, which) -> dict:
     """The starts ``which`` of ``plan``: {index: (run, row)} (for another process)."""
-    from ..interrupt import check
-    out = {}
-    for i in which:
-        check()                       # Ctrl-C between starts (Ipopt may have swallowed it)
-        out[i] = solve_start(plan, i)
-    return out
+    return {i: solve_start(plan, i) for i in which}
 
 
 @guarded
@@ -473,12 +471,10 @@ def optimise_kind(cfg, *, starts: int | None = None, verify: bool = True,
     notes = list(disc.notes)
     away, collect = elsewhere if elsewhere else ((), None)
     solved: dict = {}
-    from ..interrupt import check
     with bar:
         for i in range(plan.n_starts):
             if i in away:
                 continue
-            check()                   # Ctrl-C between starts (Ipopt may have swallowed it)
             bar.update(len(solved), f"start {i + 1} of {plan.n_starts}: solving "
                                     f"({disc.nodes} x {disc.substeps} RK4 steps)", force=True)
             solved[i] = r, _ = solve_start(plan, i)

@@ -47,8 +47,8 @@ def local_map(cfg_dict: dict, keys: list[str], tasks, threads: int | None = None
     Python runs the others' strokes are integrated, and the caller stores the last finished
     chunk meanwhile. Where fewer chunks are left than threads, they share the threads (a
     sweep of one chunk has them all)."""
-    from ..native import MAX_THREADS, cores
-    total = threads or min(cores(), MAX_THREADS)
+    from ..native import kernel_threads
+    total = kernel_threads(threads)
     tasks = iter(tasks)
     ahead: collections.deque = collections.deque()      # tasks drawn, not started
     flight: collections.deque = collections.deque()     # (thread, box) in task order
