@@ -284,6 +284,15 @@ def forget_nlp(key: str) -> None:
         _remove(where / f"nlp-{key}.so")
 
 
+def package_root() -> str:
+    """The folder this package was imported from (site-packages, or a source tree): a
+    background compilation starts there, so that ``python -m`` imports this same package.
+    From the folder a command was run in, it would import a ``softclose/`` found there
+    first -- the clone next to an installed copy -- whose fingerprint differs: its library
+    would go to another cache folder, never loaded, and asked for again on every run."""
+    return str(Path(__file__).resolve().parent.parent)
+
+
 def request_nlp(key: str, spec: dict, module: str = "softclose.optimiser.compile") -> bool:
     """The NLP ``key`` was used (and is not compiled): the second time -- a marker remembers
     the first -- start its compilation in the background, unless another one is running
@@ -319,7 +328,7 @@ def request_nlp(key: str, spec: dict, module: str = "softclose.optimiser.compile
     with os.fdopen(fd, "w") as f:
         json.dump({"key": key, **spec}, f)
     try:
-        subprocess.Popen([sys.executable, "-m", module, str(lock)],
+        subprocess.Popen([sys.executable, "-m", module, str(lock)], cwd=package_root(),
                          stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                          stderr=subprocess.DEVNULL, start_new_session=True, close_fds=True,
                          env={**os.environ, ENV_FOLDER: os.environ.get(ENV_FOLDER, "")})
@@ -375,6 +384,7 @@ def chain(lock: Path) -> None:
             _remove(path)
             continue
         try:
+            os.chdir(package_root())            # (the same package, as request_nlp)
             os.execv(sys.executable, [sys.executable, "-m", module, str(lock)])
         except OSError:
             break

@@ -154,7 +154,10 @@ def test_compilations_asked_for_while_one_runs_wait_their_turn(cache, cfg, monke
     class Exec(Exception):
         """exec does not return: this process became the next compilation"""
 
+    monkeypatch.chdir(cache)                          # (restored after the test)
+
     def execv(exe, argv):
+        assert os.getcwd() == buildcache.package_root()   # the same package (below)
         execs.append(argv)
         raise Exec
     monkeypatch.setattr(os, "execv", execv)
@@ -175,6 +178,39 @@ def test_compilations_asked_for_while_one_runs_wait_their_turn(cache, cfg, monke
     end()                                             # none waits: the lock goes
     assert not lock.exists() and not list(buildcache.folder().glob("pending-*"))
     assert len(execs) == buildcache.MAX_PENDING - 1
+
+
+def test_a_background_compilation_imports_this_same_package(cache, tmp_path, monkeypatch):
+    """A command run in a clone with the package installed from it (the README's set-up)
+    must start its compilation where ``python -m`` finds the installed package, not the
+    clone's ``softclose/`` beside it: that one has another fingerprint, so its library
+    would go to a cache folder nobody reads, asked for again on every run."""
+    import subprocess
+    import sys
+    monkeypatch.setenv(buildcache.ENV_COMPILE, "1")
+    clone = tmp_path / "clone"
+    (clone / "softclose").mkdir(parents=True)
+    (clone / "softclose" / "__init__.py").write_text("# another copy of the package\n")
+    monkeypatch.chdir(clone)
+    started = []
+
+    class Popen:
+        def __init__(self, cmd, **kw):
+            started.append((cmd, kw))
+    with monkeypatch.context() as m:
+        m.setattr(subprocess, "Popen", Popen)
+        for _ in range(2):
+            buildcache.request_nlp("k", {"nodes": 1})
+    (cmd, kw), = started
+    assert cmd[1:3] == ["-m", "softclose.optimiser.compile"]
+    probe = [sys.executable, "-c", "import softclose; print(softclose.__file__)"]
+
+    def imported_from(cwd):
+        out = subprocess.run(probe, cwd=cwd, env=kw["env"], capture_output=True, text=True,
+                             check=True).stdout.strip()
+        return Path(out).resolve()
+    assert imported_from(clone) == (clone / "softclose" / "__init__.py").resolve()  # the trap
+    assert imported_from(kw.get("cwd")) == Path(softclose.__file__).resolve()
 
 
 @pytest.mark.slow
