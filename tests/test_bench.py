@@ -263,3 +263,22 @@ def test_cheapest_is_a_method_s_largest_passing_step_whatever_the_timings_say():
                                "rk4": {"step": 5e-3, "mean_time_per_stroke": 1.5}}
     assert (c["method"], c["step"]) == ("rk2", 1e-3)
     assert bench.cheapest_setting([row("rk4", 2e-3, 1.0, ok=False)], ["a"])["step"] is None
+
+
+def test_a_fresh_interpreter_of_the_bench_imports_this_copy(tmp_path, monkeypatch):
+    """The bench times fresh interpreters of this copy of softclose, even when it runs in a
+    folder with another ``softclose/`` (a clone beside the installed package): without -P,
+    ``python -c``/``-m`` would import that one first."""
+    import softclose
+    from softclose.bench.timing import fresh_command, fresh_env
+    (tmp_path / "softclose").mkdir()
+    (tmp_path / "softclose" / "__init__.py").write_text("# another copy\n")
+    monkeypatch.chdir(tmp_path)
+    probe = "import softclose; print(softclose.__file__)"
+
+    def imported(cmd):
+        out = subprocess.run(cmd, env=fresh_env(), capture_output=True, text=True, check=True)
+        return Path(out.stdout.strip()).resolve()
+    assert imported([sys.executable, "-c", probe]) == \
+        (tmp_path / "softclose" / "__init__.py").resolve()          # the trap
+    assert imported(fresh_command("-c", probe)) == Path(softclose.__file__).resolve()

@@ -9,7 +9,6 @@ from __future__ import annotations
 import json
 import os
 import subprocess
-import sys
 
 import numpy as np
 
@@ -19,7 +18,7 @@ from ..model import LidModel
 from ..reference import Reference
 from ..simulate import Simulator
 from .later import later_entries
-from .timing import cli_time, fresh_env, kernel_times, median_time, not_measured, speed_row
+from .timing import cli_time, fresh_command, fresh_env, kernel_times, median_time, not_measured, speed_row
 
 #: modules that ``softclose simulate`` must not import at start-up (they are imported lazily)
 HEAVY_MODULES = ("pandas", "pyarrow", "scipy", "SALib", "dask", "matplotlib")
@@ -117,8 +116,8 @@ def startup_rows(repeats: int = 9, log=None) -> list[dict]:
         how += "; no .pyc files: every module is compiled from source at each start " \
                "(measure an installed package)"
     env = fresh_env()
-    cmds = {"casadi": [sys.executable, "-c", "import casadi"]}
-    cmds.update({k: [sys.executable, "-m", "softclose", *argv] for k, argv, _ in STARTUP})
+    cmds = {"casadi": fresh_command("-c", "import casadi")}
+    cmds.update({k: fresh_command("-m", "softclose", *argv) for k, argv, _ in STARTUP})
     times: dict = {k: [] for k in cmds}
     for i in range(repeats + 1):
         for k, cmd in cmds.items():
@@ -148,7 +147,7 @@ def startup_imports(argv: list[str], modules=HEAVY_MODULES) -> list[str]:
             "with contextlib.redirect_stdout(io.StringIO()):\n"
             f"    main({list(argv)!r})\n"
             f"print(json.dumps([m for m in {list(modules)!r} if m in sys.modules]))\n")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+    r = subprocess.run(fresh_command("-c", code), capture_output=True, text=True,
                        env=fresh_env())
     if r.returncode != 0:
         raise RuntimeError(f"softclose {' '.join(argv)} failed: {r.stderr.strip()[-300:]}")

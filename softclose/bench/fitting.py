@@ -12,11 +12,10 @@ from __future__ import annotations
 
 import json
 import subprocess
-import sys
 import tempfile
 from pathlib import Path
 
-from .timing import fresh_env
+from .timing import fresh_command, fresh_env
 
 #: the README's optimum as a built prototype (a compression spring)
 PROTOTYPE = {"design.spring_kind": "compression", "design.spring_k": 1914.709,
@@ -60,7 +59,7 @@ def fit_entries(rows: list, timed, repeats: int) -> None:
             last = {}
 
             def call(files=files, keys=keys, first=first, last=last):
-                argv = [sys.executable, "-m", "softclose", "fit", *map(str, files),
+                argv = [*fresh_command("-m", "softclose"), "fit", *map(str, files),
                         *[a for k in keys for a in ("--free", k)],
                         *_sets({k: v for k, v in PROTOTYPE.items() if k not in keys}),
                         *_sets(first), "--json"]

@@ -11,7 +11,6 @@ from __future__ import annotations
 import json
 import statistics
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -23,7 +22,7 @@ from ..problem import PARAM_COLUMNS, objective, params_of
 from ..reference import Reference
 from ..simulate import Simulator
 from .precision import TRUTH_TOL
-from .timing import OtherLoad, fresh_env, not_measured, speed_row
+from .timing import OtherLoad, fresh_command, fresh_env, not_measured, speed_row
 
 #: a later entry is repeated (up to its repeat count) only while its runs took less than this
 LATER_BUDGET_S = 30.0
@@ -297,7 +296,7 @@ def _placement_rows(cfg: Config, rows: list, timed, quick: bool) -> None:
     args += [f"--set={k}={json.dumps(v)}" for k, v in PLACEMENT_DESIGN.items()]
     with tempfile.TemporaryDirectory() as tmp:
         def run():
-            r = subprocess.run([sys.executable, "-m", "softclose", "sweep", "--sample",
+            r = subprocess.run([*fresh_command("-m", "softclose"), "sweep", "--sample",
                                 str(PLACEMENT_ROWS), *args, "--format", "parquet", "--out",
                                 str(Path(tmp) / "placements"), "--json"], capture_output=True,
                                text=True, env=fresh_env())
@@ -355,7 +354,7 @@ def _cli_sweep_rows(cfg: Config, rows: list, n_grid: int, timed, repeats: int) -
     with tempfile.TemporaryDirectory() as tmp:
         def run():
             out = Path(tmp) / f"run{len(maps)}"
-            r = subprocess.run([sys.executable, "-m", "softclose", "sweep", *grid, "--out",
+            r = subprocess.run([*fresh_command("-m", "softclose"), "sweep", *grid, "--out",
                                 str(out), "--json"], capture_output=True, text=True,
                                env=fresh_env())
             if r.returncode != 0:

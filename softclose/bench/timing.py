@@ -171,6 +171,14 @@ def not_measured(key, what, note, repeats=0) -> dict:
             "note": note}
 
 
+def fresh_command(*args: str) -> list[str]:
+    """A fresh interpreter's command line (``python -P ARGS``; with :func:`fresh_env`): it
+    imports this copy of softclose. Without ``-P``, ``python -m``/``-c`` would look first in
+    the folder the bench runs in -- a clone's ``softclose/`` beside an installed copy -- and
+    time that one, with another build cache."""
+    return [sys.executable, "-P", *args]
+
+
 def fresh_env() -> dict:
     """The environment of a fresh interpreter that imports this copy of softclose."""
     root = str(Path(__file__).resolve().parents[2])
@@ -181,7 +189,7 @@ def fresh_env() -> dict:
 
 def cli_time(argv: list[str], repeats: int) -> float:
     """Median wall time of ``python -m softclose ARGV`` in a fresh interpreter, in s."""
-    cmd = [sys.executable, "-m", "softclose", *argv]
+    cmd = fresh_command("-m", "softclose", *argv)
     env = fresh_env()
 
     def run():
