@@ -55,18 +55,19 @@ def _layout(cfg: Config) -> list:
         [k for k, _, _ in placement_layout(cfg)]
 
 
-def choose_points(cfg: Config, notes: list, bound: float | None = None) -> tuple[dict, dict]:
+def choose_points(cfg: Config, notes: list, bound: float | None = None,
+                  ahead=None) -> tuple[dict, dict]:
     """Stage 1 (module docstring): (points {key: m}, what it found). With no solution the
     points of the nominal optimum (or the config's) are returned, and ``info`` says so.
 
     ``bound``: the best worst-case J another spring kind reached. The nominal lid is one of
     the box's scenarios, so a kind whose nominal co-design optimum already exceeds it cannot
-    do better: then (None, info) at once, without the scenario NLP."""
+    do better: then (None, info) at once, without the scenario NLP. ``ahead``: the process
+    solving that nominal co-design already (:func:`nominals_ahead`), or None: solved here."""
     from ..optimiser.interval import free_of
-    from ..optimiser.optimiser import optimise_kind
     t0 = time.perf_counter()
     layout = _layout(cfg)
-    nominal = optimise_kind(cfg, verify=False)
+    nominal = _nominal(cfg, ahead)
     c = _at(cfg, nominal.design or {})
     points = {k: _value(c, k) for k in layout}
     info = {"nominal_objective": nominal.objective, "nominal_points": dict(points)}
@@ -95,6 +96,38 @@ def choose_points(cfg: Config, notes: list, bound: float | None = None) -> tuple
                      f"({run.r['status']}) from the nominal co-design's and from the "
                      "config's own: the config's (clipped into their bounds) are used")
     return points, info
+
+
+def _solve_nominal(cfg: Config):
+    """The nominal co-design optimum of ``cfg``'s spring kind (the points free), unverified:
+    stage 1's start."""
+    from ..optimiser.optimiser import optimise_kind
+    return optimise_kind(cfg, verify=False)
+
+
+def _nominal(cfg: Config, ahead):
+    """:func:`_solve_nominal`: the answer of ``ahead`` (its process), or solved here (also
+    when that process died); an error of the solve is raised as it would be here."""
+    if ahead is not None:
+        try:
+            return ahead.raw()
+        except (EOFError, OSError):
+            pass
+    return _solve_nominal(cfg)
+
+
+def nominals_ahead(configs: list) -> dict:
+    """Stage 1's nominal co-designs of the spring kinds after the first, each started now in
+    a forked process (:class:`softclose.optimiser.sidebyside.KindProcess`), so that they run
+    beside the first kind's: {index in ``configs``: process}. Empty where solving side by
+    side is not available (:func:`softclose.optimiser.sidebyside.available`: one core, other
+    threads, no fork, ``SOFTCLOSE_SIDE_BY_SIDE=0``). The answers are the same as solved here
+    (the same code on the same inputs); the caller closes the processes."""
+    from ..optimiser import sidebyside
+    if not sidebyside.available(len(configs)):
+        return {}
+    return {i: sidebyside.KindProcess(lambda c=c: (_solve_nominal(c), None))
+            for i, c in enumerate(configs) if i > 0}
 
 
 #: Ipopt iterations of one joint solve (one iteration of 9 scenarios takes ~0.15-0.3 s)
@@ -153,4 +186,4 @@ def _quoted(key: str, v: float) -> str:
     return f"{key} = {v:.6g} " + ("deg" if key == END_ANGLE else "N m s/rad")
 
 
-__all__ = ["choose_points", "fixed_points"]
+__all__ = ["choose_points", "fixed_points", "nominals_ahead"]

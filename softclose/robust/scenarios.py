@@ -18,7 +18,7 @@ from ..config import Config
 from ..problem import DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, with_designs
 from .box import Box, box_of
 from .evaluate import evaluate
-from .policy import MAX_CORNERS, max_corners, t_end
+from .policy import max_corners, t_end
 
 
 @dataclass(frozen=True)

@@ -24,8 +24,7 @@ from ..config import Config
 from ..problem import DESIGN_KEYS, objective, with_designs
 from .box import Box, box_of
 from .evaluate import evaluate, simulator, slow_keys
-from .nlp import (T_FLOOR, ScenarioNLP, get_scenario_nlp, model_config, node_times, t_limit,
-                  time_grid)
+from .nlp import T_FLOOR, ScenarioNLP, get_scenario_nlp, model_config, node_times, t_limit
 from .policy import (AGREE_RTOL, CHECK_SAMPLES, MAX_REFINE, MAX_ROUNDS, REFINE_RTOL,
                      SLOW_CHECK_SAMPLES, t_end)
 from .scenarios import Scenario, maps, scenario_rows
