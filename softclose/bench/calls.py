@@ -18,7 +18,8 @@ from ..model import LidModel
 from ..reference import Reference
 from ..simulate import Simulator
 from .later import later_entries
-from .timing import cli_time, fresh_command, fresh_env, kernel_times, median_time, not_measured, speed_row
+from .timing import (cli_time, fresh_command, fresh_env, kernel_times, median_time,
+                     not_measured, speed_row)
 
 #: modules that ``softclose simulate`` must not import at start-up (they are imported lazily)
 HEAVY_MODULES = ("pandas", "pyarrow", "scipy", "SALib", "dask", "matplotlib")

@@ -13,7 +13,10 @@ with it). Two stages:
    variables (:class:`softclose.robust.nlp.ScenarioNLP`: every scenario's spring length and
    holding moment at the points, each scenario's spring kind valid over the stroke with its
    own free length; every scenario two-phase at the shared angle, with its own c_e) chooses
-   them and the design for the worst case over the scenarios.
+   them and the design for the worst case over the scenarios. The nominal co-designs of
+   the spring kinds after the first are started at once, each in a forked process beside
+   the first kind's (:func:`nominals_ahead`; the same answers): a later kind whose nominal
+   optimum already exceeds an earlier kind's worst case stops there (:func:`choose_points`).
 2. **What, verified**: at those points (a config with them set, the points no longer free)
    the robust optimiser runs as without free points (:func:`optimise_robust_kind`: start,
    scenario NLP, the interior worst cases and every corner in the kernel, the accuracy
