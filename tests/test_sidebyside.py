@@ -191,3 +191,20 @@ def test_the_robust_co_designs_later_kinds_start_side_by_side(mode):
     r = _stage1(mode)
     assert all(r["same"]) and r["off"] and r["compiling"] == [], r
     assert r["J"] == pytest.approx(0.204746, abs=1e-6)
+
+
+def test_the_nlp_loaded_before_a_fork_is_the_one_the_starts_use():
+    """What the parent loads before forking (kind_nlp) is the NLP plan_kind gives the starts,
+    also with a free point outside its bounds (clipped in, and its value is part of the
+    NLP's key): otherwise the parent builds an NLP nobody uses and every process its own."""
+    import softclose
+    from softclose.optimiser.cache import get_nlp
+    from softclose.optimiser.discretise import discretisation
+    from softclose.optimiser.optimiser import kind_nlp, plan_kind
+    cfg = softclose.load_config().set("optimise.free", {
+        "geometry.spring_anchor[0]": [-0.09, -0.08], "geometry.lid_e[1]": [0.004, 0.024]})
+    assert not -0.09 <= cfg.geometry.spring_anchor[0] <= -0.08
+    nlp = kind_nlp(cfg)
+    assert plan_kind(cfg).nlp is nlp
+    disc = discretisation(cfg)
+    assert get_nlp(cfg, disc.nodes, disc.substeps) is not nlp     # the unclipped one

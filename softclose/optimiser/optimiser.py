@@ -279,8 +279,7 @@ def optimise(cfg, *, starts: int | None = None, verify: bool = True,
     children, first = {}, {}
     try:
         if sidebyside.available(len(todo)):
-            disc = discretisation(todo[0][1], nodes, substeps)
-            get_nlp(todo[0][1], disc.nodes, disc.substeps)       # loaded once, inherited
+            kind_nlp(todo[0][1], nodes, substeps)              # loaded once, inherited
             plan, share = None, ()
             if len(todo) == 2:      # one other kind: its process takes some of this one's
                 plan = plan_kind(todo[0][1], starts, nodes, substeps)   # starts too (first)
@@ -400,6 +399,16 @@ class Plan:
     @property
     def n_starts(self) -> int:
         return len(self.designs)
+
+
+def kind_nlp(cfg, nodes: int | None = None, substeps: int | None = None) -> ShootingNLP:
+    """The NLP a kind's starts use (:func:`plan_kind`: its free variables clipped into their
+    bounds, its discretisation), built or loaded here: processes forked after this inherit
+    it. (The NLP of the unclipped config may be another one -- a free point's value is part
+    of its key -- and would be built for nothing, and then in every process.)"""
+    cfg = free_in_bounds(cfg)
+    disc = discretisation(cfg, nodes, substeps)
+    return get_nlp(cfg, disc.nodes, disc.substeps)
 
 
 def plan_kind(cfg, starts: int | None = None, nodes: int | None = None,

@@ -127,15 +127,13 @@ def nominals_ahead(configs: list) -> dict:
     threads, no fork, ``SOFTCLOSE_SIDE_BY_SIDE=0``). The answers are the same as solved here
     (the same code on the same inputs); the caller closes the processes."""
     from ..optimiser import sidebyside
-    from ..optimiser.cache import get_nlp
-    from ..optimiser.discretise import discretisation
+    from ..optimiser.optimiser import kind_nlp
     if not sidebyside.available(len(configs)):
         return {}
     # the kinds share one nominal NLP: loaded (built) here once and inherited, as the
     # optimiser's side by side does -- built in each process it would count as a second use
     # and start its background compilation now, beside this run
-    disc = discretisation(configs[0], None, None)
-    get_nlp(configs[0], disc.nodes, disc.substeps)
+    kind_nlp(configs[0])
     return {i: sidebyside.KindProcess(lambda c=c: (_solve_nominal(c), None))
             for i, c in enumerate(configs) if i > 0}
 
