@@ -10,7 +10,7 @@ import softclose
 from softclose.config import default_config
 from softclose.errors import ConfigError
 from softclose.optimiser.cache import get_model
-from softclose.optimiser.interval import ChebyshevFit, interval_function, nlp_elements
+from softclose.optimiser.interval import ChebyshevFit, bound_interval, nlp_elements
 from softclose.optimiser.placement import SLOTS, placed_config, slot_values
 from softclose.problem import params_of
 from softclose.reference import Reference
@@ -27,7 +27,7 @@ def _flow_nlp(cfg):
     """x(T1) from release by the placed NLP's interval (symbolic in the points g)."""
     model = get_model(cfg)
     fit = ChebyshevFit(model, els=nlp_elements(cfg), pose=True)
-    f = interval_function(model, M, fit, placement=True)
+    f = bound_interval(fit, M, placement=True)
     g = ca.MX.sym("g", len(SLOTS))
     x = ca.DM([cfg.stroke.theta0, 0.0])
     p = params_of(cfg)
@@ -41,7 +41,7 @@ def test_placed_interval_matches_the_fixed_points_one():
     closure and the points) is the fixed-point one (series of the lengths themselves)."""
     cfg = default_config().update(DESIGN)
     x1, model, fit, p = _flow_nlp(cfg)
-    plain = interval_function(model, M, ChebyshevFit(model, els=nlp_elements(cfg)))
+    plain = bound_interval(ChebyshevFit(model, els=nlp_elements(cfg)), M)
     x = ca.DM([cfg.stroke.theta0, 0.0])
     for _ in range(NI):
         x = plain(x, p, T1 / NI / M)[0]

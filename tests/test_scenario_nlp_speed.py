@@ -25,9 +25,9 @@ NODES, SUBSTEPS = 4, 2
 @pytest.fixture
 def cache(tmp_path, monkeypatch):
     monkeypatch.setenv(buildcache.ENV_FOLDER, str(tmp_path))
-    rnlp._NLPS.clear()
+    rnlp.forget()
     yield tmp_path
-    rnlp._NLPS.clear()
+    rnlp.forget()
 
 
 def _problem(cfg):
@@ -51,7 +51,7 @@ def test_threads_give_the_same_solve(cache, cfg, monkeypatch):
     monkeypatch.setattr(rnlp, "MAX_MAP_THREADS", 1)
     assert rnlp.map_threads() == 1
     _, one = _solve(cfg)
-    rnlp._NLPS.clear()
+    rnlp.forget()
     monkeypatch.setattr(rnlp, "MAX_MAP_THREADS", 4)
     monkeypatch.setattr(rnlp, "map_threads", lambda: 3)     # threads even on one core
     _, three = _solve(cfg)
@@ -67,7 +67,7 @@ def test_the_second_build_of_a_scenario_nlp_compiles_it_in_the_background(
     first, _ = _problem(cfg)                 # first build: remembered, nothing compiled
     assert not started and list(cache.glob(f"*/seen-{first.nlp.key}"))
     assert list(cache.glob(f"*/nlpmeta-{first.nlp.key}.bin"))
-    rnlp._NLPS.clear()
+    rnlp.forget()
     again, _ = _problem(cfg)                 # second (another process): compile it
     assert len(started) == 1 and started[0][1:3] == ["-m", "softclose.robust.compile"]
     spec = __import__("json").loads(open(started[0][3]).read())
@@ -92,7 +92,7 @@ def test_the_compiled_scenario_nlp_gives_the_same_solve(cache, cfg, monkeypatch)
     key = vm_problem.nlp.key
     assert buildcache.compile_nlp(rnlp.build_from_spec(spec).solver, key,
                                   buildcache.SCENARIO_CFLAGS) is not None
-    rnlp._NLPS.clear()
+    rnlp.forget()
     problem, fast = _solve(cfg)
     assert problem.nlp.library is not None and problem.nlp.build_time < 0.5
     assert fast.r["iterations"] == vm.r["iterations"]
@@ -111,7 +111,7 @@ def test_the_compiled_scenario_nlp_gives_the_same_solve(cache, cfg, monkeypatch)
     meta = dict(buildcache.load("nlpmeta", key))
     meta["nw"] = meta["nw"] + 1
     buildcache.store("nlpmeta", key, meta)
-    rnlp._NLPS.clear()
+    rnlp.forget()
     problem, again = _solve(cfg)
     assert problem.nlp.library is None and buildcache.compiled_nlp(key) is None
     assert np.array_equal(again.r["x"], vm.r["x"])

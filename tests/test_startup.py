@@ -29,7 +29,7 @@ def _clear_memory():
     oc = importlib.import_module("softclose.optimiser.cache")
     verify = importlib.import_module("softclose.optimiser.verify")
     importlib.import_module("softclose.model")._SHARED.clear()
-    oc._NLPS.clear()
+    oc.forget()
     verify._CHECKERS.clear()
 
 

@@ -1,40 +1,61 @@
-"""Models, NLPs and simulators, built once per geometry and reused.
+"""Models, NLPs and simulators, built once and reused.
 
-Building the NLP of a geometry takes ~0.2 s and a model ~0.03 s; a solve takes ~0.1 s. So
-everything that only depends on the geometry, mass, stroke and discretisation is cached
-here, keyed by those values (Config sections are frozen dataclasses, so they hash), and a
-new problem -- other bounds, weights, closing-time limits -- reuses it.
+An NLP is built once per structure (:func:`nlp_key`: its elements, free variables,
+discretisation -- never the lid's numbers) and bound to a lid by its numbers
+(:class:`softclose.optimiser.nlp.ShootingNLP`); models and their Chebyshev fits are kept per
+geometry, mass and stroke. A new problem -- other bounds, weights, closing-time limits,
+another lid of the same structure -- builds nothing.
 """
 
 from __future__ import annotations
 
+from .. import elements
 from ..model import model_key, shared_model
 from ..simulate import Simulator
 from .discretise import phase_two_substeps
-from .interval import end_damper_mode, free_layout, nlp_elements
-from .nlp import ShootingNLP
-from .placement import placement_layout
+from .interval import ChebyshevFit, end_damper_mode, free_layout, nlp_elements
+from .lid import padded_degree
+from .nlp import ShootingNLP, ShootingStructure
+from .placement import placement_layout, slot_values
 
 _NLPS: dict = {}
+#: the NLP structures built in this process, by :func:`nlp_key`
+_STRUCTURES: dict = {}
+_FITS: dict = {}
 #: the LidModel of cfg's geometry, mass and stroke, kept for the process
 #: (:func:`softclose.model.shared_model`)
 get_model = shared_model
 
 
+def lid_fit(cfg) -> ChebyshevFit:
+    """The Chebyshev fit of cfg's model for its NLP (the elements it carries, the closure's
+    series with free attachment points), kept for the process."""
+    els = nlp_elements(cfg)
+    pose = bool(placement_layout(cfg))
+    key = model_key(cfg) + (tuple(e.name for e in els), pose)
+    if key not in _FITS:
+        _FITS[key] = ChebyshevFit(get_model(cfg), els=els, pose=pose)
+    return _FITS[key]
+
+
 def nlp_key(cfg, nodes: int | None = None, substeps: int | None = None,
             substeps2: int | None = None) -> tuple:
-    """The NLP's structure: the model, the elements it carries, the free variables, the
-    discretisation (with an end damper engaging inside the stroke: two phases, phase 2's
-    sub-steps ``substeps2``, by default :func:`.nlp.phase_two_substeps`), the solver."""
+    """The NLP's structure, and nothing of the lid's numbers: the elements it carries and
+    the series' padded degree, the free variables and points (which), the opening bound,
+    the keep-out regions, the discretisation (with an end damper engaging inside the
+    stroke: two phases, phase 2's sub-steps ``substeps2``, by default
+    :func:`.nlp.phase_two_substeps`), the solver."""
     o = cfg.optimise
     N, M = nodes or o.nodes, substeps or o.substeps
     M2 = None
     if end_damper_mode(cfg) == "two-phase":
         M2 = int(substeps2 or phase_two_substeps(cfg, N, M))
-    return model_key(cfg) + (tuple(e.name for e in nlp_elements(cfg)),
-                             o.opening_force_max is not None, free_layout(cfg),
-                             placement_layout(cfg), keep_out_of(cfg), M2,
-                             N, M, o.hessian, o.linear_solver, o.max_iter)
+    fit = lid_fit(cfg)
+    return (tuple(e.name for e in fit.elements), fit.names, padded_degree(fit.degree),
+            o.opening_force_max is not None,
+            tuple((k, col) for k, col, _ in free_layout(cfg)),
+            tuple((k, slot) for k, slot, _ in placement_layout(cfg)), keep_out_of(cfg), M2,
+            N, M, o.hessian, o.linear_solver, o.max_iter)
 
 
 def keep_out_of(cfg) -> tuple:
@@ -46,71 +67,78 @@ def keep_out_of(cfg) -> tuple:
     return tuple(tuple(tuple(float(c) for c in v) for v in poly) for poly in polys)
 
 
-def _phase2(N, M2):
-    """Phase 2's (intervals, sub-steps) of a two-phase NLP: N as phase 1, M2 (None: one
-    phase)."""
-    return None if M2 is None else (N, M2)
-
-
 def has_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
             substeps2: int | None = None) -> bool:
-    return nlp_key(cfg, nodes, substeps, substeps2) in _NLPS
+    return nlp_key(cfg, nodes, substeps, substeps2) in _STRUCTURES
 
 
-def build_nlp(cfg, nodes: int, substeps: int, substeps2: int | None = None, library=None,
-              meta=None) -> ShootingNLP:
-    """The ShootingNLP of cfg's geometry and discretisation, built symbolically (or its
-    compiled ``library`` loaded, with its ``meta``)."""
-    o = cfg.optimise
-    return ShootingNLP(get_model(cfg), nodes, substeps, o.hessian, o.linear_solver,
-                       o.max_iter, els=nlp_elements(cfg),
-                       opening=o.opening_force_max is not None, free=free_layout(cfg),
-                       placement=placement_layout(cfg), keep_out=keep_out_of(cfg),
-                       phase2=_phase2(nodes, nlp_key(cfg, nodes, substeps, substeps2)[-6]),
-                       library=library, meta=meta)
+def build_structure(key: tuple, library=None, meta=None) -> ShootingStructure:
+    """The ShootingStructure of a :func:`nlp_key`, built symbolically (or its compiled
+    ``library`` loaded, with its ``meta``)."""
+    els, names, degree, opening, free, place, keep_out, M2, N, M, hess, lin, it = key
+    return ShootingStructure(tuple(elements.BY_NAME[e] for e in els), names, degree, N, M,
+                             None if M2 is None else (N, M2), free, place, opening,
+                             keep_out, hess, lin, it, library=library, meta=meta)
+
+
+def get_structure(key: tuple) -> ShootingStructure:
+    """The ShootingStructure of ``key`` (built once, then kept): its compiled library when
+    one was built before (:mod:`softclose.buildcache`, ``softclose prepare``), else built
+    symbolically for CasADi's virtual machine."""
+    from .. import buildcache
+    if key not in _STRUCTURES:
+        disk = buildcache.key_of("nlp", key)
+
+        def make(library=None, meta=None):
+            return build_structure(key, library=library, meta=meta)
+
+        def spec():
+            return {"key": repr(key)}
+        st = buildcache.load_or_build(disk, make, make, spec)
+        st.key = key
+        _STRUCTURES[key] = st
+    return _STRUCTURES[key]
+
+
+def build_nlp(cfg, nodes: int, substeps: int, substeps2: int | None = None) -> ShootingNLP:
+    """The ShootingNLP of cfg's lid and discretisation, its structure built symbolically
+    now (not the shared one)."""
+    key = nlp_key(cfg, nodes, substeps, substeps2)
+    return _bind(cfg, build_structure(key))
+
+
+def _bind(cfg, structure) -> ShootingNLP:
+    return ShootingNLP(get_model(cfg), structure, lid_fit(cfg), free=free_layout(cfg),
+                       placement=placement_layout(cfg))
 
 
 def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
             substeps2: int | None = None) -> ShootingNLP:
-    """The ShootingNLP of cfg's geometry and discretisation (built once, then cached).
-
-    Its compiled library, when this software compiled it before, is loaded instead of
-    building it (:mod:`softclose.buildcache`: the solves run ~3x faster, same numbers);
-    else it is built, and the second time it is built (in another process) a background
-    process compiles it for the runs after that.
-    """
-    from .. import buildcache
+    """The ShootingNLP of cfg's lid and discretisation: the structure's NLP (built once per
+    structure, :func:`get_structure`) bound to the lid's numbers (kept per lid)."""
     key = nlp_key(cfg, nodes, substeps, substeps2)
-    if key not in _NLPS:
-        N, M, M2 = key[-5], key[-4], key[-6]
-        disk = buildcache.key_of("nlp", key)
-
-        def make(library=None, meta=None):
-            return build_nlp(cfg, N, M, M2, library=library, meta=meta)
-
-        def spec():
-            from ..config import to_dict
-            return {"config": to_dict(cfg), "nodes": N, "substeps": M, "substeps2": M2}
-        nlp = buildcache.load_or_build(disk, make, make, spec)
-        nlp.key = key
-        _NLPS[key] = nlp
-    return _NLPS[key]
+    lid = (key, model_key(cfg), free_layout(cfg), placement_layout(cfg),
+           tuple(slot_values(cfg)))
+    if lid not in _NLPS:
+        nlp = _bind(cfg, get_structure(key))
+        nlp.key = lid
+        _NLPS[lid] = nlp
+    return _NLPS[lid]
 
 
 def prepare(cfg, nodes: int | None = None, substeps: int | None = None):
-    """Compile cfg's NLP now (seconds), unless it is compiled or compiling is off (no cache,
-    no C compiler, ``SOFTCLOSE_COMPILE=0``): the path of its library, or None. What the
-    background compilation does, for a benchmark or a machine set up ahead of use."""
+    """Compile cfg's NLP structure now (seconds), unless it is compiled or compiling is off
+    (no cache, no C compiler, ``SOFTCLOSE_COMPILE=0``): the path of its library, or None."""
     from .. import buildcache
     key = nlp_key(cfg, nodes, substeps)
     disk = buildcache.key_of("nlp", key)
     lib = buildcache.compiled_nlp(disk)
     if lib is not None or not buildcache.compile_enabled():
         return lib
-    nlp = build_nlp(cfg, key[-5], key[-4], key[-6])
+    st = build_structure(key)
     if not buildcache.has("nlpmeta", disk):
-        buildcache.store("nlpmeta", disk, nlp.meta())
-    return buildcache.compile_nlp(nlp.solver, disk)
+        buildcache.store("nlpmeta", disk, st.meta())
+    return buildcache.compile_nlp(st.solver, disk)
 
 
 def stroke_simulator(cfg, t_end: float | None = None) -> Simulator:
@@ -121,3 +149,10 @@ def stroke_simulator(cfg, t_end: float | None = None) -> Simulator:
         c = cfg.replace(stroke={"t_max": float(t_end)})
     step = min(cfg.simulate.step, 1e-3)
     return Simulator(c, model=get_model(cfg), integrator="rk4", step=step, cached=True)
+
+
+def forget() -> None:
+    """Drop the NLPs, structures and fits this process keeps (tests; a long session)."""
+    _NLPS.clear()
+    _STRUCTURES.clear()
+    _FITS.clear()

@@ -32,6 +32,8 @@ FIT_MARGIN_DEG = 3.0
 #: accumulated (mapaccum), so that building the NLP does not grow with the sub-steps
 UNROLL_MAX = 8
 
+#: the closure's series of a placed NLP (:data:`softclose.optimiser.placement.POSE_SERIES`)
+POSE_NAMES = ("pose:Ax", "pose:Ay", "pose:dAx", "pose:dAy", "pose:invM")
 #: the end damper's keys (:class:`softclose.elements.dampers.EndDamper`)
 END_C, END_ANGLE = "design.end_damper_c", "design.end_damper_angle_deg"
 #: a free engagement angle is bounded this far (a fraction of the stroke) inside the stroke:
@@ -245,82 +247,104 @@ class ChebyshevFit:
         return ca.vertcat(*T)
 
 
-def interval_function(model, substeps: int, fit: ChebyshevFit | None = None,
-                      with_ode: bool = False, placement: bool = False):
-    """One shooting interval of ``substeps`` RK4 sub-steps on ``model``'s equation of motion
-    (its Chebyshev series): ``interval(x0, q, h) -> (x1, theta, theta_dot, speed)``.
-
-    ``q`` the parameter vector (:data:`softclose.problem.PARAM_KEYS`), ``h`` the sub-step;
-    ``theta``/``theta_dot`` are the states
-    after sub-steps 1..M-1, ``speed`` the tip speeds after each sub-step followed by the
-    Hermite maxima inside each. With ``with_ode`` also returns the ODE ``f(x, q)``.
-
-    With ``placement`` (a fit with the closure's series) the spring and the dashpot act
-    through the attachment points g (:mod:`.placement`), a fourth input:
-    ``interval(x0, q, h, g)``, ``f(x, q, g)``.
-    """
-    fit = fit or ChebyshevFit(model, pose=placement)
-    M = substeps
-    nb = fit.degree + 1
-    # theta'' = a0(theta) + a1(theta) theta' + a2(theta) theta'^2; the series of a0 and a1
-    # are combined from the parameters once per interval, not at every evaluation: each
-    # element's law gives the coefficients of its series (a_e, b_e of T = a + b q; B_e)
-    x0, q, h = ca.SX.sym("x0", 2), ca.SX.sym("q", len(PARAM_KEYS)), ca.SX.sym("h")
-    g = None
+def combine_function(series, placement: bool = False):
+    """The coefficients of one stroke's equation of motion, combined once per NLP (not per
+    interval): ``combine(q[, g], L) -> c``, c = (the series of a0 and of a1 -- each element's
+    law gives the coefficients of its series, a_e and b_e of T = a + b q, B_e, C_e --, with
+    ``placement`` the spring's (a_s, b_s), the dashpot's c and the points g, then the series
+    L themselves). ``q`` the parameter vector (:data:`softclose.problem.PARAM_KEYS`), ``L``
+    the series' numbers (``series.sym``)."""
+    q, L = ca.SX.sym("q", len(PARAM_KEYS)), series.sym
     P = elements.params(q)
     a0, a1 = [], []
     placed = ("spring", "dashpot") if placement else ()
-    for name, e, what in series_terms(fit.elements):
+    for name, e, what in series_terms(series.elements):
         if e in placed:
             continue
         el = elements.BY_NAME[e]
         coef = el.viscous(P) if what == "B" else el.coulomb(P) if what == "C" else \
             el.affine(P)["ab".index(what)]
-        (a1 if what == "B" else a0).append(coef * fit.series(name))
-    cq = ca.vertcat(sum(a0[1:], a0[0]), sum(a1[1:], a1[0]))
-    xs = ca.SX.sym("x", 2)
-    if placement:   # the spring's (a_s, b_s), the dashpot's c and the points g ride along
-        from .placement import SLOTS, lengths
+        (a1 if what == "B" else a0).append(coef * series.series(name))
+    cq = [sum(a0[1:], a0[0]), sum(a1[1:], a1[0])]
+    ins = [q]
+    if placement:
+        from .placement import SLOTS
         g = ca.SX.sym("g", len(SLOTS))
         sa, sb = elements.BY_NAME["spring"].affine(P)
-        cq = ca.vertcat(cq, sa, sb, elements.BY_NAME["dashpot"].viscous(P), g)
-    cs = ca.SX.sym("cq", cq.numel())
+        cq += [sa, sb, elements.BY_NAME["dashpot"].viscous(P), g]
+        ins.append(g)
+    view = _step_series(series, placement)
+    return ca.Function("combine", ins + [L],
+                       [ca.vertcat(*cq, *[series.series(n) for n in view.names],
+                                   series.lo, series.hi)],
+                       ["q"] + (["g"] if placement else []) + ["L"], ["c"])
+
+
+def _step_series(series, placement: bool, vector=None):
+    """The series a sub-step reads beside the combined coefficients (the inertia's, the
+    tip's lever tau and tau', with ``placement`` the closure's), as the tail of c."""
+    from .lid import SymbolicSeries
+    names = (POSE_NAMES if placement else ()) + ("inertia", "tau", "dtau")
+    if vector is None:
+        vector = ca.SX.sym("s", len(names) * (series.degree + 1) + 2)
+    return SymbolicSeries(names, series.elements, series.degree, vector)
+
+
+def interval_function(series, substeps: int, with_ode: bool = False,
+                      placement: bool = False):
+    """One shooting interval of ``substeps`` RK4 sub-steps on the equation of motion whose
+    geometric functions are the symbolic Chebyshev ``series``
+    (:class:`softclose.optimiser.lid.SymbolicSeries`): ``interval(x0, c, h) -> (x1, theta,
+    theta_dot, speed)``, ``c`` the coefficients of :func:`combine_function` (the design and
+    the lid's series), ``h`` the sub-step; ``theta``/``theta_dot`` are the states after
+    sub-steps 1..M-1, ``speed`` the tip speeds after each sub-step followed by the Hermite
+    maxima inside each. With ``with_ode`` also returns the ODE ``f(x, c)``.
+
+    theta'' = a0(theta) + a1(theta) theta' + a2(theta) theta'^2 (a2 = -M'/(2M), a series of
+    its own); with ``placement`` the spring and the dashpot act through the attachment
+    points g in c (:mod:`.placement`).
+    """
+    M = substeps
+    nb = series.degree + 1
+    n_c = int(combine_function(series, placement).size1_out(0))
+    x0, cs, h = ca.SX.sym("x0", 2), ca.SX.sym("c", n_c), ca.SX.sym("h")
+    fit = _step_series(series, placement)
+    fit = fit.over(cs[n_c - fit.size:])
+    xs = ca.SX.sym("x", 2)
     B = fit.basis(xs[0])
     acc = (ca.dot(cs[:nb], B) + ca.dot(cs[nb:2 * nb], B) * xs[1]
            + ca.dot(fit.series("inertia"), B) * xs[1] ** 2)
     if placement:
-        l, ldl, dq2, invM = lengths(fit, xs[0], B, cs[2 * nb + 3:])
+        from .placement import lengths
+        l, ldl, dq2, invM = lengths(fit, xs[0], B, cs[2 * nb + 3:2 * nb + 11])
         a_s, b_s, c_d = cs[2 * nb], cs[2 * nb + 1], cs[2 * nb + 2]
         acc = acc - (a_s * ldl / l + b_s * ldl) * invM - c_d * dq2 * invM * xs[1]
-    f_c = ca.Function("f_c", [xs, cs], [ca.vertcat(xs[1], acc)])
-    extra_in = [g] if placement else []
-    f = ca.Function("f", [xs, q] + extra_in, [f_c(xs, cq)])     # the ODE, for reporting
+    f = ca.Function("f", [xs, cs], [ca.vertcat(xs[1], acc)], ["x", "c"], ["xdot"])
     th = ca.SX.sym("th")
     Bt = fit.basis(th)
-    tau = ca.Function("tau", [th], [ca.dot(fit.series("tau"), Bt),
-                                    ca.dot(fit.series("dtau"), Bt)])
+    tau = ca.Function("tau", [th, cs], [ca.dot(fit.series("tau"), Bt),
+                                        ca.dot(fit.series("dtau"), Bt)])
 
-    def speed(x, xdot):  # |v_T| = -tau theta' (theta' <= 0), and h d|v_T|/dt
-        t, dt = tau(x[0])
+    def speed(x, xdot, c):  # |v_T| = -tau theta' (theta' <= 0), and h d|v_T|/dt
+        t, dt = tau(x[0], c)
         return -t * x[1], -h * (dt * x[1] * x[1] + t * xdot[1])
 
-    def rk4(x, fx, cq_):  # one RK4 sub-step of length h; fx = f(x) (first stage reused)
-        k2 = f_c(x + 0.5 * h * fx, cq_)
-        k3 = f_c(x + 0.5 * h * k2, cq_)
-        k4 = f_c(x + h * k3, cq_)
+    def rk4(x, fx, c):  # one RK4 sub-step of length h; fx = f(x) (first stage reused)
+        k2 = f(x + 0.5 * h * fx, c)
+        k3 = f(x + 0.5 * h * k2, c)
+        k4 = f(x + h * k3, c)
         return x + h / 6 * (fx + 2 * k2 + 2 * k3 + k4)
 
-    names = (["x0", "q", "h"] + (["g"] if placement else []),
-             ["x1", "theta", "theta_dot", "speed"])
+    names = (["x0", "c", "h"], ["x1", "theta", "theta_dot", "speed"])
     if M <= UNROLL_MAX:  # unrolled in SX (cheapest to evaluate)
         x = x0
-        fx = f_c(x, cq)
-        va, ma = speed(x, fx)
+        fx = f(x, cs)
+        va, ma = speed(x, fx, cs)
         ths, thds, spd, peak = [], [], [], []
         for j in range(M):
-            x = rk4(x, fx, cq)
-            fx = f_c(x, cq)
-            vb, mb = speed(x, fx)
+            x = rk4(x, fx, cs)
+            fx = f(x, cs)
+            vb, mb = speed(x, fx, cs)
             if j < M - 1:
                 ths.append(x[0])
                 thds.append(x[1])
@@ -330,30 +354,49 @@ def interval_function(model, substeps: int, fit: ChebyshevFit | None = None,
         empty = ca.SX(0, 1)
         outs = [x, ca.vertcat(*ths) if ths else empty,
                 ca.vertcat(*thds) if thds else empty, ca.vertcat(*spd, *peak)]
-        interval = ca.Function("interval", [x0, q, h] + extra_in, ca.cse(outs), *names)
+        interval = ca.Function("interval", [x0, cs, h], ca.cse(outs), *names)
     else:  # one SX sub-step, accumulated M times (build time independent of M)
-        a, cqs = ca.SX.sym("a", 6), ca.SX.sym("cq", cq.numel())   # a = (x, x', v, h v')
+        a = ca.SX.sym("a", 6)    # a = (x, x', v, h v')
         x, fx, va, ma = a[0:2], a[2:4], a[4], a[5]
-        x1 = rk4(x, fx, cqs)
-        fx1 = f_c(x1, cqs)
-        vb, mb = speed(x1, fx1)
-        step = ca.Function("substep", [a, cqs, h],
+        x1 = rk4(x, fx, cs)
+        fx1 = f(x1, cs)
+        vb, mb = speed(x1, fx1, cs)
+        step = ca.Function("substep", [a, cs, h],
                            ca.cse([ca.vertcat(x1, fx1, vb, mb),
                                    ca.vertcat(x1, vb, hermite_max(va, ma, vb, mb))]))
-        fx0 = f_c(x0, cq)
-        start = ca.Function("start", [x0, q, h] + extra_in,
-                            [ca.vertcat(x0, fx0, *speed(x0, fx0)), cq])
+        fx0 = f(x0, cs)
+        start = ca.Function("start", [x0, cs, h], [ca.vertcat(x0, fx0, *speed(x0, fx0, cs))])
         accum = step.mapaccum("substeps", M)
-        x0m, qm, hm = ca.MX.sym("x0", 2), ca.MX.sym("q", len(PARAM_KEYS)), ca.MX.sym("h")
-        gm = [ca.MX.sym("g", len(SLOTS))] if placement else []
-        a0, cqm = start(x0m, qm, hm, *gm)
-        _, Y = accum(a0, ca.repmat(cqm, 1, M), ca.repmat(hm, 1, M))
+        x0m, cm, hm = ca.MX.sym("x0", 2), ca.MX.sym("c", n_c), ca.MX.sym("h")
+        _, Y = accum(start(x0m, cm, hm), ca.repmat(cm, 1, M), ca.repmat(hm, 1, M))
         outs = [Y[0:2, M - 1], Y[0, :M - 1].T, Y[1, :M - 1].T,
                 ca.vertcat(Y[2, :].T, Y[3, :].T)]
-        interval = ca.Function("interval", [x0m, qm, hm] + gm, outs, *names)
+        interval = ca.Function("interval", [x0m, cm, hm], outs, *names)
     return (interval, f) if with_ode else interval
+
+
+def bound_interval(fit, substeps: int, with_ode: bool = False, placement: bool = False,
+                   degree: int | None = None):
+    """:func:`interval_function` on a lid's numeric ``fit``: ``interval(x0, q, h[, g])``
+    (and ``f(x, q[, g])``), the design's parameters q, the series' numbers bound (reports
+    and tests evaluate it); ``degree`` the padded degree (by default
+    :func:`softclose.optimiser.lid.padded_degree`)."""
+    from .lid import SymbolicSeries, padded_degree
+    sym = SymbolicSeries(fit.names, fit.elements, degree or padded_degree(fit.degree))
+    Lv = ca.DM(sym.values(fit))
+    combine = combine_function(sym, placement)
+    interval, f = interval_function(sym, substeps, with_ode=True, placement=placement)
+    x, q, h = ca.MX.sym("x", 2), ca.MX.sym("q", len(PARAM_KEYS)), ca.MX.sym("h")
+    g = [ca.MX.sym("g", 8)] if placement else []
+    c = combine(q, *g, Lv)
+    gn = ["g"] if placement else []
+    bi = ca.Function("interval", [x, q, h] + g, interval.call([x, c, h]),
+                     ["x0", "q", "h"] + gn, interval.name_out())
+    bf = ca.Function("f", [x, q] + g, [f(x, c)], ["x", "q"] + gn, ["xdot"])
+    return (bi, bf) if with_ode else bi
 
 
 __all__ = ["FIT_MARGIN_DEG", "UNROLL_MAX", "END_C", "END_ANGLE", "ANGLE_MARGIN", "angle_bounds",
            "end_damper_mode", "free_of", "free_layout", "nlp_elements",
-           "series_terms", "ChebyshevFit", "hermite_max", "interval_function"]
+           "series_terms", "ChebyshevFit", "hermite_max", "interval_function",
+           "combine_function", "bound_interval"]

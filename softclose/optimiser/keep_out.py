@@ -61,9 +61,10 @@ def free_lines(place) -> tuple:
                  if slots & (set(range(8)[ln[1]]) | set(range(8)[ln[2]])))
 
 
-def keep_out_constraints(fit, theta0, thc, g, polys, place=None):
+def keep_out_constraints(fit, theta0, thc, g, polys, place=None, L=None):
     """gap >= 0 of every polygon and every line with a free point (all lines when
-    ``place`` is None) at the nodes of the stroke's angle grid (CasADi expressions)."""
+    ``place`` is None) at the nodes of the stroke's angle grid (CasADi expressions);
+    ``fit`` symbolic series, ``L`` their numbers."""
     from .placement import LENGTH_INTERVALS, POSE_SERIES, point
     th, gs = ca.SX.sym("theta"), ca.SX.sym("g", 8)
     B = fit.basis(th)
@@ -73,10 +74,10 @@ def keep_out_constraints(fit, theta0, thc, g, polys, place=None):
     ends = []
     for _, ground, lid in lines:
         ends += [gs[ground], point(A, dA, th, gs[lid])[0]]
-    fn = ca.Function("lines", [th, gs], [ca.vertcat(*ends)])
+    fn = ca.Function("lines", [th, gs, fit.sym], [ca.vertcat(*ends)])
     n = LENGTH_INTERVALS + 1
     u = ca.DM(np.linspace(0.0, 1.0, n)).T
-    E = fn.map(n)(thc + (theta0 - thc) * u, ca.repmat(g, 1, n))
+    E = fn.map(n)(thc + (theta0 - thc) * u, ca.repmat(g, 1, n), ca.repmat(L, 1, n))
     out = []
     for poly in polys:
         gap = gap_function(poly).map(n)

@@ -70,8 +70,9 @@ import numpy as np
 from ..errors import ConfigError
 from ..problem import DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, SCALES, params_of
 from .. import elements
-from .interval import (END_C, ChebyshevFit, free_of, hermite_max,
-                       interval_function, nlp_elements)
+from .interval import (END_C, ChebyshevFit, bound_interval, combine_function, free_of,
+                       hermite_max, interval_function)
+from .lid import LidLayout, SymbolicSeries, holding_moment, opening_angles, opening_effort
 from .keep_out import keep_out_constraints
 from .placement import placed_config, placed_constraints, slot_values
 
@@ -104,14 +105,21 @@ PHASE_FLOOR = 1e-4
 OPENING_INTERVALS = 32
 
 
-def opening_bound(model, theta0, thc, design):
+def opening_bound(layout, values, theta0, thc, design):
     """The opening effort at the nodes of a grid of [theta_closed, theta0] and the maxima of
     its cubic Hermite interpolant in every interval (error O(h^4)): every value <= the bound
-    bounds the largest effort over the stroke."""
+    bounds the largest effort over the stroke. ``values``: the lid vector's opening part
+    (the geometry at the grid's angles, :func:`softclose.optimiser.lid.opening_values`)."""
     n = OPENING_INTERVALS
-    u = ca.DM(np.linspace(0.0, 1.0, n + 1)).T
-    th = thc + (theta0 - thc) * u
-    F, dF = model.opening.map(n + 1)(th, ca.repmat(design, 1, n + 1))
+    names = layout.opening_elements
+    k = 3 * len(names) + 2
+    P = elements.params(design)
+    F, dF = [], []
+    for i in range(n + 1):
+        f, df = opening_effort(values[i * k:(i + 1) * k], P, names)
+        F.append(f)
+        dF.append(df)
+    F, dF = ca.vertcat(*F).T, ca.vertcat(*dF).T
     h = (theta0 - thc) / n
     va, vb, ma, mb = F[:n], F[1:], dF[:n] * h, dF[1:] * h
     return ca.vertcat(F.T, hermite_max(va.T, ma.T, vb.T, mb.T))
@@ -175,46 +183,43 @@ class Run:
         return float(self.p[J_INDEX])
 
 
-class ShootingNLP:
-    """The multiple-shooting NLP of one geometry with N intervals of M RK4 sub-steps each.
+class ShootingStructure:
+    """The multiple-shooting NLP of one structure: the elements it carries, the series'
+    names and padded degree, the free variables and points (which, not their values), the
+    discretisation, the opening bound and the keep-out regions. It holds no number of a lid:
+    those are the lid vector L at the end of the NLP's parameters
+    (:mod:`softclose.optimiser.lid`), so one structure serves every lid
+    (:class:`ShootingNLP` binds one).
 
-    Built once (:func:`softclose.optimiser.cache.get_nlp` caches it per geometry and
-    discretisation); :meth:`solve` takes the bounds and parameters of one problem, so
-    changing closing_time_max, weights, design bounds or holding_moment_min never rebuilds
-    anything.
+    Built symbolically (CasADi's virtual machine evaluates it), or -- ``library`` a compiled
+    library of this structure (:mod:`softclose.buildcache`) and ``meta`` what :meth:`meta`
+    stored -- loaded: nothing symbolic is built, the solves call the compiled functions.
     """
 
-    def __init__(self, model, nodes: int, substeps: int, hessian: str = "exact",
+    def __init__(self, els, names: tuple, degree: int, nodes: int, substeps: int,
+                 phase2: tuple | None = None, free: tuple = (), place: tuple = (),
+                 opening: bool = False, keep_out: tuple = (), hessian: str = "exact",
                  linear_solver: str = "mumps", max_iter: int = 500, tol: float = 1e-10,
-                 els=None, opening: bool = False, free: tuple = (), library=None,
-                 meta: dict | None = None, placement: tuple = (), keep_out: tuple = (),
-                 phase2: tuple | None = None):
-        """Built symbolically (CasADi's virtual machine evaluates it), or -- ``library`` a
-        compiled library of this NLP (:mod:`softclose.buildcache`) and ``meta`` what
-        :meth:`meta` stored when it was built -- loaded: nothing symbolic is built, the
-        solves call the compiled functions. ``phase2``: a two-phase stroke (module docstring):
-        phase 2's (intervals, sub-steps); phase 1 has ``nodes`` x ``substeps``."""
+                 library=None, meta: dict | None = None):
         t0 = time.perf_counter()
         check_linear_solver(linear_solver)
+        self.els = tuple(els)
         self.two_phase = phase2 is not None
-        # nodes: phase 1's intervals (the only phase's); N: every node (both phases); N2,
-        # M2: phase 2's intervals and sub-steps
-        self.model, self.nodes, self.M = model, nodes, substeps
+        self.nodes, self.M = nodes, substeps
         self.N2, self.M2 = (int(phase2[0]), int(phase2[1])) if self.two_phase else (0, None)
         self.N = N = nodes + self.N2
         M, substeps2 = substeps, self.M2
-        # the design variables: k, l0, c, then the free ones (optimise.free: free_layout)
-        self.free = tuple(free)
-        # the free attachment points (optimise.free geometry.*: placement_layout), last
-        self.place = tuple(placement)
+        # free: (key, column of p) of the free design variables; place: (key, slot in g)
+        self.free, self.place = tuple(free), tuple(place)
         self.placed = bool(self.place)
-        self.g0 = slot_values(model.cfg)
         self.nd = len(DESIGN_KEYS) + len(self.free) + len(self.place)
-        self.scales = np.r_[SCALES, [sc for _, _, sc in self.free],
-                            [sc for _, _, sc in self.place]]
-        self.iT = self.nd                       # w = (d, T, [T1], X (node-major), s)
+        self.iT = self.nd
         self.iT1 = self.nd + 1 if self.two_phase else None
         self.iX = self.nd + (2 if self.two_phase else 1)
+        self.series = SymbolicSeries(names, self.els, degree)
+        self.lid = LidLayout(self.series, len(self.free) + len(self.place), self.placed,
+                             OPENING_INTERVALS + 1 if opening else 0)
+        self.n_params = len(NLP_PARAMS) + N + self.lid.size
         self.ipopt_options = {"print_time": False, "show_eval_warnings": False,
                               "calc_lam_p": False,
                               "ipopt.print_level": 0, "ipopt.sb": "yes",
@@ -225,75 +230,77 @@ class ShootingNLP:
                               "ipopt.bound_relax_factor": 0.0, **LINEAR_ALGEBRA}
         if linear_solver == "mumps":
             self.ipopt_options.update(MUMPS_OPTIONS)
-        self.key = None
         self.library = library
         if library is not None:
-            self._load(library, meta, els)
+            self._load(library, meta)
             self.build_time = time.perf_counter() - t0
             return
         if self.placed and opening:
             raise ConfigError("optimise.opening_force_max cannot yet be combined with free "
                               "attachment points (optimise.free geometry.*): fix the points "
                               "or drop the bound")
-        self.fit = ChebyshevFit(model, els=els, pose=self.placed)
-        self.interval, self.f = interval_function(model, substeps, self.fit, with_ode=True,
+        self.interval, self.f = interval_function(self.series, substeps, with_ode=True,
                                                   placement=self.placed)
         if self.two_phase:
             self.interval2 = self.interval if substeps2 == substeps else interval_function(
-                model, substeps2, self.fit, placement=self.placed)
+                self.series, substeps2, placement=self.placed)
         # the NLP: MX graph over the SX interval, mapped over the N intervals
         d, T = ca.MX.sym("d", self.nd), ca.MX.sym("T")
         T1 = ca.MX.sym("T1") if self.two_phase else None
         X, s = ca.MX.sym("X", 2, N), ca.MX.sym("s")
         npar = len(NLP_PARAMS)
-        P = ca.MX.sym("P", npar + N)
+        P = ca.MX.sym("P", self.n_params)
         theta0, thc, wi, wp, wt = (P[i] for i in range(5))
         fixed, Jref = P[5:5 + len(FIXED_PARAMS)], P[J_INDEX]
-        grid = P[npar:]
+        grid = P[npar:npar + N]
+        lid = self.lid.split(P[npar + N:])
+        L, scales = lid["series"], lid["scales"]
         entries = [d[i] * SCALES[i] for i in range(len(DESIGN_KEYS))] + \
             [fixed[i] for i in range(len(FIXED_PARAMS))]
-        for j, (_, col, sc) in enumerate(self.free):
-            entries[col] = d[len(DESIGN_KEYS) + j] * sc
+        for j, (_, col) in enumerate(self.free):
+            entries[col] = d[len(DESIGN_KEYS) + j] * scales[j]
         design = ca.vertcat(*entries)
         Xs = ca.horzcat(ca.vertcat(theta0, 0), X[:, :N - 1])
         gin = []
-        if self.placed:     # the points g: the model's, the free components variables
-            gl = [ca.MX(float(v)) for v in self.g0]
-            for j, (_, slot, sc) in enumerate(self.place):
-                gl[slot] = d[len(DESIGN_KEYS) + len(self.free) + j] * sc
+        if self.placed:     # the points g: the lid's, the free components variables
+            points = lid["points"]
+            gl = [points[i] for i in range(8)]
+            for j, (_, slot) in enumerate(self.place):
+                gl[slot] = d[len(DESIGN_KEYS) + len(self.free) + j] * scales[len(self.free) + j]
             gvec = ca.vertcat(*gl)
-            gin = [ca.repmat(gvec, 1, N)]
+            gin = [gvec]
+        self.combine = combine_function(self.series, self.placed)
+        c = self.combine(design, *gin, L)
         if not self.two_phase:
-            xe, a, b, sp = self.interval.map(N)(Xs, ca.repmat(design, 1, N), T * grid.T / M,
-                                                *gin)
+            xe, a, b, sp = self.interval.map(N)(Xs, ca.repmat(c, 1, N), T * grid.T / M)
         else:   # phase 1 without the end damper (c_e = 0), phase 2 with it
             n1, n2 = nodes, self.N2
             off = list(entries)
             off[PARAM_COLUMNS[END_C]] = ca.MX(0.0)
-            design1 = ca.vertcat(*off)
-            o1 = self.interval.map(n1)(Xs[:, :n1], ca.repmat(design1, 1, n1),
-                                       T1 * grid[:n1].T / M, *[gi[:, :n1] for gi in gin])
-            o2 = self.interval2.map(n2)(Xs[:, n1:], ca.repmat(design, 1, n2),
-                                        (T - T1) * grid[n1:].T / substeps2,
-                                        *[gi[:, n1:] for gi in gin])
+            c1 = self.combine(ca.vertcat(*off), *gin, L)
+            o1 = self.interval.map(n1)(Xs[:, :n1], ca.repmat(c1, 1, n1),
+                                       T1 * grid[:n1].T / M)
+            o2 = self.interval2.map(n2)(Xs[:, n1:], ca.repmat(c, 1, n2),
+                                        (T - T1) * grid[n1:].T / substeps2)
             xe = ca.horzcat(o1[0], o2[0])
             a, b, sp = (ca.vertcat(ca.vec(o1[k]), ca.vec(o2[k])) for k in (1, 2, 3))
             theta_e = elements.params(design)["end_damper_angle_deg"]
         if self.placed:     # the holding moment: the spring's part at the points g
-            g_all = placed_constraints(self, model, design, gvec, theta0, thc)
+            g_all = placed_constraints(self, design, gvec, theta0, thc, lid["closed"], L, c)
             if keep_out:    # the lines with a free point clear the regions
-                g_all["keep_out"] = keep_out_constraints(self.fit, theta0, thc, gvec, keep_out,
-                                                         self.place)
+                g_all["keep_out"] = keep_out_constraints(self.series, theta0, thc, gvec,
+                                                         keep_out, self.place, L)
         else:
-            g_all = {"holding_moment": model.dV(thc, design),
-                     "release_downwards": self.f(ca.vertcat(theta0, 0), design)[1]}
+            g_all = {"holding_moment": holding_moment(lid["closed"], elements.params(design)),
+                     "release_downwards": self.f(ca.vertcat(theta0, 0), c)[1]}
         g_all = {"continuity": ca.vec(xe - X),                  # = 0
                  "theta_above_closed": ca.vec(a) - thc,          # >= 0
                  "theta_dot_nonpositive": ca.vec(b),             # <= 0
                  "peak_tip_speed": s - ca.vec(sp),               # >= 0
                  **g_all}      # holding moment >= holding_moment_min, release <= 0, ...
         if opening:        # the opening effort (optimise.opening_force_max): <= the bound
-            g_all["opening_force"] = opening_bound(model, theta0, thc, design)
+            g_all["opening_force"] = opening_bound(self.lid, lid["opening"], theta0, thc,
+                                                   design)
         if self.two_phase:  # the node between the phases on theta_e; phase 2 lasts
             g_all["engagement"] = X[0, nodes - 1] - theta_e           # = 0
             g_all["phase_two"] = T - T1                               # >= PHASE_FLOOR
@@ -311,19 +318,15 @@ class ShootingNLP:
                                 {**self.ipopt_options, **COLD_OPTIONS})
         # the warm solver shares the oracle (and its cached derivatives): ~0.05 s more
         oracle = self.solver.oracle()
-        wx, wpar = ca.MX.sym("x", self.nw), ca.MX.sym("p", npar + N)
+        wx, wpar = ca.MX.sym("x", self.nw), ca.MX.sym("p", self.n_params)
         fo, go = oracle(wx, wpar)
         self.warm_solver = ca.nlpsol("softclose_ms_warm", "ipopt",
                                      {"x": wx, "p": wpar, "f": fo, "g": go},
                                      {**self.ipopt_options, **WARM_OPTIONS})
         self.build_time = time.perf_counter() - t0
 
-    def _load(self, library, meta: dict, els) -> None:
+    def _load(self, library, meta: dict) -> None:
         """The solvers from a compiled library and the numbers :meth:`meta` kept."""
-        els = tuple(els if els is not None else nlp_elements(self.model.cfg))
-        self.fit = ChebyshevFit.restore(meta, els)
-        if self.fit.pose != self.placed:
-            raise ValueError("the compiled NLP carries other attachment points")
         self.g_names = [str(n) for n in meta["g_names"]]
         self.g_sizes = [int(n) for n in meta["g_sizes"]]
         self.nw = int(meta["nw"][0])
@@ -335,28 +338,71 @@ class ShootingNLP:
         self.warm_solver = ca.nlpsol("softclose_ms_warm", "ipopt", lib,
                                      {**self.ipopt_options, **WARM_OPTIONS})
         if (self.solver.size1_in(0), self.solver.size1_in(1),
-                self.solver.size1_in(5)) != (self.nw, len(NLP_PARAMS) + self.N,
-                                             sum(self.g_sizes)):
+                self.solver.size1_in(5)) != (self.nw, self.n_params, sum(self.g_sizes)):
             raise ValueError("the compiled NLP has other dimensions")
 
     def __getattr__(self, name):
-        """``interval`` and ``f`` of an NLP loaded from its compiled library: built on first
-        use (tests and reports ask for them; the solves do not)."""
+        """``interval``, ``f`` and ``interval2`` of a structure loaded from its compiled
+        library: built on first use (tests and reports ask for them; the solves do not)."""
         if name in ("interval", "f", "interval2") and self.__dict__.get("library") is not None:
-            self.interval, self.f = interval_function(self.model, self.M, self.fit,
-                                                      with_ode=True, placement=self.placed)
+            self.interval, self.f = interval_function(self.series, self.M, with_ode=True,
+                                                      placement=self.placed)
             if self.two_phase:
-                self.interval2 = interval_function(self.model, self.M2, self.fit,
+                self.interval2 = interval_function(self.series, self.M2,
                                                    placement=self.placed)
             return getattr(self, name)
         raise AttributeError(name)
 
     def meta(self) -> dict:
-        """What a compiled library of this NLP needs beside it (:mod:`softclose.buildcache`):
-        the fit, the constraint groups, the size of w, the peak function."""
-        return {**self.fit.state(), "g_names": np.array(self.g_names),
-                "g_sizes": np.array(self.g_sizes), "nw": np.array([self.nw]),
-                "peak": self._peak.serialize().encode()}
+        """What a compiled library of this structure needs beside it
+        (:mod:`softclose.buildcache`): the constraint groups, the size of w, the peak
+        function."""
+        return {"g_names": np.array(self.g_names), "g_sizes": np.array(self.g_sizes),
+                "nw": np.array([self.nw]), "peak": self._peak.serialize().encode()}
+
+
+class ShootingNLP:
+    """The multiple-shooting NLP of one lid: a :class:`ShootingStructure` and the lid's
+    numbers that fill it (its model, its Chebyshev fit, the scales of its free variables,
+    its attachment points: the lid vector of :meth:`params`).
+
+    :func:`softclose.optimiser.cache.get_nlp` builds the structure once and binds it per
+    lid; :meth:`solve` takes the bounds and parameters of one problem, so changing
+    closing_time_max, weights, design bounds or holding_moment_min -- or the lid -- never
+    rebuilds anything.
+    """
+
+    def __init__(self, model, structure: ShootingStructure, fit: ChebyshevFit,
+                 free: tuple = (), placement: tuple = ()):
+        self.model, self.structure, self.fit = model, structure, fit
+        for k in ("two_phase", "nodes", "M", "N2", "M2", "N", "nd", "iT", "iT1", "iX",
+                  "placed", "g_names", "g_sizes", "nw", "solver", "warm_solver", "_peak",
+                  "ipopt_options", "library", "build_time"):
+            setattr(self, k, getattr(structure, k))
+        # the design variables: k, l0, c, then the free ones (optimise.free: free_layout),
+        # then the free attachment points (placement_layout): (key, column/slot, scale)
+        self.free, self.place = tuple(free), tuple(placement)
+        self.g0 = slot_values(model.cfg)
+        self.scales = np.r_[SCALES, [sc for _, _, sc in self.free],
+                            [sc for _, _, sc in self.place]]
+        lay = structure.lid
+        self.lid_vector = lay.values(
+            model, fit, self.scales[len(DESIGN_KEYS):], self.g0,
+            opening_angles(model, OPENING_INTERVALS) if lay.opening_angles else None)
+        self.key = None
+
+    def __getattr__(self, name):
+        """``interval``, ``f``, ``interval2``: the structure's with this lid's series bound
+        (built on first use)."""
+        if name in ("interval", "f", "interval2"):
+            fns = bound_interval(self.fit, self.M, with_ode=True, placement=self.placed,
+                                 degree=self.structure.series.degree)
+            self.interval, self.f = fns
+            if self.two_phase:
+                self.interval2 = bound_interval(self.fit, self.M2, placement=self.placed,
+                                                degree=self.structure.series.degree)
+            return getattr(self, name)
+        raise AttributeError(name)
 
     # -- packing -------------------------------------------------------------------------
     def pack(self, design, T, X, s, T1: float | None = None) -> np.ndarray:
@@ -490,7 +536,7 @@ class ShootingNLP:
         wi, wp = (o.weight_impact, o.weight_peak_tip) if weights is None else weights
         fixed = params_of(cfg)[len(DESIGN_KEYS):]
         return np.r_[st.theta0, st.theta_closed, wi, wp, weight_time, fixed, J_ref,
-                     self.time_grid()]
+                     self.time_grid(), self.lid_vector]
 
     def time_grid(self) -> np.ndarray:
         """Fractions of T of the N intervals: uniform (two phases: each phase's N intervals
@@ -505,9 +551,9 @@ class ShootingNLP:
             return np.full(self.N, 1.0 / self.N)
         return np.r_[np.full(self.nodes, 1.0 / self.nodes), np.full(self.N2, 1.0 / self.N2)]
 
-    @staticmethod
-    def grid_of(p) -> np.ndarray:
-        return np.asarray(p, float)[len(NLP_PARAMS):]
+    def grid_of(self, p) -> np.ndarray:
+        """The time grid in the parameters ``p`` of this NLP."""
+        return np.asarray(p, float)[len(NLP_PARAMS):len(NLP_PARAMS) + self.N]
 
     def groups(self):
         """(name, slice of g) of each constraint group."""

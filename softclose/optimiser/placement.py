@@ -38,7 +38,7 @@ from ..config.free import PLACEMENT_KEYS, config_value
 #: point), F (dashpot anchor, world), H (dashpot's lid point)
 SLOTS = PLACEMENT_KEYS
 #: the series of the closure the placed NLP fits beside the elements'
-POSE_SERIES = ("pose:Ax", "pose:Ay", "pose:dAx", "pose:dAy", "pose:invM")
+from .interval import POSE_NAMES as POSE_SERIES  # noqa: E402
 #: intervals of the angle grid over which the spring's length is bounded
 LENGTH_INTERVALS = 32
 
@@ -91,13 +91,14 @@ def lengths(fit, theta, B, g):
 
 
 def length_function(fit):
-    """``spring_length(theta, g) -> (l, dl/dtheta)`` on the fitted closure."""
+    """``spring_length(theta, g, L) -> (l, dl/dtheta)`` on the fitted closure (``fit``:
+    symbolic series, :class:`softclose.optimiser.lid.SymbolicSeries`; L their numbers)."""
     th, g = ca.SX.sym("theta"), ca.SX.sym("g", len(SLOTS))
     l, ldl, _, _ = lengths(fit, th, fit.basis(th), g)
-    return ca.Function("spring_length", [th, g], [l, ldl / l])
+    return ca.Function("spring_length", [th, g, fit.sym], [l, ldl / l])
 
 
-def length_bounds(fit, theta0, thc, g):
+def length_bounds(fit, theta0, thc, g, L):
     """The spring's length over the stroke: (nodes of an angle grid, the Hermite maxima,
     the Hermite minima in every interval) -- every value within the bounds bounds the length
     over the whole stroke (to O(h^4))."""
@@ -105,39 +106,47 @@ def length_bounds(fit, theta0, thc, g):
     n = LENGTH_INTERVALS
     u = ca.DM(np.linspace(0.0, 1.0, n + 1)).T
     th = thc + (theta0 - thc) * u
-    L, dL = length_function(fit).map(n + 1)(th, ca.repmat(g, 1, n + 1))
+    Ln, dL = length_function(fit).map(n + 1)(th, ca.repmat(g, 1, n + 1),
+                                             ca.repmat(L, 1, n + 1))
     h = (theta0 - thc) / n
-    va, vb, ma, mb = L[:n], L[1:], dL[:n] * h, dL[1:] * h
-    return (L.T, hermite_max(va.T, ma.T, vb.T, mb.T),
+    va, vb, ma, mb = Ln[:n], Ln[1:], dL[:n] * h, dL[1:] * h
+    return (Ln.T, hermite_max(va.T, ma.T, vb.T, mb.T),
             -hermite_max(-va.T, -ma.T, -vb.T, -mb.T))
 
 
-def spring_moment(fit, theta, g, a, b):
+def spring_moment(fit, theta, g, a, b, L):
     """The spring's moment T l' at theta (T = a + b l): its part of the holding moment."""
-    l, ldl, _, _ = lengths(fit, theta, fit.basis(theta), g)
-    return a * ldl / l + b * ldl
+    th, gs, ab = ca.SX.sym("theta"), ca.SX.sym("g", len(SLOTS)), ca.SX.sym("ab", 2)
+    l, ldl, _, _ = lengths(fit, th, fit.basis(th), gs)
+    fn = ca.Function("spring_moment", [th, gs, ab, fit.sym],
+                     [ab[0] * ldl / l + ab[1] * ldl])
+    return fn(theta, g, ca.vertcat(a, b), L)
 
 
-def placed_constraints(nlp, model, design, g, theta0, thc) -> dict:
+def placed_constraints(nlp, design, g, theta0, thc, closed, L, c) -> dict:
     """The constraint groups of a placed NLP beside the shooting ones: the holding moment
-    (every element's at theta_closed, the spring's at the points g), the release downwards,
-    the spring's length over the stroke against its kind (``spring_long``: l0 - l >= 0 for
-    a compression spring; ``spring_short``: l - l0 >= 0 for an extension spring) and its
-    limits (``spring_length``)."""
+    (every element's at theta_closed -- ``closed``: their coordinates there
+    (:func:`softclose.optimiser.lid.holding_moment`) --, the spring's at the points g), the
+    release downwards, the spring's length over the stroke against its kind
+    (``spring_long``: l0 - l >= 0 for a compression spring; ``spring_short``: l - l0 >= 0 for
+    an extension spring) and its limits (``spring_length``). ``L``: the series' numbers,
+    ``c`` the combined coefficients (:func:`softclose.optimiser.interval.combine_function`)."""
     from .. import elements
     from ..problem import PARAM_COLUMNS
+    from .lid import holding_moment
     mask = np.ones(design.numel())
     for k in ("design.spring_k", "design.spring_preload"):
         mask[PARAM_COLUMNS[k]] = 0.0
     a, b = elements.BY_NAME["spring"].affine(elements.params(design))
-    hold = model.dV(thc, design * ca.DM(mask)) + spring_moment(nlp.fit, thc, g, a, b)
-    L, Lmax, Lmin = length_bounds(nlp.fit, theta0, thc, g)
+    hold = holding_moment(closed, elements.params(design * ca.DM(mask))) + \
+        spring_moment(nlp.series, thc, g, a, b, L)
+    Ln, Lmax, Lmin = length_bounds(nlp.series, theta0, thc, g, L)
     l0 = design[PARAM_COLUMNS["design.spring_rest_length"]]
     out = {"holding_moment": hold,
-           "release_downwards": nlp.f(ca.vertcat(theta0, 0), design, g)[1],
-           "spring_long": l0 - ca.vertcat(ca.vec(L), ca.vec(Lmax)),
-           "spring_short": ca.vertcat(ca.vec(L), ca.vec(Lmin)) - l0,
-           "spring_length": ca.vertcat(ca.vec(L), ca.vec(Lmax), ca.vec(Lmin))}
+           "release_downwards": nlp.f(ca.vertcat(theta0, 0), c)[1],
+           "spring_long": l0 - ca.vertcat(ca.vec(Ln), ca.vec(Lmax)),
+           "spring_short": ca.vertcat(ca.vec(Ln), ca.vec(Lmin)) - l0,
+           "spring_length": ca.vertcat(ca.vec(Ln), ca.vec(Lmax), ca.vec(Lmin))}
     return out
 
 

@@ -48,7 +48,6 @@ import casadi as ca
 import numpy as np
 
 from ..config import Config
-from ..optimiser.nlp import opening_bound
 from ..problem import DESIGN_KEYS, PARAM_KEYS, SCALES, params_of
 
 #: the parameters of p that are not design variables: NLP parameters
@@ -179,182 +178,163 @@ def phase_two(cfg: Config, nodes: int, substeps: int) -> int | None:
     return phase_two_substeps(cfg, nodes, substeps)
 
 
-def interval_of(cfg_model: Config, nodes: int, substeps: int, placement: bool = False,
-                substeps2: int | None = None):
-    """(model, {"f": shooting-interval Function, "f2": phase 2's (``substeps2`` sub-steps;
-    None for one phase), "fit", "ode"}) of a scenario's model: the nominal optimiser's (with
-    ``placement`` the attachment points an input: the fit is of the closure, which the
-    points do not change)."""
+def scenario_fit(cfg_model: Config, placement: bool = False):
+    """(model, Chebyshev fit) of a scenario's model: the nominal optimiser's (with
+    ``placement`` the closure's series too; the points do not change them)."""
     from ..optimiser.cache import get_model
-    from ..optimiser.interval import ChebyshevFit, interval_function, nlp_elements
+    from ..optimiser.interval import ChebyshevFit, nlp_elements
     model = get_model(cfg_model)
-    fit = ChebyshevFit(model, els=nlp_elements(cfg_model), pose=placement)
-    f, ode = interval_function(model, substeps, fit, with_ode=True, placement=placement)
-    f2 = None
-    if substeps2 is not None:
-        f2 = f if substeps2 == substeps else interval_function(model, substeps2, fit,
-                                                               placement=placement)
-    return model, {"f": f, "f2": f2, "fit": fit, "ode": ode}
+    return model, ChebyshevFit(model, els=nlp_elements(cfg_model), pose=placement)
 
 
-class ScenarioNLP:
-    """The multiple-shooting NLP of S scenarios (see the module docstring).
+class ScenarioStructure:
+    """The symbolic scenario NLP of one structure: S scenarios of a model with the elements
+    ``els`` (series ``names`` at the padded ``degree``), the free variables and points
+    (which), the discretisation, the objective, the opening bound and keep-out regions. No
+    number of a lid or a scenario is in it: the scenario maps (a_s, b_s), the free
+    variables' scales, the attachment points and every scenario's lid vector
+    (:mod:`softclose.optimiser.lid`) are parameters (:meth:`ScenarioNLP.params`)."""
 
-    ``models`` lists the scenarios' model configs (equal configs share a model and its
-    interval Function). Variables: w = (d, t, then per scenario T_s, [T1_s], X_s (2N_all),
-    s_s); d = (k, l0, c, the free end damper's c_e and angle, the free points), scaled.
-    ``nodes``: intervals (per phase); ``substeps2``: phase 2's sub-steps (two phases: by
-    default :func:`phase_two` of ``cfg``).
-    """
-
-    def __init__(self, cfg: Config, model_cfgs: list[Config], nodes: int, substeps: int,
-                 robust_objective: str = "worst", tol: float = 1e-10,
-                 substeps2: int | None = None, library=None, meta: dict | None = None):
-        t0 = time.perf_counter()
-        o = cfg.optimise
-        self.two_phase = two_phase(cfg)
-        self.M2 = (substeps2 or phase_two(cfg, nodes, substeps)) if self.two_phase else None
-        # nodes: intervals of a phase; N: nodes of a scenario (both phases)
-        self.nodes, self.M, self.S = nodes, substeps, len(model_cfgs)
-        self.N = 2 * nodes if self.two_phase else nodes
-        self.robust_objective = robust_objective
-        n1, M, S, N = nodes, substeps, self.S, self.N
-        # free attachment points (optimise.free geometry.*), shared by every scenario
-        from ..optimiser.placement import (length_bounds, placement_layout, slot_values,
-                                           spring_moment)
-        from ..optimiser.interval import END_C, END_ANGLE, free_layout
+    def __init__(self, S: int, els, names, degree: int, nodes: int, substeps: int,
+                 M2: int | None, free: tuple, place: tuple, robust_objective: str,
+                 opening: bool, keep_out: tuple, hessian: str, linear_solver: str,
+                 max_iter: int, tol: float = 1e-10, library=None, meta=None):
+        from ..optimiser.interval import END_C, combine_function, interval_function
+        from ..optimiser.lid import LidLayout, SymbolicSeries, holding_moment
+        from ..optimiser.nlp import OPENING_INTERVALS, check_linear_solver
+        from ..optimiser.placement import length_bounds, spring_moment
         from ..problem import PARAM_COLUMNS
-        # the free end damper (optimise.free), shared by every scenario
-        self.free = tuple(x for x in free_layout(cfg) if x[0] in (END_C, END_ANGLE))
-        self.place = placement_layout(cfg)
+        from .. import elements
+        t0 = time.perf_counter()
+        self.S, self.nodes, self.M, self.M2 = S, nodes, substeps, M2
+        self.two_phase = M2 is not None
+        self.N = N = 2 * nodes if self.two_phase else nodes
+        self.free, self.place = tuple(free), tuple(place)
         self.placed = bool(self.place)
-        self.g0 = slot_values(cfg)
+        self.robust_objective = robust_objective
         self.nd = 3 + len(self.free) + len(self.place)
-        from ..config.free import config_value
-        from ..optimiser.interval import free_of
-        bounds = {k: (lo, hi) for k, lo, hi in free_of(cfg)}
-        #: the free variables' values when a design gives only (k, l0, c): cfg's, clipped
-        self.free_values = np.r_[[float(np.clip(config_value(cfg, k), *bounds[k]))
-                                  for k, _, _ in self.free],
-                                 [self.g0[slot] for _, slot, _ in self.place]]
-        self.scales = np.r_[SCALES, [sc for _, _, sc in self.free],
-                            [sc for _, _, sc in self.place]]
-        from ..optimiser.nlp import check_linear_solver
-        check_linear_solver(o.linear_solver)
+        self.series = SymbolicSeries(names, els, degree)
+        self.lid = LidLayout(self.series, 0, False, OPENING_INTERVALS + 1 if opening else 0)
+        n_sc = len(self.free) + len(self.place)
+        self.n_params = len(PARAMS) + N + 2 * NP * S + n_sc + (8 if self.placed else 0) + \
+            S * self.lid.size
+        check_linear_solver(linear_solver)
         self.options = {"print_time": False, "show_eval_warnings": False, "calc_lam_p": False,
                         "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": tol,
-                        "ipopt.max_iter": o.max_iter,
-                        "ipopt.hessian_approximation": o.hessian,
-                        "ipopt.linear_solver": o.linear_solver,
+                        "ipopt.max_iter": max_iter,
+                        "ipopt.hessian_approximation": hessian,
+                        "ipopt.linear_solver": linear_solver,
                         "ipopt.bound_relax_factor": 0.0}
         self.library = library
         if library is not None:
-            self._load(model_cfgs, library, meta)
+            self._load(library, meta)
             self.build_time = time.perf_counter() - t0
             return
-        # one interval Function per distinct model
-        keys, self.model_index, funcs, models = [], [], [], []
-        for c in model_cfgs:
-            key = _model_key(c)
-            if key not in keys:
-                keys.append(key)
-                model, f = interval_of(c, n1, M, self.placed, self.M2)
-                models.append(model)
-                funcs.append(f)
-            self.model_index.append(keys.index(key))
-        self.models = models
-        self.scenario_models = [models[i] for i in self.model_index]
+        n1, M = nodes, substeps
+        f, ode = interval_function(self.series, M, with_ode=True, placement=self.placed)
+        f2 = None if M2 is None else f if M2 == M else interval_function(
+            self.series, M2, placement=self.placed)
+        combine = combine_function(self.series, self.placed)
         npar = len(PARAMS)
-        P = ca.MX.sym("P", npar + N + 2 * NP * S)
+        P = ca.MX.sym("P", self.n_params)
         theta0, thc, wi, wp = (P[i] for i in range(4))
         fixed, Jref = P[4:4 + len(FIXED)], P[npar - 1]
         grid = P[npar:npar + N]
-        A = ca.reshape(P[npar + N:npar + N + NP * S], NP, S)
-        B = ca.reshape(P[npar + N + NP * S:], NP, S)
+        i0 = npar + N
+        A = ca.reshape(P[i0:i0 + NP * S], NP, S)
+        B = ca.reshape(P[i0 + NP * S:i0 + 2 * NP * S], NP, S)
+        i0 += 2 * NP * S
+        scales = P[i0:i0 + n_sc]
+        i0 += n_sc
+        if self.placed:
+            points = P[i0:i0 + 8]
+            i0 += 8
+        lids = [self.lid.split(P[i0 + s * self.lid.size:i0 + (s + 1) * self.lid.size])
+                for s in range(S)]
         d, t = ca.MX.sym("d", self.nd), ca.MX.sym("t")
         T = [ca.MX.sym(f"T{s}") for s in range(S)]
         T1 = [ca.MX.sym(f"T1_{s}") for s in range(S)] if self.two_phase else []
         X = [ca.MX.sym(f"X{s}", 2, N) for s in range(S)]
         pk = [ca.MX.sym(f"s{s}") for s in range(S)]
         entries = [d[i] * SCALES[i] for i in range(3)] + [fixed[i] for i in range(len(FIXED))]
-        for j, (_, col, sc) in enumerate(self.free):
-            entries[col] = d[3 + j] * sc
+        for j, (_, col) in enumerate(self.free):
+            entries[col] = d[3 + j] * scales[j]
         q = ca.vertcat(*entries)
+        gin = []
         if self.placed:
-            gl = [ca.MX(float(v)) for v in self.g0]
-            for j, (_, slot, sc) in enumerate(self.place):
-                gl[slot] = d[3 + len(self.free) + j] * sc
+            gl = [points[i] for i in range(8)]
+            for j, (_, slot) in enumerate(self.place):
+                gl[slot] = d[3 + len(self.free) + j] * scales[len(self.free) + j]
             gvec = ca.vertcat(*gl)
+            gin = [gvec]
         ps = [A[:, s] * q + B[:, s] for s in range(S)]
+        cs = [combine(ps[s], *gin, lids[s]["series"]) for s in range(S)]
         if self.two_phase:      # phase 1 without the end damper
             off = np.ones(NP)
             off[PARAM_COLUMNS[END_C]] = 0.0
-            ps1 = [p_ * ca.DM(off) for p_ in ps]
-        # the shooting intervals, one map per model (and phase) over all of its scenarios'
-        # intervals
+            cs1 = [combine(ps[s] * ca.DM(off), *gin, lids[s]["series"]) for s in range(S)]
+        # the shooting intervals of every scenario: one map (per phase)
+        X0 = [ca.horzcat(ca.vertcat(theta0, 0), X[s][:, :N - 1]) for s in range(S)]
         outs: list = [None] * S
-        for m, fn in enumerate(funcs):
-            ss = [s for s in range(S) if self.model_index[s] == m]
-            if not ss:
-                continue
-            gin = [ca.repmat(gvec, 1, n1 * len(ss))] if self.placed else []
-            X0 = [ca.horzcat(ca.vertcat(theta0, 0), X[s][:, :N - 1]) for s in ss]
-            if not self.two_phase:
-                Q = ca.horzcat(*[ca.repmat(ps[s], 1, N) for s in ss])
-                H = ca.horzcat(*[T[s] * grid.T / M for s in ss])
-                res = mapped(fn["f"], N * len(ss))(ca.horzcat(*X0), Q, H, *gin)
-                for j, s in enumerate(ss):
-                    cols = slice(j * N, (j + 1) * N)
-                    outs[s] = tuple(r[:, cols] for r in res)
-                continue
-            Q1 = ca.horzcat(*[ca.repmat(ps1[s], 1, n1) for s in ss])
-            H1 = ca.horzcat(*[T1[s] * grid[:n1].T / M for s in ss])
-            r1 = mapped(fn["f"], n1 * len(ss))(ca.horzcat(*[x[:, :n1] for x in X0]), Q1, H1, *gin)
-            Q2 = ca.horzcat(*[ca.repmat(ps[s], 1, n1) for s in ss])
-            H2 = ca.horzcat(*[(T[s] - T1[s]) * grid[n1:].T / self.M2 for s in ss])
-            r2 = mapped(fn["f2"], n1 * len(ss))(ca.horzcat(*[x[:, n1:] for x in X0]), Q2, H2,
-                                            *gin)
-            for j, s in enumerate(ss):
-                cols = slice(j * n1, (j + 1) * n1)
+        if not self.two_phase:
+            C = ca.horzcat(*[ca.repmat(cs[s], 1, N) for s in range(S)])
+            H = ca.horzcat(*[T[s] * grid.T / M for s in range(S)])
+            res = mapped(f, N * S)(ca.horzcat(*X0), C, H)
+            for s in range(S):
+                cols = slice(s * N, (s + 1) * N)
+                outs[s] = tuple(r[:, cols] for r in res)
+        else:
+            C1 = ca.horzcat(*[ca.repmat(cs1[s], 1, n1) for s in range(S)])
+            H1 = ca.horzcat(*[T1[s] * grid[:n1].T / M for s in range(S)])
+            r1 = mapped(f, n1 * S)(ca.horzcat(*[x[:, :n1] for x in X0]), C1, H1)
+            C2 = ca.horzcat(*[ca.repmat(cs[s], 1, n1) for s in range(S)])
+            H2 = ca.horzcat(*[(T[s] - T1[s]) * grid[n1:].T / M2 for s in range(S)])
+            r2 = mapped(f2, n1 * S)(ca.horzcat(*[x[:, n1:] for x in X0]), C2, H2)
+            for s in range(S):
+                cols = slice(s * n1, (s + 1) * n1)
                 outs[s] = (ca.horzcat(r1[0][:, cols], r2[0][:, cols]),
                            *(ca.vertcat(ca.vec(r1[k][:, cols]), ca.vec(r2[k][:, cols]))
                              for k in (1, 2, 3)))
         g, self.g_sizes, J, peaks = [], [], [], []
+        none = ca.MX(0, 1)
         for s in range(S):
             xe, a, b, sp = outs[s]
-            model = self.scenario_models[s]
+            Ls = lids[s]["series"]
             Js = wi * X[s][1, N - 1] ** 2 + wp * pk[s] ** 2
             J.append(Js)
             peaks.append(ca.mmax(sp))     # the scenario's own peak: sub-steps, Hermite maxima
-            none = ca.MX(0, 1)
+            release = ode(ca.vertcat(theta0, 0), cs[s])[1]
             if self.placed:     # the spring at the shared points g (optimiser.placement)
-                from .. import elements
-                fit, ode = funcs[self.model_index[s]]["fit"], funcs[self.model_index[s]]["ode"]
                 mask = np.ones(NP)
                 mask[[PARAM_COLUMNS["design.spring_k"], PARAM_COLUMNS["design.spring_preload"]]] = 0
                 sa, sb = elements.BY_NAME["spring"].affine(elements.params(ps[s]))
-                hold = model.dV(thc, ps[s] * ca.DM(mask)) + spring_moment(fit, thc, gvec, sa, sb)
-                release = ode(ca.vertcat(theta0, 0), ps[s], gvec)[1]
-                L, Lmax, Lmin = length_bounds(fit, theta0, thc, gvec)
+                hold = holding_moment(lids[s]["closed"], elements.params(ps[s] * ca.DM(mask))) \
+                    + spring_moment(self.series, thc, gvec, sa, sb, Ls)
+                Ln, Lmax, Lmin = length_bounds(self.series, theta0, thc, gvec, Ls)
                 l0 = ps[s][PARAM_COLUMNS["design.spring_rest_length"]]
-                lengths = [l0 - ca.vertcat(ca.vec(L), ca.vec(Lmax)),
-                           ca.vertcat(ca.vec(L), ca.vec(Lmin)) - l0,
-                           ca.vertcat(ca.vec(L), ca.vec(Lmax), ca.vec(Lmin))]
+                lengths = [l0 - ca.vertcat(ca.vec(Ln), ca.vec(Lmax)),
+                           ca.vertcat(ca.vec(Ln), ca.vec(Lmin)) - l0,
+                           ca.vertcat(ca.vec(Ln), ca.vec(Lmax), ca.vec(Lmin))]
             else:
-                hold, release = model.dV(thc, ps[s]), model.ode(ca.vertcat(theta0, 0), ps[s])[1]
+                hold = holding_moment(lids[s]["closed"], elements.params(ps[s]))
                 lengths = [none, none, none]
             if self.two_phase:  # the node between the phases on the scenario's theta_e
-                from .. import elements
                 phases = [X[s][0, n1 - 1] - elements.params(ps[s])["end_damper_angle_deg"],
                           T[s] - T1[s]]
             else:
                 phases = [none, none]
+            if opening and not self.placed:
+                from ..optimiser.nlp import opening_bound
+                op = opening_bound(self.lid, lids[s]["opening"], theta0, thc, ps[s])
+            else:
+                op = none
+            ko = none
+            if self.placed and s == 0 and keep_out:
+                from ..optimiser.keep_out import keep_out_constraints
+                ko = keep_out_constraints(self.series, theta0, thc, gvec, keep_out,
+                                          self.place, Ls)
             blocks = [ca.vec(xe - X[s]), ca.vec(a) - thc, ca.vec(b), pk[s] - ca.vec(sp),
-                      hold, release, t - Js / Jref,
-                      opening_bound(model, theta0, thc, ps[s]) if o.opening_force_max
-                      is not None and not self.placed else none] + lengths + [
-                          self._keep_out(cfg, fit, theta0, thc, gvec) if self.placed and s == 0
-                          else none] + phases
+                      hold, release, t - Js / Jref, op] + lengths + [ko] + phases
             g += blocks
             self.g_sizes.append([int(v.numel()) for v in blocks])
         self.block = sum(self.g_sizes[0])
@@ -381,20 +361,10 @@ class ScenarioNLP:
                                      {**self.options, **WARM_OPTIONS})
         self.build_time = time.perf_counter() - t0
 
-    def _load(self, model_cfgs: list[Config], library, meta: dict) -> None:
+    def _load(self, library, meta: dict) -> None:
         """The solvers from a compiled library (:mod:`softclose.buildcache`) and the numbers
-        :meth:`meta` kept: nothing symbolic is built (the scenarios' models are the shared
-        ones, loaded from the cache)."""
+        :meth:`meta` kept: nothing symbolic is built."""
         from ..buildcache import text
-        from ..optimiser.cache import get_model
-        keys, self.model_index, self.models = [], [], []
-        for c in model_cfgs:
-            key = _model_key(c)
-            if key not in keys:
-                keys.append(key)
-                self.models.append(get_model(c))
-            self.model_index.append(keys.index(key))
-        self.scenario_models = [self.models[i] for i in self.model_index]
         self.g_sizes = [[int(n) for n in row] for row in np.asarray(meta["g_sizes"])]
         self.block, self.nw = sum(self.g_sizes[0]), int(meta["nw"][0])
         self.peak_fn = ca.Function.deserialize(text(meta["peak"]))
@@ -404,9 +374,8 @@ class ScenarioNLP:
                                 {**self.options, "ipopt.mu_strategy": "adaptive"})
         self.warm_solver = ca.nlpsol("softclose_robust_warm", "ipopt", lib,
                                      {**self.options, **WARM_OPTIONS})
-        npar = len(PARAMS) + self.N + 2 * NP * self.S
         if (len(self.g_sizes), self.solver.size1_in(0), self.solver.size1_in(1),
-                self.solver.size1_in(5)) != (self.S, self.nw, npar,
+                self.solver.size1_in(5)) != (self.S, self.nw, self.n_params,
                                              sum(map(sum, self.g_sizes))):
             raise ValueError("the compiled scenario NLP has other dimensions")
 
@@ -417,13 +386,79 @@ class ScenarioNLP:
                 "peak": self.peak_fn.serialize().encode(),
                 "J": self.J_fn.serialize().encode()}
 
-    def _keep_out(self, cfg, fit, theta0, thc, g):
-        """optimise.keep_out at the shared points (in the first scenario's block only)."""
+
+class ScenarioNLP:
+    """The multiple-shooting NLP of S scenarios (see the module docstring): a
+    :class:`ScenarioStructure` bound to the scenarios' models (their lid vectors).
+
+    ``model_cfgs`` lists the scenarios' model configs (equal configs share a model and its
+    fit). Variables: w = (d, t, then per scenario T_s, [T1_s], X_s (2N_all), s_s); d = (k,
+    l0, c, the free end damper's c_e and angle, the free points), scaled. ``nodes``:
+    intervals (per phase); ``substeps2``: phase 2's sub-steps (two phases: by default
+    :func:`phase_two` of ``cfg``).
+    """
+
+    def __init__(self, cfg: Config, model_cfgs: list[Config], nodes: int, substeps: int,
+                 robust_objective: str = "worst", tol: float = 1e-10,
+                 substeps2: int | None = None, structure: ScenarioStructure | None = None):
+        from ..optimiser.interval import END_C, END_ANGLE, free_layout, free_of
+        from ..optimiser.lid import padded_degree
+        from ..optimiser.nlp import OPENING_INTERVALS
+        from ..optimiser.lid import opening_angles
+        from ..optimiser.placement import placement_layout, slot_values
+        from ..config.free import config_value
+        t0 = time.perf_counter()
+        o = cfg.optimise
+        self.two_phase = two_phase(cfg)
+        self.M2 = (substeps2 or phase_two(cfg, nodes, substeps)) if self.two_phase else None
+        self.nodes, self.M, self.S = nodes, substeps, len(model_cfgs)
+        self.N = 2 * nodes if self.two_phase else nodes
+        self.robust_objective = robust_objective
+        # the free end damper (optimise.free) and attachment points, shared by every scenario
+        self.free = tuple(x for x in free_layout(cfg) if x[0] in (END_C, END_ANGLE))
+        self.place = placement_layout(cfg)
+        self.placed = bool(self.place)
+        self.g0 = slot_values(cfg)
+        self.nd = 3 + len(self.free) + len(self.place)
+        bounds = {k: (lo, hi) for k, lo, hi in free_of(cfg)}
+        #: the free variables' values when a design gives only (k, l0, c): cfg's, clipped
+        self.free_values = np.r_[[float(np.clip(config_value(cfg, k), *bounds[k]))
+                                  for k, _, _ in self.free],
+                                 [self.g0[slot] for _, slot, _ in self.place]]
+        self.scales = np.r_[SCALES, [sc for _, _, sc in self.free],
+                            [sc for _, _, sc in self.place]]
+        # one model and fit per distinct model config
+        keys, self.model_index, self.models, fits = [], [], [], []
+        for c in model_cfgs:
+            key = _model_key(c)
+            if key not in keys:
+                keys.append(key)
+                model, fit = scenario_fit(c, self.placed)
+                self.models.append(model)
+                fits.append(fit)
+            self.model_index.append(keys.index(key))
+        self.scenario_models = [self.models[i] for i in self.model_index]
+        self.fits = fits
+        degree = padded_degree(max(f.degree for f in fits))
         from ..optimiser.cache import keep_out_of
-        from ..optimiser.keep_out import keep_out_constraints
-        polys = keep_out_of(cfg)
-        return keep_out_constraints(fit, theta0, thc, g, polys, self.place) if polys \
-            else ca.MX(0, 1)
+        self.structure_key = (self.S, tuple(e.name for e in fits[0].elements), fits[0].names,
+                              degree, nodes, substeps, self.M2,
+                              tuple((k, col) for k, col, _ in self.free),
+                              tuple((k, slot) for k, slot, _ in self.place),
+                              robust_objective, o.opening_force_max is not None,
+                              keep_out_of(cfg), o.hessian, o.linear_solver, o.max_iter, tol)
+        st = structure or get_scenario_structure(self.structure_key)
+        self.structure = st
+        for k in ("g_sizes", "block", "nw", "peak_fn", "J_fn", "solver", "warm_solver",
+                  "library", "options"):
+            setattr(self, k, getattr(st, k))
+        lay = st.lid
+        per_model = [lay.values(m, f, (), None, opening_angles(m, OPENING_INTERVALS)
+                                if lay.opening_angles else None)
+                     for m, f in zip(self.models, fits)]
+        self.lid_vector = np.r_[self.scales[3:], self.g0 if self.placed else [],
+                                np.concatenate([per_model[i] for i in self.model_index])]
+        self.build_time = time.perf_counter() - t0
 
     # -- layout ------------------------------------------------------------------------
     @property
@@ -478,7 +513,7 @@ class ScenarioNLP:
         B = np.concatenate([np.asarray(b, float) for _, b in maps])
         return np.r_[st.theta0, st.theta_closed, o.weight_impact, o.weight_peak_tip,
                      params_of(cfg)[len(DESIGN_KEYS):], J_ref,
-                     phase_grid(self.nodes, self.two_phase), A, B]
+                     phase_grid(self.nodes, self.two_phase), A, B, self.lid_vector]
 
     def bounds(self, cfg: Config, t_hi: list[float] | None = None,
                t_lo: list[float] | None = None, design_lb=None):
@@ -576,6 +611,35 @@ class ScenarioNLP:
 
 
 _NLPS: dict = {}
+_STRUCTURES: dict = {}
+
+
+def get_scenario_structure(key: tuple) -> ScenarioStructure:
+    """The ScenarioStructure of ``key`` (:attr:`ScenarioNLP.structure_key`), built once:
+    its compiled library when ``softclose prepare`` built one, else symbolically."""
+    if key not in _STRUCTURES:
+        from .. import buildcache
+        disk = buildcache.key_of("scenario-nlp", key)
+        (S, els, names, degree, nodes, substeps, M2, free, place, objective, opening,
+         keep_out, hessian, linear_solver, max_iter, tol) = key
+        from .. import elements
+
+        def make(library=None, meta=None):
+            return ScenarioStructure(S, tuple(elements.BY_NAME[e] for e in els), names,
+                                     degree, nodes, substeps, M2, free, place, objective,
+                                     opening, keep_out, hessian, linear_solver, max_iter,
+                                     tol, library=library, meta=meta)
+        st = buildcache.load_or_build(disk, make, make, lambda: {"key": repr(key)},
+                                      "softclose.robust.compile")
+        st.key = disk
+        _STRUCTURES[key] = st
+    return _STRUCTURES[key]
+
+
+def forget() -> None:
+    """Drop the scenario NLPs and structures this process keeps."""
+    _NLPS.clear()
+    _STRUCTURES.clear()
 
 
 def get_scenario_nlp(cfg: Config, model_cfgs: list[Config], nodes: int, substeps: int,
@@ -585,44 +649,17 @@ def get_scenario_nlp(cfg: Config, model_cfgs: list[Config], nodes: int, substeps
     ``substeps2``: phase 2's sub-steps of a two-phase stroke (default :func:`phase_two`)."""
     o = cfg.optimise
     from ..optimiser.interval import free_layout
-    from ..optimiser.placement import placement_layout
+    from ..optimiser.placement import placement_layout, slot_values
     M2 = (substeps2 or phase_two(cfg, nodes, substeps)) if two_phase(cfg) else None
     key = (tuple(_model_key(c)
                  for c in model_cfgs), nodes, substeps, M2, robust_objective, o.hessian,
            o.linear_solver, o.max_iter, o.opening_force_max is not None,
-           placement_layout(cfg), free_layout(cfg))
+           placement_layout(cfg), free_layout(cfg), tuple(slot_values(cfg)))
     if key in _NLPS:
         return _NLPS[key], True
     if len(_NLPS) > 16:
         _NLPS.clear()
-    from .. import buildcache
-    disk = buildcache.key_of("scenario-nlp", key)
-    def make(library=None, meta=None):
-        return ScenarioNLP(cfg, model_cfgs, nodes, substeps, robust_objective, substeps2=M2,
-                           library=library, meta=meta)
-    nlp = buildcache.load_or_build(
-        disk, make, make,
-        lambda: compile_spec(cfg, model_cfgs, nodes, substeps, robust_objective, M2),
-        "softclose.robust.compile")
-    nlp.key = disk
+    nlp = ScenarioNLP(cfg, model_cfgs, nodes, substeps, robust_objective, substeps2=M2)
+    nlp.key = nlp.structure.key
     _NLPS[key] = nlp
     return nlp, False
-
-
-def compile_spec(cfg: Config, model_cfgs: list[Config], nodes: int, substeps: int,
-                 robust_objective: str, substeps2: int | None) -> dict:
-    """What the background compilation (:mod:`softclose.optimiser.compile`) needs to build
-    this scenario NLP again: plain values."""
-    from ..config import to_dict
-    return {"kind": "scenario", "config": to_dict(cfg),
-            "models": [to_dict(c) for c in model_cfgs], "nodes": nodes,
-            "substeps": substeps, "robust_objective": robust_objective,
-            "substeps2": substeps2}
-
-
-def build_from_spec(spec: dict) -> ScenarioNLP:
-    """The scenario NLP a :func:`compile_spec` describes, built symbolically."""
-    from ..config import from_dict
-    return ScenarioNLP(from_dict(spec["config"]), [from_dict(m) for m in spec["models"]],
-                       spec["nodes"], spec["substeps"], spec["robust_objective"],
-                       substeps2=spec["substeps2"])
