@@ -56,7 +56,7 @@ def gap_function(poly) -> ca.Function:
 
 def free_lines(place) -> tuple:
     """The lines with a free point (``place``: the NLP's placement layout)."""
-    slots = {s for _, s, _ in place}
+    slots = {x[1] for x in place}
     return tuple(ln for ln in LINES
                  if slots & (set(range(8)[ln[1]]) | set(range(8)[ln[2]])))
 

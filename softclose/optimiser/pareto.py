@@ -22,7 +22,7 @@ from ..parts import spring_part
 from .cache import get_nlp, stroke_simulator
 from .discretise import discretisation
 from .kinds import kind_config
-from .nlp import J_INDEX, ShootingNLP
+from .nlp import J_INDEX
 from .optimiser import check_problem, finish, guarded, optimise, start_row
 from .polish import nlp_objective
 from .result import FrontResult, OptimiseResult
@@ -102,7 +102,7 @@ def _continue(cfg, prev: OptimiseResult) -> OptimiseResult:
     if nlp.two_phase:   # each phase's states at the same fractions of its duration
         Xn, T1 = X_old.copy(), nlp.engagement(prev.run.x)[0] * T_new / T_old
     else:
-        tau_old = np.r_[0.0, np.cumsum(ShootingNLP.grid_of(prev.run.p))]
+        tau_old = np.r_[0.0, np.cumsum(nlp.grid_of(prev.run.p))]      # same N
         tau_new = np.cumsum(nlp.grid_of(p))
         Xo = np.column_stack([[st.theta0, 0.0], X_old])
         Xn = np.vstack([np.interp(tau_new, tau_old, Xo[0]),
