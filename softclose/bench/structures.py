@@ -1,0 +1,92 @@
+"""What each NLP structure of the README's commands costs to build: its size, the time to
+build it symbolically, the size of its generated C and the time to compile that.
+
+An NLP is keyed by its structure (:func:`softclose.optimiser.cache.nlp_key`,
+:class:`softclose.robust.nlp.ScenarioStructure`): the commands below are run in this
+process, and every structure they built is measured. Compiling is what ``softclose
+prepare`` does once per structure; the rows say what that costs.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+#: the commands whose structures are measured: (name, optimise options, --free pairs)
+COMMANDS = (
+    ("optimise", False, ()),
+    ("optimise --robust", True, ()),
+    ("end-damper co-design", False, (("design.end_damper_c", 0.0, 2.0),
+                                     ("design.end_damper_angle_deg", 1.0, 10.0))),
+    ("points co-design", False, (("geometry.spring_anchor[0]", -0.09, -0.03),
+                                 ("geometry.spring_anchor[1]", -0.01, 0.05),
+                                 ("geometry.lid_e[0]", -0.006, 0.044),
+                                 ("geometry.lid_e[1]", 0.004, 0.024))),
+)
+#: the functions Ipopt calls, as generated into the C of a compiled NLP
+NLP_FUNCTIONS = ("nlp_f", "nlp_g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l")
+
+
+def structures_of(cfg, robust: bool, free: tuple) -> list:
+    """The NLP structures one optimisation of ``cfg`` (``free``: (key, lo, hi) set free)
+    builds: [(kind, structure)]."""
+    from .. import optimise
+    from ..optimiser import cache as oc
+    from ..robust import nlp as rn
+    if free:
+        cfg = cfg.update({"optimise.free": {k: [lo, hi] for k, lo, hi in free}})
+    oc.forget()
+    rn.forget()
+    optimise(cfg, robust=robust)
+    return [("nominal", s) for s in oc._STRUCTURES.values()] + \
+        [("scenarios", s) for s in rn._STRUCTURES.values()]
+
+
+def measure(structure, compile_flags: tuple | None = ("-O1",)) -> dict:
+    """Size and cost of one structure: variables, constraints, build time (s), generated C
+    (MB, s) and, with ``compile_flags``, the compile time (s)."""
+    import casadi as ca
+    solver = structure.solver
+    row = {"variables": int(solver.size1_in(0)), "constraints": int(solver.size1_out(2)),
+           "parameters": int(solver.size1_in(1)),
+           "build_s": float(getattr(structure, "build_time", float("nan")))}
+    with tempfile.TemporaryDirectory() as tmp:
+        t = time.perf_counter()
+        cg = ca.CodeGenerator("nlp.c")
+        for name in NLP_FUNCTIONS:
+            cg.add(solver.get_function(name))
+        path = Path(cg.generate(tmp + os.sep))
+        row["generate_s"] = time.perf_counter() - t
+        row["c_mb"] = path.stat().st_size / 1e6
+        if compile_flags:
+            cc = os.environ.get("CC", "cc")
+            t = time.perf_counter()
+            subprocess.run([cc, *compile_flags, "-shared", "-fPIC", str(path), "-o",
+                            str(path.with_suffix(".so"))], check=True, capture_output=True)
+            row["compile_s"] = time.perf_counter() - t
+            row["flags"] = " ".join(compile_flags)
+    return row
+
+
+def structure_rows(cfg, compile_flags: tuple | None = ("-O1",), log=None) -> list[dict]:
+    """One row per structure of :data:`COMMANDS` on ``cfg`` (a structure two commands
+    share is measured once)."""
+    log = log or (lambda *a: None)
+    rows, seen = [], set()
+    for name, robust, free in COMMANDS:
+        for kind, st in structures_of(cfg, robust, free):
+            key = getattr(st, "key", None)
+            if key in seen:
+                continue
+            seen.add(key)
+            row = {"command": name, "nlp": kind, **measure(st, compile_flags)}
+            rows.append(row)
+            log(f"  {name} ({kind}): {row['c_mb']:.2f} MB of C"
+                + (f", {row['compile_s']:.1f} s to compile" if "compile_s" in row else ""))
+    return rows
+
+
+__all__ = ["COMMANDS", "NLP_FUNCTIONS", "structures_of", "measure", "structure_rows"]
