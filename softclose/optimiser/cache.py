@@ -70,14 +70,21 @@ def build_nlp(cfg, nodes: int, substeps: int, substeps2: int | None = None, libr
                        library=library, meta=meta)
 
 
+def describe_nlp(cfg, N: int, M: int, M2: int | None) -> str:
+    """The NLP in words, for the line a compilation writes on stderr."""
+    kind = cfg.design.spring_kind
+    return (f"of the optimiser ({kind} spring, {N} x {M} RK4 steps"
+            + (f", phase 2 {N} x {M2}" if M2 else "") + ")")
+
+
 def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
             substeps2: int | None = None) -> ShootingNLP:
     """The ShootingNLP of cfg's geometry and discretisation (built once, then cached).
 
-    Its compiled library, when this software compiled it before, is loaded instead of
-    building it (:mod:`softclose.buildcache`: the solves run ~3x faster, same numbers);
-    else it is built, and the second time it is built (in another process) a background
-    process compiles it for the runs after that.
+    Its compiled library, when it is in the cache (:mod:`softclose.buildcache`: compiled by
+    ``softclose prepare`` or :func:`prepare`), is loaded instead of building it (the solves
+    run ~3x faster, same numbers); else it is built symbolically -- and, inside
+    :func:`softclose.buildcache.compiling`, compiled now.
     """
     from .. import buildcache
     key = nlp_key(cfg, nodes, substeps, substeps2)
@@ -87,30 +94,26 @@ def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
 
         def make(library=None, meta=None):
             return build_nlp(cfg, N, M, M2, library=library, meta=meta)
-
-        def spec():
-            from ..config import to_dict
-            return {"config": to_dict(cfg), "nodes": N, "substeps": M, "substeps2": M2}
-        nlp = buildcache.load_or_build(disk, make, make, spec)
+        nlp = buildcache.load_or_build(disk, make, make, describe_nlp(cfg, N, M, M2))
         nlp.key = key
         _NLPS[key] = nlp
     return _NLPS[key]
 
 
 def prepare(cfg, nodes: int | None = None, substeps: int | None = None):
-    """Compile cfg's NLP now (seconds), unless it is compiled or compiling is off (no cache,
-    no C compiler, ``SOFTCLOSE_COMPILE=0``): the path of its library, or None. What the
-    background compilation does, for a benchmark or a machine set up ahead of use."""
+    """Compile cfg's NLP now, in the foreground (seconds; a line on stderr says what is
+    built), unless it is compiled: the path of its library, or None (no cache, no C
+    compiler). ``softclose prepare`` compiles every NLP a command would use."""
     from .. import buildcache
     key = nlp_key(cfg, nodes, substeps)
     disk = buildcache.key_of("nlp", key)
     lib = buildcache.compiled_nlp(disk)
-    if lib is not None or not buildcache.compile_enabled():
+    if lib is not None or buildcache.folder() is None:
         return lib
     nlp = build_nlp(cfg, key[-5], key[-4], key[-6])
-    if not buildcache.has("nlpmeta", disk):
-        buildcache.store("nlpmeta", disk, nlp.meta())
-    return buildcache.compile_nlp(nlp.solver, disk)
+    buildcache.store("nlpmeta", disk, nlp.meta())
+    return buildcache.compile_nlp(nlp.solver, disk,
+                                  what=describe_nlp(cfg, key[-5], key[-4], key[-6]))
 
 
 def stroke_simulator(cfg, t_end: float | None = None) -> Simulator:

@@ -597,32 +597,30 @@ def get_scenario_nlp(cfg: Config, model_cfgs: list[Config], nodes: int, substeps
         _NLPS.clear()
     from .. import buildcache
     disk = buildcache.key_of("scenario-nlp", key)
+
     def make(library=None, meta=None):
         return ScenarioNLP(cfg, model_cfgs, nodes, substeps, robust_objective, substeps2=M2,
                            library=library, meta=meta)
-    nlp = buildcache.load_or_build(
-        disk, make, make,
-        lambda: compile_spec(cfg, model_cfgs, nodes, substeps, robust_objective, M2),
-        "softclose.robust.compile")
+    what = (f"of the robust optimiser ({len(model_cfgs)} scenarios, {nodes} x {substeps} RK4 "
+            f"steps, {robust_objective} case)")
+    nlp = buildcache.load_or_build(disk, make, make, what, buildcache.SCENARIO_CFLAGS)
     nlp.key = disk
     _NLPS[key] = nlp
     return nlp, False
 
 
-def compile_spec(cfg: Config, model_cfgs: list[Config], nodes: int, substeps: int,
-                 robust_objective: str, substeps2: int | None) -> dict:
-    """What the background compilation (:mod:`softclose.optimiser.compile`) needs to build
-    this scenario NLP again: plain values."""
-    from ..config import to_dict
-    return {"kind": "scenario", "config": to_dict(cfg),
-            "models": [to_dict(c) for c in model_cfgs], "nodes": nodes,
-            "substeps": substeps, "robust_objective": robust_objective,
-            "substeps2": substeps2}
-
-
-def build_from_spec(spec: dict) -> ScenarioNLP:
-    """The scenario NLP a :func:`compile_spec` describes, built symbolically."""
-    from ..config import from_dict
-    return ScenarioNLP(from_dict(spec["config"]), [from_dict(m) for m in spec["models"]],
-                       spec["nodes"], spec["substeps"], spec["robust_objective"],
-                       substeps2=spec["substeps2"])
+def prepare(cfg: Config, model_cfgs: list[Config], nodes: int, substeps: int,
+            robust_objective: str, substeps2: int | None = None):
+    """Compile this scenario NLP now, in the foreground (minutes; a line on stderr says what
+    is built), unless it is compiled: the path of its library, or None (no cache, no C
+    compiler). ``softclose prepare --robust`` compiles every one a robust design uses."""
+    from .. import buildcache
+    with buildcache.compiling():
+        nlp, cached = get_scenario_nlp(cfg, model_cfgs, nodes, substeps, robust_objective,
+                                       substeps2)
+    if cached and nlp.library is None:      # built in this process before: compile it now
+        _NLPS.clear()
+        with buildcache.compiling():
+            nlp, _ = get_scenario_nlp(cfg, model_cfgs, nodes, substeps, robust_objective,
+                                      substeps2)
+    return nlp.library
