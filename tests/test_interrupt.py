@@ -260,7 +260,6 @@ def test_a_swallowed_ctrl_c_stops_the_multistart_before_its_next_start(monkeypat
             interrupt._pending.set()
         return out
     monkeypatch.setattr(opt, "solve_start", counting)
-    monkeypatch.setenv("SOFTCLOSE_SIDE_BY_SIDE", "0")
     quiet = interrupt._quiet.is_set()
     interrupt._quiet.clear()
     try:

@@ -116,12 +116,7 @@ def _interrupted() -> int:
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
-    from .maps import cancel_early, start_early
-    start_early(argv)          # a sweep's maps: their process starts importing matplotlib
-    try:
-        return _main(argv)
-    finally:
-        cancel_early()
+    return _main(argv)
 
 
 def free_overrides(args) -> list[str]:
