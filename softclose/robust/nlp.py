@@ -48,6 +48,7 @@ import casadi as ca
 import numpy as np
 
 from ..config import Config
+from ..interrupt import ipopt_options, solving
 from ..optimiser.nlp import opening_bound
 from ..problem import DESIGN_KEYS, PARAM_KEYS, SCALES, params_of
 
@@ -371,14 +372,15 @@ class ScenarioNLP:
         self.peak_fn = ca.Function("peaks", [w, P], [pv])
         self.J_fn = ca.Function("J", [w, P], [wi * thd ** 2 + wp * pv ** 2])
         nlp = {"x": w, "f": f_obj, "g": ca.vertcat(*g), "p": P}
+        stop = ipopt_options(self.nw, int(nlp["g"].numel()), int(P.numel()))   # Ctrl-C
         self.solver = ca.nlpsol("softclose_robust", "ipopt", nlp,
-                                {**self.options, "ipopt.mu_strategy": "adaptive"})
+                                {**self.options, "ipopt.mu_strategy": "adaptive", **stop})
         oracle = self.solver.oracle()
         wx, wp_ = ca.MX.sym("x", self.nw), ca.MX.sym("p", P.numel())
         fo, go = oracle(wx, wp_)
         self.warm_solver = ca.nlpsol("softclose_robust_warm", "ipopt",
                                      {"x": wx, "p": wp_, "f": fo, "g": go},
-                                     {**self.options, **WARM_OPTIONS})
+                                     {**self.options, **WARM_OPTIONS, **stop})
         self.build_time = time.perf_counter() - t0
 
     def _load(self, model_cfgs: list[Config], library, meta: dict) -> None:
@@ -400,11 +402,12 @@ class ScenarioNLP:
         self.peak_fn = ca.Function.deserialize(text(meta["peak"]))
         self.J_fn = ca.Function.deserialize(text(meta["J"]))
         lib = str(library)
-        self.solver = ca.nlpsol("softclose_robust", "ipopt", lib,
-                                {**self.options, "ipopt.mu_strategy": "adaptive"})
-        self.warm_solver = ca.nlpsol("softclose_robust_warm", "ipopt", lib,
-                                     {**self.options, **WARM_OPTIONS})
         npar = len(PARAMS) + self.N + 2 * NP * self.S
+        stop = ipopt_options(self.nw, sum(map(sum, self.g_sizes)), npar)
+        self.solver = ca.nlpsol("softclose_robust", "ipopt", lib,
+                                {**self.options, "ipopt.mu_strategy": "adaptive", **stop})
+        self.warm_solver = ca.nlpsol("softclose_robust_warm", "ipopt", lib,
+                                     {**self.options, **WARM_OPTIONS, **stop})
         if (len(self.g_sizes), self.solver.size1_in(0), self.solver.size1_in(1),
                 self.solver.size1_in(5)) != (self.S, self.nw, npar,
                                              sum(map(sum, self.g_sizes))):
@@ -561,7 +564,8 @@ class ScenarioNLP:
             args.update(lam_x0=lam_x0, lam_g0=lam_g0)
         t0 = time.perf_counter()
         try:
-            sol = solver(**args)
+            with solving():      # Ctrl-C: Ipopt stops, KeyboardInterrupt raised after it
+                sol = solver(**args)
             st = solver.stats()
             status, ok, its = st["return_status"], bool(st["success"]), int(st["iter_count"])
         except RuntimeError as exc:
