@@ -14,36 +14,44 @@ loads them instead of building them:
   ``nlpsol`` from the library. The solves run ~3x faster than CasADi's virtual machine,
   with the same numbers (the same operations in the same order). A serialised NLP would
   not help: it is 12 MB and takes as long to load as to build (~0.1 s). Compiling takes
-  seconds, so it is never done while a command waits: the second time an NLP is used (in
-  another process), a background process (``nice``, its own session) compiles it, and runs
-  after that load it (one compilation at a time; up to :data:`MAX_PENDING` more asked for
-  meanwhile wait their turn, :func:`chain`). The robust optimiser's scenario NLPs
+  seconds to minutes, so it is done only when asked for, in the foreground, with a line on
+  stderr saying what is built (``softclose prepare``, :func:`softclose.optimiser.cache.
+  prepare`, or any code run inside :func:`compiling`); an NLP is otherwise built
+  symbolically (CasADi's virtual machine) on use, and its compiled library loaded when the
+  cache holds one. Nothing runs in the background. The robust optimiser's scenario NLPs
   (:mod:`softclose.robust.nlp`) are kept the same way, compiled with
   :data:`SCENARIO_CFLAGS` (the robust co-design's joint NLP: ~100 s and ~3 GB of compiler
-  memory, once; its solve then takes 6 s instead of 12 s, and nothing is built: 0.02 s
-  instead of 2 s).
+  memory, once; its solve then takes 6 s instead of 12 s).
 
 Every entry is keyed by the config's part that it depends on and by a fingerprint of the
-software that built it (CasADi's and numpy's versions, Python, and the size and time of
-every source file of the package): an entry of another version is never read. A corrupt,
-truncated or foreign entry is ignored (and removed), never an error: the thing is built
-again. ``SOFTCLOSE_CACHE`` names the folder (default ``$XDG_CACHE_HOME/softclose`` or
-``~/.cache/softclose``); ``SOFTCLOSE_CACHE=off`` turns the cache off, ``SOFTCLOSE_COMPILE=0``
-only the compiling. At most :data:`MAX_ENTRIES` entries of each kind are kept (the least
-recently used go), and the folders of :data:`KEEP_VERSIONS` other versions of the software
-(:func:`prune_versions`, when a new version makes its folder).
+software that built it (CasADi's and numpy's versions, Python, the package's version and a
+hash of the *contents* of its source files -- not their times: a reinstall of the same
+sources keeps the cache); a compiled library also by the C compiler (its ``--version``) and
+the flags. An entry of another version is never read. A corrupt, truncated or foreign entry
+is ignored (and removed), never an error: the thing is built again. Every file is written
+to a temporary file named with the writer's pid and moved into place (``os.replace``), so
+two processes may share the folder, and a writer killed midway leaves only a temporary file,
+which is never read and is removed once its process is gone (:func:`sweep_temporaries`).
+
+``SOFTCLOSE_CACHE`` names the folder (default ``$XDG_CACHE_HOME/softclose`` or
+``~/.cache/softclose``; the C stroke kernel of a source checkout is compiled there too,
+:mod:`softclose.native`); ``SOFTCLOSE_CACHE=off`` turns the cache off. A folder that cannot
+be made or written (a read-only home) turns it off too, with one note on stderr. At most
+:data:`MAX_ENTRIES` entries of each kind are kept (the least recently used go), and the
+folders of :data:`KEEP_VERSIONS` other versions of the software (:func:`prune_versions`,
+when a new version makes its folder).
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 from functools import lru_cache
 from pathlib import Path
 
-#: environment variables: the folder (or "off"), and whether NLPs are compiled
+#: the environment variable naming the folder (or "off")
 ENV_FOLDER = "SOFTCLOSE_CACHE"
-ENV_COMPILE = "SOFTCLOSE_COMPILE"
 #: entries of each kind kept (models: ~0.7 MB each; compiled NLPs: ~2 MB)
 MAX_ENTRIES = 64
 #: compiler flags of the NLP: -O1 compiles the default NLP in ~10 s and solves 2.3x faster
@@ -54,8 +62,6 @@ CFLAGS = ("-O1", "-shared", "-fPIC")
 #: ~7 min; -O0 in ~100 s, and their solves still run ~2x faster than the virtual machine
 #: (the co-design's joint NLP: 6.0 s against 11.9 s, the same 89 iterations and bits)
 SCENARIO_CFLAGS = ("-O0", "-shared", "-fPIC", "-pthread")
-#: a compile lock older than this (s) belongs to a process that died
-STALE_LOCK = 900.0
 
 
 def _blake2b(*args, **kw):
@@ -67,6 +73,51 @@ def _blake2b(*args, **kw):
     return blake2b(*args, **kw)
 
 
+def base() -> Path | None:
+    """The cache folder named by ``SOFTCLOSE_CACHE`` (default ``$XDG_CACHE_HOME/softclose``,
+    else ``~/.cache/softclose``), not created; None when the cache is off (or there is no
+    home to put it in)."""
+    setting = os.environ.get(ENV_FOLDER, "")
+    if setting.lower() in ("off", "0", "no", "false"):
+        return None
+    if setting:
+        return Path(setting)
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    try:
+        return (Path(xdg) if xdg else Path.home() / ".cache") / "softclose"
+    except (RuntimeError, KeyError, OSError):         # no home directory at all
+        note_unwritable(None, "no home directory")
+        return None
+
+
+_noted: list = []
+
+
+def note_unwritable(path: Path | None, why) -> None:
+    """One note on stderr per process: the cache folder cannot be used, things are built
+    anew (the kernel, the models, the NLPs) and not kept."""
+    if _noted:
+        return
+    _noted.append(path)
+    where = f"the cache folder {path}" if path is not None else "the cache folder"
+    reason = why.strerror if isinstance(why, OSError) and why.strerror else why
+    print(f"softclose: note: {where} cannot be written ({reason}); working without a cache "
+          f"(set {ENV_FOLDER} to a writable folder to keep what is built)", file=sys.stderr)
+
+
+def writable(path: Path) -> bool:
+    """Make ``path`` (a folder) and check that files can be written there; when not, the
+    note (:func:`note_unwritable`, once) and False."""
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        if not os.access(path, os.W_OK | os.X_OK):
+            raise PermissionError(13, "Permission denied")
+    except OSError as exc:
+        note_unwritable(path, exc)
+        return False
+    return True
+
+
 def folder() -> Path | None:
     """The cache folder of this software (created), or None when the cache is off or the
     folder cannot be made."""
@@ -75,20 +126,18 @@ def folder() -> Path | None:
 
 @lru_cache(maxsize=4)
 def _folder(setting: str) -> Path | None:
-    if setting.lower() in ("off", "0", "no", "false"):
+    root = base()
+    if root is None:
         return None
-    base = Path(setting) if setting else \
-        Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "softclose"
-    path = base / fingerprint()
-    try:
-        new = not path.exists()
-        path.mkdir(parents=True, exist_ok=True)
-    except OSError:
+    path = root / fingerprint()
+    new = not path.exists()
+    if not writable(path):
         return None
     if new:                 # another version of the software: forget the oldest ones
-        prune_versions(base, keep=path)
+        prune_versions(root, keep=path)
     else:
         _touch(path)        # (the version folders' times say which were used last)
+        sweep_temporaries(path)
     return path
 
 
@@ -124,26 +173,118 @@ def prune_versions(base: Path, keep: Path | None = None) -> list[Path]:
 
 @lru_cache(maxsize=1)
 def fingerprint() -> str:
-    """What built an entry: CasADi, numpy, Python, this machine's kind and the package's
-    source files (name, size, modification time), as 16 hex digits."""
+    """What built an entry: CasADi, numpy, Python, this machine's kind, the package's version
+    and the contents of its source files (:func:`source_digest`), as 16 hex digits."""
     import casadi
     import numpy
+
+    from .version import __version__
     h = _blake2b(digest_size=8)
     h.update(f"{casadi.__version__};{numpy.__version__};{sys.version};"
-             f"{os.uname().machine if hasattr(os, 'uname') else ''}".encode())
-    root = Path(__file__).resolve().parent
-    stack = [str(root)]
+             f"{os.uname().machine if hasattr(os, 'uname') else ''};{__version__};"
+             f"{source_digest(Path(__file__).resolve().parent)}".encode())
+    return h.hexdigest()
+
+
+def _sources(root: Path) -> list:
+    """The package's source files under ``root`` (.py, .c), sorted: (relative name, path,
+    stat)."""
+    out, stack = [], [str(root)]
     while stack:                              # (scandir: ~0.5 ms for the package)
         with os.scandir(stack.pop()) as it:
             for e in sorted(it, key=lambda e: e.name):
                 if e.is_dir():
                     if e.name != "__pycache__":
                         stack.append(e.path)
-                elif e.name.endswith((".py", ".c", ".so")):
-                    st = e.stat()
-                    h.update(f"{e.path[len(str(root)):]};{st.st_size};{st.st_mtime_ns}\n"
-                             .encode())
-    return h.hexdigest()
+                elif e.name.endswith((".py", ".c")):
+                    out.append((e.path[len(str(root)):], e.path, e.stat()))
+    return sorted(out)
+
+
+def source_digest(root: Path) -> str:
+    """A hash of the contents of the package's source files (names and bytes): the same
+    sources give the same digest wherever and whenever they were installed. Reading them
+    all takes ~6 ms, so the digest is remembered in the cache folder under the files'
+    names, sizes and times (``sources-*.txt``), and only computed when those change."""
+    files = _sources(root)
+    stamp = _blake2b(digest_size=12)
+    stamp.update(str(root).encode())
+    for name, _, st in files:
+        stamp.update(f"{name};{st.st_size};{st.st_mtime_ns}\n".encode())
+    root_dir = base()
+    memo = root_dir / f"sources-{stamp.hexdigest()}.txt" if root_dir is not None else None
+    if memo is not None:
+        try:
+            digest = memo.read_text()
+            if len(digest) == 32:
+                return digest
+        except OSError:
+            pass
+    h = _blake2b(digest_size=16)
+    for name, path, _ in files:
+        try:
+            with open(path, "rb") as f:
+                data = f.read()
+        except OSError:
+            data = b""
+        h.update(f"{name};{len(data)}\n".encode())
+        h.update(data)
+    digest = h.hexdigest()
+    if memo is not None:
+        try:
+            if memo.parent.is_dir():
+                _write_atomic(memo, digest.encode())
+                _prune(memo.parent, "sources-*.txt")
+        except OSError:
+            pass
+    return digest
+
+
+def _write_atomic(path: Path, data: bytes) -> None:
+    """Write ``data`` as ``path``: a temporary file of this process, then moved into place."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        with open(tmp, "wb") as f:
+            f.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        _remove(tmp)
+        raise
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:             # another user's process: alive
+        return True
+    return True
+
+
+def sweep_temporaries(where: Path) -> list[Path]:
+    """Remove the temporary files and build folders (``.NAME.PID.tmp``, ``.build-KEY.PID``)
+    left in ``where`` by processes that are gone (killed midway); the removed ones. Those of
+    live processes -- this one, another run writing now -- are left alone."""
+    import shutil
+    gone = []
+    try:
+        found = [p for p in where.iterdir() if p.name.startswith(".")]
+    except OSError:
+        return gone
+    for p in found:
+        parts = p.name.removesuffix(".tmp").rsplit(".", 1)
+        if len(parts) != 2 or not parts[1].isdigit():
+            continue
+        if p.name.endswith(".tmp") or p.name.startswith(".build-"):
+            if _alive(int(parts[1])):
+                continue
+            if p.is_dir():
+                shutil.rmtree(p, ignore_errors=True)
+            else:
+                _remove(p)
+            gone.append(p)
+    return gone
 
 
 def key_of(*parts) -> str:
@@ -260,202 +401,158 @@ def text(a) -> str:
 
 
 # -- compiled NLPs --------------------------------------------------------------------------------
-def compile_enabled() -> bool:
-    return os.environ.get(ENV_COMPILE, "1").lower() not in ("0", "off", "no", "false") \
-        and folder() is not None
+def compiler() -> str:
+    """The C compiler: ``$CC``, else ``cc``."""
+    return os.environ.get("CC") or "cc"
 
 
-def compiled_nlp(key: str) -> Path | None:
-    """The compiled library of the NLP ``key``, if it is built."""
+@lru_cache(maxsize=8)
+def _toolchain(cc: str, flags: tuple) -> str | None:
+    """A key of the compiler ``cc`` (the first line of its ``--version``) and ``flags``; None
+    when there is no such compiler."""
+    import shutil
+    import subprocess
+    if shutil.which(cc) is None:
+        return None
+    try:
+        out = subprocess.run([cc, "--version"], capture_output=True, text=True, timeout=30,
+                             stdin=subprocess.DEVNULL)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    version = (out.stdout or out.stderr).strip().splitlines()
+    return key_of(cc, version[0] if version else "", flags)[:12]
+
+
+def toolchain(flags: tuple = CFLAGS) -> str | None:
+    """:func:`_toolchain` of this process's compiler."""
+    return _toolchain(compiler(), tuple(flags))
+
+
+def _library(where: Path, key: str, flags: tuple) -> Path | None:
+    tools = toolchain(flags)
+    return None if tools is None else where / f"nlp-{key}-{tools}.so"
+
+
+def compiled_nlp(key: str, flags: tuple = CFLAGS) -> Path | None:
+    """The compiled library of the NLP ``key`` (by this compiler, with ``flags``), if it is
+    built."""
     where = folder()
     if where is None:
         return None
-    path = where / f"nlp-{key}.so"
-    if path.exists():
+    path = _library(where, key, flags)
+    if path is not None and path.exists():
         _touch(path)
         return path
     return None
 
 
-def forget_nlp(key: str) -> None:
-    """Remove a compiled NLP that could not be loaded (it is compiled again later)."""
+def forget_nlp(key: str, flags: tuple = CFLAGS) -> None:
+    """Remove a compiled NLP that could not be loaded (it is compiled again when asked)."""
     where = folder()
-    if where is not None:
-        _remove(where / f"nlp-{key}.so")
+    path = _library(where, key, flags) if where is not None else None
+    if path is not None:
+        _remove(path)
 
 
-def package_root() -> str:
-    """The folder this package was imported from (site-packages, or a source tree): a
-    background compilation starts there, so that ``python -m`` imports this same package.
-    From the folder a command was run in, it would import a ``softclose/`` found there
-    first -- the clone next to an installed copy -- whose fingerprint differs: its library
-    would go to another cache folder, never loaded, and asked for again on every run."""
-    return str(Path(__file__).resolve().parent.parent)
+_compiling: list = []
 
 
-def request_nlp(key: str, spec: dict, module: str = "softclose.optimiser.compile") -> bool:
-    """The NLP ``key`` was used (and is not compiled): the second time -- a marker remembers
-    the first -- start its compilation in the background, unless another one is running
-    (one at a time). ``spec``: what builds it (the config as a dict, nodes, substeps);
-    ``module``: the one that builds and compiles it (``python -m module LOCK``: the
-    optimiser's, or :mod:`softclose.robust.compile`). True when a compilation was
-    started."""
-    if not compile_enabled():
-        return False
-    where = folder()
-    seen = where / f"seen-{key}"
-    if not seen.exists():
-        try:
-            seen.write_bytes(b"")
-        except OSError:
-            pass
-        _prune(where, "seen-*")
-        return False
-    # one compilation at a time on this machine (a grid of lids run twice must not start a
-    # compiler per lid): while one runs, a few more wait their turn (pending-*), and a later
-    # use asks again
-    import json
-    lock = where / "compiling.lock"
+@contextlib.contextmanager
+def compiling():
+    """Inside the block, every NLP built (:func:`load_or_build`) is compiled now, in the
+    foreground, into the cache, and its library used (``softclose prepare``)."""
+    _compiling.append(True)
     try:
-        import time
-        if lock.exists() and time.time() - lock.stat().st_mtime > STALE_LOCK:
-            _remove(lock)
-        fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
-    except OSError:                   # being compiled by another process (or no room)
-        _queue(where, key, {**spec, "module": module})
-        return False
-    import subprocess
-    with os.fdopen(fd, "w") as f:
-        json.dump({"key": key, **spec}, f)
-    try:
-        subprocess.Popen([sys.executable, "-m", module, str(lock)], cwd=package_root(),
-                         stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                         stderr=subprocess.DEVNULL, start_new_session=True, close_fds=True,
-                         env={**os.environ, ENV_FOLDER: os.environ.get(ENV_FOLDER, "")})
-    except OSError:
-        _remove(lock)
-        return False
-    return True
+        yield
+    finally:
+        _compiling.pop()
 
 
-#: compilations waiting while one runs, at most (each ~10 s to ~2 min of a background core)
-MAX_PENDING = 4
+#: what this process did with NLPs, for ``softclose prepare``'s report: the libraries it
+#: compiled and loaded (paths), the NLPs it could not compile (their names)
+compiled: list = []
+loaded: list = []
+failed: list = []
 
 
-def _queue(where: Path, key: str, spec: dict) -> None:
-    """Ask for the NLP ``key`` to be compiled after the running compilation (:func:`chain`):
-    a pending-KEY file with its spec and the module that compiles it, unless it is asked
-    already or :data:`MAX_PENDING` are."""
-    import json
-    path = where / f"pending-{key}"
-    try:
-        if path.exists() or len(list(where.glob("pending-*"))) >= MAX_PENDING:
-            return
-        tmp = where / f".pending-{key}.{os.getpid()}.tmp"
-        tmp.write_text(json.dumps({"key": key, **spec}))
-        os.replace(tmp, path)
-    except OSError:
-        pass
-
-
-def chain(lock: Path) -> None:
-    """The end of a background compilation holding ``lock``: the next waiting one
-    (:func:`_queue`, oldest first) takes this process's place (``exec``; the lock stays held
-    and names it); none left, the lock goes. Called by the compile modules last."""
-    import json
-    import time
-    where = lock.parent
-    try:
-        waiting = sorted(where.glob("pending-*"), key=lambda p: p.stat().st_mtime)
-    except OSError:
-        waiting = []
-    for path in waiting:
-        try:
-            spec = json.loads(path.read_text())
-            module = spec.pop("module")
-            key = spec["key"]
-            if (where / f"nlp-{key}.so").exists():
-                raise ValueError("compiled already")
-            lock.write_text(json.dumps(spec))
-            path.unlink()
-            now = time.time()
-            os.utime(lock, (now, now))
-        except (OSError, ValueError, KeyError, TypeError):
-            _remove(path)
-            continue
-        try:
-            os.chdir(package_root())            # (the same package, as request_nlp)
-            os.execv(sys.executable, [sys.executable, "-m", module, str(lock)])
-        except OSError:
-            break
-    _remove(lock)
-
-
-def load_or_build(disk: str, restore, build, spec, module: str = "softclose.optimiser.compile"):
-    """The NLP kept as ``disk``: ``restore(library, meta)`` when this software compiled it
-    (a damaged or foreign library is dropped), else ``build()`` -- its ``meta()`` stored and
-    its background compilation asked for (:func:`request_nlp` with ``spec()``, the module
-    ``module``). The one way the optimiser's and the robust optimiser's NLPs are kept."""
-    lib = compiled_nlp(disk)
+def load_or_build(disk: str, restore, build, what: str = "", flags: tuple = CFLAGS):
+    """The NLP kept as ``disk``: ``restore(library, meta)`` when its compiled library is in
+    the cache (a damaged or foreign library is dropped), else ``build()`` -- built
+    symbolically. Inside :func:`compiling`, a built NLP is compiled (``flags``; ``what``
+    names it on stderr) and its library loaded. The one way the optimiser's and the robust
+    optimiser's NLPs are kept."""
+    lib = compiled_nlp(disk, flags)
     meta = load("nlpmeta", disk) if lib is not None else None
     if meta is not None:
         try:
-            return restore(lib, meta)
+            nlp = restore(lib, meta)
+            loaded.append(lib)
+            return nlp
         except Exception:   # noqa: BLE001  (a damaged or foreign library: build anew)
-            forget_nlp(disk)
+            forget_nlp(disk, flags)
     nlp = build()
-    if compile_enabled():
-        if not has("nlpmeta", disk):
-            store("nlpmeta", disk, nlp.meta())
-        request_nlp(disk, spec(), module)
+    if _compiling and folder() is not None:
+        store("nlpmeta", disk, nlp.meta())
+        lib = compile_nlp(nlp.solver, disk, flags, what)
+        meta = load("nlpmeta", disk) if lib is not None else None
+        if meta is not None:
+            try:
+                out = restore(lib, meta)
+                compiled.append(lib)
+                return out
+            except Exception:   # noqa: BLE001
+                forget_nlp(disk, flags)
+        failed.append(what or disk)
     return nlp
 
 
-def compile_locked(lock: str, build, flags: tuple = CFLAGS) -> int:
-    """The body of a background compilation (``python -m MODULE LOCK``, started by
-    :func:`request_nlp`): at low priority, ``build(spec)`` the NLP the lock file names (an
-    object with ``solver``), compile it into the cache with ``flags``, and hand the lock
-    on (:func:`chain`)."""
-    import json
-    try:
-        os.nice(10)
-    except OSError:
-        pass
-    try:
-        spec = json.loads(Path(lock).read_text())
-        compile_nlp(build(spec).solver, spec["key"], flags)
-    finally:
-        chain(Path(lock))      # the next waiting compilation in this one's place, or none
-    return 0
-
-
-def compile_nlp(solver, key: str, flags: tuple = CFLAGS) -> Path | None:
+def compile_nlp(solver, key: str, flags: tuple = CFLAGS, what: str = "") -> Path | None:
     """Generate the C of ``solver``'s functions, compile it (``flags``) and put the library
-    in the cache as the NLP ``key`` (here and now: seconds). None when there is no cache or
-    no compiler."""
+    in the cache as the NLP ``key`` (here and now: seconds to minutes, with a line on
+    stderr: ``building the NLP WHAT (C, -O1) ... 12.3 s``). None when there is no cache or
+    no compiler (said on that line)."""
     import shutil
     import subprocess
-    import tempfile
+    import time
     where = folder()
     if where is None:
         return None
-    cc = os.environ.get("CC", "cc")
-    if shutil.which(cc) is None:
+    cc = compiler()
+    level = next((f for f in flags if f.startswith("-O")), "")
+    head = f"softclose: building the NLP{' ' + what if what else ''} (C, {level}) ..."
+    print(head, end="", file=sys.stderr, flush=True)
+    t0 = time.perf_counter()
+    path = _library(where, key, flags)
+    if path is None:
+        print(f" no C compiler ({cc}): not compiled", file=sys.stderr, flush=True)
         return None
-    with tempfile.TemporaryDirectory(dir=where) as tmp:
+    sweep_temporaries(where)
+    tmp = where / f".build-{key}.{os.getpid()}"       # (a killed build: removed later)
+    try:
+        shutil.rmtree(tmp, ignore_errors=True)
+        tmp.mkdir()
         old = os.getcwd()
         try:
             os.chdir(tmp)                     # CasADi writes the file where it stands
             solver.generate_dependencies(f"nlp_{key}.c", {"with_header": False})
         finally:
             os.chdir(old)
-        src, out = Path(tmp) / f"nlp_{key}.c", Path(tmp) / f"nlp-{key}.so"
+        src, out = tmp / f"nlp_{key}.c", tmp / path.name
         try:
             subprocess.run([cc, *flags, str(src), "-o", str(out), "-lm"], check=True,
-                           capture_output=True)
-        except (OSError, subprocess.CalledProcessError):
+                           capture_output=True, stdin=subprocess.DEVNULL)
+        except (OSError, subprocess.CalledProcessError) as exc:
+            why = getattr(exc, "stderr", b"") or b""
+            why = why.decode(errors="replace").strip().splitlines()
+            print(f" failed ({why[-1] if why else exc}): not compiled", file=sys.stderr,
+                  flush=True)
             return None
-        path = where / f"nlp-{key}.so"
         os.replace(out, path)
+    except OSError as exc:
+        print(f" failed ({exc}): not compiled", file=sys.stderr, flush=True)
+        return None
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    print(f" {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
     _prune(where, "nlp-*.so")
     return path

@@ -1,24 +1,20 @@
 """Ctrl-C that ends a command wherever it lands: one line, exit code 130.
 
-Python turns SIGINT into :class:`KeyboardInterrupt` between bytecodes. Inside a compiled
-solver that checks for signals, CasADi catches that exception and carries on: an Ipopt solve
-ends with ``NonIpopt_Exception_Thrown`` and a ``WARNING("KeyboardInterruptException")`` line
-on stderr, a CVODES integration fails with a RuntimeError after printing ``rhs failed:
-KeyboardInterrupt``. Left alone, a multistart would run its remaining starts, and a reference
-simulation would be reported as a numerical failure (exit 3).
+Python turns SIGINT into :class:`KeyboardInterrupt` between bytecodes. Raised inside a
+CasADi call (a compiled solver that checks for signals, or Python code CasADi calls back),
+CasADi catches it and carries on or reports an error of its own. So the command line runs
+every command inside :func:`guard`, whose SIGINT handler
 
-:func:`guard` (the command line runs every command inside it) therefore
-
-- remembers that Ctrl-C was pressed (:func:`interrupted`), so that an error raised because of
-  it is reported as the interruption it is;
-- sees when the KeyboardInterrupt was raised inside a CasADi call (the frame the signal
-  handler runs in belongs to CasADi), and then sends SIGINT again as soon as the main thread
-  is back in Python code, or after :data:`RESEND` seconds in another CasADi call (which a
-  signal ends at its next iteration) -- only then, so that an interrupt that propagates
-  normally is never raised a second time into the clean-up it runs (``finally`` blocks that
-  keep what was finished);
-- while an interrupt is pending, drops what the solvers write to ``sys.stderr``, so that the
-  only line left is the command line's own.
+- notes that Ctrl-C was pressed (:func:`interrupted`, a flag), so that an error raised
+  because of it is reported as the interruption it is;
+- raises KeyboardInterrupt at once in plain Python code, as Python's own handler does;
+- inside a solver call (:func:`solving`: an Ipopt solve, a CVODES integration) only notes
+  it: Ipopt stops at its next iteration through the documented ``iteration_callback``
+  option of ``nlpsol`` (:func:`ipopt_options`: a :class:`casadi.Callback` returning 1 once
+  the flag is set; the solve ends with ``User_Requested_Stop``), a CVODES call ends its few
+  milliseconds, and the KeyboardInterrupt is raised when the call returns;
+- while an interrupt is pending, drops what is written to ``sys.stderr``, so that the only
+  line left is the command line's own.
 
 :func:`check` lets a long loop stop at a safe point (between solves, between chunks);
 :func:`sigint_handler` swaps the SIGINT handler for a block (the sweep wants Python's plain
@@ -28,21 +24,13 @@ KeyboardInterrupt, Dask's local worker processes are started with SIGINT ignored
 from __future__ import annotations
 
 import contextlib
-import os
 import signal
 import sys
 import threading
-import time
-
-#: seconds a CasADi call may run on after a swallowed Ctrl-C before SIGINT is sent into it
-RESEND = 0.2
-#: seconds between looks at where the main thread is, while a swallowed interrupt is pending
-POLL = 0.002
-_CASADI = os.path.join("casadi", "casadi.py")
 
 _pending = threading.Event()     # Ctrl-C was pressed under the current guard
-_swallowed = threading.Event()   # ... and the last KeyboardInterrupt was raised into CasADi
 _quiet = threading.Event()       # the guarded command has ended
+_depth = [0]                     # solver calls the main thread is in (:func:`solving`)
 
 
 def interrupted() -> bool:
@@ -50,14 +38,92 @@ def interrupted() -> bool:
     return _pending.is_set()
 
 
+def stop_requested() -> bool:
+    """Should a solver stop now (Ctrl-C pressed under a guard that is still active)?"""
+    return _pending.is_set() and not _quiet.is_set()
+
+
 def check() -> None:
-    """Raise KeyboardInterrupt if Ctrl-C was pressed (a solver may have swallowed it)."""
+    """Raise KeyboardInterrupt if Ctrl-C was pressed (noted during a solver call)."""
     if _pending.is_set() and not _quiet.is_set():
         raise KeyboardInterrupt
 
 
-def _in_casadi(frame) -> bool:
-    return frame is not None and frame.f_code.co_filename.endswith(_CASADI)
+class _Solving:
+    """The context of :func:`solving` (a class: entered thousands of times a command)."""
+
+    __slots__ = ("main",)
+
+    def __enter__(self):
+        self.main = threading.current_thread() is threading.main_thread()
+        if self.main:
+            _depth[0] += 1
+        return self
+
+    def __exit__(self, kind, value, tb):
+        if self.main:
+            _depth[0] -= 1
+            if kind is None:
+                check()
+        return False
+
+
+def solving() -> _Solving:
+    """A block that calls a CasADi solver (Ipopt, CVODES): a Ctrl-C inside it is noted, not
+    raised into CasADi (which would swallow it); Ipopt stops at its next iteration
+    (:func:`ipopt_options`), and KeyboardInterrupt is raised as the block ends."""
+    return _Solving()
+
+
+_callbacks: dict = {}
+
+
+def ipopt_options(nx: int, ng: int, np_: int) -> dict:
+    """The ``nlpsol`` options that stop Ipopt at its next iteration once Ctrl-C is pressed:
+    ``iteration_callback``, a :class:`casadi.Callback` of an NLP with ``nx`` variables,
+    ``ng`` constraints and ``np_`` parameters that returns 1 (stop) when
+    :func:`stop_requested`. Kept for the process (a solver holds it; one per size)."""
+    key = (int(nx), int(ng), int(np_))
+    cb = _callbacks.get(key)
+    if cb is None:
+        cb = _callbacks[key] = _stopper(*key)
+    return {"iteration_callback": cb}
+
+
+def _stopper(nx: int, ng: int, np_: int):
+    import casadi as ca
+
+    sizes = {"x": nx, "f": 1, "g": ng, "lam_x": nx, "lam_g": ng, "lam_p": np_}
+
+    class StopOnCtrlC(ca.Callback):
+        """Ipopt's iteration callback: 1 (stop) once Ctrl-C was pressed, else 0."""
+
+        def __init__(self):
+            ca.Callback.__init__(self)
+            self.construct(f"softclose_stop_{nx}_{ng}_{np_}", {})
+
+        def get_n_in(self):
+            return ca.nlpsol_n_out()
+
+        def get_n_out(self):
+            return 1
+
+        def get_name_in(self, i):
+            return ca.nlpsol_out(i)
+
+        def get_name_out(self, i):
+            return "stop"
+
+        def get_sparsity_in(self, i):
+            return ca.Sparsity.dense(sizes[ca.nlpsol_out(i)], 1)
+
+        def get_sparsity_out(self, i):
+            return ca.Sparsity.dense(1, 1)
+
+        def eval(self, arg):
+            return [1.0 if stop_requested() else 0.0]
+
+    return StopOnCtrlC()
 
 
 class _QuietStderr:
@@ -93,6 +159,16 @@ def sigint_handler(handler):
         signal.signal(signal.SIGINT, previous)
 
 
+def _handler(signum, frame):
+    if _quiet.is_set():                    # the command has ended
+        return
+    _pending.set()
+    if _depth[0] == 0:                     # plain Python: at once, as Python's own handler
+        raise KeyboardInterrupt
+    # inside a solver call: noted; the solver stops (iteration callback), and the
+    # KeyboardInterrupt is raised when the call returns (:func:`solving`)
+
+
 @contextlib.contextmanager
 def guard():
     """Run a command so that Ctrl-C ends it even inside a compiled solver (module docstring).
@@ -102,56 +178,20 @@ def guard():
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    for flag in (_pending, _swallowed, _quiet):
-        flag.clear()
-    stop = threading.Event()
-    main_id = threading.main_thread().ident
-    resender: list[threading.Thread] = []
-
-    def resend():
-        frame, since = None, 0.0
-        while not stop.wait(POLL):
-            if not _swallowed.is_set():
-                continue
-            top = sys._current_frames().get(main_id)
-            if _in_casadi(top):
-                if top is not frame:          # a new CasADi call: give it RESEND seconds
-                    frame, since = top, time.monotonic()
-                if time.monotonic() - since < RESEND:
-                    continue
-            frame = None
-            _swallowed.clear()
-            os.kill(os.getpid(), signal.SIGINT)
-
-    def handler(signum, frame):
-        if _quiet.is_set():                    # the command has ended: a late re-send
-            return
-        _pending.set()
-        if _in_casadi(frame):
-            _swallowed.set()
-            if not resender:
-                t = threading.Thread(target=resend, name="softclose-interrupt", daemon=True)
-                resender.append(t)
-                t.start()
-        raise KeyboardInterrupt
-
-    previous = signal.signal(signal.SIGINT, handler)
+    _pending.clear()
+    _quiet.clear()
+    _depth[0] = 0
+    previous = signal.signal(signal.SIGINT, _handler)
     stderr = sys.stderr
     sys.stderr = _QuietStderr(stderr)
     try:
         yield
     finally:
         _quiet.set()
-        stop.set()
-        for t in resender:
-            t.join()
-        # a re-sent signal may be tripped but not handled yet: let it reach the quiet
-        # handler (the loop's backward jumps run pending handlers) before restoring
-        for _ in range(3):
-            pass
         signal.signal(signal.SIGINT, previous)
         if isinstance(sys.stderr, _QuietStderr):
             sys.stderr = stderr
 
 
-__all__ = ["guard", "interrupted", "check", "sigint_handler", "RESEND"]
+__all__ = ["guard", "interrupted", "check", "solving", "ipopt_options", "stop_requested",
+           "sigint_handler"]

@@ -24,6 +24,7 @@ import numpy as np
 
 from . import elements, statics
 from .errors import NumericalError
+from .interrupt import solving
 from .problem import as_params
 from .roots import illinois
 from .stroke import StrokeResult, StrokeStatus
@@ -80,8 +81,9 @@ class Reference:
         if tau <= 0:
             return np.asarray(x0, float)
         try:
-            return np.asarray(self._flow(x0=x0, p=np.r_[p, self._moving, self._engaged, tau]
-                                         )["xf"]).ravel()
+            with solving():      # Ctrl-C: noted, raised when CVODES returns
+                out = self._flow(x0=x0, p=np.r_[p, self._moving, self._engaged, tau])["xf"]
+            return np.asarray(out).ravel()
         except RuntimeError as exc:   # (a step towards a toggle position: the equation is NaN)
             raise NumericalError(f"the reference integrator (CVODES) failed from theta = "
                                  f"{math.degrees(float(x0[0])):.4g} deg "
@@ -101,8 +103,10 @@ class Reference:
             self._chunk_off -= 1
             return self.flow(x0, p, h)
         try:
-            xs = np.asarray(self._chunk_flow(x0=x0, p=np.r_[p, self._moving, self._engaged,
-                                                            CHUNK * h])["xf"])
+            with solving():
+                xs = np.asarray(self._chunk_flow(x0=x0, p=np.r_[p, self._moving,
+                                                                self._engaged,
+                                                                CHUNK * h])["xf"])
         except RuntimeError:
             xs = None
         if xs is None or not np.all(np.isfinite(xs)):

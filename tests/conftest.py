@@ -21,12 +21,11 @@ import numpy as np
 import pytest
 
 # the disk cache of built models and NLPs (softclose.buildcache): a folder of this test run
-# (every process it starts inherits it), and no NLP is compiled in the background -- the
-# tests of the cache compile one on purpose (tests/test_startup.py)
+# (every process it starts inherits it); NLPs are compiled only when asked for -- the tests
+# of the cache compile one on purpose (tests/test_startup.py)
 _CACHE = tempfile.mkdtemp(prefix="softclose-test-cache-")
 atexit.register(shutil.rmtree, _CACHE, True)
 os.environ["SOFTCLOSE_CACHE"] = _CACHE
-os.environ["SOFTCLOSE_COMPILE"] = "0"
 
 from softclose.config import default_config, from_dict
 from softclose.model import LidModel
@@ -94,22 +93,6 @@ def assembly_angles(geometry: dict, theta_deg: float, near_phi_deg: float) -> li
 
 def wrap_deg(a):
     return (a + 180.0) % 360.0 - 180.0
-
-
-@pytest.fixture
-def compiles_started(monkeypatch) -> list:
-    """Background compiles turned on, but none started: each ``subprocess.Popen`` a build
-    cache would start is recorded (its command) in the list this returns."""
-    import subprocess
-    from softclose import buildcache
-    monkeypatch.setenv(buildcache.ENV_COMPILE, "1")
-    started: list = []
-
-    class Popen:
-        def __init__(self, cmd, **kw):
-            started.append(cmd)
-    monkeypatch.setattr(subprocess, "Popen", Popen)
-    return started
 
 
 @pytest.fixture(scope="session")

@@ -260,7 +260,6 @@ def test_a_swallowed_ctrl_c_stops_the_multistart_before_its_next_start(monkeypat
             interrupt._pending.set()
         return out
     monkeypatch.setattr(opt, "solve_start", counting)
-    monkeypatch.setenv("SOFTCLOSE_SIDE_BY_SIDE", "0")
     quiet = interrupt._quiet.is_set()
     interrupt._quiet.clear()
     try:
@@ -271,3 +270,61 @@ def test_a_swallowed_ctrl_c_stops_the_multistart_before_its_next_start(monkeypat
         if quiet:
             interrupt._quiet.set()
     assert solved == [0, 1]
+
+
+def test_inside_a_solver_call_ctrl_c_is_noted_and_raised_when_it_returns():
+    """Under the guard a real SIGINT raises KeyboardInterrupt at once in plain Python code;
+    inside ``solving()`` (a CasADi solver call) it is only noted -- nothing is raised into
+    CasADi -- and raised as the block ends."""
+    from softclose import interrupt
+    with pytest.raises(KeyboardInterrupt):
+        with interrupt.guard():
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(1.0)                    # the KeyboardInterrupt ends the wait
+    assert interrupt.interrupted()
+    reached = []
+    with pytest.raises(KeyboardInterrupt):
+        with interrupt.guard():
+            with interrupt.solving():
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(0.05)               # the handler runs here: noted only
+                reached.append(interrupt.stop_requested())
+    assert reached == [True] and interrupt.interrupted()
+    assert not interrupt.stop_requested()      # the guard has ended
+
+
+@pytest.mark.parametrize("compiled", [False, pytest.param(True, marks=pytest.mark.slow)],
+                         ids=["virtual machine", "compiled"])
+def test_ipopt_stops_at_its_next_iteration_through_its_iteration_callback(
+        compiled, monkeypatch, tmp_path):
+    """The solvers carry nlpsol's ``iteration_callback``: once a stop is requested, Ipopt
+    ends with User_Requested_Stop at its next iteration -- also a solver loaded from a
+    compiled library."""
+    import shutil
+
+    from softclose import buildcache, interrupt
+    from softclose.config import default_config
+    from softclose.optimiser import optimiser as opt
+    from softclose.optimiser.cache import forget, prepare
+    if compiled and shutil.which(os.environ.get("CC", "cc")) is None:
+        pytest.skip("no C compiler")
+    monkeypatch.setenv(buildcache.ENV_FOLDER, str(tmp_path))
+    cfg = default_config().update({"optimise.nodes": 4, "optimise.substeps": 2})
+    forget()
+    try:
+        plan = opt.plan_kind(cfg, 1)
+        if compiled:                    # (11 s)
+            assert prepare(plan.cfg, plan.disc.nodes, plan.disc.substeps) is not None
+            forget()
+            plan = opt.plan_kind(cfg, 1)
+        assert (plan.nlp.library is not None) == compiled
+        calls = []
+
+        def stop():
+            calls.append(1)
+            return len(calls) >= 3
+        monkeypatch.setattr(interrupt, "stop_requested", stop)
+        r, _ = opt.solve_start(plan, 0)
+    finally:
+        forget()
+    assert r.status == "User_Requested_Stop" and len(calls) == 3 and r.iterations <= 3

@@ -1,7 +1,8 @@
 """The robust optimiser's scenario NLP, faster and the same: its shooting intervals evaluated
-in threads give the same solve bit for bit; the second time the same scenario NLP is built a
-background process compiles it (softclose.robust.compile); the compiled library solves to the
-same point in the same iterations, and a damaged one is dropped, never an error."""
+in threads give the same solve bit for bit; using a scenario NLP builds it and compiles
+nothing (compiling is asked for: softclose.robust.nlp.prepare, in the foreground); the
+compiled library solves to the same point in the same iterations, and a damaged one is
+dropped, never an error."""
 
 from __future__ import annotations
 
@@ -13,7 +14,6 @@ import numpy as np
 import pytest
 
 from softclose import buildcache
-from softclose.config import from_dict
 
 rnlp = importlib.import_module("softclose.robust.nlp")
 
@@ -47,7 +47,6 @@ def _solve(cfg):
 
 
 def test_threads_give_the_same_solve(cache, cfg, monkeypatch):
-    monkeypatch.setenv(buildcache.ENV_COMPILE, "0")
     monkeypatch.setattr(rnlp, "MAX_MAP_THREADS", 1)
     assert rnlp.map_threads() == 1
     _, one = _solve(cfg)
@@ -61,37 +60,29 @@ def test_threads_give_the_same_solve(cache, cfg, monkeypatch):
     assert np.array_equal(three.J, one.J) and np.array_equal(three.peaks, one.peaks)
 
 
-def test_the_second_build_of_a_scenario_nlp_compiles_it_in_the_background(
-        cache, cfg, compiles_started):
-    started = compiles_started
-    first, _ = _problem(cfg)                 # first build: remembered, nothing compiled
-    assert not started and list(cache.glob(f"*/seen-{first.nlp.key}"))
-    assert list(cache.glob(f"*/nlpmeta-{first.nlp.key}.bin"))
+def test_using_a_scenario_nlp_compiles_nothing(cache, cfg, monkeypatch):
+    """Built symbolically on use, twice (another process), and nothing compiled or started:
+    compiling is only done when asked for."""
+    import subprocess
+    started = []
+    monkeypatch.setattr(subprocess, "Popen", lambda *a, **k: started.append(a))
+    first, _ = _problem(cfg)
     rnlp.forget()
-    again, _ = _problem(cfg)                 # second (another process): compile it
-    assert len(started) == 1 and started[0][1:3] == ["-m", "softclose.robust.compile"]
-    spec = __import__("json").loads(open(started[0][3]).read())
-    assert spec["kind"] == "scenario" and spec["key"] == again.nlp.key
-    assert from_dict(spec["config"]) == cfg
-    assert [from_dict(m) for m in spec["models"]] == again.model_cfgs
-    # the spec builds the same NLP: the same constraint groups and variables
-    built = rnlp.build_from_spec(spec)
-    assert built.g_sizes == again.nlp.g_sizes and built.nw == again.nlp.nw
+    again, _ = _problem(cfg)
+    assert not started and again.nlp.library is None
+    assert not list(cache.glob("*/nlp-*.so")) and not list(cache.glob("*/seen-*"))
 
 
 @pytest.mark.slow
 def test_the_compiled_scenario_nlp_gives_the_same_solve(cache, cfg, monkeypatch):
     if shutil.which(os.environ.get("CC", "cc")) is None:
         pytest.skip("no C compiler")
-    monkeypatch.setenv(buildcache.ENV_COMPILE, "1")
-    monkeypatch.setattr(buildcache, "request_nlp", lambda *a, **k: False)   # no background
     vm_problem, vm = _solve(cfg)
     assert vm_problem.nlp.library is None and vm.success
-    spec = rnlp.compile_spec(cfg, vm_problem.model_cfgs, NODES, SUBSTEPS,
-                             cfg.tolerance.robust_objective, vm_problem.M2)
     key = vm_problem.nlp.key
-    assert buildcache.compile_nlp(rnlp.build_from_spec(spec).solver, key,
-                                  buildcache.SCENARIO_CFLAGS) is not None
+    lib = rnlp.prepare(cfg, vm_problem.model_cfgs, NODES, SUBSTEPS,
+                       cfg.tolerance.robust_objective, vm_problem.M2)
+    assert lib is not None and lib == buildcache.compiled_nlp(key, buildcache.SCENARIO_CFLAGS)
     rnlp.forget()
     problem, fast = _solve(cfg)
     assert problem.nlp.library is not None and problem.nlp.build_time < 0.5
@@ -113,5 +104,6 @@ def test_the_compiled_scenario_nlp_gives_the_same_solve(cache, cfg, monkeypatch)
     buildcache.store("nlpmeta", key, meta)
     rnlp.forget()
     problem, again = _solve(cfg)
-    assert problem.nlp.library is None and buildcache.compiled_nlp(key) is None
+    assert problem.nlp.library is None
+    assert buildcache.compiled_nlp(key, buildcache.SCENARIO_CFLAGS) is None
     assert np.array_equal(again.r["x"], vm.r["x"])

@@ -79,19 +79,46 @@ def test_a_damaged_entry_is_ignored_and_rebuilt(cache, cfg, damage):
 def test_another_version_of_the_software_reads_nothing(cache, cfg, monkeypatch):
     Simulator(cfg, cached=True)
     before = buildcache.folder()
-    src = Path(softclose.__file__).with_name("version.py")
-    st = src.stat()
     buildcache.fingerprint.cache_clear()
     buildcache._folder.cache_clear()
     try:
-        os.utime(src, ns=(st.st_atime_ns, st.st_mtime_ns + 10**9))   # an edited source
-        after = buildcache.folder()
-        assert after != before and not list(after.glob("*.bin"))
+        with monkeypatch.context() as m:                 # edited sources
+            m.setattr(buildcache, "source_digest", lambda root: "0" * 32)
+            after = buildcache.folder()
+            assert after != before and not list(after.glob("*.bin"))
     finally:
-        os.utime(src, ns=(st.st_atime_ns, st.st_mtime_ns))
         buildcache.fingerprint.cache_clear()
         buildcache._folder.cache_clear()
     assert buildcache.folder() == before
+
+
+def test_the_sources_are_known_by_their_contents_not_their_times(cache, tmp_path):
+    """The same sources installed again (new times) keep the cache; an edit does not."""
+    import shutil
+    root = tmp_path / "pkg"
+    shutil.copytree(Path(softclose.__file__).parent, root,
+                    ignore=shutil.ignore_patterns("__pycache__", "*.so"))
+    first = buildcache.source_digest(root)
+    assert list(cache.glob("sources-*.txt"))            # remembered under the files' times
+    src = root / "version.py"
+    st = src.stat()
+    os.utime(src, ns=(st.st_atime_ns, st.st_mtime_ns + 10**9))     # reinstalled: new times
+    assert buildcache.source_digest(root) == first
+    src.write_text(src.read_text() + "# edited\n")
+    assert buildcache.source_digest(root) != first
+    src.write_text(src.read_text().removesuffix("# edited\n"))
+    assert buildcache.source_digest(root) == first
+
+
+def test_the_compiler_and_its_flags_are_part_of_a_librarys_key(cache, monkeypatch):
+    import shutil
+    if shutil.which("cc") is None:
+        pytest.skip("no C compiler")
+    a = buildcache.toolchain(buildcache.CFLAGS)
+    assert a is not None and a != buildcache.toolchain(buildcache.SCENARIO_CFLAGS)
+    monkeypatch.setenv("CC", "no-such-compiler-here")
+    assert buildcache.toolchain() is None
+    assert buildcache.compiled_nlp("k") is None
 
 
 def test_the_cache_can_be_turned_off(monkeypatch, cfg):
@@ -101,133 +128,70 @@ def test_the_cache_can_be_turned_off(monkeypatch, cfg):
     assert "_serialised" not in sim.model.__dict__
 
 
-def test_the_second_use_of_an_nlp_compiles_it_in_the_background(cache, cfg, compiles_started):
-    started = compiles_started
-    from softclose.optimiser.cache import get_nlp
-    _clear_memory()
-    get_nlp(cfg)                        # first use: remembered, nothing compiled
-    assert not started and list(cache.glob("*/seen-*"))
-    _clear_memory()
-    get_nlp(cfg)                        # second use (another process): compile it
-    assert len(started) == 1 and started[0][1:3] == ["-m", "softclose.optimiser.compile"]
-    lock = Path(started[0][3])
-    assert lock.exists()
-    spec = __import__("json").loads(lock.read_text())
-    assert from_dict(spec["config"]) == cfg and spec["nodes"] == cfg.optimise.nodes
-    _clear_memory()
-    get_nlp(cfg)                        # being compiled (the lock): not again
-    assert len(started) == 1
-    other = cfg.set("mass.lid", 0.6)    # nor another NLP while one compiles
-    get_nlp(other)
-    _clear_memory()
-    get_nlp(other)
-    assert len(started) == 1
-    old = time.time() - buildcache.STALE_LOCK - 10
-    os.utime(lock, (old, old))          # a compiler that died long ago
-    _clear_memory()
-    get_nlp(cfg)
-    assert len(started) == 2
-    _clear_memory()
-
-
-def test_compilations_asked_for_while_one_runs_wait_their_turn(cache, cfg, monkeypatch,
-                                                               compiles_started):
-    """While one NLP compiles, the second use of another queues it (at most MAX_PENDING);
-    the running compilation's end hands the lock to the oldest waiting one (exec, the lock
-    held), and to none once none waits."""
-    started = compiles_started
-    import json
-    for _ in range(2):                                # the first NLP: compiling
-        assert not buildcache.request_nlp("first", {"nodes": 1}) or len(started) == 1
-    lock = Path(started[0][3])
-    assert lock.exists() and len(started) == 1
-    for i in range(buildcache.MAX_PENDING + 2):       # more, while it runs: queued
-        for _ in range(2):
-            assert not buildcache.request_nlp(f"k{i}", {"nodes": i}, "softclose.robust.compile")
-        if i < buildcache.MAX_PENDING:                # (the order they were asked in)
-            os.utime(buildcache.folder() / f"pending-k{i}", (time.time() + i,) * 2)
-    waiting = sorted(p.name for p in buildcache.folder().glob("pending-*"))
-    assert waiting == [f"pending-k{i}" for i in range(buildcache.MAX_PENDING)]
-    assert len(started) == 1
-    execs = []
-
-    class Exec(Exception):
-        """exec does not return: this process became the next compilation"""
-
-    monkeypatch.chdir(cache)                          # (restored after the test)
-
-    def execv(exe, argv):
-        assert os.getcwd() == buildcache.package_root()   # the same package (below)
-        execs.append(argv)
-        raise Exec
-    monkeypatch.setattr(os, "execv", execv)
-
-    def end():
-        try:
-            buildcache.chain(lock)
-        except Exec:
-            pass
-    (buildcache.folder() / "nlp-k0.so").write_bytes(b"")   # k0 got compiled meanwhile
-    end()                                             # the first one ends: k1 is next
-    assert execs[-1][1:] == ["-m", "softclose.robust.compile", str(lock)]
-    assert json.loads(lock.read_text()) == {"key": "k1", "nodes": 1}
-    assert not (buildcache.folder() / "pending-k0").exists()
-    for _ in range(buildcache.MAX_PENDING - 2):
-        end()
-    assert json.loads(lock.read_text())["key"] == f"k{buildcache.MAX_PENDING - 1}"
-    end()                                             # none waits: the lock goes
-    assert not lock.exists() and not list(buildcache.folder().glob("pending-*"))
-    assert len(execs) == buildcache.MAX_PENDING - 1
-
-
-def test_a_background_compilation_imports_this_same_package(cache, tmp_path, monkeypatch):
-    """A command run in a clone with the package installed from it (the README's set-up)
-    must start its compilation where ``python -m`` finds the installed package, not the
-    clone's ``softclose/`` beside it: that one has another fingerprint, so its library
-    would go to a cache folder nobody reads, asked for again on every run."""
+def test_using_an_nlp_compiles_nothing_and_starts_no_process(cache, cfg, monkeypatch):
+    """An NLP used again and again (in other processes) is built symbolically each time;
+    nothing is compiled, nothing started: compiling is only done when asked for."""
     import subprocess
-    import sys
-    monkeypatch.setenv(buildcache.ENV_COMPILE, "1")
-    clone = tmp_path / "clone"
-    (clone / "softclose").mkdir(parents=True)
-    (clone / "softclose" / "__init__.py").write_text("# another copy of the package\n")
-    monkeypatch.chdir(clone)
     started = []
+    monkeypatch.setattr(subprocess, "Popen", lambda *a, **k: started.append(a))
+    from softclose.optimiser.cache import get_nlp
+    for _ in range(3):
+        _clear_memory()
+        assert get_nlp(cfg).library is None
+    assert not started
+    assert not [p.name for p in cache.glob("*/*") if not p.name.startswith(
+        ("model-", "table-", "nlpmeta-"))]
 
-    class Popen:
-        def __init__(self, cmd, **kw):
-            started.append((cmd, kw))
-    with monkeypatch.context() as m:
-        m.setattr(subprocess, "Popen", Popen)
-        for _ in range(2):
-            buildcache.request_nlp("k", {"nodes": 1})
-    (cmd, kw), = started
-    assert cmd[1:3] == ["-m", "softclose.optimiser.compile"]
-    probe = [sys.executable, "-c", "import softclose; print(softclose.__file__)"]
 
-    def imported_from(cwd):
-        out = subprocess.run(probe, cwd=cwd, env=kw["env"], capture_output=True, text=True,
-                             check=True).stdout.strip()
-        return Path(out).resolve()
-    assert imported_from(clone) == (clone / "softclose" / "__init__.py").resolve()  # the trap
-    assert imported_from(kw.get("cwd")) == Path(softclose.__file__).resolve()
+def test_prepare_compiles_in_the_foreground_saying_what(cache, cfg, monkeypatch, capfd):
+    """optimiser.cache.prepare compiles here and now (one line on stderr naming the NLP and
+    the seconds), nothing is left in the cache folder but the library and its numbers, and
+    the next use loads it. Compiling stubbed: the compiler's argument list is checked."""
+    import shutil
+    import subprocess
+    if shutil.which(os.environ.get("CC", "cc")) is None:
+        pytest.skip("no C compiler")
+    from softclose.optimiser.cache import get_nlp, nlp_key, prepare
+    runs = []
+    real = subprocess.run
+
+    def fake(cmd, **kw):
+        if "--version" in cmd:
+            return real(cmd, **kw)
+        runs.append(cmd)
+        Path(cmd[cmd.index("-o") + 1]).write_bytes(b"not a library")
+        return subprocess.CompletedProcess(cmd, 0, b"", b"")
+    monkeypatch.setattr(subprocess, "run", fake)
+    lib = prepare(cfg)
+    err = capfd.readouterr().err
+    assert lib is not None and lib.exists() and len(runs) == 1
+    assert runs[0][1:4] == list(buildcache.CFLAGS)
+    assert err.startswith("softclose: building the NLP of the optimiser (")
+    assert "(C, -O1) ..." in err and err.rstrip().endswith(" s")
+    left = {p.name.split("-")[0] for p in lib.parent.iterdir()}
+    assert {"nlp", "nlpmeta"} <= left <= {"model", "table", "nlp", "nlpmeta"}, left
+    assert prepare(cfg) == lib and len(runs) == 1         # compiled already
+    key = buildcache.key_of("nlp", nlp_key(cfg))
+    assert buildcache.compiled_nlp(key) == lib
+    _clear_memory()
+    assert get_nlp(cfg).library is None                   # a damaged library: dropped
+    assert buildcache.compiled_nlp(key) is None
 
 
 @pytest.mark.slow
 def test_the_compiled_nlp_gives_the_same_optimum(cache, cfg, monkeypatch):
     """The NLP compiled to C (a few seconds here) solves to the same optimum as CasADi's
     virtual machine, and a damaged library is dropped, never an error."""
-    monkeypatch.setenv(buildcache.ENV_COMPILE, "1")
     import shutil
     if shutil.which(os.environ.get("CC", "cc")) is None:
         pytest.skip("no C compiler")
-    from softclose.optimiser.cache import build_nlp, get_nlp, nlp_key
+    from softclose.optimiser.cache import build_nlp, get_nlp, nlp_key, prepare
     _clear_memory()
     vm = softclose.optimise(cfg)
     nlp = get_nlp(cfg)
     assert nlp.library is None
     key = buildcache.key_of("nlp", nlp_key(cfg))
-    assert buildcache.compile_nlp(build_nlp(cfg, nlp.N, nlp.M).solver, key) is not None
+    assert prepare(cfg) is not None
     _clear_memory()
     nlp = get_nlp(cfg)
     assert nlp.library is not None and nlp.build_time < 0.5
@@ -250,8 +214,7 @@ def test_the_compiled_nlp_gives_the_same_optimum(cache, cfg, monkeypatch):
 
     def command():
         r = subprocess.run([sys.executable, "-m", "softclose", "optimise", "--json"],
-                           capture_output=True, text=True,
-                           env={**os.environ, buildcache.ENV_COMPILE: "0"})
+                           capture_output=True, text=True)
         assert r.returncode == 0, r.stderr
         return json.loads(r.stdout)
     out = command()

@@ -229,7 +229,7 @@ def test_a_lost_cluster_is_a_failed_result_that_says_why(design_sweep):
 
 
 def test_result_pickles_and_stays_read_only(design_sweep):
-    """A result can be sent to another process (the command sends it to the maps' drawer)."""
+    """A result can be sent to another process (a Dask worker, a notebook's)."""
     import pickle
     res, _, _ = design_sweep
     back = pickle.loads(pickle.dumps(res))
@@ -363,72 +363,34 @@ def test_binned_summary_is_the_best_over_the_other_keys(design_sweep):
             assert row["peak_tip_speed"] == b.grid(g, "peak_tip_speed")[cell]
 
 
-def test_command_draws_the_maps_when_its_drawer_fails(tmp_path, monkeypatch):
-    """The command forks a drawer (matplotlib imported while the kernel runs) and sends it
-    the result; if it fails, the command draws every map itself."""
+def test_the_command_draws_the_maps_itself_and_starts_no_process(tmp_path, monkeypatch):
+    """The maps are drawn by the command's own process, after the sweep: nothing is forked
+    or started (nothing is left running when it ends)."""
     import os
+    import subprocess
 
     import softclose.figures.sweep as fs
+
+    def no(*a, **k):
+        raise AssertionError("a process was started")
+    monkeypatch.setattr(os, "fork", no)
+    monkeypatch.setattr(subprocess, "Popen", no)
     parent = os.getpid()
     real = fs.save_maps
     drawn_here = []
 
-    def failing_in_children(figs, out):
-        if os.getpid() != parent:
-            raise RuntimeError("a drawing process fails")
+    def save(figs, out, *rest):
+        assert os.getpid() == parent
         drawn_here.extend(figs)
-        return real(figs, out)
-    monkeypatch.setattr(fs, "save_maps", failing_in_children)
+        return real(figs, out, *rest)
+    monkeypatch.setattr(fs, "save_maps", save)
     argv = ["sweep", "--out", str(tmp_path), "--json"]
     for g in GRID:
         argv += ["--grid", g]
     assert main(argv) == 0
     pngs = sorted(p.name for p in tmp_path.glob("*.png"))
     assert len(pngs) == 3 and sorted(f"{n}.png" for n in drawn_here) == pngs
-
-
-def test_a_drawer_that_takes_too_long_is_ended(design_sweep, tmp_path, monkeypatch):
-    """The command waits for its drawer at most a timeout, then ends it (the command then
-    draws the maps itself); a drawer sent nothing leaves on its own, having drawn nothing."""
-    import os
-    import time
-
-    import softclose.cli.maps as maps
-    res, _, _ = design_sweep
-    d = maps.Drawer.start()
-    assert d is not None and d.finish() == []            # nothing sent (2 cores here)
-    monkeypatch.setattr(maps, "_draw_in_processes", lambda *a: time.sleep(60))
-    d = maps.Drawer.start()                              # (forked with the slow drawing)
-    d.draw(res, tmp_path)
-    pid, t = d.pid, time.monotonic()
-    assert d.finish(timeout=0.5) is None                 # ended after the timeout
-    assert time.monotonic() - t < 5 and d.pid is None
-    with pytest.raises(ChildProcessError):               # reaped: no zombie left
-        os.waitpid(pid, os.WNOHANG)
-    assert not list(tmp_path.glob("*.png"))
-
-
-def test_maps_drawn_here_when_a_drawing_process_fails(tmp_path, monkeypatch):
-    """The maps are drawn in forked processes; what a failed one did not draw is drawn by
-    the command itself."""
-    import os
-
-    import softclose.figures.sweep as fs
-    from softclose.cli.sweep import write_maps
-    parent = os.getpid()
-    real = fs.save_maps
-
-    def failing_in_children(figs, out):
-        if os.getpid() != parent:
-            raise RuntimeError("a drawing process fails")
-        return real(figs, out)
-    monkeypatch.setattr(fs, "save_maps", failing_in_children)
-    res = sweep(default_config(), {"design.spring_k": [0.0, 800, 1600],
-                                   "design.damper_c": [0.0, 500, 1000],
-                                   "design.spring_rest_length": [0.05, 0.07]})
-    files = write_maps(res, tmp_path)
-    assert sorted(f.name for f in files) == sorted(p.name for p in tmp_path.glob("*.png"))
-    assert len(files) == 3 and all(f.stat().st_size > 10_000 for f in files)
+    assert all(p.stat().st_size > 10_000 for p in tmp_path.glob("*.png"))
 
 
 # -- a swept lid mass runs in the kernel's lid-mass column, not a model per value ------------

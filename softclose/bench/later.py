@@ -185,8 +185,8 @@ def _co_design_rows(cfg: Config, rows: list, quick: bool = False, log=None) -> N
     """The co-design commands end to end in a fresh interpreter (``softclose optimise
     [--robust] --free ... --json``), after one run of each and with each spring kind's
     nominal NLP compiled (:func:`softclose.optimiser.cache.prepare`): what a user's second
-    and later runs take. Nominal: the median of 3 runs; robust: one run, after the runs
-    that compile its scenario NLPs in the background (:func:`_settle`)."""
+    and later runs take. Nominal: the median of 3 runs; robust: one run, after
+    ``softclose prepare`` compiled its scenario NLPs (:func:`_settle`)."""
     from .timing import cli_time
     log = log or (lambda *a: None)
     for lever, free in CO_DESIGN.items():
@@ -214,36 +214,13 @@ def _co_design_rows(cfg: Config, rows: list, quick: bool = False, log=None) -> N
             log(f"  {what}: {t:.2f} s")
 
 
-#: runs of a robust command before it is timed, at most (each may start one compile)
-SETTLE_RUNS = 6
-#: how long one background compile may take before the bench goes on (s)
-SETTLE_WAIT = 1200.0
-
-
 def _settle(argv: list[str], log) -> None:
-    """Run ``softclose ARGV`` until a run starts no background compile: the second use of
-    each of its NLPs compiles it (:func:`softclose.buildcache.request_nlp`, one at a time,
-    the others waiting their turn: the robust co-design's joint scenario NLP takes ~100 s),
-    and a user's later runs load them. Waits for the compiles to end."""
-    from .. import buildcache
+    """Compile the NLPs of ``softclose ARGV`` before it is timed: ``softclose prepare`` with
+    its options, in the foreground (the robust co-design's joint scenario NLP takes ~100 s),
+    so that the timed run loads them, as a user's runs after a prepare do."""
     from .timing import cli_time
-    where = buildcache.folder()
-    if where is None or not buildcache.compile_enabled():
-        return
-    lock = where / "compiling.lock"
-
-    def wait() -> bool:
-        t0, waited = time.perf_counter(), False
-        while lock.exists() and time.perf_counter() - t0 < SETTLE_WAIT:
-            waited = True
-            time.sleep(1.0)
-        return waited
-    wait()
-    for i in range(SETTLE_RUNS):
-        cli_time(argv, 1)
-        if not wait() and i > 0:
-            return
-        log(f"  (a background compile of `softclose {' '.join(argv[:2])} ...` ended)")
+    t = cli_time(["prepare", *[a for a in argv[1:] if a != "--json"]], 1)
+    log(f"  (`softclose prepare {' '.join(argv[1:3])} ...`: {t:.0f} s)")
 
 
 def _default() -> Config:

@@ -28,6 +28,7 @@ import casadi as ca
 import numpy as np
 
 from ..integrators import casadi_step, get_method
+from ..interrupt import ipopt_options, solving
 from .equation import fit_ode
 
 #: Ipopt options of a fit
@@ -135,7 +136,9 @@ class FitNLP:
                            [lam_f * ca.triu(ca.mtimes(J.T, J))],
                            ["x", "p", "lam_f", "lam_g"], ["hess_gamma_x_x"])
         nlp = {"x": self.w, "p": self.P, "f": 0.5 * ca.sumsqr(self.r), "g": self.g}
-        self.solver = ca.nlpsol("fit", "ipopt", nlp, {**IPOPT, "hess_lag": hess})
+        self.solver = ca.nlpsol("fit", "ipopt", nlp, {**IPOPT, "hess_lag": hess,
+                                                      **ipopt_options(self.nw, self.ng,
+                                                                      self.P.numel())})
         self.jac = ca.Function("fit_jac", [self.w, self.P],
                                [self.r, J, ca.jacobian(self.g, self.w)])
         #: the largest change of a fitted sample when the sub-steps are halved (in units of
@@ -145,7 +148,8 @@ class FitNLP:
         self.n_move, self.n_release = n_move, n_release
 
     def solve(self, w0, p, lbw, ubw):
-        sol = self.solver(x0=w0, p=p, lbx=lbw, ubx=ubw, lbg=0, ubg=0)
+        with solving():          # Ctrl-C: Ipopt stops, KeyboardInterrupt raised after it
+            sol = self.solver(x0=w0, p=p, lbx=lbw, ubx=ubw, lbg=0, ubg=0)
         status = self.solver.stats()["return_status"]
         return np.asarray(sol["x"]).ravel(), float(sol["f"]), status, \
             int(self.solver.stats().get("iter_count", 0))

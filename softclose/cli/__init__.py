@@ -20,12 +20,13 @@ from ..errors import ConfigError, SoftcloseError
 from .common import Outcome
 
 #: command modules, in the order ``--help`` lists them
-COMMAND_MODULES = ("state", "simulate", "optimise", "sweep", "bench", "robust", "select", "fit",
-                   "docs")
+COMMAND_MODULES = ("state", "simulate", "optimise", "prepare", "sweep", "bench", "robust",
+                   "select", "fit", "docs")
 #: the module of each command (a command line names one: only its module is imported and
 #: only its parser built -- the others' cost ~10 ms of start-up)
 COMMANDS = {"state": "state", "simulate": "simulate", "optimise": "optimise",
-            "optimize": "optimise", "pareto": "optimise", "sweep": "sweep", "bench": "bench",
+            "optimize": "optimise", "pareto": "optimise", "prepare": "prepare", "sweep": "sweep",
+            "bench": "bench",
             "yield": "robust", "sensitivity": "robust", "select": "select", "fit": "fit",
             "docs": "docs"}
 
@@ -115,12 +116,7 @@ def _interrupted() -> int:
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
-    from .maps import cancel_early, start_early
-    start_early(argv)          # a sweep's maps: their process starts importing matplotlib
-    try:
-        return _main(argv)
-    finally:
-        cancel_early()
+    return _main(argv)
 
 
 def free_overrides(args) -> list[str]:

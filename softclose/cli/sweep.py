@@ -28,8 +28,8 @@ import threading
 import time
 from pathlib import Path
 
-from .common import Outcome, add_common, add_figures, figure_path, interactive, prepare_out, wrote
-from .maps import take_drawer, write_maps
+from .common import Outcome, add_common, add_figures, interactive, prepare_out, wrote
+from .maps import write_maps
 
 
 def register(sub) -> None:
@@ -178,8 +178,7 @@ def run(cfg, args) -> Outcome:
 def _plain_ctrl_c():
     """Ctrl-C as Python's plain KeyboardInterrupt while the sweep runs: the runner catches
     it between chunks, keeps what is finished and the command reports it (exit 130). (The
-    command line's own handler, made for solvers that swallow the interrupt, would keep
-    re-sending it; the sweep calls no such solver.)"""
+    command line's own handler notes it for the solvers; the sweep calls none.)"""
     from ..interrupt import sigint_handler
     return sigint_handler(signal.default_int_handler)
 
@@ -207,71 +206,60 @@ def _sweep_run(cfg, args, space, fmt, chunk, out: Path, m: dict, dask,
             done = ()
     else:
         done = ()
-    # the maps' process imports matplotlib on the core the start-up leaves idle (see
-    # softclose.cli.maps); the table's library is imported while the kernel runs (its
-    # threads leave the interpreter free)
-    drawer = take_drawer()
+    # the table's library and matplotlib are imported while the kernel runs (its threads
+    # leave the interpreter free); the maps are drawn here once the table is written
+    prefetch = threading.Thread(target=_import_outputs, args=(parquet, True),
+                                name="softclose-imports", daemon=True)
+    prefetch.start()
+    ctx = dask.mapper(args.dask, args.threads) if dask is not None else \
+        contextlib.nullcontext(None)
     try:
-        prefetch = threading.Thread(target=_import_outputs, args=(parquet, drawer is None),
-                                    name="softclose-imports", daemon=True)
-        prefetch.start()
-        ctx = dask.mapper(args.dask, args.threads) if dask is not None else \
-            contextlib.nullcontext(None)
-        try:
-            with ctx as mapper:              # connected: only now is the folder written
-                if replace:
-                    store.clear(out)         # a finished earlier sweep is replaced
-                store.write_manifest(out, m, complete=False)
-                sink = store.ParquetSink(out, keys) if parquet else None
-                res = run_sweep(cfg, space, progress=interactive(args), threads=args.threads,
-                                chunk=chunk, keep=not parquet, sink=sink, done=done,
-                                mapper=mapper,
-                                dataset=str(out / store.DATASET) if parquet else None)
-        finally:
-            prefetch.join()                  # before any fork: no import half done
-        stages = dict(res.stages)
-        files: list[Path] = []
-        interrupted = res.interrupted
-        maps = not interrupted and res.computed > 0
-        if drawer is not None and maps:
-            drawer.draw(res, out)            # it draws while the table is written
-        try:
-            if parquet:
-                files.append(out / store.DATASET)
-            else:
-                tw = time.perf_counter()
-                # the finished chunks are written whatever happens (a second Ctrl-C waits)
-                with _no_interrupt(reraise=not interrupted):
-                    files.append(store.write_csv(res.columns, keys, out / store.CSV))
-                stages["csv"] = time.perf_counter() - tw
-            if not interrupted:
-                tm = time.perf_counter()
-                names = drawer.finish() if drawer is not None and maps else None
-                if names is not None:
-                    files += [figure_path(out / f"{n}.png") for n in names]
-                elif maps:                   # no drawer, or it failed: draw them here
-                    files += write_maps(res, out)
-                store.write_manifest(out, m, complete=True)
-                stages["maps"] = time.perf_counter() - tm
-        except KeyboardInterrupt:            # the table is whole; resuming draws the maps
-            interrupted = True
-        resume = f"softclose sweep --resume {shlex.quote(str(out))}" if interrupted else None
-        stages["total"] = time.perf_counter() - t0
-        files.append(out / store.MANIFEST)
-        payload = res.to_json()
-        payload.update(stages=stages, format=fmt, out=str(out), resume=resume,
-                       files=[str(f) for f in files])
-        payload["interrupted"] = interrupted
-        text = _text(res, payload, files, resume)
-        lost = getattr(mapper, "lost", None)     # the Dask cluster stopped working mid-sweep
-        if lost is not None:
-            error = f"{lost}; the finished chunks are kept, resume with: {resume}"
-            payload["error"] = error
-            return Outcome(payload, text, lost.exit_code, tuple(files), error=error)
-        return Outcome(payload, text, 130 if interrupted else 0, tuple(files))
+        with ctx as mapper:              # connected: only now is the folder written
+            if replace:
+                store.clear(out)         # a finished earlier sweep is replaced
+            store.write_manifest(out, m, complete=False)
+            sink = store.ParquetSink(out, keys) if parquet else None
+            res = run_sweep(cfg, space, progress=interactive(args), threads=args.threads,
+                            chunk=chunk, keep=not parquet, sink=sink, done=done,
+                            mapper=mapper,
+                            dataset=str(out / store.DATASET) if parquet else None)
     finally:
-        if drawer is not None:
-            drawer.cancel()
+        prefetch.join()                  # no import half done
+    stages = dict(res.stages)
+    files: list[Path] = []
+    interrupted = res.interrupted
+    maps = not interrupted and res.computed > 0
+    try:
+        if parquet:
+            files.append(out / store.DATASET)
+        else:
+            tw = time.perf_counter()
+            # the finished chunks are written whatever happens (a second Ctrl-C waits)
+            with _no_interrupt(reraise=not interrupted):
+                files.append(store.write_csv(res.columns, keys, out / store.CSV))
+            stages["csv"] = time.perf_counter() - tw
+        if not interrupted:
+            tm = time.perf_counter()
+            if maps:
+                files += write_maps(res, out)
+            store.write_manifest(out, m, complete=True)
+            stages["maps"] = time.perf_counter() - tm
+    except KeyboardInterrupt:            # the table is whole; resuming draws the maps
+        interrupted = True
+    resume = f"softclose sweep --resume {shlex.quote(str(out))}" if interrupted else None
+    stages["total"] = time.perf_counter() - t0
+    files.append(out / store.MANIFEST)
+    payload = res.to_json()
+    payload.update(stages=stages, format=fmt, out=str(out), resume=resume,
+                   files=[str(f) for f in files])
+    payload["interrupted"] = interrupted
+    text = _text(res, payload, files, resume)
+    lost = getattr(mapper, "lost", None)     # the Dask cluster stopped working mid-sweep
+    if lost is not None:
+        error = f"{lost}; the finished chunks are kept, resume with: {resume}"
+        payload["error"] = error
+        return Outcome(payload, text, lost.exit_code, tuple(files), error=error)
+    return Outcome(payload, text, 130 if interrupted else 0, tuple(files))
 
 
 def _import_outputs(parquet: bool, plotting: bool) -> None:

@@ -81,20 +81,18 @@ def build_structure(key: tuple, library=None, meta=None) -> ShootingStructure:
                              keep_out, hess, lin, it, library=library, meta=meta)
 
 
-def get_structure(key: tuple) -> ShootingStructure:
+def get_structure(key: tuple, what: str = "") -> ShootingStructure:
     """The ShootingStructure of ``key`` (built once, then kept): its compiled library when
-    one was built before (:mod:`softclose.buildcache`, ``softclose prepare``), else built
-    symbolically for CasADi's virtual machine."""
+    one is in the cache (:mod:`softclose.buildcache`, compiled by ``softclose prepare``),
+    else built symbolically for CasADi's virtual machine -- and, inside
+    :func:`softclose.buildcache.compiling`, compiled now (``what`` names it)."""
     from .. import buildcache
     if key not in _STRUCTURES:
         disk = buildcache.key_of("nlp", key)
 
         def make(library=None, meta=None):
             return build_structure(key, library=library, meta=meta)
-
-        def spec():
-            return {"key": repr(key)}
-        st = buildcache.load_or_build(disk, make, make, spec)
+        st = buildcache.load_or_build(disk, make, make, what)
         st.key = key
         _STRUCTURES[key] = st
     return _STRUCTURES[key]
@@ -112,6 +110,13 @@ def _bind(cfg, structure) -> ShootingNLP:
                        placement=placement_layout(cfg))
 
 
+def describe_nlp(cfg, N: int, M: int, M2: int | None) -> str:
+    """The NLP in words, for the line a compilation writes on stderr."""
+    kind = cfg.design.spring_kind
+    return (f"of the optimiser ({kind} spring, {N} x {M} RK4 steps"
+            + (f", phase 2 {N} x {M2}" if M2 else "") + ")")
+
+
 def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
             substeps2: int | None = None) -> ShootingNLP:
     """The ShootingNLP of cfg's lid and discretisation: the structure's NLP (built once per
@@ -120,25 +125,26 @@ def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
     lid = (key, model_key(cfg), free_layout(cfg), placement_layout(cfg),
            tuple(slot_values(cfg)))
     if lid not in _NLPS:
-        nlp = _bind(cfg, get_structure(key))
+        nlp = _bind(cfg, get_structure(key, describe_nlp(cfg, key[-5], key[-4], key[-6])))
         nlp.key = lid
         _NLPS[lid] = nlp
     return _NLPS[lid]
 
 
 def prepare(cfg, nodes: int | None = None, substeps: int | None = None):
-    """Compile cfg's NLP structure now (seconds), unless it is compiled or compiling is off
-    (no cache, no C compiler, ``SOFTCLOSE_COMPILE=0``): the path of its library, or None."""
+    """Compile cfg's NLP structure now, in the foreground (seconds; a line on stderr says
+    what is built), unless it is compiled: the path of its library, or None (no cache, no C
+    compiler). ``softclose prepare`` compiles every NLP a command would use."""
     from .. import buildcache
     key = nlp_key(cfg, nodes, substeps)
     disk = buildcache.key_of("nlp", key)
     lib = buildcache.compiled_nlp(disk)
-    if lib is not None or not buildcache.compile_enabled():
+    if lib is not None or buildcache.folder() is None:
         return lib
     st = build_structure(key)
-    if not buildcache.has("nlpmeta", disk):
-        buildcache.store("nlpmeta", disk, st.meta())
-    return buildcache.compile_nlp(st.solver, disk)
+    buildcache.store("nlpmeta", disk, st.meta())
+    return buildcache.compile_nlp(st.solver, disk,
+                                  what=describe_nlp(cfg, key[-5], key[-4], key[-6]))
 
 
 def stroke_simulator(cfg, t_end: float | None = None) -> Simulator:

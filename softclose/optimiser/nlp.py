@@ -68,6 +68,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import ConfigError
+from ..interrupt import ipopt_options, solving
 from ..problem import DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, SCALES, params_of
 from .. import elements
 from .interval import (END_C, ChebyshevFit, bound_interval, combine_function, free_of,
@@ -314,15 +315,16 @@ class ShootingStructure:
         # the largest sub-step speed or Hermite maximum: the NLP's own peak tip speed
         self._peak = ca.Function("peak", [w, P], [ca.mmax(sp)])
         nlp = {"x": w, "f": J / Jref, "g": ca.vertcat(*g_all.values()), "p": P}
+        stop = ipopt_options(self.nw, sum(self.g_sizes), int(P.numel()))   # Ctrl-C
         self.solver = ca.nlpsol("softclose_ms", "ipopt", nlp,
-                                {**self.ipopt_options, **COLD_OPTIONS})
+                                {**self.ipopt_options, **COLD_OPTIONS, **stop})
         # the warm solver shares the oracle (and its cached derivatives): ~0.05 s more
         oracle = self.solver.oracle()
         wx, wpar = ca.MX.sym("x", self.nw), ca.MX.sym("p", self.n_params)
         fo, go = oracle(wx, wpar)
         self.warm_solver = ca.nlpsol("softclose_ms_warm", "ipopt",
                                      {"x": wx, "p": wpar, "f": fo, "g": go},
-                                     {**self.ipopt_options, **WARM_OPTIONS})
+                                     {**self.ipopt_options, **WARM_OPTIONS, **stop})
         self.build_time = time.perf_counter() - t0
 
     def _load(self, library, meta: dict) -> None:
@@ -333,10 +335,11 @@ class ShootingStructure:
         from ..buildcache import text
         self._peak = ca.Function.deserialize(text(meta["peak"]))
         lib = str(library)
+        stop = ipopt_options(self.nw, sum(self.g_sizes), self.n_params)
         self.solver = ca.nlpsol("softclose_ms", "ipopt", lib,
-                                {**self.ipopt_options, **COLD_OPTIONS})
+                                {**self.ipopt_options, **COLD_OPTIONS, **stop})
         self.warm_solver = ca.nlpsol("softclose_ms_warm", "ipopt", lib,
-                                     {**self.ipopt_options, **WARM_OPTIONS})
+                                     {**self.ipopt_options, **WARM_OPTIONS, **stop})
         if (self.solver.size1_in(0), self.solver.size1_in(1),
                 self.solver.size1_in(5)) != (self.nw, self.n_params, sum(self.g_sizes)):
             raise ValueError("the compiled NLP has other dimensions")
@@ -582,7 +585,8 @@ class ShootingNLP:
         bounds = (lbx, ubx, lbg, ubg)
         t0 = time.perf_counter()
         try:
-            sol = solver(**args)
+            with solving():      # Ctrl-C: Ipopt stops, KeyboardInterrupt raised after it
+                sol = solver(**args)
             st = solver.stats()
             status, ok, its = st["return_status"], bool(st["success"]), int(st["iter_count"])
         except RuntimeError as exc:  # an evaluation error before Ipopt could report

@@ -8,7 +8,6 @@ corrects the best answer (:mod:`.polish`), re-simulates it with the adaptive ref
 
 from __future__ import annotations
 
-import functools
 import time
 from dataclasses import dataclass, replace
 
@@ -23,7 +22,6 @@ from ..parts import spring_part
 from .diagnose import diagnose
 from .discretise import Discretisation, discretisation
 from .interval import END_C
-from . import sidebyside
 from .kinds import kind_config
 from .nlp import J_INDEX, Run, ShootingNLP, check_options
 from .polish import keep_clear, nlp_objective, refine, tighten
@@ -270,64 +268,18 @@ def optimise(cfg, *, starts: int | None = None, verify: bool = True,
             continue
         rows.append({"kind": kind})
         todo.append((kind, c))
-    # every kind is solved (multistart): the kinds after the first side by side with it in
-    # forked processes where that is safe (.sidebyside: the same numbers); the polish and the
-    # reference's verification, which cost as much, go to the best kind first (then the
-    # next, should it fail)
-    solve = functools.partial(optimise_kind, starts=starts, verify=verify, nodes=nodes,
-                              substeps=substeps, defer=True)
-    children, first = {}, {}
-    try:
-        if sidebyside.available(len(todo)):
-            kind_nlp(todo[0][1], nodes, substeps)              # loaded once, inherited
-            plan, share = None, ()
-            if len(todo) == 2:      # one other kind: its process takes some of this one's
-                plan = plan_kind(todo[0][1], starts, nodes, substeps)   # starts too (first)
-                share = sidebyside.shared_starts(plan.n_starts)
-                first = {"plan": plan}
-            children = {kind: sidebyside.KindProcess(
-                functools.partial(solve, c, progress=False),
-                before=functools.partial(solve_starts, plan, share) if share else None)
-                for kind, c in todo[1:]}
-            if share:
-                first["elsewhere"] = (share, children[todo[1][0]].before)
-        for kind, c in todo:
-            r, later = _kind_answer(children.get(kind), functools.partial(solve, **(
-                first if kind == todo[0][0] else {})), c, progress)
-            if children and kind == todo[0][0] and later is not None and r.success:
-                later = sidebyside.ahead(later)    # polished and verified while the others finish
-            row = next(row for row in rows if row["kind"] == kind)
-            row.update({"success": r.success, "objective": r.objective,
-                        "message": r.message, "verified": False})
-            results.append((kind, r))
-            pending.append(later)
-        return _best_kind(cfg, rows, results, pending, verify, t_start)
-    except BaseException:       # Ctrl-C, an error: the kinds' processes end at once
-        for child in children.values():
-            child.close(wait=0.0)
-        raise
-    finally:
-        for child in children.values():
-            child.close()
-
-
-def _kind_answer(child, solve, c, progress):
-    """(a kind's unpolished result, how to finish it): from its side-by-side process, or
-    solved here (also when that process failed: its kind is solved here after all)."""
-    if child is not None:
-        try:
-            r = child.raw()
-
-            def later():
-                try:
-                    return child.finish()
-                except (EOFError, OSError):
-                    r2, again = solve(c, progress=progress)
-                    return again() if again is not None else r2
-            return r, later
-        except (EOFError, OSError):
-            pass
-    return solve(c, progress=progress)
+    # every kind is solved (multistart), one after the other; the polish and the reference's
+    # verification, which cost as much, go to the best kind first (then the next, should it
+    # fail)
+    for kind, c in todo:
+        r, later = optimise_kind(c, starts=starts, verify=verify, nodes=nodes,
+                                 substeps=substeps, defer=True, progress=progress)
+        row = next(row for row in rows if row["kind"] == kind)
+        row.update({"success": r.success, "objective": r.objective,
+                    "message": r.message, "verified": False})
+        results.append((kind, r))
+        pending.append(later)
+    return _best_kind(cfg, rows, results, pending, verify, t_start)
 
 
 def _best_kind(cfg, rows, results, pending, verify, t_start) -> OptimiseResult:
@@ -401,16 +353,6 @@ class Plan:
         return len(self.designs)
 
 
-def kind_nlp(cfg, nodes: int | None = None, substeps: int | None = None) -> ShootingNLP:
-    """The NLP a kind's starts use (:func:`plan_kind`: its free variables clipped into their
-    bounds, its discretisation), built or loaded here: processes forked after this inherit
-    it. (The NLP of the unclipped config may be another one -- a free point's value is part
-    of its key -- and would be built for nothing, and then in every process.)"""
-    cfg = free_in_bounds(cfg)
-    disc = discretisation(cfg, nodes, substeps)
-    return get_nlp(cfg, disc.nodes, disc.substeps)
-
-
 def plan_kind(cfg, starts: int | None = None, nodes: int | None = None,
               substeps: int | None = None, bar: Progress | None = None) -> Plan:
     """Everything a kind's starts need: the NLP (built or loaded), the sweep of the design
@@ -430,8 +372,7 @@ def plan_kind(cfg, starts: int | None = None, nodes: int | None = None,
 
 def solve_start(plan: Plan, i: int) -> tuple[Run, dict]:
     """Start ``i`` of ``plan``: its initial guess from the simulated stroke, one Ipopt solve,
-    and its row of the report. The same numbers in whichever process runs it. A Ctrl-C noted
-    before it (one that Ipopt swallowed in the start before) is raised here, first."""
+    and its row of the report. A Ctrl-C noted before it is raised here, first."""
     from ..interrupt import check
     check()
     nlp, cfg, d0 = plan.nlp, plan.cfg, plan.designs[i]
@@ -443,16 +384,11 @@ def solve_start(plan: Plan, i: int) -> tuple[Run, dict]:
     return r, start_row(nlp, cfg, d0, r, J0)
 
 
-def solve_starts(plan: Plan, which) -> dict:
-    """The starts ``which`` of ``plan``: {index: (run, row)} (for another process)."""
-    return {i: solve_start(plan, i) for i in which}
-
-
 @guarded
 def optimise_kind(cfg, *, starts: int | None = None, verify: bool = True,
                   progress: bool = False, nodes: int | None = None,
                   substeps: int | None = None, defer: bool = False,
-                  plan: Plan | None = None, elsewhere=None):
+                  plan: Plan | None = None):
     """Solve cfg's soft-close problem, with cfg's spring kind, from several starts; the best
     answer, verified.
 
@@ -464,9 +400,7 @@ def optimise_kind(cfg, *, starts: int | None = None, verify: bool = True,
     reference's (objective to 1e-3 relative). Infeasible problems and solver failures are
     reported in the result, never raised. ``progress=True`` draws the starts on a terminal.
 
-    ``plan``: the kind's :func:`plan_kind`, when made already; ``elsewhere``: (indices,
-    collect) -- starts another process solves, and how to get them ({index: (run, row)};
-    any it does not deliver are solved here).
+    ``plan``: the kind's :func:`plan_kind`, when made already.
 
     The design for the ``[tolerance]`` box is :func:`softclose.robust.optimise_robust`
     (which builds on this one; ``softclose.optimise(cfg, robust=True)`` calls it).
@@ -478,27 +412,14 @@ def optimise_kind(cfg, *, starts: int | None = None, verify: bool = True,
     plan = plan or plan_kind(cfg, starts, nodes, substeps, bar)
     cfg, disc, nlp = plan.cfg, plan.disc, plan.nlp
     notes = list(disc.notes)
-    away, collect = elsewhere if elsewhere else ((), None)
     solved: dict = {}
     with bar:
         for i in range(plan.n_starts):
-            if i in away:
-                continue
             bar.update(len(solved), f"start {i + 1} of {plan.n_starts}: solving "
                                     f"({disc.nodes} x {disc.substeps} RK4 steps)", force=True)
             solved[i] = r, _ = solve_start(plan, i)
             bar.update(len(solved), f"start {i + 1}: {r.status}, {r.iterations} iterations",
                        force=True)
-        if away:
-            try:
-                solved.update({i: v for i, v in collect().items() if i in away})
-            except (EOFError, OSError):     # the other process failed: solved here instead
-                pass
-            for i in away:
-                if i not in solved:
-                    solved[i] = solve_start(plan, i)
-            bar.update(len(solved), f"starts {min(away) + 1}..{max(away) + 1}: solved "
-                                    "side by side", force=True)
         runs = [solved[i][0] for i in range(plan.n_starts)]
         rows = [solved[i][1] for i in range(plan.n_starts)]
         base = dict(starts=tuple(rows), build_time=plan.build, sweep=plan.info)

@@ -22,6 +22,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import NumericalError
+from ..interrupt import solving
 from ..problem import (CONSTRAINT_TOL, ENGAGE_KEYS, METRIC_KEYS, UNITS,
                        VERIFY_RTOL, PARAM_KEYS, agreement_tolerance, objective, params_of)
 from ..stroke import StrokeResult, StrokeStatus
@@ -57,7 +58,8 @@ class Checker:
     def theta_dot_max(self, p, T) -> float:
         """max theta' over (0, T] of the exact equation (CVODES on a fine grid)."""
         st = self.model.cfg.stroke
-        out = self._grid_flow(x0=[st.theta0, 0.0], p=np.r_[p, T])["xf"]
+        with solving():          # Ctrl-C: noted, raised when CVODES returns
+            out = self._grid_flow(x0=[st.theta0, 0.0], p=np.r_[p, T])["xf"]
         return float(np.max(np.asarray(out)[1]))
 
     def spring_extremes(self, a: float, b: float) -> tuple[float, float]:

@@ -114,45 +114,36 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     rows, results = [], []
     configs = [(kind, *kind_config(cfg, kind, robust=True))
                for kind in cfg.optimise.spring_kinds]
-    ahead = {}                  # stage 1's nominal co-designs of the later kinds, side by side
-    if placed:
-        from .placement import nominals_ahead
-        valid = [(kind, c) for kind, c, why in configs if why is None]
-        ahead = {valid[i][0]: p for i, p in nominals_ahead([c for _, c in valid]).items()}
-    try:
-        for kind, c, why in configs:
-            if why is None and placed:      # stage 1: where (robust/placement.py)
-                from .placement import choose_points, fixed_points
-                stage_notes: list = []
-                bound = min((x[1].objective for x in results if x[1].success
-                             and x[1].objective is not None), default=None)
-                points, info = choose_points(c, stage_notes, bound, ahead.get(kind))
-                if points is None:
-                    rows.append({"kind": kind, "success": False, "objective": None,
-                                 "message": (
-                                     f"not solved: its nominal co-design optimum J = "
-                                     f"{info['nominal_objective']:.6g} already exceeds the "
-                                     f"worst case {bound:.6g} of a kind solved before (the "
-                                     "nominal lid is a scenario)")})
-                    continue
-                c, why = kind_config(fixed_points(cfg, points), kind, robust=True)
-            if why is not None:
+    for kind, c, why in configs:
+        if why is None and placed:      # stage 1: where (robust/placement.py)
+            from .placement import choose_points, fixed_points
+            stage_notes: list = []
+            bound = min((x[1].objective for x in results if x[1].success
+                         and x[1].objective is not None), default=None)
+            points, info = choose_points(c, stage_notes, bound)
+            if points is None:
                 rows.append({"kind": kind, "success": False, "objective": None,
-                             "message": why})
+                             "message": (
+                                 f"not solved: its nominal co-design optimum J = "
+                                 f"{info['nominal_objective']:.6g} already exceeds the "
+                                 f"worst case {bound:.6g} of a kind solved before (the "
+                                 "nominal lid is a scenario)")})
                 continue
-            r = optimise_robust_kind(c, progress=progress, samples=samples, seed=seed,
-                                     verify=verify)
-            if placed:              # stage 2 ran at the points (end damper): report them
-                r = replace(r, design={**(r.design or {}), **{k.split(".", 1)[1]: v
-                                                              for k, v in points.items()}},
-                            notes=tuple(stage_notes) + r.notes)
-                r = _keep_out_check(c, r)
-            rows.append({"kind": kind, "success": r.success, "objective": r.objective,
-                         "message": r.message})
-            results.append((kind, r, c))
-    finally:
-        for process in ahead.values():
-            process.close(wait=0.0)
+            c, why = kind_config(fixed_points(cfg, points), kind, robust=True)
+        if why is not None:
+            rows.append({"kind": kind, "success": False, "objective": None,
+                         "message": why})
+            continue
+        r = optimise_robust_kind(c, progress=progress, samples=samples, seed=seed,
+                                 verify=verify)
+        if placed:              # stage 2 ran at the points (end damper): report them
+            r = replace(r, design={**(r.design or {}), **{k.split(".", 1)[1]: v
+                                                          for k, v in points.items()}},
+                        notes=tuple(stage_notes) + r.notes)
+            r = _keep_out_check(c, r)
+        rows.append({"kind": kind, "success": r.success, "objective": r.objective,
+                     "message": r.message})
+        results.append((kind, r, c))
     pool = [x for x in results if x[1].success] or [x for x in results if x[1].design] \
         or results
     if not pool:

@@ -48,6 +48,7 @@ import casadi as ca
 import numpy as np
 
 from ..config import Config
+from ..interrupt import ipopt_options, solving
 from ..problem import DESIGN_KEYS, PARAM_KEYS, SCALES, params_of
 
 #: the parameters of p that are not design variables: NLP parameters
@@ -351,14 +352,15 @@ class ScenarioStructure:
         self.peak_fn = ca.Function("peaks", [w, P], [pv])
         self.J_fn = ca.Function("J", [w, P], [wi * thd ** 2 + wp * pv ** 2])
         nlp = {"x": w, "f": f_obj, "g": ca.vertcat(*g), "p": P}
+        stop = ipopt_options(self.nw, int(nlp["g"].numel()), int(P.numel()))   # Ctrl-C
         self.solver = ca.nlpsol("softclose_robust", "ipopt", nlp,
-                                {**self.options, "ipopt.mu_strategy": "adaptive"})
+                                {**self.options, "ipopt.mu_strategy": "adaptive", **stop})
         oracle = self.solver.oracle()
         wx, wp_ = ca.MX.sym("x", self.nw), ca.MX.sym("p", P.numel())
         fo, go = oracle(wx, wp_)
         self.warm_solver = ca.nlpsol("softclose_robust_warm", "ipopt",
                                      {"x": wx, "p": wp_, "f": fo, "g": go},
-                                     {**self.options, **WARM_OPTIONS})
+                                     {**self.options, **WARM_OPTIONS, **stop})
         self.build_time = time.perf_counter() - t0
 
     def _load(self, library, meta: dict) -> None:
@@ -370,10 +372,11 @@ class ScenarioStructure:
         self.peak_fn = ca.Function.deserialize(text(meta["peak"]))
         self.J_fn = ca.Function.deserialize(text(meta["J"]))
         lib = str(library)
+        stop = ipopt_options(self.nw, sum(map(sum, self.g_sizes)), self.n_params)
         self.solver = ca.nlpsol("softclose_robust", "ipopt", lib,
-                                {**self.options, "ipopt.mu_strategy": "adaptive"})
+                                {**self.options, "ipopt.mu_strategy": "adaptive", **stop})
         self.warm_solver = ca.nlpsol("softclose_robust_warm", "ipopt", lib,
-                                     {**self.options, **WARM_OPTIONS})
+                                     {**self.options, **WARM_OPTIONS, **stop})
         if (len(self.g_sizes), self.solver.size1_in(0), self.solver.size1_in(1),
                 self.solver.size1_in(5)) != (self.S, self.nw, self.n_params,
                                              sum(map(sum, self.g_sizes))):
@@ -596,7 +599,8 @@ class ScenarioNLP:
             args.update(lam_x0=lam_x0, lam_g0=lam_g0)
         t0 = time.perf_counter()
         try:
-            sol = solver(**args)
+            with solving():      # Ctrl-C: Ipopt stops, KeyboardInterrupt raised after it
+                sol = solver(**args)
             st = solver.stats()
             status, ok, its = st["return_status"], bool(st["success"]), int(st["iter_count"])
         except RuntimeError as exc:
@@ -629,8 +633,9 @@ def get_scenario_structure(key: tuple) -> ScenarioStructure:
                                      degree, nodes, substeps, M2, free, place, objective,
                                      opening, keep_out, hessian, linear_solver, max_iter,
                                      tol, library=library, meta=meta)
-        st = buildcache.load_or_build(disk, make, make, lambda: {"key": repr(key)},
-                                      "softclose.robust.compile")
+        what = (f"of the robust optimiser ({S} scenarios, {nodes} x {substeps} RK4 steps, "
+                f"{objective} case)")
+        st = buildcache.load_or_build(disk, make, make, what, buildcache.SCENARIO_CFLAGS)
         st.key = disk
         _STRUCTURES[key] = st
     return _STRUCTURES[key]
@@ -663,3 +668,20 @@ def get_scenario_nlp(cfg: Config, model_cfgs: list[Config], nodes: int, substeps
     nlp.key = nlp.structure.key
     _NLPS[key] = nlp
     return nlp, False
+
+
+def prepare(cfg: Config, model_cfgs: list[Config], nodes: int, substeps: int,
+            robust_objective: str, substeps2: int | None = None):
+    """Compile this scenario NLP's structure now, in the foreground (a line on stderr says
+    what is built), unless it is compiled: the path of its library, or None (no cache, no C
+    compiler). ``softclose prepare --robust`` compiles every one a robust design uses."""
+    from .. import buildcache
+    with buildcache.compiling():
+        nlp, cached = get_scenario_nlp(cfg, model_cfgs, nodes, substeps, robust_objective,
+                                       substeps2)
+    if nlp.library is None:      # built in this process before: compile it now
+        forget()
+        with buildcache.compiling():
+            nlp, _ = get_scenario_nlp(cfg, model_cfgs, nodes, substeps, robust_objective,
+                                      substeps2)
+    return nlp.library

@@ -13,10 +13,9 @@ with it). Two stages:
    variables (:class:`softclose.robust.nlp.ScenarioNLP`: every scenario's spring length and
    holding moment at the points, each scenario's spring kind valid over the stroke with its
    own free length; every scenario two-phase at the shared angle, with its own c_e) chooses
-   them and the design for the worst case over the scenarios. The nominal co-designs of
-   the spring kinds after the first are started at once, each in a forked process beside
-   the first kind's (:func:`nominals_ahead`; the same answers): a later kind whose nominal
-   optimum already exceeds an earlier kind's worst case stops there (:func:`choose_points`).
+   them and the design for the worst case over the scenarios. The spring kinds are solved
+   one after the other: a later kind whose nominal optimum already exceeds an earlier
+   kind's worst case stops there (:func:`choose_points`).
 2. **What, verified**: at those points (a config with them set, the points no longer free)
    the robust optimiser runs as without free points (:func:`optimise_robust_kind`: start,
    scenario NLP, the interior worst cases and every corner in the kernel, the accuracy
@@ -58,19 +57,17 @@ def _layout(cfg: Config) -> list:
         [k for k, _, _ in placement_layout(cfg)]
 
 
-def choose_points(cfg: Config, notes: list, bound: float | None = None,
-                  ahead=None) -> tuple[dict, dict]:
+def choose_points(cfg: Config, notes: list, bound: float | None = None) -> tuple[dict, dict]:
     """Stage 1 (module docstring): (points {key: m}, what it found). With no solution the
     points of the nominal optimum (or the config's) are returned, and ``info`` says so.
 
     ``bound``: the best worst-case J another spring kind reached. The nominal lid is one of
     the box's scenarios, so a kind whose nominal co-design optimum already exceeds it cannot
-    do better: then (None, info) at once, without the scenario NLP. ``ahead``: the process
-    solving that nominal co-design already (:func:`nominals_ahead`), or None: solved here."""
+    do better: then (None, info) at once, without the scenario NLP."""
     from ..optimiser.interval import free_of
     t0 = time.perf_counter()
     layout = _layout(cfg)
-    nominal = _nominal(cfg, ahead)
+    nominal = _solve_nominal(cfg)
     c = _at(cfg, nominal.design or {})
     points = {k: _value(c, k) for k in layout}
     info = {"nominal_objective": nominal.objective, "nominal_points": dict(points)}
@@ -106,36 +103,6 @@ def _solve_nominal(cfg: Config):
     stage 1's start."""
     from ..optimiser.optimiser import optimise_kind
     return optimise_kind(cfg, verify=False)
-
-
-def _nominal(cfg: Config, ahead):
-    """:func:`_solve_nominal`: the answer of ``ahead`` (its process), or solved here (also
-    when that process died); an error of the solve is raised as it would be here."""
-    if ahead is not None:
-        try:
-            return ahead.raw()
-        except (EOFError, OSError):
-            pass
-    return _solve_nominal(cfg)
-
-
-def nominals_ahead(configs: list) -> dict:
-    """Stage 1's nominal co-designs of the spring kinds after the first, each started now in
-    a forked process (:class:`softclose.optimiser.sidebyside.KindProcess`), so that they run
-    beside the first kind's: {index in ``configs``: process}. Empty where solving side by
-    side is not available (:func:`softclose.optimiser.sidebyside.available`: one core, other
-    threads, no fork, ``SOFTCLOSE_SIDE_BY_SIDE=0``). The answers are the same as solved here
-    (the same code on the same inputs); the caller closes the processes."""
-    from ..optimiser import sidebyside
-    from ..optimiser.optimiser import kind_nlp
-    if not sidebyside.available(len(configs)):
-        return {}
-    # the kinds share one nominal NLP: loaded (built) here once and inherited, as the
-    # optimiser's side by side does -- built in each process it would count as a second use
-    # and start its background compilation now, beside this run
-    kind_nlp(configs[0])
-    return {i: sidebyside.KindProcess(lambda c=c: (_solve_nominal(c), None))
-            for i, c in enumerate(configs) if i > 0}
 
 
 #: Ipopt iterations of one joint solve (one iteration of 9 scenarios takes ~0.15-0.3 s)
@@ -194,4 +161,4 @@ def _quoted(key: str, v: float) -> str:
     return f"{key} = {v:.6g} " + ("deg" if key == END_ANGLE else "N m s/rad")
 
 
-__all__ = ["choose_points", "fixed_points", "nominals_ahead"]
+__all__ = ["choose_points", "fixed_points"]
