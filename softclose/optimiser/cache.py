@@ -111,10 +111,12 @@ def _bind(cfg, structure) -> ShootingNLP:
 
 
 def describe_nlp(cfg, N: int, M: int, M2: int | None) -> str:
-    """The NLP in words, for the line a compilation writes on stderr."""
-    kind = cfg.design.spring_kind
-    return (f"of the optimiser ({kind} spring, {N} x {M} RK4 steps"
-            + (f", phase 2 {N} x {M2}" if M2 else "") + ")")
+    """The NLP's structure in words, for the line a compilation writes on stderr (one
+    structure serves every lid and spring kind)."""
+    free = [k for k, _, _ in free_layout(cfg) + placement_layout(cfg)]
+    return (f"of the optimiser ({', '.join(e.name for e in nlp_elements(cfg))}; "
+            f"{N} x {M} RK4 steps" + (f", phase 2 {N} x {M2}" if M2 else "")
+            + (f"; free {', '.join(free)}" if free else "") + ")")
 
 
 def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
