@@ -158,9 +158,9 @@ def test_prepare_compiles_in_the_foreground_saying_what(cache, cfg, monkeypatch,
     def fake(cmd, **kw):
         if "--version" in cmd:
             return real(cmd, **kw)
-        runs.append(cmd)
-        Path(cmd[cmd.index("-o") + 1]).write_bytes(b"not a library")
-        return subprocess.CompletedProcess(cmd, 0, b"", b"")
+        runs.append(cmd)             # a library, but not of the NLP: an empty one
+        return real([cmd[0], "-shared", "-fPIC", "-x", "c", os.devnull, "-o",
+                     cmd[cmd.index("-o") + 1]], **kw)
     monkeypatch.setattr(subprocess, "run", fake)
     lib = prepare(cfg)
     err = capfd.readouterr().err
@@ -174,7 +174,7 @@ def test_prepare_compiles_in_the_foreground_saying_what(cache, cfg, monkeypatch,
     key = buildcache.key_of("nlp", nlp_key(cfg))
     assert buildcache.compiled_nlp(key) == lib
     _clear_memory()
-    assert get_nlp(cfg).library is None                   # a damaged library: dropped
+    assert get_nlp(cfg).library is None                   # a foreign library: dropped
     assert buildcache.compiled_nlp(key) is None
 
 
