@@ -278,3 +278,18 @@ def test_the_folders_of_other_versions_are_pruned(tmp_path):
     assert all(not p.exists() for p in gone)
     assert all(p.exists() for p in old[:buildcache.KEEP_VERSIONS - 1])
     assert recent.exists() and other.exists() and current.exists()
+
+
+def test_prepare_refuses_without_a_cache_or_a_compiler(monkeypatch, capsys, tmp_path):
+    """`softclose prepare` with nothing to keep the libraries in, or no compiler: one line,
+    exit 2, nothing run."""
+    from softclose.cli import main
+    monkeypatch.setenv(buildcache.ENV_FOLDER, "off")
+    assert main(["prepare"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("softclose: error: there is no cache folder")
+    monkeypatch.setenv(buildcache.ENV_FOLDER, str(tmp_path))
+    monkeypatch.setenv("CC", "no-such-compiler-here")
+    assert main(["prepare"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no C compiler 'no-such-compiler-here'" in err[0]
