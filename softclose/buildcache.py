@@ -433,14 +433,58 @@ def _library(where: Path, key: str, flags: tuple) -> Path | None:
     return None if tools is None else where / f"nlp-{key}-{tools}.so"
 
 
+def whole_library(path: Path) -> bool:
+    """Whether the shared library ``path`` is whole: an ELF file at least as long as its
+    headers say (every segment and the section table inside it). A truncated library would
+    not fail to load: the process would die of SIGBUS when it touched the missing part.
+    (Not ELF -- another system -- is taken as whole: the loader says.)"""
+    import struct
+    if not sys.platform.startswith("linux"):
+        return True
+    try:
+        with open(path, "rb") as f:
+            size = os.fstat(f.fileno()).st_size
+            head = f.read(64)
+            if len(head) < 52 or head[:4] != b"\x7fELF" or head[4] not in (1, 2):
+                return False
+            e = "<" if head[5] == 1 else ">"
+            wide = head[4] == 2
+            if wide:
+                phoff, shoff = struct.unpack_from(e + "QQ", head, 0x20)
+                phent, phnum, shent, shnum = struct.unpack_from(e + "HHHH", head, 0x36)
+            else:
+                phoff, shoff = struct.unpack_from(e + "II", head, 0x1C)
+                phent, phnum, shent, shnum = struct.unpack_from(e + "HHHH", head, 0x2A)
+            if phoff + phnum * phent > size or shoff + shnum * shent > size:
+                return False
+            f.seek(phoff)
+            table = f.read(phnum * phent)
+            for i in range(phnum):
+                at = i * phent
+                if wide:
+                    offset, = struct.unpack_from(e + "Q", table, at + 8)
+                    filesz, = struct.unpack_from(e + "Q", table, at + 32)
+                else:
+                    offset, = struct.unpack_from(e + "I", table, at + 4)
+                    filesz, = struct.unpack_from(e + "I", table, at + 16)
+                if offset + filesz > size:
+                    return False
+    except (OSError, struct.error):
+        return False
+    return True
+
+
 def compiled_nlp(key: str, flags: tuple = CFLAGS) -> Path | None:
     """The compiled library of the NLP ``key`` (by this compiler, with ``flags``), if it is
-    built."""
+    built (a damaged one is removed: it is compiled again when asked)."""
     where = folder()
     if where is None:
         return None
     path = _library(where, key, flags)
     if path is not None and path.exists():
+        if not whole_library(path):
+            _remove(path)
+            return None
         _touch(path)
         return path
     return None

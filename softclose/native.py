@@ -106,7 +106,8 @@ time, the early exit, t_max or a failure). :func:`not_closed_reasons` turns them
 
 The kernel is built by ``pip install`` as the extension ``softclose._kernel``; in a source
 checkout without it (or with one older than ``_kernel.c``), it is compiled once with the
-system C compiler into a cache folder. Calls go through ctypes, which releases the GIL, so
+system C compiler into the cache folder of :mod:`softclose.buildcache` (``SOFTCLOSE_CACHE``;
+for this process only when there is none that can be written). Calls go through ctypes, which releases the GIL, so
 batches run on all cores in threads. On a CPU with AVX2 the strokes of a thread advance as
 SIMD vectors (the same numbers bit for bit as the lane-by-lane code, which the environment
 variable ``SC_SCALAR=1`` selects).
@@ -162,32 +163,88 @@ _SRC = Path(__file__).with_name("_kernel.c")
 _COL = {name: i for i, name in enumerate(OUT_FIELDS)}
 
 
-def _compile_fallback() -> Path:
+#: compiler flags of the kernel compiled in a source checkout (as setup.py's)
+KERNEL_CFLAGS = ("-O3", "-shared", "-fPIC")
+
+
+def _fallback_name() -> str:
+    """The file name of the kernel compiled from this ``_kernel.c`` with this compiler
+    (``$CC`` or ``cc``) and :data:`KERNEL_CFLAGS`: any change gives another file."""
     import hashlib  # (what only a source checkout needs is imported here, not at start-up)
-    src = _SRC.read_bytes()
-    tag = hashlib.sha256(src).hexdigest()[:16]
-    cache = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "softclose"
-    lib = cache / f"_kernel_{tag}.so"
-    if lib.exists():
-        return lib
+    cc = os.environ.get("CC") or "cc"
+    tag = hashlib.sha256(_SRC.read_bytes() + repr((cc, KERNEL_CFLAGS)).encode()).hexdigest()
+    return f"_kernel_{tag[:16]}.so"
+
+
+def _compile(out: Path) -> None:
+    """Compile ``_kernel.c`` into ``out`` (NumericalError, one line, when it cannot be)."""
     import subprocess
     import sysconfig
-    import tempfile
-    cache.mkdir(parents=True, exist_ok=True)
-    cc = os.environ.get("CC", "cc")
+    cc = os.environ.get("CC") or "cc"
     inc = sysconfig.get_paths()["include"]
-    with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / lib.name
-        cmd = [cc, "-O3", "-shared", "-fPIC", f"-I{inc}", str(_SRC), "-o", str(out), "-lm"]
+    cmd = [cc, *KERNEL_CFLAGS, f"-I{inc}", str(_SRC), "-o", str(out), "-lm"]
+    try:
+        subprocess.run(cmd, check=True, capture_output=True, stdin=subprocess.DEVNULL)
+    except (OSError, subprocess.CalledProcessError) as exc:
+        raise NumericalError(
+            "the stroke kernel is not built and could not be compiled "
+            f"({exc}); reinstall softclose with `pip install .` on a machine with a C compiler"
+        ) from None
+
+
+def _compile_fallback() -> tuple[Path, bool]:
+    """The kernel of a source checkout: (its library, whether it is kept). Kept in the cache
+    folder of :mod:`softclose.buildcache` (``SOFTCLOSE_CACHE``, else
+    ``$XDG_CACHE_HOME/softclose`` or ``~/.cache/softclose``), compiled there once: into a
+    temporary file named with this process's id, then moved into place (two processes
+    compiling at once both succeed; one killed midway leaves a temporary file that is never
+    read and is removed once it is gone). With the cache off, or a folder that cannot be
+    written (a read-only home: one note on stderr), it is compiled into a temporary folder
+    for this process only (not kept: the caller removes it once loaded)."""
+    from . import buildcache
+    name = _fallback_name()
+    root = buildcache.base()
+    if root is not None:
+        lib = root / name
+        if lib.exists():
+            if buildcache.whole_library(lib):
+                return lib, True
+            buildcache._remove(lib)           # truncated or damaged: compiled again
+        if buildcache.writable(root):
+            buildcache.sweep_temporaries(root)
+            tmp = root / f".{name}.{os.getpid()}.tmp"
+            try:
+                _compile(tmp)
+                os.replace(tmp, lib)
+                return lib, True
+            except OSError as exc:        # (the folder went away or filled up)
+                buildcache.note_unwritable(root, exc)
+            finally:
+                buildcache._remove(tmp)
+    import tempfile
+    out = Path(tempfile.mkdtemp(prefix="softclose-kernel-")) / name
+    _compile(out)
+    return out, False
+
+
+def _load_fallback():
+    """The ctypes handle of the kernel of a source checkout (:func:`_compile_fallback`); a
+    kept library that does not load (corrupt, truncated) is removed and compiled again."""
+    import shutil
+    for attempt in (0, 1):
+        path, kept = _compile_fallback()
         try:
-            subprocess.run(cmd, check=True, capture_output=True)
-        except (OSError, subprocess.CalledProcessError) as exc:
-            raise NumericalError(
-                "the stroke kernel is not built and could not be compiled "
-                f"({exc}); reinstall softclose with `pip install .` on a machine with a C compiler"
-            ) from None
-        os.replace(out, lib)
-    return lib
+            return ctypes.CDLL(str(path))
+        except OSError:
+            if not kept or attempt:
+                raise
+            try:
+                path.unlink()
+            except OSError:
+                pass
+        finally:
+            if not kept:                  # (mapped: the file is not needed any more)
+                shutil.rmtree(path.parent, ignore_errors=True)
 
 
 def _built_extension() -> Path | None:
@@ -215,8 +272,8 @@ def load():
     with _lock:
         if _lib is not None:
             return _lib
-        path = _built_extension() or _compile_fallback()
-        lib = ctypes.CDLL(str(path))
+        path = _built_extension()
+        lib = ctypes.CDLL(str(path)) if path is not None else _load_fallback()
         dp, lp = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_long)
         d, l = ctypes.c_double, ctypes.c_long
         lib.sc_strokes.argtypes = [dp, dp, dp, dp, dp, dp, dp, d, d, d, d, l, l, dp, l, dp]

@@ -158,9 +158,9 @@ def test_prepare_compiles_in_the_foreground_saying_what(cache, cfg, monkeypatch,
     def fake(cmd, **kw):
         if "--version" in cmd:
             return real(cmd, **kw)
-        runs.append(cmd)
-        Path(cmd[cmd.index("-o") + 1]).write_bytes(b"not a library")
-        return subprocess.CompletedProcess(cmd, 0, b"", b"")
+        runs.append(cmd)             # a library, but not of the NLP: an empty one
+        return real([cmd[0], "-shared", "-fPIC", "-x", "c", os.devnull, "-o",
+                     cmd[cmd.index("-o") + 1]], **kw)
     monkeypatch.setattr(subprocess, "run", fake)
     lib = prepare(cfg)
     err = capfd.readouterr().err
@@ -174,7 +174,7 @@ def test_prepare_compiles_in_the_foreground_saying_what(cache, cfg, monkeypatch,
     key = buildcache.key_of("nlp", nlp_key(cfg))
     assert buildcache.compiled_nlp(key) == lib
     _clear_memory()
-    assert get_nlp(cfg).library is None                   # a damaged library: dropped
+    assert get_nlp(cfg).library is None                   # a foreign library: dropped
     assert buildcache.compiled_nlp(key) is None
 
 
@@ -278,3 +278,18 @@ def test_the_folders_of_other_versions_are_pruned(tmp_path):
     assert all(not p.exists() for p in gone)
     assert all(p.exists() for p in old[:buildcache.KEEP_VERSIONS - 1])
     assert recent.exists() and other.exists() and current.exists()
+
+
+def test_prepare_refuses_without_a_cache_or_a_compiler(monkeypatch, capsys, tmp_path):
+    """`softclose prepare` with nothing to keep the libraries in, or no compiler: one line,
+    exit 2, nothing run."""
+    from softclose.cli import main
+    monkeypatch.setenv(buildcache.ENV_FOLDER, "off")
+    assert main(["prepare"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("softclose: error: there is no cache folder")
+    monkeypatch.setenv(buildcache.ENV_FOLDER, str(tmp_path))
+    monkeypatch.setenv("CC", "no-such-compiler-here")
+    assert main(["prepare"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no C compiler 'no-such-compiler-here'" in err[0]
