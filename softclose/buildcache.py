@@ -138,6 +138,7 @@ def _folder(setting: str) -> Path | None:
     else:
         _touch(path)        # (the version folders' times say which were used last)
         sweep_temporaries(path)
+    sweep_temporaries(root)   # (the kernel's and other writes at the top)
     return path
 
 
