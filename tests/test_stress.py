@@ -5,7 +5,7 @@ The cases are ``softclose.stress.stress_cases(fast=True)`` (damping 0 … 1e6 N 
 to 1e6 N/m, steps far too large and very small, long undamped runs with their energy drift, a
 toggle near or inside the stroke, a release angle at the edge of the assembly) plus random
 valid configs (hypothesis). ``studies/stress_survey.py`` runs the full list and writes the
-stress table of BENCHMARKS.md.
+stress table of docs/performance.md.
 """
 
 from __future__ import annotations
