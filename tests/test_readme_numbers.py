@@ -55,9 +55,8 @@ def test_the_table_names_a_command_for_every_figure_and_the_text_quotes_it():
 
 
 @pytest.fixture(scope="module")
-def optimum():
-    import softclose
-    return softclose.optimise(default_config())
+def optimum(default_optimum):
+    return default_optimum
 
 
 def test_optimum(optimum):
@@ -92,9 +91,8 @@ def test_nominal_yield(optimum):
 
 
 @pytest.fixture(scope="module")
-def robust():
-    import softclose
-    return softclose.optimise(default_config(), robust=True)
+def robust(default_robust):
+    return default_robust
 
 
 def test_robust(robust):
