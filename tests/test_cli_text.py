@@ -152,6 +152,7 @@ def test_pareto_figure_states_j_s_unit():
     assert label == "J = 1 s²·θ'² + 0.1 s²/m²·v_peak² [dimensionless]"
 
 
+@pytest.mark.slow
 def test_the_robust_report_names_what_limits_it(capsys):
     """The idealised spring's robust design sits at its spring and damper bounds and on
     closing_time_max in its stiff, damped, light corner: the text and the JSON say so, with

@@ -41,6 +41,7 @@ def exact(prototype):
     return stroke_samples(prototype)
 
 
+@pytest.mark.slow
 def test_recovery_over_noise_seeds(prototype, exact):
     """Damper and lid inertia (mass weighed) from one stroke: over 50 noise seeds the truth
     lies in the 95 % intervals in >= 90 % of the fits (each key), the damper within 3 % in
