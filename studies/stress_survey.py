@@ -10,7 +10,7 @@ come with a one-line report; an unstable one is re-run at the step the report re
 NaN, a traceback or a mismatch is a finding (exit code 1).
 
 Writes to studies/out/stress_survey/:
-  stress.md    the stress table (Markdown; pasted into BENCHMARKS.md)
+  stress.md    the stress table (Markdown; docs/performance.md quotes it)
   stress.csv   the same, one row per case
   stress.json  the same, machine-readable
 

@@ -19,7 +19,7 @@ Writes to studies/out/work_precision/:
   work_precision.csv  one row per design, method and step (errors, run times, status)
   speed.csv           the speed measurements, with their targets
   optimiser.csv       one row per N and sub-steps (if the optimiser ran)
-  bench.md            the tables as Markdown (pasted into BENCHMARKS.md)
+  bench.md            the tables as Markdown (docs/performance.md quotes them)
   bench.json          everything above, machine, date and commit included
 
 Usage: python studies/work_precision.py [--fast] [--no-optimiser] [--no-later] [--out DIR]

@@ -258,3 +258,20 @@ def random_states(model, n, seed, thd_max=6.0):
                        rng.uniform(10, 3000), rng.uniform(0.001, 0.05)])
         out.append((th, thd, p))
     return out
+
+
+# -- expensive results shared by several test files (one per test process) -----------------
+@pytest.fixture(scope="session")
+def default_optimum():
+    """``softclose.optimise(default_config())``: the verified optimum of the default problem
+    (an immutable result: tests read it, none changes it)."""
+    import softclose
+    return softclose.optimise(default_config())
+
+
+@pytest.fixture(scope="session")
+def default_robust():
+    """``softclose.optimise(default_config(), robust=True)``: the robust design of the
+    default problem (immutable)."""
+    import softclose
+    return softclose.optimise(default_config(), robust=True)

@@ -29,7 +29,7 @@ SPEC6 = {
                "rotary_damper_c": 0.0},
     "stroke": {"theta0_deg": 18.0, "theta_closed_deg": 0.0, "t_max": 5.0},
     # SPEC §6: "step = 0.001 # s; the default is chosen from the work-precision benchmark";
-    # the benchmark chose 0.002 s (BENCHMARKS.md), checked in test_default_step_meets_targets
+    # the benchmark chose 0.002 s (docs/performance.md), checked in test_default_step_meets_targets
     "simulate": {"integrator": "rk4"},
     "optimise": {"closing_time_max": 1.0, "closing_time_min": 0.0, "holding_moment_min": 0.1,
                  "weight_impact": 1.0, "weight_peak_tip": 0.1, "spring_k": [0.0, 10000.0],

@@ -172,6 +172,7 @@ def test_every_line_of_yield_is_printed_once(capsys):
 
 
 # -- the other optimisers ------------------------------------------------------------------
+@pytest.mark.slow
 def test_robust_out_writes_the_robust_design(tmp_path, capsys):
     rc, out, _ = _run(capsys, ["optimise", "--robust", "--json", "--out", str(tmp_path)])
     j = json.loads(out)
@@ -212,10 +213,9 @@ def test_optimal_grid_out_writes_each_point_s_design(tmp_path, capsys):
         assert cfg.mass.inertia_lid == pytest.approx(row["mass.lid"] * 0.25 / 12, rel=1e-15)
 
 
-def test_design_config_of_the_results():
+def test_design_config_of_the_results(default_optimum):
     """The library's side of the hand-off: every result gives its design as a config."""
-    import softclose
-    r = softclose.optimise(default_config())
+    r = default_optimum
     c = r.design_config()
     assert {k: getattr(c.design, k) for k in DESIGN_KEYS} == r.design
     assert tolerance_analysis(c, samples=200, reference=0).design == r.design

@@ -20,8 +20,8 @@ def text(html: str) -> str:
 
 
 @pytest.fixture(scope="module")
-def optimum(cfg):
-    return softclose.optimise(cfg)
+def optimum(default_optimum):
+    return default_optimum
 
 
 def test_formatting_helpers():

@@ -134,6 +134,7 @@ def test_two_phase_without_end_damper_is_todays_optimum():
     assert "engage_time" not in r2.optimiser          # no damper: no engagement to claim
 
 
+@pytest.mark.slow
 def test_end_damper_co_design_is_verified_where_it_engages(tmp_path):
     """c_e and theta_e free: a verified optimum well below today's J, its engagement node
     (time and theta') equal to the reference's located event within the agreement
@@ -193,6 +194,7 @@ def test_end_damper_keys_are_checked():
     assert (lo, hi) == pytest.approx((0.18, 17.82))
 
 
+@pytest.mark.slow
 def test_robust_end_damper_meets_every_corner():
     """optimise --robust with c_e and theta_e free: every scenario re-simulated by the
     reference meets every constraint and agrees with the scenario NLP (its engagement

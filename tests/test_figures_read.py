@@ -47,9 +47,8 @@ def test_stroke_figure_labels_sit_off_the_curves(design):
     plt.close(fig)
 
 
-def test_optimum_figure_labels_sit_off_the_curves():
-    import softclose
-    r = softclose.optimise(default_config())
+def test_optimum_figure_labels_sit_off_the_curves(default_optimum):
+    r = default_optimum
     fig = r.plot()
     assert [a.get_text().split()[0] for a in fig.labels] == ["peak", "impact"]
     _clear(fig, fig.labels, twins=[a for a in fig.axes if a is not fig.labels[0].axes

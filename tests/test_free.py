@@ -67,6 +67,7 @@ def test_free_preload_trades_with_the_free_length():
         d["spring_preload"]
 
 
+@pytest.mark.slow
 def test_collapsed_bounds_are_the_fixed_value_and_freedom_never_costs():
     base = default_config().update({"design.rotary_damper_pivot": "A",
                                     "optimise.damper_c": [0.0, 300.0],

@@ -165,6 +165,7 @@ def test_opening_force_adds_the_friction_moment():
     assert b.opening_force == pytest.approx(ref.opening_force, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_optimiser_sees_friction_and_the_reference_verifies_it():
     from softclose.optimiser import optimise
     cfg = default_config().set("friction.torque", 0.1)

@@ -806,9 +806,15 @@ ISSUE_CASES = [
 ]
 
 
-@pytest.mark.parametrize("command,values,opts", ISSUE_CASES,
-                         ids=[f"{c} " + " ".join([f"{k}={t[:8]}" for k, _, t in v] + o)
-                              for c, v, o in ISSUE_CASES])
+#: explicit cases of 10-30 s each, run with the slow tests (a faster case covers each command)
+SLOW_ISSUE_CASES = {"fit mass.lid=0.6 --starts=2", "optimise optimise.closing_time_max=30.0",
+                    "optimise --free=design.end_damper_c=0:2 --free=design.end_damper_angle_deg=1:10"}
+ISSUE_IDS = [f"{c} " + " ".join([f"{k}={t[:8]}" for k, _, t in v] + o) for c, v, o in ISSUE_CASES]
+
+
+@pytest.mark.parametrize("command,values,opts", [
+    pytest.param(*case, marks=pytest.mark.slow) if name in SLOW_ISSUE_CASES else case
+    for case, name in zip(ISSUE_CASES, ISSUE_IDS)], ids=ISSUE_IDS)
 def test_issue_inputs(command, values, opts, out_root):
     """The inputs of the issue (and what the fuzzing found) end with a one-line error or an
     answer; the three of the issue are refused naming the key, its value and its range."""
@@ -853,7 +859,12 @@ def test_batch_budget(command, opts, values, out_root):
                     opts=opts, defaults=False) == 2
 
 
-@pytest.mark.parametrize("command", list(COMMANDS))
+#: the fast profile's costliest commands (10-45 s each) run with the slow tests
+SLOW_FUZZ = {"sweep", "optimise", "fit"}
+
+
+@pytest.mark.parametrize("command", [pytest.param(c, marks=pytest.mark.slow) if c in SLOW_FUZZ
+                                     else c for c in COMMANDS])
 def test_fuzz(command, out_root):
     """Fast profile (the default run): the module docstring's promises on every command."""
     if command not in AVAILABLE:

@@ -35,8 +35,8 @@ DESIGN_DEFAULT = {"spring_k": 1914.7, "spring_rest_length": 0.079257, "damper_c"
 
 
 @pytest.fixture(scope="module")
-def result(cfg) -> OptimiseResult:
-    return optimise(cfg)
+def result(default_optimum) -> OptimiseResult:
+    return default_optimum
 
 
 def test_default_answer(result):
@@ -289,6 +289,7 @@ def assert_units(fig, axes: int):
     plt.close(fig)
 
 
+@pytest.mark.slow
 def test_cli_optimise_json_and_out(tmp_path, capsys):
     code = main(["optimise", "--json", "--out", str(tmp_path)])
     captured = capsys.readouterr()

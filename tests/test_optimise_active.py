@@ -40,6 +40,7 @@ def test_default_active_set_and_prices(cfg):
     assert hm.dJ < 0
 
 
+@pytest.mark.slow
 def test_heavy_lid_is_limited_by_the_rest_length(cfg):
     """Lid mass 0.75 kg: the optimum sits at spring_rest_length = 0.12 m, its upper bound."""
     heavy = cfg.set("mass.lid", 0.75)

@@ -85,6 +85,7 @@ def test_free_placement_keys_are_read_and_checked():
             default_config().set("optimise.free", bad)
 
 
+@pytest.mark.slow
 def test_nominal_co_design_beats_the_fixed_points_and_is_verified():
     """Spring anchor and lid point free within the issue's box: a verified optimum whose
     points lie in the box, whose compression spring stays below its free length over the
@@ -109,6 +110,7 @@ def test_nominal_co_design_beats_the_fixed_points_and_is_verified():
     assert J == pytest.approx(r.verified_objective, rel=1e-3)
 
 
+@pytest.mark.slow
 def test_robust_co_design_meets_every_corner_and_beats_todays_points():
     """The issue's box with a compression spring: the robust design at free points is
     verified by the reference in every scenario, no corner of the tolerance box breaks a
@@ -138,6 +140,7 @@ def test_robust_co_design_meets_every_corner_and_beats_todays_points():
 KEEP_OUT = [[[-0.030, 0.0505], [-0.026, 0.0505], [-0.026, 0.0545]]]
 
 
+@pytest.mark.slow
 def test_keep_out_region_is_respected_exactly_and_costs_objective():
     """A triangle that the free optimum's spring line crosses (checked exactly before):
     with it as optimise.keep_out the optimum clears it over the whole stroke on the exact
@@ -167,6 +170,7 @@ def test_keep_out_gap_is_the_distance_for_simple_cases():
         default_config().set("optimise.keep_out", [[[0, 0], [1, 0], [0.2, 0.2], [0, 1]]])
 
 
+@pytest.mark.slow
 def test_pareto_front_with_free_points_is_verified_and_monotone():
     """The Pareto optimiser carries the points too: each point of the front verified at its
     own points, J falling as the closing time allowed grows, and never above the front at

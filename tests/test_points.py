@@ -266,8 +266,7 @@ def test_sample_over_placement_keys_matches_simulate():
 
 
 def test_grid_over_placement_keys_matches_a_model_per_value():
-    """A grid over lid_e[1] x spring_anchor[0] (the case BENCHMARKS timed at 41 designs/s
-    with a model per value): every row as the sweep of the same grid, one model a row."""
+    """A grid over lid_e[1] x spring_anchor[0] (slow with a model per value): every row as the sweep of the same grid, one model a row."""
     cfg = default_config().update(ROBUST)
     axes = {"geometry.lid_e[1]": np.linspace(0.004, 0.024, 4),
             "geometry.spring_anchor[0]": np.linspace(-0.09, -0.03, 3)}

@@ -1,8 +1,9 @@
-"""Every number of the README comes from a command a reader can run (issue 26): its table
-"Where the numbers come from" names the command of each figure; this test recomputes the
-results at the digits quoted, holds the timings within the stated band (±35 %) of the
-recorded idle `softclose bench` run (docs/bench_speed.json), and checks that each figure of
-the table is quoted in the README's text."""
+"""Every number of the documents comes from a command a reader can run: the table of
+docs/numbers.md ("Where the numbers come from") names the command of each figure; this test
+recomputes the results at the digits quoted, holds the timings (and every row of the speed
+table of docs/performance.md) within the stated band (±35 %) of the recorded idle
+`softclose bench` run (docs/bench_speed.json), and checks that each figure of the table is
+quoted in the text of the README or of a page of the documentation."""
 
 from __future__ import annotations
 
@@ -15,15 +16,19 @@ import pytest
 from softclose.config import default_config
 
 ROOT = Path(__file__).resolve().parents[1]
-README = (ROOT / "README.md").read_text()
+NUMBERS = (ROOT / "docs" / "numbers.md").read_text()
+PERFORMANCE = (ROOT / "docs" / "performance.md").read_text()
+#: the text of the README and of every page of the documentation but the table's own
+DOCUMENTS = "\n".join([(ROOT / "README.md").read_text()] + [
+    p.read_text() for p in sorted((ROOT / "docs").glob("*.md")) if p.name != "numbers.md"])
 RECORD = json.loads((ROOT / "docs" / "bench_speed.json").read_text())
-#: the README's timings lie within this fraction of the recorded bench run
+#: the documents' timings lie within this fraction of the recorded bench run
 BAND = 0.35
 NUMBER = re.compile(r"(?<![\w.])\d[\d,]*(?:\.\d+)?(?:e-?\d+)?")
 
 
 def _table() -> dict[str, tuple[str, str]]:
-    block = README.split("<!-- numbers:begin -->")[1].split("<!-- numbers:end -->")[0]
+    block = NUMBERS.split("<!-- numbers:begin -->")[1].split("<!-- numbers:end -->")[0]
     rows = {}
     for line in block.strip().splitlines()[2:]:
         cells = [c.strip() for c in line.strip().strip("|").split(" | ")]
@@ -32,7 +37,7 @@ def _table() -> dict[str, tuple[str, str]]:
 
 
 TABLE = _table()
-PROSE = README.split("## Where the numbers come from")[0]
+PROSE = DOCUMENTS
 
 
 def _numbers(text: str) -> list[str]:
@@ -41,7 +46,7 @@ def _numbers(text: str) -> list[str]:
 
 def test_the_table_names_a_command_for_every_figure_and_the_text_quotes_it():
     assert {"optimum", "nominal_yield", "robust", "sobol", "robust_optimise",
-            "sweep_cli_40000", "kernel_40000", "cli_simulate", "tests"} <= set(TABLE)
+            "sweep_cli_40000", "kernel_40000", "cli_simulate"} <= set(TABLE)
     for key, (figure, command) in TABLE.items():
         assert "softclose" in command or "pytest" in command or "python" in command, key
         prose = PROSE.replace("\n", " ")
@@ -50,9 +55,8 @@ def test_the_table_names_a_command_for_every_figure_and_the_text_quotes_it():
 
 
 @pytest.fixture(scope="module")
-def optimum():
-    import softclose
-    return softclose.optimise(default_config())
+def optimum(default_optimum):
+    return default_optimum
 
 
 def test_optimum(optimum):
@@ -87,9 +91,8 @@ def test_nominal_yield(optimum):
 
 
 @pytest.fixture(scope="module")
-def robust():
-    import softclose
-    return softclose.optimise(default_config(), robust=True)
+def robust(default_robust):
+    return default_robust
 
 
 def test_robust(robust):
@@ -140,7 +143,7 @@ def test_catalog(robust):
 
 
 # -- timings: within the band of the recorded idle bench run --------------------------------
-#: id -> (the record's quantity, how the README's figure gives it)
+#: id -> (the record's quantity, how the documents' figure gives it)
 TIMINGS = {"robust_optimise": "median_s", "sweep_cli_40000": "median_s",
            "kernel_40000": "rate", "cli_simulate": "median_s"}
 
@@ -162,8 +165,36 @@ def test_the_record_is_an_idle_run():
 
 
 @pytest.mark.parametrize("key", list(TIMINGS))
-def test_readme_timings_lie_within_the_band_of_the_bench_record(key):
+def test_quoted_timings_lie_within_the_band_of_the_bench_record(key):
     lo, hi = _value(TABLE[key][0])
     measured = RECORD["rows"][key][TIMINGS[key]]
     assert lo * (1 - BAND) <= measured <= hi * (1 + BAND), \
-        f"{key}: the README says {TABLE[key][0]}, the bench record {measured:.4g}"
+        f"{key}: the documents say {TABLE[key][0]}, the bench record {measured:.4g}"
+
+
+#: a duration of the performance page's speed table, in seconds
+UNITS = {"µs": 1e-6, "ms": 1e-3, "s": 1.0}
+
+
+def _speed_table() -> dict[str, list[str]]:
+    block = PERFORMANCE.split("<!-- speed:begin -->")[1].split("<!-- speed:end -->")[0]
+    rows = {}
+    for line in block.strip().splitlines()[2:]:
+        cells = [c.strip() for c in line.strip().strip("|").split(" | ")]
+        rows[cells[0].strip("`")] = cells
+    return rows
+
+
+def test_the_speed_table_is_the_bench_record():
+    """docs/performance.md's speed table: a row for every row of the record, each median
+    (and rate) within the band of the record's."""
+    rows = _speed_table()
+    assert set(rows) == set(RECORD["rows"])
+    for key, cells in rows.items():
+        rec = RECORD["rows"][key]
+        value, unit = cells[2].split()
+        median = float(value.replace(",", "")) * UNITS[unit]
+        assert median == pytest.approx(rec["median_s"], rel=BAND), (key, cells[2])
+        if rec["rate"] is not None and rec["unit"]:
+            rate = float(_numbers(cells[3])[0].replace(",", ""))
+            assert rate == pytest.approx(rec["rate"], rel=BAND), (key, cells[3])

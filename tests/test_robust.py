@@ -27,8 +27,8 @@ SPREADS = {"design.spring_k": 0.10, "design.damper_c": 0.20, "mass.lid": 0.05}
 
 
 @pytest.fixture(scope="module")
-def robust():
-    return optimise_robust(default_config())
+def robust(default_robust):
+    return default_robust
 
 
 #: the idealised problem: a spring that pushes and pulls through its free length
@@ -103,6 +103,7 @@ def test_robust_json_keys(robust):
     assert len(df) == 9 and "mass.lid" in df.columns
 
 
+@pytest.mark.slow
 def test_interior_search_recovers_a_missing_worst_case():
     """Without its worst corner in the scenario set, the first solve violates that corner;
     the Monte Carlo search and local ascent must find it, add it and re-solve."""
@@ -132,6 +133,7 @@ class _Quiet:
         pass
 
 
+@pytest.mark.slow
 def test_mean_objective_minimises_the_mean():
     cfg = default_config().update({"tolerance.robust_objective": "mean"})
     mean = optimise_robust(cfg, samples=2000)
@@ -145,6 +147,7 @@ def test_mean_objective_minimises_the_mean():
     assert max(Js) >= worst.objective * (1 - 1e-6)
 
 
+@pytest.mark.slow
 def test_no_design_over_the_box_is_reported_with_what_would_do(capsys):
     """A closing-time window of 0.7..0.9 s cannot hold with the damper ±20 %: closing time
     roughly scales with the damper, and 0.9/0.7 < 1.2/0.8."""
@@ -283,6 +286,7 @@ def test_fractional_factorial_is_orthogonal(d):
     assert len({tuple(r) for r in X}) == n
 
 
+@pytest.mark.slow
 def test_many_keys_start_from_a_few_corners_and_every_corner_holds():
     cfg = _many_config()
     d = len(MANY)
@@ -367,6 +371,7 @@ def test_the_default_robust_design_is_a_spring_one_can_buy(robust, robust_linear
         assert r.ok and r.max_spring_length <= robust.design["spring_rest_length"] + 1e-12
 
 
+@pytest.mark.slow
 def test_a_trial_stopped_at_its_iteration_cap_counts_as_not_shown_feasible(monkeypatch):
     """The diagnosis' bisection counts a trial only when Ipopt solves it within
     TRIAL_MAX_ITER iterations: with a cap of 1 no scenario NLP solves a trial, so only the

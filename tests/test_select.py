@@ -148,6 +148,7 @@ def test_select_ranks_a_verified_feasible_pair_first(catalog):
     assert 3 <= sum(e["feasible"] for e in R) <= 30
 
 
+@pytest.mark.slow
 def test_feasibility_agrees_with_the_reference_at_every_corner(catalog):
     ref = _reference_verdicts()
     R = catalog["json"]["ranking"]
@@ -388,6 +389,7 @@ def test_ctrl_c_on_the_command_line_writes_what_was_ranked(tmp_path, monkeypatch
     assert "interrupted: 12 of 36 pairs screened" in out
 
 
+@pytest.mark.slow
 def test_free_points_are_re_optimised_per_part(capsys):
     """``select --free``: the best pair's attachment points by the robust co-design with the
     parts fixed; the pair is screened and checked by the reference at its own points, where

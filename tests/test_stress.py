@@ -5,7 +5,7 @@ The cases are ``softclose.stress.stress_cases(fast=True)`` (damping 0 … 1e6 N 
 to 1e6 N/m, steps far too large and very small, long undamped runs with their energy drift, a
 toggle near or inside the stroke, a release angle at the edge of the assembly) plus random
 valid configs (hypothesis). ``studies/stress_survey.py`` runs the full list and writes the
-stress table of BENCHMARKS.md.
+stress table of docs/performance.md.
 """
 
 from __future__ import annotations
@@ -25,7 +25,9 @@ from softclose.reference import Reference
 from softclose.simulate import Simulator
 from softclose.stroke import StrokeStatus
 
-pytestmark = pytest.mark.stress
+#: the numerical stress tests (marker ``stress``); the quick checks of the survey's verdicts
+#: below are unmarked, so that the default run covers ``softclose.stress`` too
+stress_mark = pytest.mark.stress
 
 CASES = stress.stress_cases(fast=True)
 #: a stroke of this survey that takes longer than this counts as a hang
@@ -49,12 +51,14 @@ def _check_row(case, row):
         assert math.isfinite(row["energy_drift"])
 
 
+@stress_mark
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
 def test_stress_case(case):
     row = stress.run_stress_case(case, rerun=False)
     _check_row(case, row)
 
 
+@stress_mark
 def test_unstable_report_names_a_step_that_works():
     """c = 1e6 N s/m with rk4 at 1 ms: reported with the step it needs; at that step (with a
     safety factor 0.8) the stroke runs and agrees with radau5 at a small step."""
@@ -72,6 +76,7 @@ def test_unstable_report_names_a_step_that_works():
     assert abs(ok.peak_tip_speed - fine.peak_tip_speed) <= 1e-6 * fine.peak_tip_speed
 
 
+@stress_mark
 @pytest.mark.parametrize("integ", ["rk4", "gauss4", "euler_cromer"])
 def test_long_undamped_run_energy_drift(integ):
     """20 s of undamped oscillation (the spring holds the lid open): the energy drift is
@@ -108,6 +113,7 @@ def test_steps_far_too_large_are_reported_not_nan():
        theta0=st.floats(5.0, 30.0), lid=st.floats(0.2, 1.0),
        integ=st.sampled_from(["rk4", "gauss4", "radau5", "euler_cromer"]),
        step=st.sampled_from([2e-4, 5e-4, 1e-3, 2e-3]))
+@stress_mark
 def test_random_valid_configs(k, l0, c, crank_oa, crank_bc, theta0, lid, integ, step):
     geo = stress.geometry_with_assembly(crank_oa=crank_oa, crank_bc=crank_bc)
     overrides = {"geometry": geo, "mass": {"lid": lid},
@@ -119,6 +125,7 @@ def test_random_valid_configs(k, l0, c, crank_oa, crank_bc, theta0, lid, integ, 
 
 
 # -- regressions: core bugs this survey found (all fixed) ------------------------------------
+@stress_mark
 def test_reference_peak_in_first_grid_intervals():
     """Regression (found by this survey, fixed in reference.py): d|v_T|/dt is NaN at rest, so a
     tip-speed peak in the first two grid intervals (c = 1e6 N s/m: at t = 2.3 ms) was not
@@ -130,6 +137,7 @@ def test_reference_peak_in_first_grid_intervals():
     assert abs(r.peak_tip_speed - fine.peak_tip_speed) <= 1e-8 * fine.peak_tip_speed
 
 
+@stress_mark
 def test_near_toggle_result_is_accurate_or_flagged():
     geo = stress.geometry_with_assembly(crank_bc=0.0925)
     cfg = default_config().replace(geometry=geo, stroke={"theta_closed_deg": -2.4})
@@ -149,6 +157,7 @@ def test_toggle_inside_stroke_is_a_config_error():
         LidModel(default_config().replace(geometry=geo))
 
 
+@stress_mark
 def test_no_nan_in_batch_of_extreme_designs():
     """A batch across the extremes: every row has a status; metrics finite or NaN only where
     the status says the stroke did not close."""
@@ -163,6 +172,7 @@ def test_no_nan_in_batch_of_extreme_designs():
                                                         "impact_tip_speed", "peak_tip_speed"))
 
 
+@stress_mark
 def test_recommended_step_for_rotary_damper_works():
     cfg = default_config().replace(design={"rotary_damper_c": 1e3})
     sim = Simulator(cfg)
@@ -200,6 +210,7 @@ def test_confirm_uses_the_targets_and_the_estimate():
     assert not stress.confirm(dataclasses.replace(same, closed=False), ref)[0]
 
 
+@stress_mark
 def test_reference_near_a_toggle_neither_grinds_nor_raises_a_traceback():
     """Regression (CI of 8f31760): the reference runs CVODES on through 16 grid nodes a call;
     near the rim such a run went on past it towards the toggle position, where the equation

@@ -255,6 +255,7 @@ def test_calibration_study(tmp_path):
     assert cal.friction.torque == fitted["friction.torque"]["value"]
 
 
+@pytest.mark.slow
 def test_co_design_study(tmp_path):
     """The co-design levers: every answer verified, today's robust worst case (0.1255), the
     spring's points lower the nominal J (0.0229 -> 0.0207), the dashpot's lower it, the end

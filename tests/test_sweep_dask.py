@@ -246,6 +246,7 @@ def processes(tmp_path):
             p.wait()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("dies", ["scheduler", "workers"])
 def test_a_cluster_that_dies_mid_sweep_keeps_the_finished_chunks(tmp_path, capsys, processes,
                                                                  dies):

@@ -67,6 +67,7 @@ def test_the_spring_carries_the_heavier_lid(cfg, local):
     np.testing.assert_allclose(np.diff(spring), np.diff(gravity), rtol=1e-6)
 
 
+@pytest.mark.slow
 def test_the_dask_run_gives_the_same_table(cfg, local):
     remote = optimise_grid(cfg, {"mass.lid": MASSES}, segment=2, dask="local:2")
     assert remote.where == "local:2" and remote.success
@@ -152,6 +153,7 @@ def test_a_cluster_lost_mid_grid_keeps_the_finished_points(cfg, tmp_path, monkey
     assert len(rows) == 3 and "not computed" in rows[2]
 
 
+@pytest.mark.slow
 def test_robust_optimum_per_lid_mass_is_the_robust_optimiser_s_and_verified(cfg):
     """`sweep --optimise --robust` over lid masses: each point is the robust design of that
     lid (the same as softclose.optimise(..., robust=True) there: checked at the first, the

@@ -31,6 +31,7 @@ def _distinct(Z, tol=1e-6):
     return True
 
 
+@pytest.mark.slow
 def test_generic_count_is_36(random_case):
     r, flags = random_case
     assert r.n_paths == 96                            # 6-homogeneous Bezout number
@@ -39,6 +40,7 @@ def test_generic_count_is_36(random_case):
     assert _distinct(r.solutions)
 
 
+@pytest.mark.slow
 def test_every_solution_satisfies_the_equations(random_case, problem7):
     for r, flags in (random_case, problem7):
         res = [np.max(np.abs(evaluate_equations(z, r.points, r.pivot_a))) for z in r.solutions]
