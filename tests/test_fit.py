@@ -22,8 +22,9 @@ from softclose.errors import ConfigError
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "data" / "stroke.csv"
-#: the calibration page of the documentation, which quotes the fits
-CALIBRATION = (ROOT / "docs" / "calibration.md").read_text()
+#: the table of the documents' numbers (docs/numbers.md: rows fit, fit_seeds), whose figures
+#: tests/test_readme_numbers.py finds quoted in the calibration page
+NUMBERS = (ROOT / "docs" / "numbers.md").read_text()
 #: the default optimum as a built prototype (a compression spring), the lid weighed
 PROTOTYPE = {"design.spring_kind": "compression", "design.spring_k": 1914.709,
              "design.spring_rest_length": 0.07925707, "design.damper_c": 2087.754}
@@ -72,12 +73,12 @@ def test_recovery_over_noise_seeds(prototype, exact):
         assert inside[k] >= 45, (k, inside[k])
         spread, reported = np.std(est[k]), np.mean(std[k])
         assert 0.6 < spread / reported < 1.6, (k, spread, reported)
-    # the calibration page quotes these counts and ratios (docs/numbers.md, row fit_seeds)
+    # the documents quote these counts and ratios (docs/numbers.md, row fit_seeds)
     rel_spread = {k: f"{100 * np.std(est[k]) / truth[k]:.2g} % against "
                      f"{100 * np.mean(std[k]) / truth[k]:.2g} %" for k in truth}
     assert (f"{inside['design.damper_c']} and {inside['mass.inertia_lid']} of the 50 fits "
             f"(both at once in {both}); {rel_spread['design.damper_c']}, "
-            f"{rel_spread['mass.inertia_lid']}") in CALIBRATION
+            f"{rel_spread['mass.inertia_lid']}") in NUMBERS
     assert abs(np.mean(est["design.damper_c"]) / truth["design.damper_c"] - 1) < 0.005
     assert abs(np.mean(rel)) < 2e-3 and np.std(rel) < 5e-3     # the release, to a frame
 
@@ -176,7 +177,7 @@ def test_cli_done_when(tmp_path, capsys):
               f"{c['ci95'][1]:.1f}; truth 2087.754), inertia_lid = {i['value']:.4f} ± "
               f"{i['std']:.4f} kg m² (95 %: {i['ci95'][0]:.4f}–{i['ci95'][1]:.4f}; truth "
               f"0.0104), rms residual {d['residual_rms']:.3f}°")
-    assert quoted in CALIBRATION, quoted     # docs/numbers.md, row "fit"
+    assert quoted in NUMBERS, quoted     # docs/numbers.md, row "fit"
     assert abs(d["release_time"] - 0.10308) < 0.01 and abs(d["release_angle_deg"] - 18) < 0.2
     assert {Path(f).name for f in d["files"]} == {"calibrated.toml", "fit.csv", "samples.csv",
                                                   "fit.svg"}
