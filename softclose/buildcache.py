@@ -526,28 +526,32 @@ def load_or_build(disk: str, restore, build, what: str = "", flags: tuple = CFLA
     symbolically. Inside :func:`compiling`, a built NLP is compiled (``flags``; ``what``
     names it on stderr) and its library loaded. The one way the optimiser's and the robust
     optimiser's NLPs are kept."""
-    lib = compiled_nlp(disk, flags)
-    meta = load("nlpmeta", disk) if lib is not None else None
-    if meta is not None:
-        try:
-            nlp = restore(lib, meta)
-            loaded.append(lib)
-            return nlp
-        except Exception:   # noqa: BLE001  (a damaged or foreign library: build anew)
-            forget_nlp(disk, flags)
+    nlp = _restored(disk, compiled_nlp(disk, flags), restore, flags, loaded)
+    if nlp is not None:
+        return nlp
     nlp = build()
     if _compiling and folder() is not None:
         store("nlpmeta", disk, nlp.meta())
-        lib = compile_nlp(nlp.solver, disk, flags, what)
-        meta = load("nlpmeta", disk) if lib is not None else None
-        if meta is not None:
-            try:
-                out = restore(lib, meta)
-                compiled.append(lib)
-                return out
-            except Exception:   # noqa: BLE001
-                forget_nlp(disk, flags)
+        out = _restored(disk, compile_nlp(nlp.solver, disk, flags, what), restore, flags,
+                        compiled)
+        if out is not None:
+            return out
         failed.append(what or disk)
+    return nlp
+
+
+def _restored(disk: str, lib, restore, flags: tuple, into: list):
+    """``restore(lib, meta)`` of the NLP ``disk``'s library ``lib`` (noted in ``into``), or
+    None: no library, no meta, or a damaged or foreign one (dropped)."""
+    meta = load("nlpmeta", disk) if lib is not None else None
+    if meta is None:
+        return None
+    try:
+        nlp = restore(lib, meta)
+    except Exception:   # noqa: BLE001  (a damaged or foreign library: build anew)
+        forget_nlp(disk, flags)
+        return None
+    into.append(lib)
     return nlp
 
 

@@ -152,6 +152,15 @@ def series_terms(els) -> list[tuple[str, str, str]]:
     return out
 
 
+def chebyshev_basis(u, degree: int):
+    """Chebyshev polynomials T_0..T_degree at u in [-1, 1] (a CasADi column), by their
+    three-term recurrence."""
+    T = [1, u]
+    for _ in range(2, degree + 1):
+        T.append(2 * u * T[-1] - T[-2])
+    return ca.vertcat(*T)
+
+
 class ChebyshevFit:
     """The geometric functions of theta (and tau') as Chebyshev series on [lo, hi].
 
@@ -240,11 +249,7 @@ class ChebyshevFit:
 
     def basis(self, theta):
         """Chebyshev polynomials T_0..T_n at theta (an SX column)."""
-        u = self._u(theta)
-        T = [1, u]
-        for _ in range(2, self.degree + 1):
-            T.append(2 * u * T[-1] - T[-2])
-        return ca.vertcat(*T)
+        return chebyshev_basis(self._u(theta), self.degree)
 
 
 def combine_function(series, placement: bool = False):
@@ -398,5 +403,5 @@ def bound_interval(fit, substeps: int, with_ode: bool = False, placement: bool =
 
 __all__ = ["FIT_MARGIN_DEG", "UNROLL_MAX", "END_C", "END_ANGLE", "ANGLE_MARGIN", "angle_bounds",
            "end_damper_mode", "free_of", "free_layout", "nlp_elements",
-           "series_terms", "ChebyshevFit", "hermite_max", "interval_function",
+           "series_terms", "chebyshev_basis", "ChebyshevFit", "hermite_max", "interval_function",
            "combine_function", "bound_interval"]

@@ -65,11 +65,9 @@ class SymbolicSeries:
 
     def basis(self, theta):
         """Chebyshev polynomials T_0..T_n at theta (an SX column)."""
-        u = (2 * theta - (self.lo + self.hi)) / (self.hi - self.lo)
-        T = [1, u]
-        for _ in range(2, self.degree + 1):
-            T.append(2 * u * T[-1] - T[-2])
-        return ca.vertcat(*T)
+        from .interval import chebyshev_basis
+        return chebyshev_basis((2 * theta - (self.lo + self.hi)) / (self.hi - self.lo),
+                               self.degree)
 
     def values(self, fit) -> np.ndarray:
         """:attr:`sym`'s numbers for a fit of the same series."""
