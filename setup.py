@@ -1,5 +1,5 @@
-"""Builds the C stroke kernel (softclose/_kernel.c) as an extension; metadata is in pyproject.toml."""
+"""Builds the C stroke kernel (softclose/simulation/kernel/_kernel.c) as an extension; metadata is in pyproject.toml."""
 from setuptools import Extension, setup
 
-setup(ext_modules=[Extension("softclose._kernel", ["softclose/_kernel.c"],
+setup(ext_modules=[Extension("softclose.simulation.kernel._kernel", ["softclose/simulation/kernel/_kernel.c"],
                              extra_compile_args=["-O3"])])

@@ -30,10 +30,10 @@ from importlib import import_module
 
 from .config import Config, default_config, load_config
 from .errors import ConfigError, NumericalError, SoftcloseError
-from .model import LidModel
-from .reference import Reference
-from .simulate import Simulator, simulate
-from .stroke import StrokeResult, StrokeStatus
+from .model.lid import LidModel
+from .simulation.reference import Reference
+from .simulation.simulator import Simulator, simulate
+from .simulation.stroke import StrokeResult, StrokeStatus
 from .version import __version__  # noqa: F401  (re-exported)
 
 #: public functions and result types of the feature packages, imported on first use

@@ -7,7 +7,7 @@ benchmark -- and none restates it.
 - **Design** (:data:`DESIGN_KEYS`): the spring stiffness, its rest length and the damper;
   the stroke kernels take them, with every other element's per-stroke values, as one
   parameter vector ``p = (k, l0, c, c_rot, ...)`` (:data:`PARAM_KEYS`, stated by the element
-  registry, :data:`softclose.elements.PARAMS`; :func:`params_of`).
+  registry, :data:`softclose.model.elements.PARAMS`; :func:`params_of`).
 - **Metrics** (:data:`METRICS`): the quantities of one closing stroke, with units.
 - **Objective**: ``J = weight_impact · impact_theta_dot² + weight_peak_tip · peak_tip_speed²``
   (:func:`objective`).
@@ -29,8 +29,8 @@ from typing import Any
 import numpy as np
 
 from .config.schema import KEYS
-from . import elements
-from .elements import ELEMENTS, PARAM_NAMES, PARAMS
+from .model import elements
+from .model.elements import ELEMENTS, PARAM_NAMES, PARAMS
 
 #: the design variables the optimiser picks (config section [design], bounds in [optimise])
 DESIGN_KEYS = ("spring_k", "spring_rest_length", "damper_c")
@@ -94,7 +94,7 @@ METRICS = (
 METRIC_KEYS = tuple(m.key for m in METRICS)
 #: with an end damper that engages inside the stroke (``design.end_damper_c`` > 0 below
 #: ``design.end_damper_angle_deg``): when the lid first reaches its angle and how fast
-#: (:class:`softclose.stroke.StrokeResult`; the two-phase NLP's node between its phases)
+#: (:class:`softclose.simulation.stroke.StrokeResult`; the two-phase NLP's node between its phases)
 ENGAGE_METRICS = (
     Metric("engage_time", "s", "when the lid first reaches the end damper's engagement angle"),
     Metric("engage_theta_dot", "rad/s", "theta' there (negative): the engagement speed"),

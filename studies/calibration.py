@@ -44,7 +44,7 @@ from pathlib import Path
 import softclose
 from softclose.calibration.synthetic import angle_track, gyroscope_track, write_csv
 from softclose.config import to_toml
-from softclose.figures import save
+from softclose.present.figures import save
 from softclose.jsonio import jsonable
 
 OUT = Path(__file__).resolve().parent / "out" / "calibration"

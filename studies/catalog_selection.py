@@ -31,7 +31,7 @@ from pathlib import Path
 import softclose
 from softclose.catalog import (DamperEntry, SpringEntry, read_dampers, read_springs,
                                standard_free_length_tolerance)
-from softclose.figures import save
+from softclose.present.figures import save
 from softclose.jsonio import jsonable
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -42,7 +42,7 @@ import time
 from pathlib import Path
 
 import softclose
-from softclose.figures import save
+from softclose.present.figures import save
 from softclose.jsonio import jsonable
 
 OUT = Path(__file__).resolve().parent / "out" / "co_design"
@@ -133,10 +133,10 @@ def main(argv=None) -> int:
     robust = [(res.objective, lever, res) for (p, lever), (res, _) in answers.items()
               if p == "robust" and res.success and res.objective is not None]
     best = min(robust, key=lambda x: x[0])[2]
-    from softclose.figures.placement import plot_attachments
-    files.append(save(plot_attachments(best.design_config(),
+    from softclose.present.figures.attachment import plot_attachments
+    files.append(save(plot_attachments(softclose.LidModel(best.design_config()),
                                        title="Best robust design",
-                                       before=cfg), a.out / "attachments.png"))
+                                       before=softclose.LidModel(cfg)), a.out / "attachments.png"))
     summary = {"levers": rows,
                "designs": {f"{p}_{lever}": {"design": res.design, "objective": res.objective,
                                             "success": res.success,

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from softclose.textbook.driven_fourbar import (DrivenFourBar, assemble_driven_fourbar,
+from softclose.validation.textbook.driven_fourbar import (DrivenFourBar, assemble_driven_fourbar,
                                                build_driven_fourbar, evaluate_constraints,
                                                locate_joints, track_motion)
 
@@ -34,7 +34,7 @@ def draw(p, t, Q, QD, QDD, out: Path) -> list[str]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from softclose.figures import save
+    from softclose.present.figures import save
 
     out.mkdir(parents=True, exist_ok=True)
     fig, ax = plt.subplots(3, 1, figsize=(8, 9), sharex=True)

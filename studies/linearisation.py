@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from softclose.textbook.linearisation import (LeverFourBar, compare_linearisation,
+from softclose.validation.textbook.linearisation import (LeverFourBar, compare_linearisation,
                                               compute_loop_residual, solve_error_limit,
                                               solve_output_angle)
 
@@ -31,7 +31,7 @@ def draw(link, r, limit, limit_seed, out: Path) -> str:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from softclose.figures import save
+    from softclose.present.figures import save
 
     out.mkdir(parents=True, exist_ok=True)
     phi = np.degrees(r["phi"])

@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 import softclose
-from softclose.figures import save
+from softclose.present.figures import save
 from softclose.jsonio import dumps
 
 OUT = Path(__file__).resolve().parent / "out" / "pareto_closing_time"

@@ -11,8 +11,8 @@ Writes to studies/out/report_figures/:
                        studies/out/<name>/ (every study writes its own files there)
 
 ``--format pdf`` (or svg) writes every figure in that format and in the report style
-(``softclose.figures``: a 3.5 in column, 8-pt text, vector), through the environment
-variables SOFTCLOSE_FIGURE_FORMAT and SOFTCLOSE_FIGURE_STYLE that ``softclose.figures.save``
+(``softclose.present.figures``: a 3.5 in column, 8-pt text, vector), through the environment
+variables SOFTCLOSE_FIGURE_FORMAT and SOFTCLOSE_FIGURE_STYLE that ``softclose.present.figures.save``
 reads; ``--format png`` (the default) keeps the screen style.
 
 Usage: python studies/report_figures.py [--fast] [--format png|pdf|svg] [--only NAME ...]

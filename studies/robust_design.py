@@ -25,7 +25,7 @@ import sys
 from pathlib import Path
 
 import softclose
-from softclose.figures import save
+from softclose.present.figures import save
 from softclose.jsonio import jsonable
 from softclose.robust import optimise_robust, sensitivity
 

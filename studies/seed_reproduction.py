@@ -26,8 +26,8 @@ from pathlib import Path
 
 import softclose
 from softclose.bench import SEED_KEYS, seed_reproduction
-from softclose.figures import save
-from softclose.figures.bench import plot_seed_reproduction
+from softclose.present.figures import save
+from softclose.present.figures.bench import plot_seed_reproduction
 from softclose.jsonio import dumps
 
 OUT = Path(__file__).resolve().parent / "out" / "seed_reproduction"

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 import softclose
-from softclose.figures import save
+from softclose.present.figures import save
 from softclose.jsonio import dumps
 from softclose.optimiser import optimise
 from softclose.sweeps import sweep

@@ -1,11 +1,11 @@
 """Does every stressed stroke give an answer the adaptive reference confirms, or a clear report of why not?
 
-Runs the stress cases of ``softclose.stress.stress_cases``: damping from 0 to 1e6 N s/m, spring
+Runs the stress cases of ``softclose.validation.stress.stress_cases``: damping from 0 to 1e6 N s/m, spring
 stiffness up to 1e6 N/m, steps far too large and very small, long undamped runs (energy drift
 reported), a geometry driven near a toggle position, a release angle near the edge of the
 assembly, and a few other edges. Each case is simulated with the fixed-step kernel; an answer is
 compared with CVODES (tolerance 1e-12): each metric must lie within the accuracy target or
-within 4 x the stroke's own error estimate (``softclose.stress.confirm``). A failed stroke must
+within 4 x the stroke's own error estimate (``softclose.validation.stress.confirm``). A failed stroke must
 come with a one-line report; an unstable one is re-run at the step the report recommends. A
 NaN, a traceback or a mismatch is a finding (exit code 1).
 
@@ -23,7 +23,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from softclose import stress
+from softclose.validation import stress
 from softclose.cli.bench import write_csv
 from softclose.jsonio import dumps
 

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from softclose.textbook.synthesis import (PIVOT_A, PROBLEM7_POINTS, classify_solutions,
+from softclose.validation.textbook.synthesis import (PIVOT_A, PROBLEM7_POINTS, classify_solutions,
                                           locate_poses, make_design, solve_precision_points,
                                           trace_circuit)
 
@@ -51,7 +51,7 @@ def draw(result, z, out: Path) -> str:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from softclose.figures import save
+    from softclose.present.figures import save
 
     out.mkdir(parents=True, exist_ok=True)
     d, a = result.points, result.pivot_a

@@ -28,10 +28,10 @@ atexit.register(shutil.rmtree, _CACHE, True)
 os.environ["SOFTCLOSE_CACHE"] = _CACHE
 
 from softclose.config import default_config, from_dict
-from softclose.model import LidModel
-from softclose.reference import Reference
+from softclose.model.lid import LidModel
+from softclose.simulation.reference import Reference
 from softclose.problem import as_params
-from softclose.simulate import Simulator
+from softclose.simulation.simulator import Simulator
 
 #: the second geometry of the test suite (SPEC §6 keys); assembly computed below
 GEOMETRY2 = {"crank_oa": 0.05, "crank_bc": 0.09, "pivot_b": [0.065, 0.02],

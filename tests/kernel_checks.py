@@ -19,9 +19,9 @@ import numpy as np
 _SCALAR_RUN = """
 import json, sys
 import numpy as np
-from softclose import native
+from softclose.simulation.kernel import binding as native
 from softclose.config import default_config
-from softclose.simulate import Simulator
+from softclose.simulation.simulator import Simulator
 sim = Simulator(default_config()); st = sim.cfg.stroke
 D = np.array(json.loads(sys.stdin.read()), dtype=float)
 out = native.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0, st.theta_closed, D)

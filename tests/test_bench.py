@@ -16,14 +16,14 @@ import numpy as np
 import pytest
 
 from softclose import bench
-from softclose.bench import later
+from softclose.bench import features as later
 from softclose.cli import main
 from softclose.cli.bench import default_text, work_precision_markdown
 from softclose.config import default_config
-from softclose.model import LidModel
+from softclose.model.lid import LidModel
 from softclose.problem import TARGETS
-from softclose.reference import Reference
-from softclose.simulate import Simulator
+from softclose.simulation.reference import Reference
+from softclose.simulation.simulator import Simulator
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -145,8 +145,8 @@ def test_full_design_set_confirms_the_default_from_rows():
 
 
 def test_figure_legend_names_the_configured_default(wp):
-    from softclose.figures import plt
-    from softclose.figures.bench import plot_error_vs_step, plot_work_precision
+    from softclose.present.figures import plt
+    from softclose.present.figures.bench import plot_error_vs_step, plot_work_precision
     for fig in (plot_work_precision(wp), plot_error_vs_step(wp)):
         labels = [t.get_text() for t in fig.legends[0].get_texts()]
         plt.close(fig)

@@ -19,12 +19,12 @@ import numpy as np
 import pytest
 
 from conftest import cross2, np_closure_all, wrap_deg
-from softclose import kinematics as kin
+from softclose.model import kinematics as kin
 from softclose.config import default_config, from_dict
 from softclose.errors import ConfigError
-from softclose.model import LidModel
-from softclose.reference import Reference
-from softclose.simulate import Simulator
+from softclose.model.lid import LidModel
+from softclose.simulation.reference import Reference
+from softclose.simulation.simulator import Simulator
 
 DEFAULT_ASSEMBLY = (18.0, 108.6655, 146.8855)
 

@@ -20,14 +20,14 @@ ROOT = Path(__file__).resolve().parents[1]
 #: library it loaded, or "extension" when the package's built extension is used
 PROBE = r"""
 import sys
-from softclose import native
+from softclose.simulation.kernel import binding as native, library
 from softclose.config import default_config
-from softclose.simulate import Simulator
-ext = native._built_extension()
+from softclose.simulation.simulator import Simulator
+ext = library._built_extension()
 native.load()
 r = Simulator(default_config(), cached=True).run()
 assert r.closed, r
-print("extension" if ext is not None else native._fallback_name())
+print("extension" if ext is not None else library._fallback_name())
 """
 
 
@@ -109,8 +109,8 @@ def test_what_a_killed_build_leaves_is_ignored_and_cleaned_up(tmp_path):
     cache = tmp_path / "cache"
     cache.mkdir()
     dead, alive = _dead_pid(), os.getpid()
-    name = subprocess.run([sys.executable, "-c", "from softclose import native; "
-                           "print(native._fallback_name())"], capture_output=True,
+    name = subprocess.run([sys.executable, "-c", "from softclose.simulation.kernel import library; "
+                           "print(library._fallback_name())"], capture_output=True,
                           text=True, env=_env(), check=True).stdout.strip()
     left = [cache / f".{name}.{dead}.tmp", cache / f".model-abc.{dead}.tmp"]
     for p in left:

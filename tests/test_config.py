@@ -16,7 +16,7 @@ from conftest import np_closure_all
 from softclose import cli
 from softclose.config import default_config, from_dict, load_config, to_dict
 from softclose.errors import ConfigError
-from softclose.model import LidModel
+from softclose.model.lid import LidModel
 from softclose.problem import as_params
 
 SPEC6 = {

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from softclose import elements
+from softclose.model import elements
 from softclose.config import KEYS, RANGES, SCHEMA, TOLERANCE_KEYS, default_config, docs
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -16,11 +16,11 @@ import numpy as np
 import pytest
 
 from softclose.config import default_config
-from softclose.model import LidModel
+from softclose.model.lid import LidModel
 from softclose.problem import PARAM_KEYS, TARGETS
-from softclose.reference import Reference
-from softclose.simulate import Simulator
-from softclose.textbook.lid_absolute import compute_theta_ddot, read_parameters
+from softclose.simulation.reference import Reference
+from softclose.simulation.simulator import Simulator
+from softclose.validation.textbook.lid_absolute import compute_theta_ddot, read_parameters
 
 PIVOTS = ("O", "B", "A", "C")
 

@@ -1,6 +1,6 @@
 """How results show in a notebook: a short repr and an HTML table with the numbers, their
 units and accuracies, the limits, the yield with its interval and failures in plain words
-(softclose.display)."""
+(softclose.present.display)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import softclose
-from softclose.display import MAX_ROWS, Display, Table, interval, num, percent, pm, to_html
+from softclose.present.display import MAX_ROWS, Display, Table, interval, num, percent, pm, to_html
 
 
 def text(html: str) -> str:
@@ -157,7 +157,7 @@ def test_robust_result_shows_both_yields(cfg):
 
 
 def test_optimal_grid_result(cfg):
-    from softclose.optimal_grid import optimise_grid
+    from softclose.sweeps.optimal import optimise_grid
     res = optimise_grid(cfg, {"mass.lid": [0.4, 0.6]})
     t = text(res._repr_html_())
     assert "points 2 (2 over mass.lid)" in t and "verified 2" in t

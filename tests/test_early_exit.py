@@ -16,10 +16,10 @@ import math
 import numpy as np
 import pytest
 
-from softclose import native
-from softclose.reference import Reference
+from softclose.simulation.kernel import binding as native
+from softclose.simulation.reference import Reference
 from softclose.problem import as_params
-from softclose.simulate import Simulator
+from softclose.simulation.simulator import Simulator
 
 from kernel_checks import energy_rise_ratio, scalar_strokes
 

@@ -24,14 +24,14 @@ import numpy as np
 import pytest
 
 import softclose
-from softclose import native
+from softclose.simulation.kernel import binding as native
 from softclose.config import default_config
-from softclose.integrators import get_method
-from softclose.model import LidModel
+from softclose.simulation.integrators import get_method
+from softclose.model.lid import LidModel
 from softclose.problem import METRIC_KEYS, TARGETS, as_params
-from softclose.reference import Reference
-from softclose.simulate import Simulator
-from softclose.textbook.lid_absolute import compute_theta_ddot, read_parameters
+from softclose.simulation.reference import Reference
+from softclose.simulation.simulator import Simulator
+from softclose.validation.textbook.lid_absolute import compute_theta_ddot, read_parameters
 
 from kernel_checks import energy_rise_ratio, scalar_strokes
 
@@ -462,7 +462,7 @@ def _agree(row, r):
 
 def test_sweep_and_sample_rows_equal_single_strokes():
     """Both keys are columns of the kernel's rows: a grid and a sample over them give each
-    design's numbers as softclose.simulate of that design does."""
+    design's numbers as softclose.simulation.simulator of that design does."""
     cfg = cfg_of(**SPRING)
     res = softclose.sweep(cfg, {"design.end_damper_c": [0.0, 0.3, 1.5],
                                 "design.end_damper_angle_deg": [-1.0, 6.0, 12.0, 25.0]})
@@ -566,8 +566,8 @@ def test_bad_values_are_refused_in_one_line(key, value, msg):
 
 
 def test_time_history_figure_marks_the_engagement():
-    from softclose.figures import plt
-    from softclose.figures.stroke import plot_time_histories
+    from softclose.present.figures import plt
+    from softclose.present.figures.stroke import plot_time_histories
     from test_figures_read import _clear
     for sets, text in (({**SPRING, **end(0.8, 10.0)}, "end damper on\n0.1128 s, -2.424 rad/s"),
                        ({**SPRING, **end(0.3, 25.0)}, "end damper engaged\nfrom the release"),

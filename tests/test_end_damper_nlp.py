@@ -19,7 +19,7 @@ from softclose.optimiser.nlp import J_INDEX
 from softclose.optimiser.optimiser import claims
 from softclose.optimiser.starts import initial_guess
 from softclose.problem import PARAM_COLUMNS, agreement_tolerance, params_of
-from softclose.reference import Reference
+from softclose.simulation.reference import Reference
 
 #: the default optimum's spring and dashpot with an end damper engaging at 5 deg
 DESIGN = {"design.spring_k": 1914.709, "design.spring_rest_length": 0.07925707,

@@ -14,8 +14,8 @@ import math
 import numpy as np
 import pytest
 
-from softclose.model import LidModel
-from softclose.simulate import Simulator
+from softclose.model.lid import LidModel
+from softclose.simulation.simulator import Simulator
 from softclose.problem import as_params
 
 HELD_OPEN = as_params([2200.0, 0.09, 0.0, 0.0])

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from softclose.config import default_config
-from softclose.figures import _curve_points, label_extent, plt
-from softclose.simulate import Simulator
+from softclose.present.figures import _curve_points, label_extent, plt
+from softclose.simulation.simulator import Simulator
 
 OPTIMUM = {"spring_k": 1914.709221517871, "spring_rest_length": 0.07925707423701318,
            "damper_c": 2087.754103066556}
@@ -39,7 +39,7 @@ def _clear(fig, labels, twins=()):
 
 @pytest.mark.parametrize("design", list(DESIGNS.values()), ids=list(DESIGNS))
 def test_stroke_figure_labels_sit_off_the_curves(design):
-    from softclose.figures.stroke import plot_time_histories
+    from softclose.present.figures.stroke import plot_time_histories
     res = Simulator(default_config().with_design(**design)).run(trajectory=True)
     fig = plot_time_histories(res)
     assert len(fig.labels) == (3 if res.closed else 1)
@@ -76,7 +76,7 @@ def test_yield_legend_covers_no_bar():
 
 def test_sweep_map_axes_stay_within_the_grid():
     """The issue's map: damper_c = [100, 1000, 4000] ran from -350 to 5500 N s/m."""
-    from softclose.figures.sweep import plot_maps
+    from softclose.present.figures.sweep import plot_maps
     from softclose.sweeps import sweep
     res = sweep(default_config(), {"design.spring_k": np.linspace(500, 9500, 7),
                                    "design.damper_c": [100.0, 1000.0, 4000.0]})
@@ -96,7 +96,7 @@ def test_sweep_map_axes_stay_within_the_grid():
 
 
 def test_sweep_map_names_each_fixed_key_s_unit():
-    from softclose.figures.sweep import unit
+    from softclose.present.figures.sweep import unit
     assert unit("design.torsion_k") == "N m/rad"
     assert unit("design.torsion_free_angle_deg") == "deg"
     assert unit("geometry.assembly[1]") == "deg" and unit("geometry.pivot_b[0]") == "m"
@@ -104,7 +104,7 @@ def test_sweep_map_names_each_fixed_key_s_unit():
 
 def test_sweep_map_note_gives_a_word_key_no_unit():
     """A kind held fixed reads "spring_kind = compression", numbers keep their units."""
-    from softclose.figures.sweep import _views
+    from softclose.present.figures.sweep import _views
     from softclose.sweeps import sweep
     cfg = default_config().update({"design.spring_kind": "compression",
                                    "design.spring_rest_length": 0.09})
@@ -117,7 +117,7 @@ def test_sweep_map_note_gives_a_word_key_no_unit():
 def test_the_default_stroke_shows_at_least_60_frames(tmp_path):
     from PIL import Image
 
-    from softclose.figures.stroke import FPS, slow_motion_factor, write_animation
+    from softclose.present.figures.stroke import FPS, slow_motion_factor, write_animation
     sim = Simulator(default_config())
     res = sim.run(trajectory=True)
     assert res.closing_time == pytest.approx(0.1491478, abs=1e-7)

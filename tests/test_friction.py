@@ -18,10 +18,10 @@ import numpy as np
 import pytest
 
 from softclose.config import default_config
-from softclose.model import LidModel
-from softclose.reference import Reference
-from softclose.simulate import Simulator
-from softclose.textbook.lid_absolute import compute_theta_ddot, read_parameters
+from softclose.model.lid import LidModel
+from softclose.simulation.reference import Reference
+from softclose.simulation.simulator import Simulator
+from softclose.validation.textbook.lid_absolute import compute_theta_ddot, read_parameters
 
 #: a spring that holds the lid open in a well near 11 deg (no damper: friction alone)
 WELL = dict(spring_k=3000.0, spring_rest_length=0.0792571, damper_c=0.0)

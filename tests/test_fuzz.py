@@ -986,7 +986,7 @@ def test_budgets():
 def test_stress_designs_admitted():
     """The ranges admit every design of the stress survey (dampers to 1e6 N s/m, springs to
     1e6 N/m, steps from 1e-7 s to 1 s, 60 s strokes): they bound nonsense, not studies."""
-    stress = pytest.importorskip("softclose.stress")
+    stress = pytest.importorskip("softclose.validation.stress")
     from softclose.config import default_config
     for case in stress.stress_cases(fast=False):
         default_config().replace(**case.overrides)     # raises ConfigError if refused
@@ -1011,7 +1011,7 @@ def test_trajectory_budget(sets, rows, tmp_path):
     # that step fits (checked without writing a million rows): no refusal, and its stroke
     # has at most the budget's rows
     from softclose.config import TRAJECTORY_BUDGET
-    from softclose.simulate import Simulator
+    from softclose.simulation.simulator import Simulator
     cfg = load_config(None, sets + [f"simulate.step={step}"])
     sim = Simulator(cfg)
     p = sim.model.params()

@@ -9,10 +9,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from softclose import native
-from softclose.integrators import METHODS, casadi_step, get_method
-from softclose.reference import Reference
-from softclose.simulate import Simulator, amplification
+from softclose.simulation.kernel import binding as native
+from softclose.simulation.integrators import METHODS, casadi_step, get_method
+from softclose.simulation.reference import Reference
+from softclose.simulation.simulator import Simulator, amplification
 from softclose.problem import as_params
 
 

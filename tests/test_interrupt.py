@@ -40,13 +40,13 @@ def inside(frames):
                 for f, n in frames)
     if where == "cvodes":
         return top.endswith(sep.join(("casadi", "casadi.py"))) and \
-            any(f.endswith(sep.join(("softclose", "reference.py"))) for f in files)
+            any(f.endswith(sep.join(("simulation", "reference.py"))) for f in files)
     if where == "kernel":
-        return any(f.endswith(sep.join(("softclose", "native.py"))) and n == "run_strokes"
+        return any(f.endswith(sep.join(("kernel", "binding.py"))) and n == "run_strokes"
                    for f, n in frames)
     if where == "figure":
         return sep.join(("matplotlib", "")) in top and \
-            any(sep.join(("softclose", "figures", "")) in f and n.startswith(("plot_", "save"))
+            any(sep.join(("present", "figures", "")) in f and n.startswith(("plot_", "save"))
                 for f, n in frames)
     raise SystemExit(f"unknown place {where}")
 

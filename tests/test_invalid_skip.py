@@ -18,13 +18,15 @@ import numpy as np
 import pytest
 
 import softclose
-from softclose import elements, native, statics
+from softclose.model import elements
+from softclose.simulation.kernel import binding as native
+from softclose.simulation import statics
 from softclose.config import default_config
-from softclose.model import LidModel
+from softclose.model.lid import LidModel
 from softclose.problem import params_of
-from softclose.reference import Reference
-from softclose.simulate import Simulator
-from softclose.stroke import StrokeStatus
+from softclose.simulation.reference import Reference
+from softclose.simulation.simulator import Simulator
+from softclose.simulation.stroke import StrokeStatus
 
 #: a compression spring whose free length (50 mm) is below the spring's shortest length on
 #: the default geometry (52.3 mm): invalid over the whole stroke

@@ -11,10 +11,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from softclose import native, statics
+from softclose.simulation.kernel import binding as native
+from softclose.simulation.kernel import library
+from softclose.simulation import statics
 from softclose.errors import ConfigError
-from softclose.model import LidModel
-from softclose.simulate import Simulator
+from softclose.model.lid import LidModel
+from softclose.simulation.simulator import Simulator
 from softclose.problem import as_params
 
 COL = {name: i for i, name in enumerate(native.OUT_FIELDS)}
@@ -156,7 +158,7 @@ def test_the_kernel_s_layout_is_checked_at_load():
     """Every layout constant shared with the C side (columns, rows, outputs, range columns)
     is compared when the kernel is loaded: a mismatch is a one-line error naming it."""
     lib = native.load()
-    native.check_layout(lib)                                  # the built kernel agrees
+    library.check_layout(lib)                                  # the built kernel agrees
 
     class Other:                                              # a kernel of another layout
         def __init__(self, layout):
@@ -166,6 +168,6 @@ def test_the_kernel_s_layout_is_checked_at_load():
 
     wrong = native.LAYOUT.replace("row=spring_k,", "row=k,")
     with pytest.raises(native.NumericalError, match="row: the kernel has 'k,spring_rest"):
-        native.check_layout(Other(wrong))
+        library.check_layout(Other(wrong))
     with pytest.raises(native.NumericalError, match="nrng"):
-        native.check_layout(Other(native.LAYOUT.replace("nrng=18", "nrng=17")))
+        library.check_layout(Other(native.LAYOUT.replace("nrng=18", "nrng=17")))

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from conftest import np_closure, wrap_deg
-from softclose import kinematics as kin
+from softclose.model import kinematics as kin
 
 SPEC_PHI_DEG, SPEC_GAMMA_DEG = 108.6655, 146.8855   # SPEC §8, published to 4 decimals
 

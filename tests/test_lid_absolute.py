@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from softclose.textbook.driven_fourbar import evaluate_constraints, evaluate_gamma, evaluate_jacobian
-from softclose.textbook.lid_absolute import (build_lid_system, compute_theta_ddot, default_parameters,
+from softclose.validation.textbook.driven_fourbar import evaluate_constraints, evaluate_gamma, evaluate_jacobian
+from softclose.validation.textbook.lid_absolute import (build_lid_system, compute_theta_ddot, default_parameters,
                                              read_parameters, solve_lid_accelerations)
 
 
@@ -41,7 +41,7 @@ def test_config_parameters_match_the_spec_defaults():
 
 def test_agrees_with_reduced_model_at_random_states():
     config = pytest.importorskip("softclose.config")
-    model = pytest.importorskip("softclose.model")
+    model = pytest.importorskip("softclose.model.lid")
     cfg = config.load_config(overrides=["design.spring_k=350", "design.spring_rest_length=0.045",
                                         "design.damper_c=40", "design.rotary_damper_c=0.03"])
     reduced = model.LidModel(cfg)

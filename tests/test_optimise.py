@@ -27,7 +27,7 @@ import pytest
 from softclose.cli import main
 from softclose.optimiser import OptimiseResult, get_nlp, optimise, solve, verify
 from softclose.problem import (DESIGN_KEYS, METRIC_KEYS, agreement_tolerance, objective)
-from softclose.simulate import Simulator
+from softclose.simulation.simulator import Simulator
 from softclose.problem import as_params
 
 J_DEFAULT = 0.0228995
@@ -50,8 +50,8 @@ def test_default_optimum_is_verified(cfg, result):
     ver = result.verification
     assert ver.ok and result.verified
     # the verified metrics are the reference's, recomputed here independently
-    from softclose.reference import Reference
-    from softclose.model import LidModel
+    from softclose.simulation.reference import Reference
+    from softclose.model.lid import LidModel
     p = np.r_[[result.design[k] for k in DESIGN_KEYS], cfg.design.rotary_damper_c]
     ref = Reference(LidModel(cfg)).simulate(p)      # its own model, 2 ms output grid
     for k in METRIC_KEYS:

@@ -13,11 +13,11 @@ from hypothesis import HealthCheck, Phase, example, given, settings
 from hypothesis import strategies as st
 
 from softclose.config import default_config
-from softclose.model import LidModel
+from softclose.model.lid import LidModel
 from softclose.optimiser import optimise
 from softclose.problem import (DESIGN_KEYS, ERROR_KEYS, METRIC_KEYS, VERIFY_RTOL,
                                agreement_tolerance, target)
-from softclose.reference import Reference
+from softclose.simulation.reference import Reference
 
 CFG = default_config()
 _REFS: dict = {}

@@ -11,9 +11,9 @@ from softclose.config import default_config
 from softclose.errors import ConfigError
 from softclose.optimiser.cache import get_model
 from softclose.optimiser.interval import ChebyshevFit, bound_interval, nlp_elements
-from softclose.optimiser.placement import SLOTS, placed_config, slot_values
+from softclose.optimiser.free_points import SLOTS, placed_config, slot_values
 from softclose.problem import params_of
-from softclose.reference import Reference
+from softclose.simulation.reference import Reference
 
 BOX = {"geometry.spring_anchor[0]": [-0.09, -0.03], "geometry.spring_anchor[1]": [-0.01, 0.05],
        "geometry.lid_e[0]": [-0.006, 0.044], "geometry.lid_e[1]": [0.004, 0.024]}

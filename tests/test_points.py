@@ -21,15 +21,15 @@ import numpy as np
 import pytest
 
 import softclose
-from softclose import native
+from softclose.simulation.kernel import binding as native
 from softclose.config import default_config
 from softclose.config.free import PLACEMENT_KEYS
 from softclose.errors import ConfigError
 from softclose.problem import ERROR_KEYS, params_of, target
-from softclose.reference import Reference
+from softclose.simulation.reference import Reference
 from softclose.robust.evaluate import evaluate, slow_keys
-from softclose.simulate import Simulator
-from softclose.stroke import StrokeStatus
+from softclose.simulation.simulator import Simulator
+from softclose.simulation.stroke import StrokeStatus
 
 from kernel_checks import energy_rise_ratio, scalar_strokes
 
@@ -139,7 +139,7 @@ def test_points_against_the_reference():
     res = sim.run_batch(P, points=pts)
     for i in range(3):
         c = cfg.update({k: v[i] for k, v in pts.items()})
-        R = Reference(softclose.model.LidModel(c)).simulate(P[i])
+        R = Reference(softclose.model.lid.LidModel(c)).simulate(P[i])
         assert res["closed"][i] and R.closed
         for k in ERROR_KEYS:
             assert abs(res[k][i] - getattr(R, k)) <= target(k, getattr(R, k)), (i, k)
@@ -244,7 +244,7 @@ def test_placement_keys_are_fast_keys():
 
 
 def test_sample_over_placement_keys_matches_simulate():
-    """A sample over the four placement keys: each row as softclose.simulate of the config
+    """A sample over the four placement keys: each row as softclose.simulation.simulator of the config
     with that row's points (metrics, status, reason)."""
     cfg = default_config().update({"design.spring_k": 1914.709,
                                    "design.spring_rest_length": 0.07925707,

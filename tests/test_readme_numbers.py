@@ -71,7 +71,7 @@ def test_optimum(optimum):
 
 def test_the_quoted_digits_reproduce_the_optimum_and_rounder_ones_do_not(optimum):
     """7 digits keep the design within both active limits; the old 3-4 digits do not."""
-    from softclose.simulate import Simulator
+    from softclose.simulation.simulator import Simulator
     o = default_config().optimise
     quoted = {k: float(f"{v:.7g}") for k, v in optimum.design.items()}
     r = Simulator(default_config().with_design(**quoted)).run()

@@ -13,15 +13,15 @@ import pytest
 
 from softclose import cli
 from softclose.config import default_config
-from softclose.model import LidModel
+from softclose.model.lid import LidModel
 from softclose.problem import (CONSTRAINT_TOL, DESIGN_KEYS, VERIFY_RTOL, agreement_tolerance,
                                objective)
-from softclose.reference import Reference
+from softclose.simulation.reference import Reference
 from softclose.robust import optimise_robust, tolerance_analysis
 from softclose.robust import policy, scenarios, solve
 from softclose.robust.box import box_of
 from softclose.robust.evaluate import evaluate
-from softclose.robust.nlp import discretise
+from softclose.robust.discretisation import discretise
 
 SPREADS = {"design.spring_k": 0.10, "design.damper_c": 0.20, "mass.lid": 0.05}
 

@@ -14,8 +14,10 @@ import numpy as np
 import pytest
 
 from softclose import buildcache
+from softclose.optimiser import compiled
 
 rnlp = importlib.import_module("softclose.robust.nlp")
+rdisc = importlib.import_module("softclose.robust.discretisation")
 
 #: a small problem: 2 scenarios of the default box, 4 intervals of 2 sub-steps (the
 #: compiled library of it takes a few seconds; the co-design's takes ~100 s)
@@ -47,12 +49,12 @@ def _solve(cfg):
 
 
 def test_threads_give_the_same_solve(cache, cfg, monkeypatch):
-    monkeypatch.setattr(rnlp, "MAX_MAP_THREADS", 1)
-    assert rnlp.map_threads() == 1
+    monkeypatch.setattr(rdisc, "MAX_MAP_THREADS", 1)
+    assert rdisc.map_threads() == 1
     _, one = _solve(cfg)
     rnlp.forget()
-    monkeypatch.setattr(rnlp, "MAX_MAP_THREADS", 4)
-    monkeypatch.setattr(rnlp, "map_threads", lambda: 3)     # threads even on one core
+    monkeypatch.setattr(rdisc, "MAX_MAP_THREADS", 4)
+    monkeypatch.setattr(rdisc, "map_threads", lambda: 3)     # threads even on one core
     _, three = _solve(cfg)
     assert one.success and three.success
     assert three.r["iterations"] == one.r["iterations"]
@@ -82,7 +84,7 @@ def test_the_compiled_scenario_nlp_gives_the_same_solve(cache, cfg, monkeypatch)
     key = vm_problem.nlp.key
     lib = rnlp.prepare(cfg, vm_problem.model_cfgs, NODES, SUBSTEPS,
                        cfg.tolerance.robust_objective, vm_problem.M2)
-    assert lib is not None and lib == buildcache.compiled_nlp(key, buildcache.SCENARIO_CFLAGS)
+    assert lib is not None and lib == compiled.compiled_nlp(key, compiled.SCENARIO_CFLAGS)
     rnlp.forget()
     problem, fast = _solve(cfg)
     assert problem.nlp.library is not None and problem.nlp.build_time < 0.5
@@ -105,5 +107,5 @@ def test_the_compiled_scenario_nlp_gives_the_same_solve(cache, cfg, monkeypatch)
     rnlp.forget()
     problem, again = _solve(cfg)
     assert problem.nlp.library is None
-    assert buildcache.compiled_nlp(key, buildcache.SCENARIO_CFLAGS) is None
+    assert compiled.compiled_nlp(key, compiled.SCENARIO_CFLAGS) is None
     assert np.array_equal(again.r["x"], vm.r["x"])

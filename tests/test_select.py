@@ -83,7 +83,7 @@ def catalog(tmp_path_factory):
 def _reference_verdicts():
     """Per pair (spring, damper): the reference's verdict at each of the 8 corners of its box,
     built from the catalog's numbers here."""
-    from softclose.model import LidModel
+    from softclose.model.lid import LidModel
     from softclose.optimiser.verify import Checker, verify
     cfg = _cfg()
     springs, dampers = _rows(SPRINGS), _rows(DAMPERS)
@@ -239,7 +239,7 @@ def test_damper_c_optimised_without_a_damper_catalog(tmp_path):
     """Without dampers, c is chosen per spring: at the best spring's c the box is feasible
     at every corner, and 10 % more c breaks a corner or 10 % less raises the worst J."""
     from softclose.catalog import read_springs, select
-    from softclose.catalog.parts import DamperEntry
+    from softclose.catalog.files import DamperEntry
     from softclose.catalog.screen import pair_box, run_pairs, summarise
     cfg = _cfg()
     s = read_springs(_write(tmp_path, "s.csv", SPRINGS))

@@ -18,10 +18,10 @@ import numpy as np
 import pytest
 
 from softclose import cli
-from softclose.model import LidModel
-from softclose.reference import Reference
+from softclose.model.lid import LidModel
+from softclose.simulation.reference import Reference
 from softclose.problem import METRIC_KEYS
-from softclose.simulate import Simulator
+from softclose.simulation.simulator import Simulator
 from softclose.problem import as_params
 
 TOL = {"closing_time": 1e-7, "impact_theta_dot": 1e-6}

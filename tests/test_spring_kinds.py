@@ -19,15 +19,15 @@ import pytest
 
 import softclose
 from conftest import np_closure
-from softclose import statics
+from softclose.simulation import statics
 from softclose.cli import main
 from softclose.config import default_config
-from softclose.model import LidModel
+from softclose.model.lid import LidModel
 from softclose.problem import PARAM_KEYS, TARGETS
-from softclose.reference import Reference
-from softclose.simulate import Simulator
-from softclose.stroke import StrokeStatus
-from softclose.textbook.lid_absolute import compute_theta_ddot, read_parameters
+from softclose.simulation.reference import Reference
+from softclose.simulation.simulator import Simulator
+from softclose.simulation.stroke import StrokeStatus
+from softclose.validation.textbook.lid_absolute import compute_theta_ddot, read_parameters
 
 #: a compression spring (gas strut) that stays shorter than its free length over the stroke
 #: (l runs 52.3..58.4 mm on the default geometry), and an extension spring that stays longer

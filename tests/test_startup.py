@@ -13,8 +13,9 @@ import pytest
 
 import softclose
 from softclose import buildcache
+from softclose.optimiser import compiled
 from softclose.config import from_dict, to_dict
-from softclose.simulate import Simulator
+from softclose.simulation.simulator import Simulator
 
 
 @pytest.fixture
@@ -28,7 +29,7 @@ def _clear_memory():
     import importlib
     oc = importlib.import_module("softclose.optimiser.cache")
     verify = importlib.import_module("softclose.optimiser.verify")
-    importlib.import_module("softclose.model")._SHARED.clear()
+    importlib.import_module("softclose.model.lid")._SHARED.clear()
     oc.forget()
     verify._CHECKERS.clear()
 
@@ -114,11 +115,11 @@ def test_the_compiler_and_its_flags_are_part_of_a_librarys_key(cache, monkeypatc
     import shutil
     if shutil.which("cc") is None:
         pytest.skip("no C compiler")
-    a = buildcache.toolchain(buildcache.CFLAGS)
-    assert a is not None and a != buildcache.toolchain(buildcache.SCENARIO_CFLAGS)
+    a = compiled.toolchain(compiled.CFLAGS)
+    assert a is not None and a != compiled.toolchain(compiled.SCENARIO_CFLAGS)
     monkeypatch.setenv("CC", "no-such-compiler-here")
-    assert buildcache.toolchain() is None
-    assert buildcache.compiled_nlp("k") is None
+    assert compiled.toolchain() is None
+    assert compiled.compiled_nlp("k") is None
 
 
 def test_the_cache_can_be_turned_off(monkeypatch, cfg):
@@ -165,17 +166,17 @@ def test_prepare_compiles_in_the_foreground_saying_what(cache, cfg, monkeypatch,
     lib = prepare(cfg)
     err = capfd.readouterr().err
     assert lib is not None and lib.exists() and len(runs) == 1
-    assert runs[0][1:4] == list(buildcache.CFLAGS)
+    assert runs[0][1:4] == list(compiled.CFLAGS)
     assert err.startswith("softclose: building the NLP of the optimiser (")
     assert "(C, -O1) ..." in err and err.rstrip().endswith(" s")
     left = {p.name.split("-")[0] for p in lib.parent.iterdir()}
     assert {"nlp", "nlpmeta"} <= left <= {"model", "table", "nlp", "nlpmeta"}, left
     assert prepare(cfg) == lib and len(runs) == 1         # compiled already
     key = buildcache.key_of("nlp", nlp_key(cfg))
-    assert buildcache.compiled_nlp(key) == lib
+    assert compiled.compiled_nlp(key) == lib
     _clear_memory()
     assert get_nlp(cfg).library is None                   # a foreign library: dropped
-    assert buildcache.compiled_nlp(key) is None
+    assert compiled.compiled_nlp(key) is None
 
 
 @pytest.mark.slow
@@ -221,13 +222,13 @@ def test_the_compiled_nlp_gives_the_same_optimum(cache, cfg, monkeypatch):
     assert out["solver"]["build_time"] < 0.5
     assert out["design"] == pytest.approx(fast.design, rel=1e-12)
     # ... and a damaged library is dropped, the NLP built again: the same answer
-    lib = buildcache.compiled_nlp(key)
+    lib = compiled.compiled_nlp(key)
     tmp = lib.with_suffix(".new")
     tmp.write_bytes(b"\x7fELF damaged")
     os.replace(tmp, lib)
     out = command()
     assert out["design"] == pytest.approx(vm.design, rel=1e-12)
-    assert buildcache.compiled_nlp(key) is None
+    assert compiled.compiled_nlp(key) is None
 
 
 def test_a_config_round_trip_keeps_the_nlp(cfg):

@@ -1,7 +1,7 @@
 """Numerical stress: every stressed stroke gives an answer that the adaptive reference
 confirms, or a clear one-line report of why not. Never a NaN, a hang or a traceback.
 
-The cases are ``softclose.stress.stress_cases(fast=True)`` (damping 0 … 1e6 N s/m, springs up
+The cases are ``softclose.validation.stress.stress_cases(fast=True)`` (damping 0 … 1e6 N s/m, springs up
 to 1e6 N/m, steps far too large and very small, long undamped runs with their energy drift, a
 toggle near or inside the stroke, a release angle at the edge of the assembly) plus random
 valid configs (hypothesis). ``studies/stress_survey.py`` runs the full list and writes the
@@ -17,16 +17,16 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
-from softclose import stress
+from softclose.validation import stress
 from softclose.config import default_config
 from softclose.errors import ConfigError
-from softclose.model import LidModel
-from softclose.reference import Reference
-from softclose.simulate import Simulator
-from softclose.stroke import StrokeStatus
+from softclose.model.lid import LidModel
+from softclose.simulation.reference import Reference
+from softclose.simulation.simulator import Simulator
+from softclose.simulation.stroke import StrokeStatus
 
 #: the numerical stress tests (marker ``stress``); the quick checks of the survey's verdicts
-#: below are unmarked, so that the default run covers ``softclose.stress`` too
+#: below are unmarked, so that the default run covers ``softclose.validation.stress`` too
 stress_mark = pytest.mark.stress
 
 CASES = stress.stress_cases(fast=True)
@@ -219,7 +219,7 @@ def test_reference_near_a_toggle_neither_grinds_nor_raises_a_traceback():
     3 with its message), never a bare RuntimeError of CVODES."""
     import time
     from softclose.errors import NumericalError
-    from softclose.reference import CHUNK_MAX_STEPS
+    from softclose.simulation.reference import CHUNK_MAX_STEPS
     geo = stress.geometry_with_assembly(crank_bc=0.0925)
     cfg = default_config().replace(geometry=geo, stroke={"theta_closed_deg": -2.4})
     ref = Reference(LidModel(cfg))

@@ -116,9 +116,9 @@ def test_work_precision_study(tmp_path):
     rk4 at 2 ms on spec8 recomputed against CVODES at 1e-14."""
     from softclose import bench
     from softclose.config import default_config
-    from softclose.model import LidModel
-    from softclose.reference import Reference
-    from softclose.simulate import Simulator
+    from softclose.model.lid import LidModel
+    from softclose.simulation.reference import Reference
+    from softclose.simulation.simulator import Simulator
     script = STUDIES / "work_precision.py"
     t0 = time.time()
     p = run(script, "--fast", "--no-later", "--out", str(tmp_path))
@@ -151,11 +151,11 @@ def test_work_precision_study(tmp_path):
 def test_stress_survey_study(tmp_path):
     """The fast survey: every case of ``stress_cases(fast=True)`` in order, no finding, and
     a confirmed case's numbers equal the library's stroke and reference."""
-    from softclose import stress
+    from softclose.validation import stress
     from softclose.config import default_config
-    from softclose.model import LidModel
-    from softclose.reference import Reference
-    from softclose.simulate import Simulator
+    from softclose.model.lid import LidModel
+    from softclose.simulation.reference import Reference
+    from softclose.simulation.simulator import Simulator
     script = STUDIES / "stress_survey.py"
     t0 = time.time()
     p = run(script, "--fast", "--out", str(tmp_path))
@@ -182,8 +182,8 @@ def test_seed_reproduction_study(tmp_path):
     configured step) meets the target, Euler–Cromer at 1 kHz is first order and off by
     1e-4 … 5e-2 rad/s, and the printed numbers are the ones written."""
     from softclose.config import default_config
-    from softclose.model import LidModel
-    from softclose.reference import Reference
+    from softclose.model.lid import LidModel
+    from softclose.simulation.reference import Reference
     script = STUDIES / "seed_reproduction.py"
     t0 = time.time()
     p = run(script, "--fast", "--json", "--out", str(tmp_path))

@@ -16,7 +16,7 @@ from softclose.cli import main
 from softclose.config import default_config
 from softclose.errors import ConfigError
 from softclose.problem import METRIC_KEYS
-from softclose.simulate import Simulator
+from softclose.simulation.simulator import Simulator
 from softclose.sweeps import columns, recompute, sweep
 from softclose.sweeps import store
 from softclose.sweeps.space import parse_grid
@@ -369,7 +369,7 @@ def test_the_command_draws_the_maps_itself_and_starts_no_process(tmp_path, monke
     import os
     import subprocess
 
-    import softclose.figures.sweep as fs
+    import softclose.present.figures.sweep as fs
 
     def no(*a, **k):
         raise AssertionError("a process was started")

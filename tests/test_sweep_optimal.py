@@ -11,9 +11,9 @@ import pytest
 
 from softclose.cli import main
 from softclose.errors import ConfigError
-from softclose.model import LidModel
+from softclose.model.lid import LidModel
 from softclose import optimise
-from softclose.optimal_grid import optimise_grid, segments
+from softclose.sweeps.optimal import optimise_grid, segments
 from softclose.problem import as_params
 
 MASSES = [0.4, 0.5, 0.6]
@@ -124,7 +124,7 @@ def test_a_cluster_lost_mid_grid_keeps_the_finished_points(cfg, tmp_path, monkey
     exit 3 (not 130: nobody pressed Ctrl-C)."""
     import contextlib
 
-    from softclose import optimal_grid
+    from softclose.sweeps import optimal as optimal_grid
     from softclose.sweeps import distributed
 
     @contextlib.contextmanager

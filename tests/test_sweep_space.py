@@ -12,7 +12,7 @@ import pytest
 from softclose.cli import main
 from softclose.config import default_config
 from softclose.errors import ConfigError
-from softclose.simulate import Simulator
+from softclose.simulation.simulator import Simulator
 from softclose.sweeps import columns, sample, sweep
 from softclose.sweeps.space import Range, Sample, make_sample, parse_range
 

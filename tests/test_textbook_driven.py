@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from softclose.textbook.driven_fourbar import (GROUND, DrivenFourBar, PlanarSystem, Revolute,
+from softclose.validation.textbook.driven_fourbar import (GROUND, DrivenFourBar, PlanarSystem, Revolute,
                                                add_point_force, assemble_driven_fourbar,
                                                assemble_mass_matrix, build_driven_fourbar,
                                                evaluate_constraints, evaluate_jacobian, locate_joints,

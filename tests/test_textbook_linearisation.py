@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from softclose.textbook.linearisation import (LeverFourBar, compare_linearisation, compute_loop_residual,
+from softclose.validation.textbook.linearisation import (LeverFourBar, compare_linearisation, compute_loop_residual,
                                               select_reference_branch, solve_error_limit,
                                               solve_output_angle)
 

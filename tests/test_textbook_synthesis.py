@@ -5,7 +5,7 @@ import pytest
 
 pytest.importorskip("bertini", reason="optional dependency bertini2 is not installed")
 
-from softclose.textbook.synthesis import (GENERIC_SOLUTION_COUNT, PIVOT_A, PROBLEM7_POINTS,  # noqa: E402
+from softclose.validation.textbook.synthesis import (GENERIC_SOLUTION_COUNT, PIVOT_A, PROBLEM7_POINTS,  # noqa: E402
                                           classify_solutions, evaluate_equations, locate_poses,
                                           solve_precision_points)
 

@@ -19,13 +19,13 @@ import pytest
 
 from softclose import cli
 from softclose.config import ConfigError, default_config, from_dict, load_config
-from softclose.model import LidModel
-from softclose.reference import Reference
+from softclose.model.lid import LidModel
+from softclose.simulation.reference import Reference
 from softclose.robust import sensitivity, tolerance_analysis
 from softclose.robust.box import box_of
 from softclose.robust.evaluate import evaluate
 from softclose.robust.stats import percentiles, wilson
-from softclose.simulate import Simulator
+from softclose.simulation.simulator import Simulator
 
 OPT = {"spring_k": 1914.7092215178668, "spring_rest_length": 0.07925707423701324,
        "damper_c": 2087.7541030665616}

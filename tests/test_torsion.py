@@ -15,14 +15,15 @@ import pytest
 
 import softclose
 from conftest import np_closure
-from softclose import native, statics
+from softclose.simulation.kernel import binding as native
+from softclose.simulation import statics
 from softclose.config import default_config
-from softclose.integrators import casadi_step, get_method
-from softclose.model import LidModel
+from softclose.simulation.integrators import casadi_step, get_method
+from softclose.model.lid import LidModel
 from softclose.problem import PARAM_KEYS, TARGETS, as_params
-from softclose.reference import Reference
-from softclose.simulate import Simulator
-from softclose.textbook.lid_absolute import compute_theta_ddot, read_parameters
+from softclose.simulation.reference import Reference
+from softclose.simulation.simulator import Simulator
+from softclose.validation.textbook.lid_absolute import compute_theta_ddot, read_parameters
 
 #: a free angle per pivot near its angle over the default stroke (deg): a spring that acts
 #: both ways over the stroke

@@ -22,17 +22,17 @@ What it measures (in-process, ``time.perf_counter``, several repeats, the median
   error of the optimal objective and the solve time.
 
 Everything is returned as data (:class:`BenchResult`); ``softclose bench`` formats it and
-writes the files, :mod:`softclose.figures.bench` draws it.
+writes the files, :mod:`softclose.present.figures.bench` draws it.
 
 The modules: :mod:`.precision` (work precision, the cheapest setting, the default),
-:mod:`.calls` (the speed rows, start-up), :mod:`.later` (the sweep, robust, yield, Sobol and
+:mod:`.calls` (the speed rows, start-up), :mod:`.features` (the sweep, robust, yield, Sobol and
 optimiser entries), :mod:`.seed` (the seed's drop), :mod:`.timing` (how things are timed, a
 speed row), :mod:`.benchmark` (:func:`run` and its result, machine and commit).
 """
 
-from ..integrators import SEED
+from ..simulation.integrators import SEED
 from .benchmark import BenchResult, commit, machine, run
-from .later import (LATER_BUDGET_S, OPT_NODES, OPT_SUBSTEPS, SWEEP_GRID, later_entries,
+from .features import (FEATURE_BUDGET_S, OPT_NODES, OPT_SUBSTEPS, SWEEP_GRID, feature_entries,
                     optimiser_study, sweep_axes)
 from .precision import (METRICS, QUICK_DESIGNS, QUICK_STEPS, REFERENCE_TOLS, SPRING_DASHPOT,
                         STEPS, TRUTH_TOL, WorkPrecision, assess_default, cheapest_setting,
@@ -41,11 +41,11 @@ from .seed import SEED_KEYS, SEED_STEP, seed_reading, seed_reproduction
 from .calls import HEAVY_MODULES, cli_time, speed, startup_imports
 from .timing import SPEED_TARGETS, kernel_times, median_time, speed_row, time_stats
 
-__all__ = ["run", "work_precision", "speed", "optimiser_study", "later_entries",
+__all__ = ["run", "work_precision", "speed", "optimiser_study", "feature_entries",
            "assess_default", "cheapest_setting", "errors", "meets", "fit_order",
            "designs_for", "kernel_times", "time_stats", "median_time", "cli_time",
            "startup_imports", "machine", "commit", "sweep_axes", "BenchResult",
            "WorkPrecision", "TRUTH_TOL", "REFERENCE_TOLS", "SEED", "STEPS", "QUICK_STEPS",
            "SPRING_DASHPOT", "SPEED_TARGETS", "HEAVY_MODULES", "SWEEP_GRID", "METRICS",
-           "QUICK_DESIGNS", "LATER_BUDGET_S", "OPT_NODES", "OPT_SUBSTEPS", "speed_row",
+           "QUICK_DESIGNS", "FEATURE_BUDGET_S", "OPT_NODES", "OPT_SUBSTEPS", "speed_row",
            "seed_reading", "seed_reproduction", "SEED_STEP", "SEED_KEYS"]

@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 
 from ..config import Config
-from ..display import Display, Displayed, Table, num
+from ..present.display import Display, Displayed, Table, num
 from ..problem import RELATIVE, TARGETS
-from .later import optimiser_study
+from .features import optimiser_study
 from .precision import WorkPrecision, work_precision
 from .calls import speed
 from .timing import SPEED_TARGETS
@@ -119,7 +119,7 @@ class BenchResult(Displayed):
 
 
 def run(cfg: Config, quick: bool = False, log=None, cli: bool = True,
-        optimiser: bool = True, later: bool = True) -> BenchResult:
+        optimiser: bool = True, features: bool = True) -> BenchResult:
     """The whole benchmark: work precision, speed, optimiser (see the module docstring)."""
     log = log or (lambda *a: None)
     t0 = time.perf_counter()
@@ -127,7 +127,7 @@ def run(cfg: Config, quick: bool = False, log=None, cli: bool = True,
     log("work precision ...")
     wp = work_precision(cfg, quick=quick, log=log)
     log("speed ...")
-    sp = speed(cfg, quick=quick, cli=cli, later=later, log=log)
+    sp = speed(cfg, quick=quick, cli=cli, features=features, log=log)
     log("optimiser ...")
     opt, note = optimiser_study(cfg, quick=quick, log=log) if optimiser else \
         ([], "optimiser section not run")

@@ -1,7 +1,7 @@
 """Speed of the user-facing calls: model build, one stroke (with and without its error
 estimate), the raw kernel, a batch, the reference, ``softclose simulate`` end to end in a
 fresh interpreter and which heavy modules its start-up imports (:func:`speed`), and the
-later features' entries (:mod:`softclose.bench.later`).
+features' entries (:mod:`softclose.bench.features`).
 """
 
 from __future__ import annotations
@@ -12,12 +12,12 @@ import subprocess
 
 import numpy as np
 
-from .. import native
+from ..simulation.kernel import binding as native
 from ..config import Config
-from ..model import LidModel
-from ..reference import Reference
-from ..simulate import Simulator
-from .later import later_entries
+from ..model.lid import LidModel
+from ..simulation.reference import Reference
+from ..simulation.simulator import Simulator
+from .features import feature_entries
 from .timing import (cli_time, fresh_command, fresh_env, kernel_times, median_time,
                      not_measured, speed_row)
 
@@ -25,10 +25,10 @@ from .timing import (cli_time, fresh_command, fresh_env, kernel_times, median_ti
 HEAVY_MODULES = ("pandas", "pyarrow", "scipy", "SALib", "dask", "matplotlib")
 
 
-def speed(cfg: Config, quick: bool = False, cli: bool = True, later: bool = True,
+def speed(cfg: Config, quick: bool = False, cli: bool = True, features: bool = True,
           log=None) -> list[dict]:
     """Run times (median of repeats) of model build, one stroke, the kernel, the reference,
-    the CLI start-up, and (``later``) the sweep / robust / yield / Sobol entries."""
+    the CLI start-up, and (``features``) the sweep / robust / yield / Sobol entries."""
     log = log or (lambda *a: None)
     rows = []
 
@@ -84,8 +84,8 @@ def speed(cfg: Config, quick: bool = False, cli: bool = True, later: bool = True
                                      "run softclose bench") for key, _, what in STARTUP)
         else:
             rows.extend(startup_rows(rc, log))
-    if later:
-        rows.extend(later_entries(cfg, quick=quick, log=log))
+    if features:
+        rows.extend(feature_entries(cfg, quick=quick, log=log))
     return rows
 
 

@@ -33,7 +33,7 @@ def _sets(values: dict) -> list[str]:
 
 
 def fit_entries(rows: list, timed, repeats: int) -> None:
-    """Time both fits with ``timed(key, what, fn, repeats)`` (the later entries' timer: the
+    """Time both fits with ``timed(key, what, fn, repeats)`` (the feature entries' timer: the
     median of the repeats, the machine's load recorded; it appends the row to ``rows``);
     each row's note gives the fit's iterations, samples and identifiability verdict."""
     from ..calibration.synthetic import angle_track, gyroscope_track, write_csv

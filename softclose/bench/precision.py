@@ -13,11 +13,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..config import Config
-from ..integrators import METHODS, SEED
-from ..model import LidModel
+from ..simulation.integrators import METHODS, SEED
+from ..model.lid import LidModel
 from ..problem import RELATIVE, TARGETS, as_params, params_of
-from ..reference import Reference
-from ..simulate import Simulator
+from ..simulation.reference import Reference
+from ..simulation.simulator import Simulator
 from .timing import kernel_times, time_stats
 
 #: the metrics with an accuracy target, in table order
@@ -60,7 +60,7 @@ ELEMENT_DESIGNS = {
 def element_params(values: dict) -> np.ndarray:
     """The parameter vector p of a design given by some of its parameters (words by their
     codes), the others at their defaults (absent)."""
-    from ..elements import PARAMS
+    from ..model.elements import PARAMS
     from ..problem import PARAM_DEFAULTS
     p = PARAM_DEFAULTS.copy()
     for i, q in enumerate(PARAMS):
@@ -87,7 +87,7 @@ def designs_for(cfg: Config, quick: bool = False) -> dict[str, np.ndarray]:
 # -- errors --------------------------------------------------------------------------------
 def errors(res, truth) -> dict:
     """Error of each targeted metric of ``res`` against ``truth`` (both
-    :class:`~softclose.stroke.StrokeResult`): absolute, or relative for
+    :class:`~softclose.simulation.stroke.StrokeResult`): absolute, or relative for
     :data:`softclose.problem.RELATIVE`; None where either value is missing."""
     out = {}
     for k in METRICS:

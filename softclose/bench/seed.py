@@ -9,11 +9,11 @@ import math
 
 import numpy as np
 
-from .. import native
+from ..simulation.kernel import binding as native
 from ..config import Config
-from ..integrators import SEED
-from ..reference import Reference
-from ..simulate import Simulator
+from ..simulation.integrators import SEED
+from ..simulation.reference import Reference
+from ..simulation.simulator import Simulator
 
 #: the seed notebook's step (1000 samples per second)
 SEED_STEP = SEED[1]

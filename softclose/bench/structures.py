@@ -31,14 +31,15 @@ COMMANDS = (
 def structures_of(cfg, robust: bool, free: tuple) -> list:
     """The NLP structures one optimisation of ``cfg`` (``free``: (key, lo, hi) set free)
     builds: [(kind, structure)]."""
-    from .. import optimise
     from ..optimiser import cache as oc
+    from ..optimiser import optimise
     from ..robust import nlp as rn
+    from ..robust import optimise_robust
     if free:
         cfg = cfg.update({"optimise.free": {k: [lo, hi] for k, lo, hi in free}})
     oc.forget()
     rn.forget()
-    optimise(cfg, robust=robust)
+    optimise_robust(cfg) if robust else optimise(cfg)
     return [("nominal", s) for s in oc._STRUCTURES.values()] + \
         [("scenarios", s) for s in rn._STRUCTURES.values()]
 

@@ -15,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import native
+from ..simulation.kernel import binding as native
 from ..problem import as_params
-from ..simulate import Simulator
+from ..simulation.simulator import Simulator
 
 #: speed targets (from the issues): "max_s" -- at most this many seconds; "min_per_s" --
 #: at least this many items per second. Rows without an entry have no target.

@@ -30,7 +30,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import ConfigError
-from ..model import LidModel
+from ..model.lid import LidModel
 from .data import locate, record_of
 from .equation import bounds_of, check_keys, fit_ode, value_of
 from .nlp import DEFECT_MAX, get_nlp, substeps
@@ -218,7 +218,7 @@ def solve(cfg, data, free, *, axis=None, starts: int = 1, seed: int = 0, prepare
     n_move, n_rel = substeps(h_move), substeps(h_rel)
     best = None
     from ..interrupt import check
-    from ..progress import Progress
+    from ..present.progress import Progress
     bar = Progress(int(starts), "fit", enabled=progress and starts > 1, unit="")
     for i in range(max(1, int(starts))):
         check()                       # Ctrl-C between starts (Ipopt may swallow it)

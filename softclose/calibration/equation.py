@@ -3,8 +3,8 @@
 A fit may free any numeric parameter of the lid's dynamics: the masses, inertias and gravity
 of ``[mass]`` (they enter the generalised mass M(theta) and gravity's potential), and the
 elements' parameters of the stroke's parameter vector p (``[design]``, ``friction.torque``).
-The equation is the model's own (:func:`softclose.dynamics.coefficients`,
-:func:`softclose.dynamics.theta_ddot`) with those values replaced by CasADi symbols; the
+The equation is the model's own (:func:`softclose.model.dynamics.coefficients`,
+:func:`softclose.model.dynamics.theta_ddot`) with those values replaced by CasADi symbols; the
 geometry stays the config's. The stroke closes monotonically (theta' <= 0), so dry friction
 acts as the constant moment against a closing lid (``moving = -1``), as in the NLP of the
 optimiser and the reference's closing phase.
@@ -22,9 +22,9 @@ import dataclasses
 import casadi as ca
 import numpy as np
 
-from .. import elements
+from ..model import elements
 from ..config.schema import BY_NAME, KEYS, RANGES
-from ..dynamics import coefficients, theta_ddot
+from ..model.dynamics import coefficients, theta_ddot
 from ..errors import ConfigError
 from ..problem import PARAM_COLUMNS
 

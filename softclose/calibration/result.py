@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..display import Display, Displayed, Table, num, unit_of, with_unit
+from ..present.display import Display, Displayed, Table, num, unit_of, with_unit
 
 #: variance inflation factor above which keys count as not identifiable (the usual
 #: multicollinearity rule; a pair correlated beyond |r| = 0.949; a lid's mass against its
@@ -200,7 +200,7 @@ class FitResult(Displayed):
 
     def plot(self):
         """The data against the fit, with the residuals (a Figure)."""
-        from ..figures.fit import plot_fit
+        from ..present.figures.fit import plot_fit
         return plot_fit(self)
 
     # -- hand-over -----------------------------------------------------------------------

@@ -1,6 +1,6 @@
 """Synthetic measurements: a closing stroke of known parameters, sampled like a camera or a
 phone's gyroscope, with noise. The truth comes from the adaptive reference
-(:class:`softclose.reference.Reference`, CVODES on the exact equation of motion), not from the
+(:class:`softclose.simulation.reference.Reference`, CVODES on the exact equation of motion), not from the
 fixed-step integrator the fit uses, so a fit that recovers it is checked against a second
 formulation. Used by the tests, the calibration study and the example data file.
 """
@@ -20,8 +20,8 @@ def stroke_samples(cfg, rate: float = 120.0, before: float = 0.1, after: float =
     t_release, t_closed)`` (s, rad, rad/s). The lid rests at ``stroke.theta0_deg`` for
     ``before`` seconds, is released at ``t_release`` (``phase`` of a frame after a frame),
     closes at ``t_closed`` and rests on the rim for ``after`` seconds."""
-    from ..model import LidModel
-    from ..reference import Reference
+    from ..model.lid import LidModel
+    from ..simulation.reference import Reference
     model = LidModel.cached(cfg)
     ref = Reference(model)
     p = model.params()

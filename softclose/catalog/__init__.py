@@ -8,7 +8,7 @@
 - :mod:`.ranking` -- the procedure (:func:`select`); :mod:`.result` -- :class:`SelectResult`.
 """
 
-from .parts import (Catalog, DamperEntry, SpringEntry, read_dampers, read_springs,
+from .files import (Catalog, DamperEntry, SpringEntry, read_dampers, read_springs,
                     standard_free_length_tolerance)
 from .result import SelectResult
 from .ranking import select

@@ -17,7 +17,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from .parts import DamperEntry, SpringEntry, standard_free_length_tolerance
+from .files import DamperEntry, SpringEntry, standard_free_length_tolerance
 
 HEADER = """\
 # ILLUSTRATIVE CATALOG -- NOT REAL PARTS. Made up for softclose's examples, benchmark and study:

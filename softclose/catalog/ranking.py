@@ -26,8 +26,8 @@ import numpy as np
 
 from ..config import Config, check_batch
 from ..errors import ConfigError
-from ..progress import Progress
-from .parts import Catalog, DamperEntry, as_catalog, read_dampers, read_springs
+from ..present.progress import Progress
+from .files import Catalog, DamperEntry, as_catalog, read_dampers, read_springs
 from .result import SelectResult, pair_entry
 from .screen import (RANGE, PairBox, pair_box, range_texts, reason_text, run_pairs,
                      summarise)
@@ -96,7 +96,7 @@ def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: 
     """Rank every spring (x damper) of the catalogs by how the lid closes with it, each
     over its own tolerance box and ``[tolerance]`` for the other keys (module docstring).
 
-    ``springs``, ``dampers``: catalog files (:mod:`softclose.catalog.parts`), read
+    ``springs``, ``dampers``: catalog files (:mod:`softclose.catalog.files`), read
     :class:`Catalog` objects or lists of entries; ``dampers=None`` chooses the dashpot's c
     per spring. ``samples``: Monte Carlo samples per pair; ``verify``: how many of the best
     pairs the adaptive reference checks at every corner; ``nlp`` (without dampers): those
@@ -112,7 +112,7 @@ def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: 
         raise ConfigError(f"samples: expected a whole number 0..100000, got {samples!r}")
     if isinstance(verify, bool) or not isinstance(verify, (int, np.integer)) or verify < 0:
         raise ConfigError(f"verify: expected a whole number >= 0, got {verify!r}")
-    from .place import placement_keys
+    from .mounting import placement_keys
     placed = placement_keys(cfg)      # (refuses free keys other than attachment points)
     spr: Catalog = as_catalog(springs, read_springs)
     dmp: Catalog | None = as_catalog(dampers, read_dampers)
@@ -246,7 +246,7 @@ def _place_best(cfg, box, pairs, entries, kernel, order, n, cfgs: dict, samples:
     again at its points keeps them when it ranks better there (``cfgs`` gets its config).
     Returns the new order."""
     from .nlp import NLP_SAMPLES
-    from .place import place_pair
+    from .mounting import place_pair
     best = order[:n]
     bar = Progress(len(best), "placing", enabled=progress, unit="pairs")
     with bar:

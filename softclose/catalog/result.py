@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from ..display import Display, Displayed, Table, num, percent
+from ..present.display import Display, Displayed, Table, num, percent
 
 #: the keys of one ranked pair as SPEC §10 gives them (``--json``), then the details
 SPEC_KEYS = ("spring", "damper", "feasible", "yield", "worst_objective", "design", "verified")
@@ -89,7 +89,7 @@ class SelectResult(Displayed):
 
     def plot(self):
         """Yield against worst-case J for every pair, the chosen one marked (a Figure)."""
-        from ..figures.select import plot_select
+        from ..present.figures.select import plot_select
         return plot_select(self)
 
     def _display(self) -> Display:

@@ -23,10 +23,10 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from .. import statics
+from ..simulation import statics
 from ..config import Config
 from ..config.load import from_dict
-from ..elements.springs import KINDS
+from ..model.elements.springs import KINDS
 from ..robust.box import Box, box_of
 from ..robust.evaluate import evaluate, point_values, simulator, slow_keys
 
@@ -241,7 +241,7 @@ def reason_text(box: PairBox, cols: dict, p: int, row: int, reason: str, spring,
 def range_texts(cfg, box: PairBox, items: list) -> list[str]:
     """Where the spring leaves its valid range, for each ``(spring, damper, row)`` of
     ``items`` (the kernel's stroke at that point of the pair's box,
-    :func:`softclose.statics.out_of_range`, which names the angle); one batch per pivot and
+    :func:`softclose.simulation.statics.out_of_range`, which names the angle); one batch per pivot and
     part limits."""
     from ..problem import LID_MASS, param_rows
     out = [RANGE] * len(items)

@@ -21,7 +21,7 @@ _CHECKERS: dict = {}
 
 
 def _checker(cfg):
-    from ..model import LidModel, model_key
+    from ..model.lid import LidModel, model_key
     from ..optimiser.verify import Checker
     key = model_key(cfg)
     if key not in _CHECKERS:

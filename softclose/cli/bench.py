@@ -92,7 +92,7 @@ def default_text(default: dict) -> str:
 def work_precision_markdown(wp) -> str:
     """The work-precision table (one block per design) and the fitted orders, as Markdown."""
     from ..bench import METRICS, TRUTH_TOL
-    from ..integrators import METHODS
+    from ..simulation.integrators import METHODS
     d = wp.default
     c = d["cheapest"]
     out = []
@@ -280,7 +280,7 @@ def speed_record(res) -> dict:
 def write_files(res, out: Path) -> list[Path]:
     """Tables, report, JSON and figures of one bench run into ``out`` (which exists)."""
     from .common import save_figure as save
-    from ..figures.bench import plot_error_vs_step, plot_optimiser, plot_work_precision
+    from ..present.figures.bench import plot_error_vs_step, plot_optimiser, plot_work_precision
     from ..jsonio import dumps
     out = Path(out)
     speed_rows = [{**r, "target": target_text(r.get("target"))} for r in res.speed]

@@ -35,7 +35,7 @@ def add_common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
 
 
-#: the figure formats and styles of the commands (softclose.figures.FORMATS / STYLES: not
+#: the figure formats and styles of the commands (softclose.present.figures.FORMATS / STYLES: not
 #: imported here, matplotlib is not needed to parse a command line)
 FIGURE_FORMATS = ("png", "pdf", "svg")
 FIGURE_STYLES = ("screen", "report")
@@ -63,7 +63,7 @@ def add_figures(p: argparse.ArgumentParser) -> None:
 
 def set_figures(args) -> None:
     """How this command writes figures, from its options (none: PNG in the current style of
-    :mod:`softclose.figures`, the screen's unless the environment says otherwise)."""
+    :mod:`softclose.present.figures`, the screen's unless the environment says otherwise)."""
     st = getattr(args, "figure_style", None)
     fmt = getattr(args, "figure_format", None) or ("pdf" if st == "report" else "png")
     FIGURES.update(format=fmt, style=st)
@@ -77,7 +77,7 @@ def figure_path(path) -> Path:
 def save_figure(fig, path) -> Path:
     """Write ``fig`` as ``path`` in this command's figure format and style (the suffix of
     ``path`` is replaced) and close it."""
-    from ..figures import save
+    from ..present.figures import save
     return save(fig, figure_path(path), style=FIGURES["style"])
 
 
@@ -175,7 +175,7 @@ def format_metrics(m: dict) -> str:
 def write_outputs(out: Path, csv_name: str, frame, fig_name: str, plot) -> list[Path]:
     """Write a result's table and figure in ``out``: ``frame`` (a pandas DataFrame, e.g.
     the result's ``to_frame()``) as ``out/csv_name`` without the index, then the figure
-    ``plot()`` draws as ``out/fig_name`` (:func:`softclose.figures.save`). Returns the two
+    ``plot()`` draws as ``out/fig_name`` (:func:`softclose.present.figures.save`). Returns the two
     paths, table first.
 
     The figure is drawn only once the table is on disk, so that a failure or a Ctrl-C while

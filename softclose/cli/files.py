@@ -30,7 +30,7 @@ def write_stroke_outputs(model, res, out: Path, stem: str = "stroke",
     """Trajectory CSV, time histories, linkage drawing and animation of one stroke
     (``slow_motion``: the GIF's factor; None: enough for at least 60 frames)."""
     from .common import save_figure as save
-    from ..figures.stroke import plot_linkage, plot_time_histories, write_animation
+    from ..present.figures.stroke import plot_linkage, plot_time_histories, write_animation
     tr = res.trajectory
     files = [write_trajectory_csv(tr, out / f"{stem}_trajectory.csv"),
              save(plot_time_histories(res), out / f"{stem}_time.png")]

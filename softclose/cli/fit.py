@@ -61,7 +61,7 @@ def _starts(text: str) -> int:
 
 
 def format_fit(res, payload) -> str:
-    from ..display import num
+    from ..present.display import num
     lines = []
     w = max(len(k) for k in res.keys)
     for k in res.keys:

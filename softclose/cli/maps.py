@@ -15,7 +15,7 @@ from pathlib import Path
 def write_maps(res, out: Path) -> list[Path]:
     """Draw and save the maps of ``res`` in ``out`` (this process, one after the other);
     their paths."""
-    from ..figures.sweep import map_names, plot_maps, save_maps
+    from ..present.figures.sweep import map_names, plot_maps, save_maps
     from .common import FIGURES, figure_path
     names = map_names(res)
     if names:

@@ -123,7 +123,7 @@ def write_optimum(res, out, slow_motion=None) -> list:
     stroke (trajectory CSV, figures, animation)."""
     from .common import save_figure as save
     from ..jsonio import dumps
-    from ..simulate import Simulator
+    from ..simulation.simulator import Simulator
     from .files import write_stroke_outputs
     files = [write_design(out / DESIGN_FILE, res.design_config(),
                           "the optimum of `softclose optimise`"
@@ -138,8 +138,9 @@ def write_optimum(res, out, slow_motion=None) -> list:
     files.append(save(res.plot(), out / "optimum.png"))
     cfg = res.design_config()
     if any("[" in k for k in res.design) or cfg.optimise.keep_out:   # where it attaches
-        from ..figures.placement import plot_attachments
-        files.append(save(plot_attachments(cfg), out / "attachments.png"))
+        from ..optimiser.cache import get_model
+        from ..present.figures.attachment import plot_attachments
+        files.append(save(plot_attachments(get_model(cfg)), out / "attachments.png"))
     files += write_stroke_outputs(sim.model, stroke, out, stem="optimum",
                                   slow_motion=slow_motion)
     return files

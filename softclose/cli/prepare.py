@@ -42,23 +42,24 @@ def run_prepare(cfg, args) -> Outcome:
     import shutil
 
     from .. import buildcache
+    from ..optimiser import compiled
     if buildcache.folder() is None:
         env = buildcache.ENV_FOLDER
         raise ConfigError(f"there is no cache folder to keep compiled NLPs in ({env} is off, "
                           f"or its folder cannot be written): set {env} to a writable folder")
-    cc = buildcache.compiler()
+    cc = compiled.compiler()
     if shutil.which(cc) is None:
         raise ConfigError(f"no C compiler '{cc}' found: install one (e.g. gcc) or set CC")
     t0 = time.perf_counter()
-    start = {name: len(getattr(buildcache, name)) for name in ("compiled", "loaded", "failed")}
-    with buildcache.compiling():
+    start = {name: len(getattr(compiled, name)) for name in ("compiled", "loaded", "failed")}
+    with compiled.compiling():
         if args.robust:
             from ..robust import optimise_robust
             optimise_robust(cfg)
         else:
             from ..optimiser import optimise
             optimise(cfg)
-    done = {name: [str(x) for x in getattr(buildcache, name)[start[name]:]]
+    done = {name: [str(x) for x in getattr(compiled, name)[start[name]:]]
             for name in start}
     seconds = time.perf_counter() - t0
     what = "softclose optimise" + (" --robust" if args.robust else "")

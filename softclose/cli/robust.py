@@ -320,8 +320,9 @@ def robust_outcome(cfg, args) -> Outcome:
         if res.yield_result is not None:
             files.append(save(res.plot(), out / "robust_histograms.png"))
         if res.design and any("[" in k for k in res.design):   # the chosen attachment points
-            from ..figures.placement import plot_attachments
-            files.append(save(plot_attachments(res.design_config()),
+            from ..optimiser.cache import get_model
+            from ..present.figures.attachment import plot_attachments
+            files.append(save(plot_attachments(get_model(res.design_config())),
                               out / "attachments.png"))
         payload["files"] = [str(f) for f in files]
     return Outcome(payload, format_robust(res) + wrote(files), 0 if res.success else 3,

@@ -49,7 +49,7 @@ def end_damper_note(cfg, res) -> str | None:
 
 
 def run(cfg, args) -> Outcome:
-    from ..simulate import Simulator
+    from ..simulation.simulator import Simulator
     factor = slow_motion(args)
     out = prepare_out(args.out)
     sim = Simulator(cfg, cached=True)
@@ -58,7 +58,7 @@ def run(cfg, args) -> Outcome:
     payload["integrator"] = res.method
     if not res.ok:
         payload["error"] = res.message
-        from ..stroke import StrokeStatus
+        from ..simulation.stroke import StrokeStatus
         code = 2 if res.status is StrokeStatus.OUT_OF_RANGE else 3   # an invalid design
         return Outcome(payload, format_metrics(payload), code, error=res.message)
     files = []

@@ -38,7 +38,7 @@ def _no_negative_zero(v):
 
 
 def run(cfg, args) -> Outcome:
-    from ..model import LidModel
+    from ..model.lid import LidModel
     if not math.isfinite(args.theta_deg):
         raise ConfigError(f"--theta-deg: expected a finite angle, got {args.theta_deg}")
     if not math.isfinite(args.theta_dot):

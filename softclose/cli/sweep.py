@@ -16,7 +16,7 @@ computes only the missing chunks and refuses a folder of another sweep, naming w
 
 Scale-out: ``--dask`` runs the chunks through ``softclose.sweeps.distributed.mapper(address,
 threads)`` (see :mod:`softclose.sweeps.run`); ``--optimise`` calls
-``softclose.optimal_grid.optimise_grid`` and writes its table and maps.
+``softclose.sweeps.optimal.optimise_grid`` and writes its table and maps.
 """
 
 from __future__ import annotations
@@ -134,7 +134,7 @@ def run(cfg, args) -> Outcome:
         raise ConfigError(f"--chunk: must be a positive number of designs, got {args.chunk}")
     if args.threads is not None and args.threads < 1:
         raise ConfigError(f"--threads: must be at least 1, got {args.threads}")
-    from .. import optimal_grid
+    from ..sweeps import optimal as optimal_grid
     from ..sweeps import distributed
     dask = distributed if args.dask else None
     if args.robust and not args.optimise:
@@ -269,7 +269,7 @@ def _import_outputs(parquet: bool, plotting: bool) -> None:
         else:
             import pyarrow.csv  # noqa: F401
         if plotting:
-            from ..figures import sweep  # noqa: F401  (matplotlib)
+            from ..present.figures import sweep  # noqa: F401  (matplotlib)
 
 
 def _text(res, payload: dict, files, resume) -> str:
@@ -393,7 +393,7 @@ def _optimal_grid(cfg, args, space, out):
     verified, 3 when some point has no verified optimum (the table says which and why),
     130 after Ctrl-C (the finished points are written)."""
     from ..errors import ConfigError
-    from ..optimal_grid import FIGURE, optimise_grid, write_table
+    from ..sweeps.optimal import FIGURE, optimise_grid, write_table
     if getattr(args, "resume", None):
         raise ConfigError("--resume: not with --optimise (an optimal grid is not resumed; "
                           "run it again)")

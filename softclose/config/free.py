@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from .. import elements
+from ..model import elements
 from ..errors import ConfigError
 from .schema import BY_NAME, RANGES
 from .values import fmt, in_range, number

@@ -5,7 +5,7 @@ records (:mod:`softclose.config.schema`); loading checks each value against its 
 kind and admissible range, derives the missing derived defaults, checks the work a config
 asks for (steps per stroke, the optimiser's grid) and raises :class:`ConfigError` with a
 one-line message naming the key. Geometry that cannot be assembled is checked by the model
-(:mod:`softclose.kinematics`), which also raises ``ConfigError``.
+(:mod:`softclose.model.kinematics`), which also raises ``ConfigError``.
 """
 
 from __future__ import annotations

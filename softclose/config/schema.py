@@ -1,8 +1,8 @@
-"""Every config key, one record each (:class:`softclose.keys.Key`), and the views read from them.
+"""Every config key, one record each (:class:`softclose.config.keys.Key`), and the views read from them.
 
 The linkage's own keys (lengths, masses, the stroke, the integrator, the optimiser's settings
 and the ``[tolerance]`` options) are recorded here; each machine element records its keys in
-its unit (:mod:`softclose.elements`). :data:`KEYS` is all of them, in the order of the
+its unit (:mod:`softclose.model.elements`). :data:`KEYS` is all of them, in the order of the
 sections and, within a section, the linkage's keys first, then the elements' in the
 registry's order. Everything else is derived from the records: :data:`SCHEMA` (kind and
 default per section and key), :data:`RANGES` (admissible magnitudes), :data:`DEFAULT_SPREADS`
@@ -15,8 +15,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from .. import elements
-from ..keys import Key
+from ..model import elements
+from .keys import Key
 
 INTEGRATORS = ("rk4", "euler_cromer", "gauss4", "radau5")
 HESSIANS = ("exact", "limited-memory")

@@ -9,21 +9,21 @@ another lid of the same structure -- builds nothing.
 
 from __future__ import annotations
 
-from .. import elements
-from ..model import model_key, shared_model
-from ..simulate import Simulator
+from ..model import elements
+from ..model.lid import model_key, shared_model
+from ..simulation.simulator import Simulator
 from .discretise import phase_two_substeps
 from .interval import ChebyshevFit, end_damper_mode, free_layout, nlp_elements
 from .lid import padded_degree
 from .nlp import ShootingNLP, ShootingStructure
-from .placement import placement_layout, slot_values
+from .free_points import placement_layout, slot_values
 
 _NLPS: dict = {}
 #: the NLP structures built in this process, by :func:`nlp_key`
 _STRUCTURES: dict = {}
 _FITS: dict = {}
 #: the LidModel of cfg's geometry, mass and stroke, kept for the process
-#: (:func:`softclose.model.shared_model`)
+#: (:func:`softclose.model.lid.shared_model`)
 get_model = shared_model
 
 
@@ -85,14 +85,15 @@ def get_structure(key: tuple, what: str = "") -> ShootingStructure:
     """The ShootingStructure of ``key`` (built once, then kept): its compiled library when
     one is in the cache (:mod:`softclose.buildcache`, compiled by ``softclose prepare``),
     else built symbolically for CasADi's virtual machine -- and, inside
-    :func:`softclose.buildcache.compiling`, compiled now (``what`` names it)."""
+    :func:`softclose.optimiser.compiled.compiling`, compiled now (``what`` names it)."""
     from .. import buildcache
+    from . import compiled
     if key not in _STRUCTURES:
         disk = buildcache.key_of("nlp", key)
 
         def make(library=None, meta=None):
             return build_structure(key, library=library, meta=meta)
-        st = buildcache.load_or_build(disk, make, make, what)
+        st = compiled.load_or_build(disk, make, make, what)
         st.key = key
         _STRUCTURES[key] = st
     return _STRUCTURES[key]
@@ -138,14 +139,15 @@ def prepare(cfg, nodes: int | None = None, substeps: int | None = None):
     what is built), unless it is compiled: the path of its library, or None (no cache, no C
     compiler). ``softclose prepare`` compiles every NLP a command would use."""
     from .. import buildcache
+    from . import compiled
     key = nlp_key(cfg, nodes, substeps)
     disk = buildcache.key_of("nlp", key)
-    lib = buildcache.compiled_nlp(disk)
+    lib = compiled.compiled_nlp(disk)
     if lib is not None or buildcache.folder() is None:
         return lib
     st = build_structure(key)
     buildcache.store("nlpmeta", disk, st.meta())
-    return buildcache.compile_nlp(st.solver, disk,
+    return compiled.compile_nlp(st.solver, disk,
                                   what=describe_nlp(cfg, key[-5], key[-4], key[-6]))
 
 

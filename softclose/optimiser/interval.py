@@ -2,7 +2,7 @@
 shooting interval of RK4 sub-steps on them.
 
 theta'' = a0(theta) + a1(theta) theta' + a2(theta) theta'^2, with every element's law affine
-in its parameters (:mod:`softclose.elements.base`): a0 sums the conservative elements'
+in its parameters (:mod:`softclose.model.elements.base`): a0 sums the conservative elements'
 a_e (-q_e'/M) + b_e (-q_e q_e'/M) (T_e = a_e + b_e q) and dry friction's C_e |q_e'|/M (the
 stroke is monotone, theta' <= 0), a1 the dampers' B_e (-q_e'^2/M), a2 = -M'/(2M). The
 geometric functions are fitted once per geometry as Chebyshev series to machine precision
@@ -20,11 +20,13 @@ import math
 import casadi as ca
 import numpy as np
 
-from .. import elements
-from ..dynamics import coefficients
+from ..model import elements
+from ..model.dynamics import coefficients
 from ..errors import ConfigError
 from ..problem import PARAM_KEYS
+from .free_points import POSE_SERIES, SLOTS, lengths, pose_functions
 from .hermite import hermite_max
+from .lid import SymbolicSeries, chebyshev_basis, padded_degree
 
 #: margin (deg) beyond the stroke over which the Chebyshev series are fitted
 FIT_MARGIN_DEG = 3.0
@@ -32,9 +34,7 @@ FIT_MARGIN_DEG = 3.0
 #: accumulated (mapaccum), so that building the NLP does not grow with the sub-steps
 UNROLL_MAX = 8
 
-#: the closure's series of a placed NLP (:data:`softclose.optimiser.placement.POSE_SERIES`)
-POSE_NAMES = ("pose:Ax", "pose:Ay", "pose:dAx", "pose:dAy", "pose:invM")
-#: the end damper's keys (:class:`softclose.elements.dampers.EndDamper`)
+#: the end damper's keys (:class:`softclose.model.elements.dampers.EndDamper`)
 END_C, END_ANGLE = "design.end_damper_c", "design.end_damper_angle_deg"
 #: a free engagement angle is bounded this far (a fraction of the stroke) inside the stroke:
 #: each phase keeps a length, and the answer's lid meets the plunger between release and rim
@@ -71,7 +71,7 @@ def angle_bounds(cfg, lo: float, hi: float) -> tuple[float, float]:
 
 
 def end_damper_mode(cfg) -> str | None:
-    """How the NLP carries the end damper (:class:`~softclose.elements.dampers.EndDamper`):
+    """How the NLP carries the end damper (:class:`~softclose.model.elements.dampers.EndDamper`):
 
     - ``"two-phase"``: it acts (c_e > 0, or ``design.end_damper_c`` free) and its engagement
       angle lies inside the stroke (or is free: bounded inside it): phase 1 from the release
@@ -152,15 +152,6 @@ def series_terms(els) -> list[tuple[str, str, str]]:
     return out
 
 
-def chebyshev_basis(u, degree: int):
-    """Chebyshev polynomials T_0..T_degree at u in [-1, 1] (a CasADi column), by their
-    three-term recurrence."""
-    T = [1, u]
-    for _ in range(2, degree + 1):
-        T.append(2 * u * T[-1] - T[-2])
-    return ca.vertcat(*T)
-
-
 class ChebyshevFit:
     """The geometric functions of theta (and tau') as Chebyshev series on [lo, hi].
 
@@ -183,7 +174,6 @@ class ChebyshevFit:
         funcs = [what[w](co[e]) for _, e, w in terms]
         names = [n for n, _, _ in terms]
         if pose:        # the closure itself, for attachment points as design variables
-            from .placement import POSE_SERIES, pose_functions
             funcs += pose_functions(th, model.cfg, model.sigma, M)
             names += list(POSE_SERIES)
         funcs += [-0.5 * cf["dM"] / M, cf["tau"]]
@@ -233,7 +223,6 @@ class ChebyshevFit:
         lo, hi, degree, err = (float(v) for v in state["fit_numbers"])
         f.lo, f.hi, f.degree, f.max_rel_error = lo, hi, int(degree), err
         f.coef = np.array(state["fit_coef"], float)
-        from .placement import POSE_SERIES
         pose = POSE_SERIES if "pose:Ax" in f.names else ()
         if f.names != tuple(n for n, _, _ in series_terms(f.elements)) + pose + (
                 "inertia", "tau", "dtau"):
@@ -273,7 +262,6 @@ def combine_function(series, placement: bool = False):
     cq = [sum(a0[1:], a0[0]), sum(a1[1:], a1[0])]
     ins = [q]
     if placement:
-        from .placement import SLOTS
         g = ca.SX.sym("g", len(SLOTS))
         sa, sb = elements.BY_NAME["spring"].affine(P)
         cq += [sa, sb, elements.BY_NAME["dashpot"].viscous(P), g]
@@ -288,8 +276,7 @@ def combine_function(series, placement: bool = False):
 def _step_series(series, placement: bool, vector=None):
     """The series a sub-step reads beside the combined coefficients (the inertia's, the
     tip's lever tau and tau', with ``placement`` the closure's), as the tail of c."""
-    from .lid import SymbolicSeries
-    names = (POSE_NAMES if placement else ()) + ("inertia", "tau", "dtau")
+    names = (POSE_SERIES if placement else ()) + ("inertia", "tau", "dtau")
     if vector is None:
         vector = ca.SX.sym("s", len(names) * (series.degree + 1) + 2)
     return SymbolicSeries(names, series.elements, series.degree, vector)
@@ -320,7 +307,6 @@ def interval_function(series, substeps: int, with_ode: bool = False,
     acc = (ca.dot(cs[:nb], B) + ca.dot(cs[nb:2 * nb], B) * xs[1]
            + ca.dot(fit.series("inertia"), B) * xs[1] ** 2)
     if placement:
-        from .placement import lengths
         l, ldl, dq2, invM = lengths(fit, xs[0], B, cs[2 * nb + 3:2 * nb + 11])
         a_s, b_s, c_d = cs[2 * nb], cs[2 * nb + 1], cs[2 * nb + 2]
         acc = acc - (a_s * ldl / l + b_s * ldl) * invM - c_d * dq2 * invM * xs[1]
@@ -386,7 +372,6 @@ def bound_interval(fit, substeps: int, with_ode: bool = False, placement: bool =
     (and ``f(x, q[, g])``), the design's parameters q, the series' numbers bound (reports
     and tests evaluate it); ``degree`` the padded degree (by default
     :func:`softclose.optimiser.lid.padded_degree`)."""
-    from .lid import SymbolicSeries, padded_degree
     sym = SymbolicSeries(fit.names, fit.elements, degree or padded_degree(fit.degree))
     Lv = ca.DM(sym.values(fit))
     combine = combine_function(sym, placement)
@@ -403,5 +388,5 @@ def bound_interval(fit, substeps: int, with_ode: bool = False, placement: bool =
 
 __all__ = ["FIT_MARGIN_DEG", "UNROLL_MAX", "END_C", "END_ANGLE", "ANGLE_MARGIN", "angle_bounds",
            "end_damper_mode", "free_of", "free_layout", "nlp_elements",
-           "series_terms", "chebyshev_basis", "ChebyshevFit", "hermite_max", "interval_function",
+           "series_terms", "ChebyshevFit", "hermite_max", "interval_function",
            "combine_function", "bound_interval"]

@@ -10,7 +10,7 @@ normals or the segment's own normal separates them (the separating-axis theorem)
 
 is >= 0 exactly when they do not overlap (in m, the distance of the separating line's
 clearance). The NLP asks gap >= 0 at the nodes of the stroke's angle grid
-(:data:`softclose.optimiser.placement.LENGTH_INTERVALS` intervals) for each line whose
+(:data:`softclose.optimiser.free_points.LENGTH_INTERVALS` intervals) for each line whose
 points are free; :func:`clearance` checks every line afterwards on a dense grid of the exact
 closure (2001 angles), which is what the result reports.
 """
@@ -65,7 +65,7 @@ def keep_out_constraints(fit, theta0, thc, g, polys, place=None, L=None):
     """gap >= 0 of every polygon and every line with a free point (all lines when
     ``place`` is None) at the nodes of the stroke's angle grid (CasADi expressions);
     ``fit`` symbolic series, ``L`` their numbers."""
-    from .placement import LENGTH_INTERVALS, POSE_SERIES, point
+    from .free_points import LENGTH_INTERVALS, POSE_SERIES, point
     th, gs = ca.SX.sym("theta"), ca.SX.sym("g", 8)
     B = fit.basis(th)
     sx = [ca.dot(fit.series(n), B) for n in POSE_SERIES[:4]]
@@ -89,7 +89,7 @@ def keep_out_constraints(fit, theta0, thc, g, polys, place=None, L=None):
 def clearance(cfg, polys=None) -> dict:
     """The exact check: per line, the smallest gap over the stroke (m; < 0: it crosses a
     region) and the angle where (deg), on :data:`CHECK_ANGLES` angles of the exact closure."""
-    from ..model import LidModel
+    from ..model.lid import LidModel
     polys = cfg.optimise.keep_out if polys is None else polys
     if not polys:
         return {}

@@ -39,7 +39,7 @@ def kind_config(cfg: Config, kind: str, robust: bool = False) -> tuple[Config, s
     ``robust``, over the free length's tolerance too). Returns (config, why not) -- the
     reason when no free length within optimise.spring_rest_length keeps it valid."""
     d, o = cfg.design, cfg.optimise
-    from .placement import placement_layout
+    from .free_points import placement_layout
     if placement_layout(cfg):   # the points move: validity is the NLP's constraint
         return cfg.update({"design.spring_kind": kind}), None
     lmin, lmax = spring_range(cfg)

@@ -21,8 +21,9 @@ from types import SimpleNamespace
 import casadi as ca
 import numpy as np
 
-from .. import elements
-from ..dynamics import friction, slope
+from ..model import elements
+from ..model.dynamics import friction, slope
+from .hermite import hermite_max
 
 #: the degrees a series is padded to (part of an NLP's structure)
 DEGREES = (16, 24, 32, 48, 64)
@@ -36,6 +37,15 @@ def padded_degree(degree: int) -> int:
         if d >= degree:
             return d
     raise ValueError(f"a Chebyshev fit of degree {degree} exceeds {DEGREES[-1]}")
+
+
+def chebyshev_basis(u, degree: int):
+    """Chebyshev polynomials T_0..T_degree at u in [-1, 1] (a CasADi column), by their
+    three-term recurrence."""
+    T = [1, u]
+    for _ in range(2, degree + 1):
+        T.append(2 * u * T[-1] - T[-2])
+    return ca.vertcat(*T)
 
 
 class SymbolicSeries:
@@ -65,7 +75,6 @@ class SymbolicSeries:
 
     def basis(self, theta):
         """Chebyshev polynomials T_0..T_n at theta (an SX column)."""
-        from .interval import chebyshev_basis
         return chebyshev_basis((2 * theta - (self.lo + self.hi)) / (self.hi - self.lo),
                                self.degree)
 
@@ -130,7 +139,7 @@ def closed_values(model) -> np.ndarray:
 
 def holding_moment(closed, P):
     """dV/dtheta at theta_closed (N m) from the ``closed`` part of L and the element
-    parameters P (:func:`softclose.dynamics.slope` on the coordinates' values)."""
+    parameters P (:func:`softclose.model.dynamics.slope` on the coordinates' values)."""
     coords = {name: SimpleNamespace(q=closed[2 * i], dq=closed[2 * i + 1])
               for i, name in enumerate(HOLDING)}
     return slope(coords, P)
@@ -143,7 +152,7 @@ def opening_values(model, angles, names) -> np.ndarray:
     for name in names:
         q, dq = model.coordinate_fns[name](th)
         outs += [q, dq, ca.jacobian(dq, th)]
-    from ..dynamics import COEFFS
+    from ..model.dynamics import COEFFS
     c, dc = model.coeffs(th)
     i = COEFFS.index("tau")
     outs += [c[i], dc[i]]
@@ -177,6 +186,33 @@ def opening_angles(model, n: int) -> np.ndarray:
     return st.theta_closed + (st.theta0 - st.theta_closed) * np.linspace(0.0, 1.0, n + 1)
 
 
+
+
+#: intervals of the angle grid over which the opening effort is bounded (when
+#: optimise.opening_force_max is set): the nodes and the cubic Hermite maxima between them
+OPENING_INTERVALS = 32
+
+
+def opening_bound(layout, values, theta0, thc, design):
+    """The opening effort at the nodes of a grid of [theta_closed, theta0] and the maxima of
+    its cubic Hermite interpolant in every interval (error O(h^4)): every value <= the bound
+    bounds the largest effort over the stroke. ``values``: the lid vector's opening part
+    (the geometry at the grid's angles, :func:`softclose.optimiser.lid.opening_values`)."""
+    n = OPENING_INTERVALS
+    names = layout.opening_elements
+    k = 3 * len(names) + 2
+    P = elements.params(design)
+    F, dF = [], []
+    for i in range(n + 1):
+        f, df = opening_effort(values[i * k:(i + 1) * k], P, names)
+        F.append(f)
+        dF.append(df)
+    F, dF = ca.vertcat(*F).T, ca.vertcat(*dF).T
+    h = (theta0 - thc) / n
+    va, vb, ma, mb = F[:n], F[1:], dF[:n] * h, dF[1:] * h
+    return ca.vertcat(F.T, hermite_max(va.T, ma.T, vb.T, mb.T))
+
+
 __all__ = ["DEGREES", "HOLDING", "padded_degree", "SymbolicSeries", "LidLayout",
            "closed_values", "holding_moment", "opening_values", "opening_effort",
-           "opening_angles"]
+           "opening_angles", "OPENING_INTERVALS", "opening_bound"]

@@ -19,7 +19,7 @@ optimiser's own peak tip speed is never read from s but from the sub-step speeds
 Hermite maxima at the solution (:meth:`ShootingNLP.peak`).
 
 The equation of motion is theta'' = a0(theta) + a1(theta) theta' + a2(theta) theta'^2 with
-every element's law affine in its parameters (:mod:`softclose.elements.base`):
+every element's law affine in its parameters (:mod:`softclose.model.elements.base`):
 a0 = sum over the conservative elements of a_e (-q_e'/M) + b_e (-q_e q_e'/M) (T_e = a_e + b_e q),
 a1 = sum over the dampers of B_e (-q_e'^2/M), a2 = -M'/(2M). So it depends on theta only
 through a few geometric functions (for the seed's elements -dVg/M, -dl/M, -l dl/M, -dd/M,
@@ -35,7 +35,7 @@ holding_moment_min are bounds: one NLP per geometry and (N, M) serves multistart
 re-solves and Pareto fronts (:func:`softclose.optimiser.cache.get_nlp`).
 
 **Two phases: an end damper that engages near the rim.** An end damper
-(:class:`softclose.elements.dampers.EndDamper`: a moment -c_e theta' on the lid below its
+(:class:`softclose.model.elements.dampers.EndDamper`: a moment -c_e theta' on the lid below its
 engagement angle theta_e) switches the equation of motion at theta_e, a discontinuity that
 the NLP never smooths: with c_e > 0 (or ``design.end_damper_c`` free) and theta_e inside the
 stroke (:func:`softclose.optimiser.interval.end_damper_mode`), the stroke is two phases --
@@ -53,7 +53,7 @@ w = (d, T, T1, X (2N nodes), s).
 
 Attachment points freed in ``optimise.free`` (``geometry.spring_anchor[i]``, ``lid_e[i]``,
 ``dashpot_anchor[i]``, ``dashpot_lid[i]``) are design variables after the others: the spring
-and the dashpot then act through the points (:mod:`softclose.optimiser.placement`), the
+and the dashpot then act through the points (:mod:`softclose.optimiser.free_points`), the
 spring kind's validity over the stroke and the keep-out regions are constraints, and the
 answer is verified at a config with the points set (:meth:`ShootingNLP.placed_config`).
 """
@@ -70,12 +70,13 @@ import numpy as np
 from ..errors import ConfigError
 from ..interrupt import ipopt_options, solving
 from ..problem import DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, SCALES, params_of
-from .. import elements
+from ..model import elements
 from .interval import (END_C, ChebyshevFit, bound_interval, combine_function, free_of,
-                       hermite_max, interval_function)
-from .lid import LidLayout, SymbolicSeries, holding_moment, opening_angles, opening_effort
+                       interval_function)
+from .lid import (OPENING_INTERVALS, LidLayout, SymbolicSeries, holding_moment, opening_angles,
+                  opening_bound)
 from .keep_out import keep_out_constraints
-from .placement import placed_config, placed_constraints, slot_values
+from .free_points import placed_config, placed_constraints, slot_values
 
 #: Ipopt return statuses that count as converged
 CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
@@ -101,31 +102,6 @@ T_FLOOR = 1e-3
 #: shortest phase of a two-phase stroke (s): the engagement time T1 and T - T1 (a phase of
 #: no duration would be a node on both sides of the switch)
 PHASE_FLOOR = 1e-4
-#: intervals of the angle grid over which the opening effort is bounded (when
-#: optimise.opening_force_max is set): the nodes and the cubic Hermite maxima between them
-OPENING_INTERVALS = 32
-
-
-def opening_bound(layout, values, theta0, thc, design):
-    """The opening effort at the nodes of a grid of [theta_closed, theta0] and the maxima of
-    its cubic Hermite interpolant in every interval (error O(h^4)): every value <= the bound
-    bounds the largest effort over the stroke. ``values``: the lid vector's opening part
-    (the geometry at the grid's angles, :func:`softclose.optimiser.lid.opening_values`)."""
-    n = OPENING_INTERVALS
-    names = layout.opening_elements
-    k = 3 * len(names) + 2
-    P = elements.params(design)
-    F, dF = [], []
-    for i in range(n + 1):
-        f, df = opening_effort(values[i * k:(i + 1) * k], P, names)
-        F.append(f)
-        dF.append(df)
-    F, dF = ca.vertcat(*F).T, ca.vertcat(*dF).T
-    h = (theta0 - thc) / n
-    va, vb, ma, mb = F[:n], F[1:], dF[:n] * h, dF[1:] * h
-    return ca.vertcat(F.T, hermite_max(va.T, ma.T, vb.T, mb.T))
-
-
 def check_linear_solver(name: str) -> None:
     """ConfigError unless Ipopt can load the linear solver ``name``.
 
@@ -515,7 +491,7 @@ class ShootingNLP:
               "opening_force": np.inf if o.opening_force_max is None else o.opening_force_max,
               "engagement": 0.0, "phase_two": np.inf}
         if self.placed:
-            from .placement import placed_bounds
+            from .free_points import placed_bounds
             placed_bounds(cfg, lo, hi)
         lbg = np.concatenate([np.full(n, lo[k]) for k, n in zip(self.g_names, self.g_sizes)])
         ubg = np.concatenate([np.full(n, hi[k]) for k, n in zip(self.g_names, self.g_sizes)])

@@ -13,12 +13,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .. import statics
+from ..simulation import statics
 from ..errors import ConfigError, NumericalError, SoftcloseError
 from ..problem import DESIGN_KEYS, PARAM_COLUMNS, SCALES, UNITS, describe
-from ..progress import Progress
+from ..present.progress import Progress
 from .cache import get_model, get_nlp, has_nlp, stroke_simulator
-from ..parts import spring_part
+from .spring_part import spring_part
 from .diagnose import diagnose
 from .discretise import Discretisation, discretisation
 from .interval import END_C
@@ -223,7 +223,7 @@ def finish(cfg, nlp: ShootingNLP, run: Run, disc: Discretisation, *, verify: boo
 
 def _points_of(res, cfg):
     """``cfg`` (not the kind's bounds) with the attachment points ``res`` placed."""
-    from .placement import placed_config
+    from .free_points import placed_config
     return placed_config(cfg, res.design or {})
 
 

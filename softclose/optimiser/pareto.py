@@ -17,8 +17,8 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..problem import describe
-from ..progress import Progress
-from ..parts import spring_part
+from ..present.progress import Progress
+from .spring_part import spring_part
 from .cache import get_nlp, stroke_simulator
 from .discretise import discretisation
 from .kinds import kind_config

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..display import Display, Displayed, Table, num, with_unit
+from ..present.display import Display, Displayed, Table, num, with_unit
 from ..problem import DESIGN_KEYS, ENGAGE_KEYS, ENGAGE_METRICS, METRIC_KEYS, METRICS, UNITS
 from .verify import Verification
 
@@ -171,7 +171,7 @@ class OptimiseResult(Displayed):
 
     def simulate(self, trajectory: bool = True):
         """The optimal design's stroke by the fixed-step simulator (with its trajectory)."""
-        from ..simulate import Simulator
+        from ..simulation.simulator import Simulator
         if self.design is None or self.config is None:
             raise ValueError("this result has no design to simulate")
         return Simulator(self.config.with_design(**self.design), cached=True).run(trajectory=trajectory)
@@ -237,7 +237,7 @@ class OptimiseResult(Displayed):
     def plot(self):
         """The optimal stroke's time histories with the verified metrics marked, and where
         the design sits within its bounds: a matplotlib Figure."""
-        from ..figures.optimise import plot_optimum
+        from ..present.figures.optimise import plot_optimum
         return plot_optimum(self)
 
 
@@ -309,5 +309,5 @@ class FrontResult(Displayed):
 
     def plot(self):
         """Objective, speeds and design against closing_time_max: a matplotlib Figure."""
-        from ..figures.optimise import plot_front
+        from ..present.figures.optimise import plot_front
         return plot_front(self)

@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import elements, statics
-from ..dynamics import COEFFS
+from ..model import elements
+from ..simulation import statics
+from ..model.dynamics import COEFFS
 from ..problem import DESIGN_KEYS, PARAM_COLUMNS, objective, with_designs
 from .cache import stroke_simulator
 from .interval import END_ANGLE, END_C, free_of
@@ -46,7 +47,7 @@ def design_rows(cfg, G: np.ndarray, keys=()) -> np.ndarray:
     value clipped into its bounds."""
     from ..config.free import config_value
     from .interval import free_layout
-    from .placement import placement_layout
+    from .free_points import placement_layout
     bounds = {k: (lo, hi) for k, lo, hi in free_of(cfg)}
     layout = [k for k, _, _ in free_layout(cfg)] + [k for k, _, _ in placement_layout(cfg)]
     swept = [k for k, _, _ in keys]

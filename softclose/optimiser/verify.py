@@ -1,7 +1,7 @@
 """Verification: an answer counts when the independent adaptive reference reproduces it.
 
 :func:`verify` re-simulates a design with CVODES on the exact equation of motion
-(:class:`softclose.reference.Reference`) and checks
+(:class:`softclose.simulation.reference.Reference`) and checks
 
 - every constraint of the problem on that simulation (closed; closing_time within its
   bounds; holding moment; no rebound: theta' <= 0 on an 800-point CVODES grid over the
@@ -25,7 +25,7 @@ from ..errors import NumericalError
 from ..interrupt import solving
 from ..problem import (CONSTRAINT_TOL, ENGAGE_KEYS, METRIC_KEYS, UNITS,
                        VERIFY_RTOL, PARAM_KEYS, agreement_tolerance, objective, params_of)
-from ..stroke import StrokeResult, StrokeStatus
+from ..simulation.stroke import StrokeResult, StrokeStatus
 from .cache import get_model
 
 #: output grid of the verifying reference simulation (s): events and peaks are located by
@@ -43,7 +43,7 @@ class Checker:
     """Independent checks of one model: the CVODES reference and theta' on a fine grid."""
 
     def __init__(self, model):
-        from ..reference import Reference
+        from ..simulation.reference import Reference
         self.model = model
         self.reference = Reference(model, grid_step=VERIFY_GRID)
         x, tau = ca.SX.sym("x", 2), ca.SX.sym("tau")

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..config import Config, check_batch
-from ..display import Display, Displayed, Table, interval, num, percent, unit_of, with_unit
+from ..present.display import Display, Displayed, Table, interval, num, percent, unit_of, with_unit
 from ..problem import (BARE_LID, DESIGN_KEYS, LID_MASS, METRIC_KEYS, bare_lid, design_of,
                        params_of)
 from .box import Box, box_of
@@ -108,7 +108,7 @@ class YieldResult(Displayed):
 
     def plot(self):
         """Histograms of closing time and impact speed over the samples (a Figure)."""
-        from ..figures.robust import plot_yield
+        from ..present.figures.robust import plot_yield
         return plot_yield([self], ["design"])
 
 

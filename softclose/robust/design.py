@@ -65,7 +65,8 @@ from .analysis import YieldResult, analyse_samples
 from .box import box_of
 from .evaluate import slow_keys
 from .infeasible import diagnose
-from .nlp import T_FLOOR, discretise, t_limit
+from .discretisation import discretise, t_limit
+from .nlp import T_FLOOR
 from .policy import (MAX_WIDEN, SLOW_YIELD_SAMPLES, WIDEN, YIELD_REFERENCE, check_keys,
                      max_corners)
 from .result import RobustResult, box_summary
@@ -89,13 +90,13 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     from dataclasses import replace
 
     from ..optimiser.kinds import kind_config
-    from ..parts import spring_part
+    from ..optimiser.spring_part import spring_part
     t_start = time.perf_counter()
     check_batch(cfg, int(samples or cfg.tolerance.samples),
                 "--samples" if samples else "tolerance.samples")
     check_keys(cfg)
     from ..optimiser.interval import END_ANGLE, END_C
-    from ..optimiser.placement import SLOTS
+    from ..optimiser.free_points import SLOTS
     others = [k for k, _, _ in cfg.optimise.free or () if k not in SLOTS + (END_C, END_ANGLE)]
     if others:
         raise ConfigError(
@@ -116,7 +117,7 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
                for kind in cfg.optimise.spring_kinds]
     for kind, c, why in configs:
         if why is None and placed:      # stage 1: where (robust/placement.py)
-            from .placement import choose_points, fixed_points
+            from .codesign import choose_points, fixed_points
             stage_notes: list = []
             bound = min((x[1].objective for x in results if x[1].success
                          and x[1].objective is not None), default=None)
@@ -160,7 +161,7 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     times = dict(best.times, total=time.perf_counter() - t_start)
     out_cfg = cfg.set("design.spring_kind", kind)         # (not the kind's bounds)
     if placed:                          # with the points (end damper) set, no longer free
-        from .placement import fixed_points
+        from .codesign import fixed_points
         chosen = {k for k, _, _ in cfg.optimise.free}
         out_cfg = fixed_points(out_cfg, {full: v for k, v in (best.design or {}).items()
                                          for full in (f"geometry.{k}", f"design.{k}")
@@ -194,7 +195,7 @@ def optimise_robust_kind(cfg: Config, *, progress: bool = False, samples: int | 
                          seed: int = 0, verify: bool = True) -> RobustResult:
     """The robust soft-close design over cfg's ``[tolerance]`` box with cfg's spring kind (see
     the module docstring)."""
-    from ..progress import Progress
+    from ..present.progress import Progress
     t_start = time.perf_counter()
     tol = cfg.tolerance
     check_batch(cfg, int(samples or tol.samples), "--samples" if samples else "tolerance.samples")

@@ -4,12 +4,12 @@ How each kind of key reaches the C kernel (fastest first):
 
 - design keys (``design.spring_k`` ...) are columns of the kernel's parameter rows
   ``p = (k, l0, c, c_rot)``: one batch call for all samples;
-- ``mass.lid`` is the kernel's per-stroke lid-mass column (:mod:`softclose.native`: the
+- ``mass.lid`` is the kernel's per-stroke lid-mass column (:mod:`softclose.simulation.kernel.binding`: the
   tabulated coefficients are affine in the lid mass, so one table serves every mass, exactly);
 - the attachment points' components (``geometry.spring_anchor[i]``, ``lid_e[i]``,
   ``dashpot_anchor[i]``, ``dashpot_lid[i]``) are the kernel's per-stroke point columns (the
   lengths from the table's pose pieces: one table serves every placement,
-  :meth:`softclose.simulate.Simulator.run_batch`'s ``points``);
+  :meth:`softclose.simulation.simulator.Simulator.run_batch`'s ``points``);
 - any other key (geometry, crank masses, stroke angles ...) changes the model: samples are
   grouped by their values and each group gets its own model, table and simulator (about
   0.03 s each; correct, slow when every sample has its own value).
@@ -59,10 +59,10 @@ def simulator(cfg: Config, t_end: float | None = None):
     """The fixed-step simulator of cfg's model (cached per geometry, mass, stroke, method,
     element choices and spring limits);
     strokes are cut at ``t_end`` when it is below stroke.t_max."""
-    from ..simulate import Simulator
+    from ..simulation.simulator import Simulator
     if t_end is not None and t_end < cfg.stroke.t_max:
         cfg = cfg.replace(stroke={"t_max": float(t_end)})
-    from .. import elements
+    from ..model import elements
     # the element choices (a rotary damper's pivot) and the spring's length limits are the
     # simulator's too: its table and its range check read them
     key = (cfg.geometry, cfg.mass, cfg.stroke, cfg.simulate, elements.structure(cfg),
@@ -81,7 +81,7 @@ def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
     ``keys`` are numeric config keys, ``X`` (n, len(keys)) their values (absolute).
     ``t_end`` cuts the strokes early (anything slower is infeasible anyway: the
     closing-time window ends before it); ``explain=False`` skips locating where a spring
-    leaves its valid range (:meth:`softclose.simulate.Simulator.run_batch`). Returns a dict
+    leaves its valid range (:meth:`softclose.simulation.simulator.Simulator.run_batch`). Returns a dict
     of arrays (see ``COLUMNS``).
     """
     keys = list(keys)

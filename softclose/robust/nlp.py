@@ -26,7 +26,7 @@ and every J_s reported or compared (:meth:`ScenarioNLP.objectives`) uses that pe
 scenario's shooting
 interval is the nominal optimiser's (``ShootingNLP.interval``: M RK4 sub-steps on the
 Chebyshev series of its model, with the Hermite peak bound), so the robust and the nominal
-problem share their discretisation (N, M); only the node grid differs (:func:`time_grid`:
+problem share their discretisation (N, M); only the node grid differs (:func:`~softclose.robust.discretisation.time_grid`:
 the first two intervals are half as long, for the release transient of the stiffly damped
 scenarios). The NLP is built for a given list of scenario models
 (:func:`get_scenario_nlp` caches it); the a_s, b_s are parameters.
@@ -36,7 +36,7 @@ nominal NLP (:mod:`softclose.optimiser.nlp`): its own engagement time T1_s, the 
 between its phases on its own engagement angle, phase 1 without the end damper (graded
 grid), phase 2 with it (uniform grid, sub-steps M2). The end damper's coefficient and
 angle may be shared design variables (``optimise.free``; the robust optimiser's first
-stage, :mod:`softclose.robust.placement`), after (k, l0, c) and before the points.
+stage, :mod:`softclose.robust.codesign`), after (k, l0, c) and before the points.
 """
 
 from __future__ import annotations
@@ -50,6 +50,7 @@ import numpy as np
 from ..config import Config
 from ..interrupt import ipopt_options, solving
 from ..problem import DESIGN_KEYS, PARAM_KEYS, SCALES, params_of
+from .discretisation import mapped, phase_grid, phase_two, t_limit, two_phase
 
 #: the parameters of p that are not design variables: NLP parameters
 FIXED = PARAM_KEYS[len(DESIGN_KEYS):]
@@ -70,86 +71,6 @@ WARM_OPTIONS = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
                 "ipopt.warm_start_slack_bound_push": 1e-9}
 
 
-def map_threads() -> int:
-    """Threads that evaluate the scenario NLP's shooting intervals: the cores this process
-    may use, at most :data:`MAX_MAP_THREADS`."""
-    from ..native import cores
-    return min(cores(), MAX_MAP_THREADS)
-
-
-#: at most this many threads per map (the intervals of 9 scenarios are ~90 calls)
-MAX_MAP_THREADS = 4
-
-
-def mapped(f: ca.Function, n: int) -> ca.Function:
-    """``f`` mapped over n shooting intervals, evaluated in :func:`map_threads` threads
-    (CasADi's "thread" map; its derivatives are thread maps too).
-
-    Why: an Ipopt iteration of the scenario NLP is mostly the Hessian of the Lagrangian
-    and the constraints' Jacobian, forward-over-reverse sweeps through these maps (9
-    scenarios with the points free: 0.15 s and 0.06 s of a 0.22 s iteration). The
-    intervals are independent, so on 2 cores the joint NLP of the robust co-design solves
-    in 11.9 s instead of 20.6 s, in the same 89 iterations to the same bits (each
-    interval's numbers are computed alone; the sums over them are the MX graph's, in the
-    same order)."""
-    k = map_threads()
-    return f.map(n, "thread", k) if k > 1 and n > 1 else f.map(n)
-
-
-#: the node grid is graded (:func:`time_grid`) from this many nodes on
-GRADED_MIN_NODES = 6
-
-
-def time_grid(N: int) -> np.ndarray:
-    """Fractions of T_s of the N shooting intervals: the first two half as long as the
-    others (uniform for N < :data:`GRADED_MIN_NODES`).
-
-    Why: robust designs sit at stiff springs and strong dampers, and the scenarios add
-    +20 % to them. The lid then accelerates from rest with a time constant of ~20 ms and
-    reaches its peak tip speed at ~0.07 s, inside the first interval, while a uniform
-    sub-step is T/(N M) = 25 ms at T = 1 s (h |lambda| ~ 1.5). RK4's error on that
-    transient decays by the rim (closing time 4e-5 relative) but not at the peak: the
-    scenario's own peak tip speed was 2.9e-3 below the adaptive reference's, beyond
-    VERIFY_RTOL. Halving the first two intervals (the first 10 % of the stroke at N = 10)
-    cuts that to 1.2e-4 at no cost; the other intervals grow by (N-1)/(N-2) (12.5 % at
-    N = 10), which moved no metric of the default problem by more than 1.2e-4 (the
-    accuracy loop of :mod:`softclose.robust.design` refines M if a scenario still
-    disagrees). Doubling M instead costs ~3 s more per robust optimisation.
-    """
-    if N < GRADED_MIN_NODES:
-        return np.full(N, 1.0 / N)
-    rest = (1.0 - 1.0 / N) / (N - 2)
-    return np.r_[0.5 / N, 0.5 / N, np.full(N - 2, rest)]
-
-
-def t_limit(cfg: Config) -> float:
-    """The largest closing time the NLP allows: a stroke must close within stroke.t_max."""
-    return min(cfg.optimise.closing_time_max, cfg.stroke.t_max)
-
-
-def phase_grid(N: int, two_phase: bool) -> np.ndarray:
-    """The node grid of a scenario: :func:`time_grid` (fractions of T_s), or with two
-    phases phase 1's graded grid (fractions of T1_s) and phase 2's uniform one (fractions
-    of T_s - T1_s)."""
-    return np.r_[time_grid(N), np.full(N, 1.0 / N)] if two_phase else time_grid(N)
-
-
-def node_times(N: int, two_phase: bool, T: float, T1: float | None = None) -> np.ndarray:
-    """The times (s) of a scenario's nodes on :func:`phase_grid`."""
-    g = np.minimum(np.cumsum(time_grid(N)), 1.0)
-    if not two_phase:
-        return T * g
-    return np.r_[T1 * g, T1 + (T - T1) * np.arange(1, N + 1) / N]
-
-
-def discretise(cfg: Config) -> tuple[int, int, float, list[str]]:
-    """(N, M, closing-time limit, notes) of the nominal optimiser's discretisation (with two
-    phases, phase 2's sub-steps follow from cfg: :func:`phase_two`)."""
-    from ..optimiser.discretise import discretisation
-    d = discretisation(cfg)
-    return d.nodes, d.substeps, d.t_limit, list(d.notes)
-
-
 def model_config(cfg: Config, values: dict) -> Config:
     """The config of a scenario's model: ``cfg`` with its keys set that are not in the
     parameter vector (those the scenario maps as a q + b)."""
@@ -160,23 +81,9 @@ def model_config(cfg: Config, values: dict) -> Config:
 
 def _model_key(cfg: Config) -> tuple:
     """A scenario model's key: the model's, and the elements the NLP carries."""
-    from ..model import model_key
+    from ..model.lid import model_key
     from ..optimiser.interval import nlp_elements
     return model_key(cfg) + (tuple(e.name for e in nlp_elements(cfg)),)
-
-
-def two_phase(cfg: Config) -> bool:
-    """Is cfg's stroke two phases (an end damper engaging inside it)?"""
-    from ..optimiser.interval import end_damper_mode
-    return end_damper_mode(cfg) == "two-phase"
-
-
-def phase_two(cfg: Config, nodes: int, substeps: int) -> int | None:
-    """Phase 2's sub-steps (the nominal optimiser's rule), None for one phase."""
-    if not two_phase(cfg):
-        return None
-    from ..optimiser.discretise import phase_two_substeps
-    return phase_two_substeps(cfg, nodes, substeps)
 
 
 def scenario_fit(cfg_model: Config, placement: bool = False):
@@ -202,10 +109,11 @@ class ScenarioStructure:
                  max_iter: int, tol: float = 1e-10, library=None, meta=None):
         from ..optimiser.interval import END_C, combine_function, interval_function
         from ..optimiser.lid import LidLayout, SymbolicSeries, holding_moment
-        from ..optimiser.nlp import OPENING_INTERVALS, check_linear_solver
-        from ..optimiser.placement import length_bounds, spring_moment
+        from ..optimiser.lid import OPENING_INTERVALS
+        from ..optimiser.nlp import check_linear_solver
+        from ..optimiser.free_points import length_bounds, spring_moment
         from ..problem import PARAM_COLUMNS
-        from .. import elements
+        from ..model import elements
         t0 = time.perf_counter()
         self.S, self.nodes, self.M, self.M2 = S, nodes, substeps, M2
         self.two_phase = M2 is not None
@@ -325,7 +233,7 @@ class ScenarioStructure:
             else:
                 phases = [none, none]
             if opening and not self.placed:
-                from ..optimiser.nlp import opening_bound
+                from ..optimiser.lid import opening_bound
                 op = opening_bound(self.lid, lids[s]["opening"], theta0, thc, ps[s])
             else:
                 op = none
@@ -406,9 +314,9 @@ class ScenarioNLP:
                  substeps2: int | None = None, structure: ScenarioStructure | None = None):
         from ..optimiser.interval import END_C, END_ANGLE, free_layout, free_of
         from ..optimiser.lid import padded_degree
-        from ..optimiser.nlp import OPENING_INTERVALS
+        from ..optimiser.lid import OPENING_INTERVALS
         from ..optimiser.lid import opening_angles
-        from ..optimiser.placement import placement_layout, slot_values
+        from ..optimiser.free_points import placement_layout, slot_values
         from ..config.free import config_value
         t0 = time.perf_counter()
         o = cfg.optimise
@@ -559,7 +467,7 @@ class ScenarioNLP:
               "epigraph": np.inf,
               "opening_force": np.inf if o.opening_force_max is None else o.opening_force_max,
               "engagement": 0.0, "phase_two": np.inf}
-        from ..optimiser.placement import placed_bounds
+        from ..optimiser.free_points import placed_bounds
         placed_bounds(cfg, lo, hi)
         lbg = np.concatenate([np.full(n, lo[k]) for sizes in self.g_sizes
                               for k, n in zip(GROUPS, sizes)])
@@ -623,10 +531,11 @@ def get_scenario_structure(key: tuple) -> ScenarioStructure:
     its compiled library when ``softclose prepare`` built one, else symbolically."""
     if key not in _STRUCTURES:
         from .. import buildcache
+        from ..optimiser import compiled
         disk = buildcache.key_of("scenario-nlp", key)
         (S, els, names, degree, nodes, substeps, M2, free, place, objective, opening,
          keep_out, hessian, linear_solver, max_iter, tol) = key
-        from .. import elements
+        from ..model import elements
 
         def make(library=None, meta=None):
             return ScenarioStructure(S, tuple(elements.BY_NAME[e] for e in els), names,
@@ -635,7 +544,7 @@ def get_scenario_structure(key: tuple) -> ScenarioStructure:
                                      tol, library=library, meta=meta)
         what = (f"of the robust optimiser ({S} scenarios, {nodes} x {substeps} RK4 steps, "
                 f"{objective} case)")
-        st = buildcache.load_or_build(disk, make, make, what, buildcache.SCENARIO_CFLAGS)
+        st = compiled.load_or_build(disk, make, make, what, compiled.SCENARIO_CFLAGS)
         st.key = disk
         _STRUCTURES[key] = st
     return _STRUCTURES[key]
@@ -654,7 +563,7 @@ def get_scenario_nlp(cfg: Config, model_cfgs: list[Config], nodes: int, substeps
     ``substeps2``: phase 2's sub-steps of a two-phase stroke (default :func:`phase_two`)."""
     o = cfg.optimise
     from ..optimiser.interval import free_layout
-    from ..optimiser.placement import placement_layout, slot_values
+    from ..optimiser.free_points import placement_layout, slot_values
     M2 = (substeps2 or phase_two(cfg, nodes, substeps)) if two_phase(cfg) else None
     key = (tuple(_model_key(c)
                  for c in model_cfgs), nodes, substeps, M2, robust_objective, o.hessian,
@@ -675,13 +584,13 @@ def prepare(cfg: Config, model_cfgs: list[Config], nodes: int, substeps: int,
     """Compile this scenario NLP's structure now, in the foreground (a line on stderr says
     what is built), unless it is compiled: the path of its library, or None (no cache, no C
     compiler). ``softclose prepare --robust`` compiles every one a robust design uses."""
-    from .. import buildcache
-    with buildcache.compiling():
+    from ..optimiser import compiled
+    with compiled.compiling():
         nlp, cached = get_scenario_nlp(cfg, model_cfgs, nodes, substeps, robust_objective,
                                        substeps2)
     if nlp.library is None:      # built in this process before: compile it now
         forget()
-        with buildcache.compiling():
+        with compiled.compiling():
             nlp, _ = get_scenario_nlp(cfg, model_cfgs, nodes, substeps, robust_objective,
                                       substeps2)
     return nlp.library

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..display import Display, Displayed, Table, interval, num, percent, with_unit
+from ..present.display import Display, Displayed, Table, interval, num, percent, with_unit
 from ..problem import DESIGN_KEYS, ENGAGE_KEYS, ENGAGE_METRICS, METRIC_KEYS, METRICS, UNITS
 from .analysis import YieldResult, yield_tables
 from .box import Box
@@ -158,7 +158,7 @@ class RobustResult(Displayed):
     def plot(self):
         """Histograms of closing time and impact speed, nominal against robust design, over
         the same samples (a Figure)."""
-        from ..figures.robust import plot_yield
+        from ..present.figures.robust import plot_yield
         if self.yield_result is None:
             raise ValueError("no robust design: nothing to plot")
         ys = [y for y in (self.nominal_yield, self.yield_result) if y is not None]

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..config import Config, check_batch
-from ..display import Display, Displayed, Table, num, with_unit
+from ..present.display import Display, Displayed, Table, num, with_unit
 from ..errors import ConfigError
 from ..problem import BARE_LID, DESIGN_KEYS, design_of, params_of
 from .box import box_of
@@ -107,7 +107,7 @@ class SensitivityResult(Displayed):
 
     def plot(self, title: str | None = None):
         """Bars of S1 and ST with their intervals, one panel per output (a Figure)."""
-        from ..figures.robust import plot_sobol
+        from ..present.figures.robust import plot_sobol
         return plot_sobol(self, title)
 
 

@@ -24,7 +24,8 @@ from ..config import Config
 from ..problem import DESIGN_KEYS, objective, with_designs
 from .box import Box, box_of
 from .evaluate import evaluate, simulator, slow_keys
-from .nlp import T_FLOOR, ScenarioNLP, get_scenario_nlp, model_config, node_times, t_limit
+from .discretisation import node_times, t_limit
+from .nlp import T_FLOOR, ScenarioNLP, get_scenario_nlp, model_config
 from .policy import (AGREE_RTOL, CHECK_SAMPLES, MAX_REFINE, MAX_ROUNDS, REFINE_RTOL,
                      SLOW_CHECK_SAMPLES, t_end)
 from .scenarios import Scenario, maps, scenario_rows
@@ -61,7 +62,7 @@ def _guess(cfg_m: Config, p: np.ndarray, N: int, t_lo: float, t_hi: float,
     """(T, X (2, N), peak, J, T1) of a scenario from its simulated stroke at parameters p
     (N intervals per phase; with ``two_phase`` T1 is where the stroke first reaches the
     end damper's angle, else None)."""
-    from .. import elements
+    from ..model import elements
     from ..optimiser.nlp import PHASE_FLOOR
     st, o = cfg_m.stroke, cfg_m.optimise
     sim = simulator(cfg_m)

@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from .. import statics
+from ..simulation import statics
 from ..config import Config
 from ..problem import (DESIGN_KEYS, ENGAGE_KEYS, METRIC_KEYS, VERIFY_RTOL, agreement_tolerance,
                        design_of, params_of)

@@ -2,7 +2,7 @@
 
 :func:`evaluate_chunk` takes only plain values -- the config as a dict (``cfg.raw``), the
 swept keys, the design ids and their swept values -- and returns a dict of numpy columns.
-It builds (and caches, per process) its own :class:`~softclose.simulate.Simulator`, because
+It builds (and caches, per process) its own :class:`~softclose.simulation.simulator.Simulator`, because
 CasADi objects do not pickle; so the same function runs in this process (the local runner)
 or in any worker process that can import softclose (a Dask worker, a job array), and its
 result depends on nothing but its arguments.
@@ -18,7 +18,7 @@ How a chunk is evaluated (metric only, batched):
 - the design keys (``design.spring_k``, ``design.spring_rest_length``, ``design.damper_c``,
   ``design.rotary_damper_c``) go into the kernel's parameter rows, a swept ``mass.lid``
   into its per-stroke lid-mass column (the tabulated coefficients are affine in the lid
-  mass, :mod:`softclose.native`: one table serves every mass, and a row at the table's own
+  mass, :mod:`softclose.simulation.kernel.binding`: one table serves every mass, and a row at the table's own
   mass gives the same bits as without the column), swept attachment points
   (``geometry.spring_anchor[i]``, ``lid_e[i]``, ``dashpot_anchor[i]``, ``dashpot_lid[i]``)
   into its per-stroke point columns (the lengths from the table's pose pieces, as a table
@@ -40,7 +40,7 @@ import numpy as np
 from ..config.free import PLACEMENT_KEYS, point_refusals
 from ..problem import (LID_MASS, METRIC_KEYS, PARAM_COLUMNS, infeasibility, objective,
                        params_of)
-from ..stroke import StrokeStatus
+from ..simulation.stroke import StrokeStatus
 
 #: designs per chunk: the unit of progress, of Ctrl-C and resume, and of a Parquet part file
 CHUNK = 16384
@@ -84,7 +84,7 @@ def _simulator(cfg):
     """The simulator of ``cfg``'s model and method (the [optimise] and [tolerance] sections
     do not change a stroke, so configs differing only there share one)."""
     from ..config import to_dict
-    from ..simulate import Simulator
+    from ..simulation.simulator import Simulator
     d = to_dict(cfg)
     d.pop("optimise", None)
     d.pop("tolerance", None)

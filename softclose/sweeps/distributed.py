@@ -14,7 +14,7 @@ Where the work runs is one string, ``dask`` (``--dask`` on the command line):
 
 What is sent is plain values, never CasADi objects (they do not pickle): the task function is
 importable (:func:`softclose.sweeps.chunks.evaluate_chunk`,
-:func:`softclose.optimal_grid.solve_segment`) and its arguments are a config dict, key names
+:func:`softclose.sweeps.optimal.solve_segment`) and its arguments are a config dict, key names
 and numpy arrays; each worker process builds (and caches) its own simulator or NLP from the
 config. The results are therefore the same numbers as the local run's, whatever the number
 of workers.
@@ -28,7 +28,7 @@ worker gone for :data:`NO_WORKERS_TIMEOUT` seconds, a task that kills worker aft
 (``distributed.KilledWorker``) -- is a :class:`ClusterLost` (a
 :class:`~softclose.errors.NumericalError`) saying so; the sweep's mapper ends there, so that
 the runner keeps every finished chunk and the sweep can be resumed. Progress is the caller's
-own line (:class:`softclose.progress.Progress`, fed as results arrive from ``as_completed``):
+own line (:class:`softclose.present.progress.Progress`, fed as results arrive from ``as_completed``):
 Dask's ``progress`` does not combine with ``as_completed`` (dask/distributed#2423).
 """
 

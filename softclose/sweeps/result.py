@@ -8,7 +8,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ..display import Display, Displayed, Table, num, percent, unit_of
+from ..present.display import Display, Displayed, Table, num, percent, unit_of
 from .chunks import columns as column_names
 
 #: best rows a sweep shows (of any number of designs)
@@ -202,8 +202,8 @@ class SweepResult(Displayed):
 
     def plot(self) -> dict:
         """The maps as matplotlib Figures, by file stem (``map_<k1>__<k2>``, or
-        ``profile_<k>`` for one swept key): see :mod:`softclose.figures.sweep`."""
-        from ..figures.sweep import plot_maps
+        ``profile_<k>`` for one swept key): see :mod:`softclose.present.figures.sweep`."""
+        from ..present.figures.sweep import plot_maps
         return plot_maps(self)
 
 

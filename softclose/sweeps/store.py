@@ -35,9 +35,9 @@ LAYOUT = 1
 
 def kernel_hash() -> str | None:
     """Hash of the stroke kernel's source (a changed kernel may change the numbers)."""
-    from .. import native
+    from ..simulation.kernel.library import SOURCE
     try:
-        return hashlib.sha256(native._SRC.read_bytes()).hexdigest()[:16]
+        return hashlib.sha256(SOURCE.read_bytes()).hexdigest()[:16]
     except OSError:
         return None
 

@@ -13,12 +13,12 @@ from pathlib import Path
 import numpy as np
 
 import softclose
-from softclose import native
+from softclose.simulation.kernel import binding as native
 from softclose.config import default_config, from_dict
-from softclose.model import LidModel
+from softclose.model.lid import LidModel
 from softclose.optimiser.interval import ChebyshevFit
-from softclose.reference import Reference
-from softclose.simulate import Simulator
+from softclose.simulation.reference import Reference
+from softclose.simulation.simulator import Simulator
 
 OUT = Path(__file__).with_name("golden.npz")
 #: the kernel's output columns the file holds (those of b33652c: the columns added since, the

@@ -1,0 +1,104 @@
+"""The machine elements: one home per element (the registry).
+
+Every force on the linkage is one :class:`~softclose.model.elements.base.Element` of
+:data:`ELEMENTS` (the contract is :mod:`softclose.model.elements.base`; where each acts,
+:mod:`softclose.model.elements.coordinates`). The reduced equation, Newton-Euler with pin
+reactions, the statics (holding moment, release check, equilibria), the CasADi model, the
+coefficient table and the kernel's parameter rows, the adaptive reference and the
+optimisers' dynamics all sum over this list; the config keys of each element come from it
+too. The kernel states the same laws once, in the element section of ``_kernel.c``, and
+``softclose.simulation.kernel.binding`` checks at load time that both sides agree on the columns and rows.
+
+To add an element: write its unit (a subclass with its keys, parameters, coordinate and law),
+add it to :data:`ELEMENTS`, add its law to ``_kernel.c``'s element section, and test it.
+"""
+
+from __future__ import annotations
+
+from ...config.keys import Key
+from .base import Element, Param, Params
+from .dampers import Dashpot, EndDamper, RotaryDamper
+from .friction import Friction
+from .gravity import Gravity
+from .springs import Spring, TorsionSpring
+
+#: every element, in the order their contributions are summed (gravity first, then the
+#: springs, then the dampers: the order of the seed's equation, so its sums are unchanged);
+#: the end damper, added last, puts its parameters after every earlier one in p
+ELEMENTS: tuple[Element, ...] = (Gravity(), Spring(), TorsionSpring(), Dashpot(),
+                                 RotaryDamper(), Friction(), EndDamper())
+BY_NAME = {e.name: e for e in ELEMENTS}
+#: the seed's parameters, which come first in p: (k, l0, c, c_rot)
+SEED = ("spring_k", "spring_rest_length", "damper_c", "rotary_damper_c")
+#: the per-stroke parameters: the columns of the parameter vector p. The seed's four come
+#: first, then the others, in the order of :data:`ELEMENTS`.
+PARAMS: tuple[Param, ...] = tuple(q for name in SEED for e in ELEMENTS for q in e.params
+                                  if q.name == name) + tuple(
+    q for e in ELEMENTS for q in e.params if q.name not in SEED)
+#: their names (``design`` keys without the section)
+PARAM_NAMES: tuple[str, ...] = tuple(q.name for q in PARAMS)
+#: the config keys every element owns
+KEYS: tuple[Key, ...] = tuple(k for e in ELEMENTS for k in e.keys)
+#: the elements whose force is conservative (a law T(q)) and those that are viscous (B)
+SPRINGS = tuple(e for e in ELEMENTS if e.affine.__func__ is not Element.affine)
+DAMPERS = tuple(e for e in ELEMENTS if e.viscous.__func__ is not Element.viscous)
+FRICTIONS = tuple(e for e in ELEMENTS if e.coulomb.__func__ is not Element.coulomb)
+#: the elements that act only below an engagement angle (:attr:`Element.engagement`)
+ENGAGING = tuple(e for e in ELEMENTS if e.engagement is not None)
+
+
+def params(p) -> Params:
+    """The parameter vector (or rows) p as named SI values: ``params(p)["spring_k"]``."""
+    return Params(p, PARAMS)
+
+
+def structure(cfg) -> tuple:
+    """The element choices that change the model itself (not a per-stroke value): part of
+    every cache key of a model, its table or an NLP."""
+    return tuple(x for e in ELEMENTS for x in e.structure(cfg))
+
+
+#: the elements in the kernel's table of element columns (tabulated when a stroke needs it)
+EXTRA = tuple(e for e in ELEMENTS if e.table == "extra")
+
+
+def acting(cfg, extra_values: dict | None = None) -> tuple[Element, ...]:
+    """The elements that exert a force with ``cfg``'s design (and ``extra_values``, a dict
+    of design values that vary, e.g. swept or freed: their largest magnitude)."""
+    values = {q.name: q.number(q.value(cfg)) for q in PARAMS}
+    values.update(extra_values or {})
+    return tuple(e for e in ELEMENTS if bool(e.acts(values)))
+
+
+def needs_extra(P, cfg) -> bool:
+    """Does any row of P (parameter vectors) have an element acting that reads the table of
+    element columns in ``cfg`` (a torsion spring, a rotary damper at a pivot)?"""
+    import numpy as np
+    P = np.atleast_2d(np.asarray(P, float))
+    values = {q.name: P[:, i] for i, q in enumerate(PARAMS)}
+    return any(bool(np.any(e.acts(values))) for e in EXTRA if e.in_extra(cfg))
+
+
+#: the flags of a table the kernel reads (after ncell, lo, h, m0): its structural element
+#: choices -- the rotary damper at a pivot rather than the lid
+KERNEL_META = ("rotary_at_pivot",)
+
+
+def kernel_meta(cfg) -> tuple[float, ...]:
+    """The values of :data:`KERNEL_META` in ``cfg``."""
+    return (float(BY_NAME["rotary"].in_extra(cfg)),)
+
+
+def one_way(P, theta_d):
+    """The dampers' factor with ``design.damper_one_way``: 0 while the lid opens (theta' > 0),
+    else 1 (numbers, arrays or CasADi expressions alike)."""
+    ow = P["damper_one_way"]
+    if hasattr(theta_d, "is_symbolic") or hasattr(ow, "is_symbolic"):
+        import casadi as ca
+        return 1 - ow * ca.if_else(theta_d > 0, 1, 0)
+    import numpy as np
+    return 1 - ow * (np.asarray(theta_d) > 0)
+
+
+__all__ = ["ELEMENTS", "BY_NAME", "ENGAGING", "FRICTIONS", "EXTRA", "needs_extra", "one_way", "PARAMS", "PARAM_NAMES", "KEYS", "SPRINGS", "DAMPERS",
+           "Element", "Param", "Params", "params", "structure", "acting"]

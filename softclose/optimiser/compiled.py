@@ -1,0 +1,189 @@
+"""The optimiser's NLPs compiled to C, kept in the build cache (:mod:`softclose.buildcache`):
+built once per structure, in the foreground, with a line on stderr saying what is built
+(:func:`compiling`, ``softclose prepare``), loaded by ``nlpsol`` from the library when the cache
+holds one. A library is keyed by the NLP's structure, the C compiler (its ``--version``) and
+the flags; a damaged or foreign one is dropped and built again."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+from functools import lru_cache
+from pathlib import Path
+
+from ..buildcache import (_prune, _remove, _touch, folder, key_of, load, store,
+                          sweep_temporaries, whole_library)
+
+#: compiler flags of the NLP: -O1 compiles the default NLP in ~10 s and solves 2.3x faster
+#: than the virtual machine (-O2: 50 s to compile, 3.4x; -O0: 4 s, 1.5x)
+CFLAGS = ("-O1", "-shared", "-fPIC")
+#: compiler flags of the robust optimiser's scenario NLPs: their C is ~20 times the
+#: optimiser's (9 scenarios of 3 models, the points free: 39 MB), which -O1 compiles in
+#: ~7 min; -O0 in ~100 s, and their solves still run ~2x faster than the virtual machine
+#: (the co-design's joint NLP: 6.0 s against 11.9 s, the same 89 iterations and bits)
+SCENARIO_CFLAGS = ("-O0", "-shared", "-fPIC", "-pthread")
+
+
+def compiler() -> str:
+    """The C compiler: ``$CC``, else ``cc``."""
+    return os.environ.get("CC") or "cc"
+
+
+@lru_cache(maxsize=8)
+def _toolchain(cc: str, flags: tuple) -> str | None:
+    """A key of the compiler ``cc`` (the first line of its ``--version``) and ``flags``; None
+    when there is no such compiler."""
+    import shutil
+    import subprocess
+    if shutil.which(cc) is None:
+        return None
+    try:
+        out = subprocess.run([cc, "--version"], capture_output=True, text=True, timeout=30,
+                             stdin=subprocess.DEVNULL)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    version = (out.stdout or out.stderr).strip().splitlines()
+    return key_of(cc, version[0] if version else "", flags)[:12]
+
+
+def toolchain(flags: tuple = CFLAGS) -> str | None:
+    """:func:`_toolchain` of this process's compiler."""
+    return _toolchain(compiler(), tuple(flags))
+
+
+def _library(where: Path, key: str, flags: tuple) -> Path | None:
+    tools = toolchain(flags)
+    return None if tools is None else where / f"nlp-{key}-{tools}.so"
+
+
+def compiled_nlp(key: str, flags: tuple = CFLAGS) -> Path | None:
+    """The compiled library of the NLP ``key`` (by this compiler, with ``flags``), if it is
+    built (a damaged one is removed: it is compiled again when asked)."""
+    where = folder()
+    if where is None:
+        return None
+    path = _library(where, key, flags)
+    if path is not None and path.exists():
+        if not whole_library(path):
+            _remove(path)
+            return None
+        _touch(path)
+        return path
+    return None
+
+
+def forget_nlp(key: str, flags: tuple = CFLAGS) -> None:
+    """Remove a compiled NLP that could not be loaded (it is compiled again when asked)."""
+    where = folder()
+    path = _library(where, key, flags) if where is not None else None
+    if path is not None:
+        _remove(path)
+
+
+_compiling: list = []
+
+
+@contextlib.contextmanager
+def compiling():
+    """Inside the block, every NLP built (:func:`load_or_build`) is compiled now, in the
+    foreground, into the cache, and its library used (``softclose prepare``)."""
+    _compiling.append(True)
+    try:
+        yield
+    finally:
+        _compiling.pop()
+
+
+#: what this process did with NLPs, for ``softclose prepare``'s report: the libraries it
+#: compiled and loaded (paths), the NLPs it could not compile (their names)
+compiled: list = []
+loaded: list = []
+failed: list = []
+
+
+def load_or_build(disk: str, restore, build, what: str = "", flags: tuple = CFLAGS):
+    """The NLP kept as ``disk``: ``restore(library, meta)`` when its compiled library is in
+    the cache (a damaged or foreign library is dropped), else ``build()`` -- built
+    symbolically. Inside :func:`compiling`, a built NLP is compiled (``flags``; ``what``
+    names it on stderr) and its library loaded. The one way the optimiser's and the robust
+    optimiser's NLPs are kept."""
+    nlp = _restored(disk, compiled_nlp(disk, flags), restore, flags, loaded)
+    if nlp is not None:
+        return nlp
+    nlp = build()
+    if _compiling and folder() is not None:
+        store("nlpmeta", disk, nlp.meta())
+        out = _restored(disk, compile_nlp(nlp.solver, disk, flags, what), restore, flags,
+                        compiled)
+        if out is not None:
+            return out
+        failed.append(what or disk)
+    return nlp
+
+
+def _restored(disk: str, lib, restore, flags: tuple, into: list):
+    """``restore(lib, meta)`` of the NLP ``disk``'s library ``lib`` (noted in ``into``), or
+    None: no library, no meta, or a damaged or foreign one (dropped)."""
+    meta = load("nlpmeta", disk) if lib is not None else None
+    if meta is None:
+        return None
+    try:
+        nlp = restore(lib, meta)
+    except Exception:   # noqa: BLE001  (a damaged or foreign library: build anew)
+        forget_nlp(disk, flags)
+        return None
+    into.append(lib)
+    return nlp
+
+
+def compile_nlp(solver, key: str, flags: tuple = CFLAGS, what: str = "") -> Path | None:
+    """Generate the C of ``solver``'s functions, compile it (``flags``) and put the library
+    in the cache as the NLP ``key`` (here and now: seconds to minutes, with a line on
+    stderr: ``building the NLP WHAT (C, -O1) ... 12.3 s``). None when there is no cache or
+    no compiler (said on that line)."""
+    import shutil
+    import subprocess
+    import time
+    where = folder()
+    if where is None:
+        return None
+    cc = compiler()
+    level = next((f for f in flags if f.startswith("-O")), "")
+    head = f"softclose: building the NLP{' ' + what if what else ''} (C, {level}) ..."
+    print(head, end="", file=sys.stderr, flush=True)
+    t0 = time.perf_counter()
+    path = _library(where, key, flags)
+    if path is None:
+        print(f" no C compiler ({cc}): not compiled", file=sys.stderr, flush=True)
+        return None
+    sweep_temporaries(where)
+    tmp = where / f".build-{key}.{os.getpid()}"       # (a killed build: removed later)
+    try:
+        shutil.rmtree(tmp, ignore_errors=True)
+        tmp.mkdir()
+        old = os.getcwd()
+        try:
+            os.chdir(tmp)                     # CasADi writes the file where it stands
+            solver.generate_dependencies(f"nlp_{key}.c", {"with_header": False})
+        finally:
+            os.chdir(old)
+        src, out = tmp / f"nlp_{key}.c", tmp / path.name
+        try:
+            subprocess.run([cc, *flags, str(src), "-o", str(out), "-lm"], check=True,
+                           capture_output=True, stdin=subprocess.DEVNULL)
+        except (OSError, subprocess.CalledProcessError) as exc:
+            why = getattr(exc, "stderr", b"") or b""
+            why = why.decode(errors="replace").strip().splitlines()
+            print(f" failed ({why[-1] if why else exc}): not compiled", file=sys.stderr,
+                  flush=True)
+            return None
+        os.replace(out, path)
+    except OSError as exc:
+        print(f" failed ({exc}): not compiled", file=sys.stderr, flush=True)
+        return None
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    print(f" {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
+    _prune(where, "nlp-*.so")
+    return path

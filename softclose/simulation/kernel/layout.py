@@ -1,0 +1,41 @@
+"""The kernel's contract with Python: the columns of its design rows and of its output, its
+status and stop-reason codes, and the layout string (:data:`LAYOUT`) that ``sc_layout()`` of
+``_kernel.c`` must return -- the element registry's parameters, the coefficient table's columns,
+the pose and range widths -- so that a kernel built from other sources is refused, never read
+wrongly."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...model import elements
+from ...model.dynamics import COEFFS, EXTRA_COEFFS
+from .table import NPOSE, NX, POINT_NAMES, POSE
+
+#: output columns of the kernel, in order
+OUT_FIELDS = ("status", "closing_time", "impact_theta_dot", "impact_tip_speed",
+              "peak_tip_speed", "min_spring_length", "max_spring_length", "steps",
+              "energy_rise", "theta_min", "theta_dot_max", "theta_max",
+              "stop_reason", "stop_theta", "stop_time", "engage_time", "engage_theta_dot")
+STATUS = {0: "closed", 1: "not closed", 2: "unstable", 3: "left the tabulated range",
+          4: "non-finite", 5: "implicit solve failed"}
+#: ``stop_reason`` codes: why a stroke does not close (0: it closed, failed, or is undecided)
+STOP_REASONS = {0: "", 1: "energy below the barrier", 2: "held open", 3: "held by friction"}
+#: the optional point columns after lid_mass (a row's own attachment points, m; NaN: the
+#: table's): D, E, F, H of :data:`softclose.simulation.kernel.table.POINT_NAMES`, x and y each
+POINT_COLUMNS = tuple(f"{name}_{xy}" for name in POINT_NAMES for xy in "xy")
+NPT = len(POINT_COLUMNS)
+#: the design-row columns, in order: the parameter vector (SI), then energy_tol, the
+#: optional lid_mass and the optional point columns
+DESIGN_COLUMNS = tuple(q.name.removesuffix("_deg") for q in elements.PARAMS) + (
+    "energy_tol", "lid_mass") + POINT_COLUMNS
+#: the SI factor of each parameter column (an angle given in degrees: pi/180)
+SI = np.array([q.si for q in elements.PARAMS])
+#: version of the exported C signatures; a built extension reporting another is not used
+KERNEL_ABI = 6
+#: every layout constant this module shares with the kernel (``sc_layout()`` must equal it)
+LAYOUT = (f"abi={KERNEL_ABI};meta=ncell,lo,h,m0,{','.join(elements.KERNEL_META)};"
+          f"cc={','.join(COEFFS)};mass={','.join(COEFFS[:4])};"
+          f"xcc={','.join(EXTRA_COEFFS + ('-',) * (NX - len(EXTRA_COEFFS)))};"
+          f"pose={','.join(POSE + ('-',) * (NPOSE - len(POSE)))};"
+          f"row={','.join(DESIGN_COLUMNS)};out={','.join(OUT_FIELDS)};nrng=18")

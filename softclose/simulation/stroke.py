@@ -1,0 +1,177 @@
+"""One closing stroke's result, whichever integrator produced it.
+
+:class:`StrokeStatus` names how a stroke ended (the values are the C kernel's status
+codes); :class:`StrokeResult` holds its metrics (:data:`softclose.problem.METRICS`), how it
+was computed, how accurate it is, and -- when asked for -- its trajectory. The fixed-step
+:class:`softclose.simulation.simulator.Simulator` and the adaptive :class:`softclose.simulation.reference.Reference`
+both return it, so a result can be compared with its verification field by field.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from enum import IntEnum
+
+from ..present.display import Display, Displayed, Table, pm, with_unit
+from ..problem import METRIC_KEYS, METRICS
+
+
+class StrokeStatus(IntEnum):
+    """How a stroke ended (values: the stroke kernel's status codes)."""
+
+    CLOSED = 0
+    NOT_CLOSED = 1
+    UNSTABLE = 2
+    LEFT_RANGE = 3
+    NON_FINITE = 4
+    IMPLICIT_FAILED = 5
+    #: integrated to its end, but an element left its valid range (a spring past its free
+    #: length): an invalid design, whose metrics are not reported as the stroke's
+    OUT_OF_RANGE = 6
+
+    @property
+    def ok(self) -> bool:
+        """True when the stroke was integrated to its end (closed or not)."""
+        return self in (StrokeStatus.CLOSED, StrokeStatus.NOT_CLOSED)
+
+    @property
+    def text(self) -> str:
+        return _TEXT[self]
+
+    def __str__(self) -> str:
+        return self.text
+
+
+_TEXT = {StrokeStatus.CLOSED: "closed", StrokeStatus.NOT_CLOSED: "not closed",
+         StrokeStatus.UNSTABLE: "unstable", StrokeStatus.LEFT_RANGE: "left the tabulated range",
+         StrokeStatus.NON_FINITE: "non-finite",
+         StrokeStatus.IMPLICIT_FAILED: "implicit solve failed",
+         StrokeStatus.OUT_OF_RANGE: "invalid design"}
+
+
+@dataclass(frozen=True, repr=False)
+class StrokeResult(Displayed):
+    """The metrics of one stroke and how they were obtained.
+
+    ``ok`` is False when the method could not integrate the stroke; ``message`` then says
+    why and what to change (and otherwise carries a warning, if any). ``accuracy`` holds the
+    estimated distance of each fixed-step metric from the converged answer (None for the
+    adaptive reference, whose tolerance is ``tolerance``). ``reason`` says why a stroke that
+    ran to its end did not close, when that is known.
+    """
+
+    closed: bool
+    closing_time: float | None
+    impact_theta_dot: float | None
+    impact_tip_speed: float | None
+    peak_tip_speed: float | None
+    min_spring_length: float | None
+    max_spring_length: float | None
+    holding_moment: float
+    status: StrokeStatus
+    method: str
+    step: float | None = None
+    steps: int = 0
+    tolerance: float | None = None
+    message: str | None = None
+    reason: str | None = None
+    accuracy: dict | None = None
+    theta_min: float | None = None
+    theta_max: float | None = None
+    theta_dot_max: float | None = None
+    opening_force: float | None = None
+    #: the angle the ``reason`` of a stroke that did not close names (rad): where friction
+    #: holds the lid, the well that holds it open, the top of the barrier it cannot pass
+    stop_theta: float | None = None
+    #: with an end damper (``design.end_damper_c`` > 0): when the lid first reaches its
+    #: engagement angle moving down (s) and theta' there (rad/s, the engagement speed); None
+    #: when it has none or never gets there
+    engage_time: float | None = None
+    engage_theta_dot: float | None = None
+    trajectory: dict | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def ok(self) -> bool:
+        return self.status.ok
+
+    @property
+    def success(self) -> bool:
+        """The stroke was integrated (closed or not): the public API's success flag."""
+        return self.ok
+
+    @property
+    def integrator(self) -> str:
+        return self.method
+
+    def metrics(self) -> dict:
+        """The metrics as a dict (:data:`softclose.problem.METRIC_KEYS`)."""
+        return {k: getattr(self, k) for k in METRIC_KEYS}
+
+    def to_json(self) -> dict:
+        """Plain JSON values: the metrics, then how they were computed (no trajectory)."""
+        from ..jsonio import jsonable
+        out = self.metrics()
+        out.update({"status": self.status.text, "method": self.method, "step": self.step,
+                    "steps": self.steps, "accuracy": self.accuracy})
+        for k in ("tolerance", "message", "reason", "engage_time", "engage_theta_dot"):
+            if getattr(self, k) is not None:
+                out[k] = getattr(self, k)
+        return jsonable(out)
+
+    def to_frame(self):
+        """One row (pandas DataFrame): the metrics and the status. With a trajectory, use
+        :meth:`trajectory_frame` for the time histories."""
+        import pandas as pd
+        row = self.metrics()
+        row["status"] = self.status.text
+        for k in ("engage_time", "engage_theta_dot"):   # (as in the JSON: where it engages)
+            if getattr(self, k) is not None:
+                row[k] = getattr(self, k)
+        return pd.DataFrame([row])
+
+    def trajectory_frame(self):
+        """The trajectory (one row per step) as a DataFrame; columns carry their units."""
+        import pandas as pd
+        if self.trajectory is None:
+            raise ValueError("this result has no trajectory: simulate(cfg, trajectory=True)")
+        return pd.DataFrame(self.trajectory)
+
+    def _display(self) -> Display:
+        how = (f"{self.method}, step {self.step:g} s, {self.steps} steps" if self.step else
+               f"{self.method}, tolerance {self.tolerance:g}" if self.tolerance else self.method)
+        acc = self.accuracy or {}
+        rows = [(m.key, pm(getattr(self, m.key), acc.get(m.key), m.unit) if m.key != "closed"
+                 else ("yes" if self.closed else "no"), m.description) for m in METRICS]
+        facts = [("status", self.status.text)]
+        facts += [(k, with_unit(getattr(self, k), u)) for k, u in
+                  (("closing_time", "s"), ("impact_tip_speed", "m/s"), ("peak_tip_speed", "m/s"))
+                  if getattr(self, k) is not None]
+        if self.engage_time is not None:
+            facts.append(("end damper engages", f"at t = {self.engage_time:.6g} s, theta' = "
+                          f"{self.engage_theta_dot:.6g} rad/s"))
+        if self.reason:
+            facts.append(("why not closed", self.reason))
+        note = ("± is the estimated distance from the converged answer (Richardson at half "
+                "the step, plus the table's interpolation error)") if acc else ""
+        return Display(f"StrokeResult ({how})", self.ok,
+                       self.message or "", tuple(facts),
+                       (Table("metrics", ("metric", "value", "what"), rows, note),))
+
+    def plot(self):
+        """Time histories of the stroke (needs ``trajectory=True``): a matplotlib Figure."""
+        from ..present.figures.stroke import plot_time_histories
+        if self.trajectory is None:
+            raise ValueError("this result has no trajectory: simulate(cfg, trajectory=True)")
+        return plot_time_histories(self)
+
+
+def none_if_nan(x) -> float | None:
+    """A float, or None for NaN/inf/None (how metrics of strokes that did not close read)."""
+    if x is None:
+        return None
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+__all__ = ["StrokeStatus", "StrokeResult", "none_if_nan"]
