@@ -81,6 +81,8 @@ COMMANDS = {
              "{out}", "--set", 'design.spring_kind="compression"', "--set",
              "design.spring_k=1914.709", "--set", "design.spring_rest_length=0.07925707"],
             "medium"),
+    # compiles the optimiser's NLP in the foreground (~10 s; once per structure and cache)
+    "prepare": (["prepare"], "costly"),
 }
 #: the pairs of the catalog the fuzzed select runs (4 springs x 2 dampers)
 SELECT_PAIRS = 8
@@ -139,6 +141,9 @@ OPTIONS = {
                    "design.spring_preload=0:10", "geometry.lid_e[1]=0.02:0.01",
                    "geometry.lid_e[9]=0:1", "nope=1:2", "geometry.lid_e[1]=abc", "")]
                           + [("geometry.lid_e[1]=0.004:0.024", False)])},
+    "prepare": {"--free": (None, [(v, True) for v in (
+                    "nope=1:2", "geometry.lid_e[1]=abc", "geometry.lid_e[9]=0:1",
+                    "design.spring_k=5:1", "")] + [("geometry.lid_e[1]=0.004:0.024", False)])},
     "pareto": {"--closing-times": ("0.4:1:2", [(v, False) for v in (
         "0.4:1:1", "1:0.4:2", "0:1:2", "nan:1:2", "0.4:inf:2", "0.4:1:0", "0.4:1:100000",
         "0.3:3:2:log", "abc", "1e9:1e10:2", "0.4:30:2", "0.4:1:-2", "0.4:1:2.5")])},
@@ -703,7 +708,8 @@ def run_case(command: str, values, out_dir: Path, as_json: bool,
 EXAMPLES = {"state": (100, 400), "simulate": (400, 1500), "sweep": (60, 300),
             "optimise": (25, 120), "yield": (25, 100), "sensitivity": (15, 60),
             "pareto": (10, 30), "optimise --robust": (10, 15), "bench": (10, 8),
-            "docs": (30, 100), "select": (25, 100), "fit": (25, 100)}
+            "docs": (30, 100), "select": (25, 100), "fit": (25, 100),
+            "prepare": (10, 20)}
 
 
 @pytest.fixture(scope="module")
