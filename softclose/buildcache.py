@@ -48,6 +48,7 @@ import os
 import sys
 from functools import lru_cache
 from pathlib import Path
+from .version import __version__
 
 #: the environment variable naming the folder (or "off")
 ENV_FOLDER = "SOFTCLOSE_CACHE"
@@ -170,7 +171,6 @@ def fingerprint() -> str:
     import casadi
     import numpy
 
-    from .version import __version__
     h = _blake2b(digest_size=8)
     h.update(f"{casadi.__version__};{numpy.__version__};{sys.version};"
              f"{os.uname().machine if hasattr(os, 'uname') else ''};{__version__};"

@@ -563,6 +563,8 @@ def work_seconds(command: str, cfg, argv: list[str]) -> float:
         return 400.0
     if command == "docs":
         return 30.0
+    if command == "prepare":      # one NLP compiled (-O1; the points free: a larger one)
+        return 120.0 + (240.0 if _option(argv, "--free") else 0.0) + 0.1 * _nlp_steps(cfg)
     if command == "select":       # the kernel's batch, a model per distinct geometry, the
         # reference at every corner of the verified pairs (0.5 s each)
         d = 3 + _select_axes(cfg)

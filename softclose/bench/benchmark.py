@@ -21,6 +21,7 @@ from .features import optimiser_study
 from .precision import WorkPrecision, work_precision
 from .calls import speed
 from .timing import SPEED_TARGETS
+from ..jsonio import jsonable
 
 def machine() -> str:
     """CPU, cores, OS, Python, NumPy and CasADi versions of this machine."""
@@ -107,7 +108,6 @@ class BenchResult(Displayed):
                        tuple(facts), tables, short=1)
 
     def to_json(self) -> dict:
-        from ..jsonio import jsonable
         return jsonable({"machine": self.machine, "date": self.date, "commit": self.commit,
                          "quick": self.quick, "targets": dict(TARGETS),
                          "relative": list(RELATIVE), "speed_targets": SPEED_TARGETS,

@@ -13,13 +13,14 @@ import subprocess
 import numpy as np
 
 from ..simulation.kernel import binding as native
-from ..config import Config
+from ..config import Config, default_config
 from ..model.lid import LidModel
 from ..simulation.reference import Reference
 from ..simulation.simulator import Simulator
 from .features import feature_entries
 from .timing import (cli_time, fresh_command, fresh_env, kernel_times, median_time,
                      not_measured, speed_row)
+from ..optimiser import cache as optimiser_cache
 
 #: modules that ``softclose simulate`` must not import at start-up (they are imported lazily)
 HEAVY_MODULES = ("pandas", "pyarrow", "scipy", "SALib", "dask", "matplotlib")
@@ -104,10 +105,8 @@ def startup_rows(repeats: int = 9, log=None) -> list[dict]:
     what a user's second and later runs take."""
     import statistics
     import time
-    from ..config import default_config
-    from ..optimiser.cache import prepare
     log = log or (lambda *a: None)
-    lib = prepare(default_config())
+    lib = optimiser_cache.prepare(default_config())
     how = ("the NLP compiled" if lib is not None else
            "the NLP interpreted (no C compiler, or the cache is off)")
     import importlib.util

@@ -16,13 +16,23 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config import Config
+from ..config import Config, default_config, to_dict
 from ..model.lid import LidModel
 from ..problem import PARAM_COLUMNS, objective, params_of
 from ..simulation.reference import Reference
 from ..simulation.simulator import Simulator
 from .precision import TRUTH_TOL
-from .timing import OtherLoad, fresh_command, fresh_env, not_measured, speed_row
+from .timing import cli_time, fresh_command, fresh_env, not_measured, OtherLoad, speed_row
+from ..optimiser import optimise, solve
+from ..catalog.illustrative import dampers, springs
+from ..catalog import select
+from ..sweeps.space import make_grid, make_sample
+from ..optimiser.kinds import kind_config
+from ..optimiser.cache import prepare
+from ..config.free import parse_free_option
+from .fitting import fit_entries
+from ..robust import optimise_robust, sensitivity as sens, tolerance_analysis as ta
+from ..sweeps import sweep
 
 #: a feature entry is repeated (up to its repeat count) only while its runs took less than this
 FEATURE_BUDGET_S = 30.0
@@ -89,8 +99,6 @@ def feature_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
         return out[-1]
 
     rep = 1 if quick else 3
-    from ..sweeps import sweep
-    from ..sweeps.space import make_grid
     n_grid = int(np.prod([n for _, _, n in SWEEP_GRID.values()]))
     axes = sweep_axes()
     sim = Simulator(cfg)
@@ -125,9 +133,6 @@ def feature_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
         rows[-1]["note"] = (f"the result's own designs_per_second (evaluation only): "
                             f"{res.designs_per_second or 0:,.0f}")
     _cli_sweep_rows(cfg, rows, n_grid, timed, 1 if quick else 5)
-    from ..robust import optimise_robust
-    from ..robust import sensitivity as sens
-    from ..robust import tolerance_analysis as ta
     what = "robust optimisation over the [tolerance] box"
     rob = None
     if quick:
@@ -166,7 +171,6 @@ def feature_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
     else:
         timed("sobol_1024", what_s, lambda: sens(at, samples=1024), rep, note=note)
     _select_row(cfg, timed, rows, quick)
-    from .fitting import fit_entries
     fit_entries(rows, timed, 1 if quick else 5)
     return rows
 
@@ -187,7 +191,6 @@ def _co_design_rows(cfg: Config, rows: list, quick: bool = False, log=None) -> N
     nominal NLP compiled (:func:`softclose.optimiser.cache.prepare`): what a user's second
     and later runs take. Nominal: the median of 3 runs; robust: one run, after
     ``softclose prepare`` compiled its scenario NLPs (:func:`_settle`)."""
-    from .timing import cli_time
     log = log or (lambda *a: None)
     for lever, free in CO_DESIGN.items():
         for robust in (False, True):
@@ -218,22 +221,17 @@ def _settle(argv: list[str], log) -> None:
     """Compile the NLPs of ``softclose ARGV`` before it is timed: ``softclose prepare`` with
     its options, in the foreground (the robust co-design's joint scenario NLP takes ~100 s),
     so that the timed run loads them, as a user's runs after a prepare do."""
-    from .timing import cli_time
     t = cli_time(["prepare", *[a for a in argv[1:] if a != "--json"]], 1)
     log(f"  (`softclose prepare {' '.join(argv[1:3])} ...`: {t:.0f} s)")
 
 
 def _default() -> Config:
-    from ..config import default_config
     return default_config()
 
 
 def _prepare(cfg: Config, free: list) -> None:
     """Compile the nominal NLP of each spring kind of ``cfg`` with the ``--free`` options
     ``free`` (one run before first, so the compiled library is what the timed runs load)."""
-    from ..config.free import parse_free_option
-    from ..optimiser.cache import prepare
-    from ..optimiser.kinds import kind_config
     table = dict(parse_free_option(free[i + 1]) for i in range(0, len(free), 2))
     c = cfg.set("optimise.free", table)
     for kind in c.optimise.spring_kinds:
@@ -249,7 +247,6 @@ def _placement_rows(cfg: Config, rows: list, timed, quick: bool) -> None:
     Parquet and maps; not with ``quick``)."""
     import tempfile
 
-    from ..sweeps.space import make_sample
     c = cfg.update(PLACEMENT_DESIGN)
     n = PLACEMENT_KERNEL_ROWS
     space = make_sample(PLACEMENT_BOX, n, "sobol", 0, c)
@@ -299,8 +296,6 @@ def _select_row(cfg: Config, timed, rows: list, quick: bool = False) -> None:
     if quick:
         rows.append(not_measured("select_1000", what, "not run with --quick"))
         return
-    from ..catalog import select
-    from ..catalog.illustrative import dampers, springs
     s, d = springs()[:100], dampers()[:10]
     select(cfg, s[:2], d[:2], samples=16, verify=0)     # warm-up: its tables built
     res = timed("select_1000", what, lambda: select(cfg, s, d), 1, count=1000, unit="pairs")
@@ -318,7 +313,6 @@ def _cli_sweep_rows(cfg: Config, rows: list, n_grid: int, timed, repeats: int) -
     saved)."""
     import tempfile
 
-    from ..config import default_config, to_dict
     what = (f"softclose sweep --grid ... --out DIR: the {n_grid:,}-design grid with its CSV "
             "and maps, fresh interpreter, end to end")
     what_maps = "the maps of that command (3 maps; its `maps` stage)"
@@ -348,7 +342,6 @@ def _cli_sweep_rows(cfg: Config, rows: list, n_grid: int, timed, repeats: int) -
 
 def _nominal_optimum(cfg: Config):
     """(cfg with the nominal optimum's design, note), or (None, why not)."""
-    from ..optimiser import optimise
     try:
         r = optimise(cfg)
     except Exception as exc:  # reported in the table
@@ -373,7 +366,6 @@ def optimiser_study(cfg: Config, quick: bool = False, log=None) -> tuple[list, s
     when the optimiser's ``solve`` is not available.
     """
     log = log or (lambda *a: None)
-    from ..optimiser import solve
     nodes = (5, 10, 20) if quick else OPT_NODES
     subs = (1, 4) if quick else OPT_SUBSTEPS
     ref = Reference(LidModel(cfg), TRUTH_TOL)

@@ -16,6 +16,8 @@ import tempfile
 from pathlib import Path
 
 from .timing import fresh_command, fresh_env
+from ..config import default_config
+from ..calibration.synthetic import angle_track, gyroscope_track, write_csv
 
 #: the README's optimum as a built prototype (a compression spring)
 PROTOTYPE = {"design.spring_kind": "compression", "design.spring_k": 1914.709,
@@ -36,8 +38,6 @@ def fit_entries(rows: list, timed, repeats: int) -> None:
     """Time both fits with ``timed(key, what, fn, repeats)`` (the feature entries' timer: the
     median of the repeats, the machine's load recorded; it appends the row to ``rows``);
     each row's note gives the fit's iterations, samples and identifiability verdict."""
-    from ..calibration.synthetic import angle_track, gyroscope_track, write_csv
-    from ..config import default_config
     base = default_config().update(PROTOTYPE)
     truth = base.update({"mass.inertia_lid": 0.0125, "friction.torque": 0.02,
                          "design.spring_preload": 1.0})

@@ -15,10 +15,12 @@ import numpy as np
 from ..config import Config
 from ..simulation.integrators import METHODS, SEED
 from ..model.lid import LidModel
-from ..problem import RELATIVE, TARGETS, as_params, params_of
+from ..problem import as_params, PARAM_DEFAULTS, params_of, RELATIVE, TARGETS
 from ..simulation.reference import Reference
 from ..simulation.simulator import Simulator
 from .timing import kernel_times, time_stats
+from ..jsonio import jsonable
+from ..model.elements import PARAMS
 
 #: the metrics with an accuracy target, in table order
 METRICS = tuple(TARGETS)
@@ -60,8 +62,6 @@ ELEMENT_DESIGNS = {
 def element_params(values: dict) -> np.ndarray:
     """The parameter vector p of a design given by some of its parameters (words by their
     codes), the others at their defaults (absent)."""
-    from ..model.elements import PARAMS
-    from ..problem import PARAM_DEFAULTS
     p = PARAM_DEFAULTS.copy()
     for i, q in enumerate(PARAMS):
         if q.name in values:
@@ -146,7 +146,6 @@ class WorkPrecision:
         return [r for r in self.rows if r["design"] == design and r["method"] == method]
 
     def to_json(self) -> dict:
-        from ..jsonio import jsonable
         return jsonable({
             "designs": list(self.designs), "quick": self.quick, "truth_tol": TRUTH_TOL,
             "default": self.default, "rows": list(self.rows),

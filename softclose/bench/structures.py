@@ -14,6 +14,8 @@ import subprocess
 import tempfile
 import time
 from pathlib import Path
+from ..robust import nlp as rn, optimise_robust
+from ..optimiser import cache as oc, optimise
 
 #: the commands whose structures are measured: (name, optimise options, --free pairs)
 COMMANDS = (
@@ -31,10 +33,6 @@ COMMANDS = (
 def structures_of(cfg, robust: bool, free: tuple) -> list:
     """The NLP structures one optimisation of ``cfg`` (``free``: (key, lo, hi) set free)
     builds: [(kind, structure)]."""
-    from ..optimiser import cache as oc
-    from ..optimiser import optimise
-    from ..robust import nlp as rn
-    from ..robust import optimise_robust
     if free:
         cfg = cfg.update({"optimise.free": {k: [lo, hi] for k, lo, hi in free}})
     oc.forget()

@@ -35,6 +35,9 @@ from .data import locate, record_of
 from .equation import bounds_of, check_keys, fit_ode, value_of
 from .nlp import DEFECT_MAX, get_nlp, substeps
 from .result import UNDETERMINED, VIF_MAX  # noqa: F401  (the verdict's thresholds)
+from ..present.progress import Progress
+from ..interrupt import check
+from .result import FitResult, StrokeFit
 
 CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
@@ -186,7 +189,6 @@ def _parameters(stroke, scale):
 def solve(cfg, data, free, *, axis=None, starts: int = 1, seed: int = 0, prepared=None,
           progress: bool = False):
     """The fit of the keys ``free`` to ``data``: a :class:`softclose.calibration.FitResult`."""
-    from .result import FitResult, StrokeFit
     model, keys, strokes = prepared or prepare(cfg, data, free, axis)
     nk = len(keys)
     lo, hi = _bounds(keys)
@@ -217,8 +219,6 @@ def solve(cfg, data, free, *, axis=None, starts: int = 1, seed: int = 0, prepare
     rng = np.random.default_rng(seed)
     n_move, n_rel = substeps(h_move), substeps(h_rel)
     best = None
-    from ..interrupt import check
-    from ..present.progress import Progress
     bar = Progress(int(starts), "fit", enabled=progress and starts > 1, unit="")
     for i in range(max(1, int(starts))):
         check()                       # Ctrl-C between starts (Ipopt may swallow it)

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..present.display import Display, Displayed, Table, num, unit_of, with_unit
+from ..problem import DESIGN_KEYS
 
 #: variance inflation factor above which keys count as not identifiable (the usual
 #: multicollinearity rule; a pair correlated beyond |r| = 0.949; a lid's mass against its
@@ -212,7 +213,6 @@ class FitResult(Displayed):
         the configured distribution (uniform: the interval's half width; normal: 3 standard
         deviations), and never below a spread the config already gives the key. Keys the data
         do not determine get none (give them by hand)."""
-        from ..problem import DESIGN_KEYS
         skip = {f"design.{k}" for k in DESIGN_KEYS} | {k for k, _, _ in
                                                         (self.cfg.optimise.free or ())}
         given = {sp.key: sp for sp in self.cfg.tolerance.spreads}

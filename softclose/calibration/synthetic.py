@@ -12,6 +12,8 @@ import math
 import numpy as np
 
 from ..errors import NumericalError
+from ..simulation.reference import Reference
+from ..model.lid import LidModel
 
 
 def stroke_samples(cfg, rate: float = 120.0, before: float = 0.1, after: float = 0.1,
@@ -20,8 +22,6 @@ def stroke_samples(cfg, rate: float = 120.0, before: float = 0.1, after: float =
     t_release, t_closed)`` (s, rad, rad/s). The lid rests at ``stroke.theta0_deg`` for
     ``before`` seconds, is released at ``t_release`` (``phase`` of a frame after a frame),
     closes at ``t_closed`` and rests on the rim for ``after`` seconds."""
-    from ..model.lid import LidModel
-    from ..simulation.reference import Reference
     model = LidModel.cached(cfg)
     ref = Reference(model)
     p = model.params()

@@ -10,12 +10,13 @@ builds and caches its own simulators. The results are the local run's numbers.
 from __future__ import annotations
 
 import contextlib
+from ..sweeps.distributed import ClusterLost, connect, map_tasks
+from .ranking import screen_chunk
+from ..config.load import from_dict
 
 
 def _select_task(cfg_dict: dict, box, a: int, chunk: list):
     """One chunk of pairs on a worker: :func:`softclose.catalog.ranking.screen_chunk`."""
-    from ..config.load import from_dict
-    from .ranking import screen_chunk
     return screen_chunk(from_dict(cfg_dict), box, a, chunk)
 
 
@@ -25,7 +26,6 @@ class _Mapper:
         self.lost = None
 
     def __call__(self, cfg, box, tasks):
-        from ..sweeps.distributed import ClusterLost, map_tasks
         raw = {k: dict(v) for k, v in cfg.raw.items()}
         try:
             for _, result in map_tasks(self.client, _select_task,
@@ -40,6 +40,5 @@ class _Mapper:
 def mapper(dask):
     """A mapper for :func:`softclose.catalog.select` that screens the chunks on Dask
     (``dask``: ``"local:N"``, a scheduler address or a ``distributed.Client``)."""
-    from ..sweeps.distributed import connect
     with connect(dask) as client:
         yield _Mapper(client)

@@ -15,6 +15,8 @@ from __future__ import annotations
 from ..config import Config
 from ..config.free import PLACEMENT_KEYS
 from ..errors import ConfigError, SoftcloseError
+from .nlp import spring_config
+from ..robust import optimise_robust
 
 
 def placement_keys(cfg: Config) -> tuple[str, ...]:
@@ -32,8 +34,6 @@ def placement_keys(cfg: Config) -> tuple[str, ...]:
 def place_pair(cfg: Config, spring, damper, samples: int) -> dict:
     """The robust co-design of one pair: {values: {geometry key: value} (None when it found
     none), success, objective (its worst scenario), message}."""
-    from ..robust import optimise_robust
-    from .nlp import spring_config
     if damper.kind != "dashpot":
         return {"values": None, "success": False, "objective": None,
                 "message": "a rotary damper: the config's points kept (the robust NLP fixes "

@@ -14,6 +14,7 @@ from __future__ import annotations
 from ..config import Config
 from ..errors import SoftcloseError
 from .screen import without_limits
+from ..robust import optimise_robust
 
 
 def spring_config(cfg: Config, spring, damper) -> Config:
@@ -43,7 +44,6 @@ NLP_SAMPLES = 1000
 def solve_c(cfg: Config, spring, damper) -> dict:
     """The robust NLP's c for ``spring`` (``damper``: the dashpot chosen so far, its c the
     start): {c (None when it found none), success, objective (worst scenario), message}."""
-    from ..robust import optimise_robust
     try:
         c = spring_config(cfg, spring, damper)
         r = optimise_robust(c, samples=NLP_SAMPLES, verify=False)

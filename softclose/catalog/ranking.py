@@ -31,6 +31,9 @@ from .files import Catalog, DamperEntry, as_catalog, read_dampers, read_springs
 from .result import SelectResult, pair_entry
 from .screen import (RANGE, PairBox, pair_box, range_texts, reason_text, run_pairs,
                      summarise)
+from .nlp import NLP_SAMPLES, solve_c
+from .mounting import place_pair, placement_keys
+from . import verify
 
 #: rows of the kernel per chunk of pairs (a chunk is the unit of progress and of Ctrl-C)
 CHUNK_ROWS = 40_000
@@ -112,7 +115,6 @@ def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: 
         raise ConfigError(f"samples: expected a whole number 0..100000, got {samples!r}")
     if isinstance(verify, bool) or not isinstance(verify, (int, np.integer)) or verify < 0:
         raise ConfigError(f"verify: expected a whole number >= 0, got {verify!r}")
-    from .mounting import placement_keys
     placed = placement_keys(cfg)      # (refuses free keys other than attachment points)
     spr: Catalog = as_catalog(springs, read_springs)
     dmp: Catalog | None = as_catalog(dampers, read_dampers)
@@ -216,14 +218,13 @@ def _verify_best(cfg, box, pairs, entries, kernel, order, n, checked: dict,
     pairs are ranked again, until the best ``n`` are all checked (at most 5 rounds). Returns
     the new order."""
     cfgs = cfgs or {}
-    from .verify import verify_pair
     for _ in range(5):
         todo = [i for i in order[:n] if i not in checked]
         if not todo:
             break
         for i in todo:
             F, J = kernel[i]
-            v = verify_pair(cfgs.get(i, cfg), box, *pairs[i], F, J)
+            v = verify.verify_pair(cfgs.get(i, cfg), box, *pairs[i], F, J)
             checked[i] = v
             e = entries[i]
             e["verified"] = v["agree"]
@@ -245,8 +246,6 @@ def _place_best(cfg, box, pairs, entries, kernel, order, n, cfgs: dict, samples:
     """The best ``n`` pairs' attachment points re-optimised (:mod:`.place`); a pair screened
     again at its points keeps them when it ranks better there (``cfgs`` gets its config).
     Returns the new order."""
-    from .nlp import NLP_SAMPLES
-    from .mounting import place_pair
     best = order[:n]
     bar = Progress(len(best), "placing", enabled=progress, unit="pairs")
     with bar:
@@ -274,7 +273,6 @@ def _resolve_c(cfg, box, pairs, entries, kernel, order, n) -> list:
     screened again with the NLP's c and keeps whichever c ranks better. Returns the new
     order."""
     from dataclasses import replace
-    from .nlp import solve_c
     for i in order[:n]:
         s, d = pairs[i]
         info = solve_c(cfg, s, d)

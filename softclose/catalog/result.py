@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass, field
 
 from ..present.display import Display, Displayed, Table, num, percent
+from ..jsonio import jsonable
 
 #: the keys of one ranked pair as SPEC §10 gives them (``--json``), then the details
 SPEC_KEYS = ("spring", "damper", "feasible", "yield", "worst_objective", "design", "verified")
@@ -61,7 +62,6 @@ class SelectResult(Displayed):
         return self.ranking[0] if self.ranking else None
 
     def to_json(self) -> dict:
-        from ..jsonio import jsonable
         return jsonable({
             "ranking": [dict(e) for e in self.ranking], "evaluated": self.evaluated,
             "seconds": self.seconds, "pairs": self.pairs, "success": self.success,

@@ -29,6 +29,7 @@ from ..config.load import from_dict
 from ..model.elements.springs import KINDS
 from ..robust.box import Box, box_of
 from ..robust.evaluate import evaluate, point_values, simulator, slow_keys
+from ..problem import LID_MASS, param_rows
 
 #: the [tolerance] keys a catalog's own tolerances replace
 OWNED = ("design.spring_k", "design.spring_rest_length", "design.damper_c",
@@ -243,7 +244,6 @@ def range_texts(cfg, box: PairBox, items: list) -> list[str]:
     ``items`` (the kernel's stroke at that point of the pair's box,
     :func:`softclose.simulation.statics.out_of_range`, which names the angle); one batch per pivot and
     part limits."""
-    from ..problem import LID_MASS, param_rows
     out = [RANGE] * len(items)
     groups: dict = {}
     for n, (s, d, _) in enumerate(items):

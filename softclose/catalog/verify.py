@@ -16,13 +16,13 @@ import numpy as np
 
 from ..problem import DESIGN_KEYS
 from .screen import LIMIT_RTOL, PairBox, pair_rows, pivot_config
+from ..optimiser.verify import Checker, verify
+from ..model.lid import LidModel, model_key
 
 _CHECKERS: dict = {}
 
 
 def _checker(cfg):
-    from ..model.lid import LidModel, model_key
-    from ..optimiser.verify import Checker
     key = model_key(cfg)
     if key not in _CHECKERS:
         if len(_CHECKERS) > 64:
@@ -43,7 +43,6 @@ def corner_config(cfg, box: PairBox, spring, damper, row: int):
 def check_point(cfg, box: PairBox, spring, damper, row: int) -> dict:
     """The reference at one point of the pair's box: ``ok`` (every constraint met and the
     spring within its part's limits), ``reason`` when not, the reference's metrics and J."""
-    from ..optimiser.verify import verify
     c = corner_config(cfg, box, spring, damper, row)
     v = verify(c, {}, checker=_checker(c))
     if v.error is not None:

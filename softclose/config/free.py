@@ -17,7 +17,7 @@ from __future__ import annotations
 from typing import Any
 
 from ..model import elements
-from ..errors import ConfigError
+from ..errors import ConfigError, SoftcloseError
 from .schema import BY_NAME, RANGES
 from .values import fmt, in_range, number
 
@@ -47,8 +47,6 @@ def point_refusals(cfg, points: dict | None, n: int):
     is accepted when it is a finite number within its key's range."""
     import numpy as np
 
-    from ..errors import SoftcloseError
-    from .schema import RANGES
     out = np.full(n, "", dtype=object)
     for k, v in (points or {}).items():
         lo, hi, _ = RANGES[k.split("[")[0]]

@@ -29,7 +29,7 @@ import casadi as ca
 
 from . import elements
 from .elements import DAMPERS, ELEMENTS, FRICTIONS, SPRINGS
-from .elements.coordinates import Length, PivotAngle, Pose, moment_about
+from .elements.coordinates import Length, moment_about, PivotAngle, PIVOTS, Pose
 from .kinematics import acceleration_loop, closure, cross, perp, points, velocity_loop
 
 #: the coefficients of theta that are not an element's: the generalised mass, its slope, and
@@ -281,7 +281,6 @@ def _rate(coord, ps: Pose, omega: dict, A, phi_d, theta_d):
         r = P - coord.ground_point(ps.geo)
         return ca.dot(r / ca.norm_2(r), velocity_of(ps.points, A, phi_d, theta_d, P))
     if isinstance(coord, PivotAngle):
-        from .elements.coordinates import PIVOTS
         a, b = PIVOTS[coord.pivot]
         return omega[a] - omega[b]
     raise TypeError(f"no rate for the coordinate {coord!r}")

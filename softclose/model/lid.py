@@ -24,12 +24,12 @@ from functools import cached_property
 import casadi as ca
 import numpy as np
 
-from . import dynamics as dyn
-from . import elements
+from . import dynamics as dyn, elements
 from ..config import Config
 from ..errors import ConfigError
 from .kinematics import branch_of, closure, points, velocity_loop
 from ..problem import as_params
+from ..buildcache import text
 
 #: |u| above which the linkage counts as "at a toggle": acos|u| < 0.81 deg, i.e. the crank
 #: angles phi of the two assemblies (phi = arg w +- acos u) less than 1.6 deg apart
@@ -106,7 +106,6 @@ class LidModel:
 
     @classmethod
     def _restore(cls, cfg: Config, entry: dict) -> "LidModel":
-        from ..buildcache import text
         m = cls.__new__(cls)
         m.cfg, m.geo, m.mass = cfg, cfg.geometry, cfg.mass
         sigma, lo, hi, u = (float(v) for v in entry["numbers"])

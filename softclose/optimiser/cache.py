@@ -17,6 +17,7 @@ from .interval import ChebyshevFit, end_damper_mode, free_layout, nlp_elements
 from .lid import padded_degree
 from .nlp import ShootingNLP, ShootingStructure
 from .free_points import placement_layout, slot_values
+from . import compiled
 
 _NLPS: dict = {}
 #: the NLP structures built in this process, by :func:`nlp_key`
@@ -87,7 +88,6 @@ def get_structure(key: tuple, what: str = "") -> ShootingStructure:
     else built symbolically for CasADi's virtual machine -- and, inside
     :func:`softclose.optimiser.compiled.compiling`, compiled now (``what`` names it)."""
     from .. import buildcache
-    from . import compiled
     if key not in _STRUCTURES:
         disk = buildcache.key_of("nlp", key)
 
@@ -139,7 +139,6 @@ def prepare(cfg, nodes: int | None = None, substeps: int | None = None):
     what is built), unless it is compiled: the path of its library, or None (no cache, no C
     compiler). ``softclose prepare`` compiles every NLP a command would use."""
     from .. import buildcache
-    from . import compiled
     key = nlp_key(cfg, nodes, substeps)
     disk = buildcache.key_of("nlp", key)
     lib = compiled.compiled_nlp(disk)

@@ -18,6 +18,7 @@ from ..problem import DESIGN_KEYS, with_designs
 from .cache import stroke_simulator
 from .nlp import T_FLOOR, Run, ShootingNLP
 from .starts import initial_guess
+from .polish import _sim
 
 #: Ipopt statuses that suggest that the constraints cannot be met
 INFEASIBLE = ("Infeasible_Problem_Detected", "Restoration_Failed",
@@ -74,7 +75,6 @@ def diagnose(cfg, nlp: ShootingNLP, runs: list[Run]) -> tuple[str, dict]:
         if best is None:
             continue
         d, T, _, _ = nlp.unpack(best.x)
-        from .polish import _sim
         rs = _sim(cfg, nlp, d, sim).run(nlp.param_vector(cfg, d), estimate_error=False)
         T_sim = rs.closing_time if rs.closed else T
         dd = nlp.design_dict(cfg, d)

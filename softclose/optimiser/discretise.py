@@ -18,6 +18,8 @@ import numpy as np
 from ..config import NLP_BUDGET
 from ..errors import ConfigError
 from .interval import END_C, end_damper_mode, free_of
+from ..model.lid import shared_model
+from ..model.dynamics import COEFFS
 
 
 #: largest RK4 step of the NLP (s) when the sub-steps are chosen automatically: the default
@@ -37,8 +39,6 @@ def phase_two_rate(cfg) -> float:
     """The largest damping rate of phase 2 (1/s): max over theta in [theta_closed, the
     highest engagement angle] of (c_max q_d'^2 + c_e,max) / M(theta) -- the dashpot at its
     upper bound and the end damper at its largest coefficient (its upper bound when free)."""
-    from ..model.dynamics import COEFFS
-    from ..model.lid import shared_model
     o, st = cfg.optimise, cfg.stroke
     free = {k: (lo, hi) for k, lo, hi in free_of(cfg)}
     ce = free[END_C][1] if END_C in free else cfg.design.end_damper_c

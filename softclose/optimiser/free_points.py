@@ -35,6 +35,9 @@ import numpy as np
 from ..config.free import PLACEMENT_KEYS, config_value
 from .hermite import hermite_max
 from .lid import holding_moment
+from ..problem import PARAM_COLUMNS
+from ..model import elements
+from ..model.dynamics import pose
 
 #: the vector g of attachment points, in order: D (spring anchor, world), E (spring's lid
 #: point), F (dashpot anchor, world), H (dashpot's lid point)
@@ -66,7 +69,6 @@ def placed_config(cfg, values: dict):
 
 def pose_functions(theta, cfg, sigma, M):
     """The closure's functions the placed NLP fits: A_x, A_y, A'_x, A'_y and 1/M."""
-    from ..model.dynamics import pose
     A = pose(theta, cfg.geometry, cfg.mass, sigma).points["A"]
     dA = ca.jacobian(A, theta)
     return [A[0], A[1], dA[0], dA[1], 1.0 / M]
@@ -132,8 +134,6 @@ def placed_constraints(nlp, design, g, theta0, thc, closed, L, c) -> dict:
     (``spring_long``: l0 - l >= 0 for a compression spring; ``spring_short``: l - l0 >= 0 for
     an extension spring) and its limits (``spring_length``). ``L``: the series' numbers,
     ``c`` the combined coefficients (:func:`softclose.optimiser.interval.combine_function`)."""
-    from ..model import elements
-    from ..problem import PARAM_COLUMNS
     mask = np.ones(design.numel())
     for k in ("design.spring_k", "design.spring_preload"):
         mask[PARAM_COLUMNS[k]] = 0.0

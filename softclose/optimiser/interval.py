@@ -23,7 +23,7 @@ import numpy as np
 from ..model import elements
 from ..model.dynamics import coefficients
 from ..errors import ConfigError
-from ..problem import PARAM_KEYS
+from ..problem import PARAM_COLUMNS, PARAM_KEYS
 from .free_points import POSE_SERIES, SLOTS, lengths, pose_functions
 from .hermite import hermite_max
 from .lid import SymbolicSeries, chebyshev_basis, padded_degree
@@ -115,7 +115,6 @@ def end_damper_mode(cfg) -> str | None:
 def free_layout(cfg) -> tuple:
     """The NLP's further design variables: (key, column of p, scale) each, the scale the
     larger magnitude of the bounds (so that the scaled variable lies within [-1, 1])."""
-    from ..problem import PARAM_COLUMNS
     return tuple((k, PARAM_COLUMNS[k], max(abs(lo), abs(hi)) or 1.0)
                  for k, lo, hi in free_of(cfg) if k in PARAM_COLUMNS)
 

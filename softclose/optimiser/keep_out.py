@@ -21,6 +21,8 @@ import math
 
 import casadi as ca
 import numpy as np
+from ..model.lid import LidModel
+from .free_points import LENGTH_INTERVALS, POSE_SERIES, point
 
 #: angles of the exact check after the solve
 CHECK_ANGLES = 2001
@@ -65,7 +67,6 @@ def keep_out_constraints(fit, theta0, thc, g, polys, place=None, L=None):
     """gap >= 0 of every polygon and every line with a free point (all lines when
     ``place`` is None) at the nodes of the stroke's angle grid (CasADi expressions);
     ``fit`` symbolic series, ``L`` their numbers."""
-    from .free_points import LENGTH_INTERVALS, POSE_SERIES, point
     th, gs = ca.SX.sym("theta"), ca.SX.sym("g", 8)
     B = fit.basis(th)
     sx = [ca.dot(fit.series(n), B) for n in POSE_SERIES[:4]]
@@ -89,7 +90,6 @@ def keep_out_constraints(fit, theta0, thc, g, polys, place=None, L=None):
 def clearance(cfg, polys=None) -> dict:
     """The exact check: per line, the smallest gap over the stroke (m; < 0: it crosses a
     region) and the angle where (deg), on :data:`CHECK_ANGLES` angles of the exact closure."""
-    from ..model.lid import LidModel
     polys = cfg.optimise.keep_out if polys is None else polys
     if not polys:
         return {}

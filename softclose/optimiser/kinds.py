@@ -16,11 +16,12 @@ from __future__ import annotations
 import math
 
 from ..config import Config
+from .free_points import placement_layout
+from .verify import get_checker
 
 
 def spring_range(cfg: Config) -> tuple[float, float]:
     """(shortest, longest) spring length over the stroke's angles (the exact model)."""
-    from .verify import get_checker
     st = cfg.stroke
     return get_checker(cfg).spring_extremes(st.theta_closed, st.theta0)
 
@@ -39,7 +40,6 @@ def kind_config(cfg: Config, kind: str, robust: bool = False) -> tuple[Config, s
     ``robust``, over the free length's tolerance too). Returns (config, why not) -- the
     reason when no free length within optimise.spring_rest_length keeps it valid."""
     d, o = cfg.design, cfg.optimise
-    from .free_points import placement_layout
     if placement_layout(cfg):   # the points move: validity is the NLP's constraint
         return cfg.update({"design.spring_kind": kind}), None
     lmin, lmax = spring_range(cfg)

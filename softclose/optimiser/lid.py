@@ -22,7 +22,7 @@ import casadi as ca
 import numpy as np
 
 from ..model import elements
-from ..model.dynamics import friction, slope
+from ..model.dynamics import COEFFS, friction, slope
 from .hermite import hermite_max
 
 #: the degrees a series is padded to (part of an NLP's structure)
@@ -152,7 +152,6 @@ def opening_values(model, angles, names) -> np.ndarray:
     for name in names:
         q, dq = model.coordinate_fns[name](th)
         outs += [q, dq, ca.jacobian(dq, th)]
-    from ..model.dynamics import COEFFS
     c, dc = model.coeffs(th)
     i = COEFFS.index("tau")
     outs += [c[i], dc[i]]

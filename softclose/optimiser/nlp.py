@@ -76,7 +76,8 @@ from .interval import (END_C, ChebyshevFit, bound_interval, combine_function, fr
 from .lid import (OPENING_INTERVALS, LidLayout, SymbolicSeries, holding_moment, opening_angles,
                   opening_bound)
 from .keep_out import keep_out_constraints
-from .free_points import placed_config, placed_constraints, slot_values
+from .free_points import placed_bounds, placed_config, placed_constraints, slot_values
+from ..buildcache import text
 
 #: Ipopt return statuses that count as converged
 CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
@@ -308,7 +309,6 @@ class ShootingStructure:
         self.g_names = [str(n) for n in meta["g_names"]]
         self.g_sizes = [int(n) for n in meta["g_sizes"]]
         self.nw = int(meta["nw"][0])
-        from ..buildcache import text
         self._peak = ca.Function.deserialize(text(meta["peak"]))
         lib = str(library)
         stop = ipopt_options(self.nw, sum(self.g_sizes), self.n_params)
@@ -491,7 +491,6 @@ class ShootingNLP:
               "opening_force": np.inf if o.opening_force_max is None else o.opening_force_max,
               "engagement": 0.0, "phase_two": np.inf}
         if self.placed:
-            from .free_points import placed_bounds
             placed_bounds(cfg, lo, hi)
         lbg = np.concatenate([np.full(n, lo[k]) for k, n in zip(self.g_names, self.g_sizes)])
         ubg = np.concatenate([np.full(n, hi[k]) for k, n in zip(self.g_names, self.g_sizes)])

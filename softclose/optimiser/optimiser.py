@@ -28,6 +28,10 @@ from .polish import keep_clear, nlp_objective, refine, tighten
 from .result import Active, OptimiseResult
 from .starts import MAX_STARTS, initial_guess, sweep_starts, sweep_time
 from .verify import get_checker, verify as verify_design
+from ..interrupt import check
+from .free_points import placed_config
+from .keep_out import clearance
+from ..config.free import config_value
 
 #: a scaled Ipopt multiplier (J/J_ref per scaled unit) above this marks a limit as active
 ACTIVE_LAM = 1e-6
@@ -82,7 +86,6 @@ def claims(nlp: ShootingNLP, cfg, run: Run) -> tuple[dict, dict, float]:
 def free_in_bounds(cfg):
     """``cfg`` with each free design variable (``optimise.free``) clipped into its bounds:
     where the starts' sweep holds it."""
-    from ..config.free import config_value
     values = {}
     for key, lo, hi in cfg.optimise.free or ():
         v = config_value(cfg, key)
@@ -206,7 +209,6 @@ def finish(cfg, nlp: ShootingNLP, run: Run, disc: Discretisation, *, verify: boo
     ver = verify_design(cfg, design, own, J)
     ok, msg = ver.ok, ver.message and f"the answer is {ver.message}"
     if cfg.optimise.keep_out:          # the exact check of the keep-out regions
-        from .keep_out import clearance
         for line, c in clearance(cfg).items():
             notes.append(f"keep-out: the {line}'s line clears the regions by "
                          f"{c['clearance'] * 1e3:.3f} mm at the least (theta = "
@@ -223,7 +225,6 @@ def finish(cfg, nlp: ShootingNLP, run: Run, disc: Discretisation, *, verify: boo
 
 def _points_of(res, cfg):
     """``cfg`` (not the kind's bounds) with the attachment points ``res`` placed."""
-    from .free_points import placed_config
     return placed_config(cfg, res.design or {})
 
 
@@ -373,7 +374,6 @@ def plan_kind(cfg, starts: int | None = None, nodes: int | None = None,
 def solve_start(plan: Plan, i: int) -> tuple[Run, dict]:
     """Start ``i`` of ``plan``: its initial guess from the simulated stroke, one Ipopt solve,
     and its row of the report. A Ctrl-C noted before it is raised here, first."""
-    from ..interrupt import check
     check()
     nlp, cfg, d0 = plan.nlp, plan.cfg, plan.designs[i]
     p = nlp.params(cfg)

@@ -16,9 +16,10 @@ from dataclasses import replace
 import numpy as np
 
 from ..problem import ERROR_KEYS, agreement_tolerance, objective
-from .cache import get_nlp
+from .cache import get_nlp, stroke_simulator
 from .discretise import MAX_STEPS
 from .nlp import T_FLOOR, Run, ShootingNLP
+from .keep_out import clearance, free_lines
 
 #: the NLP's objective must agree with an accurate simulation of its design to this
 #: (relative) before the answer goes to verification; else the sub-steps are doubled
@@ -42,7 +43,6 @@ def _sim(cfg, nlp: ShootingNLP, d, sim):
     """The simulator of ``d``'s stroke: ``sim``, or one at d's attachment points."""
     if not nlp.placed:
         return sim
-    from .cache import stroke_simulator
     return stroke_simulator(nlp.placed_config(cfg, d))
 
 
@@ -157,7 +157,6 @@ def keep_clear(cfg, nlp: ShootingNLP, run: Run, notes: list) -> Run:
     graze a region. Checked exactly (:func:`softclose.optimiser.keep_out.clearance`); while
     a free line crosses one, the nodes' bound is raised by 1.5 times the crossing and the
     problem re-solved warm (at most :data:`MAX_TIGHTEN` times)."""
-    from .keep_out import clearance, free_lines
     groups = dict(nlp.groups())
     if not cfg.optimise.keep_out or "keep_out" not in groups:
         return run

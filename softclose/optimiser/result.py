@@ -14,6 +14,8 @@ from dataclasses import dataclass, field
 from ..present.display import Display, Displayed, Table, num, with_unit
 from ..problem import DESIGN_KEYS, ENGAGE_KEYS, ENGAGE_METRICS, METRIC_KEYS, METRICS, UNITS
 from .verify import Verification
+from ..jsonio import jsonable
+from ..simulation.simulator import Simulator
 
 
 @dataclass(frozen=True)
@@ -107,7 +109,6 @@ class OptimiseResult(Displayed):
     def to_json(self) -> dict:
         """success, design, objective, the verified §4 metrics, the optimiser's own numbers,
         verification, active limits, problem, starts, the coarse sweep, solver, notes."""
-        from ..jsonio import jsonable
         out = {"success": self.success, "message": self.message, "status": self.status,
                "design": self.design, "objective": self.objective, "kind": self.kind,
                "part": None if self.part is None else self.part.to_json(),
@@ -171,7 +172,6 @@ class OptimiseResult(Displayed):
 
     def simulate(self, trajectory: bool = True):
         """The optimal design's stroke by the fixed-step simulator (with its trajectory)."""
-        from ..simulation.simulator import Simulator
         if self.design is None or self.config is None:
             raise ValueError("this result has no design to simulate")
         return Simulator(self.config.with_design(**self.design), cached=True).run(trajectory=trajectory)
@@ -267,7 +267,6 @@ class FrontResult(Displayed):
     def to_json(self) -> dict:
         """{"success", "message", "points": [{closing_time_max, success, design, objective,
         the §4 metrics, verification, active, message}], "total_time"}."""
-        from ..jsonio import jsonable
         pts = []
         for t, p in zip(self.closing_times, self.points):
             j = p.to_json()

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..model import elements
 from ..problem import PARAM_KEYS, feasible, params_of
+from ..simulation.simulator import Simulator
 
 #: the ladders of deviations tried, each side: free length (m), rate (relative)
 FREE_LENGTH_STEPS = np.r_[np.arange(1, 101) * 1e-5, np.arange(11, 301) * 1e-4]   # to 30 mm
@@ -84,7 +85,6 @@ def margins(cfg, p, model=None) -> dict:
     with the design still feasible and valid (the kernel at cfg's step, every other value
     nominal): the first deviation of the ladder that fails, less one step (found on every
     :data:`LADDER_STRIDE`-th step, then step by step below the first that fails)."""
-    from ..simulation.simulator import Simulator
     # the model at hand (else built), its table from the build cache when it has been built
     # before: a whole model and table cost ~20 ms against ~10 ms for the strokes
     sim = Simulator(cfg, model=model, cached=model is not None)

@@ -10,8 +10,10 @@ from ..simulation import statics
 from ..model.dynamics import COEFFS
 from ..problem import DESIGN_KEYS, PARAM_COLUMNS, objective, with_designs
 from .cache import stroke_simulator
-from .interval import END_ANGLE, END_C, free_of
+from .interval import END_ANGLE, END_C, free_layout, free_of
 from .nlp import PHASE_FLOOR, T_FLOOR, ShootingNLP
+from .free_points import placement_layout
+from ..config.free import config_value
 
 #: the coarse sweep of the design box: points along (spring_k, spring_rest_length, damper_c)
 SWEEP_SHAPE = (8, 6, 8)
@@ -45,9 +47,6 @@ def design_rows(cfg, G: np.ndarray, keys=()) -> np.ndarray:
     points: :func:`~softclose.optimiser.interval.free_layout`, ``placement_layout``) from
     rows of (k, l0, c, then the columns of ``keys``): every other free variable at cfg's
     value clipped into its bounds."""
-    from ..config.free import config_value
-    from .interval import free_layout
-    from .free_points import placement_layout
     bounds = {k: (lo, hi) for k, lo, hi in free_of(cfg)}
     layout = [k for k, _, _ in free_layout(cfg)] + [k for k, _, _ in placement_layout(cfg)]
     swept = [k for k, _, _ in keys]

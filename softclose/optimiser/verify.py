@@ -27,6 +27,8 @@ from ..problem import (CONSTRAINT_TOL, ENGAGE_KEYS, METRIC_KEYS, UNITS,
                        VERIFY_RTOL, PARAM_KEYS, agreement_tolerance, objective, params_of)
 from ..simulation.stroke import StrokeResult, StrokeStatus
 from .cache import get_model
+from ..jsonio import jsonable
+from ..simulation.reference import Reference
 
 #: output grid of the verifying reference simulation (s): events and peaks are located by
 #: Newton inside it, to the tolerance; a 2 ms grid changes the metrics by < 1e-9 and takes
@@ -43,7 +45,6 @@ class Checker:
     """Independent checks of one model: the CVODES reference and theta' on a fine grid."""
 
     def __init__(self, model):
-        from ..simulation.reference import Reference
         self.model = model
         self.reference = Reference(model, grid_step=VERIFY_GRID)
         x, tau = ca.SX.sym("x", 2), ca.SX.sym("tau")
@@ -179,7 +180,6 @@ class Verification:
     def to_json(self) -> dict:
         """Plain values: ok, the reference's metrics (top level) and objective, the
         differences from the optimiser's numbers with their tolerances, the constraints."""
-        from ..jsonio import jsonable
         if self.error is not None:
             return {"ok": False, "error": self.error, "method": self.method,
                     "failures": list(self.failures)}

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from ..problem import UNITS
+from ..config.schema import KEYS
 
 #: rows a table shows at most (the rest is counted in a note)
 MAX_ROWS = 12
@@ -103,8 +105,6 @@ def interval(ci) -> str:
 
 def unit_of(key: str) -> str:
     """The unit of a metric, a design key or a config key ("section.name")."""
-    from ..config.schema import KEYS
-    from ..problem import UNITS
     if key in UNITS:
         return UNITS[key]
     for k in KEYS:

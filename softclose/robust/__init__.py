@@ -22,6 +22,7 @@ from .analysis import YieldResult, tolerance_analysis
 from .design import optimise_robust
 from .result import RobustResult
 from .sensitivity import SensitivityResult, sensitivity
+from ..config import default_config
 
 __all__ = ["tolerance_analysis", "sensitivity", "optimise_robust", "YieldResult",
            "SensitivityResult", "RobustResult", "bench_numbers"]
@@ -34,7 +35,6 @@ def bench_numbers(cfg=None, *, repeats: int = 1) -> dict:
     Each is the best of ``repeats`` runs after one warm-up (kernel compiled, imports done)."""
     import time
 
-    from ..config import default_config
     from .box import box_of
     from .evaluate import evaluate
     cfg = cfg or default_config()

@@ -37,6 +37,8 @@ from .box import Box, box_of
 from .evaluate import evaluate
 from .stats import CI_METHOD, margins, percentiles, wilson
 from .verify import reference_check
+from ..problem import UNITS
+from ..jsonio import jsonable
 
 #: metrics whose percentiles are reported (closing time over every sample, the others over
 #: the samples that closed)
@@ -83,7 +85,6 @@ class YieldResult(Displayed):
         return (BARE_LID,) if self.nominal.get("bare") else ()
 
     def to_json(self) -> dict:
-        from ..jsonio import jsonable
         return jsonable({
             "success": self.success, "message": self.message, "design": self.design,
             "yield": self.yield_, "yield_ci": list(self.yield_ci), "ci_method": CI_METHOD,
@@ -114,7 +115,6 @@ class YieldResult(Displayed):
 
 def yield_facts(y: YieldResult) -> tuple:
     """The one-line facts of a yield: the design, the yield with its interval, the samples."""
-    from ..problem import UNITS
     ok = "meets" if y.meets_required else "below"
     facts = [("yield", f"{percent(y.yield_)} (95 % interval {interval(y.yield_ci)}; "
                        f"{ok} the required {percent(y.required_yield)})"),

@@ -33,9 +33,15 @@ import time
 import numpy as np
 
 from ..config import Config
-from ..optimiser.interval import END_ANGLE, END_C
+from ..optimiser.interval import END_ANGLE, END_C, free_layout, free_of
 from ..optimiser.free_points import SLOTS, placed_config, placement_layout
 from ..problem import DESIGN_KEYS
+from ..config.free import config_value
+from .solve import Problem, start_design
+from .scenarios import initial_scenarios
+from .discretisation import discretise
+from .box import box_of
+from ..optimiser.optimiser import optimise_kind
 
 #: the free keys the first stage chooses: the points and the end damper
 CHOSEN = SLOTS + (END_C, END_ANGLE)
@@ -52,7 +58,6 @@ def fixed_points(cfg: Config, points: dict) -> Config:
 def _layout(cfg: Config) -> list:
     """The first stage's variables, in the scenario NLP's order: the end damper's, then the
     points."""
-    from ..optimiser.interval import free_layout
     return [k for k, _, _ in free_layout(cfg) if k in (END_C, END_ANGLE)] + \
         [k for k, _, _ in placement_layout(cfg)]
 
@@ -64,7 +69,6 @@ def choose_points(cfg: Config, notes: list, bound: float | None = None) -> tuple
     ``bound``: the best worst-case J another spring kind reached. The nominal lid is one of
     the box's scenarios, so a kind whose nominal co-design optimum already exceeds it cannot
     do better: then (None, info) at once, without the scenario NLP."""
-    from ..optimiser.interval import free_of
     t0 = time.perf_counter()
     layout = _layout(cfg)
     nominal = _solve_nominal(cfg)
@@ -101,7 +105,6 @@ def choose_points(cfg: Config, notes: list, bound: float | None = None) -> tuple
 def _solve_nominal(cfg: Config):
     """The nominal co-design optimum of ``cfg``'s spring kind (the points free), unverified:
     stage 1's start."""
-    from ..optimiser.optimiser import optimise_kind
     return optimise_kind(cfg, verify=False)
 
 
@@ -111,10 +114,6 @@ JOINT_MAX_ITER = 200
 
 def _joint(c: Config, nominal):
     """The scenario NLP with the points free, from the points of ``c``: (run, c, scenarios)."""
-    from .box import box_of
-    from .discretisation import discretise
-    from .scenarios import initial_scenarios
-    from .solve import Problem, start_design
     c = c.set("optimise.max_iter", min(c.optimise.max_iter, JOINT_MAX_ITER))
     N, M, _, _ = discretise(c)
     box = box_of(c)
@@ -129,7 +128,6 @@ def _joint(c: Config, nominal):
 
 
 def _value(cfg: Config, key: str) -> float:
-    from ..config.free import config_value
     return float(config_value(cfg, key))
 
 

@@ -74,6 +74,14 @@ from .scenarios import initial_scenarios
 from .solve import Problem, Run, solve_box, start_design
 from .verify import scenario_report
 from .worst_cases import check_corners
+from ..optimiser.optimiser import optimise_kind
+from ..present.progress import Progress
+from ..optimiser.keep_out import clearance
+from .codesign import choose_points, fixed_points
+from ..optimiser.free_points import SLOTS
+from ..optimiser.interval import END_ANGLE, END_C
+from ..optimiser.spring_part import spring_part
+from ..optimiser.kinds import kind_config
 
 
 def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None = None,
@@ -89,14 +97,10 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     """
     from dataclasses import replace
 
-    from ..optimiser.kinds import kind_config
-    from ..optimiser.spring_part import spring_part
     t_start = time.perf_counter()
     check_batch(cfg, int(samples or cfg.tolerance.samples),
                 "--samples" if samples else "tolerance.samples")
     check_keys(cfg)
-    from ..optimiser.interval import END_ANGLE, END_C
-    from ..optimiser.free_points import SLOTS
     others = [k for k, _, _ in cfg.optimise.free or () if k not in SLOTS + (END_C, END_ANGLE)]
     if others:
         raise ConfigError(
@@ -117,7 +121,6 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
                for kind in cfg.optimise.spring_kinds]
     for kind, c, why in configs:
         if why is None and placed:      # stage 1: where (robust/placement.py)
-            from .codesign import choose_points, fixed_points
             stage_notes: list = []
             bound = min((x[1].objective for x in results if x[1].success
                          and x[1].objective is not None), default=None)
@@ -161,7 +164,6 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     times = dict(best.times, total=time.perf_counter() - t_start)
     out_cfg = cfg.set("design.spring_kind", kind)         # (not the kind's bounds)
     if placed:                          # with the points (end damper) set, no longer free
-        from .codesign import fixed_points
         chosen = {k for k, _, _ in cfg.optimise.free}
         out_cfg = fixed_points(out_cfg, {full: v for k, v in (best.design or {}).items()
                                          for full in (f"geometry.{k}", f"design.{k}")
@@ -174,7 +176,6 @@ def _keep_out_check(cfg: Config, r: RobustResult) -> RobustResult:
     """The exact keep-out check at the result's points (``optimise.keep_out``)."""
     from dataclasses import replace
 
-    from ..optimiser.keep_out import clearance
     if not cfg.optimise.keep_out:
         return r
     notes, msgs = list(r.notes), []
@@ -195,7 +196,6 @@ def optimise_robust_kind(cfg: Config, *, progress: bool = False, samples: int | 
                          seed: int = 0, verify: bool = True) -> RobustResult:
     """The robust soft-close design over cfg's ``[tolerance]`` box with cfg's spring kind (see
     the module docstring)."""
-    from ..present.progress import Progress
     t_start = time.perf_counter()
     tol = cfg.tolerance
     check_batch(cfg, int(samples or tol.samples), "--samples" if samples else "tolerance.samples")
@@ -263,7 +263,6 @@ class _Log:
 def _nominal(cfg: Config) -> dict:
     """The nominal optimum (no tolerances) with cfg's spring kind, for the start and the
     comparison."""
-    from ..optimiser.optimiser import optimise_kind
     res = optimise_kind(cfg, verify=False)
     return {"success": bool(res.success), "design": res.design, "objective": res.objective,
             "message": res.message}

@@ -8,12 +8,14 @@ import casadi as ca
 import numpy as np
 
 from ..config import Config
+from ..optimiser.discretise import discretisation, phase_two_substeps
+from ..optimiser.interval import end_damper_mode
+from ..simulation.kernel.binding import cores
 
 
 def map_threads() -> int:
     """Threads that evaluate the scenario NLP's shooting intervals: the cores this process
     may use, at most :data:`MAX_MAP_THREADS`."""
-    from ..simulation.kernel.binding import cores
     return min(cores(), MAX_MAP_THREADS)
 
 
@@ -85,14 +87,12 @@ def node_times(N: int, two_phase: bool, T: float, T1: float | None = None) -> np
 def discretise(cfg: Config) -> tuple[int, int, float, list[str]]:
     """(N, M, closing-time limit, notes) of the nominal optimiser's discretisation (with two
     phases, phase 2's sub-steps follow from cfg: :func:`phase_two`)."""
-    from ..optimiser.discretise import discretisation
     d = discretisation(cfg)
     return d.nodes, d.substeps, d.t_limit, list(d.notes)
 
 
 def two_phase(cfg: Config) -> bool:
     """Is cfg's stroke two phases (an end damper engaging inside it)?"""
-    from ..optimiser.interval import end_damper_mode
     return end_damper_mode(cfg) == "two-phase"
 
 
@@ -100,5 +100,4 @@ def phase_two(cfg: Config, nodes: int, substeps: int) -> int | None:
     """Phase 2's sub-steps (the nominal optimiser's rule), None for one phase."""
     if not two_phase(cfg):
         return None
-    from ..optimiser.discretise import phase_two_substeps
     return phase_two_substeps(cfg, nodes, substeps)

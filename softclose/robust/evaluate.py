@@ -28,6 +28,8 @@ from ..config import Config
 from ..errors import ConfigError, SoftcloseError
 from ..config.free import PLACEMENT_KEYS, point_refusals
 from ..problem import LID_MASS, METRIC_KEYS, PARAM_COLUMNS, infeasibility, objective, params_of
+from ..model import elements
+from ..simulation.simulator import Simulator
 
 #: the kernel's output columns kept per sample
 COLUMNS = METRIC_KEYS + ("theta_dot_max", "theta_min", "status", "objective", "reason", "feasible")
@@ -59,10 +61,8 @@ def simulator(cfg: Config, t_end: float | None = None):
     """The fixed-step simulator of cfg's model (cached per geometry, mass, stroke, method,
     element choices and spring limits);
     strokes are cut at ``t_end`` when it is below stroke.t_max."""
-    from ..simulation.simulator import Simulator
     if t_end is not None and t_end < cfg.stroke.t_max:
         cfg = cfg.replace(stroke={"t_max": float(t_end)})
-    from ..model import elements
     # the element choices (a rotary damper's pivot) and the spring's length limits are the
     # simulator's too: its table and its range check read them
     key = (cfg.geometry, cfg.mass, cfg.stroke, cfg.simulate, elements.structure(cfg),

@@ -49,8 +49,23 @@ import numpy as np
 
 from ..config import Config
 from ..interrupt import ipopt_options, solving
-from ..problem import DESIGN_KEYS, PARAM_KEYS, SCALES, params_of
+from ..problem import DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, params_of, SCALES
 from .discretisation import mapped, phase_grid, phase_two, t_limit, two_phase
+from ..optimiser import compiled
+from ..optimiser.free_points import (length_bounds, placed_bounds, placement_layout, slot_values,
+                                     spring_moment)
+from ..optimiser.interval import (ChebyshevFit, combine_function, END_ANGLE, END_C, free_layout,
+                                  free_of, interval_function, nlp_elements)
+from ..model import elements
+from ..optimiser.nlp import check_linear_solver, PHASE_FLOOR
+from ..optimiser.cache import get_model, keep_out_of
+from ..config.free import config_value
+from ..optimiser.lid import (holding_moment, LidLayout, opening_angles, opening_bound,
+                             OPENING_INTERVALS, padded_degree, SymbolicSeries)
+from ..buildcache import text
+from ..optimiser.keep_out import keep_out_constraints
+from ..model.lid import model_key
+from .evaluate import with_values
 
 #: the parameters of p that are not design variables: NLP parameters
 FIXED = PARAM_KEYS[len(DESIGN_KEYS):]
@@ -74,23 +89,17 @@ WARM_OPTIONS = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
 def model_config(cfg: Config, values: dict) -> Config:
     """The config of a scenario's model: ``cfg`` with its keys set that are not in the
     parameter vector (those the scenario maps as a q + b)."""
-    from ..problem import PARAM_COLUMNS
-    from .evaluate import with_values
     return with_values(cfg, {k: v for k, v in values.items() if k not in PARAM_COLUMNS})
 
 
 def _model_key(cfg: Config) -> tuple:
     """A scenario model's key: the model's, and the elements the NLP carries."""
-    from ..model.lid import model_key
-    from ..optimiser.interval import nlp_elements
     return model_key(cfg) + (tuple(e.name for e in nlp_elements(cfg)),)
 
 
 def scenario_fit(cfg_model: Config, placement: bool = False):
     """(model, Chebyshev fit) of a scenario's model: the nominal optimiser's (with
     ``placement`` the closure's series too; the points do not change them)."""
-    from ..optimiser.cache import get_model
-    from ..optimiser.interval import ChebyshevFit, nlp_elements
     model = get_model(cfg_model)
     return model, ChebyshevFit(model, els=nlp_elements(cfg_model), pose=placement)
 
@@ -107,13 +116,6 @@ class ScenarioStructure:
                  M2: int | None, free: tuple, place: tuple, robust_objective: str,
                  opening: bool, keep_out: tuple, hessian: str, linear_solver: str,
                  max_iter: int, tol: float = 1e-10, library=None, meta=None):
-        from ..optimiser.interval import END_C, combine_function, interval_function
-        from ..optimiser.lid import LidLayout, SymbolicSeries, holding_moment
-        from ..optimiser.lid import OPENING_INTERVALS
-        from ..optimiser.nlp import check_linear_solver
-        from ..optimiser.free_points import length_bounds, spring_moment
-        from ..problem import PARAM_COLUMNS
-        from ..model import elements
         t0 = time.perf_counter()
         self.S, self.nodes, self.M, self.M2 = S, nodes, substeps, M2
         self.two_phase = M2 is not None
@@ -233,13 +235,11 @@ class ScenarioStructure:
             else:
                 phases = [none, none]
             if opening and not self.placed:
-                from ..optimiser.lid import opening_bound
                 op = opening_bound(self.lid, lids[s]["opening"], theta0, thc, ps[s])
             else:
                 op = none
             ko = none
             if self.placed and s == 0 and keep_out:
-                from ..optimiser.keep_out import keep_out_constraints
                 ko = keep_out_constraints(self.series, theta0, thc, gvec, keep_out,
                                           self.place, Ls)
             blocks = [ca.vec(xe - X[s]), ca.vec(a) - thc, ca.vec(b), pk[s] - ca.vec(sp),
@@ -274,7 +274,6 @@ class ScenarioStructure:
     def _load(self, library, meta: dict) -> None:
         """The solvers from a compiled library (:mod:`softclose.buildcache`) and the numbers
         :meth:`meta` kept: nothing symbolic is built."""
-        from ..buildcache import text
         self.g_sizes = [[int(n) for n in row] for row in np.asarray(meta["g_sizes"])]
         self.block, self.nw = sum(self.g_sizes[0]), int(meta["nw"][0])
         self.peak_fn = ca.Function.deserialize(text(meta["peak"]))
@@ -312,12 +311,6 @@ class ScenarioNLP:
     def __init__(self, cfg: Config, model_cfgs: list[Config], nodes: int, substeps: int,
                  robust_objective: str = "worst", tol: float = 1e-10,
                  substeps2: int | None = None, structure: ScenarioStructure | None = None):
-        from ..optimiser.interval import END_C, END_ANGLE, free_layout, free_of
-        from ..optimiser.lid import padded_degree
-        from ..optimiser.lid import OPENING_INTERVALS
-        from ..optimiser.lid import opening_angles
-        from ..optimiser.free_points import placement_layout, slot_values
-        from ..config.free import config_value
         t0 = time.perf_counter()
         o = cfg.optimise
         self.two_phase = two_phase(cfg)
@@ -351,7 +344,6 @@ class ScenarioNLP:
         self.scenario_models = [self.models[i] for i in self.model_index]
         self.fits = fits
         degree = padded_degree(max(f.degree for f in fits))
-        from ..optimiser.cache import keep_out_of
         self.structure_key = (self.S, tuple(e.name for e in fits[0].elements), fits[0].names,
                               degree, nodes, substeps, self.M2,
                               tuple((k, col) for k, col, _ in self.free),
@@ -438,13 +430,11 @@ class ScenarioNLP:
             if design_lb is not None:
                 lo = max(lo, design_lb[i])
             lbx[i], ubx[i] = lo / SCALES[i], hi / SCALES[i]
-        from ..optimiser.interval import free_of
         free = {k: (lo, hi) for k, lo, hi in free_of(cfg)}
         for j, (k, _, sc) in enumerate(self.free + self.place):
             lbx[3 + j], ubx[3 + j] = free[k][0] / sc, free[k][1] / sc
         if self.robust_objective != "worst":
             lbx[self.nd] = ubx[self.nd] = 0.0
-        from ..optimiser.nlp import PHASE_FLOOR
         for s in range(self.S):
             i, j = self.offset(s), self.x_offset(s)
             lbx[i] = max(o.closing_time_min if t_lo is None else t_lo[s], T_FLOOR)
@@ -467,7 +457,6 @@ class ScenarioNLP:
               "epigraph": np.inf,
               "opening_force": np.inf if o.opening_force_max is None else o.opening_force_max,
               "engagement": 0.0, "phase_two": np.inf}
-        from ..optimiser.free_points import placed_bounds
         placed_bounds(cfg, lo, hi)
         lbg = np.concatenate([np.full(n, lo[k]) for sizes in self.g_sizes
                               for k, n in zip(GROUPS, sizes)])
@@ -531,11 +520,9 @@ def get_scenario_structure(key: tuple) -> ScenarioStructure:
     its compiled library when ``softclose prepare`` built one, else symbolically."""
     if key not in _STRUCTURES:
         from .. import buildcache
-        from ..optimiser import compiled
         disk = buildcache.key_of("scenario-nlp", key)
         (S, els, names, degree, nodes, substeps, M2, free, place, objective, opening,
          keep_out, hessian, linear_solver, max_iter, tol) = key
-        from ..model import elements
 
         def make(library=None, meta=None):
             return ScenarioStructure(S, tuple(elements.BY_NAME[e] for e in els), names,
@@ -562,8 +549,6 @@ def get_scenario_nlp(cfg: Config, model_cfgs: list[Config], nodes: int, substeps
     """The ScenarioNLP of these scenario models (cached); (nlp, was it cached).
     ``substeps2``: phase 2's sub-steps of a two-phase stroke (default :func:`phase_two`)."""
     o = cfg.optimise
-    from ..optimiser.interval import free_layout
-    from ..optimiser.free_points import placement_layout, slot_values
     M2 = (substeps2 or phase_two(cfg, nodes, substeps)) if two_phase(cfg) else None
     key = (tuple(_model_key(c)
                  for c in model_cfgs), nodes, substeps, M2, robust_objective, o.hessian,
@@ -584,7 +569,6 @@ def prepare(cfg: Config, model_cfgs: list[Config], nodes: int, substeps: int,
     """Compile this scenario NLP's structure now, in the foreground (a line on stderr says
     what is built), unless it is compiled: the path of its library, or None (no cache, no C
     compiler). ``softclose prepare --robust`` compiles every one a robust design uses."""
-    from ..optimiser import compiled
     with compiled.compiling():
         nlp, cached = get_scenario_nlp(cfg, model_cfgs, nodes, substeps, robust_objective,
                                        substeps2)

@@ -10,7 +10,7 @@ from ..config import Config
 from ..errors import ConfigError
 from ..problem import VERIFY_RTOL
 from .evaluate import slow_keys
-from .discretisation import t_limit
+from .discretisation import discretise, phase_two, t_limit
 
 #: most corners of the box that enter the scenario NLP all together (d <= 4 keys). Each
 #: scenario adds 2N + 2 variables and a copy of every constraint to the NLP, and one
@@ -29,7 +29,6 @@ def max_corners(cfg: Config) -> int:
     stroke) costs N (M + M2) steps instead of N M, so fewer of its corners enter together
     (16 M / (M + M2): 5 at M2 = 2M, with a fourth toleranced key's 16 corners the worst-corner
     start of d > 4); the corner check still simulates all 2^d after every solve."""
-    from .discretisation import discretise, phase_two
     N, M, _, _ = discretise(cfg)
     M2 = phase_two(cfg, N, M)
     return MAX_CORNERS if M2 is None else int(MAX_CORNERS * M / (M + M2))

@@ -12,6 +12,7 @@ from ..problem import DESIGN_KEYS, ENGAGE_KEYS, ENGAGE_METRICS, METRIC_KEYS, MET
 from .analysis import YieldResult, yield_tables
 from .box import Box
 from .stats import CI_METHOD
+from ..jsonio import jsonable
 
 
 @dataclass(frozen=True, repr=False)
@@ -70,7 +71,6 @@ class RobustResult(Displayed):
         return None if self.yield_result is None else self.yield_result.yield_ci
 
     def to_json(self) -> dict:
-        from ..jsonio import jsonable
         out = {"success": self.success, "status": self.status, "message": self.message,
                "design": self.design, "objective": self.objective,
                "robust_objective": self.robust_objective, "kind": self.kind,

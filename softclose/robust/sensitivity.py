@@ -24,9 +24,11 @@ import numpy as np
 from ..config import Config, check_batch
 from ..present.display import Display, Displayed, Table, num, with_unit
 from ..errors import ConfigError
-from ..problem import BARE_LID, DESIGN_KEYS, design_of, params_of
+from ..problem import BARE_LID, DESIGN_KEYS, design_of, params_of, UNITS
 from .box import box_of
 from .evaluate import evaluate
+from .analysis import nominal_stroke
+from ..jsonio import jsonable
 
 #: the outputs analysed
 OUTPUTS = ("closing_time", "impact_theta_dot")
@@ -61,7 +63,6 @@ class SensitivityResult(Displayed):
         return (BARE_LID,) if self.nominal.get("bare") else ()
 
     def to_json(self) -> dict:
-        from ..jsonio import jsonable
         out = {"success": self.success, "message": self.message, "design": self.design,
                "nominal": self.nominal, "warnings": list(self.warnings),
                "fixed": list(self.fixed)}
@@ -87,7 +88,6 @@ class SensitivityResult(Displayed):
         return pd.DataFrame(rows)
 
     def _display(self) -> Display:
-        from ..problem import UNITS
         facts = [(f"{out} driven by", ", ".join(
             f"{k} (ST {d['ST'][k]:.2f})" for k in sorted(self.keys, key=lambda k: -d["ST"][k])[:2]))
             for out, d in self.indices.items()]
@@ -179,7 +179,6 @@ def sensitivity(cfg: Config, *, samples: int = 1024, seed: int = 0,
     if nc:
         msgs.append(f"{nc} of {len(X)} strokes did not close; {CENSORING}")
     msg = "; ".join(msgs)
-    from .analysis import nominal_stroke
     return SensitivityResult(True, msg, design_of(params_of(cfg)), tuple(keys), int(samples),
                              len(X), nc, indices, box.distribution, seed,
                              time.perf_counter() - t0, {"X": X, "Y": Y, "cols": cols},

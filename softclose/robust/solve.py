@@ -21,7 +21,7 @@ import math
 import numpy as np
 
 from ..config import Config
-from ..problem import DESIGN_KEYS, objective, with_designs
+from ..problem import DESIGN_KEYS, objective, PARAM_COLUMNS, with_designs
 from .box import Box, box_of
 from .evaluate import evaluate, simulator, slow_keys
 from .discretisation import node_times, t_limit
@@ -31,6 +31,8 @@ from .policy import (AGREE_RTOL, CHECK_SAMPLES, MAX_REFINE, MAX_ROUNDS, REFINE_R
 from .scenarios import Scenario, maps, scenario_rows
 from .stats import margins
 from .worst_cases import check_corners, search
+from ..optimiser.nlp import PHASE_FLOOR
+from ..model import elements
 
 
 def start_design(cfg: Config, box: Box, Z: np.ndarray,
@@ -62,8 +64,6 @@ def _guess(cfg_m: Config, p: np.ndarray, N: int, t_lo: float, t_hi: float,
     """(T, X (2, N), peak, J, T1) of a scenario from its simulated stroke at parameters p
     (N intervals per phase; with ``two_phase`` T1 is where the stroke first reaches the
     end damper's angle, else None)."""
-    from ..model import elements
-    from ..optimiser.nlp import PHASE_FLOOR
     st, o = cfg_m.stroke, cfg_m.optimise
     sim = simulator(cfg_m)
     r = sim.run(p, trajectory=True, estimate_error=False)
@@ -128,7 +128,6 @@ class Problem:
     def param(self, design) -> np.ndarray:
         """The parameter vector of a design (k, l0, c, then the NLP's free end damper, when
         given)."""
-        from ..problem import PARAM_COLUMNS
         d = np.asarray(design, float)
         p = with_designs(self.cfg, d[:3])
         for j, (k, _, _) in enumerate(self.nlp.free):

@@ -23,10 +23,10 @@ from ..problem import (DESIGN_KEYS, ENGAGE_KEYS, METRIC_KEYS, VERIFY_RTOL, agree
 from ..problem import PARAM_COLUMNS
 from .box import box_of
 from .evaluate import with_values
+from ..optimiser.verify import verify_design
 
 
 def _verify_design():
-    from ..optimiser.verify import verify_design
     return verify_design
 
 

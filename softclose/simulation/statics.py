@@ -24,6 +24,7 @@ from ..model import elements
 from ..model.dynamics import COEFFS, EXTRA_COEFFS, coordinates_of_columns, damping, potential, slope
 from ..problem import as_params
 from .roots import illinois
+from .kernel.binding import leaves, point_grid, point_lengths, point_opening
 
 
 #: the kernel's point columns of each element that may have its own (spring: D, E;
@@ -36,7 +37,6 @@ def with_points(table, theta, points, cols: dict) -> dict:
     of the rows that have their own points (``points``, the kernel's convention, or None)."""
     if points is None:
         return cols
-    from .kernel.binding import point_lengths
     pts = np.atleast_2d(np.asarray(points, float))
     pc = point_lengths(table, theta, pts)
     out = dict(cols)
@@ -172,7 +172,6 @@ def table_coordinate(table, points=None):
         th = np.asarray(th, float)
         if not has.any():
             return table.evaluate_column(th, col)
-        from .kernel.binding import point_grid
         if has.all():
             return point_grid(table, th.reshape(len(pts), -1), pts, "l").reshape(th.shape)
         out = np.empty(th.shape)
@@ -204,7 +203,6 @@ def _leaves(q_of, theta_ranges, bound, short, chunk: int = 4096):
     short = np.broadcast_to(np.asarray(short, bool), (m,))
     edge, worst = np.full(m, np.nan), np.empty(m)
     u = np.linspace(0.0, 1.0, G)
-    from .kernel.binding import leaves
     for a in range(0, m, chunk):
         r = slice(a, min(a + chunk, m))
         lo, hi = theta_ranges[r, :1], theta_ranges[r, 1:]
@@ -270,7 +268,6 @@ def opening_forces(table, cfg, P, lid_mass=None, points=None) -> np.ndarray:
                                 skip="spring")
     a, b = elements.BY_NAME["spring"].affine(elements.params(P[own]))
     ab = np.column_stack([np.broadcast_to(np.asarray(v, float), (len(own),)) for v in (a, b)])
-    from .kernel.binding import point_opening
     F[own] = point_opening(table, th, pts[own], ab, base, np.asarray(inv).ravel(), tau)
     return F
 

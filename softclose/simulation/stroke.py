@@ -15,6 +15,7 @@ from enum import IntEnum
 
 from ..present.display import Display, Displayed, Table, pm, with_unit
 from ..problem import METRIC_KEYS, METRICS
+from ..jsonio import jsonable
 
 
 class StrokeStatus(IntEnum):
@@ -110,7 +111,6 @@ class StrokeResult(Displayed):
 
     def to_json(self) -> dict:
         """Plain JSON values: the metrics, then how they were computed (no trajectory)."""
-        from ..jsonio import jsonable
         out = self.metrics()
         out.update({"status": self.status.text, "method": self.method, "step": self.step,
                     "steps": self.steps, "accuracy": self.accuracy})

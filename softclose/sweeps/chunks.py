@@ -41,6 +41,9 @@ from ..config.free import PLACEMENT_KEYS, point_refusals
 from ..problem import (LID_MASS, METRIC_KEYS, PARAM_COLUMNS, infeasibility, objective,
                        params_of)
 from ..simulation.stroke import StrokeStatus
+from ..errors import SoftcloseError
+from ..config import from_dict, RANGES, to_dict
+from ..simulation.simulator import Simulator
 
 #: designs per chunk: the unit of progress, of Ctrl-C and resume, and of a Parquet part file
 CHUNK = 16384
@@ -75,7 +78,6 @@ def _lru(cache: OrderedDict, key, make):
 
 
 def _config(cfg_dict: dict):
-    from ..config import from_dict
     return _lru(_cfgs, json.dumps(cfg_dict, sort_keys=True, default=float),
                 lambda: from_dict(cfg_dict))
 
@@ -83,8 +85,6 @@ def _config(cfg_dict: dict):
 def _simulator(cfg):
     """The simulator of ``cfg``'s model and method (the [optimise] and [tolerance] sections
     do not change a stroke, so configs differing only there share one)."""
-    from ..config import to_dict
-    from ..simulation.simulator import Simulator
     d = to_dict(cfg)
     d.pop("optimise", None)
     d.pop("tolerance", None)
@@ -114,7 +114,6 @@ def evaluate_chunk(cfg_dict: dict, keys: list[str], ids: np.ndarray, X: np.ndarr
     columns of :func:`columns` (``status``/``reason`` as str objects, ``closed``/
     ``feasible`` as bool, ``id`` as int64), rows in the order of ``ids``.
     """
-    from ..errors import SoftcloseError
     keys = list(keys)
     ids = np.asarray(ids, np.int64)
     X = np.asarray(X, float).reshape(len(ids), len(keys))
@@ -184,8 +183,6 @@ def lid_mass_refusals(cfg, masses: np.ndarray) -> np.ndarray:
     value is tried. Each refused value is tried for its message, exactly as the config
     words it.
     """
-    from ..config import RANGES
-    from ..errors import SoftcloseError
 
     def refusal(m: float) -> str:
         try:

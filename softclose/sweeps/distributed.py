@@ -44,6 +44,9 @@ from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 from ..errors import ConfigError, NumericalError, SoftcloseError
+from .chunks import evaluate_chunk
+from ..version import __version__
+from ..interrupt import sigint_handler
 
 #: seconds to wait for a scheduler to answer before the address is refused
 CONNECT_TIMEOUT = 5.0
@@ -106,7 +109,6 @@ def _import_distributed():
 
 def _worker_version() -> str:
     """Run on each worker: the softclose version it imports (checks that it can)."""
-    from ..version import __version__
     return __version__
 
 
@@ -205,13 +207,11 @@ def _workers_ignore_ctrl_c():
     A Ctrl-C during the second or so of start-up is therefore not seen."""
     import signal
 
-    from ..interrupt import sigint_handler
     return sigint_handler(signal.SIG_IGN)
 
 
 def _check_workers(client, where: str) -> None:
     """The workers present must import this softclose (same version): say so if not."""
-    from ..version import __version__
     try:
         versions = client.run(_worker_version, on_error="return")
     except Exception as exc:  # noqa: BLE001 - a scheduler that fails here is unusable
@@ -375,7 +375,6 @@ def _raise_task_error(exc, label: str, tag) -> None:
 def _chunk_task(cfg_dict: dict, keys: list[str], ids, X, threads: int | None = None) -> dict:
     """One sweep chunk on a worker: :func:`softclose.sweeps.chunks.evaluate_chunk` with
     ``threads`` kernel threads (default: as many as the worker has)."""
-    from .chunks import evaluate_chunk
     if threads is None:
         try:
             from distributed import get_worker

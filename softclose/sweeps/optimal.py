@@ -46,9 +46,15 @@ import numpy as np
 from ..present.display import MAX_ROWS, Display, Displayed, Table, num, unit_of
 from ..errors import ConfigError, SoftcloseError
 from ..problem import DESIGN_KEYS, METRIC_KEYS
+from . import distributed
 from .distributed import ClusterLost
 from .result import readonly_columns
-from .space import readonly
+from .space import Grid, make_grid, readonly
+from ..jsonio import jsonable
+from ..present.progress import Progress
+from ..robust import optimise_robust
+from ..optimiser import continue_from, optimise
+from ..config import from_dict
 
 #: most neighbouring points (along the last key) solved one from the other in one task
 SEGMENT = 8
@@ -66,7 +72,6 @@ REFUSED = "--optimise picks the design; sweep only non-design keys"
 def check_grid(cfg, axes) -> Any:
     """The :class:`softclose.sweeps.space.Grid` of ``axes`` (a dict ``{key: values}`` or a
     Grid), refusing design keys and oversized grids with a one-line ConfigError."""
-    from .space import Grid, make_grid
     grid = axes if isinstance(axes, Grid) else make_grid(axes, cfg, "axes")
     for key in grid.keys:
         if key.startswith("design.") and key.split(".", 1)[1] in DESIGN_KEYS:
@@ -108,7 +113,6 @@ _SOLVING = threading.Lock()
 
 def _segment(cfg_dict: dict, keys: list[str], ids, X, robust: bool):
     """The rows of :func:`solve_segment`, yielded as each point is finished."""
-    from ..config import from_dict
     base = from_dict(cfg_dict)
     keys = list(keys)
     X = np.asarray(X, float).reshape(len(ids), len(keys))
@@ -142,7 +146,6 @@ def _segment(cfg_dict: dict, keys: list[str], ids, X, robust: bool):
 def _optimum(cfg, prev) -> tuple[Any, str]:
     """cfg's verified optimum: warm from ``prev`` (a neighbour's result) when there is one,
     with the multistart optimiser as the fallback; (result, how it was started)."""
-    from ..optimiser import continue_from, optimise
     if prev is not None:
         warm = continue_from(cfg, prev)
         if warm.success:
@@ -155,7 +158,6 @@ def _optimum(cfg, prev) -> tuple[Any, str]:
 
 
 def _robust(cfg):
-    from ..robust import optimise_robust
     return optimise_robust(cfg, verify=True)
 
 
@@ -214,7 +216,6 @@ def optimise_grid(cfg, axes, *, dask=None, robust: bool = False, progress: bool 
     (``interrupted``). A point that cannot be solved is reported in the table
     (``success`` False, ``message``), never raised.
     """
-    from ..present.progress import Progress
     grid = check_grid(cfg, axes)
     if isinstance(segment, bool) or not isinstance(segment, (int, np.integer)) or segment < 1:
         raise ConfigError(f"segment: expected a whole number >= 1, got {segment!r}")
@@ -239,10 +240,9 @@ def optimise_grid(cfg, axes, *, dask=None, robust: bool = False, progress: bool 
                                    f"{'verified' if r['success'] else 'NOT verified'}",
                                    force=True)
         else:
-            from .distributed import connect, map_tasks
             where = dask if isinstance(dask, str) else "client"
-            with connect(dask) as client:
-                for _, out in map_tasks(client, solve_segment, tasks, label="segment"):
+            with distributed.connect(dask) as client:
+                for _, out in distributed.map_tasks(client, solve_segment, tasks, label="segment"):
                     for r in out:
                         rows.setdefault(r["id"], r)
                     bar.update(len(rows), force=True)
@@ -358,7 +358,6 @@ class OptimalGridResult(Displayed):
 
     def row(self, i: int) -> dict:
         """The row of grid point ``i`` (plain values; NaN as None)."""
-        from ..jsonio import jsonable
         return jsonable({k: v[i] for k, v in self.columns.items()})
 
     def design_config(self, i: int):
@@ -387,7 +386,6 @@ class OptimalGridResult(Displayed):
         return pd.DataFrame({k: self.columns[k] for k in names})
 
     def to_json(self) -> dict:
-        from ..jsonio import jsonable
         return jsonable({
             "success": self.success, "message": self.message, "keys": list(self.keys),
             "axes": {k: a for k, a in zip(self.keys, self.axes)}, "points": self.points,

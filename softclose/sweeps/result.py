@@ -10,6 +10,9 @@ import numpy as np
 
 from ..present.display import Display, Displayed, Table, num, percent, unit_of
 from .chunks import columns as column_names
+from .tally import row_of
+from ..jsonio import jsonable
+from .store import as_words
 
 #: best rows a sweep shows (of any number of designs)
 SHOW_BEST = 5
@@ -112,7 +115,6 @@ class SweepResult(Displayed):
     # -- rows ------------------------------------------------------------------------------
     def row(self, id: int) -> dict:
         """One design's row by its ``id`` (computed again with ``sweep.recompute``)."""
-        from .tally import row_of
         if self.columns is not None:
             ids = self.columns["id"]
             i = int(np.searchsorted(ids, id))
@@ -132,7 +134,6 @@ class SweepResult(Displayed):
         metrics, ``objective``, ``feasible``, ``status``, ``reason``; sorted by id."""
         import pandas as pd
         names = column_names(self.keys)
-        from .store import as_words
         if self.columns is None:
             df = pd.read_parquet(self.dataset)
             df = df[names].sort_values("id", kind="stable").reset_index(drop=True)
@@ -144,7 +145,6 @@ class SweepResult(Displayed):
 
     def to_json(self) -> dict:
         """The summary: counts, reasons, the best feasible design, timings."""
-        from ..jsonio import jsonable
         rate = self.designs_per_second
         return jsonable({
             "kind": self.kind, "keys": list(self.keys), "space": self.space.describe(),
@@ -162,7 +162,6 @@ class SweepResult(Displayed):
         memory; a sweep streamed to a dataset gives its best design only)."""
         if self.columns is None:
             return [dict(self.best)] if self.best is not None else []
-        from .tally import row_of
         J = np.asarray(self.columns["objective"], float)
         ok = np.asarray(self.columns["feasible"], bool) & np.isfinite(J)
         idx = np.flatnonzero(ok)

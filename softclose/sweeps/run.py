@@ -24,10 +24,13 @@ from typing import Callable, Iterable, Iterator
 import numpy as np
 
 from ..errors import ConfigError
-from ..problem import categorise, params_of
+from ..problem import categorise, PARAM_DEFAULTS, params_of
 from .chunks import CHUNK, PARAM_COLUMNS, columns, empty, evaluate_chunk
 from .result import SweepResult
 from .tally import Bins, Tally
+from ..model.elements import SEED
+from ..present.progress import Progress
+from ..simulation.kernel.binding import kernel_threads
 
 #: most designs a result keeps in memory (larger sweeps: stream them to a Parquet dataset)
 MAX_IN_MEMORY = 20_000_000
@@ -47,7 +50,6 @@ def local_map(cfg_dict: dict, keys: list[str], tasks, threads: int | None = None
     Python runs the others' strokes are integrated, and the caller stores the last finished
     chunk meanwhile. Where fewer chunks are left than threads, they share the threads (a
     sweep of one chunk has them all)."""
-    from ..simulation.kernel.binding import kernel_threads
     total = kernel_threads(threads)
     tasks = iter(tasks)
     ahead: collections.deque = collections.deque()      # tasks drawn, not started
@@ -123,7 +125,6 @@ def run(cfg, space, *, progress: bool = False, threads: int | None = None,
     keeps the rows in memory (the result's ``columns``); ``sink.write(c, columns)`` stores
     each new chunk. Returns the :class:`SweepResult` (``interrupted`` after Ctrl-C).
     """
-    from ..present.progress import Progress
     if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1:
         raise ConfigError(f"chunk: expected a positive whole number of designs, got {chunk!r}")
     chunk = int(chunk)
@@ -196,8 +197,6 @@ def run(cfg, space, *, progress: bool = False, threads: int | None = None,
 def _says(cfg, key: str) -> bool:
     """Does a design key not swept say something about the rows: one of the seed's four
     (k, l0, c, c_rot), or another at a value other than its default?"""
-    from ..model.elements import SEED
-    from ..problem import PARAM_DEFAULTS
     i = PARAM_COLUMNS[key]
     return key.removeprefix("design.") in SEED or params_of(cfg)[i] != PARAM_DEFAULTS[i]
 

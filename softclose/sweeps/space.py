@@ -25,6 +25,8 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import ConfigError
+from ..config import check_batch, numeric_keys
+from ..problem import word_code, WORD_PARAMS, word_text
 
 #: samplers of :class:`Sample` (scipy.stats.qmc, or numpy's PCG64 for "random")
 SAMPLERS = ("sobol", "lhs", "random")
@@ -42,8 +44,6 @@ def readonly(a) -> np.ndarray:
 
 def check_key(key: str, option: str) -> str:
     """``key`` if it is a numeric config key (see :func:`softclose.config.numeric_keys`)."""
-    from ..config import numeric_keys
-    from ..problem import WORD_PARAMS
     known = numeric_keys() + list(WORD_PARAMS)
     if key not in known:
         stem = key.split(".")[-1].split("[")[0]
@@ -58,7 +58,6 @@ def check_values(cfg, key: str, values, option: str) -> None:
     """Refuse values the config itself refuses (its smallest and largest are tried)."""
     if cfg is None:
         return
-    from ..problem import WORD_PARAMS
     if key in WORD_PARAMS:          # every word is tried (there are two or three)
         for c in np.unique(values):
             try:
@@ -108,7 +107,6 @@ class Grid:
                                          for k, v, g in zip(self.keys, self.values, logs)]}
 
     def describe(self) -> list[str]:
-        from ..problem import WORD_PARAMS, word_text
         return [f"{k} ({', '.join(word_text(k, x) for x in v)})" if k in WORD_PARAMS else
                 f"{k} ({len(v)} values, {v.min():.6g} .. {v.max():.6g}"
                 f"{', log' if g else ''})"
@@ -152,19 +150,16 @@ def make_grid(axes: dict, cfg=None, option: str = "axes") -> Grid:
 
 
 def _is_word_key(key: str) -> bool:
-    from ..problem import WORD_PARAMS
     return key in WORD_PARAMS
 
 
 def _codes(key: str, words) -> np.ndarray:
     """The numbers p holds for a word key's values (words, or the numbers themselves)."""
-    from ..problem import word_code
     if isinstance(words, (str, bool)):
         words = [words]
     out = []
     for w in words:
         if isinstance(w, (int, float, np.number)) and not isinstance(w, bool):
-            from ..problem import WORD_PARAMS
             if float(w) not in WORD_PARAMS[key].codes.values():
                 word_code(key, w)             # refused, naming the words
             out.append(float(w))
@@ -400,7 +395,6 @@ def make_range(key: str, lo, hi, log: bool = False, cfg=None, where: str | None 
 
 def _no_range(key: str, where: str) -> None:
     if _is_word_key(key):
-        from ..problem import WORD_PARAMS, word_text
         words = ",".join(word_text(key, c) for c in WORD_PARAMS[key].codes.values())
         raise ConfigError(f"{where}: {key} takes words, not a range: sweep it on a grid "
                           f"(--grid {key}={words})")
@@ -458,7 +452,6 @@ def check_budget(cfg, space, what: str = "the sweep") -> None:
     """Refuse (ConfigError) a sweep whose strokes could take more fixed steps in all than
     :data:`softclose.config.BATCH_STEP_BUDGET` (designs x t_max / step, at the smallest
     swept step and the longest swept t_max)."""
-    from ..config import check_batch
     if cfg is None:
         return
     values = {}

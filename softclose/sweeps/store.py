@@ -24,6 +24,11 @@ import numpy as np
 
 from ..errors import ConfigError
 from .chunks import columns
+from ..problem import METRIC_KEYS, word_code, WORD_PARAMS, word_text
+from ..jsonio import jsonable
+from ..config import to_dict
+from ..version import __version__
+from ..simulation.kernel.library import SOURCE
 
 MANIFEST = "manifest.json"
 CSV = "sweep.csv"
@@ -35,7 +40,6 @@ LAYOUT = 1
 
 def kernel_hash() -> str | None:
     """Hash of the stroke kernel's source (a changed kernel may change the numbers)."""
-    from ..simulation.kernel.library import SOURCE
     try:
         return hashlib.sha256(SOURCE.read_bytes()).hexdigest()[:16]
     except OSError:
@@ -44,9 +48,6 @@ def kernel_hash() -> str | None:
 
 def manifest(cfg, space, chunk: int, fmt: str) -> dict:
     """Plain values that identify a sweep (JSON round-tripped, so they compare exactly)."""
-    from ..version import __version__
-    from ..config import to_dict
-    from ..jsonio import jsonable
     m = {"softclose_sweep": LAYOUT, "version": __version__, "kernel": kernel_hash(),
          "format": fmt, "chunk": int(chunk), "points": int(space.n), "space": space.spec(),
          "config": to_dict(cfg), "raw": cfg.raw}
@@ -126,7 +127,6 @@ def _schema(keys, words: bool = False):
     """The table's Arrow schema; ``words``: a word key's column (a spring's kind) as its
     words (CSV), not the numbers p holds (Parquet, memory)."""
     import pyarrow as pa
-    from ..problem import METRIC_KEYS, WORD_PARAMS
     fields = [pa.field("id", pa.int64())] + [
         pa.field(k, pa.string() if words and k in WORD_PARAMS else pa.float64()) for k in keys]
     fields += [pa.field(k, pa.bool_() if k == "closed" else pa.float64()) for k in METRIC_KEYS]
@@ -194,7 +194,6 @@ def _numpy(table) -> dict[str, np.ndarray]:
 
 def as_words(cols: dict, keys) -> dict:
     """``cols`` with each word key's numbers (p's codes) as its words."""
-    from ..problem import WORD_PARAMS, word_text
     coded = [k for k in keys if k in WORD_PARAMS]
     if not coded:
         return cols
@@ -207,7 +206,6 @@ def as_words(cols: dict, keys) -> dict:
 
 def as_codes(cols: dict, keys) -> dict:
     """The inverse of :func:`as_words`."""
-    from ..problem import WORD_PARAMS, word_code
     out = dict(cols)
     for k in keys:
         if k in WORD_PARAMS:

@@ -18,7 +18,9 @@ import math
 
 import numpy as np
 
-from ..problem import CATEGORIES
+from ..problem import CATEGORIES, WORD_PARAMS, word_text
+from .chunks import columns
+from ..jsonio import jsonable
 
 #: metrics kept per cell (what the maps show besides the objective)
 MAPPED = ("impact_theta_dot", "peak_tip_speed", "closing_time")
@@ -60,9 +62,6 @@ class Tally:
 
 def row_of(cols: dict, i: int, keys) -> dict:
     """Row ``i`` of a chunk as plain values (NaN -> None)."""
-    from ..jsonio import jsonable
-    from ..problem import WORD_PARAMS, word_text
-    from .chunks import columns
     row = {k: jsonable(cols[k][i].item() if hasattr(cols[k][i], "item") else cols[k][i])
            for k in columns(keys)}
     for k in keys:                       # a word key (a spring's kind) by its word

@@ -33,6 +33,7 @@ from ..model.lid import LidModel
 from ..problem import RELATIVE, TARGETS
 from ..simulation.reference import Reference
 from ..simulation.simulator import Simulator
+from ..model.kinematics import branch_of, closure
 
 #: outcomes that are findings (a defect of softclose), not answers or reports
 FAILURES = ("MISMATCH", "NaN", "EXCEPTION")
@@ -65,7 +66,6 @@ def assembly_for(geometry: dict, theta_deg: float = 18.0):
     cannot close at ``theta_deg``."""
     import casadi as ca
 
-    from ..model.kinematics import branch_of, closure
     g0 = default_config().geometry
     geo = SimpleNamespace(**{**g0._asdict(), **geometry})
     th0, phi0, gamma0 = g0.assembly

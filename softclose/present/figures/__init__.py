@@ -16,6 +16,7 @@ import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from ...errors import ConfigError
 
 plt.rcParams.update({"font.size": 10, "axes.grid": True, "grid.alpha": 0.3,
                      "figure.dpi": 110, "savefig.bbox": "tight"})
@@ -120,7 +121,6 @@ def place_label(ax, text: str, xy, avoid=(), pad: float = 3.0, twins=(), **kwarg
 
 
 def check_style(name: str) -> str:
-    from ...errors import ConfigError
     if name not in STYLES:
         raise ConfigError(f"figure style {name!r}: expected one of {', '.join(STYLES)}")
     return name
@@ -209,7 +209,6 @@ def restyle(fig, name: str | None = None):
 def figure_format(path) -> str:
     """The format of a figure file by its suffix (png, pdf, svg); anything else is refused
     with one line naming the path."""
-    from ...errors import ConfigError
     fmt = Path(path).suffix.lower().lstrip(".")
     if fmt not in FORMATS:
         raise ConfigError(f"{path}: a figure is written as {', '.join('.' + f for f in FORMATS)}"

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import plt
+from . import place_label, plt
 
 _BOX = {"boxstyle": "round,pad=0.2", "fc": "white", "ec": "none", "alpha": 0.85}
 #: (design key, axis label, scale to the plotted unit)
@@ -75,7 +75,6 @@ def plot_optimum(res):
                 fontsize=10)
     fig.labels = []                  # placed where they touch no curve (tests check)
     if marks:
-        from . import place_label
         fig.canvas.draw()            # the layout, final
         for text, xy in marks:
             fig.labels.append(place_label(a, text, xy, avoid=fig.labels, twins=(a2,)))

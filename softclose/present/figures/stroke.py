@@ -7,14 +7,13 @@ from pathlib import Path
 
 import numpy as np
 
-from . import plt
+from . import place_label, plt
 
 
 def plot_time_histories(res, title: str = "Closing stroke"):
     """theta, theta' and the tip speed against time, with the event and the peak marked (and
     the end damper's engagement, where it has one that engages: a dotted line, theta' there);
     each label sits where it touches no curve (:func:`softclose.present.figures.place_label`)."""
-    from . import place_label
     tr = res.trajectory
     fig, ax = plt.subplots(3, 1, figsize=(6.5, 6.5), sharex=True)
     ax[0].plot(tr["t"], np.degrees(tr["theta"]), color="C0", lw=2)

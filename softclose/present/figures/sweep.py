@@ -22,8 +22,9 @@ import re
 
 import numpy as np
 
-from ...problem import CATEGORIES, categorise
-from . import plt
+from ...problem import CATEGORIES, categorise, word_code, WORD_PARAMS, word_text
+from . import current_style, DPI, plt, save
+from ...config.schema import BY_NAME
 
 #: the quantities of a map, their labels and units
 QUANTITIES = {
@@ -66,7 +67,6 @@ def unit(key: str) -> str:
     """The unit of a config key (or vector component): its label's, else its record's."""
     if key in LABELS:
         return LABELS[key][1]
-    from ...config.schema import BY_NAME
     record = BY_NAME.get(key.split("[", 1)[0])
     if record is not None and record.unit:
         return record.unit
@@ -84,7 +84,6 @@ def stem(key: str) -> str:
 
 
 def _fmt(v, key: str | None = None) -> str:
-    from ...problem import WORD_PARAMS, word_text
     if key in WORD_PARAMS and not isinstance(v, str):
         return word_text(key, v)
     return v if isinstance(v, str) else f"{v:.4g}"
@@ -92,12 +91,10 @@ def _fmt(v, key: str | None = None) -> str:
 
 def _number(key: str, v) -> float:
     """A best design's value on a map axis (a word key's word as p's number)."""
-    from ...problem import WORD_PARAMS, word_code
     return word_code(key, v) if key in WORD_PARAMS and isinstance(v, str) else float(v)
 
 
 def _is_word(key: str) -> bool:
-    from ...problem import WORD_PARAMS
     return key in WORD_PARAMS
 
 
@@ -110,7 +107,6 @@ def _setting(key: str, value) -> str:
 
 def _mapped(keys) -> list[int]:
     """The axes a map may show: not a word key (a spring's kind is sliced, not drawn)."""
-    from ...problem import WORD_PARAMS
     return [j for j, k in enumerate(keys) if k not in WORD_PARAMS]
 
 
@@ -429,7 +425,6 @@ def save_maps(figs: dict, out, fmt: str = "png", style: str | None = None) -> li
 
     import matplotlib
 
-    from . import DPI, current_style, save
     paths = []
     if fmt != "png" or (style or current_style()) != "screen":
         for name, fig in figs.items():

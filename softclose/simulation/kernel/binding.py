@@ -93,6 +93,8 @@ from .layout import (DESIGN_COLUMNS, KERNEL_ABI, LAYOUT, NPT, OUT_FIELDS, POINT_
                      STATUS, STOP_REASONS, SI)
 from .library import load
 from .table import POINT_NAMES, CoefficientTable
+from ...problem import as_params
+from ...config import RANGES
 
 _COL = {name: i for i, name in enumerate(OUT_FIELDS)}
 
@@ -181,7 +183,6 @@ def point_rows(table: CoefficientTable, points, n: int) -> np.ndarray | None:
             X[:, _POINT_INDEX[k]] = np.broadcast_to(np.asarray(v, float), (n,))
     else:
         X = np.array(np.broadcast_to(np.asarray(points, float), (n, NPT)))
-    from ...config import RANGES
     for j, k in enumerate(POINT_KEYS):
         lo, hi, unit = RANGES[k.split("[")[0]]
         x = X[:, j]
@@ -399,7 +400,6 @@ def kernel_step(table, method, p, h, x0, lid_mass=None, points=None) -> np.ndarr
     lib = load()
     x1 = np.empty(2)
     mass = np.nan if lid_mass is None else float(lid_mass)
-    from ...problem import as_params
     pts = point_rows(table, points, 1)
     pts = np.full(NPT, np.nan) if pts is None else pts[0]
     d = np.ascontiguousarray(np.r_[kernel_rows(as_params(p)), 0.0, mass, pts], float)

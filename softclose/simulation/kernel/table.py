@@ -19,8 +19,9 @@ from functools import cached_property
 import numpy as np
 
 from ...model import elements
-from ...model.dynamics import COEFFS, EXTRA_COEFFS
+from ...model.dynamics import COEFFS, EXTRA_COEFFS, pose
 from ...errors import NumericalError
+from ...model.lid import LidModel
 
 #: element columns per row of the extra table (the kernel's NX: its columns, then zeros)
 NX = 4
@@ -191,7 +192,6 @@ class CoefficientTable:
         tables at m0 and 2 m0 (same cells, same inertia rule: derived I = m L^2/12 unless
         ``mass.inertia_lid`` is configured) is exact up to rounding.
         """
-        from ...model.lid import LidModel
         cfg, m0 = self.model.cfg, self.lid_mass
         other = LidModel(cfg.replace(mass={"lid": 2.0 * m0}))
         nodes = np.linspace(self.lo, self.hi, self.ncell + 1)
@@ -291,7 +291,6 @@ class CoefficientTable:
         (:func:`softclose.simulation.kernel.binding.point_lengths`; the kernel's ``pcc``). Built on first use,
         from the model's closure with exact derivatives, like the coefficients."""
         import casadi as ca
-        from ...model.dynamics import pose
         m = self.model
         th = ca.SX.sym("theta")
         A = pose(th, m.cfg.geometry, m.cfg.mass, m.sigma).points["A"]
