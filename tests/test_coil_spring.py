@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import math
 
+import numpy as np
 import pytest
 
 from softclose.coil_spring import (MATERIALS, PREFERRED_WIRE_D, CoilSpring, Duty, check,
@@ -378,3 +379,124 @@ def test_bad_design_arguments(lid_duty):
         design(lid_duty, max_outer_d=-0.01)
     with pytest.raises(ValueError, match=r"^spring\.min_inner_d: 0\.02 m leaves no room"):
         design(lid_duty, max_outer_d=0.015, min_inner_d=0.02)
+
+
+# -- the [spring] table and `softclose spring` (SPEC §14) -----------------------------------
+
+#: a compression spring on the default lid (the fit example's design)
+COMPRESSION = ['design.spring_kind="compression"', "design.spring_k=1914.709",
+               "design.spring_rest_length=0.07925707"]
+
+
+def _sets(*overrides):
+    return [a for o in (*COMPRESSION, *overrides) for a in ("--set", o)]
+
+
+def test_working_lengths_are_the_stroke_extremes():
+    """The spring's longest and shortest |D - E| between the rim and theta0, against plain
+    numpy kinematics on a fine grid (conftest.np_closure)."""
+    from conftest import np_closure
+
+    from softclose.config import load_config
+    from softclose.spring_order import spring_duty, working_lengths
+    cfg = load_config(None, COMPRESSION)
+    g = cfg.geometry
+    near = math.radians(g.assembly[1])
+    lengths = []
+    for th in np.linspace(0.0, math.radians(18.0), 2001):
+        phi, _ = np_closure(th, g, near)
+        near = phi
+        a = g.crank_oa * np.array([math.cos(phi), math.sin(phi)])
+        c, s = math.cos(th), math.sin(th)
+        e = a + np.array([c * g.lid_e[0] - s * g.lid_e[1], s * g.lid_e[0] + c * g.lid_e[1]])
+        lengths.append(float(np.hypot(*(np.asarray(g.spring_anchor) - e))))
+    longest, shortest = working_lengths(cfg)
+    assert longest == pytest.approx(max(lengths), abs=1e-9)
+    assert shortest == pytest.approx(min(lengths), abs=1e-9)
+    assert longest >= max(lengths) - 1e-12 and shortest <= min(lengths) + 1e-12
+    duty = spring_duty(cfg)
+    assert (duty.rate, duty.free_length) == (1914.709, 0.07925707)
+    assert (duty.longest_length, duty.shortest_length) == (longest, shortest)
+    # a preload moves the coil spring's free length: L0 = l0 + F0 / k
+    pre = spring_duty(cfg.update({"design.spring_preload": 19.14709}))
+    assert pre.free_length == pytest.approx(0.07925707 + 0.01, rel=1e-12)
+
+
+def test_spring_command_designs(capsys, tmp_path):
+    from softclose.cli import main
+    rc = main(["spring", "--json", "--out", str(tmp_path), *_sets("spring.max_outer_d=0.03")])
+    out = json.loads(capsys.readouterr().out)
+    assert rc == 0 and out["mode"] == "design" and out["success"]
+    s = out["spring"]
+    assert set(s) >= {"material", "wire_d", "coil_d", "outer_d", "inner_d", "active_coils",
+                      "total_coils", "free_length", "solid_length", "min_working_length",
+                      "rate", "forces", "stresses", "life", "buckling", "natural_frequency",
+                      "mass", "tolerance"}
+    assert set(s["stresses"]) == {"tau_k1", "tau_k2", "tau_kh", "tau_c", "tau_c_allowed",
+                                  "tau_kh_allowed"}
+    assert set(s["buckling"]) == {"s_k", "s_2", "safe"}
+    assert set(s["tolerance"]) == {"grade", "force", "free_length"}
+    assert all(set(c) >= {"name", "value", "limit", "ok"} and c["ok"] for c in out["checks"])
+    assert s["outer_d"] <= 0.03 and s["wire_d"] in PREFERRED_WIRE_D
+    assert s["free_length"] == 0.07925707 and s["material"] == "EN10270-1-SH"
+    assert abs(s["rate"] / 1914.709 - 1) <= 0.125 / s["active_coils"]
+    assert [c["mass"] for c in out["candidates"]] == sorted(c["mass"] for c in
+                                                            out["candidates"])
+    assert {p.name for p in tmp_path.iterdir()} == {"spring.json", "spring_checks.csv",
+                                                   "spring_candidates.csv"}
+    assert json.loads((tmp_path / "spring.json").read_text())["spring"] == s
+
+
+def test_spring_command_checks(capsys):
+    """The three geometry keys given: that spring is checked; it fails (exit 3, one line)."""
+    from softclose.cli import main
+    rc = main(["spring", *_sets("spring.wire_d=0.002", "spring.coil_d=0.016",
+                                "spring.active_coils=17")])
+    out, err = capsys.readouterr()
+    assert rc == 3
+    assert err.strip().splitlines() == [
+        "softclose: error: the spring fails rate: 22.26 %, limit <= 0.7353 %; buckling: "
+        "26.99 mm, limit < 9.601 mm"]
+    assert "spring checked: EN10270-1-SH, d = 2 mm, D = 16 mm" in out
+    # the designer's choice (d = 2 mm, D = 27.2 mm, n = 4.25) passes; with n for the exact
+    # rate (4.2296) its stress at solid length exceeds 0.56 R_m by 0.2 %
+    rc = main(["spring", "--json", *_sets("spring.wire_d=0.002", "spring.coil_d=0.0272",
+                                          "spring.active_coils=4.25")])
+    res = json.loads(capsys.readouterr().out)
+    assert rc == 0 and res["mode"] == "check" and res["ok"] and res["candidates"] == []
+    assert res["spring"]["rate"] == pytest.approx(81500e6 * 16e-12 / (8 * 0.0272 ** 3 * 4.25))
+    n = 81500e6 * 0.002 ** 4 / (8 * 0.0272 ** 3 * 1914.709)
+    rc = main(["spring", "--json", *_sets("spring.wire_d=0.002", "spring.coil_d=0.0272",
+                                          f"spring.active_coils={n!r}")])
+    res = json.loads(capsys.readouterr().out)
+    assert rc == 3 and res["failed"] == ["static"] and res["exit_code"] == 3
+
+
+@pytest.mark.parametrize("sets, message", [
+    ((), "design.spring_kind: softclose spring makes a compression spring to order; the "
+         "design's spring is 'linear' (set design.spring_kind = \"compression\")"),
+    (COMPRESSION + ["spring.wire_d=0.001", "spring.coil_d=0.025"],
+     "spring.coil_d: the spring index w = D/d = 25 is outside EN 13906-1's 4 <= w <= 20 "
+     "(d = 1 mm, D = 25 mm)"),
+    (COMPRESSION + ["spring.active_coils=8"],
+     "spring.active_coils: given without spring.wire_d and spring.coil_d; give all three to "
+     "check a spring, or leave it out to design one"),
+    (COMPRESSION + ["spring.active_coils=1.5", "spring.wire_d=0.002", "spring.coil_d=0.016"],
+     "spring.active_coils: 1.5 coils is outside the admissible range 2..1000 coils"),
+    (COMPRESSION + ["spring.wire_d=-0.002"], "spring.wire_d: must be positive, got -0.002"),
+    (COMPRESSION + ['spring.material="EN10270-3"'],
+     "spring.material: expected one of EN10270-1-SH, EN10270-1-DH, EN10270-1-SH-peened; got "
+     "'EN10270-3'"),
+    (COMPRESSION + ["spring.grade=4"], "spring.grade: 4 is outside the admissible range 1..3"),
+    (COMPRESSION + ["design.spring_rest_length=0.05"],
+     "design.spring_rest_length: the compression spring's free length 50 mm is shorter than "
+     "its longest length over the stroke, 58.43 mm: it would come loose (a longer free "
+     "length or a preload keeps it in place)"),
+])
+def test_spring_command_bad_input(capsys, sets, message):
+    from softclose.cli import main
+    rc = main(["spring", "--json", *[a for o in sets for a in ("--set", o)]])
+    out, err = capsys.readouterr()
+    assert rc == 2
+    assert err.strip().splitlines() == [f"softclose: error: {message}"]
+    assert json.loads(out) == {"error": message, "exit_code": 2}

@@ -563,7 +563,7 @@ def _coil_grid(lo: float, hi: float, step: float) -> list[float]:
 def design(duty: Duty, material: str = DEFAULT_MATERIAL, *, ends: str = "closed_ground",
            max_outer_d: float | None = None, min_inner_d: float | None = None,
            grade: int = en15800.DEFAULT_GRADE, wires=PREFERRED_WIRE_D,
-           coil_step: float = COIL_STEP) -> SpringDesign:
+           coil_step: float = COIL_STEP, coil_ds=None) -> SpringDesign:
     """Design the lightest compression spring of ``material`` for ``duty``.
 
     For every preferred wire diameter d of EN 10270 (``wires``) the material covers, and
@@ -588,6 +588,8 @@ def design(duty: Duty, material: str = DEFAULT_MATERIAL, *, ends: str = "closed_
         The wire diameters to try (m).
     coil_step : float
         The grid of D (m).
+    coil_ds : sequence of float, optional
+        The mean coil diameters to try instead of the grid (m), e.g. one given D.
 
     Returns
     -------
@@ -608,6 +610,9 @@ def design(duty: Duty, material: str = DEFAULT_MATERIAL, *, ends: str = "closed_
         raise ConfigError(f"spring.min_inner_d: {min_inner_d:.6g} m leaves no room below "
                           f"spring.max_outer_d = {max_outer_d:.6g} m")
     _positive("coil_step", coil_step, "m")
+    if coil_ds is not None:
+        coil_ds = [_positive("spring.coil_d", D, "m") for D in coil_ds]
+    wires = [_positive("spring.wire_d", d, "m") for d in wires]
     lo_w, hi_w = en13906.INDEX_RANGE
     best_per_wire: dict[float, SpringCheck] = {}
     nearest: SpringCheck | None = None
@@ -621,7 +626,9 @@ def design(duty: Duty, material: str = DEFAULT_MATERIAL, *, ends: str = "closed_
             lo = max(lo, min_inner_d + d)
         if max_outer_d is not None:
             hi = min(hi, max_outer_d - d)
-        for D in _coil_grid(lo, hi, coil_step):
+        grid = _coil_grid(lo, hi, coil_step) if coil_ds is None else \
+            sorted(D for D in coil_ds if lo * (1 - 1e-12) <= D <= hi * (1 + 1e-12))
+        for D in grid:
             if not lo_w <= D / d <= hi_w:
                 continue
             n_exact = en13906.active_coils_for_rate(mat.G, d, D, duty.rate)

@@ -63,12 +63,7 @@ def validate(d: float, D: float, n: float, ends: str = "closed_ground") -> None:
     if not _finite(D) or D <= 0:
         raise ConfigError(f"spring.coil_d: the mean coil diameter D must be a positive "
                           f"number of metres, got {D!r}")
-    w = D / d
-    lo, hi = INDEX_RANGE
-    if not lo <= w <= hi:
-        raise ConfigError(f"spring.coil_d: the spring index w = D/d = {w:.4g} is outside "
-                          f"EN 13906-1's {lo:g} <= w <= {hi:g} (d = {d * 1e3:g} mm, "
-                          f"D = {D * 1e3:g} mm)")
+    check_index(d, D)
     if not _finite(n):
         raise ConfigError(f"spring.active_coils: must be a number of coils >= "
                           f"{MIN_ACTIVE_COILS:g}, got {n!r}")
@@ -78,6 +73,16 @@ def validate(d: float, D: float, n: float, ends: str = "closed_ground") -> None:
     if ends not in ENDS:
         raise ConfigError(f"spring.ends: unknown end form {ends!r} (one of "
                           f"{', '.join(ENDS)})")
+
+
+def check_index(d: float, D: float) -> None:
+    """Refuse a spring index ``w = D/d`` outside 4..20, in one line naming ``spring.coil_d``."""
+    w = D / d
+    lo, hi = INDEX_RANGE
+    if not lo <= w <= hi:
+        raise ConfigError(f"spring.coil_d: the spring index w = D/d = {w:.4g} is outside "
+                          f"EN 13906-1's {lo:g} <= w <= {hi:g} (d = {d * 1e3:g} mm, "
+                          f"D = {D * 1e3:g} mm)")
 
 
 def spring_index(d: float, D: float) -> float:
