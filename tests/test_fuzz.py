@@ -83,6 +83,11 @@ COMMANDS = {
             "medium"),
     # compiles the optimiser's NLP in the foreground (~10 s; once per structure and cache)
     "prepare": (["prepare"], "costly"),
+    # the coil spring made to order of a compression spring (designed, or checked when the
+    # fuzzed [spring] keys give wire, coil diameter and coils)
+    "spring": (["spring", "--out", "{out}", "--set", 'design.spring_kind="compression"',
+                "--set", "design.spring_k=1914.709", "--set",
+                "design.spring_rest_length=0.07925707"], "cheap"),
 }
 #: the pairs of the catalog the fuzzed select runs (4 springs x 2 dampers)
 SELECT_PAIRS = 8
@@ -565,6 +570,8 @@ def work_seconds(command: str, cfg, argv: list[str]) -> float:
         return 30.0
     if command == "prepare":      # one NLP compiled (-O1; the points free: a larger one)
         return 120.0 + (240.0 if _option(argv, "--free") else 0.0) + 0.1 * _nlp_steps(cfg)
+    if command == "spring":       # a model (its spring's lengths), then < 1 s of design
+        return 30.0
     if command == "select":       # the kernel's batch, a model per distinct geometry, the
         # reference at every corner of the verified pairs (0.5 s each)
         d = 3 + _select_axes(cfg)
@@ -711,7 +718,7 @@ EXAMPLES = {"state": (100, 400), "simulate": (400, 1500), "sweep": (60, 300),
             "optimise": (25, 120), "yield": (25, 100), "sensitivity": (15, 60),
             "pareto": (10, 30), "optimise --robust": (10, 15), "bench": (10, 8),
             "docs": (30, 100), "select": (25, 100), "fit": (25, 100),
-            "prepare": (10, 20)}
+            "prepare": (10, 20), "spring": (60, 300)}
 
 
 @pytest.fixture(scope="module")
@@ -811,6 +818,19 @@ ISSUE_CASES = [
     ("optimise", [], ["--free=design.end_damper_c=0:2", "--free=design.end_damper_angle_deg=1:10"]),
     ("optimise", [], ["--free=design.end_damper_angle_deg=1:10"]),
     ("optimise", [("design.end_damper_c", "edge", "100000.0")], []),
+    # the coil spring made to order: designed; checked (fails buckling and the rate: exit 3);
+    # an index outside 4..20, coils without the wire, a wire the material lacks (exit 2);
+    # no room at all (exit 3); a free length shorter than the stroke's longest (exit 2)
+    ("spring", [], []),
+    ("spring", [("spring.wire_d", "in_range", "0.002"), ("spring.coil_d", "in_range", "0.016"),
+                ("spring.active_coils", "in_range", "17.0")], []),
+    ("spring", [("spring.wire_d", "in_range", "0.001"), ("spring.coil_d", "in_range", "0.03")],
+     []),
+    ("spring", [("spring.active_coils", "in_range", "5.0")], []),
+    ("spring", [("spring.wire_d", "in_range", "0.0002")], []),
+    ("spring", [("spring.max_outer_d", "edge", "0.0001")], []),
+    ("spring", [("design.spring_rest_length", "in_range", "0.05")], []),
+    ("spring", [("design.spring_kind", "string", '"extension"')], []),
 ]
 
 
@@ -932,6 +952,10 @@ _COMPANIONS = {
     ("stroke.theta_closed_deg", "hi"): None,     # must lie below theta0_deg (<= 360)
     ("stroke.theta0_deg", "lo"): None,           # must lie above theta_closed_deg (>= -360)
     ("optimise.closing_time_min", "hi"): None,   # must lie below closing_time_max (<= 60)
+    ("spring.wire_d", "lo"): {"spring.material": "EN10270-1-DH"},   # SH starts at 0.28 mm
+    # the coils only with the wire and the coil diameter (4 <= D/d <= 20)
+    ("spring.active_coils", "lo"): {"spring.wire_d": 0.002, "spring.coil_d": 0.016},
+    ("spring.active_coils", "hi"): {"spring.wire_d": 0.002, "spring.coil_d": 0.016},
 }
 
 

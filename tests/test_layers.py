@@ -4,11 +4,11 @@ root keeps at most 8 modules, and no module exceeds 600 lines.
 
 The layers, lowest first, as module prefixes (the longest prefix names a module's layer):
 the foundations (errors, the version, JSON, Ctrl-C, the build cache, the config's key
-records, progress lines); the integrators and a root finder; the mechanism and its elements;
+records, progress lines); the integrators, a root finder and the coil spring's standards (EN 13906-1, EN 10270, EN 15800); the mechanism and its elements;
 the config; the design problem; what is shown (tables, figures); the CasADi model of a lid;
 the simulation (the simulator, its C kernel, the reference, statics, the stroke's result); the
-features (optimiser, robust design, sweeps, catalog, calibration, the coil spring, the
-notebook explorer); benchmarks and validation; the command line. Nothing imports the command
+features (optimiser, robust design, sweeps, catalog, calibration, the coil spring made to
+order, the notebook explorer); benchmarks and validation; the command line. Nothing imports the command
 line, and nothing below the top imports the package root's API.
 """
 
@@ -24,7 +24,7 @@ ROOT = Path(__file__).resolve().parents[1] / "softclose"
 LAYERS = [
     ["softclose.errors", "softclose.version", "softclose.jsonio", "softclose.interrupt",
      "softclose.buildcache", "softclose.config.keys", "softclose.present.progress"],
-    ["softclose.simulation.integrators", "softclose.simulation.roots"],
+    ["softclose.simulation.integrators", "softclose.simulation.roots", "softclose.coil_spring"],
     ["softclose.model.kinematics", "softclose.model.elements"],
     ["softclose.config"],
     ["softclose.problem"],
@@ -32,7 +32,7 @@ LAYERS = [
     ["softclose.model"],
     ["softclose.simulation"],
     ["softclose.optimiser", "softclose.robust", "softclose.sweeps", "softclose.catalog",
-     "softclose.calibration", "softclose.coil_spring", "softclose.present.explorer"],
+     "softclose.calibration", "softclose.coil_spring.order", "softclose.present.explorer"],
     ["softclose.bench", "softclose.validation"],
     ["softclose.cli", "softclose.__main__"],
 ]

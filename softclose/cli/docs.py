@@ -134,6 +134,7 @@ def files() -> str:
             ("fit DATA --free KEY --out D", "calibrated.toml (the config with the fitted "
              "keys and a [tolerance] proposal; softclose optimise --robust --config "
              "D/calibrated.toml designs for it), fit.csv, samples.csv, fit.png"),
+            ("spring --out D", "spring.json, spring_checks.csv, spring_candidates.csv"),
             ("bench --out D", "work_precision.csv, speed.csv, optimiser.csv, bench.md, "
              "bench.json and figures")]
     lines = ["files the commands write (--out D is checked before any work):"]

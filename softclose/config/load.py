@@ -62,6 +62,7 @@ class Config:
     stroke: Stroke
     simulate: Simulate
     optimise: Optimise
+    spring: Spring
     tolerance: "Tolerance"
     raw: dict = dataclasses.field(default_factory=dict, repr=False, compare=False)
 
@@ -161,9 +162,29 @@ def from_dict(raw: dict[str, Any]) -> Config:
     for key in ("spring_k", "damper_c"):
         if o[key][0] < 0:
             raise ConfigError(f"optimise.{key}: lower bound must be non-negative, got {o[key][0]}")
+    _check_spring(values["spring"])
     sections = {name: SECTION_TYPES[name](**values[name]) for name in SECTIONS}
     tolerance = read_tolerance(raw.get("tolerance", {}), values)
     return Config(**sections, tolerance=tolerance, raw={k: dict(v) for k, v in raw.items()})
+
+
+def _check_spring(sp: dict[str, Any]) -> None:
+    """The [spring] keys against each other and the wire (SPEC §14): the material's wire
+    diameters, the spring index 4..20 of EN 13906-1, n only with d and D, the space."""
+    from ..coil_spring import material, standard
+    d, D = sp["wire_d"], sp["coil_d"]
+    if d is not None:
+        material(sp["material"]).check_wire(d)
+    if d is not None and D is not None:
+        standard.check_index(d, D)
+    if sp["active_coils"] is not None and (d is None or D is None):
+        raise ConfigError("spring.active_coils: given without spring.wire_d and "
+                          "spring.coil_d; give all three to check a spring, or leave it out "
+                          "to design one")
+    lo, hi = sp["min_inner_d"], sp["max_outer_d"]
+    if lo is not None and hi is not None and lo >= hi:
+        raise ConfigError(f"spring.min_inner_d: {lo:g} m leaves no room below "
+                          f"spring.max_outer_d = {hi:g} m")
 
 
 def _nearest(word: str, known, before: str = "", after: str = "") -> str:

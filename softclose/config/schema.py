@@ -15,13 +15,15 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from ..coil_spring.materials import DEFAULT_MATERIAL, MATERIALS
 from ..model import elements
 from .keys import Key
 
 INTEGRATORS = ("rk4", "euler_cromer", "gauss4", "radau5")
 HESSIANS = ("exact", "limited-memory")
 #: the sections of a config, in order; "tolerance" holds spreads and their options
-SECTIONS = ("geometry", "mass", "design", "friction", "stroke", "simulate", "optimise")
+SECTIONS = ("geometry", "mass", "design", "friction", "stroke", "simulate", "optimise",
+            "spring")
 
 
 def _half_length(v):
@@ -132,6 +134,39 @@ CORE: tuple[Key, ...] = (
         lo=1, hi=10000),
 )
 
+#: the coil spring made to order (SPEC §14: EN 13906-1, EN 10270, EN 15800)
+SPRING: tuple[Key, ...] = (
+    Key("spring", "material", "str:" + ",".join(MATERIALS), DEFAULT_MATERIAL, "",
+        "spring wire: EN 10270-1 patented cold-drawn steel, grade SH or DH, or SH with the "
+        "spring shot-peened (the wires with sourced strength and fatigue data)"),
+    Key("spring", "wire_d", "pos", None, "m",
+        "wire diameter d; none: designed (a preferred EN 10270 diameter)", lo=1e-4, hi=0.02,
+        note="within the material's diameters (SH: above 0.28 mm, DH: above 0.05 mm)"),
+    Key("spring", "coil_d", "pos", None, "m",
+        "mean coil diameter D; none: designed (within the space)", lo=2e-4, hi=0.4,
+        note="with `wire_d`: 4 ≤ D/d ≤ 20"),
+    Key("spring", "active_coils", "pos", None, "coils",
+        "active coils n; given with `wire_d` and `coil_d` the spring is checked, not "
+        "designed; none: designed (to a quarter coil for the rate)", lo=2.0, hi=1000.0,
+        note="only with `wire_d` and `coil_d`"),
+    Key("spring", "ends", "str:closed_ground,closed", "closed_ground", "",
+        "end coils: `closed_ground` (solid length n_t d) or `closed`, not ground "
+        "((n_t + 1.5) d)"),
+    Key("spring", "seating", "pos", 1.0, "1",
+        "seating coefficient nu of the buckling check: 2 one end free, 1 both ends pinned, "
+        "0.5 both ends clamped", lo=0.1, hi=10.0),
+    Key("spring", "cycles", "pos", 1e5, "strokes",
+        "design life: the fatigue check's Goodman line at this many strokes (the data span "
+        "1e3..1e7: fewer take the 1e3 line, more the 1e7 line)", lo=1.0, hi=1e12),
+    Key("spring", "max_outer_d", "pos", None, "m",
+        "largest outer diameter D + d (a bore or the space); none: no limit", lo=1e-4,
+        hi=1.0),
+    Key("spring", "min_inner_d", "pos", None, "m",
+        "smallest inner diameter D - d (a guide rod); none: no limit", lo=1e-5, hi=1.0,
+        note="below `max_outer_d`"),
+    Key("spring", "grade", "int+", 2, "", "EN 15800 tolerance grade: 1, 2 or 3", lo=1, hi=3),
+)
+
 #: the options of the [tolerance] section (every other key there names a toleranced key)
 TOLERANCE_KEYS: tuple[Key, ...] = (
     Key("tolerance", "distribution", "str:uniform,normal", "uniform", "",
@@ -151,7 +186,7 @@ def _ordered(keys) -> tuple[Key, ...]:
 
 
 #: every config key of the sections, one record each
-KEYS: tuple[Key, ...] = _ordered(CORE + elements.KEYS)
+KEYS: tuple[Key, ...] = _ordered(CORE + elements.KEYS + SPRING)
 BY_NAME: dict[str, Key] = {k.full: k for k in KEYS + TOLERANCE_KEYS}
 #: kind and default per section and key: {section: {name: (kind, default)}}
 SCHEMA: dict[str, dict[str, tuple[str, Any]]] = {
@@ -241,8 +276,8 @@ def _section(section: str, values: dict) -> Section:
 
 #: the section classes, by section
 SECTION_TYPES = {s: _section_type(s) for s in SECTIONS}
-Geometry, Mass, Design, Friction, Stroke, Simulate, Optimise = (SECTION_TYPES[s]
-                                                               for s in SECTIONS)
+Geometry, Mass, Design, Friction, Stroke, Simulate, Optimise, Spring = (
+    SECTION_TYPES[s] for s in SECTIONS)
 
 
 def numeric_keys() -> list[str]:

@@ -1,0 +1,157 @@
+"""``softclose spring [--out DIR]``: the design's compression spring made to order (SPEC §14)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from .common import Outcome, add_common, add_out, prepare_out, wrote
+
+DESCRIPTION = """\
+The design's compression spring (design.spring_kind = "compression") as a part a spring maker
+can coil: wire, mean coil diameter and active coils, checked by EN 13906-1 for the lengths it
+works at as the lid turns between stroke.theta_closed_deg and stroke.theta0_deg.
+
+With spring.wire_d, spring.coil_d and spring.active_coils all given, that spring is checked;
+otherwise one is designed: preferred EN 10270 wire diameters (or the spring.wire_d given),
+mean coil diameters on a 0.1 mm grid within spring.max_outer_d / spring.min_inner_d (or the
+spring.coil_d given), the active coils rounded to a quarter coil for design.spring_k, every
+check met for spring.cycles strokes, the lightest first.
+
+Checks: the rate within the quarter-coil rounding; the shortest working length keeps the
+minimum coil gaps S_a; the stress at solid length tau_c <= 0.56 R_m; the stroke stress under
+the wire's Goodman line at spring.cycles; buckling (seating spring.seating); the space; the
+wire's temperatures. The EN 15800 tolerances are those of spring.grade.
+
+Exit 3 when the spring checked fails a check, or no spring meets them all (the nearest miss
+is shown). With --out: spring.json, the checks (spring_checks.csv) and the candidates
+(spring_candidates.csv)."""
+
+
+def register(sub) -> None:
+    p = sub.add_parser("spring", help="the design's compression spring made to order "
+                                      "(EN 13906-1 checks, EN 15800 tolerances)",
+                       description=DESCRIPTION,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_common(p)
+    add_out(p, what="also write spring.json and the checks and candidates as CSV to this "
+                    "folder", figures=False)
+    p.set_defaults(run=run)
+
+
+def _mm(x) -> str:
+    return "—" if x is None else f"{x * 1e3:.4g} mm"
+
+
+def _mpa(x) -> str:
+    return f"{x / 1e6:.4g}"
+
+
+def _check_line(c: dict) -> str:
+    unit = c["unit"]
+    scale, shown = {"m": (1e3, "mm"), "Pa": (1e-6, "MPa"), "1": (100.0, "%")}.get(
+        unit, (1.0, unit))
+    v = c["value"] * scale
+    lim = "none" if c["limit"] is None else f"{c['limit'] * scale:.5g}"
+    return (f"  {c['name']:<19} {v:>10.5g} {c['relation']:<2} {lim:<10} {shown:<4} "
+            f"{'ok' if c['ok'] else 'FAILS'}")
+
+
+def _failed(c: dict) -> str:
+    """A failed check in words: 'buckling: 26.99 mm, limit < 13.62 mm'."""
+    scale, shown = {"m": (1e3, "mm"), "Pa": (1e-6, "MPa"), "1": (100.0, "%")}.get(
+        c["unit"], (1.0, c["unit"]))
+    return (f"{c['name']}: {c['value'] * scale:.4g} {shown}, limit {c['relation']} "
+            f"{c['limit'] * scale:.4g} {shown}")
+
+
+def format_spring(payload: dict) -> str:
+    """The text form of ``softclose spring``'s payload."""
+    s = payload["spring"]
+    if s is None:
+        return f"  {payload['message']}"
+    st, b, tol = s["stresses"], s["buckling"], s["tolerance"]
+    ends = {"closed_ground": "closed and ground", "closed": "closed, not ground"}[s["ends"]]
+    life = ("10^7 strokes or more" if s["life"] >= 1e7 else
+            "fewer than 10^3 strokes" if s["life"] < 1e3 else f"{s['life']:.3g} strokes")
+    lines = [
+        f"spring {'checked' if payload['mode'] == 'check' else 'designed'}: {s['material']}, "
+        f"d = {_mm(s['wire_d'])}, D = {_mm(s['coil_d'])} (outer {_mm(s['outer_d'])}, inner "
+        f"{_mm(s['inner_d'])}), n = {s['active_coils']:g} active of {s['total_coils']:g}, "
+        f"ends {ends}",
+        f"  free length {_mm(s['free_length'])}, works from {_mm(s['working_lengths'][0])} "
+        f"to {_mm(s['working_lengths'][1])}; solid length {_mm(s['solid_length'])}, shortest "
+        f"allowed {_mm(s['min_working_length'])}",
+        f"  rate {s['rate']:.5g} N/m (requested {s['rate_required']:.5g} N/m, "
+        f"{s['rate_deviation']:+.2%}); forces F1 = {s['forces']['F1']:.4g} N, F2 = "
+        f"{s['forces']['F2']:.4g} N, at solid length {s['forces']['Fc']:.4g} N",
+        f"  stresses (MPa): tau_k1 = {_mpa(st['tau_k1'])}, tau_k2 = {_mpa(st['tau_k2'])}, "
+        f"stroke tau_kh = {_mpa(st['tau_kh'])} (allowed {_mpa(st['tau_kh_allowed'])} for "
+        f"{s['cycles']:.3g} strokes), solid tau_c = {_mpa(st['tau_c'])} (allowed "
+        f"{_mpa(st['tau_c_allowed'])}); life {life}",
+        f"  buckling: " + (f"s_K = {_mm(b['s_k'])} against s_2 = {_mm(b['s_2'])}"
+                           if b["s_k"] is not None else "cannot buckle")
+        + f" (seating nu = {s['seating']:g}); natural frequency "
+          f"{s['natural_frequency']:.4g} Hz; mass {s['mass'] * 1e3:.4g} g",
+        f"  EN 15800 grade {tol['grade']}: free length ±{_mm(tol['free_length'])}, F1 "
+        f"±{tol['force']['F1']:.3g} N, F2 ±{tol['force']['F2']:.3g} N",
+        "checks (value, relation, limit):"]
+    lines += [_check_line(c) for c in payload["checks"]]
+    cands = payload.get("candidates") or []
+    if cands:
+        lines.append("candidates (the lightest spring of each wire diameter, lightest first):")
+        lines.append(f"  {'d mm':>6} {'D mm':>6} {'n':>6} {'rate N/m':>9} {'dev':>7} "
+                     f"{'mass g':>8} {'outer mm':>8}")
+        for c in cands[:10]:
+            lines.append(f"  {c['wire_d'] * 1e3:>6.3g} {c['coil_d'] * 1e3:>6.4g} "
+                         f"{c['active_coils']:>6g} {c['rate']:>9.5g} "
+                         f"{c['rate_deviation']:>+7.2%} {c['mass'] * 1e3:>8.4g} "
+                         f"{c['outer_d'] * 1e3:>8.4g}")
+        if len(cands) > 10:
+            lines.append(f"  ... {len(cands) - 10} more (--json, --out)")
+    lines.append(f"  {payload['message']}")
+    return "\n".join(lines)
+
+
+def run(cfg, args) -> Outcome:
+    from ..coil_spring import SpringCheck
+    from ..jsonio import jsonable
+    from ..coil_spring.order import spring_duty, spring_order
+    out = prepare_out(args.out)
+    duty = spring_duty(cfg)
+    res = spring_order(cfg, duty)
+    if isinstance(res, SpringCheck):
+        payload = res.to_json()
+        ok = res.ok
+        message = ("the spring meets every check" if ok else
+                   "the spring fails " + "; ".join(_failed(c) for c in payload["checks"]
+                                                   if not c["ok"]))
+        payload.update(mode="check", success=ok, message=message)
+    else:
+        payload = res.to_json()
+        ok = res.success
+        payload["mode"] = "design"
+        if not ok:
+            payload["message"] += (" (more room: spring.max_outer_d, spring.min_inner_d; "
+                                   "fewer spring.cycles; shot-peened wire; another free "
+                                   "length or rate of the design)")
+    payload["duty"] = duty.to_json()
+    payload = jsonable(payload)
+    files = []
+    if out is not None:
+        path = out / "spring.json"
+        path.write_text(json.dumps(payload, indent=1, allow_nan=False) + "\n")
+        files.append(path)
+        best = res if isinstance(res, SpringCheck) else res.best
+        if best is not None:
+            best.to_frame().to_csv(out / "spring_checks.csv", index=False)
+            files.append(out / "spring_checks.csv")
+        if not isinstance(res, SpringCheck):
+            res.to_frame().to_csv(out / "spring_candidates.csv", index=False)
+            files.append(out / "spring_candidates.csv")
+        payload["files"] = [str(f) for f in files]
+    text = format_spring(payload) + wrote(files)
+    if ok:
+        return Outcome(payload, text, 0, tuple(files))
+    payload["exit_code"] = 3
+    return Outcome(payload, text, 3, tuple(files), error=payload["message"])

@@ -1,0 +1,498 @@
+"""A compression spring to order: check a given spring against its duty, or design one.
+
+A *duty* (:class:`Duty`) is what the lid asks of the spring: its rate R (N/m, at the
+reference temperature), its free length L0, the longest and shortest lengths it works at
+over the stroke, L1 and L2 (over every operating temperature), the cycles it must endure,
+its seating coefficient nu and the operating temperatures. A *spring*
+(:class:`CoilSpring`) is what a spring maker coils: wire material and diameter d, mean
+coil diameter D, active coils n, end form.
+
+:func:`check` judges a spring against a duty by EN 13906-1 (and gives its EN 15800
+tolerances); :func:`design` searches the preferred wire diameters of EN 10270, coil
+diameters on a 0.1 mm grid within the space, and n rounded to a quarter coil for the
+rate, and ranks every spring that meets all checks by mass.
+
+The checks (each ``value <relation> limit``):
+
+- ``rate``: ``|R/R_req - 1| <= 0.125/n``, the rate is the request's within a quarter-coil
+  rounding of n;
+- ``min_working_length``: ``L_n = L_c + S_a <= L2``, the shortest working length keeps
+  the minimum gaps between active coils (dynamic load);
+- ``static``: ``tau_c <= 0.56 R_m``, the uncorrected stress at solid length (the spring
+  must survive being pressed solid; at the reference temperature);
+- ``fatigue``: ``tau_kh = tau_k2 - tau_k1 <= tau_kH(tau_k1, N)``, the corrected stroke
+  stress under the material's Goodman line at N = ``cycles``
+  (:class:`softclose.coil_spring.materials.Goodman`);
+- ``buckling``: ``s_2 < s_K`` (always met when s_K does not exist);
+- ``outer_d``: ``D_e = D + d <= max_outer_d`` and ``inner_d``: ``D_i = D - d >=
+  min_inner_d``, when a space is given (the unloaded spring; the growth of D_e under load
+  and the EN 15800 coil-diameter tolerance are not included);
+- ``temperature_min``, ``temperature_max``: every operating temperature within the
+  wire's usable range.
+
+Temperature: G, and with it the rate, falls as ``1 - gamma_G (T - T_ref)``. The forces
+reported are at the reference temperature; the working stresses tau_k1, tau_k2, tau_kh
+are at the operating temperature where G is largest (the coldest), where they are
+highest.
+
+Extension springs: the body checks above (rate, static, fatigue on the body's shear
+stress) apply to the coiled body only; hooks, initial tension and their bending stresses
+are not checked here.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ..errors import ConfigError
+from . import standard as en13906
+from . import tolerances as en15800
+from .materials import (DEFAULT_MATERIAL, Material, material as
+                        get_material)
+
+#: the default of ``spring.cycles``
+DEFAULT_CYCLES = 1e5
+#: the default of ``spring.seating`` (both ends pinned)
+DEFAULT_SEATING = 1.0
+#: the default reference temperature (degC)
+DEFAULT_REFERENCE_C = 23.0
+#: the grid of mean coil diameters the designer tries (m)
+COIL_STEP = 0.1e-3
+#: active coils are rounded to this (a quarter coil)
+COIL_ROUNDING = 0.25
+
+
+def _number(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def _positive(key: str, x, unit: str) -> float:
+    if not _number(x) or x <= 0:
+        raise ConfigError(f"{key}: must be a positive number ({unit}), got {x!r}")
+    return float(x)
+
+
+@dataclass(frozen=True)
+class CoilSpring:
+    """A cylindrical helical compression spring of round wire, cold coiled (EN 13906-1).
+
+    Parameters
+    ----------
+    wire_d : float
+        Wire diameter d (m).
+    coil_d : float
+        Mean coil diameter D (m); ``4 <= w = D/d <= 20``.
+    active_coils : float
+        Active coils n, ``n >= 2``.
+    material : str
+        A key of :data:`softclose.coil_spring.materials.MATERIALS`.
+    ends : str
+        ``"closed_ground"`` (default) or ``"closed"`` (not ground).
+
+    Raises
+    ------
+    softclose.errors.ConfigError
+        (a ValueError) in one line naming the key (``spring.wire_d``, ``spring.coil_d``,
+        ``spring.active_coils``, ``spring.material``, ``spring.ends``).
+    """
+
+    wire_d: float
+    coil_d: float
+    active_coils: float
+    material: str = DEFAULT_MATERIAL
+    ends: str = "closed_ground"
+
+    def __post_init__(self):
+        mat = get_material(self.material)
+        object.__setattr__(self, "material", mat.name)
+        en13906.validate(self.wire_d, self.coil_d, self.active_coils, self.ends)
+        mat.check_wire(self.wire_d)
+
+    @property
+    def mat(self) -> Material:
+        """The wire's :class:`~softclose.coil_spring.materials.Material`."""
+        return get_material(self.material)
+
+    @property
+    def index(self) -> float:
+        """w = D/d."""
+        return en13906.spring_index(self.wire_d, self.coil_d)
+
+    @property
+    def stress_correction(self) -> float:
+        """k = (w + 0.5)/(w - 0.75)."""
+        return en13906.stress_correction(self.index)
+
+    @property
+    def rate(self) -> float:
+        """R = G d^4 / (8 D^3 n) (N/m) at the reference temperature."""
+        return en13906.rate(self.mat.G, self.wire_d, self.coil_d, self.active_coils)
+
+    def rate_at(self, temperature_c: float, reference_c: float = DEFAULT_REFERENCE_C) -> float:
+        """R (1 - gamma_G (T - T_ref)) (N/m)."""
+        return self.rate * self.mat.g_factor(temperature_c, reference_c)
+
+    @property
+    def total_coils(self) -> float:
+        """n_t = n + 2."""
+        return en13906.total_coils(self.active_coils)
+
+    @property
+    def solid_length(self) -> float:
+        """L_c (m): n_t d (closed, ground) or (n_t + 1.5) d (closed)."""
+        return en13906.solid_length(self.active_coils, self.wire_d, self.ends)
+
+    @property
+    def min_gap_sum(self) -> float:
+        """S_a = 1.5 n (0.0015 D^2/d + 0.1 d) (m; the formula in mm)."""
+        return en13906.min_gap_sum(self.active_coils, self.wire_d, self.coil_d)
+
+    @property
+    def min_working_length(self) -> float:
+        """L_n = L_c + S_a (m): the shortest permissible working length."""
+        return self.solid_length + self.min_gap_sum
+
+    @property
+    def outer_d(self) -> float:
+        """D_e = D + d (m)."""
+        return self.coil_d + self.wire_d
+
+    @property
+    def inner_d(self) -> float:
+        """D_i = D - d (m)."""
+        return self.coil_d - self.wire_d
+
+    @property
+    def tensile_strength(self) -> float:
+        """R_m of the wire (Pa)."""
+        return self.mat.tensile_strength(self.wire_d)
+
+    @property
+    def natural_frequency(self) -> float:
+        """f_e = 3560 d/(n D^2) sqrt(G/rho) (Hz; d, D in mm, G in N/mm^2, rho in kg/dm^3)."""
+        m = self.mat
+        return en13906.natural_frequency(self.wire_d, self.coil_d, self.active_coils, m.G,
+                                         m.rho)
+
+    @property
+    def wire_length(self) -> float:
+        """pi D n_t (m)."""
+        return en13906.wire_length(self.coil_d, self.active_coils)
+
+    @property
+    def mass(self) -> float:
+        """rho (pi d^2/4) pi D n_t (kg)."""
+        return en13906.mass(self.wire_d, self.coil_d, self.active_coils, self.mat.rho)
+
+    def to_json(self) -> dict:
+        return {"material": self.material, "wire_d": self.wire_d, "coil_d": self.coil_d,
+                "active_coils": self.active_coils, "ends": self.ends}
+
+
+@dataclass(frozen=True)
+class Duty:
+    """What the lid asks of its compression spring (SI).
+
+    Parameters
+    ----------
+    rate : float
+        Required rate R (N/m) at the reference temperature.
+    free_length : float
+        L0 (m).
+    longest_length, shortest_length : float
+        L1 and L2 (m): the longest and shortest length the spring works at over the
+        stroke, over every operating temperature; ``L2 <= L1 <= L0``.
+    cycles : float
+        Design life N (strokes), default 1e5.
+    seating : float
+        Seating coefficient nu of the buckling check (default 1: both ends pinned).
+    temperatures_c : tuple of float
+        Operating temperatures (degC), default ``(23.0,)``.
+    reference_temperature_c : float
+        T_ref (degC) at which ``rate`` is given.
+
+    Raises
+    ------
+    softclose.errors.ConfigError
+        (a ValueError) in one line naming the field (``duty.rate``, ...).
+    """
+
+    rate: float
+    free_length: float
+    longest_length: float
+    shortest_length: float
+    cycles: float = DEFAULT_CYCLES
+    seating: float = DEFAULT_SEATING
+    temperatures_c: tuple = (DEFAULT_REFERENCE_C,)
+    reference_temperature_c: float = DEFAULT_REFERENCE_C
+
+    def __post_init__(self):
+        _positive("duty.rate", self.rate, "N/m")
+        L0 = _positive("duty.free_length", self.free_length, "m")
+        L1 = _positive("duty.longest_length", self.longest_length, "m")
+        L2 = _positive("duty.shortest_length", self.shortest_length, "m")
+        if L1 > L0:
+            raise ConfigError(f"duty.longest_length: L1 = {L1:.6g} m is longer than the free "
+                              f"length L0 = {L0:.6g} m (a compression spring would come loose)")
+        if L2 > L1:
+            raise ConfigError(f"duty.shortest_length: L2 = {L2:.6g} m is longer than the "
+                              f"longest working length L1 = {L1:.6g} m")
+        _positive("spring.cycles", self.cycles, "strokes")
+        _positive("spring.seating", self.seating, "the buckling seating coefficient nu")
+        temps = self.temperatures_c
+        if _number(temps):
+            temps = (temps,)
+        temps = tuple(temps) if isinstance(temps, (list, tuple)) else None
+        if not temps or not all(_number(t) and t > -273.15 for t in temps):
+            raise ConfigError(f"duty.temperatures_c: must be a non-empty list of degC above "
+                              f"-273.15, got {self.temperatures_c!r}")
+        object.__setattr__(self, "temperatures_c", tuple(float(t) for t in temps))
+        if not _number(self.reference_temperature_c) or self.reference_temperature_c <= -273.15:
+            raise ConfigError(f"duty.reference_temperature_c: must be degC above -273.15, "
+                              f"got {self.reference_temperature_c!r}")
+
+    def to_json(self) -> dict:
+        return {"rate": self.rate, "free_length": self.free_length,
+                "longest_length": self.longest_length,
+                "shortest_length": self.shortest_length, "cycles": self.cycles,
+                "seating": self.seating, "temperatures_c": list(self.temperatures_c),
+                "reference_temperature_c": self.reference_temperature_c}
+
+
+@dataclass(frozen=True)
+class Check:
+    """One check: ``value <relation> limit`` (``ok``), in ``unit``. ``limit`` None: no
+    limit applies (e.g. a spring that cannot buckle), and the check is met."""
+
+    name: str
+    value: float
+    limit: float | None
+    ok: bool
+    relation: str = "<="
+    unit: str = ""
+
+    @property
+    def ratio(self) -> float:
+        """How far the value is from its limit (> 1: failed), for ranking near misses."""
+        return 0.0 if self.limit is None else _ratio(self.value, self.limit, self.relation)
+
+    def to_json(self) -> dict:
+        return {"name": self.name, "value": self.value, "limit": self.limit, "ok": self.ok,
+                "relation": self.relation, "unit": self.unit}
+
+
+def _ratio(value, limit, relation) -> float:
+    a, b = (value, limit) if relation in ("<=", "<") else (limit, value)
+    if b > 0:
+        return a / b
+    return math.inf if a > b else 0.0
+
+
+def _check(name, value, limit, relation="<=", unit="") -> Check:
+    if limit is None:
+        ok = True
+    elif relation == "<=":
+        ok = value <= limit
+    elif relation == "<":
+        ok = value < limit
+    else:
+        ok = value >= limit
+    return Check(name, float(value), None if limit is None else float(limit), bool(ok),
+                 relation, unit)
+
+
+@dataclass(frozen=True, repr=False)
+class SpringCheck:
+    """A spring judged against its duty (:func:`check`): EN 13906-1 and EN 15800 values
+    in SI, and every check. ``ok``: all checks met; ``failed``: the names of those not.
+
+    Attributes
+    ----------
+    forces : dict
+        ``F1``, ``F2`` at L1 and L2, ``Fn`` at L_n, ``Fc`` at L_c (N), reference temperature.
+    stresses : dict
+        ``tau_k1``, ``tau_k2``, ``tau_kh`` (corrected, at the governing temperature),
+        ``tau_c`` (uncorrected at solid length), ``tau_c_allowed`` = 0.56 R_m,
+        ``tau_kh_allowed`` = the Goodman stroke at tau_k1 and ``cycles`` (Pa).
+    life : float
+        Cycles the stroke stress endures (1e7: 10^7 or more; 0: fewer than 10^3).
+    buckling : dict
+        ``s_k`` (m, None: never buckles), ``s_2`` (m), ``safe``.
+    temperatures : tuple
+        Per operating temperature: its rate and working forces.
+    """
+
+    spring: CoilSpring
+    duty: Duty
+    grade: int
+    max_outer_d: float | None
+    min_inner_d: float | None
+    rate: float
+    rate_deviation: float
+    forces: dict
+    stresses: dict
+    life: float
+    buckling: dict
+    natural_frequency: float
+    mass: float
+    tolerance: en15800.Tolerances
+    governing_temperature_c: float
+    temperatures: tuple
+    checks: tuple
+
+    @property
+    def ok(self) -> bool:
+        return all(c.ok for c in self.checks)
+
+    @property
+    def failed(self) -> tuple:
+        """Names of the checks not met."""
+        return tuple(c.name for c in self.checks if not c.ok)
+
+    def check_named(self, name: str) -> Check:
+        for c in self.checks:
+            if c.name == name:
+                return c
+        raise KeyError(name)
+
+    @property
+    def worst_ratio(self) -> float:
+        """The largest value/limit of the failed checks (0 when all are met)."""
+        return max((c.ratio for c in self.checks if not c.ok), default=0.0)
+
+    def spring_json(self) -> dict:
+        """SPEC §14's ``spring`` object (SI), then the details."""
+        s, d = self.spring, self.duty
+        return {
+            "material": s.material, "wire_d": s.wire_d, "coil_d": s.coil_d,
+            "outer_d": s.outer_d, "inner_d": s.inner_d, "active_coils": s.active_coils,
+            "total_coils": s.total_coils, "free_length": d.free_length,
+            "solid_length": s.solid_length, "min_working_length": s.min_working_length,
+            "rate": self.rate, "forces": dict(self.forces), "stresses": dict(self.stresses),
+            "life": self.life, "buckling": dict(self.buckling),
+            "natural_frequency": self.natural_frequency, "mass": self.mass,
+            "tolerance": {"grade": self.tolerance.grade, "force": dict(self.tolerance.force),
+                          "free_length": self.tolerance.free_length},
+            "ends": s.ends, "index": s.index, "stress_correction": s.stress_correction,
+            "tensile_strength": s.tensile_strength, "rate_required": d.rate,
+            "rate_deviation": self.rate_deviation,
+            "working_lengths": [d.longest_length, d.shortest_length],
+            "min_gap_sum": s.min_gap_sum, "wire_length": s.wire_length,
+            "cycles": d.cycles, "seating": d.seating,
+            "governing_temperature_c": self.governing_temperature_c,
+            "temperatures": [dict(t) for t in self.temperatures],
+            "ok": self.ok, "failed": list(self.failed)}
+
+    def to_json(self) -> dict:
+        """``{"spring": ..., "checks": [...], "candidates": [], "ok", "failed"}`` (SPEC §14)."""
+        return {"spring": self.spring_json(), "checks": [c.to_json() for c in self.checks],
+                "candidates": [], "ok": self.ok, "failed": list(self.failed)}
+
+    def to_frame(self):
+        """The checks, one row each: name, value, relation, limit, unit, ok."""
+        import pandas as pd
+        return pd.DataFrame([{"name": c.name, "value": c.value, "relation": c.relation,
+                              "limit": c.limit, "unit": c.unit, "ok": c.ok}
+                             for c in self.checks])
+
+    def __repr__(self) -> str:
+        s = self.spring
+        return (f"SpringCheck({s.material}, d={s.wire_d * 1e3:g} mm, "
+                f"D={s.coil_d * 1e3:g} mm, n={s.active_coils:g}: "
+                f"{'ok' if self.ok else 'fails ' + ', '.join(self.failed)})")
+
+
+def _space(key, x):
+    if x is None:
+        return None
+    return _positive(key, x, "m")
+
+
+def check(spring: CoilSpring, duty: Duty, *, grade: int = en15800.DEFAULT_GRADE,
+          max_outer_d: float | None = None, min_inner_d: float | None = None) -> SpringCheck:
+    """Judge ``spring`` against ``duty`` by EN 13906-1, with its EN 15800 tolerances.
+
+    Parameters
+    ----------
+    spring : CoilSpring
+    duty : Duty
+    grade : int
+        EN 15800 grade 1, 2 or 3.
+    max_outer_d, min_inner_d : float, optional
+        The space (m): the outer diameter D_e = D + d may not exceed ``max_outer_d``, the
+        inner diameter D_i = D - d may not fall below ``min_inner_d`` (e.g. a guide rod).
+
+    Returns
+    -------
+    SpringCheck
+        Every value and check (see the module docstring for the checks).
+
+    Notes
+    -----
+    With s = L0 - L the deflection: F = R s; tau = 8 F D / (pi d^3);
+    tau_k = k tau, k = (w + 0.5)/(w - 0.75); tau_c at s_c = L0 - L_c; the stroke stress
+    tau_kh = tau_k2 - tau_k1 against the Goodman line of the wire at ``duty.cycles``;
+    buckling s_K with nu = ``duty.seating`` against s_2 = L0 - L2.
+    """
+    if not isinstance(spring, CoilSpring):
+        raise ConfigError(f"spring: expected a CoilSpring, got {type(spring).__name__}")
+    if not isinstance(duty, Duty):
+        raise ConfigError(f"duty: expected a Duty, got {type(duty).__name__}")
+    en15800.quality_factor(grade)
+    max_outer_d = _space("spring.max_outer_d", max_outer_d)
+    min_inner_d = _space("spring.min_inner_d", min_inner_d)
+    return _evaluate(spring, duty, grade, max_outer_d, min_inner_d)
+
+
+def _evaluate(spring, duty, grade, max_outer_d, min_inner_d) -> SpringCheck:
+    s, m = spring, spring.mat
+    d, D, n = s.wire_d, s.coil_d, s.active_coils
+    L0, L1, L2 = duty.free_length, duty.longest_length, duty.shortest_length
+    R = s.rate
+    Lc, Ln = s.solid_length, s.min_working_length
+    s1, s2, sn, sc = L0 - L1, L0 - L2, L0 - Ln, L0 - Lc
+    forces = {"F1": R * s1, "F2": R * s2, "Fn": R * sn, "Fc": R * sc}
+    k = s.stress_correction
+    per_newton = en13906.shear_stress(1.0, d, D)          # tau per N of force
+    Rm = s.tensile_strength
+    # working stresses at the temperature where G (and the rate) is largest
+    t_ref = duty.reference_temperature_c
+    factors = {t: m.g_factor(t, t_ref) for t in duty.temperatures_c}
+    t_gov = max(factors, key=lambda t: (factors[t], -t))
+    f_gov = factors[t_gov]
+    tau_k1 = k * per_newton * R * f_gov * s1
+    tau_k2 = k * per_newton * R * f_gov * s2
+    tau_kh = tau_k2 - tau_k1
+    tau_c = per_newton * forces["Fc"]
+    tau_c_allowed = en13906.static_limit(Rm)
+    goodman = m.goodman(d)
+    tau_kh_allowed = goodman.permissible_stroke(tau_k1, duty.cycles)
+    life = goodman.life(tau_k1, tau_kh)
+    s_k = en13906.buckling_deflection(L0, D, m.G, m.E, duty.seating)
+    buckling = {"s_k": s_k, "s_2": s2, "safe": s_k is None or s2 < s_k}
+    temps = tuple({"temperature_c": t, "rate": R * f, "F1": R * f * s1, "F2": R * f * s2}
+                  for t, f in factors.items())
+    tol = en15800.spring_tolerances(d, D, n, R, forces["F1"], forces["F2"], grade)
+    dev = R / duty.rate - 1.0
+    checks = [
+        _check("rate", abs(dev), COIL_ROUNDING / 2 / n, "<=", "1"),
+        _check("min_working_length", Ln, L2, "<=", "m"),
+        _check("static", tau_c, tau_c_allowed, "<=", "Pa"),
+        _check("fatigue", tau_kh, tau_kh_allowed, "<=", "Pa"),
+        _check("buckling", s2, s_k, "<", "m"),
+    ]
+    if max_outer_d is not None:
+        checks.append(_check("outer_d", s.outer_d, max_outer_d, "<=", "m"))
+    if min_inner_d is not None:
+        checks.append(_check("inner_d", s.inner_d, min_inner_d, ">=", "m"))
+    checks.append(_check("temperature_min", min(duty.temperatures_c), m.t_min, ">=", "degC"))
+    checks.append(_check("temperature_max", max(duty.temperatures_c), m.t_max, "<=", "degC"))
+    return SpringCheck(
+        spring=s, duty=duty, grade=int(grade), max_outer_d=max_outer_d,
+        min_inner_d=min_inner_d, rate=R, rate_deviation=dev, forces=forces,
+        stresses={"tau_k1": tau_k1, "tau_k2": tau_k2, "tau_kh": tau_kh, "tau_c": tau_c,
+                  "tau_c_allowed": tau_c_allowed, "tau_kh_allowed": tau_kh_allowed},
+        life=life, buckling=buckling, natural_frequency=s.natural_frequency, mass=s.mass,
+        tolerance=tol, governing_temperature_c=t_gov, temperatures=temps,
+        checks=tuple(checks))

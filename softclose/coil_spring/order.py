@@ -1,0 +1,96 @@
+"""The coil spring of a config's design, made to order (SPEC §14).
+
+The lid asks of its compression spring (between E on the lid and the anchor D) a rate
+``design.spring_k``, a free length, and the lengths it works at over the stroke: the longest
+and shortest |D - E| as the lid turns between ``stroke.theta_closed_deg`` and
+``stroke.theta0_deg`` (purely kinematic, so the same at every operating temperature). With a
+preload F0 the coil spring's free length is ``spring_rest_length + F0 / spring_k`` (its force
+at the model's l0 is then F0). :func:`spring_duty` states that duty
+(:class:`softclose.coil_spring.Duty`); :func:`spring_order` checks the ``[spring]`` given
+(wire, coil diameter and active coils all set) or designs one
+(:func:`softclose.coil_spring.design`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..model.lid import shared_model
+from . import PREFERRED_WIRE_D, CoilSpring, Duty, check, design
+
+#: angles of the grid on which the spring's extremes over the stroke are bracketed
+GRID = 801
+
+
+def working_lengths(cfg) -> tuple[float, float]:
+    """(longest, shortest) length |D - E| of the spring (m) over theta in
+    [theta_closed, theta0]: the best of a grid of angles, refined by a bounded scalar search
+    in the cells about it."""
+    from scipy.optimize import minimize_scalar
+
+    q = shared_model(cfg).coordinate_fns["spring"]
+    a, b = cfg.stroke.theta_closed, cfg.stroke.theta0
+    grid = np.linspace(a, b, GRID)
+    lv = np.asarray(q.map(GRID)(grid)[0], float).ravel()
+    out = []
+    for sign in (-1.0, 1.0):                      # the longest, then the shortest
+        i = int(np.argmin(sign * lv))
+        lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, GRID - 1)]
+        best = float(lv[i])
+        r = minimize_scalar(lambda t: sign * float(q(t)[0]), bounds=(lo, hi),
+                            method="bounded", options={"xatol": 1e-12})
+        if r.success and sign * float(r.fun) < sign * best:
+            best = sign * float(r.fun)
+        out.append(best)
+    return out[0], out[1]
+
+
+def spring_duty(cfg) -> Duty:
+    """What the config's lid asks of its compression spring (see the module docstring).
+
+    Raises
+    ------
+    softclose.errors.ConfigError
+        In one line naming the key: the design's spring is not a compression spring
+        (``design.spring_kind``), has no rate (``design.spring_k``), or is longer than its
+        free length somewhere over the stroke (``design.spring_rest_length``).
+    """
+    d = cfg.design
+    if d.spring_kind != "compression":
+        raise ConfigError(f"design.spring_kind: softclose spring makes a compression spring to "
+                          f"order; the design's spring is {d.spring_kind!r} (set "
+                          "design.spring_kind = \"compression\")")
+    if not d.spring_k > 0:
+        raise ConfigError("design.spring_k: the compression spring has no rate (0 N/m); a "
+                          "coil spring to order needs a rate above 0")
+    free = d.spring_rest_length + d.spring_preload / d.spring_k
+    longest, shortest = working_lengths(cfg)
+    if longest > free * (1 + 1e-12):
+        raise ConfigError(f"design.spring_rest_length: the compression spring's free length "
+                          f"{free * 1e3:.4g} mm is shorter than its longest length over the "
+                          f"stroke, {longest * 1e3:.4g} mm: it would come loose (a longer "
+                          "free length or a preload keeps it in place)")
+    return Duty(rate=d.spring_k, free_length=free, longest_length=min(longest, free),
+                shortest_length=shortest, cycles=cfg.spring.cycles,
+                seating=cfg.spring.seating)
+
+
+def spring_order(cfg, duty: Duty | None = None):
+    """The ``[spring]`` of ``cfg`` checked against its duty (a
+    :class:`~softclose.coil_spring.SpringCheck`, when ``wire_d``, ``coil_d`` and
+    ``active_coils`` are all given), else designed (a
+    :class:`~softclose.coil_spring.SpringDesign`: the given ``wire_d`` or ``coil_d`` held,
+    the rest chosen)."""
+    duty = spring_duty(cfg) if duty is None else duty
+    sp = cfg.spring
+    space = dict(max_outer_d=sp.max_outer_d, min_inner_d=sp.min_inner_d, grade=sp.grade)
+    if None not in (sp.wire_d, sp.coil_d, sp.active_coils):
+        spring = CoilSpring(sp.wire_d, sp.coil_d, sp.active_coils, sp.material, sp.ends)
+        return check(spring, duty, **space)
+    wires = PREFERRED_WIRE_D if sp.wire_d is None else (sp.wire_d,)
+    coils = None if sp.coil_d is None else (sp.coil_d,)
+    return design(duty, sp.material, ends=sp.ends, wires=wires, coil_ds=coils, **space)
+
+
+__all__ = ["working_lengths", "spring_duty", "spring_order", "GRID"]
