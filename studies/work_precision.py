@@ -22,7 +22,7 @@ Writes to studies/out/work_precision/:
   bench.md            the tables as Markdown (docs/performance.md quotes them)
   bench.json          everything above, machine, date and commit included
 
-Usage: python studies/work_precision.py [--fast] [--no-optimiser] [--no-later] [--out DIR]
+Usage: python studies/work_precision.py [--fast] [--no-optimiser] [--no-features] [--out DIR]
 """
 
 from __future__ import annotations
@@ -42,14 +42,14 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--fast", action="store_true", help="fewer steps, designs and repeats")
     ap.add_argument("--no-optimiser", action="store_true", help="skip the optimiser section")
-    ap.add_argument("--no-later", action="store_true",
+    ap.add_argument("--no-features", action="store_true",
                     help="skip the sweep / robust / yield / Sobol speed entries")
     ap.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
     a = ap.parse_args(argv)
     a.out.mkdir(parents=True, exist_ok=True)
     log = lambda *m: print(*m, flush=True)  # noqa: E731
     res = bench.run(softclose.default_config(), quick=a.fast, log=log,
-                    optimiser=not a.no_optimiser, later=not a.no_later)
+                    optimiser=not a.no_optimiser, features=not a.no_features)
     files = write_files(res, a.out)
     print(default_text(res.default))
     if res.optimiser_note:

@@ -121,7 +121,7 @@ def test_work_precision_study(tmp_path):
     from softclose.simulation.simulator import Simulator
     script = STUDIES / "work_precision.py"
     t0 = time.time()
-    p = run(script, "--fast", "--no-later", "--out", str(tmp_path))
+    p = run(script, "--fast", "--no-features", "--out", str(tmp_path))
     assert p.returncode == 0, p.stderr[-2000:]
     files = check_files(script, tmp_path, t0)
     rep = json.loads(files["bench.json"].read_text())
