@@ -69,6 +69,8 @@ class BenchResult(Displayed):
     elapsed: float
     config: dict = field(default_factory=dict)
     load: tuple = ()  # 1-minute load average at the start and at the end of the run
+    #: the NLP structures of the README's commands (:mod:`softclose.bench.structures`)
+    structures: tuple = ()
 
     @property
     def default(self) -> dict:
@@ -115,12 +117,16 @@ class BenchResult(Displayed):
                          "work_precision": self.work_precision.to_json(),
                          "speed": list(self.speed), "optimiser": list(self.optimiser),
                          "optimiser_note": self.optimiser_note, "elapsed": self.elapsed,
-                         "load": list(self.load), "config": self.config})
+                         "load": list(self.load), "config": self.config,
+                         "structures": list(self.structures)})
 
 
 def run(cfg: Config, quick: bool = False, log=None, cli: bool = True,
-        optimiser: bool = True, features: bool = True) -> BenchResult:
-    """The whole benchmark: work precision, speed, optimiser (see the module docstring)."""
+        optimiser: bool = True, features: bool = True, structures: bool = False
+        ) -> BenchResult:
+    """The whole benchmark: work precision, speed, optimiser (see the module docstring);
+    with ``structures``, the NLP structures of the README's commands too (their size, build
+    and compile times: minutes)."""
     log = log or (lambda *a: None)
     t0 = time.perf_counter()
     load0 = _load()
@@ -131,6 +137,11 @@ def run(cfg: Config, quick: bool = False, log=None, cli: bool = True,
     log("optimiser ...")
     opt, note = optimiser_study(cfg, quick=quick, log=log) if optimiser else \
         ([], "optimiser section not run")
+    st = ()
+    if structures:
+        log("NLP structures ...")
+        from .structures import structure_rows
+        st = tuple(structure_rows(cfg, log=log))
     return BenchResult(machine=machine(),
                        date=datetime.datetime.now().astimezone().isoformat(timespec="seconds"),
                        commit=commit(), quick=quick, work_precision=wp, speed=tuple(sp),
@@ -140,7 +151,7 @@ def run(cfg: Config, quick: bool = False, log=None, cli: bool = True,
                                "step": cfg.simulate.step,
                                "nodes": cfg.optimise.nodes,
                                "substeps": cfg.optimise.substeps},
-                       load=(load0, _load()))
+                       load=(load0, _load()), structures=st)
 
 
 def _time(t) -> str:

@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 from ..robust import nlp as rn, optimise_robust
 from ..optimiser import cache as oc, optimise
+from ..optimiser.compiled import CFLAGS, SCENARIO_CFLAGS
 
 #: the commands whose structures are measured: (name, optimise options, --free pairs)
 COMMANDS = (
@@ -42,7 +43,7 @@ def structures_of(cfg, robust: bool, free: tuple) -> list:
         [("scenarios", s) for s in rn._STRUCTURES.values()]
 
 
-def measure(structure, compile_flags: tuple | None = ("-O1",)) -> dict:
+def measure(structure, compile_flags: tuple | None = CFLAGS) -> dict:
     """Size and cost of one structure: variables, constraints, build time (s), generated C
     (MB, s) and, with ``compile_flags``, the compile time (s)."""
     solver = structure.solver
@@ -63,16 +64,17 @@ def measure(structure, compile_flags: tuple | None = ("-O1",)) -> dict:
         if compile_flags:
             cc = os.environ.get("CC", "cc")
             t = time.perf_counter()
-            subprocess.run([cc, *compile_flags, "-shared", "-fPIC", str(path), "-o",
-                            str(path.with_suffix(".so"))], check=True, capture_output=True)
+            subprocess.run([cc, *compile_flags, str(path), "-o", str(path.with_suffix(".so")),
+                            "-lm"], check=True, capture_output=True, stdin=subprocess.DEVNULL)
             row["compile_s"] = time.perf_counter() - t
-            row["flags"] = " ".join(compile_flags)
+            row["flags"] = next((f for f in compile_flags if f.startswith("-O")), "")
     return row
 
 
-def structure_rows(cfg, compile_flags: tuple | None = ("-O1",), log=None) -> list[dict]:
+def structure_rows(cfg, compile: bool = True, log=None) -> list[dict]:
     """One row per structure of :data:`COMMANDS` on ``cfg`` (a structure two commands
-    share is measured once)."""
+    share is measured once); with ``compile``, its C compiled with the flags ``softclose
+    prepare`` uses (the nominal NLP's, the scenario NLP's)."""
     log = log or (lambda *a: None)
     rows, seen = [], set()
     for name, robust, free in COMMANDS:
@@ -81,7 +83,8 @@ def structure_rows(cfg, compile_flags: tuple | None = ("-O1",), log=None) -> lis
             if key in seen:
                 continue
             seen.add(key)
-            row = {"command": name, "nlp": kind, **measure(st, compile_flags)}
+            flags = (CFLAGS if kind == "nominal" else SCENARIO_CFLAGS) if compile else None
+            row = {"command": name, "nlp": kind, **measure(st, flags)}
             rows.append(row)
             log(f"  {name} ({kind}): {row['c_mb']:.2f} MB of C"
                 + (f", {row['compile_s']:.1f} s to compile" if "compile_s" in row else ""))

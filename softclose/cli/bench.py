@@ -32,6 +32,9 @@ def register(sub) -> None:
     add_out(p, what="write the tables (CSV, Markdown, JSON) and figures to this folder")
     p.add_argument("--quick", action="store_true",
                    help="fewer designs, steps and repeats (cannot confirm the default step)")
+    p.add_argument("--structures", action="store_true",
+                   help="also measure the NLP structures of the README's commands: variables, "
+                        "parameters, generated C and the time to build and compile it (minutes)")
     p.set_defaults(run=run)
 
 
@@ -41,7 +44,7 @@ def run(cfg, args) -> Outcome:
     # progress on a terminal only: a failing run's stderr is then its one-line error
     log = (lambda *a: print(*a, file=sys.stderr, flush=True)) if interactive(args) else \
         (lambda *a: None)
-    res = bench.run(cfg, quick=args.quick, log=log)
+    res = bench.run(cfg, quick=args.quick, log=log, structures=args.structures)
     files = write_files(res, out) if out is not None else []
     payload = res.to_json()
     payload["files"] = [str(f) for f in files]
@@ -200,6 +203,20 @@ def speed_markdown(rows) -> str:
     return "\n".join(out)
 
 
+def structures_markdown(rows) -> str:
+    """The NLP structures' table: one row per structure of the README's commands."""
+    head = ("| command | NLP | variables | constraints | parameters | build | C | generate "
+            "| compile |\n|---|---|---:|---:|---:|---:|---:|---:|---:|")
+    lines = [head]
+    for r in rows:
+        comp = (f"{r['compile_s']:.1f} s ({r['flags']})" if r.get("compile_s") is not None
+                else "—")
+        lines.append(f"| `{r['command']}` | {r['nlp']} | {r['variables']} | "
+                     f"{r['constraints']} | {r['parameters']} | {_fmt(r['build_s'], '.2f')} s | "
+                     f"{r['c_mb']:.2f} MB | {r['generate_s']:.1f} s | {comp} |")
+    return "\n".join(lines)
+
+
 def optimiser_markdown(rows, note="") -> str:
     """The optimiser table (N, sub-steps, objective error, solve time, design)."""
     if not rows:
@@ -240,6 +257,8 @@ def report_text(res) -> str:
         "C kernel):", work_precision_markdown(res.work_precision), "",
         "speed (median of repeats):", speed_markdown(res.speed), "",
         "optimiser:", optimiser_markdown(res.optimiser, res.optimiser_note), "",
+        *(["NLP structures:", structures_markdown(res.structures), ""] if res.structures
+          else []),
         default_text(res.default)])
 
 
@@ -249,7 +268,9 @@ def report_markdown(res) -> str:
             f"## Default step\n\n{default_text(res.default)}\n\n"
             f"## Work precision\n\n{work_precision_markdown(res.work_precision)}\n\n"
             f"## Speed\n\n{speed_markdown(res.speed)}\n\n"
-            f"## Optimiser\n\n{optimiser_markdown(res.optimiser, res.optimiser_note)}\n")
+            f"## Optimiser\n\n{optimiser_markdown(res.optimiser, res.optimiser_note)}\n"
+            + (f"\n## NLP structures\n\n{structures_markdown(res.structures)}\n"
+               if res.structures else ""))
 
 
 # -- files ---------------------------------------------------------------------------------
@@ -292,6 +313,8 @@ def write_files(res, out: Path) -> list[Path]:
     files.append(out / "speed.json")
     if res.optimiser:
         files.append(write_csv(res.optimiser, out / "optimiser.csv"))
+    if res.structures:
+        files.append(write_csv(list(res.structures), out / "structures.csv"))
     (out / "bench.md").write_text(report_markdown(res))
     files.append(out / "bench.md")
     files.append(save(plot_work_precision(res.work_precision), out / "work_precision.png"))
@@ -308,4 +331,5 @@ def write_files(res, out: Path) -> list[Path]:
 
 
 __all__ = ["register", "run", "write_files", "write_csv", "report_text", "report_markdown",
-           "default_text", "work_precision_markdown", "speed_markdown", "optimiser_markdown"]
+           "default_text", "work_precision_markdown", "speed_markdown", "optimiser_markdown",
+           "structures_markdown"]

@@ -1,0 +1,56 @@
+"""The benchmark's NLP-structure rows (`softclose bench --structures`): what an NLP keyed by
+its structure carries, and the recorded run the performance page quotes."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from softclose.bench.structures import COMMANDS, measure, structures_of
+from softclose.cli.bench import structures_markdown
+from softclose.config import default_config
+from softclose.optimiser import cache as oc
+from softclose.optimiser.nlp import NLP_PARAMS
+
+ROOT = Path(__file__).resolve().parents[1]
+RECORD = json.loads((ROOT / "docs" / "bench_structures.json").read_text())
+PERFORMANCE = (ROOT / "docs" / "performance.md").read_text()
+
+
+def test_the_default_structure_carries_the_lid_as_parameters():
+    """The default optimiser builds one structure; its parameters are the NLP's scalars, the
+    time grid of N intervals and the lid vector (the numbers that used to be constants); its
+    C is generated without compiling."""
+    cfg = default_config()
+    built = structures_of(cfg, False, ())
+    assert [kind for kind, _ in built] == ["nominal"]
+    row = measure(built[0][1], None)
+    nlp = next(iter(oc._NLPS.values()))
+    N = cfg.optimise.nodes
+    assert row["parameters"] == len(NLP_PARAMS) + N + len(nlp.lid_vector)
+    assert row["variables"] == nlp.structure.solver.size1_in(0)
+    assert row["constraints"] == nlp.structure.solver.size1_out(2)
+    assert row["c_mb"] > 1.0 and "compile_s" not in row
+
+
+def test_the_record_measured_every_command_and_compiled_each_structure():
+    commands = {name for name, _, _ in COMMANDS}
+    rows = RECORD["rows"]
+    assert {r["command"] for r in rows} <= commands and "optimise" in {r["command"] for r in rows}
+    assert all(r["compile_s"] > 0 and r["c_mb"] > 0 for r in rows)
+    assert {r["flags"] for r in rows if r["nlp"] == "nominal"} == {"-O1"}
+    assert {r["flags"] for r in rows if r["nlp"] == "scenarios"} <= {"-O0"}
+
+
+def test_the_performance_page_shows_the_record():
+    block = PERFORMANCE.split("<!-- structures:begin -->")[1].split("<!-- structures:end -->")[0]
+    assert block.strip() == structures_markdown(RECORD["rows"]).strip()
+
+
+@pytest.mark.parametrize("rows", [RECORD["rows"][:1]])
+def test_the_table_has_a_line_per_structure(rows):
+    table = structures_markdown(rows).splitlines()
+    assert len(table) == 2 + len(rows)
+    assert f"{rows[0]['c_mb']:.2f} MB" in table[2] and f"`{rows[0]['command']}`" in table[2]
