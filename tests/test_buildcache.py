@@ -62,6 +62,7 @@ def _unwritable(tmp_path: Path) -> Path:
     return blocker / "home"
 
 
+@pytest.mark.slow      # compiles the kernel from its source (~15 s)
 def test_a_cache_folder_that_cannot_be_written_works_uncached_with_one_note(tmp_path):
     home = _unwritable(tmp_path)
     for env in (_env(HOME=str(home)), _env(SOFTCLOSE_CACHE=str(home / "cache"))):
@@ -80,6 +81,7 @@ def test_a_cache_folder_that_cannot_be_written_works_uncached_with_one_note(tmp_
     assert r.stdout.strip()
 
 
+@pytest.mark.slow      # compiles the kernel from its source (~15 s)
 def test_a_corrupt_kernel_is_compiled_again(tmp_path):
     cache = tmp_path / "cache"
     env = _env(SOFTCLOSE_CACHE=str(cache))

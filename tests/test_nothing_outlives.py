@@ -60,6 +60,7 @@ def _marked(mark: str, folder: str) -> list[str]:
     return found
 
 
+@pytest.mark.slow      # every command in a fresh process (~1 min): the README's full run
 def test_no_process_outlives_a_command(tmp_path):
     cache = tmp_path / "cache"
     mark = f"softclose-test-{uuid.uuid4().hex}"
