@@ -2,4 +2,5 @@
 from setuptools import Extension, setup
 
 setup(ext_modules=[Extension("softclose.simulation.kernel._kernel", ["softclose/simulation/kernel/_kernel.c"],
+                             depends=["softclose/simulation/kernel/_layout.h"],
                              extra_compile_args=["-O3"])])

@@ -28,7 +28,7 @@ from ..problem import METRIC_KEYS, word_code, WORD_PARAMS, word_text
 from ..jsonio import jsonable
 from ..config import to_dict
 from ..version import __version__
-from ..simulation.kernel.library import SOURCE
+from ..simulation.kernel.library import source_bytes
 
 MANIFEST = "manifest.json"
 CSV = "sweep.csv"
@@ -41,7 +41,7 @@ LAYOUT = 1
 def kernel_hash() -> str | None:
     """Hash of the stroke kernel's source (a changed kernel may change the numbers)."""
     try:
-        return hashlib.sha256(SOURCE.read_bytes()).hexdigest()[:16]
+        return hashlib.sha256(source_bytes()).hexdigest()[:16]
     except OSError:
         return None
 

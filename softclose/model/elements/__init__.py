@@ -6,11 +6,14 @@ Every force on the linkage is one :class:`~softclose.model.elements.base.Element
 reactions, the statics (holding moment, release check, equilibria), the CasADi model, the
 coefficient table and the kernel's parameter rows, the adaptive reference and the
 optimisers' dynamics all sum over this list; the config keys of each element come from it
-too. The kernel states the same laws once, in the element section of ``_kernel.c``, and
-``softclose.simulation.kernel.binding`` checks at load time that both sides agree on the columns and rows.
+too. The kernel states the same laws once, in the element section of ``_kernel.c``; its
+design-row columns come from this registry (the generated header ``_layout.h``), and the
+kernel's library is checked at load time against the same layout.
 
 To add an element: write its unit (a subclass with its keys, parameters, coordinate and law),
-add it to :data:`ELEMENTS`, add its law to ``_kernel.c``'s element section, and test it.
+add it to :data:`ELEMENTS`, regenerate the kernel's layout header (``python -m
+softclose.simulation.kernel --write``), add its law to ``_kernel.c``'s element section, and
+test it.
 """
 
 from __future__ import annotations

@@ -47,38 +47,17 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define KERNEL_ABI 6 /* bumped when the exported signatures or outputs change */
-#define NC 8 /* M, dM, Vg, dVg, l, dl, dd, tau */
-enum { C_M, C_DM, C_VG, C_DVG, C_L, C_DL, C_DD, C_TAU };
-#define NMASS 4 /* M, dM, Vg, dVg: the coefficients that depend on the lid's mass */
+#include "_layout.h" /* the layout: generated from the element registry */
+
 /* the table of element columns added since the seed (tabulated when a row needs them): a
  * row of NX values per power; which element's column is which: THE MACHINE ELEMENTS */
-#define NX 4
 #define SMAX 4
-/* every layout constant the Python side shares, checked there when the kernel is loaded */
-static const char LAYOUT[] =
-    "abi=6;meta=ncell,lo,h,m0,rotary_at_pivot;cc=M,dM,Vg,dVg,l,dl,dd,tau;mass=M,dM,Vg,dVg;"
-    "xcc=psi,dpsi,dpr2,-;pose=Ax,Ay,dAx,dAy,cos,sin,-,-;"
-    "row=spring_k,spring_rest_length,damper_c,rotary_damper_c,spring_kind,spring_preload,"
-    "torsion_k,torsion_free_angle,damper_one_way,friction_torque,end_damper_c,end_damper_angle,"
-    "energy_tol,lid_mass,"
-    "spring_anchor_x,spring_anchor_y,lid_e_x,lid_e_y,dashpot_anchor_x,dashpot_anchor_y,"
-    "dashpot_lid_x,dashpot_lid_y;out=status,closing_time,impact_theta_dot,impact_tip_speed,"
-    "peak_tip_speed,min_spring_length,max_spring_length,steps,energy_rise,theta_min,"
-    "theta_dot_max,theta_max,stop_reason,stop_theta,stop_time,engage_time,engage_theta_dot;"
-    "nrng=18";
 
-/* outputs per design */
-enum { O_STATUS, O_TIME, O_THD, O_TIP, O_PEAK, O_LMIN, O_LMAX, O_NSTEP, O_EDRIFT, O_THMIN,
-       O_THDMAX, /* max of theta' over the nodes after release (> 0: the lid moved up) */
-       O_THMAX,  /* highest angle of the stroke (above theta0 when a spring pushes it open) */
-       O_REASON, /* why it does not close: 0 undecided/closed, 1 barrier, 2 held open */
-       O_STHETA, /* the barrier top (1) or the equilibrium (2), rad */
-       O_STIME,  /* time at which integration stopped (event, early exit, t_max, failure) */
-       O_ETIME,  /* the end damper's first engagement moving down (s; 0 when released below
-                  * its angle; NaN: never, or no end damper) */
-       O_ETHD,   /* theta' there (rad/s; 0 when released engaged) */
-       NOUT };
+/* the outputs per design: their enum (O_*) is in _layout.h; O_STOP_REASON is why a lid
+ * stays open (R_* below), O_STOP_THETA the barrier top, the equilibrium or the angle where
+ * friction held it, O_STOP_TIME when integration stopped (event, early exit, t_max,
+ * failure), O_ENGAGE_TIME / O_ENGAGE_THETA_DOT the end damper's first engagement moving
+ * down (0 when released below its angle; NaN: never, or no end damper) */
 /* status codes */
 enum { S_CLOSED = 0, S_OPEN = 1, S_UNSTABLE = 2, S_RANGE = 3, S_NONFINITE = 4, S_NEWTON = 5 };
 /* stop reasons */
@@ -108,8 +87,7 @@ enum { R_TAU = 0, R_M = 2, R_VG = 4, R_L = 6, R_DVG = 8, R_DL = 10, R_MID = 12, 
 #define CQ(base, i, e, j) ((base)[((size_t)(i) * 4 + (e)) * NC + (j)])
 /* the pose table's columns (PER-ROW ATTACHMENT POINTS): the crank pin A, its slope A', cos
  * and sin of theta; NPOSE per power (two vectors of four), the last two zero */
-enum { P_AX, P_AY, P_DAX, P_DAY, P_COS, P_SIN, P_USED };
-#define NPOSE 8
+/* (P_*, NPOSE: _layout.h) */
 #define XQ(base, i, e, j) ((base)[((size_t)(i) * 4 + (e)) * NX + (j)])
 
 /* lanes of the stroke loop are advanced as NG SIMD vectors of VW (see the stroke loop) */
@@ -175,16 +153,14 @@ typedef struct {
  * rotary damper) are summed by ELEM_SLOPE ...; those of the extra table (the torsion spring)
  * by ELEM_SLOPE_X ..., added where a row has them (Par.x; Par4.anyx for a group). */
 
-/* the design-row columns: the elements' parameters (in the registry's order), e_tol, m_lid */
-enum { D_K, D_L0, D_C, D_CR, D_KIND, D_F0, D_KT, D_PSI0, D_OW, D_TF, D_EC, D_EA, D_ETOL,
-       D_MLID, NDESIGN };
+/* the design-row columns (D_*, NDESIGN): _layout.h, in the registry's order */
 /* then, optionally, the row's own attachment points (PER-ROW ATTACHMENT POINTS, below): the
  * spring's anchor D (world) and lid point E (lid frame, from A), the dashpot's anchor F
  * (world) and lid point H (lid frame), x and y each; NaN: the table's own */
 enum { D_PT = NDESIGN, NPT = 8 };
 /* the extra table's columns: the torsion spring's psi and dpsi at its pivot, the rotary
  * damper's psi'^2 at its pivot */
-enum { X_PSI, X_DPSI, X_DR2 };
+/* (X_PSI, X_DPSI, X_DPR2: _layout.h) */
 
 /* one row's element parameters (SI); F: the spring's signed preload s F0; cr / crp: the
  * rotary damper at the lid / at a pivot (the table says which: rotary_at_pivot); ow: the
@@ -211,14 +187,14 @@ typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs, cen, the; v4l ow, eg
                                                           * points; any of them */ } Par4;
 /* read a design row d of table T into p (not dm) */
 #define ELEM_READ(p, d, T) do { \
-        (p)->k = (d)[D_K]; (p)->l0 = (d)[D_L0]; (p)->c = (d)[D_C]; (p)->cr = (d)[D_CR]; \
+        (p)->k = (d)[D_SPRING_K]; (p)->l0 = (d)[D_SPRING_REST_LENGTH]; (p)->c = (d)[D_DAMPER_C]; (p)->cr = (d)[D_ROTARY_DAMPER_C]; \
         (p)->crp = 0.0; \
         if ((T)->rot_pivot) { (p)->crp = (p)->cr; (p)->cr = 0.0; } \
-        (p)->F = (d)[D_KIND] * (d)[D_F0]; \
-        (p)->kt = (d)[D_KT]; (p)->psi0 = (d)[D_PSI0]; (p)->ow = (d)[D_OW] != 0.0; \
-        (p)->Tf = (d)[D_TF]; (p)->fs = 0.0; \
+        (p)->F = (d)[D_SPRING_KIND] * (d)[D_SPRING_PRELOAD]; \
+        (p)->kt = (d)[D_TORSION_K]; (p)->psi0 = (d)[D_TORSION_FREE_ANGLE]; (p)->ow = (d)[D_DAMPER_ONE_WAY] != 0.0; \
+        (p)->Tf = (d)[D_FRICTION_TORQUE]; (p)->fs = 0.0; \
         (p)->x = (p)->kt != 0.0 || (p)->crp != 0.0; \
-        (p)->ce = (d)[D_EC]; (p)->the = (d)[D_EA]; (p)->e = 0; (p)->eg = 0; (p)->cen = 0.0; \
+        (p)->ce = (d)[D_END_DAMPER_C]; (p)->the = (d)[D_END_DAMPER_ANGLE]; (p)->e = 0; (p)->eg = 0; (p)->cen = 0.0; \
     } while (0)
 /* the end damper's state at the release from th0 (stroke ending at thc): it can engage if
  * c_e != 0 and theta_e lies above the rim (else it never acts: the lid closes first, as in
@@ -271,7 +247,7 @@ typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs, cen, the; v4l ow, eg
 /* the damping on theta': the dashpot and the rotary damper at the lid (then + the rotary
  * damper at a pivot, from x[]); a one-way row's damping is 0 while th' > 0 */
 #define ELEM_DAMPING(P, cv) ((P)->c * (cv)[C_DD] + (P)->cr)
-#define ELEM_DAMPING_X(P, x) ((P)->crp * (x)[X_DR2])
+#define ELEM_DAMPING_X(P, x) ((P)->crp * (x)[X_DPR2])
 /* the end damper's damping now (0 unless the lane is engaged): added after the others, where
  * a row has one (Par.e; Par4.anye for a group) */
 #define ELEM_DAMPING_E(P) ((P)->cen)
@@ -285,7 +261,7 @@ typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs, cen, the; v4l ow, eg
 #define ELEM_DSLOPE_X(P, x, dx) \
     LAW_LINEAR_DSLOPE((P)->kt, (P)->psi0, (x)[X_PSI], (dx)[X_PSI], (x)[X_DPSI], (dx)[X_DPSI])
 #define ELEM_DDAMPING(P, dcv) ((P)->c * (dcv)[C_DD])
-#define ELEM_DDAMPING_X(P, dx) ((P)->crp * (dx)[X_DR2])
+#define ELEM_DDAMPING_X(P, dx) ((P)->crp * (dx)[X_DPR2])
 /* does the row dissipate (the early exit's condition)? The end damper counts once the lane
  * is engaged (cen > 0: checked at the release and at each engagement): a lid that never
  * reaches theta_e is undamped, and runs to t_max as one without the end damper */
@@ -1286,9 +1262,9 @@ static int lane_start(const Table *T, Lane *L, const double *d, int ncol, double
     ELEM_READ(&L->p, d, T);
     ELEM_ENGAGE_START(&L->p, th0, thc);
     pts_read(&L->p, d, ncol);
-    L->e_tol = d[D_ETOL];
+    L->e_tol = d[D_ENERGY_TOL];
     L->p.dm = 0.0;
-    if (ncol > D_MLID && isfinite(d[D_MLID]) && d[D_MLID] != T->m0) L->p.dm = d[D_MLID] - T->m0;
+    if (ncol > D_LID_MASS && isfinite(d[D_LID_MASS]) && d[D_LID_MASS] != T->m0) L->p.dm = d[D_LID_MASS] - T->m0;
     L->out = out;
     L->t = 0.0; L->th = th0; L->thd = 0.0; L->th_min = th0; L->th_max = th0;
     L->thp = th0; L->thdp = 0.0; L->hp = 0.0;
@@ -1302,8 +1278,8 @@ static int lane_start(const Table *T, Lane *L, const double *d, int ncol, double
     L->early = early && ELEM_DISSIPATES(&L->p) && ELEM_DAMPERS_VALID(&L->p)
                && !ELEM_STICKS(&L->p);
     for (int j = 0; j < NOUT; j++) out[j] = NAN;
-    if (d[D_KIND] != 0.0 && lane_invalid_throughout(T, L, d[D_KIND], th0, thc)) return 1;
-    if (L->p.eg) { out[O_ETIME] = 0.0; out[O_ETHD] = 0.0; } /* released engaged, at rest */
+    if (d[D_SPRING_KIND] != 0.0 && lane_invalid_throughout(T, L, d[D_SPRING_KIND], th0, thc)) return 1;
+    if (L->p.eg) { out[O_ENGAGE_TIME] = 0.0; out[O_ENGAGE_THETA_DOT] = 0.0; } /* released engaged, at rest */
     lane_record(L);
     double E0, V0;
     if (ELEM_STICKS(&L->p)) { /* released from rest: it moves only if |V'| exceeds T_f */
@@ -1339,18 +1315,18 @@ static void lane_finish(const Table *T, Lane *L, double thc, double t_max)
 {
     double *out = L->out;
     out[O_STATUS] = L->status;
-    out[O_PEAK] = L->peak;
-    out[O_NSTEP] = (double)L->n;
-    out[O_EDRIFT] = L->Emax - L->E0;
-    out[O_THMIN] = L->th_min;
-    out[O_THDMAX] = L->thd_max;
-    out[O_THMAX] = L->th_max;
-    out[O_STIME] = L->t;
+    out[O_PEAK_TIP_SPEED] = L->peak;
+    out[O_STEPS] = (double)L->n;
+    out[O_ENERGY_RISE] = L->Emax - L->E0;
+    out[O_THETA_MIN] = L->th_min;
+    out[O_THETA_DOT_MAX] = L->thd_max;
+    out[O_THETA_MAX] = L->th_max;
+    out[O_STOP_TIME] = L->t;
     if (L->status == S_CLOSED || L->status == S_OPEN) {
         double lmin, lmax;
         if (L->p.ps) l_extremes_pts(T, &L->p, L->th_min, L->th_max, &lmin, &lmax);
         else l_extremes(T, L->th_min, L->th_max, &lmin, &lmax);
-        out[O_LMIN] = lmin; out[O_LMAX] = lmax;
+        out[O_MIN_SPRING_LENGTH] = lmin; out[O_MAX_SPRING_LENGTH] = lmax;
     }
     if (L->status == S_OPEN && L->reason == R_NONE && L->t >= t_max * (1 - 1e-12)) {
         /* ran to t_max: say why it is open, if the energy (with its margin) decides it */
@@ -1359,9 +1335,9 @@ static void lane_finish(const Table *T, Lane *L, double thc, double t_max)
                              &th);
         L->stop_theta = th;
     }
-    out[O_REASON] = L->reason;
-    out[O_STHETA] = L->reason ? L->stop_theta : NAN;
-    if (L->status != S_CLOSED) { out[O_TIME] = NAN; out[O_THD] = NAN; out[O_TIP] = NAN; }
+    out[O_STOP_REASON] = L->reason;
+    out[O_STOP_THETA] = L->reason ? L->stop_theta : NAN;
+    if (L->status != S_CLOSED) { out[O_CLOSING_TIME] = NAN; out[O_IMPACT_THETA_DOT] = NAN; out[O_IMPACT_TIP_SPEED] = NAN; }
 }
 
 /* after an accepted node: can the rest of the stroke still change anything? (see top)
@@ -1540,7 +1516,7 @@ __attribute__((noinline)) static int lane_engage(const Table *T, const Method *m
     if (E1 - L->E > L->gain) L->gain = E1 - L->E;
     L->t += tau; L->th = the; L->thd = y1;
     if (E1 - L->E0 > L->e_tol) { L->status = S_UNSTABLE; return 1; }
-    if (down && isnan(L->out[O_ETIME])) { L->out[O_ETIME] = L->t; L->out[O_ETHD] = y1; }
+    if (down && isnan(L->out[O_ENGAGE_TIME])) { L->out[O_ENGAGE_TIME] = L->t; L->out[O_ENGAGE_THETA_DOT] = y1; }
     /* the law changed at this node: a maximum of the tip speed is looked for from here on
      * (never by a step across it), as from a node before it */
     L->gp = -INFINITY; L->thp = the; L->thdp = y1; L->hp = 0.0;
@@ -1601,7 +1577,7 @@ ALWAYS int lane_after_step(const Table *T, const Method *m, Lane *L, double h, d
         if (gi > L->peak) L->peak = gi;
         if (y1 > L->thd_max) L->thd_max = y1;
         L->t += tau; L->th = thc; L->thd = y1; L->th_min = thc; L->status = S_CLOSED;
-        L->out[O_TIME] = L->t; L->out[O_THD] = y1; L->out[O_TIP] = gi;
+        L->out[O_CLOSING_TIME] = L->t; L->out[O_IMPACT_THETA_DOT] = y1; L->out[O_IMPACT_TIP_SPEED] = gi;
         lane_record(L);
         return 1;
     }
@@ -2374,9 +2350,9 @@ int sc_step(const double *tab_meta, const double *cc, const double *dcc, const d
     p.dm = 0.0;
     if (p.x && !xcc) return S_RANGE;
     if ((p.ps | p.pd) && !pcc) return S_RANGE;
-    if (isfinite(design[D_MLID]) && design[D_MLID] != T.m0) {
+    if (isfinite(design[D_LID_MASS]) && design[D_LID_MASS] != T.m0) {
         if (!dcc) return S_RANGE;
-        p.dm = design[D_MLID] - T.m0;
+        p.dm = design[D_LID_MASS] - T.m0;
     }
     return step(&T, &m, &p, h, x0[0], x0[1], &x1[0], &x1[1]);
 }

@@ -39,3 +39,74 @@ LAYOUT = (f"abi={KERNEL_ABI};meta=ncell,lo,h,m0,{','.join(elements.KERNEL_META)}
           f"xcc={','.join(EXTRA_COEFFS + ('-',) * (NX - len(EXTRA_COEFFS)))};"
           f"pose={','.join(POSE + ('-',) * (NPOSE - len(POSE)))};"
           f"row={','.join(DESIGN_COLUMNS)};out={','.join(OUT_FIELDS)};nrng=18")
+
+
+#: the generated C header of this layout, next to ``_kernel.c``
+HEADER_NAME = "_layout.h"
+
+
+def _c_name(prefix: str, name: str) -> str:
+    return f"{prefix}_{name.upper()}"
+
+
+def header() -> str:
+    """The C header ``_kernel.c`` includes: the ABI, the design-row, coefficient, extra,
+    pose and output columns as enums named after this module's names (``D_SPRING_K``,
+    ``C_M``, ``O_CLOSING_TIME`` ...), and :data:`LAYOUT` as the string ``sc_layout()``
+    returns. Written by ``python -m softclose.simulation.kernel --write``; a test
+    holds the file to this text, so the kernel's layout always comes from the registry."""
+    row = DESIGN_COLUMNS[:len(DESIGN_COLUMNS) - NPT]
+
+    def enum(prefix, names, count=None):
+        items = [_c_name(prefix, n) for n in names] + ([count] if count else [])
+        lines, cur = [], "enum {"
+        for i, it in enumerate(items):
+            piece = f" {it}" + ("," if i < len(items) - 1 else " };")
+            if len(cur) + len(piece) > 95:
+                lines.append(cur)
+                cur = "      " + piece
+            else:
+                cur += piece
+        return "\n".join(lines + [cur])
+
+    layout = []
+    for part in LAYOUT.split(";"):        # a line a part; long parts wrapped after commas
+        text, cur = part + ";", ""
+        for piece in text.split(","):
+            if cur and len(cur) + len(piece) > 80:
+                layout.append(cur + ",")
+                cur = piece
+            else:
+                cur = f"{cur},{piece}" if cur else piece
+        layout.append(cur)
+    layout[-1] = layout[-1].removesuffix(";")
+    return "\n".join([
+        "/* The stroke kernel's layout, generated from the element registry and",
+        " * softclose/simulation/kernel/layout.py by",
+        " *     python -m softclose.simulation.kernel --write",
+        " * Do not edit: tests/test_kernel_layout.py holds this file to the generator. */",
+        "#ifndef SOFTCLOSE_KERNEL_LAYOUT_H",
+        "#define SOFTCLOSE_KERNEL_LAYOUT_H",
+        "",
+        f"#define KERNEL_ABI {KERNEL_ABI} /* bumped when the exported signatures or outputs change */",
+        "/* the design-row columns: the elements' parameters (the registry's order), e_tol, m_lid */",
+        enum("D", row, "NDESIGN"),
+        "/* the table's coefficients, and those that depend on the lid's mass (the first NMASS) */",
+        f"#define NC {len(COEFFS)}",
+        f"#define NMASS {len(COEFFS[:4])}",
+        enum("C", COEFFS),
+        "/* the extra table's element columns (NX per power) */",
+        f"#define NX {NX}",
+        enum("X", EXTRA_COEFFS),
+        "/* the pose table's columns (NPOSE per power) */",
+        f"#define NPOSE {NPOSE}",
+        enum("P", POSE, "P_USED"),
+        "/* the outputs per design row */",
+        enum("O", OUT_FIELDS, "NOUT"),
+        "/* every layout constant above, as one string: checked by Python when it loads the kernel */",
+        "static const char LAYOUT[] =",
+        "\n".join(f'    "{part}"' for part in layout) + ";",
+        "",
+        "#endif",
+        ""])
+

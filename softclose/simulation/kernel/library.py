@@ -11,12 +11,19 @@ import threading
 from pathlib import Path
 
 from ...errors import NumericalError
-from .layout import KERNEL_ABI, LAYOUT, OUT_FIELDS
+from .layout import HEADER_NAME, KERNEL_ABI, LAYOUT, OUT_FIELDS
 
 _lib = None
 _lock = threading.Lock()
 #: the kernel's C source
 SOURCE = Path(__file__).with_name("_kernel.c")
+#: the layout header it includes (generated: :func:`softclose.simulation.kernel.layout.header`)
+HEADER = Path(__file__).with_name(HEADER_NAME)
+
+
+def source_bytes() -> bytes:
+    """The kernel's source as compiled: ``_kernel.c`` and its layout header."""
+    return SOURCE.read_bytes() + HEADER.read_bytes()
 
 
 #: compiler flags of the kernel compiled in a source checkout (as setup.py's)
@@ -28,7 +35,7 @@ def _fallback_name() -> str:
     (``$CC`` or ``cc``) and :data:`KERNEL_CFLAGS`: any change gives another file."""
     import hashlib  # (what only a source checkout needs is imported here, not at start-up)
     cc = os.environ.get("CC") or "cc"
-    tag = hashlib.sha256(SOURCE.read_bytes() + repr((cc, KERNEL_CFLAGS)).encode()).hexdigest()
+    tag = hashlib.sha256(source_bytes() + repr((cc, KERNEL_CFLAGS)).encode()).hexdigest()
     return f"_kernel_{tag[:16]}.so"
 
 
@@ -111,7 +118,8 @@ def _built_extension() -> Path | None:
     except ImportError:
         return None
     path = Path(_kernel.__file__)
-    if SOURCE.exists() and path.stat().st_mtime < SOURCE.stat().st_mtime:
+    if SOURCE.exists() and path.stat().st_mtime < max(SOURCE.stat().st_mtime,
+                                                        HEADER.stat().st_mtime):
         return None
     try:
         lib = ctypes.CDLL(str(path))
