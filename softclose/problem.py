@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from .errors import ConfigError
 from .config.schema import KEYS
 from .model import elements
 from .model.elements import ELEMENTS, PARAM_NAMES, PARAMS
@@ -311,3 +312,17 @@ def categorise(status: np.ndarray, reason: np.ndarray) -> np.ndarray:
         out[valid[rest[nc]]] = REASONS.index("not closed")
     out[invalid] = CATEGORIES.index("invalid")
     return out
+
+
+def check_reference_temperature(cfg, what: str) -> None:
+    """ConfigError (one line, naming ``operating.temperature_c``) unless ``cfg``'s strokes run
+    at the reference temperature: ``what`` (the optimiser, the catalog selection, the fit)
+    designs at the temperature the parts' values are given at; strokes, sweeps and yields
+    run at any other (:mod:`softclose.model.temperature`)."""
+    op = cfg.operating
+    if op.temperature_c != op.reference_temperature_c:
+        raise ConfigError(
+            f"operating.temperature_c: {what} works at the reference temperature "
+            f"(operating.reference_temperature_c = {op.reference_temperature_c:g} °C), not at "
+            f"{op.temperature_c:g} °C; simulate, sweep and yield run strokes at other "
+            "temperatures")

@@ -12,7 +12,8 @@ import pytest
 from softclose.simulation.kernel import binding as native
 from softclose.simulation.integrators import METHODS, casadi_step, get_method
 from softclose.simulation.reference import Reference
-from softclose.simulation.simulator import Simulator, amplification
+from softclose.simulation.integrators import amplification
+from softclose.simulation.simulator import Simulator
 from softclose.problem import as_params
 
 

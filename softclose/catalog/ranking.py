@@ -34,6 +34,7 @@ from .screen import (RANGE, PairBox, pair_box, range_texts, reason_text, run_pai
 from .nlp import NLP_SAMPLES, solve_c
 from .mounting import place_pair, placement_keys
 from . import verify
+from ..problem import check_reference_temperature
 
 #: rows of the kernel per chunk of pairs (a chunk is the unit of progress and of Ctrl-C)
 CHUNK_ROWS = 40_000
@@ -109,6 +110,7 @@ def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: 
     (``result.interrupted``). Returns a :class:`SelectResult`; never raises for a part
     that fails (it is ranked with the reason).
     """
+    check_reference_temperature(cfg, "the catalog selection")
     t0 = time.perf_counter()
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) \
             or not 0 <= samples <= 100_000:

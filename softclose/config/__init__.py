@@ -16,7 +16,8 @@ from .load import (BATCH_STEP_BUDGET, NLP_BUDGET, STEP_BUDGET, TRAJECTORY_BUDGET
                    parse_value, read_toml, steps_per_stroke, to_dict)
 from .schema import (DEFAULT_SPREADS, HESSIANS, INTEGRATORS, KEYS, RANGES, SCHEMA, SECTIONS,
                      TOLERANCE_KEYS, TOLERANCE_OPTIONS, TOLERANCE_SECTIONS, Design, Friction,
-                     Geometry, Mass, Optimise, Simulate, Spring, Stroke, numeric_keys)
+                     Geometry, Mass, Operating, Optimise, Simulate, Spring, Stroke,
+                     numeric_keys)
 from .tolerance import MAX_TOLERANCE_SAMPLES, Spread, Tolerance
 from .write import to_toml
 
@@ -26,4 +27,4 @@ __all__ = ["ConfigError", "Config", "load_config", "default_config", "from_dict"
            "TOLERANCE_OPTIONS", "TOLERANCE_SECTIONS", "INTEGRATORS", "HESSIANS",
            "STEP_BUDGET", "TRAJECTORY_BUDGET", "NLP_BUDGET", "BATCH_STEP_BUDGET",
            "MAX_TOLERANCE_SAMPLES", "Spread", "Tolerance", "Geometry", "Mass", "Design",
-           "Stroke", "Simulate", "Optimise", "Spring"]
+           "Stroke", "Simulate", "Optimise", "Spring", "Operating"]

@@ -63,6 +63,7 @@ class Config:
     simulate: Simulate
     optimise: Optimise
     spring: Spring
+    operating: Operating
     tolerance: "Tolerance"
     raw: dict = dataclasses.field(default_factory=dict, repr=False, compare=False)
 

@@ -23,7 +23,7 @@ INTEGRATORS = ("rk4", "euler_cromer", "gauss4", "radau5")
 HESSIANS = ("exact", "limited-memory")
 #: the sections of a config, in order; "tolerance" holds spreads and their options
 SECTIONS = ("geometry", "mass", "design", "friction", "stroke", "simulate", "optimise",
-            "spring")
+            "spring", "operating")
 
 
 def _half_length(v):
@@ -165,6 +165,16 @@ SPRING: tuple[Key, ...] = (
         "smallest inner diameter D - d (a guide rod); none: no limit", lo=1e-5, hi=1.0,
         note="below `max_outer_d`"),
     Key("spring", "grade", "int+", 2, "", "EN 15800 tolerance grade: 1, 2 or 3", lo=1, hi=3),
+    Key("operating", "temperature_c", "real", 23.0, "°C",
+        "the temperature of a stroke: the parts' values, given at the reference temperature, "
+        "follow their laws (coil springs' rate and preload, every damper's coefficient)",
+        lo=-60.0, hi=150.0),
+    Key("operating", "reference_temperature_c", "real", 23.0, "°C",
+        "the temperature at which the parts' values are given (datasheets: 23 °C)",
+        lo=-60.0, hi=150.0),
+    Key("design", "damper_temperature_coeff", "real", 0.0, "1/K",
+        "beta: every viscous coefficient (dashpot, rotary, end damper) is c exp(beta (T - "
+        "T_ref)); silicone-oil rotary dampers about -0.005", lo=-0.1, hi=0.1),
 )
 
 #: the options of the [tolerance] section (every other key there names a toleranced key)
@@ -276,7 +286,7 @@ def _section(section: str, values: dict) -> Section:
 
 #: the section classes, by section
 SECTION_TYPES = {s: _section_type(s) for s in SECTIONS}
-Geometry, Mass, Design, Friction, Stroke, Simulate, Optimise, Spring = (
+Geometry, Mass, Design, Friction, Stroke, Simulate, Optimise, Spring, Operating = (
     SECTION_TYPES[s] for s in SECTIONS)
 
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..simulation import statics
 from ..errors import ConfigError, NumericalError, SoftcloseError
-from ..problem import DESIGN_KEYS, PARAM_COLUMNS, SCALES, UNITS, describe
+from ..problem import check_reference_temperature, DESIGN_KEYS, PARAM_COLUMNS, SCALES, UNITS, describe
 from ..present.progress import Progress
 from .cache import get_model, get_nlp, has_nlp, stroke_simulator
 from .spring_part import spring_part
@@ -260,6 +260,7 @@ def optimise(cfg, *, starts: int | None = None, verify: bool = True,
     margins within which it must be made). A kind that cannot be valid, or finds no answer,
     is listed in ``kinds`` with why.
     """
+    check_reference_temperature(cfg, "the optimiser")
     t_start = time.perf_counter()
     rows, results, pending, todo = [], [], [], []
     for kind in cfg.optimise.spring_kinds:

@@ -82,6 +82,7 @@ from ..optimiser.free_points import SLOTS
 from ..optimiser.interval import END_ANGLE, END_C
 from ..optimiser.spring_part import spring_part
 from ..optimiser.kinds import kind_config
+from ..problem import check_reference_temperature
 
 
 def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None = None,
@@ -95,6 +96,7 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     ``samples`` (default ``[tolerance] samples``) and ``seed`` fix the yield estimate;
     ``verify`` re-simulates every scenario with the adaptive reference.
     """
+    check_reference_temperature(cfg, "the robust optimiser")
     from dataclasses import replace
 
     t_start = time.perf_counter()

@@ -127,3 +127,38 @@ def casadi_step(method: Method, ode: ca.Function) -> ca.Function:
     Ks = solver(guess, ca.vertcat(x0m, pm, hm))
     x1 = x0m + hm * sum(method.b[i] * Ks[nx * i:nx * (i + 1)] for i in range(s))
     return ca.Function(f"step_{method.name}", [x0m, pm, hm], [x1], ["x0", "p", "h"], ["x1"])
+
+
+def amplification(method: Method, hJ: np.ndarray) -> np.ndarray:
+    """Step matrix of a Runge-Kutta ``method`` on the linear system x' = J x (hJ = h J).
+
+    None where the step is not defined: hJ not finite, or (implicit methods) h J meets an
+    eigenvalue of A^-1, where the stage equations have no unique solution.
+    """
+    I2 = np.eye(2)
+    s = method.stages
+    A = np.asarray(method.A, float)
+    if not np.all(np.isfinite(hJ)):
+        return None
+    big = np.eye(2 * s) - np.kron(A, hJ)
+    rhs = np.kron(np.ones((s, 1)), hJ)
+    try:
+        K = np.linalg.solve(big, rhs)  # h K_i = (hJ)(x + sum a_ij h K_j)
+    except np.linalg.LinAlgError:
+        return None
+    S = I2 + sum(method.b[i] * K[2 * i:2 * i + 2] for i in range(s))
+    return S if np.all(np.isfinite(S)) else None
+
+
+def spectral_radius(method: Method, J: np.ndarray, h: float) -> float:
+    """Spectral radius of the step matrix at step h; inf where the step is not defined
+    (see :func:`amplification`), so that such a step never counts as stable."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        if method.kind == "symplectic_euler":
+            a, b = J[1]
+            S = np.array([[1 + h * h * a, h * (1 + h * b)], [h * a, 1 + h * b]])
+        else:
+            S = amplification(method, h * J)
+        if S is None or not np.all(np.isfinite(S)):
+            return math.inf
+        return float(np.max(np.abs(np.linalg.eigvals(S))))

@@ -26,6 +26,7 @@ from ..model import elements
 from . import statics
 from ..errors import NumericalError
 from ..interrupt import solving
+from ..model.temperature import at_temperature, parameter_factors
 from ..problem import as_params
 from .roots import illinois
 from .stroke import StrokeResult, StrokeStatus
@@ -152,9 +153,12 @@ class Reference:
         spring length limits (``design.spring_min_length``, ``spring_max_length``) the stroke
         is checked against -- default the model's own; a model shared between configs (the
         caches key models by their structure, not by these limits) is given the one judged.
+        ``p`` is a design at the reference temperature; the stroke runs at that config's
+        ``operating.temperature_c`` (:mod:`softclose.model.temperature`).
         """
         m, st = self.model, self.model.cfg.stroke
-        p = m.params() if p is None else as_params(p)
+        p = at_temperature(m.params() if p is None else as_params(p),
+                           parameter_factors(cfg if cfg is not None else m.cfg))
         thc, t_max, dt = st.theta_closed, st.t_max, self.grid_step
         x = np.array([st.theta0, 0.0])
         t, peak, th_min, th_max = 0.0, 0.0, st.theta0, st.theta0

@@ -23,9 +23,10 @@ from .kernel import binding as native
 from . import statics
 from ..config import RANGES, STEP_BUDGET, TRAJECTORY_BUDGET, Config, default_config
 from ..errors import ConfigError, NumericalError
-from .integrators import Method, get_method
+from .integrators import Method, amplification, get_method, spectral_radius
 from ..model.lid import LidModel
 from ..model.dynamics import COEFFS
+from ..model.temperature import at_temperature, parameter_factors
 from ..problem import ERROR_KEYS, as_params, target
 from .stroke import StrokeResult, StrokeStatus, none_if_nan
 from .kernel.table import CoefficientTable
@@ -47,41 +48,6 @@ MIN_STEP = RANGES["simulate.step"][0]
 #: TABLE_TOL. A table built at such points refines its cells; a row's own pieces do not, so
 #: shorter strokes are refused (no spring one can buy is 2 mm long)
 MIN_POINT_LENGTH = 2e-3
-
-
-def amplification(method: Method, hJ: np.ndarray) -> np.ndarray:
-    """Step matrix of a Runge-Kutta ``method`` on the linear system x' = J x (hJ = h J).
-
-    None where the step is not defined: hJ not finite, or (implicit methods) h J meets an
-    eigenvalue of A^-1, where the stage equations have no unique solution.
-    """
-    I2 = np.eye(2)
-    s = method.stages
-    A = np.asarray(method.A, float)
-    if not np.all(np.isfinite(hJ)):
-        return None
-    big = np.eye(2 * s) - np.kron(A, hJ)
-    rhs = np.kron(np.ones((s, 1)), hJ)
-    try:
-        K = np.linalg.solve(big, rhs)  # h K_i = (hJ)(x + sum a_ij h K_j)
-    except np.linalg.LinAlgError:
-        return None
-    S = I2 + sum(method.b[i] * K[2 * i:2 * i + 2] for i in range(s))
-    return S if np.all(np.isfinite(S)) else None
-
-
-def spectral_radius(method: Method, J: np.ndarray, h: float) -> float:
-    """Spectral radius of the step matrix at step h; inf where the step is not defined
-    (see :func:`amplification`), so that such a step never counts as stable."""
-    with np.errstate(over="ignore", invalid="ignore"):
-        if method.kind == "symplectic_euler":
-            a, b = J[1]
-            S = np.array([[1 + h * h * a, h * (1 + h * b)], [h * a, 1 + h * b]])
-        else:
-            S = amplification(method, h * J)
-        if S is None or not np.all(np.isfinite(S)):
-            return math.inf
-        return float(np.max(np.abs(np.linalg.eigvals(S))))
 
 
 def _round_down(x: float) -> float:
@@ -159,6 +125,10 @@ class Simulator:
         self.method = get_method(integrator or cfg.simulate.integrator)
         self.step = step or cfg.simulate.step
         self.table = _table(self.model, cached)
+        #: the parameters' factors at ``operating.temperature_c`` (None: the reference
+        #: temperature): every p given to :meth:`run` and :meth:`run_batch` is a design at
+        #: the reference temperature, and its stroke runs at the operating one
+        self.temperature_factors = parameter_factors(cfg)
         if self.table.max_rel_error > TABLE_TOL:
             raise NumericalError(
                 f"the linkage passes close to a toggle position (transmission angle "
@@ -209,7 +179,8 @@ class Simulator:
         (reasons, valid ranges, holding moments, opening efforts) while the kernel's threads
         integrate the next: the same numbers, a row's depend on that row alone.
         """
-        P = as_params(np.atleast_2d(np.asarray(P, float)))
+        P = at_temperature(as_params(np.atleast_2d(np.asarray(P, float))),
+                           self.temperature_factors)
         st = self.cfg.stroke
         m = None if lid_mass is None else \
             np.broadcast_to(np.asarray(lid_mass, float), (len(P),)).copy()
@@ -305,7 +276,8 @@ class Simulator:
 
     # -- one stroke ------------------------------------------------------------------
     def run(self, p=None, trajectory: bool = False, estimate_error: bool = True) -> StrokeResult:
-        p = self.model.params() if p is None else as_params(p)
+        p = at_temperature(self.model.params() if p is None else as_params(p),
+                           self.temperature_factors)
         st = self.cfg.stroke
         design = np.r_[native.kernel_rows(p), self.energy_tol(p[None, :])]
         if trajectory:
