@@ -33,7 +33,8 @@ def register(sub) -> None:
     p.add_argument("--quick", action="store_true",
                    help="fewer designs, steps and repeats (cannot confirm the default step)")
     p.add_argument("--structures", action="store_true",
-                   help="also measure the NLP structures of the README's commands: variables, "
+                   help="also measure the NLP structures of the main commands (optimise, --robust, "
+                        "the co-designs): variables, "
                         "parameters, generated C and the time to build and compile it (minutes)")
     p.set_defaults(run=run)
 
