@@ -21,6 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..model import elements
+from ..model.dynamics import COEFFS
 from .roots import illinois
 from .statics import _parabola_max, opening_force_exact
 
@@ -78,7 +80,6 @@ def _parts(model, p, th):
     P = np.repeat(np.asarray(p, float)[:, None], len(th), 1)
     dV = np.asarray(model.dV.map(len(th))(th, P)).ravel()
     F = np.asarray(model.opening.map(len(th))(th, P)[0]).ravel()
-    from ..model.dynamics import COEFFS
     c = np.asarray(model.coeffs.map(len(th))(th)[0])
     tau = np.abs(c[COEFFS.index("tau"), :])
     fr = F * c[COEFFS.index("tau"), :] - dV       # (the model's friction moment)
@@ -97,13 +98,20 @@ def _roots(g, th, gv):
     return out
 
 
-def hand_force(model, p=None, grid: int = HAND_GRID) -> HandForce:
-    """The hand force and the zones of the lid ``model`` with parameters ``p`` (default: the
-    model's config) over [stroke.theta_closed_deg, stroke.theta_open_deg] (SPEC §13)."""
-    cfg = model.cfg
-    p = model.params() if p is None else np.asarray(p, float)
+def config_params(cfg) -> np.ndarray:
+    """The parameter vector p of a config (a shared model's own config may be another's of
+    the same structure)."""
+    return np.array([q.number(q.value(cfg)) for q in elements.PARAMS], float)
+
+
+def hand_force(model, p=None, cfg=None, grid: int = HAND_GRID) -> HandForce:
+    """The hand force and the zones of the lid ``model`` with parameters ``p`` (default: those
+    of ``cfg``, default the model's config) over [stroke.theta_closed_deg,
+    stroke.theta_open_deg] of ``cfg`` (SPEC §13)."""
+    cfg = model.cfg if cfg is None else cfg
+    p = config_params(cfg) if p is None else np.asarray(p, float)
     st = cfg.stroke
-    lo, hi = st.theta_closed, math.radians(getattr(st, "theta_open_deg", None) or st.theta0_deg)
+    lo, hi = st.theta_closed, math.radians(st.theta_open_deg)
     th = np.linspace(lo, hi, grid)
     dV, fr, tau = _parts(model, p, th)
 
@@ -123,9 +131,11 @@ def hand_force(model, p=None, grid: int = HAND_GRID) -> HandForce:
             zones[-1][2] = b
         else:
             zones.append([z, a, b])
-    zones = tuple((z, math.degrees(a), math.degrees(b)) for z, a, b in zones)
+    deg = lambda x: st.theta_closed_deg if x == lo else st.theta_open_deg if x == hi \
+        else math.degrees(x)                          # noqa: E731  (the ends exactly)
+    zones = tuple((z, deg(a), deg(b)) for z, a, b in zones)
     f_open, f_close = (dV + fr) / tau, (dV - fr) / tau
-    if math.isclose(hi, st.theta0, rel_tol=0, abs_tol=1e-15):
+    if st.theta_open_deg == st.theta0_deg and model.cfg.stroke.theta0_deg == st.theta0_deg:
         opening = float(opening_force_exact(model, p))
     else:
         opening = float(_parabola_max(f_open[None, :], th)[0])
@@ -138,4 +148,4 @@ def hand_force(model, p=None, grid: int = HAND_GRID) -> HandForce:
                      zones, opening, closing, self_close, self_rise, hold)
 
 
-__all__ = ["HandForce", "hand_force", "HAND_GRID", "ZONES"]
+__all__ = ["HandForce", "hand_force", "config_params", "HAND_GRID", "ZONES"]
