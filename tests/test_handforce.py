@@ -119,3 +119,22 @@ def test_bad_input_names_the_key(key, value):
     with pytest.raises(ConfigError) as e:
         from_dict({sec: {name: value}})
     assert key in str(e.value) and "\n" not in str(e.value)
+
+
+#: the default optimum (softclose optimise --json at the defaults)
+OPTIMUM = {"spring_k": 1914.709221447523, "spring_rest_length": 0.07925707423802691,
+           "damper_c": 2087.7541030385964}
+
+
+def test_self_close_min_deg_in_verification():
+    from softclose.optimiser.verify import verify
+    ok = verify(from_dict({"optimise": {"self_close_min_deg": 18.0}}), OPTIMUM)
+    assert ok.constraints["self_close_min_deg"] == {"value": 18.0, "bound": 18.0,
+                                                    "unit": "deg", "ok": True}
+    assert ok.hand.metrics()["hold_open"] == [] and ok.constraints_ok
+    bad = verify(from_dict({"optimise": {"self_close_min_deg": 50.0},
+                            "stroke": {"theta_open_deg": 80}, "design": BALANCED["design"]}),
+                 OPTIMUM)
+    assert bad.constraints["self_close_min_deg"]["value"] is None
+    assert not bad.constraints["self_close_min_deg"]["ok"] and not bad.ok
+    assert bad.hand.self_rise_deg == 0.0
