@@ -96,7 +96,8 @@ CORE: tuple[Key, ...] = (
     Key("optimise", "holding_moment_min", "real", 0.1, "N m", "least holding moment",
         lo=-1e6, hi=1e6),
     Key("optimise", "self_close_min_deg", "real", None, "deg",
-        "the lid closes by itself from every angle up to this one (SPEC §13; default none)",
+        "the lid closes by itself from every angle up to this one (SPEC §13); none: not "
+        "required",
         lo=-360.0, hi=360.0),
     Key("optimise", "opening_force_max", "pos", None, "N",
         "largest opening effort allowed (the hand force at the tip that lifts the lid); "
