@@ -138,3 +138,28 @@ def test_self_close_min_deg_in_verification():
     assert bad.constraints["self_close_min_deg"]["value"] is None
     assert not bad.constraints["self_close_min_deg"]["ok"] and not bad.ok
     assert bad.hand.self_rise_deg == 0.0
+
+
+def test_simulate_json_and_figure(capsys, tmp_path):
+    import json
+    from softclose import cli
+    out = tmp_path / "sim"
+    rc = cli.main(["simulate", "--json", "--out", str(out), "--set", "design.torsion_k=0.1",
+                   "--set", "design.torsion_free_angle_deg=300", "--set",
+                   "design.torsion_pivot=A", "--set", "friction.torque=0.05", "--set",
+                   "stroke.theta_open_deg=80"])
+    obj = json.loads(capsys.readouterr().out)
+    assert rc == 0
+    assert obj["self_close_deg"] == pytest.approx(31.912041430086095, abs=1e-6)
+    assert obj["self_rise_deg"] == pytest.approx(46.63944172617751, abs=1e-6)
+    assert obj["hold_open"] == [[obj["self_close_deg"], obj["self_rise_deg"]]]
+    assert obj["closing_force"] == pytest.approx(1.0679116598226026, rel=1e-6)
+    png = out / "hand_force.png"
+    assert str(png) in obj["files"] and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_bad_key_on_the_command_line(capsys):
+    from softclose import cli
+    rc = cli.main(["simulate", "--set", "stroke.theta_open_deg=-5"])
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and "stroke.theta_open_deg" in err and len(err.splitlines()) == 1
