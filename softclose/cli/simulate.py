@@ -74,7 +74,7 @@ def run(cfg, args) -> Outcome:
         from ..present.figures.handforce import plot_hand_force
         files.append(save_figure(plot_hand_force(hf), out / "hand_force.png"))
         payload["files"] = [str(f) for f in files]
-    text = format_metrics(payload)
+    text = format_metrics(payload) + f"\n  hand force: {hf.describe()}"
     note = end_damper_note(cfg, res)
     if note:
         payload["end_damper"] = note

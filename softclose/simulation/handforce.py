@@ -58,6 +58,18 @@ class HandForce:
                 "self_close_deg": self.self_close_deg, "self_rise_deg": self.self_rise_deg,
                 "hold_open": [list(r) for r in self.hold_open]}
 
+    def describe(self) -> str:
+        """One line: where the lid closes, stays and rises by itself, and the closing force."""
+        f = lambda v: f"{v:.4g}"                      # noqa: E731
+        parts = [f"closes by itself up to {f(self.self_close_deg)} deg"
+                 if self.self_close_deg is not None else "never closes by itself from rest"]
+        if self.hold_open:
+            parts.append("stays open over " + ", ".join(f"{f(a)}–{f(b)} deg"
+                                                        for a, b in self.hold_open))
+        if self.self_rise_deg is not None:
+            parts.append(f"rises by itself above {f(self.self_rise_deg)} deg")
+        return "; ".join(parts) + f"; closing force {f(self.closing_force)} N"
+
     def to_json(self) -> dict:
         """The metrics, the zones and the curves (strict JSON: plain floats and lists)."""
         out = self.metrics()
@@ -116,7 +128,10 @@ def hand_force(model, p=None, cfg=None, grid: int = HAND_GRID) -> HandForce:
     dV, fr, tau = _parts(model, p, th)
 
     def g(sign):
-        return lambda x: float(_parts(model, p, x)[0][0] - sign * _parts(model, p, x)[1][0])
+        def f(x):
+            d, t, _ = _parts(model, p, x)
+            return float(d[0] - sign * t[0])
+        return f
     g_close, g_rise = g(+1), g(-1)          # dV - T_fr, dV + T_fr
     edges = sorted(set(_roots(g_close, th, dV - fr) + _roots(g_rise, th, dV + fr)))
     cuts = [lo] + [e for e in edges if lo < e < hi] + [hi]
