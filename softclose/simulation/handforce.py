@@ -89,10 +89,16 @@ class HandForce:
 def _parts(model, p, th):
     """(dV/dtheta, T_fr, tau) at the angles th (rad) from the exact model."""
     th = np.atleast_1d(np.asarray(th, float))
-    P = np.repeat(np.asarray(p, float)[:, None], len(th), 1)
-    dV = np.asarray(model.dV.map(len(th))(th, P)).ravel()
-    F = np.asarray(model.opening.map(len(th))(th, P)[0]).ravel()
-    c = np.asarray(model.coeffs.map(len(th))(th)[0])
+    n = len(th)
+    P = np.repeat(np.asarray(p, float)[:, None], n, 1)
+    maps = model.__dict__.setdefault("_hand_maps", {})  # (mapping builds a Function: once)
+    if n not in maps:
+        maps[n] = tuple(f if n == 1 else f.map(n) for f in (model.dV, model.opening,
+                                                            model.coeffs))
+    fdV, fop, fco = maps[n]
+    dV = np.asarray(fdV(th, P)).ravel()
+    F = np.asarray(fop(th, P)[0]).ravel()
+    c = np.asarray(fco(th)[0]).reshape(len(COEFFS), n)
     tau = np.abs(c[COEFFS.index("tau"), :])
     fr = F * c[COEFFS.index("tau"), :] - dV       # (the model's friction moment)
     fr = np.where(np.abs(fr) < 1e-12 * np.maximum(1.0, np.abs(dV)), 0.0, fr)
