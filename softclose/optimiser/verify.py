@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from ..errors import NumericalError
+from ..errors import ConfigError, NumericalError
 from ..interrupt import solving
 from ..problem import (CONSTRAINT_TOL, ENGAGE_KEYS, METRIC_KEYS, UNITS,
                        VERIFY_RTOL, PARAM_KEYS, agreement_tolerance, objective, params_of)
@@ -260,9 +260,12 @@ def verify(cfg, design: dict, claims: dict | None = None,
         of = ref.opening_force
         cons["opening_force_max"] = {"value": of, "bound": o.opening_force_max, "unit": "N",
                                      "ok": of <= o.opening_force_max + CONSTRAINT_TOL}
-    hand = hand_force(model, p, cfg)          # the hand force and the zones (SPEC §13)
+    try:                                    # the hand force and the zones (SPEC §13)
+        hand = hand_force(model, p, cfg)
+    except ConfigError:                     # (the linkage does not reach theta_open)
+        hand = None
     if o.self_close_min_deg is not None:    # closes by itself from every angle up to it
-        sc = hand.self_close_deg
+        sc = None if hand is None else hand.self_close_deg
         cons["self_close_min_deg"] = {"value": sc, "bound": o.self_close_min_deg,
                                       "unit": "deg",
                                       "ok": sc is not None and sc >= o.self_close_min_deg

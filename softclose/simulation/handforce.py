@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import ConfigError
 from ..model import elements
 from ..model.dynamics import COEFFS
 from .roots import illinois
@@ -132,6 +133,11 @@ def hand_force(model, p=None, cfg=None, grid: int = HAND_GRID) -> HandForce:
     lo, hi = st.theta_closed, math.radians(st.theta_open_deg)
     th = np.linspace(lo, hi, grid)
     dV, fr, tau = _parts(model, p, th)
+    bad = ~(np.isfinite(dV) & np.isfinite(fr) & (tau > 0))
+    if bad.any():
+        raise ConfigError(f"stroke.theta_open_deg: the linkage does not assemble (or stands "
+                          f"in a toggle) at {np.degrees(th[bad][0]):.4g} deg, below the open "
+                          f"angle {st.theta_open_deg:g} deg")
 
     def g(sign):
         def f(x):
