@@ -101,10 +101,22 @@ ENGAGE_METRICS = (
     Metric("engage_theta_dot", "rad/s", "theta' there (negative): the engagement speed"),
 )
 ENGAGE_KEYS = tuple(m.key for m in ENGAGE_METRICS)
+#: the hand force and the zones of a lid (SPEC §13; :mod:`softclose.simulation.handforce`),
+#: over [theta_closed, stroke.theta_open_deg], beside the §9 ``opening_force``
+HAND_METRICS = (
+    Metric("closing_force", "N", "largest force at the tip that pushes the lid down where it "
+           "does not close by itself (0 if none)"),
+    Metric("self_close_deg", "deg", "highest angle up to which every release closes by itself "
+           "(null if none)"),
+    Metric("self_rise_deg", "deg", "lowest angle above which the lid rises by itself (null if "
+           "none)"),
+    Metric("hold_open", "deg", "the [lo, hi] ranges where the lid stays where it is left"),
+)
+HAND_KEYS = tuple(m.key for m in HAND_METRICS)
 
 #: units of the metrics, the objective and the design values (by name and by full config key)
 UNITS: dict[str, str] = {
-    **{m.key: m.unit for m in METRICS + ENGAGE_METRICS},
+    **{m.key: m.unit for m in METRICS + ENGAGE_METRICS + HAND_METRICS},
     "objective": "",
     **{k.name: k.unit for k in KEYS if k.section == "design"},
     **{k.full: k.unit for k in KEYS if k.section == "design"},
@@ -112,7 +124,7 @@ UNITS: dict[str, str] = {
 
 #: the named constraints of the design problem
 CONSTRAINTS = ("closed", "closing_time_max", "closing_time_min", "no_rebound",
-               "holding_moment_min", "opening_force_max")
+               "holding_moment_min", "opening_force_max", "self_close_min_deg")
 #: why a design is infeasible, in the order they are tested (the first that applies is given)
 REASONS = ("not closed", "too slow", "too fast", "not held shut", "rebound", "too heavy to open")
 

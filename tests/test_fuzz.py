@@ -951,6 +951,7 @@ _COMPANIONS = {
     ("optimise.substeps", "hi"): {"optimise.nodes": 1},
     ("stroke.theta_closed_deg", "hi"): None,     # must lie below theta0_deg (<= 360)
     ("stroke.theta0_deg", "lo"): None,           # must lie above theta_closed_deg (>= -360)
+    ("stroke.theta_open_deg", "lo"): None,       # must lie above theta_closed_deg (>= -360)
     ("optimise.closing_time_min", "hi"): None,   # must lie below closing_time_max (<= 60)
     ("spring.wire_d", "lo"): {"spring.material": "EN10270-1-DH"},   # SH starts at 0.28 mm
     # the coils only with the wire and the coil diameter (4 <= D/d <= 20)

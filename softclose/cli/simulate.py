@@ -56,6 +56,11 @@ def run(cfg, args) -> Outcome:
     res = sim.run(trajectory=out is not None)
     payload = res.to_json()
     payload["integrator"] = res.method
+    hf = None
+    if res.ok:                           # the hand force and the zones (SPEC §13)
+        from ..simulation.handforce import hand_force
+        hf = hand_force(sim.model, cfg=cfg)
+        payload.update({k: v for k, v in hf.metrics().items() if k != "opening_force"})
     if not res.ok:
         payload["error"] = res.message
         from ..simulation.stroke import StrokeStatus
@@ -65,8 +70,11 @@ def run(cfg, args) -> Outcome:
     if out is not None:
         from .files import write_stroke_outputs
         files = write_stroke_outputs(sim.model, res, out, slow_motion=factor)
+        from .common import save_figure
+        from ..present.figures.handforce import plot_hand_force
+        files.append(save_figure(plot_hand_force(hf), out / "hand_force.png"))
         payload["files"] = [str(f) for f in files]
-    text = format_metrics(payload)
+    text = format_metrics(payload) + f"\n  hand force: {hf.describe()}"
     note = end_damper_note(cfg, res)
     if note:
         payload["end_damper"] = note

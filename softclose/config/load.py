@@ -138,6 +138,9 @@ def from_dict(raw: dict[str, Any]) -> Config:
     if not s["theta0_deg"] > s["theta_closed_deg"]:
         raise ConfigError(f"stroke.theta0_deg: the release angle ({s['theta0_deg']}) must lie "
                           f"above stroke.theta_closed_deg ({s['theta_closed_deg']})")
+    if not s["theta_open_deg"] > s["theta_closed_deg"]:
+        raise ConfigError(f"stroke.theta_open_deg: the open angle ({s['theta_open_deg']}) must "
+                          f"lie above stroke.theta_closed_deg ({s['theta_closed_deg']})")
     if values["simulate"]["step"] >= s["t_max"]:
         raise ConfigError(f"simulate.step: {values['simulate']['step']} s is not smaller than "
                           f"stroke.t_max = {s['t_max']} s")

@@ -71,6 +71,10 @@ CORE: tuple[Key, ...] = (
         "release angle (must exceed `theta_closed_deg`)", lo=-360.0, hi=360.0),
     Key("stroke", "theta_closed_deg", "real", 0.0, "deg", "closed angle (the rim)",
         lo=-360.0, hi=360.0),
+    Key("stroke", "theta_open_deg", "real", None, "deg",
+        "fully open angle: the end of the hand-force curve and its zones (must exceed "
+        "`theta_closed_deg`)", lo=-360.0, hi=360.0, derived="theta0_deg",
+        derive=lambda v: v["stroke"]["theta0_deg"]),
     Key("stroke", "t_max", "pos", 5.0, "s", "longest simulated time", lo=1e-6, hi=60.0),
     # [simulate]
     Key("simulate", "integrator", "str:" + ",".join(INTEGRATORS), "rk4", "",
@@ -91,6 +95,10 @@ CORE: tuple[Key, ...] = (
         note="below `stroke.t_max`"),
     Key("optimise", "holding_moment_min", "real", 0.1, "N m", "least holding moment",
         lo=-1e6, hi=1e6),
+    Key("optimise", "self_close_min_deg", "real", None, "deg",
+        "the lid closes by itself from every angle up to this one; none: not "
+        "required",
+        lo=-360.0, hi=360.0),
     Key("optimise", "opening_force_max", "pos", None, "N",
         "largest opening effort allowed (the hand force at the tip that lifts the lid); "
         "none: not bounded", lo=1e-6, hi=1e6),

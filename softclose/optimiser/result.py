@@ -118,6 +118,9 @@ class OptimiseResult(Displayed):
         for k in ENGAGE_KEYS:       # an end damper that engages: when, and how fast
             if (self.metrics or self.optimiser or {}).get(k) is not None:
                 out[k] = None if self.metrics is None else self.metrics.get(k)
+        hand = None if self.verification is None else self.verification.hand
+        if hand is not None:        # the §13 hand-force metrics (the opening force is §9's)
+            out.update({k: v for k, v in hand.metrics().items() if k != "opening_force"})
         out["optimiser"] = self.optimiser
         out["verification"] = None if self.verification is None else self.verification.to_json()
         out["active"] = [a.to_json() for a in self.active]

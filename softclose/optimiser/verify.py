@@ -21,11 +21,12 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from ..errors import NumericalError
+from ..errors import ConfigError, NumericalError
 from ..interrupt import solving
 from ..problem import (CONSTRAINT_TOL, ENGAGE_KEYS, METRIC_KEYS, UNITS,
                        VERIFY_RTOL, PARAM_KEYS, agreement_tolerance, objective, params_of)
 from ..simulation.stroke import StrokeResult, StrokeStatus
+from ..simulation.handforce import HandForce, hand_force
 from .cache import get_model
 from ..jsonio import jsonable
 from ..simulation.reference import Reference
@@ -116,6 +117,7 @@ class Verification:
     method: str = ""
     time: float = 0.0
     error: str | None = None
+    hand: HandForce | None = None        # the hand force and the zones (SPEC §13)
 
     @property
     def constraints_ok(self) -> bool:
@@ -258,6 +260,16 @@ def verify(cfg, design: dict, claims: dict | None = None,
         of = ref.opening_force
         cons["opening_force_max"] = {"value": of, "bound": o.opening_force_max, "unit": "N",
                                      "ok": of <= o.opening_force_max + CONSTRAINT_TOL}
+    try:                                    # the hand force and the zones (SPEC §13)
+        hand = hand_force(model, p, cfg)
+    except ConfigError:                     # (the linkage does not reach theta_open)
+        hand = None
+    if o.self_close_min_deg is not None:    # closes by itself from every angle up to it
+        sc = None if hand is None else hand.self_close_deg
+        cons["self_close_min_deg"] = {"value": sc, "bound": o.self_close_min_deg,
+                                      "unit": "deg",
+                                      "ok": sc is not None and sc >= o.self_close_min_deg
+                                      - 1e-9}
     agreement = {}
     if claims is not None:
         # the engagement (two phases): its time and speed as the NLP's node between the
@@ -283,7 +295,8 @@ def verify(cfg, design: dict, claims: dict | None = None,
             agreement["objective"] = {"optimiser": claimed_objective, "reference": J,
                                       "difference": claimed_objective - J, "tolerance": tol,
                                       "ok": abs(claimed_objective - J) <= tol}
-    return Verification(ref, J, cons, agreement, method, time.perf_counter() - t0)
+    return Verification(ref, J, cons, agreement, method, time.perf_counter() - t0,
+                        hand=hand)
 
 
 def verify_design(cfg, design: dict, metrics: dict | None = None,
