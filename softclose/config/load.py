@@ -120,6 +120,7 @@ def from_dict(raw: dict[str, Any]) -> Config:
         for key in table:
             if key not in SCHEMA[section]:
                 raise ConfigError(unknown_key(section, key))
+    _check_mechanism(raw)
     values: dict[str, dict[str, Any]] = {s: {} for s in SECTIONS}
     for k in KEYS:
         v = raw.get(k.section, {}).get(k.name, k.default)
@@ -166,6 +167,23 @@ def from_dict(raw: dict[str, Any]) -> Config:
     sections = {name: SECTION_TYPES[name](**values[name]) for name in SECTIONS}
     tolerance = read_tolerance(raw.get("tolerance", {}), values)
     return Config(**sections, tolerance=tolerance, raw={k: dict(v) for k, v in raw.items()})
+
+
+#: the keys of the cranks: a hinge lid (``geometry.mechanism = "hinge"``) has none
+CRANK_KEYS = (("geometry", "crank_oa"), ("geometry", "crank_bc"), ("geometry", "pivot_b"),
+              ("geometry", "lid_c"), ("geometry", "assembly"), ("mass", "crank_oa"),
+              ("mass", "crank_bc"), ("mass", "inertia_oa"), ("mass", "inertia_bc"))
+
+
+def _check_mechanism(raw: dict[str, Any]) -> None:
+    """A hinge lid refuses the cranks' keys given explicitly (SPEC §15)."""
+    geometry = raw.get("geometry", {})
+    if geometry.get("mechanism", "four_bar") != "hinge":
+        return
+    for section, name in CRANK_KEYS:
+        if name in raw.get(section, {}):
+            raise ConfigError(f"{section}.{name}: a hinge lid (geometry.mechanism = \"hinge\") "
+                              f"has no cranks; remove the key")
 
 
 def _check_spring(sp: dict[str, Any]) -> None:

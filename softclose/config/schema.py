@@ -38,6 +38,12 @@ _L = lambda v: v["geometry"]["lid_length"]  # noqa: E731
 
 CORE: tuple[Key, ...] = (
     # [geometry]
+    Key("geometry", "mechanism", "str:four_bar,hinge", "four_bar", "",
+        "`four_bar` (the linkage of the cranks OA, BC) or `hinge` (the lid turns about the "
+        "ground pivot `hinge`; the cranks' keys do not apply)"),
+    Key("geometry", "hinge", "vec2", (0.0, 0.0), "m",
+        "hinge H (world) of a `hinge` lid: its frame's offsets are measured from H",
+        lo=-10.0, hi=10.0),
     Key("geometry", "lid_length", "pos", 0.500, "m",
         "lid length L (sets the defaults of `lid_g`, `lid_tip`, `mass.inertia_lid`)",
         lo=1e-4, hi=10.0),
