@@ -131,3 +131,43 @@ def test_rotary_damper_and_torsion_spring_at_h_linear_oscillator():
                                "rotary_damper_c": c, "rotary_damper_pivot": "lid"}})
     assert simulate(cfg_lid).closing_time == pytest.approx(simulate(cfg).closing_time,
                                                            abs=1e-12)
+
+
+# -- commands on a hinge lid -----------------------------------------------------------------
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "hinge_chest_lid.toml"
+
+
+def _cli(*args):
+    out = subprocess.run([sys.executable, "-m", "softclose", *args], capture_output=True,
+                         text=True, env=os.environ.copy(), timeout=600)
+    return out.returncode, out.stdout, out.stderr
+
+
+def test_optimise_hinge_chest_lid_is_verified():
+    rc, out, err = _cli("optimise", "--config", str(EXAMPLE), "--json")
+    assert rc == 0, err
+    res = json.loads(out)
+    assert res["success"] and res["verification"]["ok"] and res["closed"]
+    assert res["kind"] == "compression"
+    assert res["objective"] == pytest.approx(0.14367169, rel=1e-5)
+    assert res["closing_time"] == pytest.approx(1.0, abs=1e-6)
+    assert res["holding_moment"] == pytest.approx(0.1, abs=1e-6)
+    assert res["min_spring_length"] == pytest.approx(math.hypot(0.06, 0.07), rel=1e-9)
+
+
+def test_cli_refuses_crank_key_on_hinge_in_one_line():
+    rc, out, err = _cli("simulate", "--config", str(EXAMPLE), "--set", "geometry.crank_bc=0.1")
+    assert rc == 2 and len(err.strip().splitlines()) == 1 and "geometry.crank_bc" in err
+
+
+def test_four_bar_default_unchanged():
+    rc, out, err = _cli("optimise", "--json")
+    assert rc == 0, err
+    assert json.loads(out)["objective"] == 0.02289949029239926
