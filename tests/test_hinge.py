@@ -171,3 +171,18 @@ def test_four_bar_default_unchanged():
     rc, out, err = _cli("optimise", "--json")
     assert rc == 0, err
     assert json.loads(out)["objective"] == 0.02289949029239926
+
+
+def test_newton_euler_hinge_reaction():
+    """At rest at theta the hinge carries m (a_G + g y): a_G = theta'' z x R(theta) r_G."""
+    model = LidModel(_cfg())
+    theta = math.radians(30.0)
+    s = model.state(theta, 0.0)
+    i_h = I_G + M_LID * (G_X ** 2 + G_Y ** 2)
+    tdd = -M_LID * GRAV * (G_X * math.cos(theta) - G_Y * math.sin(theta)) / i_h
+    assert s["theta_ddot"] == pytest.approx(tdd, rel=1e-12)
+    r = (G_X * math.cos(theta) - G_Y * math.sin(theta), G_X * math.sin(theta) + G_Y * math.cos(theta))
+    R = [M_LID * tdd * -r[1], M_LID * tdd * r[0] + M_LID * GRAV]
+    assert s["reactions"]["A"] == pytest.approx(R, rel=1e-12)
+    assert s["reactions"]["O"] == pytest.approx(R, rel=1e-12)
+    assert s["reactions"]["C"] == pytest.approx([0.0, 0.0], abs=1e-12)
