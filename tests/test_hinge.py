@@ -186,3 +186,14 @@ def test_newton_euler_hinge_reaction():
     assert s["reactions"]["A"] == pytest.approx(R, rel=1e-12)
     assert s["reactions"]["O"] == pytest.approx(R, rel=1e-12)
     assert s["reactions"]["C"] == pytest.approx([0.0, 0.0], abs=1e-12)
+
+
+def test_hinge_config_file_round_trip(tmp_path):
+    """A written hinge config (e.g. optimise --out's design.toml) loads back: no crank keys."""
+    from softclose.config import load_config, to_toml
+    cfg = _cfg({"design": {"torsion_k": 1.5}})
+    path = tmp_path / "design.toml"
+    path.write_text(to_toml(cfg))
+    back = load_config(path)
+    for section in ("geometry", "mass", "design", "stroke"):
+        assert getattr(back, section) == getattr(cfg, section)

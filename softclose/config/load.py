@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from ..errors import ConfigError
-from .schema import BY_NAME, KEYS, RANGES, SCHEMA, SECTION_TYPES, SECTIONS
+from .schema import BY_NAME, CRANK_KEYS, KEYS, RANGES, SCHEMA, SECTION_TYPES, SECTIONS
 from .free import free_table, read_free
 from .tolerance import Tolerance, read_tolerance
 from .values import check, fmt, in_range, number
@@ -168,12 +168,6 @@ def from_dict(raw: dict[str, Any]) -> Config:
     sections = {name: SECTION_TYPES[name](**values[name]) for name in SECTIONS}
     tolerance = read_tolerance(raw.get("tolerance", {}), values)
     return Config(**sections, tolerance=tolerance, raw={k: dict(v) for k, v in raw.items()})
-
-
-#: the keys of the cranks: a hinge lid (``geometry.mechanism = "hinge"``) has none
-CRANK_KEYS = (("geometry", "crank_oa"), ("geometry", "crank_bc"), ("geometry", "pivot_b"),
-              ("geometry", "lid_c"), ("geometry", "assembly"), ("mass", "crank_oa"),
-              ("mass", "crank_bc"), ("mass", "inertia_oa"), ("mass", "inertia_bc"))
 
 
 def _check_mechanism(raw: dict[str, Any]) -> None:

@@ -26,6 +26,12 @@ SECTIONS = ("geometry", "mass", "design", "friction", "stroke", "simulate", "opt
             "spring")
 
 
+#: the keys of the cranks: a hinge lid (``geometry.mechanism = "hinge"``) has none
+CRANK_KEYS = (("geometry", "crank_oa"), ("geometry", "crank_bc"), ("geometry", "pivot_b"),
+              ("geometry", "lid_c"), ("geometry", "assembly"), ("mass", "crank_oa"),
+              ("mass", "crank_bc"), ("mass", "inertia_oa"), ("mass", "inertia_bc"))
+
+
 def _half_length(v):
     return (v["geometry"]["lid_length"] / 2, 0.015)
 
