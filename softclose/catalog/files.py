@@ -42,7 +42,7 @@ from ..errors import ConfigError
 SPRING_KINDS = {"extension": "extension", "compression": "compression",
                 "gas_strut": "compression"}
 DAMPER_KINDS = ("dashpot", "rotary")
-PIVOTS = ("lid", "O", "B", "A", "C")
+PIVOTS = ("lid", "O", "B", "A", "C", "H")
 
 #: spring columns: name -> (alternative header names with their factor to SI)
 _SPRING_COLS = {

@@ -140,10 +140,12 @@ def pair_rows(box: PairBox, spring, damper) -> tuple[list[str], np.ndarray]:
 
 
 def pivot_config(cfg: Config, damper) -> Config:
-    """The config a damper is run in: its pivot for a rotary damper, no spring limits."""
+    """The config a damper is run in: its pivot for a rotary damper (on a hinge lid, whatever
+    the catalog's pivot, the hinge H: the lid's only pivot), no spring limits."""
     cfg = without_limits(cfg)
-    if damper.kind == "rotary" and cfg.design.rotary_damper_pivot != damper.pivot:
-        cfg = cfg.replace(design={"rotary_damper_pivot": damper.pivot})
+    pivot = "H" if cfg.geometry.mechanism == "hinge" else damper.pivot
+    if damper.kind == "rotary" and cfg.design.rotary_damper_pivot != pivot:
+        cfg = cfg.replace(design={"rotary_damper_pivot": pivot})
     return cfg
 
 

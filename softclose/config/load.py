@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from ..errors import ConfigError
-from .schema import BY_NAME, KEYS, RANGES, SCHEMA, SECTION_TYPES, SECTIONS
+from .schema import BY_NAME, CRANK_KEYS, KEYS, RANGES, SCHEMA, SECTION_TYPES, SECTIONS
 from .free import free_table, read_free
 from .tolerance import Tolerance, read_tolerance
 from .values import check, fmt, in_range, number
@@ -121,6 +121,7 @@ def from_dict(raw: dict[str, Any]) -> Config:
         for key in table:
             if key not in SCHEMA[section]:
                 raise ConfigError(unknown_key(section, key))
+    _check_mechanism(raw)
     values: dict[str, dict[str, Any]] = {s: {} for s in SECTIONS}
     for k in KEYS:
         v = raw.get(k.section, {}).get(k.name, k.default)
@@ -134,6 +135,7 @@ def from_dict(raw: dict[str, Any]) -> Config:
         if values[k.section][k.name] is None and k.derive is not None:
             values[k.section][k.name] = k.derive(values)     # (else: optional, None)
 
+    _pivots(raw, values)
     s = values["stroke"]
     if not s["theta0_deg"] > s["theta_closed_deg"]:
         raise ConfigError(f"stroke.theta0_deg: the release angle ({s['theta0_deg']}) must lie "
@@ -170,6 +172,35 @@ def from_dict(raw: dict[str, Any]) -> Config:
     sections = {name: SECTION_TYPES[name](**values[name]) for name in SECTIONS}
     tolerance = read_tolerance(raw.get("tolerance", {}), values)
     return Config(**sections, tolerance=tolerance, raw={k: dict(v) for k, v in raw.items()})
+
+
+def _check_mechanism(raw: dict[str, Any]) -> None:
+    """A hinge lid refuses the cranks' keys given explicitly (SPEC §15)."""
+    geometry = raw.get("geometry", {})
+    if geometry.get("mechanism", "four_bar") != "hinge":
+        return
+    for section, name in CRANK_KEYS:
+        if name in raw.get(section, {}):
+            raise ConfigError(f"{section}.{name}: a hinge lid (geometry.mechanism = \"hinge\") "
+                              f"has no cranks; remove the key")
+
+
+def _pivots(raw: dict[str, Any], values: dict[str, dict[str, Any]]) -> None:
+    """A hinge lid's cranks are massless and unused, its pivot elements sit at H; a four-bar
+    has no pivot H."""
+    d, given = values["design"], raw.get("design", {})
+    hinge = values["geometry"]["mechanism"] == "hinge"
+    if hinge:                            # no cranks: nothing of theirs moves
+        values["mass"].update(crank_oa=0.0, crank_bc=0.0, inertia_oa=0.0, inertia_bc=0.0)
+        if "torsion_pivot" not in given:
+            d["torsion_pivot"] = "H"
+    for key in ("torsion_pivot", "rotary_damper_pivot"):
+        if hinge and d[key] not in ("H", "lid"):
+            raise ConfigError(f"design.{key}: {d[key]!r} is a crank's pivot; a hinge lid "
+                              f"(geometry.mechanism = \"hinge\") has the pivot H only")
+        if not hinge and d[key] == "H":
+            raise ConfigError(f"design.{key}: 'H' is the pivot of a hinge lid "
+                              f"(geometry.mechanism = \"hinge\"); a four-bar has O, B, A, C")
 
 
 def _check_spring(sp: dict[str, Any]) -> None:

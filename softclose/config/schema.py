@@ -26,6 +26,12 @@ SECTIONS = ("geometry", "mass", "design", "friction", "stroke", "simulate", "opt
             "spring", "operating")
 
 
+#: the keys of the cranks: a hinge lid (``geometry.mechanism = "hinge"``) has none
+CRANK_KEYS = (("geometry", "crank_oa"), ("geometry", "crank_bc"), ("geometry", "pivot_b"),
+              ("geometry", "lid_c"), ("geometry", "assembly"), ("mass", "crank_oa"),
+              ("mass", "crank_bc"), ("mass", "inertia_oa"), ("mass", "inertia_bc"))
+
+
 def _half_length(v):
     return (v["geometry"]["lid_length"] / 2, 0.015)
 
@@ -38,6 +44,12 @@ _L = lambda v: v["geometry"]["lid_length"]  # noqa: E731
 
 CORE: tuple[Key, ...] = (
     # [geometry]
+    Key("geometry", "mechanism", "str:four_bar,hinge", "four_bar", "",
+        "`four_bar` (the linkage of the cranks OA, BC) or `hinge` (the lid turns about the "
+        "ground pivot `hinge`; the cranks' keys do not apply)"),
+    Key("geometry", "hinge", "vec2", (0.0, 0.0), "m",
+        "hinge H (world) of a `hinge` lid: its frame's offsets are measured from H",
+        lo=-10.0, hi=10.0),
     Key("geometry", "lid_length", "pos", 0.500, "m",
         "lid length L (sets the defaults of `lid_g`, `lid_tip`, `mass.inertia_lid`)",
         lo=1e-4, hi=10.0),

@@ -17,7 +17,7 @@ import math
 from typing import Any
 
 from .free import free_table
-from .schema import DEFAULT_SPREADS, KEYS, SECTIONS, TOLERANCE_KEYS
+from .schema import CRANK_KEYS, DEFAULT_SPREADS, KEYS, SECTIONS, TOLERANCE_KEYS
 
 
 def toml_value(v: Any) -> str:
@@ -54,12 +54,16 @@ def to_toml(cfg, header: str = "") -> str:
     ``load_config`` of the text gives ``cfg`` back exactly (tests/test_design_file.py).
     """
     out = _comment(header) + ([""] if header else [])
+    hinge = cfg.geometry.mechanism == "hinge"
     for section in SECTIONS:
         values = getattr(cfg, section)._asdict()
         given = cfg.raw.get(section, {})
         out.append(f"[{section}]")
         for k in (k for k in KEYS if k.section == section):
             v = values[k.name]
+            if hinge and (section, k.name) in CRANK_KEYS:      # refused on a hinge lid
+                out.append(f"# {k.name}: (a hinge lid has no cranks)")
+                continue
             if k.kind == "free":                              # a table of bounds by key
                 v = free_table(v) if v else None
             if v is None:                                     # optional, not set

@@ -30,7 +30,8 @@ import casadi as ca
 from . import elements
 from .elements import DAMPERS, ELEMENTS, FRICTIONS, SPRINGS
 from .elements.coordinates import Length, moment_about, PivotAngle, PIVOTS, Pose
-from .kinematics import acceleration_loop, closure, cross, perp, points, velocity_loop
+from .kinematics import (acceleration_loop, closure, cross, is_hinge, perp, points,
+                         velocity_loop)
 
 #: the coefficients of theta that are not an element's: the generalised mass, its slope, and
 #: the tip's lever tau = |dT/dtheta| (|v_T| = tau |theta'|)
@@ -260,6 +261,11 @@ def newton_euler_system(theta, theta_d, p, cfg, sigma):
 
     (F1, M1), (F2, M2), (F3, M3) = applied("lid"), applied("oa"), applied("bc")
     G1, G2, G3 = pts["G1"], pts["G2"], pts["G3"]
+    if is_hinge(geo):      # the lid alone on its hinge: R_O = R_A the hinge's, no pin C
+        return _solved(ca.vertcat(
+            _sum([R_A + R_C] + F1) - mass.lid * a_G1,
+            _sum([cross(A - G1, R_A) + cross(C - G1, R_C)] + M1) - mass.inertia_lid * tdd,
+            R_O - R_A, R_B, R_C), z)
     res = ca.vertcat(
         _sum([R_A + R_C] + F1) - mass.lid * a_G1,
         _sum([cross(A - G1, R_A) + cross(C - G1, R_C)] + M1) - mass.inertia_lid * tdd,
@@ -268,9 +274,12 @@ def newton_euler_system(theta, theta_d, p, cfg, sigma):
         _sum([R_B - R_C] + F3) - mass.crank_bc * a_G3,
         _sum([cross(B - G3, R_B) + cross(C - G3, -R_C)] + M3) - mass.inertia_bc * gamma_dd,
     )
-    A_mat = ca.jacobian(res, z)
-    b = -ca.substitute(res, z, ca.DM.zeros(9))
-    return A_mat, b
+    return _solved(res, z)
+
+
+def _solved(res, z):
+    """``(A, b)`` of the residuals ``res``, affine in z: ``A z = b``."""
+    return ca.jacobian(res, z), -ca.substitute(res, z, ca.DM.zeros(z.numel()))
 
 
 def _rate(coord, ps: Pose, omega: dict, A, phi_d, theta_d):

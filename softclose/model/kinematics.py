@@ -65,11 +65,20 @@ def cross(a, b):
     return a[0] * b[1] - a[1] * b[0]
 
 
+def is_hinge(geo) -> bool:
+    """A single-pivot lid (SPEC §15): A is the ground hinge H, theta the only coordinate."""
+    return getattr(geo, "mechanism", "four_bar") == "hinge"
+
+
 def closure(theta, geo, sigma):
     """Closed-form loop closure on branch ``sigma``: returns ``(phi, gamma, u)``.
 
-    ``u`` is the acos argument: the loop closes for ``|u| < 1``.
+    ``u`` is the acos argument: the loop closes for ``|u| < 1``. A hinge lid has no loop: its
+    crank angles are constants (the cranks are massless and unused) and u = 0 everywhere.
     """
+    if is_hinge(geo):
+        zero = 0 * theta
+        return zero + math.radians(geo.assembly[1]), zero + math.radians(geo.assembly[2]), zero
     l2, l3 = geo.crank_oa, geo.crank_bc
     w = rot(theta, geo.lid_c) - ca.DM(geo.pivot_b)
     w2 = ca.dot(w, w)
@@ -101,7 +110,7 @@ def branch_of(phi: float, gamma: float) -> int:
 
 def points(theta, phi, gamma, geo):
     """World positions of the named points for a closed configuration."""
-    A = geo.crank_oa * e(phi)
+    A = ca.DM(geo.hinge) + 0 * theta if is_hinge(geo) else geo.crank_oa * e(phi)
     B = ca.DM(geo.pivot_b)
     h = getattr(geo, "dashpot_lid", None)
     extra = {} if h is None else {"H": A + rot(theta, h)}
@@ -128,6 +137,8 @@ def velocity_loop(theta, phi, gamma, theta_d, geo):
 
     l2 phi' z x e(phi) - l3 gamma' z x e(gamma) = -theta' z x r_AC
     """
+    if is_hinge(geo):
+        return 0 * theta_d, 0 * theta_d
     r_AC = rot(theta, geo.lid_c)
     a1 = geo.crank_oa * perp(e(phi))
     a2 = -geo.crank_bc * perp(e(gamma))
@@ -141,6 +152,8 @@ def acceleration_loop(theta, phi, gamma, theta_d, phi_d, gamma_d, theta_dd, geo)
     l2 phi'' z x e(phi) - l3 gamma'' z x e(gamma)
         = l2 phi'^2 e(phi) - theta'' z x r_AC + theta'^2 r_AC - l3 gamma'^2 e(gamma)
     """
+    if is_hinge(geo):
+        return 0 * theta_dd, 0 * theta_dd
     r_AC = rot(theta, geo.lid_c)
     a1 = geo.crank_oa * perp(e(phi))
     a2 = -geo.crank_bc * perp(e(gamma))

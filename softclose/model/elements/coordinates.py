@@ -8,7 +8,7 @@ The geometry of an element, apart from its law (:mod:`softclose.model.elements.b
 - :class:`PivotAngle` -- the relative rotation psi = angle(a) - angle(b) of the two bodies a
   pin joins (O: crank OA on the ground, phi; B: crank BC on the ground, gamma; A: the lid on
   crank OA, theta - phi; C: the lid on crank BC, theta - gamma; "lid": the lid on the ground,
-  theta). A moment tau along psi turns body a by +tau and body b by -tau. Crank angles are
+  theta; H: a hinge lid's hinge, theta). A moment tau along psi turns body a by +tau and body b by -tau. Crank angles are
   taken within half a turn of the pivot's angle at ``geometry.assembly``, so psi is
   continuous over the stroke whatever the closed form's branch cut does;
 - :class:`Weights` -- gravity's coordinate: the weights' potential
@@ -31,7 +31,9 @@ from ..kinematics import cross
 
 #: the pins an element may act at, and the bodies each joins (a, b): psi = angle(a) - angle(b)
 PIVOTS = {"lid": ("lid", "ground"), "O": ("oa", "ground"), "B": ("bc", "ground"),
-          "A": ("lid", "oa"), "C": ("lid", "bc")}
+          "A": ("lid", "oa"), "C": ("lid", "bc"), "H": ("lid", "ground")}
+#: the pivots of a hinge lid (SPEC §15): H, the hinge (the lid on the ground, theta); "lid" the same
+HINGE_PIVOTS = ("lid", "H")
 
 
 class Pose(NamedTuple):
@@ -83,7 +85,7 @@ class PivotAngle(NamedTuple):
 
     def value(self, pose: Pose):
         raw = self._raw(pose.theta, pose.phi, pose.gamma)
-        if self.pivot == "lid":
+        if self.pivot in HINGE_PIVOTS:
             return raw
         ref = self._raw(*(math.radians(x) for x in pose.geo.assembly))
         d = raw - ref

@@ -60,7 +60,7 @@ class RotaryDamper(Element):
             Key("design", "rotary_damper_pivot", "str:" + ",".join(PIVOTS), "lid", "",
                 "where the rotary damper acts: `lid` (the lid's own rotation theta: the seed's "
                 "modelling aid) or a real damper at pivot O (phi), B (gamma), A (theta - phi), "
-                "C (theta - gamma)"))
+                "C (theta - gamma), or H (a hinge lid's hinge: theta)"))
     params = (Param("rotary_damper_c"),)
     columns = (("dpr2", "dq2"),)
     table = "extra"

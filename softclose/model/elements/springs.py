@@ -192,7 +192,8 @@ class TorsionSpring(_Linear):
             "geometry.assembly gives the cranks) where it is unloaded", lo=-360.0, hi=360.0),
         Key("design", "torsion_pivot", "str:" + ",".join(p for p in PIVOTS if p != "lid"), "O",
             "", "pivot of the torsion spring: O (crank OA, psi = phi), B (crank BC, gamma), "
-            "A (lid on OA, theta - phi), C (lid on BC, theta - gamma)"),
+            "A (lid on OA, theta - phi), C (lid on BC, theta - gamma), H (a hinge lid's hinge, "
+            "theta; the default of a hinge lid)"),
     )
     params = (Param("torsion_k"), Param("torsion_free_angle_deg", math.pi / 180))
     columns = (("psi", "q"), ("dpsi", "dq"))

@@ -57,6 +57,10 @@ def plot_time_histories(res, title: str = "Closing stroke"):
     return fig
 
 
+def _hinge(model) -> bool:
+    return getattr(model.geo, "mechanism", "four_bar") == "hinge"
+
+
 def linkage_points(model, theta: float) -> dict:
     k = model.kin(np.array([theta, 0.0]))
     names = ["A", "C", "E", "T", "G1"]
@@ -75,6 +79,13 @@ def _draw(ax, model, theta, alpha=1.0, label=None, spring=True):
     corners = np.array([[0, -hgt / 2], [L, -hgt / 2], [L, hgt / 2], [0, hgt / 2]])
     lid = p["A"] + corners @ R.T
     ax.fill(lid[:, 0], lid[:, 1], color="#c8a26a", alpha=0.5 * alpha, ec="k", lw=0.8)
+    if _hinge(model):          # a hinge lid: no cranks, the lid on its hinge H (= A)
+        if spring:
+            ax.plot([p["E"][0], p["D"][0]], [p["E"][1], p["D"][1]], ":", color="C2", lw=1.5,
+                    alpha=alpha)
+        if label:
+            ax.annotate(label, p["T"], xytext=(4, 0), textcoords="offset points", fontsize=8)
+        return
     ax.plot([0, p["A"][0]], [0, p["A"][1]], "-o", color="C0", lw=2.5, ms=4, alpha=alpha)
     ax.plot([p["B"][0], p["C"][0]], [p["B"][1], p["C"][1]], "-o", color="C3", lw=2.5, ms=4,
             alpha=alpha)
@@ -96,8 +107,24 @@ def plot_linkage(model, thetas, labels=None, title="Linkage"):
         alpha = 0.35 + 0.65 * (i + 1) / n
         _draw(a1, model, th, alpha, lab)
         _draw(a2, model, th, alpha)
+    pts = linkage_points(model, thetas[0])
+    if _hinge(model):
+        for a in (a1, a2):
+            a.plot(*pts["A"], "ks", ms=7)
+            a.plot(*pts["D"], "g^", ms=7)
+            a.set_aspect("equal")
+            a.set_xlabel("x [m]")
+            a.set_ylabel("y [m]")
+        a1.set_title(title)
+        h = pts["A"]
+        a2.set_xlim(h[0] - 0.1, h[0] + 0.15)
+        a2.set_ylim(h[1] - 0.12, h[1] + 0.15)
+        a2.set_title("zoom: the hinge H, spring E–D (green)", fontsize=9)
+        for name, off in (("A", (-12, -10)), ("D", (-4, -13))):
+            a2.annotate("H" if name == "A" else name, pts[name], xytext=off,
+                        textcoords="offset points", fontsize=9, weight="bold")
+        return fig
     for a in (a1, a2):
-        pts = linkage_points(model, thetas[0])
         a.plot([0, pts["B"][0]], [0, pts["B"][1]], "ks", ms=7)
         a.plot(*pts["D"], "g^", ms=7)
         a.set_aspect("equal")

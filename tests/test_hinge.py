@@ -1,0 +1,199 @@
+"""SPEC §15: single-pivot (hinge) lids."""
+
+import pytest
+
+from softclose.config import from_dict
+from softclose.errors import ConfigError
+
+
+def test_hinge_keys_and_defaults():
+    cfg = from_dict({"geometry": {"mechanism": "hinge"}})
+    assert cfg.geometry.mechanism == "hinge"
+    assert tuple(cfg.geometry.hinge) == (0.0, 0.0)
+    assert from_dict({}).geometry.mechanism == "four_bar"
+
+
+@pytest.mark.parametrize("section,key,value", [
+    ("geometry", "crank_oa", 0.05), ("geometry", "pivot_b", [0.1, 0.0]),
+    ("geometry", "assembly", [18.0, 100.0, 140.0]), ("mass", "inertia_bc", 1e-4)])
+def test_hinge_refuses_crank_keys(section, key, value):
+    raw = {"geometry": {"mechanism": "hinge"}}
+    raw.setdefault(section, {})[key] = value
+    with pytest.raises(ConfigError) as exc:
+        from_dict(raw)
+    msg = str(exc.value)
+    assert "\n" not in msg and msg.startswith(f"{section}.{key}:")
+
+
+@pytest.mark.parametrize("raw,key", [({"mechanism": "flap"}, "geometry.mechanism"),
+                                     ({"mechanism": "hinge", "hinge": [0.0]}, "geometry.hinge"),
+                                     ({"mechanism": "hinge", "hinge": [99.0, 0.0]},
+                                      "geometry.hinge")])
+def test_hinge_bad_values_name_the_key(raw, key):
+    with pytest.raises(ConfigError) as exc:
+        from_dict({"geometry": raw})
+    assert key in str(exc.value) and "\n" not in str(exc.value)
+
+
+# -- the hinge model against textbook mechanics ----------------------------------------------
+
+import math
+
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
+
+from softclose.model.lid import LidModel
+from softclose.model import dynamics as dyn
+from softclose.simulation.reference import Reference
+from softclose.simulation.simulator import simulate
+
+#: a chest lid: 2 kg, 0.6 m deep, hinged at (0.1, 0.3), its centre of mass off the lid's line
+CHEST = {"geometry": {"mechanism": "hinge", "hinge": [0.1, 0.3], "lid_length": 0.6,
+                      "lid_g": [0.3, 0.02], "lid_tip": [0.6, 0.0]},
+         "mass": {"lid": 2.0, "inertia_lid": 0.06},
+         "stroke": {"theta0_deg": 40.0, "t_max": 2.0},
+         "design": {"spring_k": 0.0, "damper_c": 0.0}}
+M_LID, I_G, G_X, G_Y, H_Y, GRAV = 2.0, 0.06, 0.3, 0.02, 0.3, 9.81
+
+
+def _cfg(extra=None, **sections):
+    raw = {k: dict(v) for k, v in CHEST.items()}
+    for k, v in (extra or {}).items():
+        raw.setdefault(k, {}).update(v)
+    return from_dict(raw)
+
+
+def test_compound_pendulum_coefficients():
+    """A hinge lid without spring or damper: M = I_G + m |r_G|^2 constant, Vg = m g y_G."""
+    model = LidModel(_cfg())
+    i_h = I_G + M_LID * (G_X ** 2 + G_Y ** 2)
+    for theta in np.radians([-5.0, 0.0, 17.0, 40.0, 65.0]):
+        c, dc = (np.asarray(v).ravel() for v in model.coeffs(theta))
+        cf = dict(zip(dyn.COEFFS, c))
+        y_g = H_Y + math.sin(theta) * G_X + math.cos(theta) * G_Y
+        assert cf["M"] == pytest.approx(i_h, rel=1e-14)
+        assert cf["dM"] == pytest.approx(0.0, abs=1e-14)
+        assert cf["Vg"] == pytest.approx(M_LID * GRAV * y_g, rel=1e-13)
+        assert cf["dVg"] == pytest.approx(
+            M_LID * GRAV * (G_X * math.cos(theta) - G_Y * math.sin(theta)), rel=1e-12)
+        k = model.kin(np.array([theta, 1.0]))
+        assert np.asarray(k[5]).ravel() == pytest.approx([0.1, 0.3], abs=1e-15)  # A = H
+        tip = [0.1 + 0.6 * math.cos(theta), 0.3 + 0.6 * math.sin(theta)]
+        assert np.asarray(k[8]).ravel() == pytest.approx(tip, abs=1e-14)
+
+
+def _free_fall_time():
+    i_h = I_G + M_LID * (G_X ** 2 + G_Y ** 2)
+
+    def f(t, x):
+        th = x[0]
+        return [x[1], -M_LID * GRAV * (G_X * math.cos(th) - G_Y * math.sin(th)) / i_h]
+
+    hit = lambda t, x: x[0]  # noqa: E731
+    hit.terminal, hit.direction = True, -1
+    sol = solve_ivp(f, (0, 2.0), [math.radians(40.0), 0.0], method="DOP853", rtol=1e-13,
+                    atol=1e-13, events=hit)
+    return float(sol.t_events[0][0]), float(sol.y_events[0][0][1])
+
+
+def test_free_fall_closing_time_against_solve_ivp():
+    t_ref, w_ref = _free_fall_time()
+    cfg = _cfg()
+    ref = Reference(LidModel(cfg)).simulate()
+    assert ref.closing_time == pytest.approx(t_ref, abs=1e-6)
+    assert ref.impact_theta_dot == pytest.approx(w_ref, rel=1e-6)
+    # the kernel (rk4) agrees at the method's order: halving the step cuts the error ~16 x
+    errs = [abs(simulate(cfg.replace(simulate={**cfg.simulate._asdict(), "step": h})
+                         ).closing_time - t_ref) for h in (4e-3, 2e-3)]
+    assert errs[1] < 1e-6 and errs[1] < errs[0] / 8
+
+
+def test_rotary_damper_and_torsion_spring_at_h_linear_oscillator():
+    """Without gravity a torsion spring and a rotary damper at H make the linear ODE
+    I theta'' + c theta' + k (theta - theta_f) = 0: its closed form gives the closing time."""
+    k, c, th_f = 2.0, 0.3, math.radians(-20.0)
+    cfg = _cfg({"mass": {"gravity": 0.0},
+                "design": {"torsion_k": k, "torsion_free_angle_deg": -20.0,
+                           "rotary_damper_c": c, "rotary_damper_pivot": "H"}})
+    assert cfg.design.torsion_pivot == "H"
+    i_h = I_G + M_LID * (G_X ** 2 + G_Y ** 2)
+    wn, zeta = math.sqrt(k / i_h), c / (2 * math.sqrt(k * i_h))
+    wd, a0 = wn * math.sqrt(1 - zeta ** 2), math.radians(40.0) - th_f
+    theta = lambda t: th_f + a0 * math.exp(-zeta * wn * t) * (  # noqa: E731
+        math.cos(wd * t) + zeta * wn / wd * math.sin(wd * t))
+    t_close = brentq(theta, 1e-6, math.pi / wd, xtol=1e-15)
+    ref = Reference(LidModel(cfg)).simulate()
+    assert ref.closing_time == pytest.approx(t_close, abs=1e-6)
+    # the rotary damper on the lid's own rotation is the same damper for a hinge lid
+    cfg_lid = _cfg({"mass": {"gravity": 0.0},
+                    "design": {"torsion_k": k, "torsion_free_angle_deg": -20.0,
+                               "rotary_damper_c": c, "rotary_damper_pivot": "lid"}})
+    assert simulate(cfg_lid).closing_time == pytest.approx(simulate(cfg).closing_time,
+                                                           abs=1e-12)
+
+
+# -- commands on a hinge lid -----------------------------------------------------------------
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "hinge_chest_lid.toml"
+
+
+def _cli(*args):
+    out = subprocess.run([sys.executable, "-m", "softclose", *args], capture_output=True,
+                         text=True, env=os.environ.copy(), timeout=600)
+    return out.returncode, out.stdout, out.stderr
+
+
+def test_optimise_hinge_chest_lid_is_verified():
+    rc, out, err = _cli("optimise", "--config", str(EXAMPLE), "--json")
+    assert rc == 0, err
+    res = json.loads(out)
+    assert res["success"] and res["verification"]["ok"] and res["closed"]
+    assert res["kind"] == "compression"
+    assert res["objective"] == pytest.approx(0.14367169, rel=1e-5)
+    assert res["closing_time"] == pytest.approx(1.0, abs=1e-6)
+    assert res["holding_moment"] == pytest.approx(0.1, abs=1e-6)
+    assert res["min_spring_length"] == pytest.approx(math.hypot(0.06, 0.07), rel=1e-9)
+
+
+def test_cli_refuses_crank_key_on_hinge_in_one_line():
+    rc, out, err = _cli("simulate", "--config", str(EXAMPLE), "--set", "geometry.crank_bc=0.1")
+    assert rc == 2 and len(err.strip().splitlines()) == 1 and "geometry.crank_bc" in err
+
+
+def test_four_bar_default_unchanged():
+    rc, out, err = _cli("optimise", "--json")
+    assert rc == 0, err
+    assert json.loads(out)["objective"] == 0.02289949029239926
+
+
+def test_newton_euler_hinge_reaction():
+    """At rest at theta the hinge carries m (a_G + g y): a_G = theta'' z x R(theta) r_G."""
+    model = LidModel(_cfg())
+    theta = math.radians(30.0)
+    s = model.state(theta, 0.0)
+    i_h = I_G + M_LID * (G_X ** 2 + G_Y ** 2)
+    tdd = -M_LID * GRAV * (G_X * math.cos(theta) - G_Y * math.sin(theta)) / i_h
+    assert s["theta_ddot"] == pytest.approx(tdd, rel=1e-12)
+    r = (G_X * math.cos(theta) - G_Y * math.sin(theta), G_X * math.sin(theta) + G_Y * math.cos(theta))
+    R = [M_LID * tdd * -r[1], M_LID * tdd * r[0] + M_LID * GRAV]
+    assert s["reactions"]["A"] == pytest.approx(R, rel=1e-12)
+    assert s["reactions"]["O"] == pytest.approx(R, rel=1e-12)
+    assert s["reactions"]["C"] == pytest.approx([0.0, 0.0], abs=1e-12)
+
+
+def test_hinge_config_file_round_trip(tmp_path):
+    """A written hinge config (e.g. optimise --out's design.toml) loads back: no crank keys."""
+    from softclose.config import load_config, to_toml
+    cfg = _cfg({"design": {"torsion_k": 1.5}})
+    path = tmp_path / "design.toml"
+    path.write_text(to_toml(cfg))
+    back = load_config(path)
+    for section in ("geometry", "mass", "design", "stroke"):
+        assert getattr(back, section) == getattr(cfg, section)
