@@ -37,7 +37,7 @@ def definitions() -> dict[str, tuple]:
         for p in params.split(","):
             p = p.strip()
             t = re.sub(r"\s*\b\w+$", "", p).replace("*", " *").strip()
-            types.append(re.sub(r"\s+", " ", t).replace(" *", " *"))
+            types.append(re.sub(r"\s+", " ", t))
         out[name] = (ret, types)
     return out
 

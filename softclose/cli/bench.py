@@ -34,8 +34,8 @@ def register(sub) -> None:
                    help="fewer designs, steps and repeats (cannot confirm the default step)")
     p.add_argument("--structures", action="store_true",
                    help="also measure the NLP structures of the main commands (optimise, --robust, "
-                        "the co-designs): variables, "
-                        "parameters, generated C and the time to build and compile it (minutes)")
+                        "the co-designs): variables, parameters, generated C and the time to "
+                        "build and compile it (minutes)")
     p.set_defaults(run=run)
 
 
