@@ -342,6 +342,11 @@ def value_for(draw, key: str, vkind: str) -> str:
     if kind in ("polygons", "free") and vkind not in ("string", "bool", "big_int", "nan"):
         ok, bad = POLYGONS if kind == "polygons" else FREE_TABLES
         return draw(st.sampled_from(bad if vkind in REFUSED_KINDS else ok + bad))
+    if kind == "reals" and vkind in ("in_range", "edge", "outside", "scaled", "nan", "inf",
+                                     "tiny", "zero", "negative", "huge"):
+        # a list of numbers (one to three) of that kind
+        comps = [draw(scalar_value(key, "real", vkind)) for _ in range(draw(st.integers(1, 3)))]
+        return "[" + ", ".join(comps) + "]"
     if kind in _VEC_LEN:
         n = _VEC_LEN[kind]
         if vkind in ("in_range", "edge", "outside", "scaled", "nan", "inf", "tiny", "zero",
@@ -962,7 +967,7 @@ _COMPANIONS = {
 
 def _edge_config(key: str, value):
     kind = SCHEMA[key.split(".")[0]][key.split(".")[1]][0]
-    n = _VEC_LEN.get(kind)
+    n = _VEC_LEN.get(kind, 1 if kind == "reals" else None)
     raw = {key: [value] * n if n else value}
     return raw, kind
 

@@ -189,6 +189,9 @@ SPRING: tuple[Key, ...] = (
         "the temperature of a stroke: the parts' values, given at the reference temperature, "
         "follow their laws (coil springs' rate and preload, every damper's coefficient)",
         lo=-60.0, hi=150.0),
+    Key("operating", "temperatures_c", "reals", (), "°C",
+        "the temperatures at which a design must meet every constraint (robust design, "
+        "yield, select, report); empty: `[temperature_c]`", lo=-60.0, hi=150.0),
     Key("operating", "reference_temperature_c", "real", 23.0, "°C",
         "the temperature at which the parts' values are given (datasheets: 23 °C)",
         lo=-60.0, hi=150.0),

@@ -85,6 +85,10 @@ def check(key: str, kind: str, v: Any) -> Any:
         if kind == "bounds" and xs[0] > xs[1]:
             raise ConfigError(f"{key}: lower bound {xs[0]} exceeds upper bound {xs[1]}")
         return xs
+    if kind == "reals":                  # a list of numbers (may be empty)
+        if not isinstance(v, (list, tuple)):
+            raise ConfigError(f"{key}: expected a list of numbers, got {got(v)}")
+        return tuple(number(f"{key}[{i}]", x) for i, x in enumerate(v))
     if kind == "int+":
         if isinstance(v, bool) or not isinstance(v, int):
             raise ConfigError(f"{key}: expected a whole number, got {got(v)}"
