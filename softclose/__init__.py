@@ -20,7 +20,8 @@ keys), ``.to_json()`` and ``.plot()`` (a matplotlib Figure):
 - :func:`load_config`, :func:`default_config`; ``cfg.set("mass.lid", 0.6)`` changes one key.
 
 Lower layers for scripts that need them: :class:`LidModel`, :class:`Simulator`,
-:class:`Reference`, :mod:`softclose.problem` (design keys, metrics and units, objective,
+:class:`Reference` (each from a config: ``Simulator.from_config(cfg)``; below the features
+they take the config resolved once, :func:`resolve`), :mod:`softclose.problem` (design keys, metrics and units, objective,
 constraints, accuracy targets). The feature packages are :mod:`softclose.optimiser`,
 :mod:`softclose.sweeps` and :mod:`softclose.robust`; they are imported on first use, so
 ``import softclose`` stays light.
@@ -32,7 +33,8 @@ from .config import Config, default_config, load_config
 from .errors import ConfigError, NumericalError, SoftcloseError
 from .model.lid import LidModel
 from .simulation.reference import Reference
-from .simulation.simulator import Simulator, simulate
+from .problem import resolve
+from .simulation.simulator import Simulator
 from .simulation.stroke import StrokeResult, StrokeStatus
 from .version import __version__  # noqa: F401  (re-exported)
 
@@ -51,7 +53,47 @@ __all__ = ["simulate", "optimise", "front", "sweep", "sample", "tolerance_analys
            "sensitivity", "fit", "FitResult", "load_config", "default_config", "Config", "StrokeResult",
            "StrokeStatus", "OptimiseResult", "FrontResult", "SweepResult", "RobustResult",
            "YieldResult", "SensitivityResult", "select", "SelectResult", "ConfigError",
-           "NumericalError", "SoftcloseError", "LidModel", "Reference", "Simulator"]
+           "NumericalError", "SoftcloseError", "LidModel", "Reference", "Simulator", "resolve"]
+
+
+def simulate(cfg: Config, trajectory: bool = False) -> StrokeResult:
+    """One closing stroke of ``cfg``'s design with ``cfg``'s integrator and step.
+
+    Returns a :class:`~softclose.simulation.stroke.StrokeResult`: the metrics, each fixed-step
+    one with its estimated distance from the converged answer (``accuracy``), and with
+    ``trajectory=True`` the time histories (``.plot()``, ``.trajectory_frame()``). A stroke
+    the method cannot integrate is reported (``ok`` False, ``message`` says what to change),
+    never raised.
+    """
+    return Simulator(resolve(cfg), cached=True).run(trajectory=trajectory)
+
+
+def _model_from_config(cls, cfg: Config, cached: bool = False) -> LidModel:
+    """The lid model of ``cfg`` (``cached``: from the disk cache when built before):
+    ``LidModel(resolve(cfg))``."""
+    return cls.cached(resolve(cfg)) if cached else cls(resolve(cfg))
+
+
+def _simulator_from_config(cls, cfg: Config, model: LidModel | None = None,
+                           integrator: str | None = None, step: float | None = None,
+                           cached: bool = False) -> Simulator:
+    """The simulator of ``cfg``: ``Simulator(resolve(cfg), ...)``."""
+    return cls(resolve(cfg), model, integrator, step, cached)
+
+
+def _reference_from_config(cls, cfg: Config, model: LidModel | None = None,
+                           grid_step: float = 2e-3) -> Reference:
+    """The adaptive reference of ``cfg`` (its ``simulate.reference_tol``), of ``model`` or
+    ``cfg``'s own."""
+    case = resolve(cfg)
+    return cls(model or LidModel(case), case.solver.reference_tol, grid_step)
+
+
+# the public classes' constructors from a config, defined here, where the config is read
+# (below the features nothing takes a config)
+LidModel.from_config = classmethod(_model_from_config)
+Simulator.from_config = classmethod(_simulator_from_config)
+Reference.from_config = classmethod(_reference_from_config)
 
 
 def optimise(cfg: Config, *, robust: bool = False, progress: bool = False, **options):

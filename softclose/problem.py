@@ -29,9 +29,12 @@ from typing import Any
 import numpy as np
 
 from .errors import ConfigError
-from .config.schema import KEYS
+from .config.load import STEP_BUDGET, TRAJECTORY_BUDGET
+from .config.schema import KEYS, RANGES
 from .model import elements
 from .model.elements import ELEMENTS, PARAM_NAMES, PARAMS
+from .model.resolved import (Lid, LidCase, Mounting, SolverSettings, StrokeEnds,
+                             Temperatures)
 
 #: the design variables the optimiser picks (config section [design], bounds in [optimise])
 DESIGN_KEYS = ("spring_k", "spring_rest_length", "damper_c")
@@ -62,6 +65,15 @@ def word_code(key: str, word) -> float:
     raise ValueError(f"{key} takes {', '.join(word_text(key, c) for c in q.codes.values())}, "
                      f"got {word!r}")
 
+
+#: the limits the simulation's advice names, from the config's key records: the smallest
+#: admissible and the default ``simulate.step`` (s); the work budgets (``STEP_BUDGET``,
+#: ``TRAJECTORY_BUDGET``) and the admissible ranges (``RANGES``) are the config's own
+MIN_STEP = RANGES["simulate.step"][0]
+DEFAULT_STEP = next(k.default for k in KEYS if k.full == "simulate.step")
+#: the adaptive reference's default tolerance (``simulate.reference_tol``)
+REFERENCE_TOL = next(k.default for k in KEYS if k.full == "simulate.reference_tol")
+assert STEP_BUDGET and TRAJECTORY_BUDGET       # (re-exported for the simulation)
 
 #: the config key the kernels also take per stroke, beside p (their lid-mass column: the
 #: tabulated coefficients are affine in the lid mass)
@@ -142,11 +154,52 @@ VERIFY_RTOL = 1e-3
 CONSTRAINT_TOL = 1e-7
 
 
+def config_value(q, cfg):
+    """The value of the parameter ``q`` (a :class:`~softclose.model.elements.Param`) in
+    ``cfg``, as the config holds it (a word for a coded parameter)."""
+    section, attr = q.key.split(".")
+    return getattr(getattr(cfg, section), attr)
+
+
 def params_of(cfg, design: dict | None = None) -> np.ndarray:
     """The parameter vector p (:data:`PARAM_KEYS`) of ``cfg``'s design, with ``design`` (a
     dict of some of its keys) taking precedence."""
     d = dict(design or {})
-    return np.array([q.number(d[q.name] if q.name in d else q.value(cfg)) for q in PARAMS])
+    return np.array([q.number(d[q.name] if q.name in d else config_value(q, cfg))
+                     for q in PARAMS])
+
+
+def resolve_lid(cfg) -> Lid:
+    """The lid of ``cfg`` on its mechanism, with its elements' mounting."""
+    d = cfg.design
+    return Lid(cfg.geometry, cfg.mass,
+               Mounting(d.torsion_pivot, d.rotary_damper_pivot, d.spring_min_length,
+                        d.spring_max_length),
+               cfg.raw.get("mass", {}).get("inertia_lid") is None)
+
+
+def resolve_stroke(cfg) -> StrokeEnds:
+    """The stroke's ends of ``cfg``."""
+    st = cfg.stroke
+    return StrokeEnds(st.theta0_deg, st.theta_closed_deg, st.theta_open_deg, st.t_max)
+
+
+def resolve_temperatures(cfg) -> Temperatures:
+    """The operating and reference temperatures of ``cfg`` and its parts' laws."""
+    op = cfg.operating
+    return Temperatures(op.temperature_c, op.reference_temperature_c,
+                        cfg.design.damper_temperature_coeff, cfg.spring.material)
+
+
+def resolve(cfg) -> LidCase:
+    """``cfg`` resolved, once, into what the model and the simulation take
+    (:mod:`softclose.model.resolved`): the lid on its mechanism, the stroke, the design vector
+    p, the solver settings and the temperatures. Below the features nothing takes a config."""
+    sim = cfg.simulate
+    return LidCase(resolve_lid(cfg), resolve_stroke(cfg),
+                   tuple(float(v) for v in params_of(cfg)),
+                   SolverSettings(sim.integrator, sim.step, sim.reference_tol),
+                   resolve_temperatures(cfg))
 
 
 #: the parameters' defaults (the elements added since the seed: absent)

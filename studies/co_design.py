@@ -134,9 +134,10 @@ def main(argv=None) -> int:
               if p == "robust" and res.success and res.objective is not None]
     best = min(robust, key=lambda x: x[0])[2]
     from softclose.present.figures.attachment import plot_attachments
-    files.append(save(plot_attachments(softclose.LidModel(best.design_config()),
-                                       title="Best robust design",
-                                       before=softclose.LidModel(cfg)), a.out / "attachments.png"))
+    files.append(save(plot_attachments(softclose.LidModel.from_config(best.design_config()),
+                                       best.design_config(), title="Best robust design",
+                                       before=softclose.LidModel.from_config(cfg)),
+                      a.out / "attachments.png"))
     summary = {"levers": rows,
                "designs": {f"{p}_{lever}": {"design": res.design, "objective": res.objective,
                                             "success": res.success,

@@ -102,12 +102,12 @@ def cfg():
 
 @pytest.fixture(scope="session")
 def model(cfg):
-    return LidModel(cfg)
+    return LidModel.from_config(cfg)
 
 
 @pytest.fixture(scope="session")
 def sim(cfg, model):
-    return Simulator(cfg, model)
+    return Simulator.from_config(cfg, model)
 
 
 @pytest.fixture(scope="session")
@@ -124,12 +124,12 @@ def cfg2():
 
 @pytest.fixture(scope="session")
 def model2(cfg2):
-    return LidModel(cfg2)
+    return LidModel.from_config(cfg2)
 
 
 @pytest.fixture(scope="session")
 def sim2(cfg2, model2):
-    return Simulator(cfg2, model2)
+    return Simulator.from_config(cfg2, model2)
 
 
 @pytest.fixture(scope="session")

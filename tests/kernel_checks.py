@@ -22,7 +22,7 @@ import numpy as np
 from softclose.simulation.kernel import binding as native
 from softclose.config import default_config
 from softclose.simulation.simulator import Simulator
-sim = Simulator(default_config()); st = sim.cfg.stroke
+sim = Simulator.from_config(default_config()); st = sim.stroke
 D = np.array(json.loads(sys.stdin.read()), dtype=float)
 out = native.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0, st.theta_closed, D)
 sys.stdout.write(json.dumps([out.tobytes().hex(), out.shape[1]]))

@@ -37,9 +37,9 @@ def test_rows_are_errors_against_the_truth(wp):
     """The table's rk4 row at 2 ms on soft_close equals an independent recomputation:
     the stroke against CVODES at 1e-14, absolute errors, relative for the tip speeds."""
     cfg = default_config()
-    model = LidModel(cfg)
+    model = LidModel.from_config(cfg)
     p = np.array(bench.SPRING_DASHPOT["soft_close"])
-    res = Simulator(cfg, model=model, step=2e-3).run(p)
+    res = Simulator.from_config(cfg, model=model, step=2e-3).run(p)
     truth = Reference(model, bench.TRUTH_TOL).simulate(p)
     row = next(r for r in wp.rows if r["design"] == "soft_close" and r["method"] == "rk4"
                and r["step"] == 2e-3)
@@ -114,10 +114,10 @@ def test_stiff_corner_rules_out_5ms():
     """What the full bench adds to the quick one: on stiff_corner rk4 at 5 ms misses the
     impact_theta_dot target and 2 ms meets every target (against CVODES at 1e-14)."""
     cfg = default_config()
-    model = LidModel(cfg)
+    model = LidModel.from_config(cfg)
     p = np.array(bench.SPRING_DASHPOT["stiff_corner"])
     truth = Reference(model, bench.TRUTH_TOL).simulate(p)
-    sim = Simulator(cfg, model=model)
+    sim = Simulator.from_config(cfg, model=model)
     sim.step = 5e-3
     e5 = bench.errors(sim.run(p), truth)
     sim.step = 2e-3

@@ -67,7 +67,7 @@ def _edge(geo, a, b):
 def test_crank_bc_family_builds_and_closes_like_the_reference(crank_bc):
     cfg = _cfg(crank_bc=crank_bc)            # geometry.assembly left at its default
     assert cfg.geometry.assembly == DEFAULT_ASSEMBLY
-    model = LidModel(cfg)
+    model = LidModel.from_config(cfg)
     side = 1.0   # sin(146.8855 - 108.6655) > 0: the default assembly's side
     assert model.sigma == -1
     st = cfg.stroke
@@ -83,7 +83,7 @@ def test_crank_bc_family_builds_and_closes_like_the_reference(crank_bc):
     if crank_bc in (0.07, 0.09):   # these were refused by the old 10-degree distance rule
         phi18 = _side_roots(math.radians(18.0), cfg.geometry, side)[0][0]
         assert abs(wrap_deg(math.degrees(phi18) - DEFAULT_ASSEMBLY[1])) > 10.0
-    res = Simulator(cfg, model).run()
+    res = Simulator.from_config(cfg, model).run()
     ref = Reference(model).simulate()
     assert res.closed and ref.closed
     assert abs(res.closing_time - ref.closing_time) < 1e-6
@@ -91,7 +91,7 @@ def test_crank_bc_family_builds_and_closes_like_the_reference(crank_bc):
 
 
 def test_default_geometry_spec8_angles():
-    model = LidModel(default_config())
+    model = LidModel.from_config(default_config())
     phi, gamma = (math.degrees(v) for v in model.closure(math.radians(18.0)))
     assert abs(phi - 108.665505) <= 0.5e-6
     assert abs(gamma - 146.885531) <= 0.5e-6
@@ -124,7 +124,7 @@ def test_other_side_gives_the_other_solution():
     (phi_o, gamma_o), = _side_roots(th18, cfg0.geometry, -1.0)
     asm = [18.0, math.degrees(phi_o), math.degrees(gamma_o)]
     cfg = from_dict({"geometry": {"assembly": asm}})
-    model, model0 = LidModel(cfg), LidModel(cfg0)
+    model, model0 = LidModel.from_config(cfg), LidModel.from_config(cfg0)
     assert model.sigma == -model0.sigma == 1
     for th in np.linspace(cfg.stroke.theta_closed, cfg.stroke.theta0, 5):
         (phi_np, gamma_np), = _side_roots(th, cfg.geometry, -1.0)
@@ -133,7 +133,7 @@ def test_other_side_gives_the_other_solution():
         assert abs(wrap_deg(math.degrees(gamma - gamma_np))) < 1e-8
         assert abs(wrap_deg(math.degrees(phi - model0.closure(th)[0]))) > 90.0
     # the default chain is Grashof with the coupler shortest: the other assembly closes too
-    res, ref = Simulator(cfg, model).run(), Reference(model).simulate()
+    res, ref = Simulator.from_config(cfg, model).run(), Reference(model).simulate()
     assert res.closed and ref.closed
     assert abs(res.closing_time - ref.closing_time) < 1e-6
 
@@ -142,7 +142,7 @@ def test_other_side_gives_the_other_solution():
                                               ((200.0, 100.0), 1)])
 def test_assembly_angles_far_from_both_solutions_select_by_side(phi_gamma, sigma):
     """phi, gamma only name the side: far from both solutions is accepted, by its sign."""
-    model = LidModel(from_dict({"geometry": {"assembly": [18.0, *phi_gamma]}}))
+    model = LidModel.from_config(from_dict({"geometry": {"assembly": [18.0, *phi_gamma]}}))
     assert model.sigma == sigma
     (phi_np, _), = _side_roots(math.radians(18.0), model.geo, -sigma)
     assert abs(wrap_deg(math.degrees(model.closure(math.radians(18.0))[0] - phi_np))) < 1e-8
@@ -151,7 +151,7 @@ def test_assembly_angles_far_from_both_solutions_select_by_side(phi_gamma, sigma
 def test_cranks_in_line_name_no_branch():
     cfg = from_dict({"geometry": {"assembly": [18.0, 10.0, 190.0]}})
     with pytest.raises(ConfigError) as exc:
-        LidModel(cfg)
+        LidModel.from_config(cfg)
     msg = str(exc.value)
     assert "\n" not in msg and msg.startswith("geometry.assembly")
     # the message offers both solutions at 18 deg: they are the numpy ones
@@ -170,7 +170,7 @@ def test_cannot_assemble_names_where_the_loop_closes():
     does (one interval across the +-180 seam) and which keys to change."""
     cfg = _cfg(crank_bc=0.1)
     with pytest.raises(ConfigError) as exc:
-        LidModel(cfg)
+        LidModel.from_config(cfg)
     msg = str(exc.value)
     assert "\n" not in msg
     for key in ("geometry.assembly", "crank_bc", "crank_oa"):
@@ -184,7 +184,7 @@ def test_cannot_assemble_names_where_the_loop_closes():
 
 def test_closes_nowhere():
     with pytest.raises(ConfigError, match=r"^geometry: the loop cannot close at any lid angle"):
-        LidModel(_cfg(crank_bc=0.2))
+        LidModel.from_config(_cfg(crank_bc=0.2))
 
 
 def test_toggle_inside_the_stroke_is_named():
@@ -192,7 +192,7 @@ def test_toggle_inside_the_stroke_is_named():
     0..18 deg stroke. The named angle is that toggle (3 decimals, rounded to its far side)."""
     cfg = _cfg(crank_bc=0.0935)
     with pytest.raises(ConfigError) as exc:
-        LidModel(cfg)
+        LidModel.from_config(cfg)
     msg = str(exc.value)
     assert "\n" not in msg and "toggle" in msg and "inside the stroke" in msg
     for key in ("crank_bc", "stroke.theta0_deg"):
@@ -207,7 +207,7 @@ def test_toggle_between_locates_the_edge():
     """crank_bc = 0.09 closes down to about -18 deg: the scan from the release angle finds
     the edge to bisection accuracy (the angle 'state --theta-deg' reports)."""
     cfg = _cfg(crank_bc=0.09)
-    model = LidModel(cfg)
+    model = LidModel.from_config(cfg)
     found = model.toggle_between(cfg.stroke.theta0, math.radians(-40.0))
     edge = _edge(cfg.geometry, math.radians(-10.0), math.radians(-30.0))
     assert abs(found - edge) < 1e-9

@@ -25,7 +25,7 @@ from softclose.config import default_config
 from softclose.simulation.simulator import Simulator
 ext = library._built_extension()
 native.load()
-r = Simulator(default_config(), cached=True).run()
+r = Simulator.from_config(default_config(), cached=True).run()
 assert r.closed, r
 print("extension" if ext is not None else library._fallback_name())
 """

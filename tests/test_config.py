@@ -166,7 +166,7 @@ def test_toggle_inside_the_stroke_is_rejected():
                                                       math.degrees(gamma)]},
                      "stroke": {"theta0_deg": 60.0, "theta_closed_deg": 10.0}})
     with pytest.raises(ConfigError) as exc:
-        LidModel(cfg)
+        LidModel.from_config(cfg)
     msg = str(exc.value)
     assert "toggle" in msg and "\n" not in msg
     # the message names an angle of the stroke at which the loop does not close
@@ -182,9 +182,9 @@ def test_default_step_meets_targets():
     from softclose import LidModel, Reference, Simulator
     cfg = default_config()
     assert cfg.simulate.step == 0.002
-    model = LidModel(cfg)
+    model = LidModel.from_config(cfg)
     p = as_params([1e4, 0.02, 5000.0, 0.0])
-    r, R = Simulator(cfg, model).run(p), Reference(model).simulate(p)
+    r, R = Simulator.from_config(cfg, model).run(p), Reference(model).simulate(p)
     assert abs(r.closing_time - R.closing_time) <= 1e-7
     assert abs(r.impact_theta_dot - R.impact_theta_dot) <= 1e-6
     assert abs(r.peak_tip_speed - R.peak_tip_speed) <= 1e-6 * R.peak_tip_speed

@@ -33,7 +33,7 @@ def cfg_of(**design):
 def case(request):
     cfg = cfg_of(rotary_damper_pivot=request.param, rotary_damper_c=0.05, spring_k=600.0,
                  spring_rest_length=0.07, damper_c=100.0)
-    return request.param, cfg, LidModel(cfg)
+    return request.param, cfg, LidModel.from_config(cfg)
 
 
 def test_three_formulations_agree_for_a_damper_at_each_pivot(case):
@@ -51,7 +51,7 @@ def test_three_formulations_agree_for_a_damper_at_each_pivot(case):
         assert ne == pytest.approx(red, rel=1e-10, abs=1e-10)
         assert ab == pytest.approx(red, rel=1e-10, abs=1e-10)
     # the damper at the pivot is not the damper on the lid (the test can fail)
-    lid = LidModel(cfg.set("design.rotary_damper_pivot", "lid"))
+    lid = LidModel.from_config(cfg.set("design.rotary_damper_pivot", "lid"))
     assert abs(lid.theta_ddot(th, -3.0, p) - model.theta_ddot(th, -3.0, p)) > 1e-4
 
 
@@ -68,7 +68,7 @@ def test_energy_falls_by_the_damper_power(case):
 
 def test_kernel_strokes_match_the_reference(case):
     _, cfg, model = case
-    sim = Simulator(cfg, model=model)
+    sim = Simulator.from_config(cfg, model=model)
     p = model.params()
     r, rr = sim.run(p), Reference(model).simulate(p)
     assert r.closed and rr.closed
@@ -85,19 +85,19 @@ def test_one_way_dampers_leave_a_closing_stroke_and_change_a_rebound():
     strong spring that throws the lid up first: the one-way dampers let it rise freely (it
     rises higher), and the kernel and the reference agree on that stroke."""
     closing = cfg_of(spring_k=1914.70922, spring_rest_length=0.0792570742, damper_c=2087.7541)
-    a, b = Simulator(closing).run(), Simulator(closing.set("design.damper_one_way", True)).run()
+    a, b = Simulator.from_config(closing).run(), Simulator.from_config(closing.set("design.damper_one_way", True)).run()
     assert a.closing_time == b.closing_time and a.peak_tip_speed == b.peak_tip_speed
     up = cfg_of(spring_k=3000.0, spring_rest_length=0.09, damper_c=150.0,
                 rotary_damper_c=0.02)
-    two = Simulator(up).run(), Simulator(up.set("design.damper_one_way", True)).run()
+    two = Simulator.from_config(up).run(), Simulator.from_config(up.set("design.damper_one_way", True)).run()
     assert two[1].theta_max > two[0].theta_max + 1e-3          # rises higher, undamped
     ow = up.set("design.damper_one_way", True)
-    model = LidModel(ow)
-    r, rr = Simulator(ow, model=model).run(), Reference(model).simulate()
+    model = LidModel.from_config(ow)
+    r, rr = Simulator.from_config(ow, model=model).run(), Reference(model).simulate()
     assert r.theta_max == pytest.approx(rr.theta_max, abs=1e-7)
     assert r.closed == rr.closed
     if r.closed:
         assert abs(r.closing_time - rr.closing_time) < 1e-5
     # the one-way damper still only dissipates: the energy never rises along the stroke
-    tr = Simulator(ow, model=model).run(trajectory=True).trajectory
+    tr = Simulator.from_config(ow, model=model).run(trajectory=True).trajectory
     assert np.all(np.diff(tr["energy"]) <= 1e-9 * np.abs(tr["energy"]).max())

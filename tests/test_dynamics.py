@@ -150,5 +150,5 @@ def test_holding_moment_is_dV_dtheta_at_closed(geometry_case):
         V = lambda th: np_energy(model, th, 0.0, p)  # noqa: E731
         dV = (V(thc - 2 * h) - 8 * V(thc - h) + 8 * V(thc + h) - V(thc + 2 * h)) / (12 * h)
         assert model.holding_moment(p) == pytest.approx(dV, rel=1e-7, abs=1e-9)
-    if model.cfg is cfg and cfg.geometry.crank_oa == 0.045:
+    if model.geo is cfg.geometry and cfg.geometry.crank_oa == 0.045:
         assert model.holding_moment(as_params(np.zeros(4))) > 0   # gravity alone presses the lid shut

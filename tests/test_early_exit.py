@@ -36,7 +36,7 @@ def designs_of(sim, P):
 
 
 def strokes(sim, D, early=True):
-    st = sim.cfg.stroke
+    st = sim.stroke
     return native.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
                               st.theta_closed, D, early_exit=early)
 
@@ -61,7 +61,7 @@ def grid(sim):
 
 def test_grid_metrics_identical_with_and_without_early_exit(sim, grid):
     P, D, on, off = grid
-    t_max = sim.cfg.stroke.t_max
+    t_max = sim.stroke.t_max
     for key in FINAL:
         assert np.array_equal(on[:, COL[key]], off[:, COL[key]], equal_nan=True), key
     # the physics names the same equilibrium at the exit as at t_max (to rounding)
@@ -84,7 +84,7 @@ def test_grid_metrics_identical_with_and_without_early_exit(sim, grid):
 @pytest.mark.parametrize("integrator,step", [("euler_cromer", 5e-4), ("gauss4", 2e-3),
                                              ("radau5", 4e-3)])
 def test_other_methods_identical_with_and_without_early_exit(cfg, model, integrator, step):
-    sim = Simulator(cfg, model, integrator=integrator, step=step)
+    sim = Simulator.from_config(cfg, model, integrator=integrator, step=step)
     P = grid_designs()[::3]
     D = designs_of(sim, P)
     on, off = strokes(sim, D, True), strokes(sim, D, False)
@@ -105,7 +105,7 @@ def test_energy_margin_holds_after_every_exit(cfg, model, integrator, step):
     """The rule assumes the rest of the stroke never gains more than the margin
     2 (steps left) g + 1e-12 E_scale over the energy at the exit (g: the largest gain of one
     step before it). Checked on the full stroke of every exited row."""
-    sim = Simulator(cfg, model, integrator=integrator, step=step)
+    sim = Simulator.from_config(cfg, model, integrator=integrator, step=step)
     st = cfg.stroke
     P = grid_designs()[::2]
     D = designs_of(sim, P)
@@ -148,7 +148,7 @@ def test_closed_agrees_with_reference_incl_closing_boundary(cfg):
     first swing barely misses the rim and stop early, and slow creepers at t_max); the
     kernel (with early exit) and CVODES agree on closed, and on the metrics of open rows."""
     cfg1 = cfg.replace(stroke={"t_max": 1.0})       # keeps the reference affordable
-    sim = Simulator(cfg1)
+    sim = Simulator.from_config(cfg1)
     ref = Reference(sim.model)
     rows = []
     for l0, c, rel in ((0.075, 20.0, 1e-4), (0.075, 300.0, 1e-4), (0.09, 100.0, 1e-3),
@@ -182,13 +182,13 @@ def test_undamped_designs_run_to_t_max(sim):
     out = strokes(sim, designs_of(sim, P))
     is_open = out[:, COL["status"]] == 1
     assert is_open.sum() > 10
-    assert np.all(out[is_open, COL["stop_time"]] == pytest.approx(sim.cfg.stroke.t_max))
+    assert np.all(out[is_open, COL["stop_time"]] == pytest.approx(sim.stroke.t_max))
 
 
 def test_held_open_at_the_equilibrium(sim, model):
     """A strong spring holds the lid open: the reason names the equilibrium, where V' = 0
     (the model's dV, not the table) and V'' > 0, and the lid comes to rest there."""
-    st = sim.cfg.stroke
+    st = sim.stroke
     p = as_params([6000.0, 0.07, 1000.0, 0.0])
     D = designs_of(sim, p[None, :])
     on = strokes(sim, D)[0]
@@ -214,7 +214,7 @@ def test_barrier_between_the_lid_and_the_rim(cfg):
     makes a hill of V between a well near theta0 and the rim: the lid falls into the well
     and stops behind the barrier; its top has V' = 0 and V'' < 0 (model's dV)."""
     cfg_b = cfg.replace(geometry={"spring_anchor": [-0.02, 0.06]})
-    sim = Simulator(cfg_b)
+    sim = Simulator.from_config(cfg_b)
     st = cfg_b.stroke
     l0 = float(sim.table.evaluate([st.theta0])[0, 4])  # at rest length at release
     for c in (0.0, 50.0):

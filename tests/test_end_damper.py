@@ -76,8 +76,8 @@ def cases():
     out = {}
     for name, sets in DESIGNS.items():
         cfg = default_config().update(sets)
-        model = LidModel(cfg)
-        out[name] = (cfg, Simulator(cfg, model=model).run(), Reference(model).simulate())
+        model = LidModel.from_config(cfg)
+        out[name] = (cfg, Simulator.from_config(cfg, model=model).run(), Reference(model).simulate())
     return out
 
 
@@ -118,12 +118,12 @@ def test_the_damper_changes_the_stroke(cases):
     """The designs differ from the same lid without the damper (the tests can fail), and the
     released-engaged lid is the one whose damper acts from theta0 on."""
     _, r, _ = cases["inside"]
-    free = Simulator(cfg_of(**SPRING)).run()
+    free = Simulator.from_config(cfg_of(**SPRING)).run()
     assert r.closing_time > free.closing_time + 0.03
     assert abs(r.impact_theta_dot) < 0.5 * abs(free.impact_theta_dot)
     # below theta_e the peak is the engagement's: the lid falls freely to it, then slows
     assert r.peak_tip_speed == pytest.approx(
-        abs(r.engage_theta_dot) * float(LidModel(cfg_of(**SPRING)).coeffs(
+        abs(r.engage_theta_dot) * float(LidModel.from_config(cfg_of(**SPRING)).coeffs(
             math.radians(10.0))[0][7]), rel=1e-9)
     _, above, _ = cases["above theta0"]
     _, on, _ = cases["on theta0"]
@@ -136,7 +136,7 @@ def test_never_acting_damper_leaves_the_rows_unchanged(sim):
     """A row whose end damper never acts -- its angle at or below the rim, or above the rim
     but never reached -- gives the numbers of the row without it, bit for bit (the energy
     rule too: it applies from the first engagement), its engagement columns NaN."""
-    st = sim.cfg.stroke
+    st = sim.stroke
     rng = np.random.default_rng(4)
     n = 300
     P = np.tile(sim.model.params(), (n, 1))
@@ -191,7 +191,7 @@ FLOOR = {"closing_time": 2e-12, "engage_time": 2e-12, "impact_theta_dot": 4e-11,
 @pytest.fixture(scope="module")
 def order_case():
     cfg = default_config().update(ORDER_SETS)
-    model = LidModel(cfg)
+    model = LidModel.from_config(cfg)
     return cfg, model, Reference(model, tol=1e-14).simulate()
 
 
@@ -217,7 +217,7 @@ def test_every_method_keeps_its_order(order_case, name):
     order = get_method(name).order
     errs = {k: [] for k in ORDER_KEYS}
     for h in ORDER_STEPS[name]:
-        b = Simulator(cfg, model, name, h).run_batch(p[None, :])
+        b = Simulator.from_config(cfg, model, name, h).run_batch(p[None, :])
         assert b["status"][0] == 0
         for k in ORDER_KEYS:
             errs[k].append(abs(float(b[k][0]) - getattr(truth, k)))
@@ -266,7 +266,7 @@ def test_an_unlocated_switch_converges_at_order_one(order_case):
                 - truth.closing_time) for h in steps]
     assert 0.5 < _slope(steps, errs) < 1.6, errs
     # and the kernel at the coarsest of those steps is far better than the control at its finest
-    k = Simulator(cfg, model, "rk4", steps[0]).run_batch(p[None, :])["closing_time"][0]
+    k = Simulator.from_config(cfg, model, "rk4", steps[0]).run_batch(p[None, :])["closing_time"][0]
     assert abs(k - truth.closing_time) < 1e-3 * errs[-1]
 
 
@@ -280,7 +280,7 @@ def test_energy_balance(sets):
     while the lid closes): trapezoids on the trajectory, whose nodes include each crossing.
     Counting it over the whole stroke breaks the balance (the test can fail)."""
     cfg = default_config().update({**sets, "stroke.t_max": 1.0})
-    sim = Simulator(cfg, step=2.5e-4)
+    sim = Simulator.from_config(cfg, step=2.5e-4)
     tr = sim.run(trajectory=True).trajectory
     t, th, thd = tr["t"], tr["theta"], tr["theta_dot"]
     E = tr["energy"]
@@ -314,9 +314,9 @@ def test_three_formulations_agree():
     for ow in (False, True):
         cfg = cfg_of(**SPRING, **end(0.6, 8.0), damper_c=50.0, damper_one_way=ow,
                      **{"friction.torque": 0.02})
-        model, ab = LidModel(cfg), read_parameters(cfg)
+        model, ab = LidModel.from_config(cfg), read_parameters(cfg)
         assert ab.c_end == 0.6 and ab.theta_end == pytest.approx(math.radians(8.0))
-        without = LidModel(cfg.set("design.end_damper_c", 0.0))
+        without = LidModel.from_config(cfg.set("design.end_damper_c", 0.0))
         p, p0 = model.params(), without.params()
         for th, thd in ((0.05, -1.5), (0.12, -3.0), (0.139, -0.7), (0.04, 2.0), (0.2, 1.0)):
             red = model.theta_ddot(th, thd, p)
@@ -333,9 +333,9 @@ def test_three_formulations_agree():
 
 def test_statics_are_those_of_the_lid_without_it():
     """The holding moment and the opening effort (a slow lift) do not see a damper."""
-    a = Simulator(cfg_of(**SPRING)).run()
-    b = Simulator(cfg_of(**SPRING, **end(2.0, 10.0))).run()
-    c = Reference(LidModel(cfg_of(**SPRING, **end(2.0, 10.0)))).simulate()
+    a = Simulator.from_config(cfg_of(**SPRING)).run()
+    b = Simulator.from_config(cfg_of(**SPRING, **end(2.0, 10.0))).run()
+    c = Reference(LidModel.from_config(cfg_of(**SPRING, **end(2.0, 10.0)))).simulate()
     assert b.holding_moment == a.holding_moment == c.holding_moment
     assert b.opening_force == a.opening_force
     assert c.opening_force == pytest.approx(a.opening_force, rel=1e-9)
@@ -344,7 +344,7 @@ def test_statics_are_those_of_the_lid_without_it():
 def test_kernel_step_takes_the_state_of_its_start(sim):
     """One kernel step engaged as its start angle says (for the tests' single steps)."""
     cfg = cfg_of(**SPRING, **end(0.8, 10.0))
-    s = Simulator(cfg)
+    s = Simulator.from_config(cfg)
     p = s.model.params()
     p0 = s.model.params()
     p0[list(native.DESIGN_COLUMNS).index("end_damper_c")] = 0.0
@@ -371,7 +371,7 @@ def grid_rows(sim):
 
 
 def strokes(sim, D, early=True):
-    st = sim.cfg.stroke
+    st = sim.stroke
     return native.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
                               st.theta_closed, D, early_exit=early)
 
@@ -388,7 +388,7 @@ def test_early_exit_on_end_damper_rows(cfg, model, integrator, step):
     without it, bit for bit; rows whose only damper is the end damper stop early once it
     has engaged; the energy margin the rule rests on holds on the rest of every exited
     stroke (integrated to t_max)."""
-    sim = Simulator(cfg, model, integrator=integrator, step=step)
+    sim = Simulator.from_config(cfg, model, integrator=integrator, step=step)
     st = cfg.stroke
     P = grid_rows(sim)
     D = np.column_stack([native.kernel_rows(P), sim.energy_tol(P)])
@@ -441,13 +441,13 @@ def test_stiff_end_damper_is_unstable_not_stuck():
     import time
     cfg = cfg_of(**end(100.0, 5.0))
     t = time.perf_counter()
-    r = Simulator(cfg).run()
+    r = Simulator.from_config(cfg).run()
     assert time.perf_counter() - t < 5.0
     assert r.status.text == "unstable" and "use simulate.step <=" in r.message
     assert "radau5" in r.message
-    ok = Simulator(cfg.set("simulate.integrator", "radau5")).run()
+    ok = Simulator.from_config(cfg.set("simulate.integrator", "radau5")).run()
     assert ok.ok and ok.engage_time == pytest.approx(
-        Reference(LidModel(cfg)).simulate().engage_time, abs=1e-7)
+        Reference(LidModel.from_config(cfg)).simulate().engage_time, abs=1e-7)
 
 
 # -- sweeps, the command line, the figure ----------------------------------------------------
@@ -574,7 +574,7 @@ def test_time_history_figure_marks_the_engagement():
                        ({"design.spring_k": 1914.709, "design.spring_rest_length": 0.07925707,
                          "design.damper_c": 800.0, **end(0.4, 6.0)},
                         "end damper on\n0.2230 s, -1.154 rad/s")):
-        res = Simulator(default_config().update(sets)).run(trajectory=True)
+        res = Simulator.from_config(default_config().update(sets)).run(trajectory=True)
         fig = plot_time_histories(res)
         assert [a.get_text() for a in fig.labels][-1] == text and len(fig.labels) == 4
         _clear(fig, fig.labels)

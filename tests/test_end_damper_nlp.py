@@ -18,7 +18,7 @@ from softclose.optimiser.interval import end_damper_mode, free_of, nlp_elements
 from softclose.optimiser.nlp import J_INDEX
 from softclose.optimiser.optimiser import claims
 from softclose.optimiser.starts import initial_guess
-from softclose.problem import PARAM_COLUMNS, agreement_tolerance, params_of
+from softclose.problem import PARAM_COLUMNS, agreement_tolerance, params_of, resolve
 from softclose.simulation.reference import Reference
 
 #: the default optimum's spring and dashpot with an end damper engaging at 5 deg
@@ -81,7 +81,7 @@ def test_two_phase_derivatives_match_finite_differences_of_the_reference():
         for sgn in (1, -1):
             q = base.copy()
             q[PARAM_COLUMNS[key]] += sgn * h
-            out.append(ref.simulate(q, cfg=cfg))
+            out.append(ref.simulate(q, resolve(cfg)))
         for m, i in where.items():
             fd = (getattr(out[0], m) - getattr(out[1], m)) / (2 * h)
             ad = dz[i, col]
@@ -100,7 +100,7 @@ def test_two_phase_discretisation_error_is_fourth_order():
     straddles it); at the default N = 10 every number is far inside its agreement
     tolerance."""
     cfg = default_config().update(DESIGN).set("optimise.closing_time_max", 2.0)
-    ref = Reference(get_model(cfg), tol=1e-12).simulate(params_of(cfg), cfg=cfg)
+    ref = Reference(get_model(cfg), tol=1e-12).simulate(params_of(cfg), resolve(cfg))
     errors = []
     for N in (5, 10, 20):
         nlp, r, _ = _states(cfg, N, 4, 8)

@@ -24,12 +24,12 @@ HELD_OPEN = as_params([2200.0, 0.09, 0.0, 0.0])
 @pytest.fixture(scope="module")
 def long_run(cfg):
     c = cfg.replace(stroke={"t_max": 20.0})
-    m = LidModel(c)
+    m = LidModel.from_config(c)
     cache = {}
 
     def get(method, h):
         if (method, h) not in cache:
-            r = Simulator(c, m, method, h).run(HELD_OPEN, trajectory=True, estimate_error=False)
+            r = Simulator.from_config(c, m, method, h).run(HELD_OPEN, trajectory=True, estimate_error=False)
             assert r.ok and not r.closed, r.status
             tr = r.trajectory
             assert tr["t"][-1] == pytest.approx(20.0)
@@ -44,7 +44,7 @@ def long_run(cfg):
 
 def test_design_oscillates_without_closing(cfg):
     c = cfg.replace(stroke={"t_max": 20.0})
-    b = Simulator(c).run_batch(HELD_OPEN[None, :])
+    b = Simulator.from_config(c).run_batch(HELD_OPEN[None, :])
     assert b["status"][0] == 1                      # not closed, integrated to t_max
     assert math.radians(8) < b["theta_min"][0] < math.radians(14)
 
@@ -88,7 +88,7 @@ def test_euler_cromer_energy_oscillation_is_first_order(long_run):
 ])
 @pytest.mark.parametrize("method", ["rk4", "radau5"])
 def test_damped_energy_never_increases(sim, cfg, model, p, method):
-    s = sim if method == "rk4" else Simulator(cfg, model, method)
+    s = sim if method == "rk4" else Simulator.from_config(cfg, model, method)
     r = s.run(np.array(p), trajectory=True, estimate_error=False)
     assert r.ok
     E = r.trajectory["energy"]

@@ -40,7 +40,7 @@ def _clear(fig, labels, twins=()):
 @pytest.mark.parametrize("design", list(DESIGNS.values()), ids=list(DESIGNS))
 def test_stroke_figure_labels_sit_off_the_curves(design):
     from softclose.present.figures.stroke import plot_time_histories
-    res = Simulator(default_config().with_design(**design)).run(trajectory=True)
+    res = Simulator.from_config(default_config().with_design(**design)).run(trajectory=True)
     fig = plot_time_histories(res)
     assert len(fig.labels) == (3 if res.closed else 1)
     _clear(fig, fig.labels)
@@ -118,7 +118,7 @@ def test_the_default_stroke_shows_at_least_60_frames(tmp_path):
     from PIL import Image
 
     from softclose.present.figures.stroke import FPS, slow_motion_factor, write_animation
-    sim = Simulator(default_config())
+    sim = Simulator.from_config(default_config())
     res = sim.run(trajectory=True)
     assert res.closing_time == pytest.approx(0.1491478, abs=1e-7)
     assert slow_motion_factor(res.closing_time) == 20          # 0.149 s x 20 x 25/s

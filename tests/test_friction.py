@@ -41,7 +41,7 @@ def rests(model, p, Tf, theta0, n_max=200):
     the one where the lid sticks."""
     V = potential(model, p)
     dV = lambda th: float(model.dV(th, p))  # noqa: E731
-    lo, hi = model.cfg.stroke.theta_closed, theta0
+    lo, hi = model.stroke.theta_closed, theta0
     out, a = [], theta0
     for _ in range(n_max):
         if abs(dV(a)) <= Tf:
@@ -64,12 +64,12 @@ def rests(model, p, Tf, theta0, n_max=200):
 @pytest.mark.parametrize("Tf", [0.05, 0.1, 0.26])
 def test_rests_and_stick_follow_the_energy(Tf):
     cfg = cfg_of(Tf)
-    model = LidModel(cfg)
+    model = LidModel.from_config(cfg)
     p = model.params()
     seq = rests(model, p, Tf, cfg.stroke.theta0)
     assert len(seq) >= 2                                   # it moved, then stuck
     ref = Reference(model).simulate(p)
-    kern = Simulator(cfg, model=model).run(p)
+    kern = Simulator.from_config(cfg, model=model).run(p)
     for r, tol in ((ref, 1e-8), (kern, 1e-7)):
         assert not r.closed and r.reason.startswith("held by friction at theta = ")
         assert r.stop_theta == pytest.approx(seq[-1], abs=tol)
@@ -82,13 +82,13 @@ def test_rests_and_stick_follow_the_energy(Tf):
 
 def test_released_lid_sticks_exactly_when_the_driving_moment_is_small():
     cfg = cfg_of(0.0, spring_k=400.0, spring_rest_length=0.0792571, damper_c=0.0)
-    model = LidModel(cfg)
+    model = LidModel.from_config(cfg)
     p0 = model.params()
     dV0 = float(model.dV(cfg.stroke.theta0, p0))
     for f, moves in ((1 - 1e-9, True), (1 + 1e-9, False)):
         c = cfg.set("friction.torque", f * dV0)
-        m = LidModel(c)
-        for r in (Simulator(c, model=m).run(), Reference(m).simulate()):
+        m = LidModel.from_config(c)
+        for r in (Simulator.from_config(c, model=m).run(), Reference(m).simulate()):
             assert (r.theta_min < c.stroke.theta0) is moves     # it fell, however slowly
             if not moves:
                 assert r.stop_theta == c.stroke.theta0 and r.peak_tip_speed == 0.0
@@ -98,10 +98,10 @@ def test_released_lid_sticks_exactly_when_the_driving_moment_is_small():
 def test_sliding_stroke_matches_the_reference_and_is_slower():
     """A closing stroke with friction: kernel and reference agree; friction slows it."""
     design = dict(spring_k=1914.70922, spring_rest_length=0.0792570742, damper_c=2087.7541)
-    free = Simulator(cfg_of(0.0, **design)).run()
+    free = Simulator.from_config(cfg_of(0.0, **design)).run()
     cfg = cfg_of(0.05, **design)
-    model = LidModel(cfg)
-    r, rr = Simulator(cfg, model=model).run(), Reference(model).simulate()
+    model = LidModel.from_config(cfg)
+    r, rr = Simulator.from_config(cfg, model=model).run(), Reference(model).simulate()
     assert r.closed and rr.closed and r.closing_time > free.closing_time + 0.01
     assert r.closing_time == pytest.approx(rr.closing_time, abs=1e-6)
     assert r.impact_theta_dot == pytest.approx(rr.impact_theta_dot, rel=1e-6)
@@ -111,7 +111,7 @@ def test_sliding_stroke_matches_the_reference_and_is_slower():
 def test_energy_falls_by_friction_times_the_path():
     Tf = 0.05
     cfg = cfg_of(Tf)
-    r = Simulator(cfg).run(trajectory=True)
+    r = Simulator.from_config(cfg).run(trajectory=True)
     tr = r.trajectory
     path = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(tr["theta"])))])
     lost = tr["energy"][0] - tr["energy"]
@@ -126,10 +126,10 @@ def test_rest_is_located_to_the_method_order(method, order):
     falls faster here, ~h^5.6 over these steps; the Gauss method's is a clean h^4)."""
     Tf = 0.05
     cfg = cfg_of(Tf).set("simulate.integrator", method)
-    model = LidModel(cfg)
+    model = LidModel.from_config(cfg)
     exact = rests(model, model.params(), Tf, cfg.stroke.theta0)[-1]
     hs = np.array([4e-2, 2e-2, 1e-2, 5e-3]) if order > 1 else np.geomspace(4e-2, 2.5e-3, 5)
-    err = [abs(Simulator(cfg.set("simulate.step", h), model=model).run(estimate_error=False)
+    err = [abs(Simulator.from_config(cfg.set("simulate.step", h), model=model).run(estimate_error=False)
                .stop_theta - exact) for h in hs]
     slope = np.polyfit(np.log(hs), np.log(err), 1)[0]
     assert order - 0.3 < slope < order + 2.0, (err, slope)
@@ -140,10 +140,10 @@ def test_rest_is_located_to_the_method_order(method, order):
 def test_three_formulations_agree_on_the_friction_moment():
     cfg = cfg_of(0.3, spring_k=600.0, spring_rest_length=0.07, damper_c=100.0,
                  rotary_damper_c=0.02)
-    model = LidModel(cfg)
+    model = LidModel.from_config(cfg)
     p, ab = model.params(), read_parameters(cfg)
     assert ab.Tf == 0.3
-    without = LidModel(cfg.set("friction.torque", 0.0))
+    without = LidModel.from_config(cfg.set("friction.torque", 0.0))
     for th, thd in ((0.05, -1.0), (0.2, -4.0), (0.25, 2.0)):
         red = model.theta_ddot(th, thd, p)
         ne = float(np.asarray(model.newton_euler(th, thd, p)).ravel()[8])
@@ -157,11 +157,11 @@ def test_three_formulations_agree_on_the_friction_moment():
 
 def test_opening_force_adds_the_friction_moment():
     base = default_config()
-    a = Simulator(base).run()
-    b = Simulator(base.set("friction.torque", 0.2)).run()
+    a = Simulator.from_config(base).run()
+    b = Simulator.from_config(base.set("friction.torque", 0.2)).run()
     assert b.opening_force > a.opening_force
     # max_theta (V' + T_f)/tau: at least T_f / tau at the angle of a's maximum
-    ref = Reference(LidModel(base.set("friction.torque", 0.2))).simulate()
+    ref = Reference(LidModel.from_config(base.set("friction.torque", 0.2))).simulate()
     assert b.opening_force == pytest.approx(ref.opening_force, rel=1e-6)
 
 

@@ -1051,7 +1051,7 @@ def test_trajectory_budget(sets, rows, tmp_path):
     from softclose.config import TRAJECTORY_BUDGET
     from softclose.simulation.simulator import Simulator
     cfg = load_config(None, sets + [f"simulate.step={step}"])
-    sim = Simulator(cfg)
+    sim = Simulator.from_config(cfg)
     p = sim.model.params()
     sim._check_trajectory_size(np.r_[p, sim.energy_tol(p[None, :])])
     r = sim.run(estimate_error=False)

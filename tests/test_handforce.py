@@ -11,11 +11,12 @@ from scipy.integrate import simpson
 from softclose.config import ConfigError, from_dict
 from softclose.model.lid import LidModel
 from softclose.simulation import statics
-from softclose.simulation.handforce import HandForce, config_params, hand_force
+from softclose.problem import params_of, resolve
+from softclose.simulation.handforce import HandForce, hand_force
 
 
 def _lid(cfg):
-    return LidModel.cached(cfg), cfg
+    return LidModel.from_config(cfg, cached=True), cfg
 
 
 #: a torsion spring at A that nearly balances gravity: it closes by itself low down, rises
@@ -41,7 +42,7 @@ def _hand_tau(m, theta, h=1e-6):
 
 def test_no_spring_against_a_hand_computation():
     m, cfg = _lid(from_dict({}))
-    hf = hand_force(m, cfg=cfg)
+    hf = hand_force(m, case=resolve(cfg))
     assert isinstance(hf, HandForce)
     for deg in (0.0, 4.5, 13.5, 18.0):          # (on the 2001-point grid)
         th, h = math.radians(deg), 1e-5
@@ -55,7 +56,7 @@ def test_no_spring_against_a_hand_computation():
     assert hf.self_close_deg == 18.0 and hf.self_rise_deg is None and hf.hold_open == ()
     assert hf.closing_force == 0.0
     # the §9 opening force, the same number
-    assert hf.opening_force == statics.opening_force_exact(m, config_params(cfg))
+    assert hf.opening_force == statics.opening_force_exact(m, params_of(cfg))
     assert hf.opening_force == pytest.approx(2.5492138071830834, rel=1e-12)
     assert hf.metrics() == {"opening_force": hf.opening_force, "closing_force": 0.0,
                             "self_close_deg": 18.0, "self_rise_deg": None, "hold_open": []}
@@ -68,9 +69,9 @@ def test_no_spring_against_a_hand_computation():
 
 def test_zones_of_a_balanced_lid_and_their_edges():
     cfg = from_dict(dict(BALANCED, friction={"torque": 0.05}))
-    m = LidModel.cached(cfg)
-    p = config_params(cfg)
-    hf = hand_force(m, cfg=cfg)
+    m = LidModel.from_config(cfg, cached=True)
+    p = params_of(cfg)
+    hf = hand_force(m, case=resolve(cfg))
     assert [z for z, _, _ in hf.zones] == ["self_close", "hold_open", "self_rise"]
     assert hf.self_close_deg == pytest.approx(31.912041430086095, abs=1e-6)
     assert hf.self_rise_deg == pytest.approx(46.63944172617751, abs=1e-6)
@@ -83,17 +84,17 @@ def test_zones_of_a_balanced_lid_and_their_edges():
     assert hf.closing_force == pytest.approx(1.0679116598226026, rel=1e-6)
     assert hf.opening_force > 0 and hf.closing_force > 0
     # without friction the hold-open band shrinks to one edge
-    hf0 = hand_force(m, cfg=from_dict(BALANCED))
+    hf0 = hand_force(m, case=resolve(from_dict(BALANCED)))
     assert hf0.hold_open == () and hf0.self_close_deg == hf0.self_rise_deg
     assert hf0.self_close_deg == pytest.approx(40.453669153446036, abs=1e-6)
-    assert float(m.dV(math.radians(hf0.self_close_deg), config_params(from_dict(BALANCED)))) \
+    assert float(m.dV(math.radians(hf0.self_close_deg), params_of(from_dict(BALANCED)))) \
         == pytest.approx(0.0, abs=1e-9)
 
 
 def test_a_strong_spring_rises_by_itself():
     cfg = from_dict({"design": {"torsion_k": 0.5, "torsion_free_angle_deg": 90,
                                 "torsion_pivot": "A"}, "stroke": {"theta_open_deg": 60}})
-    hf = hand_force(LidModel.cached(cfg), cfg=cfg)
+    hf = hand_force(LidModel.from_config(cfg, cached=True), case=resolve(cfg))
     assert hf.self_rise_deg == 0.0 and hf.self_close_deg is None and hf.hold_open == ()
     assert max(hf.f_close) < 0 and hf.closing_force == pytest.approx(-min(hf.f_close),
                                                                      rel=1e-6)
@@ -102,9 +103,9 @@ def test_a_strong_spring_rises_by_itself():
 @pytest.mark.parametrize("conf", [{}, BALANCED])
 def test_energy_balance(conf):
     cfg = from_dict(conf)
-    m = LidModel.cached(cfg)
-    p = config_params(cfg)
-    hf = hand_force(m, cfg=cfg)
+    m = LidModel.from_config(cfg, cached=True)
+    p = params_of(cfg)
+    hf = hand_force(m, case=resolve(cfg))
     th = np.radians(hf.theta_deg)
     work = simpson(np.asarray(hf.f_close) * np.asarray(hf.lever), x=th)
     V = lambda t: float(m.energy_fn(ca.vertcat(t, 0.0), p))        # noqa: E731

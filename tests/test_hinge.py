@@ -46,7 +46,7 @@ from scipy.optimize import brentq
 from softclose.model.lid import LidModel
 from softclose.model import dynamics as dyn
 from softclose.simulation.reference import Reference
-from softclose.simulation.simulator import simulate
+from softclose import simulate
 
 #: a chest lid: 2 kg, 0.6 m deep, hinged at (0.1, 0.3), its centre of mass off the lid's line
 CHEST = {"geometry": {"mechanism": "hinge", "hinge": [0.1, 0.3], "lid_length": 0.6,
@@ -66,7 +66,7 @@ def _cfg(extra=None, **sections):
 
 def test_compound_pendulum_coefficients():
     """A hinge lid without spring or damper: M = I_G + m |r_G|^2 constant, Vg = m g y_G."""
-    model = LidModel(_cfg())
+    model = LidModel.from_config(_cfg())
     i_h = I_G + M_LID * (G_X ** 2 + G_Y ** 2)
     for theta in np.radians([-5.0, 0.0, 17.0, 40.0, 65.0]):
         c, dc = (np.asarray(v).ravel() for v in model.coeffs(theta))
@@ -100,7 +100,7 @@ def _free_fall_time():
 def test_free_fall_closing_time_against_solve_ivp():
     t_ref, w_ref = _free_fall_time()
     cfg = _cfg()
-    ref = Reference(LidModel(cfg)).simulate()
+    ref = Reference(LidModel.from_config(cfg)).simulate()
     assert ref.closing_time == pytest.approx(t_ref, abs=1e-6)
     assert ref.impact_theta_dot == pytest.approx(w_ref, rel=1e-6)
     # the kernel (rk4) agrees at the method's order: halving the step cuts the error ~16 x
@@ -123,7 +123,7 @@ def test_rotary_damper_and_torsion_spring_at_h_linear_oscillator():
     theta = lambda t: th_f + a0 * math.exp(-zeta * wn * t) * (  # noqa: E731
         math.cos(wd * t) + zeta * wn / wd * math.sin(wd * t))
     t_close = brentq(theta, 1e-6, math.pi / wd, xtol=1e-15)
-    ref = Reference(LidModel(cfg)).simulate()
+    ref = Reference(LidModel.from_config(cfg)).simulate()
     assert ref.closing_time == pytest.approx(t_close, abs=1e-6)
     # the rotary damper on the lid's own rotation is the same damper for a hinge lid
     cfg_lid = _cfg({"mass": {"gravity": 0.0},
@@ -175,7 +175,7 @@ def test_four_bar_default_unchanged():
 
 def test_newton_euler_hinge_reaction():
     """At rest at theta the hinge carries m (a_G + g y): a_G = theta'' z x R(theta) r_G."""
-    model = LidModel(_cfg())
+    model = LidModel.from_config(_cfg())
     theta = math.radians(30.0)
     s = model.state(theta, 0.0)
     i_h = I_G + M_LID * (G_X ** 2 + G_Y ** 2)

@@ -121,7 +121,7 @@ def test_convergence_order_of_impact_theta_dot(cfg, model, tight_reference, name
     steps = np.array(ORDER_STEPS[name])
     errs = []
     for h in steps:
-        r = Simulator(cfg, model, name, h).run(ORDER_DESIGN, estimate_error=False)
+        r = Simulator.from_config(cfg, model, name, h).run(ORDER_DESIGN, estimate_error=False)
         assert r.closed
         errs.append(abs(r.impact_theta_dot - exact))
     errs = np.array(errs)

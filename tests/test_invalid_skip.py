@@ -23,7 +23,7 @@ from softclose.simulation.kernel import binding as native
 from softclose.simulation import statics
 from softclose.config import default_config
 from softclose.model.lid import LidModel
-from softclose.problem import params_of
+from softclose.problem import params_of, resolve
 from softclose.simulation.reference import Reference
 from softclose.simulation.simulator import Simulator
 from softclose.simulation.stroke import StrokeStatus
@@ -37,7 +37,7 @@ WHOLE = {"design.spring_kind": "compression", "design.spring_k": 1500.0,
 
 def test_a_spring_invalid_over_the_whole_stroke_is_not_integrated_and_agrees():
     cfg = default_config().update(WHOLE)
-    sim = Simulator(cfg)
+    sim = Simulator.from_config(cfg)
     p = params_of(cfg)
     P = np.tile(p, (3, 1))
     P[1, 1] = 0.056              # beyond its range above some angle: integrated as before
@@ -59,7 +59,7 @@ def test_a_spring_invalid_over_the_whole_stroke_is_not_integrated_and_agrees():
     assert one.message == f"invalid design: {r['reason'][0]}"
     # the reference does not integrate it either: the same extremes (to the table's
     # interpolation) and the same reason
-    rr = Reference(LidModel(cfg)).simulate(p)
+    rr = Reference(LidModel.from_config(cfg)).simulate(p)
     assert rr.status is StrokeStatus.OUT_OF_RANGE
     assert rr.min_spring_length == pytest.approx(r["min_spring_length"][0], abs=1e-9)
     assert rr.max_spring_length == pytest.approx(r["max_spring_length"][0], abs=1e-9)
@@ -75,14 +75,14 @@ def test_rows_with_their_own_points_invalid_throughout_agree_with_a_table_at_the
     """Per-row points: a placement whose spring is past its free length over the whole
     stroke is skipped with the extremes a simulator built at those points gives."""
     cfg = default_config().update({**WHOLE, "design.spring_rest_length": 0.056})
-    sim = Simulator(cfg)
+    sim = Simulator.from_config(cfg)
     p = params_of(cfg)
     pts = {"geometry.spring_anchor[0]": [-0.08, -0.06, -0.045],
            "geometry.spring_anchor[1]": [0.04, 0.02, 0.0]}
     r = sim.run_batch(np.tile(p, (3, 1)), points=pts)
     for i in range(3):
         anchor = (pts["geometry.spring_anchor[0]"][i], pts["geometry.spring_anchor[1]"][i])
-        own = Simulator(cfg.update({"geometry.spring_anchor": anchor}))
+        own = Simulator.from_config(cfg.update({"geometry.spring_anchor": anchor}))
         ri = own.run_batch(p[None, :])
         assert r["status"][i] == ri["status"][0]
         assert r["steps"][i] == ri["steps"][0]
@@ -172,7 +172,8 @@ def test_the_reasons_of_many_rows_are_each_rows_text():
     worst = rng.uniform(-0.1, 0.4, n)
     excess = rng.exponential(0.01, n)
     excess[:40] = 0.0012345                                   # a rounding tie
-    got = sp.range_messages(P, cfg, np.arange(n), short, edge, worst, excess)
+    got = sp.range_messages(P, resolve(cfg).lid.mounting, np.arange(n), short, edge, worst,
+                            excess)
     want = [sp._message(float(kinds[i]), float(P["spring_rest_length"][i]), bool(short[i]),
                         cfg.design, None if math.isnan(edge[i]) else math.degrees(edge[i]),
                         math.degrees(worst[i]), float(excess[i])) for i in range(n)]

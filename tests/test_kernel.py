@@ -43,8 +43,8 @@ def sample_designs(cfg, n=24, seed=8):
 @pytest.mark.parametrize("mass", [0.45, 0.55])
 def test_lid_mass_column_matches_a_model_at_that_mass(cfg, mass, inertia):
     base = cfg if inertia is None else cfg.replace(mass={"inertia_lid": inertia})
-    sim = Simulator(base)
-    other = Simulator(base.replace(mass={"lid": mass}))
+    sim = Simulator.from_config(base)
+    other = Simulator.from_config(base.replace(mass={"lid": mass}))
     if inertia is not None:
         assert other.model.mass.inertia_lid == inertia      # fixed, not rescaled
     else:
@@ -75,7 +75,7 @@ def test_mass_derivative_is_exact(cfg, sim):
     """Coefficients at a third mass from the table and its derivative vs a model there."""
     m = 0.8
     th = np.linspace(sim.table.lo, sim.table.hi, 97)
-    exact = np.asarray(LidModel(cfg.replace(mass={"lid": m})).coeffs.map(len(th))(th)[0]).T
+    exact = np.asarray(LidModel.from_config(cfg.replace(mass={"lid": m})).coeffs.map(len(th))(th)[0]).T
     mine = sim.table.evaluate(th, lid_mass=m)
     base = sim.table.evaluate(th)
     scale = np.abs(exact).max(axis=0)
@@ -105,7 +105,7 @@ def test_row_at_table_mass_is_bit_identical(cfg, sim):
 def test_kernel_step_with_a_lid_mass(cfg, sim):
     """One kernel step at mass m equals the step of the table built at m."""
     m = 0.62
-    other = Simulator(cfg.replace(mass={"lid": m}))
+    other = Simulator.from_config(cfg.replace(mass={"lid": m}))
     p = as_params([1500.0, 0.07, 900.0, 0.002])
     x0 = np.array([0.2, -1.5])
     a = native.kernel_step(sim.table, sim.method, p, 2e-3, x0, lid_mass=m)

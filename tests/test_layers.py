@@ -4,12 +4,15 @@ root keeps at most 8 modules, and no module exceeds 600 lines.
 
 The layers, lowest first, as module prefixes (the longest prefix names a module's layer):
 the foundations (errors, the version, JSON, Ctrl-C, the build cache, the config's key
-records, progress lines); the integrators, a root finder and the coil spring's standards (EN 13906-1, EN 10270, EN 15800); the mechanism and its elements;
-the config; the design problem; what is shown (tables, figures); the CasADi model of a lid;
+records, progress lines); the integrators, a root finder and the coil spring's standards (EN 13906-1, EN 10270, EN 15800); the mechanism and its elements,
+and what a config resolves to (the lid, the stroke, the solver settings, the temperatures:
+:mod:`softclose.model.resolved`); the config; the design problem (which resolves a config); what is shown (tables, figures); the CasADi model of a lid;
 the simulation (the simulator, its C kernel, the reference, statics, the stroke's result); the
 features (optimiser, robust design, sweeps, catalog, calibration, the coil spring made to
 order, the notebook explorer); benchmarks and validation; the command line. Nothing imports the command
-line, and nothing below the top imports the package root's API.
+line, and nothing below the top imports the package root's API. The config is resolved once,
+at the top: no module of the model or the simulation imports the config (its key records,
+:mod:`softclose.config.keys`, aside) or has a function taking a ``cfg`` or ``config``.
 """
 
 from __future__ import annotations
@@ -25,7 +28,7 @@ LAYERS = [
     ["softclose.errors", "softclose.version", "softclose.jsonio", "softclose.interrupt",
      "softclose.buildcache", "softclose.config.keys", "softclose.present.progress"],
     ["softclose.simulation.integrators", "softclose.simulation.roots", "softclose.coil_spring"],
-    ["softclose.model.kinematics", "softclose.model.elements"],
+    ["softclose.model.kinematics", "softclose.model.elements", "softclose.model.resolved"],
     ["softclose.config"],
     ["softclose.problem"],
     ["softclose.present", "softclose.present.display", "softclose.present.figures"],
@@ -119,3 +122,25 @@ def test_the_root_keeps_the_api_and_at_most_eight_modules():
 def test_no_module_exceeds_600_lines():
     long = {m: n for m, p in MODULES.items() if (n := len(p.read_text().splitlines())) > 600}
     assert long == {}
+
+
+#: the layers below the features that take the config resolved, never a Config
+RESOLVED = ("softclose.model", "softclose.simulation")
+
+
+def _below_features(module: str) -> bool:
+    return any(module == pre or module.startswith(pre + ".") for pre in RESOLVED)
+
+
+@pytest.mark.parametrize("module", sorted(m for m in MODULES if _below_features(m)))
+def test_the_model_and_the_simulation_take_no_config(module):
+    configs = [t for t in GRAPH[module] if (t == "softclose.config" or t.startswith(
+        "softclose.config.")) and t != "softclose.config.keys"]
+    assert configs == [], f"{module} imports the config: take the resolved objects"
+    named = sorted({f"{getattr(node, 'name', 'lambda')}({a.arg})"
+                    for node in ast.walk(ast.parse(MODULES[module].read_text()))
+                    if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda))
+                    for a in (node.args.posonlyargs + node.args.args + node.args.kwonlyargs
+                              + [x for x in (node.args.vararg, node.args.kwarg) if x])
+                    if a.arg in ("cfg", "config")})
+    assert named == [], f"{module}: functions that take a config: {named}"

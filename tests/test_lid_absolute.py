@@ -44,7 +44,7 @@ def test_agrees_with_reduced_model_at_random_states():
     model = pytest.importorskip("softclose.model.lid")
     cfg = config.load_config(overrides=["design.spring_k=350", "design.spring_rest_length=0.045",
                                         "design.damper_c=40", "design.rotary_damper_c=0.03"])
-    reduced = model.LidModel(cfg)
+    reduced = model.LidModel.from_config(cfg)
     p = read_parameters(cfg)
     assert p.k > 0 and p.c > 0 and p.c_rot > 0
     rng = np.random.default_rng(2024)

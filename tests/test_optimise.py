@@ -53,7 +53,7 @@ def test_default_optimum_is_verified(cfg, result):
     from softclose.simulation.reference import Reference
     from softclose.model.lid import LidModel
     p = np.r_[[result.design[k] for k in DESIGN_KEYS], cfg.design.rotary_damper_c]
-    ref = Reference(LidModel(cfg)).simulate(p)      # its own model, 2 ms output grid
+    ref = Reference(LidModel.from_config(cfg)).simulate(p)      # its own model, 2 ms output grid
     for k in METRIC_KEYS:
         if k == "closed":
             assert result.metrics[k] is ref.closed is True
@@ -206,7 +206,7 @@ def test_interior_peak_is_caught_between_substeps(cfg, model):
         sample_max = max(sample_max, sp[:nlp.M].max())
         interp_max = max(interp_max, sp[nlp.M:].max())
         x = x1
-    ref = Simulator(cfg, model=model).run(p)
+    ref = Simulator.from_config(cfg, model=model).run(p)
     assert interp_max > sample_max
     assert abs(interp_max - ref.peak_tip_speed) < 0.2 * abs(sample_max - ref.peak_tip_speed)
 

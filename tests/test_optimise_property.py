@@ -44,7 +44,7 @@ def check(w, win, starts=2):
     ver = r.verification
     assert ver is not None and ver.error is None
     if "ref" not in _REFS:
-        _REFS["ref"] = Reference(LidModel(CFG))
+        _REFS["ref"] = Reference(LidModel.from_config(CFG))
     p = np.r_[[r.design[k] for k in DESIGN_KEYS], cfg.design.rotary_damper_c]
     ref = _REFS["ref"].simulate(p)
     # the reported metrics are the reference's (to its own accuracy: the output grids differ)

@@ -25,7 +25,7 @@ from softclose.simulation.kernel import binding as native
 from softclose.config import default_config
 from softclose.config.free import PLACEMENT_KEYS
 from softclose.errors import ConfigError
-from softclose.problem import ERROR_KEYS, params_of, target
+from softclose.problem import ERROR_KEYS, params_of, resolve, target
 from softclose.simulation.reference import Reference
 from softclose.robust.evaluate import evaluate, slow_keys
 from softclose.simulation.simulator import Simulator
@@ -98,19 +98,21 @@ def test_points_match_a_model_at_those_points(with_dashpot):
         pts.update(draw(DASH, n, 7))
     worst = 0.0
     statuses = set()
-    fresh = []
+    fresh, fresh_cfgs = [], []
     for i in range(n):
         c = default_config().update({k: float(v[i]) for k, v in pts.items()})
-        fresh.append(Simulator(c))
+        fresh.append(Simulator.from_config(c))
+        fresh_cfgs.append(c)
     for changes, mass in VARIANTS:
         cfg = default_config().update(changes)
-        sim = Simulator(cfg)
+        sim = Simulator.from_config(cfg)
         P = np.tile(params_of(cfg), (n, 1))
         res = sim.run_batch(P, lid_mass=mass, points=pts)
         res["opening_force"] = sim.opening_forces(P, mass, res["points"])
         for i in range(n):
             other_sim = fresh[i]
-            other_sim.cfg = other_sim.cfg.update(changes)    # (same geometry: same table)
+            case = resolve(fresh_cfgs[i].update(changes))    # (same geometry: same table)
+            other_sim.case, other_sim.stroke = case, case.stroke
             other = other_sim.run_batch(P[i:i + 1], lid_mass=mass)
             other["opening_force"] = other_sim.opening_forces(P[i:i + 1], mass)
             _compare(res, i, other, 0, (changes, i))
@@ -131,7 +133,7 @@ def test_points_against_the_reference():
     cfg = default_config().update({"design.spring_k": 1914.709,
                                    "design.spring_rest_length": 0.07925707,
                                    "design.damper_c": 2087.754})
-    sim = Simulator(cfg)
+    sim = Simulator.from_config(cfg)
     pts = {"geometry.spring_anchor[0]": [-0.08, -0.07, -0.035],
            "geometry.spring_anchor[1]": [0.0, 0.03, 0.045],
            "geometry.lid_e[0]": [0.03, 0.0, 0.04], "geometry.lid_e[1]": [0.02, 0.015, 0.022]}
@@ -139,7 +141,7 @@ def test_points_against_the_reference():
     res = sim.run_batch(P, points=pts)
     for i in range(3):
         c = cfg.update({k: v[i] for k, v in pts.items()})
-        R = Reference(softclose.model.lid.LidModel(c)).simulate(P[i])
+        R = Reference(softclose.model.lid.LidModel.from_config(c)).simulate(P[i])
         assert res["closed"][i] and R.closed
         for k in ERROR_KEYS:
             assert abs(res[k][i] - getattr(R, k)) <= target(k, getattr(R, k)), (i, k)
@@ -152,7 +154,7 @@ def test_rows_without_points_bit_identical(sim):
     component): the same bits; and in a batch mixed with point rows (lanes shared)."""
     rng = np.random.default_rng(3)
     n = 200
-    P = np.tile(params_of(sim.cfg), (n, 1))
+    P = np.tile(sim.case.p, (n, 1))
     P[:, 0] = rng.uniform(500, 9500, n)
     P[:, 1] = rng.uniform(0.05, 0.09, n)
     P[:, 2] = rng.uniform(100, 4000, n)
@@ -174,7 +176,7 @@ def _point_designs(sim, n=96, seed=5):
     """Designs with their own points that often stay open (a weak spring, strong damping),
     as the kernel's rows (with the lid-mass and point columns)."""
     rng = np.random.default_rng(seed)
-    P = np.tile(params_of(sim.cfg), (n, 1))
+    P = np.tile(sim.case.p, (n, 1))
     P[:, 0] = rng.uniform(500, 9500, n)
     P[:, 1] = rng.uniform(0.05, 0.09, n)
     P[:, 2] = rng.uniform(100, 4000, n)
@@ -186,7 +188,7 @@ def _point_designs(sim, n=96, seed=5):
 
 
 def _strokes(sim, D, early=True):
-    st = sim.cfg.stroke
+    st = sim.stroke
     return native.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
                               st.theta_closed, D, early_exit=early)
 
@@ -202,7 +204,7 @@ def test_early_exit_with_points(cfg, model, integrator, step):
     """Point rows: every final column the same with and without the early exit, for each
     method; and on the rest of every exited stroke the energy (from the row's own lengths)
     never rises above E + delta, the margin the rule rests on."""
-    sim = Simulator(cfg, model, integrator=integrator, step=step)
+    sim = Simulator.from_config(cfg, model, integrator=integrator, step=step)
     st = cfg.stroke
     P, X, D = _point_designs(sim, 64 if integrator in ("gauss4", "radau5") else 96)
     on, off = _strokes(sim, D, True), _strokes(sim, D, False)
@@ -316,12 +318,12 @@ def test_a_vanishing_length_is_reported_per_row(sim):
     the stroke): that row is reported as a failed stroke with a reason naming the points,
     never a number; the other rows are untouched. Out-of-range points are refused (run_batch
     and a sweep: ConfigError naming the key)."""
-    st = sim.cfg.stroke
+    st = sim.stroke
     E = _point_on_path(sim, st.theta0 - 0.05)             # on the way down from the release
     cfg = default_config().update({"design.spring_k": 500.0,      # (it pulls the lid by)
                                    "design.spring_rest_length": 0.005,
                                    "design.damper_c": 2087.754})
-    s = Simulator(cfg)
+    s = Simulator.from_config(cfg)
     P = np.tile(params_of(cfg), (3, 1))
     pts = {"geometry.spring_anchor[0]": [-0.06, E[0], -0.05],
            "geometry.spring_anchor[1]": [0.02, E[1], 0.01]}

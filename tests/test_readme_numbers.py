@@ -74,9 +74,9 @@ def test_the_quoted_digits_reproduce_the_optimum_and_rounder_ones_do_not(optimum
     from softclose.simulation.simulator import Simulator
     o = default_config().optimise
     quoted = {k: float(f"{v:.7g}") for k, v in optimum.design.items()}
-    r = Simulator(default_config().with_design(**quoted)).run()
+    r = Simulator.from_config(default_config().with_design(**quoted)).run()
     assert r.closing_time <= o.closing_time_max and r.holding_moment >= o.holding_moment_min
-    r = Simulator(default_config().with_design(
+    r = Simulator.from_config(default_config().with_design(
         spring_k=1915.0, spring_rest_length=0.0793, damper_c=2088.0)).run()
     assert f"0.0793 m: {r.closing_time:.5g} s, {r.holding_moment:.3g} N m" == \
         TABLE["rounded"][0]

@@ -58,7 +58,7 @@ def test_every_corner_holds_in_the_adaptive_reference(robust):
     worst = 0.0
     for signs in itertools.product((-1, 1), repeat=3):
         c = _corner_config(cfg, robust.design, signs)
-        model = LidModel(c)
+        model = LidModel.from_config(c)
         r = Reference(model).simulate(model.params())
         assert r.closed, signs
         assert o.closing_time_min <= r.closing_time <= o.closing_time_max * (1 + 1e-6), signs
@@ -72,7 +72,7 @@ def test_every_corner_holds_in_the_adaptive_reference(robust):
     assert robust.objective == pytest.approx(worst, rel=VERIFY_RTOL)
     # and the nominal design alone misses: its spring + 10 %, damper + 20 % corner is too slow
     nom = robust.nominal["design"]
-    model = LidModel(_corner_config(cfg, nom, (1, 1, -1)))
+    model = LidModel.from_config(_corner_config(cfg, nom, (1, 1, -1)))
     r = Reference(model).simulate(model.params())
     assert not r.closed or r.closing_time > o.closing_time_max
 
@@ -218,7 +218,7 @@ def _reference_of(cfg, design, values):
     """The adaptive reference (CVODES) of one scenario: the drawn design with the
     scenario's toleranced values (absolute) set."""
     c = cfg.update({**{f"design.{k}": v for k, v in design.items()}, **values})
-    model = LidModel(c)
+    model = LidModel.from_config(c)
     return Reference(model).simulate(model.params())
 
 

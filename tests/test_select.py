@@ -102,7 +102,7 @@ def _reference_verdicts():
                                "design.spring_preload": F0, "design.rotary_damper_pivot": pivot})
             key = (s["part"], pivot)
             if key not in checkers:
-                checkers[key] = Checker(LidModel.cached(base))   # (its cfg: base's)
+                checkers[key] = Checker(LidModel.from_config(base, cached=True))   # (its cfg: base's)
             verdicts = []
             for zk, zl, zc in itertools.product((-1, 1), repeat=3):
                 cc = c * (1 + zc * ct)

@@ -100,8 +100,8 @@ def test_second_geometry_agrees_with_reference(sim2, ref2, p):
 def short(cfg):
     """t_max = 1 s (the reference costs ~0.6 s per stroke second): model, sim, reference."""
     c = cfg.replace(stroke={"t_max": 1.0})
-    m = LidModel(c)
-    return c, m, Simulator(c, m), Reference(m)
+    m = LidModel.from_config(c)
+    return c, m, Simulator.from_config(c, m), Reference(m)
 
 
 @pytest.mark.parametrize("p", [
@@ -122,7 +122,7 @@ def test_spring_extremes_of_a_lid_that_opens_first(short):
     p = as_params([2600.0, 0.09, 0.0, 0.0])          # pushes at theta0: swings up to ~19.2 deg
     r = s.run(p, trajectory=True)
     assert r.ok and not r.closed
-    tr = Simulator(c, m, "gauss4", 2.5e-4).run(p, trajectory=True).trajectory
+    tr = Simulator.from_config(c, m, "gauss4", 2.5e-4).run(p, trajectory=True).trajectory
     th_max = float(tr["theta"].max())
     assert th_max > c.stroke.theta0 + math.radians(1.0)
     E = np.asarray(m.kin([th_max, 0.0])[7]).ravel()
@@ -140,7 +140,7 @@ def test_lid_pushed_open_beyond_the_table(short):
     if r.ok:
         assert_agree(r, RR)
     else:   # reported: following the advice must then work
-        assert Simulator(c, m, "radau5", s.step / 10).run(p).ok, r.message
+        assert Simulator.from_config(c, m, "radau5", s.step / 10).run(p).ok, r.message
 
 
 # -- stiff damping ------------------------------------------------------------------------
@@ -164,7 +164,7 @@ def stiff_reference(ref):
 
 def _true_peak(ref, p, t_lo, t_hi, n=400):
     """max |v_T| over [t_lo, t_hi] from dense reference-flow samples + golden section."""
-    x0 = np.array([ref.model.cfg.stroke.theta0, 0.0])
+    x0 = np.array([ref.model.stroke.theta0, 0.0])
     speed = lambda t: float(ref._speed(ref.flow(x0, p, t), p)[0])  # noqa: E731
     ts = np.linspace(t_lo, t_hi, n)
     i = int(np.argmax([speed(t) for t in ts]))
@@ -182,7 +182,7 @@ def _true_peak(ref, p, t_lo, t_hi, n=400):
 @pytest.mark.parametrize("c_damp", [1e5, 1e6])
 def test_stiff_damper_default_integrator(cfg, model, stiff_reference, c_damp):
     p = as_params([0.0, 0.05, c_damp, 0.0])
-    s = Simulator(cfg, model)           # the default: rk4 at the default step
+    s = Simulator.from_config(cfg, model)           # the default: rk4 at the default step
     r = s.run(p)
     _finite_or_none(r)
     RR = stiff_reference(c_damp)
@@ -200,7 +200,7 @@ def test_stiff_damper_default_integrator(cfg, model, stiff_reference, c_damp):
         assert "simulate.step <=" in r.message and "radau5" in r.message
         h_ok = float(r.message.split("simulate.step <=")[1].split()[0])
         assert h_ok < s.step
-        r2 = Simulator(cfg, model, step=h_ok).run(p)
+        r2 = Simulator.from_config(cfg, model, step=h_ok).run(p)
         assert r2.ok
         assert r2.peak_tip_speed == pytest.approx(RR.peak_tip_speed, rel=1e-4)
 
@@ -211,7 +211,7 @@ def test_stiff_damper_radau5(cfg, model, stiff_reference, c_damp):
     the reference (peak: the estimate is ~3e-5 relative at c = 1e6, where the peak sits in
     the first 3 ms); the spring extremes to 1e-9 m."""
     p = as_params([0.0, 0.05, c_damp, 0.0])
-    r = Simulator(cfg, model, "radau5").run(p)
+    r = Simulator.from_config(cfg, model, "radau5").run(p)
     RR = stiff_reference(c_damp)
     assert r.ok, r.message
     _finite_or_none(r)
@@ -225,7 +225,7 @@ def test_stiff_damper_radau5(cfg, model, stiff_reference, c_damp):
 def test_stiff_radau5_converges_to_the_true_peak(cfg, model, ref):
     """c = 1e6 at step 1e-4: the peak to 1e-6 of dense reference-flow samples."""
     p = as_params([0.0, 0.05, 1e6, 0.0])
-    r = Simulator(cfg, model, "radau5", 1e-4).run(p)
+    r = Simulator.from_config(cfg, model, "radau5", 1e-4).run(p)
     assert r.peak_tip_speed == pytest.approx(_true_peak(ref, p, 1e-3, 4e-3, 60), rel=1e-6)
 
 
@@ -255,7 +255,7 @@ def test_error_estimate_bounds_the_actual_error(cfg, model):
     p = as_params([800.0, 0.08, 30.0, 0.005])
     R = Reference(model, tol=1e-14).simulate(p)
     for name, h in (("rk4", 0.008), ("gauss4", 0.008), ("radau5", 0.016)):
-        r = Simulator(cfg, model, name, h).run(p)
+        r = Simulator.from_config(cfg, model, name, h).run(p)
         for key in ("closing_time", "impact_theta_dot", "impact_tip_speed"):
             actual, est = abs(getattr(r, key) - getattr(R, key)), r.accuracy[key]
             assert actual <= 2.0 * est + 1e-11, (name, key, actual, est)

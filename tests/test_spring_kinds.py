@@ -23,7 +23,7 @@ from softclose.simulation import statics
 from softclose.cli import main
 from softclose.config import default_config
 from softclose.model.lid import LidModel
-from softclose.problem import PARAM_KEYS, TARGETS
+from softclose.problem import PARAM_KEYS, TARGETS, resolve
 from softclose.simulation.reference import Reference
 from softclose.simulation.simulator import Simulator
 from softclose.simulation.stroke import StrokeStatus
@@ -47,7 +47,7 @@ def cfg_of(design: dict):
 @pytest.fixture(scope="module", params=["compression", "extension"])
 def case(request):
     cfg = cfg_of(COMPRESSION if request.param == "compression" else EXTENSION)
-    model = LidModel(cfg)
+    model = LidModel.from_config(cfg)
     return request.param, cfg, model
 
 
@@ -87,7 +87,7 @@ def test_potential_and_holding_moment_against_an_independent_closure(case):
         return (m.gravity * (m.lid * G1[1] + m.crank_oa * 0.5 * A[1] + m.crank_bc * G3[1])
                 + 0.5 * d.spring_k * (l - d.spring_rest_length) ** 2 + s * d.spring_preload * l)
 
-    sim = Simulator(cfg, model=model)
+    sim = Simulator.from_config(cfg, model=model)
     p = model.params()
     h = 1e-5
     for th in (0.0, 0.15, 0.3):
@@ -109,7 +109,7 @@ def test_energy_balance_and_the_reference(case):
     for th, thd in ((0.05, -1.0), (0.2, -3.0), (0.3, 1.0)):
         dEdt, P = (float(v) for v in rate([th, thd], p))
         assert dEdt == pytest.approx(P, rel=1e-9, abs=1e-12)
-    sim = Simulator(cfg, model=model)
+    sim = Simulator.from_config(cfg, model=model)
     r, rr = sim.run(p), Reference(model).simulate(p)
     assert r.status is StrokeStatus.CLOSED and rr.status is StrokeStatus.CLOSED
     assert abs(r.closing_time - rr.closing_time) < TARGETS["closing_time"]
@@ -154,7 +154,7 @@ def test_a_compression_spring_past_its_free_length_is_an_invalid_design():
     assert f"by up to {excess:.2f} mm" in r.message
     assert "compression spring (it only pushes) would be longer than its free length" in \
         r.message
-    rr = Reference(LidModel(cfg)).simulate()
+    rr = Reference(LidModel.from_config(cfg)).simulate()
     assert rr.status is StrokeStatus.OUT_OF_RANGE
     assert rr.max_spring_length == pytest.approx(r.max_spring_length, abs=1e-9)
     res = softclose.sweep(cfg, {"design.spring_rest_length": [0.056, 0.0585, 0.065]})
@@ -197,7 +197,7 @@ def test_a_preloaded_strut_holds_the_lid_open_at_its_equilibrium():
     vanishes (not the table's)."""
     cfg = cfg_of({"spring_kind": "compression", "spring_preload": 60.0, "spring_k": 500.0,
                   "spring_rest_length": 0.07, "damper_c": 300.0})
-    sim = Simulator(cfg)
+    sim = Simulator.from_config(cfg)
     p = sim.model.params()
     r = sim.run_batch(p[None, :])
     assert r["status"][0] == 1 and r["stop_reason"][0] == 2
@@ -218,10 +218,10 @@ def test_a_shared_model_is_checked_against_the_judged_configs_limits():
                                     "design.spring_rest_length": 0.07926,
                                     "design.damper_c": 2087.75})
     limited = base.set("design.spring_max_length", 0.057)
-    shared = Reference(LidModel(base))
+    shared = Reference(LidModel.from_config(base))
     p = params_of(base)
     assert shared.simulate(p).status == StrokeStatus.CLOSED
-    ref = shared.simulate(p, cfg=limited)
+    ref = shared.simulate(p, resolve(limited))
     fixed = softclose.simulate(limited)
     assert ref.status == fixed.status == StrokeStatus.OUT_OF_RANGE
     assert "maximum length (design.spring_max_length = 57.00 mm)" in ref.reason

@@ -45,11 +45,11 @@ def _strokes(sim):
 
 
 def test_a_loaded_model_and_table_give_the_same_numbers(cache, cfg):
-    built = Simulator(cfg)
-    first = Simulator(cfg, cached=True)                 # built and stored
+    built = Simulator.from_config(cfg)
+    first = Simulator.from_config(cfg, cached=True)                 # built and stored
     assert len(list(cache.glob("*/model-*.bin"))) == 1
     assert len(list(cache.glob("*/table-*.bin"))) == 1
-    loaded = Simulator(cfg, cached=True)                # loaded
+    loaded = Simulator.from_config(cfg, cached=True)                # loaded
     assert "_serialised" in loaded.model.__dict__ and "ode" not in loaded.model.__dict__
     assert np.array_equal(loaded.table.cc, built.table.cc)
     for sim in (first, loaded):
@@ -63,7 +63,7 @@ def test_a_loaded_model_and_table_give_the_same_numbers(cache, cfg):
 
 @pytest.mark.parametrize("damage", [b"", b"not an entry", None, "truncated"])
 def test_a_damaged_entry_is_ignored_and_rebuilt(cache, cfg, damage):
-    Simulator(cfg, cached=True)
+    Simulator.from_config(cfg, cached=True)
     for path in cache.glob("*/*.bin"):
         if damage is None:            # a valid entry of the wrong arrays
             kind, key = path.stem.split("-", 1)
@@ -71,14 +71,14 @@ def test_a_damaged_entry_is_ignored_and_rebuilt(cache, cfg, damage):
         else:
             data = path.read_bytes()
             path.write_bytes(data[:len(data) // 2] if damage == "truncated" else damage)
-    sim = Simulator(cfg, cached=True)
-    assert np.array_equal(_strokes(sim), _strokes(Simulator(cfg)), equal_nan=True)
-    again = Simulator(cfg, cached=True)                # rebuilt and stored again
+    sim = Simulator.from_config(cfg, cached=True)
+    assert np.array_equal(_strokes(sim), _strokes(Simulator.from_config(cfg)), equal_nan=True)
+    again = Simulator.from_config(cfg, cached=True)                # rebuilt and stored again
     assert "_serialised" in again.model.__dict__
 
 
 def test_another_version_of_the_software_reads_nothing(cache, cfg, monkeypatch):
-    Simulator(cfg, cached=True)
+    Simulator.from_config(cfg, cached=True)
     before = buildcache.folder()
     buildcache.fingerprint.cache_clear()
     buildcache._folder.cache_clear()
@@ -125,7 +125,7 @@ def test_the_compiler_and_its_flags_are_part_of_a_librarys_key(cache, monkeypatc
 def test_the_cache_can_be_turned_off(monkeypatch, cfg):
     monkeypatch.setenv(buildcache.ENV_FOLDER, "off")
     assert buildcache.folder() is None
-    sim = Simulator(cfg, cached=True)
+    sim = Simulator.from_config(cfg, cached=True)
     assert "_serialised" not in sim.model.__dict__
 
 

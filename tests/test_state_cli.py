@@ -16,6 +16,8 @@ import pytest
 
 from conftest import body_motion, cross2, external_forces, wrap_deg
 from softclose import cli
+from softclose.config import default_config
+from softclose.problem import params_of
 
 STATE_KEYS = {"theta", "theta_dot", "theta_ddot", "phi", "gamma", "phi_dot", "gamma_dot",
               "tip_velocity", "reactions"}
@@ -90,7 +92,7 @@ def test_state_reactions_are_self_consistent(capsys, tmp_path, which, theta_deg,
         argv += ["--config", str(_write_toml(tmp_path / "second.toml", cfg2))]
     argv += [f"--set=design.{k}={v!r}" for k, v in design.items()]
     s = run_json(capsys, argv)
-    p = mdl.params(mdl.cfg.replace(design=design).design)
+    p = params_of(default_config() if which == "default" else cfg2, design)
     assert s["theta_ddot"] == pytest.approx(mdl.theta_ddot(s["theta"], theta_dot, p), rel=1e-12)
     dF, dM, scale = _whole_mechanism_residuals(mdl, s, p)
     assert np.abs(dF).max() < 1e-7 * scale

@@ -63,15 +63,15 @@ def test_unstable_report_names_a_step_that_works():
     """c = 1e6 N s/m with rk4 at 1 ms: reported with the step it needs; at that step (with a
     safety factor 0.8) the stroke runs and agrees with radau5 at a small step."""
     cfg = default_config().replace(design={"damper_c": 1e6})
-    model = LidModel(cfg)
-    res = Simulator(cfg, model=model).run()
+    model = LidModel.from_config(cfg)
+    res = Simulator.from_config(cfg, model=model).run()
     assert res.status.text == "unstable" and not res.ok
     h = stress.recommended_step(res.message)
     assert h is not None and 1e-5 < h < 1e-3, res.message
     assert "radau5" in res.message
-    ok = Simulator(cfg, model=model, step=0.8 * h).run()
+    ok = Simulator.from_config(cfg, model=model, step=0.8 * h).run()
     assert ok.ok, ok.message
-    fine = Simulator(cfg, model=model, integrator="radau5", step=1e-4).run()
+    fine = Simulator.from_config(cfg, model=model, integrator="radau5", step=1e-4).run()
     assert ok.closed == fine.closed
     assert abs(ok.peak_tip_speed - fine.peak_tip_speed) <= 1e-6 * fine.peak_tip_speed
 
@@ -83,7 +83,7 @@ def test_long_undamped_run_energy_drift(integ):
     reported by the kernel and small, and the stroke is not flagged unstable."""
     cfg = default_config().replace(design={"spring_k": 2000.0, "spring_rest_length": 0.1},
                                    stroke={"t_max": 20.0}, simulate={"integrator": integ})
-    sim = Simulator(cfg)
+    sim = Simulator.from_config(cfg)
     p = sim.model.params()
     b = sim.run_batch(p[None, :], threads=1)
     E0 = float(sim.model.energy_fn([cfg.stroke.theta0, 0.0], p))
@@ -97,7 +97,7 @@ def test_steps_far_too_large_are_reported_not_nan():
     """rk4 at 0.2 s and 1 s on a 0.15 s stroke: a one-line report, never a NaN."""
     for h in (0.2, 1.0):
         cfg = default_config().replace(simulate={"step": h})
-        res = Simulator(cfg).run()
+        res = Simulator.from_config(cfg).run()
         if res.ok:
             assert res.closing_time is not None and math.isfinite(res.closing_time)
         else:
@@ -131,9 +131,9 @@ def test_reference_peak_in_first_grid_intervals():
     tip-speed peak in the first two grid intervals (c = 1e6 N s/m: at t = 2.3 ms) was not
     refined; the reference returned 0.0026377940 m/s, the converged value is 0.0026378194."""
     cfg = default_config().replace(design={"damper_c": 1e6})
-    model = LidModel(cfg)
+    model = LidModel.from_config(cfg)
     r = Reference(model).simulate()
-    fine = Simulator(cfg, model=model, integrator="radau5", step=1e-5).run(estimate_error=False)
+    fine = Simulator.from_config(cfg, model=model, integrator="radau5", step=1e-5).run(estimate_error=False)
     assert abs(r.peak_tip_speed - fine.peak_tip_speed) <= 1e-8 * fine.peak_tip_speed
 
 
@@ -141,8 +141,8 @@ def test_reference_peak_in_first_grid_intervals():
 def test_near_toggle_result_is_accurate_or_flagged():
     geo = stress.geometry_with_assembly(crank_bc=0.0925)
     cfg = default_config().replace(geometry=geo, stroke={"theta_closed_deg": -2.4})
-    model = LidModel(cfg)
-    res = Simulator(cfg, model=model, step=1e-4).run()
+    model = LidModel.from_config(cfg)
+    res = Simulator.from_config(cfg, model=model, step=1e-4).run()
     ref = Reference(model).simulate()
     if res.ok:
         assert abs(res.closing_time - ref.closing_time) <= 1e-7
@@ -154,7 +154,7 @@ def test_near_toggle_result_is_accurate_or_flagged():
 def test_toggle_inside_stroke_is_a_config_error():
     geo = stress.geometry_with_assembly(crank_bc=0.0935)
     with pytest.raises(ConfigError, match="toggle"):
-        LidModel(default_config().replace(geometry=geo))
+        LidModel.from_config(default_config().replace(geometry=geo))
 
 
 @stress_mark
@@ -162,7 +162,7 @@ def test_no_nan_in_batch_of_extreme_designs():
     """A batch across the extremes: every row has a status; metrics finite or NaN only where
     the status says the stroke did not close."""
     cfg = default_config()
-    sim = Simulator(cfg)
+    sim = Simulator.from_config(cfg)
     P = np.array([[k, l0, c, 0.0] for k in (0.0, 1e3, 1e6) for l0 in (0.02, 0.12)
                   for c in (0.0, 1e3, 1e6)])
     b = sim.run_batch(P, threads=1)
@@ -175,12 +175,12 @@ def test_no_nan_in_batch_of_extreme_designs():
 @stress_mark
 def test_recommended_step_for_rotary_damper_works():
     cfg = default_config().replace(design={"rotary_damper_c": 1e3})
-    sim = Simulator(cfg)
+    sim = Simulator.from_config(cfg)
     res = sim.run()
     assert res.status.text == "unstable"
     h = stress.recommended_step(res.message)
     assert h is not None
-    again = Simulator(cfg, model=sim.model, step=h).run()
+    again = Simulator.from_config(cfg, model=sim.model, step=h).run()
     assert again.ok, again.message
 
 
@@ -191,7 +191,7 @@ def test_confirm_uses_the_targets_and_the_estimate():
 
     from softclose.problem import TARGETS
     cfg = default_config()
-    model = LidModel(cfg)
+    model = LidModel.from_config(cfg)
     ref = Reference(model).simulate()
     same = dataclasses.replace(ref, method="rk4", accuracy=None)
     ok, err, allowed = stress.confirm(same, ref)
@@ -222,7 +222,7 @@ def test_reference_near_a_toggle_neither_grinds_nor_raises_a_traceback():
     from softclose.simulation.reference import CHUNK_MAX_STEPS
     geo = stress.geometry_with_assembly(crank_bc=0.0925)
     cfg = default_config().replace(geometry=geo, stroke={"theta_closed_deg": -2.4})
-    ref = Reference(LidModel(cfg))
+    ref = Reference(LidModel.from_config(cfg))
     t0 = time.process_time()
     r = ref.simulate()
     assert time.process_time() - t0 < 10.0          # 80 s of CPU before the fix
@@ -241,8 +241,8 @@ def test_reference_judges_a_spring_out_of_range_everywhere_without_integrating()
                                    "design.spring_kind": "compression", "design.spring_k": 2000.0,
                                    "design.spring_rest_length": 0.057,
                                    "design.damper_c": 3000.0})
-    ref = Reference(LidModel(cfg)).simulate()
-    fixed = Simulator(cfg).run(estimate_error=False)
+    ref = Reference(LidModel.from_config(cfg)).simulate()
+    fixed = Simulator.from_config(cfg).run(estimate_error=False)
     assert ref.status == fixed.status == StrokeStatus.OUT_OF_RANGE
     assert "over the whole stroke" in ref.reason
     assert ref.reason.split(", by up to")[0] == fixed.reason.split(", by up to")[0]

@@ -132,8 +132,8 @@ def test_work_precision_study(tmp_path):
     row = next(r for r in rep["work_precision"]["rows"] if r["design"] == "spec8"
                and r["method"] == "rk4" and r["step"] == 0.002)
     cfg = default_config()
-    model = LidModel(cfg)
-    res = Simulator(cfg, model=model).run()
+    model = LidModel.from_config(cfg)
+    res = Simulator.from_config(cfg, model=model).run()
     truth = Reference(model, bench.TRUTH_TOL).simulate()
     assert row["err_impact_theta_dot"] == pytest.approx(
         abs(res.impact_theta_dot - truth.impact_theta_dot), rel=1e-9)
@@ -168,8 +168,8 @@ def test_stress_survey_study(tmp_path):
     r = next(r for r in rows if r["name"] == "damper_c=1000")
     assert r["outcome"] == "confirmed"
     cfg = default_config().replace(design={"damper_c": 1000.0})
-    model = LidModel(cfg)
-    assert r["closing_time"] == Simulator(cfg, model=model).run().closing_time
+    model = LidModel.from_config(cfg)
+    assert r["closing_time"] == Simulator.from_config(cfg, model=model).run().closing_time
     assert r["ref_closing_time"] == pytest.approx(
         Reference(model, 1e-12).simulate().closing_time, rel=1e-12)
     md = files["stress.md"].read_text().strip().splitlines()
@@ -193,7 +193,7 @@ def test_seed_reproduction_study(tmp_path):
     ref = r["reference"]
     assert abs(ref["closing_time"] - 0.1491478) < 1e-7          # SPEC §8
     assert abs(ref["impact_theta_dot"] + 4.155764) < 1e-6
-    lib = Reference(LidModel(default_config())).simulate()
+    lib = Reference(LidModel.from_config(default_config())).simulate()
     assert ref["closing_time"] == lib.closing_time
     assert ref["impact_theta_dot"] == lib.impact_theta_dot
     assert r["default"]["method"] == "rk4" and r["default"]["step"] == 0.002

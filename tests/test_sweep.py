@@ -139,7 +139,7 @@ def test_feasibility_reasons(design_sweep):
     assert np.all(c["reason"][slow & ~loose] == "too slow") and slow.any()
     assert loose.any() and (~closed).any() and feas.any()
     # a stroke that stays open says why, as the kernel classifies it (its well or barrier)
-    sim = Simulator(default_config())
+    sim = Simulator.from_config(default_config())
     open_ = np.flatnonzero(c["status"] == "not closed")
     P = np.column_stack([c["design.spring_k"][open_], c["design.spring_rest_length"][open_],
                          c["design.damper_c"][open_], np.zeros(len(open_))])
@@ -161,7 +161,7 @@ def test_rows_agree_with_single_strokes(design_sweep):
     """Random rows against Simulator.run (the `simulate` path), to its accuracy."""
     res, out, c = design_sweep
     rng = np.random.default_rng(7)
-    sim = Simulator(default_config())
+    sim = Simulator.from_config(default_config())
     for i in rng.choice(len(c["closed"]), 12, replace=False):
         k, cd, l0 = (c[key][i] for key in ("design.spring_k", "design.damper_c",
                                             "design.spring_rest_length"))
@@ -290,7 +290,7 @@ def test_geometry_and_mass_keys_and_invalid_geometry():
         x, m, k = (row[key] for key in res.keys)
         c2 = cfg.replace(geometry={"spring_anchor": [x, cfg.geometry.spring_anchor[1]]},
                          mass={"lid": m})
-        r = Simulator(c2).run(np.array([k, c2.design.spring_rest_length, 0, 0]),
+        r = Simulator.from_config(c2).run(np.array([k, c2.design.spring_rest_length, 0, 0]),
                               estimate_error=False)
         assert abs(r.closing_time - row["closing_time"]) < 1e-13
         assert abs(r.peak_tip_speed - row["peak_tip_speed"]) < 1e-13
@@ -403,7 +403,7 @@ def _per_mass_reference(cfg, masses, P):
     ref["feasible"] = np.zeros(len(P), bool)
     for m in np.unique(masses):
         rows = np.nonzero(masses == m)[0]
-        sim = Simulator(cfg.update({"mass.lid": float(m)}))
+        sim = Simulator.from_config(cfg.update({"mass.lid": float(m)}))
         r = sim.run_batch(P[rows])
         r["opening_force"] = sim.opening_forces(P[rows])
         ok = (r["status"] == 0) | (r["status"] == 1)
@@ -491,7 +491,7 @@ def test_lid_mass_sweep_diagnoses_a_failed_stroke_at_its_own_mass():
     out = evaluate_chunk(cfg.raw, ["mass.lid", "design.spring_k", "design.damper_c"],
                          np.arange(2), X)
     for i, (m, k, c) in enumerate(X):
-        sim = Simulator(cfg.update({"mass.lid": m}))
+        sim = Simulator.from_config(cfg.update({"mass.lid": m}))
         p = np.array([k, cfg.design.spring_rest_length, c, 0.0])
         r = sim.run_batch(p[None, :])
         assert out["status"][i] == "unstable" and r["status"][0] == 2

@@ -56,7 +56,7 @@ def test_the_spring_carries_the_heavier_lid(cfg, local):
     spring, gravity = [], []
     for m, k, l0, hm in zip(MASSES, f["spring_k"], f["spring_rest_length"],
                             f["holding_moment"]):
-        model = LidModel(cfg.update({"mass.lid": m}))
+        model = LidModel.from_config(cfg.update({"mass.lid": m}))
         g = float(model.dV(th, as_params([0.0, l0, 0.0, 0.0])))            # gravity alone
         total = float(model.dV(th, as_params([k, l0, 0.0, 0.0])))
         assert total == pytest.approx(hm, abs=1e-9)             # the verified metric

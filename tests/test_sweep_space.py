@@ -70,7 +70,7 @@ def test_sample_rows_are_strokes():
     f = r.to_frame()
     assert list(f.columns) == columns(r.keys) and np.array_equal(f["id"], np.arange(64))
     assert r.kind == "sample" and r.success and r.computed == 64
-    sim = Simulator(cfg)
+    sim = Simulator.from_config(cfg)
     for i in (0, 31, 63):
         k, c, l0 = (f[key][i] for key in r.keys)
         s = sim.run(np.array([k, l0, c, 0.0]), estimate_error=False)

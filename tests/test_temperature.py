@@ -18,7 +18,13 @@ from softclose import LidModel, Reference, Simulator, sweep
 from softclose.config import default_config
 from softclose.errors import ConfigError
 from softclose.model.temperature import parameter_factors
-from softclose.problem import PARAM_KEYS, params_of
+from softclose.problem import PARAM_KEYS, params_of, resolve
+
+
+def factors_of(cfg):
+    """The parameters' factors at ``cfg``'s operating temperature."""
+    return parameter_factors(resolve(cfg).temperatures)
+
 
 ROOT = Path(__file__).resolve().parents[1]
 #: a spring and all three dampers, so every law is exercised
@@ -44,8 +50,8 @@ def by_hand(cfg, T, beta, gamma=2.5e-4):
 
 
 def test_at_the_reference_temperature_nothing_moves():
-    assert parameter_factors(default_config()) is None
-    assert parameter_factors(lid(temperature_c=40.0, reference_temperature_c=40.0)) is None
+    assert factors_of(default_config()) is None
+    assert factors_of(lid(temperature_c=40.0, reference_temperature_c=40.0)) is None
 
 
 def test_the_datasheet_damper_and_the_steel_wire():
@@ -54,11 +60,11 @@ def test_the_datasheet_damper_and_the_steel_wire():
     γ_G = 2.5e-4 /K, so at -20 °C a rate is 1.01075 times its 23 °C value."""
     i = PARAM_KEYS.index
     for T, ratio in ((0.0, 7.3 / 6.5), (40.0, 6.0 / 6.5)):
-        f = parameter_factors(lid(temperature_c=T).update(
+        f = factors_of(lid(temperature_c=T).update(
             {"design.damper_temperature_coeff": -0.005}))
         assert f[i("rotary_damper_c")] == pytest.approx(ratio, rel=0.012)
         assert f[i("damper_c")] == f[i("end_damper_c")] == f[i("rotary_damper_c")]
-    f = parameter_factors(lid(temperature_c=-20.0))
+    f = factors_of(lid(temperature_c=-20.0))
     assert f[i("spring_k")] == pytest.approx(1.01075, rel=1e-12)
     assert f[i("spring_preload")] == f[i("torsion_k")] == f[i("spring_k")]
     assert f[i("spring_rest_length")] == 1.0 and f[i("damper_c")] == 1.0   # β = 0
@@ -70,19 +76,19 @@ def test_a_stroke_at_temperature_is_the_stroke_of_the_moved_values(T):
     hot = lid(temperature_c=T).update({"design.damper_temperature_coeff": beta})
     ref = lid()
     moved = by_hand(ref, T, beta)
-    a = Simulator(hot).run(params_of(hot))
-    b = Simulator(ref).run(moved)
+    a = Simulator.from_config(hot).run(params_of(hot))
+    b = Simulator.from_config(ref).run(moved)
     assert a.closed and b.closed
     assert a.closing_time == b.closing_time and a.impact_tip_speed == b.impact_tip_speed
-    A = Simulator(hot).run_batch(np.tile(params_of(hot), (3, 1)))
+    A = Simulator.from_config(hot).run_batch(np.tile(params_of(hot), (3, 1)))
     assert A["closing_time"][0] == a.closing_time
     # the adaptive reference too, and the kernel agrees with it at the method's accuracy
-    model = LidModel(ref)
-    ra, rb = Reference(model).simulate(params_of(hot), hot), Reference(model).simulate(moved)
+    model = LidModel.from_config(ref)
+    ra, rb = Reference(model).simulate(params_of(hot), resolve(hot)), Reference(model).simulate(moved)
     assert ra.closing_time == rb.closing_time
     assert a.closing_time == pytest.approx(ra.closing_time, rel=1e-4)
     # and the temperature matters: colder dampers are stronger, the lid closes later
-    base = Simulator(ref).run(params_of(ref))
+    base = Simulator.from_config(ref).run(params_of(ref))
     assert (a.closing_time > base.closing_time) == (T < 23.0)
 
 
@@ -91,7 +97,7 @@ def test_a_sweep_over_temperature_runs_each_stroke_at_its_temperature():
     res = sweep(cfg, {"operating.temperature_c": [-20.0, 23.0, 60.0]})
     df = res.to_frame().sort_values("operating.temperature_c")
     for T, t in zip(df["operating.temperature_c"], df["closing_time"]):
-        one = Simulator(cfg.update({"operating.temperature_c": float(T)})).run(params_of(cfg))
+        one = Simulator.from_config(cfg.update({"operating.temperature_c": float(T)})).run(params_of(cfg))
         assert t == pytest.approx(one.closing_time, rel=1e-12)
     assert df["closing_time"].is_monotonic_decreasing
 

@@ -154,7 +154,7 @@ def test_lid_mass_samples_match_a_model_built_for_that_mass():
     masses = np.array([0.476, 0.5, 0.52, 0.52])
     cols = evaluate(cfg, ["mass.lid"], masses[:, None])
     for i, m in enumerate(masses):
-        r = Simulator(cfg.update({"mass.lid": float(m)})).run(estimate_error=False)
+        r = Simulator.from_config(cfg.update({"mass.lid": float(m)})).run(estimate_error=False)
         for k in ("closing_time", "impact_theta_dot", "peak_tip_speed", "holding_moment"):
             assert cols[k][i] == pytest.approx(getattr(r, k), rel=1e-9, abs=1e-12), (m, k)
 
@@ -166,7 +166,7 @@ def test_geometry_samples_build_their_own_model():
     cols = evaluate(cfg, ["geometry.pivot_b[0]", "design.spring_k"], xs)
     for i, (x, k) in enumerate(xs):
         c = cfg.update({"geometry.pivot_b[0]": float(x), "design.spring_k": float(k)})
-        r = Simulator(c).run(estimate_error=False)
+        r = Simulator.from_config(c).run(estimate_error=False)
         assert cols["closing_time"][i] == pytest.approx(r.closing_time, rel=1e-12)
         assert cols["holding_moment"][i] == pytest.approx(r.holding_moment, rel=1e-12)
 
@@ -196,7 +196,7 @@ def c_star():
     from scipy.optimize import brentq
     cfg = default_config().with_design(spring_k=K_HELD,
                                        spring_rest_length=OPT["spring_rest_length"])
-    ref = Reference(LidModel(cfg))
+    ref = Reference(LidModel.from_config(cfg))
     p = lambda c: np.array([K_HELD, OPT["spring_rest_length"], c, 0.0])  # noqa: E731
     f = lambda c: ref.simulate(p(c)).closing_time - cfg.optimise.closing_time_max  # noqa: E731
     return brentq(f, 2900.0, 3300.0, xtol=1e-6)
@@ -228,7 +228,7 @@ def test_yield_estimate_against_the_true_yield(c_star, distribution):
     assert r.reference and all(c["verdicts_agree"] for c in r.reference)
     # percentiles: the median closing time is the stroke at the median damper
     med_c = float(np.median(r.data["X"][:, 0]))
-    sim = Simulator(cfg)
+    sim = Simulator.from_config(cfg)
     t_med = sim.run(np.array([K_HELD, OPT["spring_rest_length"], med_c, 0.0]),
                     estimate_error=False).closing_time
     assert r.percentiles["closing_time"]["p50"] == pytest.approx(t_med, abs=2e-3)
@@ -316,7 +316,7 @@ def test_a_tolerance_on_friction_works_like_any_key():
     cfg = default_config().with_design(spring_k=K_HELD,
                                        spring_rest_length=OPT["spring_rest_length"],
                                        damper_c=2600.0)
-    ref = Reference(LidModel(cfg))
+    ref = Reference(LidModel.from_config(cfg))
     f_star = brentq(lambda f: ref.simulate(params_of(cfg.update({"friction.torque": f})))
                     .closing_time - cfg.optimise.closing_time_max, 0.0, 0.2, xtol=1e-9)
     assert 0.05 < f_star < 0.07

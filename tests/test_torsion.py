@@ -41,7 +41,7 @@ def torsion_cfg(pivot, kt=0.5, free=None, **design):
 @pytest.fixture(scope="module", params=PIVOTS)
 def case(request):
     cfg = torsion_cfg(request.param, damper_c=300.0, spring_k=800.0, spring_rest_length=0.06)
-    model = LidModel(cfg)
+    model = LidModel.from_config(cfg)
     return request.param, cfg, model
 
 
@@ -111,7 +111,7 @@ def test_holding_moment_is_the_slope_of_an_independent_potential(case):
         return (Vg + 0.5 * d.spring_k * (l - d.spring_rest_length) ** 2
                 + 0.5 * d.torsion_k * (psi - math.radians(d.torsion_free_angle_deg)) ** 2)
 
-    sim = Simulator(cfg, model=model)
+    sim = Simulator.from_config(cfg, model=model)
     p = model.params()
     h = 1e-5
     for th in (0.0, 0.1, 0.3):
@@ -125,7 +125,7 @@ def test_holding_moment_is_the_slope_of_an_independent_potential(case):
 
 def test_kernel_strokes_match_the_adaptive_reference(case):
     _, cfg, model = case
-    sim = Simulator(cfg, model=model)
+    sim = Simulator.from_config(cfg, model=model)
     ref = Reference(model)
     stiffer = model.params()
     stiffer[PARAM_KEYS.index("torsion_k")] *= 3
@@ -145,7 +145,7 @@ def test_kernel_energy_balance_along_a_stroke(case):
     """Along the kernel's trajectory the energy (CasADi, exact) falls by the dampers' work
     (trapezoid of the power), and without dampers it stays (rk4 at 2 ms)."""
     _, cfg, model = case
-    sim = Simulator(cfg, model=model)
+    sim = Simulator.from_config(cfg, model=model)
     p = model.params()
     r = sim.run(p, trajectory=True)
     tr = r.trajectory
@@ -168,7 +168,7 @@ def test_kernel_energy_balance_along_a_stroke(case):
 
 def test_kernel_step_matches_the_casadi_step(case):
     _, cfg, model = case
-    sim = Simulator(cfg, model=model)
+    sim = Simulator.from_config(cfg, model=model)
     p = model.params()
     for name in ("rk4", "gauss4"):
         m = get_method(name)
@@ -183,7 +183,7 @@ def test_rows_with_and_without_the_torsion_spring_in_one_batch():
     """Lanes with and without the element share vector groups: each row's numbers are those
     of a batch of its own kind."""
     cfg = torsion_cfg("O", kt=0.0)
-    sim = Simulator(cfg)
+    sim = Simulator.from_config(cfg)
     rng = np.random.default_rng(2)
     n = 64
     P = as_params(np.column_stack([rng.uniform(500, 4000, n), rng.uniform(0.05, 0.09, n),
@@ -206,7 +206,7 @@ def test_a_stiff_torsion_spring_holds_the_lid_open_at_its_equilibrium():
     """The kernel's early exit with the torsion spring's potential: the lid is held open at
     the stable equilibrium, where the model's dV vanishes (independent of the table)."""
     cfg = torsion_cfg("O", kt=30.0, free=114.0, damper_c=3000.0)   # phi = 114 deg at ~10 deg
-    sim = Simulator(cfg)
+    sim = Simulator.from_config(cfg)
     model = sim.model
     p = model.params()
     r = sim.run_batch(p[None, :])

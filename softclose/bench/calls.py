@@ -21,6 +21,7 @@ from .features import feature_entries
 from .timing import (cli_time, fresh_command, fresh_env, kernel_times, median_time,
                      not_measured, speed_row)
 from ..optimiser import cache as optimiser_cache
+from ..problem import resolve
 
 #: modules that ``softclose simulate`` must not import at start-up (they are imported lazily)
 HEAVY_MODULES = ("pandas", "pyarrow", "scipy", "SALib", "dask", "matplotlib")
@@ -37,12 +38,13 @@ def speed(cfg: Config, quick: bool = False, cli: bool = True, features: bool = T
         rows.append(row)
         log(f"  {row['what']}: {row['median_s'] * 1e3:.3f} ms")
     r = 3 if quick else 9
+    case = resolve(cfg)
     add(speed_row("model", "LidModel(cfg) (symbolic model, CasADi)",
-                  median_time(lambda: LidModel(cfg), r), r))
-    model = LidModel(cfg)
+                  median_time(lambda: LidModel(case), r), r))
+    model = LidModel(case)
     add(speed_row("table", "Simulator(cfg, model) (coefficient table)",
-                  median_time(lambda: Simulator(cfg, model=model), r), r))
-    sim = Simulator(cfg, model=model)
+                  median_time(lambda: Simulator(case, model=model), r), r))
+    sim = Simulator(case, model=model)
     p = model.params()
     n = 50 if quick else 300
     add(speed_row("run", "Simulator.run(p, estimate_error=False)",
@@ -68,10 +70,10 @@ def speed(cfg: Config, quick: bool = False, cli: bool = True, features: bool = T
     tb = median_time(lambda: sim.run_batch(P), rb)
     add(speed_row("batch", f"Simulator.run_batch, {B} random designs of the design box, "
                   "all cores", tb, rb, f"{os.cpu_count()} threads", count=B))
-    ref = Reference(model)
+    ref = Reference(model, case.solver.reference_tol)
     rr = 2 if quick else 5
     add(speed_row("reference", f"Reference(model).simulate(p) (CVODES, tol {ref.tol:g})",
-                  median_time(lambda: ref.simulate(p), rr), rr))
+                  median_time(lambda: ref.simulate(p, case), rr), rr))
     if cli:
         rc = 5 if quick else 9
         heavy = startup_imports(["simulate", "--json"])

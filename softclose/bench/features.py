@@ -33,6 +33,7 @@ from ..config.free import parse_free_option
 from .fitting import fit_entries
 from ..robust import optimise_robust, sensitivity as sens, tolerance_analysis as ta
 from ..sweeps import sweep
+from ..problem import resolve
 
 #: a feature entry is repeated (up to its repeat count) only while its runs took less than this
 FEATURE_BUDGET_S = 30.0
@@ -101,7 +102,7 @@ def feature_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
     rep = 1 if quick else 3
     n_grid = int(np.prod([n for _, _, n in SWEEP_GRID.values()]))
     axes = sweep_axes()
-    sim = Simulator(cfg)
+    sim = Simulator(resolve(cfg))
     grid = make_grid(axes)            # the sweep's own designs, in its order
     P = np.tile(params_of(cfg), (n_grid, 1))
     P[:, [PARAM_COLUMNS[k] for k in grid.keys]] = grid.points(np.arange(n_grid))
@@ -119,7 +120,7 @@ def feature_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
              {"friction.torque": 0.05, "design.rotary_damper_pivot": "O"},
              {"design.rotary_damper_c": 0.01})):
         c_el = cfg.update({**extra, **cols})
-        sim_el = Simulator(c_el)
+        sim_el = Simulator(resolve(c_el))
         P_el = np.tile(params_of(c_el), (n_grid, 1))
         P_el[:, [PARAM_COLUMNS[k] for k in grid.keys]] = grid.points(np.arange(n_grid))
         sim_el.run_batch(P_el[:1000])
@@ -252,7 +253,7 @@ def _placement_rows(cfg: Config, rows: list, timed, quick: bool) -> None:
     space = make_sample(PLACEMENT_BOX, n, "sobol", 0, c)
     X = space.points(np.arange(n))
     pts = {k: X[:, j] for j, k in enumerate(space.keys)}
-    sim = Simulator(c)
+    sim = Simulator(resolve(c))
     P = np.tile(params_of(c), (n, 1))
     sim.run_batch(P[:1000], points={k: v[:1000] for k, v in pts.items()})    # warm-up
     timed("kernel_placements", f"Simulator.run_batch(P, points=...): {n:,} Sobol placements "
@@ -368,7 +369,8 @@ def optimiser_study(cfg: Config, quick: bool = False, log=None) -> tuple[list, s
     log = log or (lambda *a: None)
     nodes = (5, 10, 20) if quick else OPT_NODES
     subs = (1, 4) if quick else OPT_SUBSTEPS
-    ref = Reference(LidModel(cfg), TRUTH_TOL)
+    case = resolve(cfg)
+    ref = Reference(LidModel(case), TRUTH_TOL)
     rows = []
     for n in nodes:
         for s in subs:
@@ -385,7 +387,7 @@ def optimiser_study(cfg: Config, quick: bool = False, log=None) -> tuple[list, s
                              "message": str(getattr(r, "message", "") or "not solved")})
                 continue
             d = r.design
-            rr = ref.simulate(params_of(cfg, d))
+            rr = ref.simulate(params_of(cfg, d), case)
             J_ref = objective(cfg.optimise, rr.impact_theta_dot, rr.peak_tip_speed)
             rows.append({"nodes": n, "substeps": s, "success": True,
                          "objective": float(r.objective), "objective_reference": J_ref,

@@ -21,6 +21,7 @@ from ..simulation.simulator import Simulator
 from .timing import kernel_times, time_stats
 from ..jsonio import jsonable
 from ..model.elements import PARAMS
+from ..problem import resolve
 
 #: the metrics with an accuracy target, in table order
 METRICS = tuple(TARGETS)
@@ -164,18 +165,19 @@ def work_precision(cfg: Config, quick: bool = False, repeats: int | None = None,
     steps = {m: set(s) for m, s in (QUICK_STEPS if quick else STEPS).items()}
     steps.setdefault(cfg.simulate.integrator, set()).add(cfg.simulate.step)
     methods = list(methods or METHODS)
-    model = LidModel(cfg)
+    case = resolve(cfg)
+    model = LidModel(case)
     designs = designs_for(cfg, quick)
     truth_ref = Reference(model, TRUTH_TOL)
     check_ref = Reference(model, 10 * TRUTH_TOL)
     rows, truths, floor = [], {}, {}
     table = None  # one coefficient table for every method (it depends on the model only)
     for dname, p in designs.items():
-        truths[dname] = truth_ref.simulate(p)
-        floor[dname] = errors(check_ref.simulate(p), truths[dname])
+        truths[dname] = truth_ref.simulate(p, case)
+        floor[dname] = errors(check_ref.simulate(p, case), truths[dname])
         log(f"  truth for {dname}: closing_time {truths[dname].closing_time}")
         for mname in methods:
-            sim = Simulator(cfg, model=model, integrator=mname)
+            sim = Simulator(case, model=model, integrator=mname)
             if table is not None:
                 sim.table = table
             table = sim.table
@@ -195,8 +197,8 @@ def work_precision(cfg: Config, quick: bool = False, repeats: int | None = None,
                 })
         for tol in REFERENCE_TOLS if not quick else REFERENCE_TOLS[1::2]:
             ref = Reference(model, tol)
-            r = ref.simulate(p)
-            t, t_min = time_stats(lambda: ref.simulate(p), max(1, repeats // 2), warmup=0)
+            r = ref.simulate(p, case)
+            t, t_min = time_stats(lambda: ref.simulate(p, case), max(1, repeats // 2), warmup=0)
             err = errors(r, truths[dname])
             rows.append({"design": dname, "method": "reference", "step": tol,
                          "status": r.status.text, "steps": 0, "time_per_stroke": t,

@@ -14,6 +14,7 @@ from ..config import Config
 from ..simulation.integrators import SEED
 from ..simulation.reference import Reference
 from ..simulation.simulator import Simulator
+from ..problem import resolve
 
 #: the seed notebook's step (1000 samples per second)
 SEED_STEP = SEED[1]
@@ -58,10 +59,11 @@ def seed_reproduction(cfg: Config, fast: bool = False) -> dict:
     step (``convergence``), their observed orders, and the trajectories of the seed's drop
     and of the default (``trajectories``, for the figure).
     """
-    ec = Simulator(cfg, integrator=SEED[0], step=SEED_STEP)
+    case = resolve(cfg)
+    ec = Simulator(case, integrator=SEED[0], step=SEED_STEP)
     seed = seed_reading(ec)
-    default = Simulator(cfg, model=ec.model).run(trajectory=True)
-    ref = Reference(ec.model).simulate()
+    default = Simulator(case, model=ec.model).run(trajectory=True)
+    ref = Reference(ec.model, case.solver.reference_tol).simulate(None, case)
     steps = SEED_STEP * 2.0 ** -np.arange(0, 4 if fast else 8)
     steps = np.r_[SEED_STEP * np.array([8, 4, 2]), steps]
     conv = {"step": steps.tolist()}
@@ -69,7 +71,7 @@ def seed_reproduction(cfg: Config, fast: bool = False) -> dict:
         for k in SEED_KEYS[:2]:
             conv[f"{name}_{k}_error"] = []
         for h in steps:
-            r = Simulator(cfg, model=ec.model, integrator=name, step=float(h)).run(
+            r = Simulator(resolve(cfg), model=ec.model, integrator=name, step=float(h)).run(
                 estimate_error=False)
             for k in SEED_KEYS[:2]:
                 conv[f"{name}_{k}_error"].append(abs(getattr(r, k) - getattr(ref, k)))

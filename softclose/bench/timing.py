@@ -75,7 +75,7 @@ def kernel_times(sim: Simulator, p: np.ndarray, repeats: int = 5,
     makes the Python call overhead negligible; the times of ``repeats`` calls are divided
     by the batch size.
     """
-    st = sim.cfg.stroke
+    st = sim.stroke
     row = np.r_[native.kernel_rows(as_params(p)), sim.energy_tol(p[None, :])]
 
     def call(n):

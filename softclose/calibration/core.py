@@ -38,6 +38,7 @@ from .result import UNDETERMINED, VIF_MAX  # noqa: F401  (the verdict's threshol
 from ..present.progress import Progress
 from ..interrupt import check
 from .result import FitResult, StrokeFit
+from ..problem import resolve
 
 CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
@@ -82,10 +83,10 @@ def measured_states(stroke):
     return th[1:], w[mv], wd
 
 
-def equation_error_guess(model, keys, strokes, u0, lo, hi, iterations: int = 8):
+def equation_error_guess(model, cfg, keys, strokes, u0, lo, hi, iterations: int = 8):
     """First guesses of the keys: Gauss-Newton on theta''(measured) - theta''(model) at the
     smoothed measured states (relative steps limited to x3 per iteration)."""
-    f = fit_ode(model, keys)
+    f = fit_ode(model, cfg, keys)
     xs, a = [], []
     for s in strokes:
         th, thd, thdd = measured_states(s)
@@ -164,7 +165,7 @@ def prepare(cfg, data, free, axis=None):
     if not data:
         raise ConfigError("fit: no data file given")
     records = [record_of(d, axis, f"data[{i}]") for i, d in enumerate(data)]
-    model = LidModel.cached(cfg)
+    model = LidModel.cached(resolve(cfg))
     strokes = [locate(r, cfg.stroke.theta_closed) for r in records]
     used = sum(st.samples_used for st in strokes)
     if used > MAX_SAMPLES:
@@ -193,7 +194,7 @@ def solve(cfg, data, free, *, axis=None, starts: int = 1, seed: int = 0, prepare
     nk = len(keys)
     lo, hi = _bounds(keys)
     u_cfg = np.array([value_of(cfg, k) for k in keys])
-    u_init = equation_error_guess(model, keys, strokes, u_cfg, lo, hi)
+    u_init = equation_error_guess(model, cfg, keys, strokes, u_cfg, lo, hi)
     # the equation error differentiates noise twice: a guess more than a decade from the
     # config's value (when it has one) is not trusted
     with np.errstate(all="ignore"):
@@ -226,7 +227,7 @@ def solve(cfg, data, free, *, axis=None, starts: int = 1, seed: int = 0, prepare
         factor = np.ones(nk) if i == 0 else np.exp(0.7 * rng.standard_normal(nk))
         w = w0.copy()
         w[:nk] = np.clip(u_init * factor / scale, lbw[:nk], ubw[:nk])
-        nlp = get_nlp(model, keys, shapes, n_move, n_rel)
+        nlp = get_nlp(model, cfg, keys, shapes, n_move, n_rel)
         ws, f, status, it = nlp.solve(w, P, lbw, ubw)
         ok = status in CONVERGED and np.isfinite(f)
         if best is None or (ok, -f) > (best[3], -best[1]):
@@ -238,7 +239,7 @@ def solve(cfg, data, free, *, axis=None, starts: int = 1, seed: int = 0, prepare
     defect = float(nlp.defect(ws, P))
     while ok and defect > DEFECT_MAX and n_move < 256:
         n_move, n_rel = 2 * n_move, 2 * n_rel
-        nlp = get_nlp(model, keys, shapes, n_move, n_rel)
+        nlp = get_nlp(model, cfg, keys, shapes, n_move, n_rel)
         ws2, f2, status2, it2 = nlp.solve(ws, P, lbw, ubw)
         ok = status2 in CONVERGED and np.isfinite(f2)
         ws, f, status, iters = ws2, f2, status2, iters + it2

@@ -17,7 +17,6 @@ as the config derives it (m L^2/12), as it does in the calibrated config written
 
 from __future__ import annotations
 
-import dataclasses
 
 import casadi as ca
 import numpy as np
@@ -87,10 +86,10 @@ def derived_followers(cfg, keys) -> tuple[str, ...]:
                  and k.name not in given and k.full not in keys)
 
 
-def fit_ode(model, keys) -> ca.Function:
-    """``ode(x, u) -> x'`` of ``model``'s lid with the values ``u`` of ``keys`` (in the keys'
-    own units) as inputs; the closing direction's dry friction (theta' <= 0)."""
-    cfg = model.cfg
+def fit_ode(model, cfg, keys) -> ca.Function:
+    """``ode(x, u) -> x'`` of ``model``'s lid (that of ``cfg``) with the values ``u`` of
+    ``keys`` (in the keys' own units) as inputs; the closing direction's dry friction
+    (theta' <= 0)."""
     u = ca.SX.sym("u", len(keys))
     mass = cfg.mass._asdict()
     for i, k in enumerate(keys):
@@ -100,13 +99,13 @@ def fit_ode(model, keys) -> ca.Function:
         values = {"geometry": cfg.geometry._asdict(), "mass": mass}
         for full in derived_followers(cfg, keys):
             mass[full.split(".")[1]] = BY_NAME[full].derive(values)
-    scfg = dataclasses.replace(cfg, mass=type(cfg.mass)(**mass))
+    lid = model.lid._replace(mass=type(cfg.mass)(**mass))
     th, thd = ca.SX.sym("theta"), ca.SX.sym("theta_dot")
     p = ca.SX(model.params())
     for i, k in enumerate(keys):
         if k in PARAM_COLUMNS:
             p[PARAM_COLUMNS[k]] = u[i]
-    cf = coefficients(th, scfg, model.sigma)
+    cf = coefficients(th, lid, model.sigma)
     tdd = theta_ddot(cf, thd, p, -1.0)
     x = ca.vertcat(th, thd)
     return ca.Function("fit_ode", [x, u], [ca.cse(ca.vertcat(thd, tdd))], ["x", "u"], ["xdot"])

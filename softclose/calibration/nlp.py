@@ -53,10 +53,10 @@ def substeps(h: float, step: float = FIT_STEP) -> int:
     return max(1, int(math.ceil(h / step * (1 - 1e-9))))
 
 
-def _flow(model, keys, n: int):
+def _flow(model, cfg, keys, n: int):
     """x1 = F(x0, u, h): ``n`` steps of the config's integrator over h."""
-    method = get_method(model.cfg.simulate.integrator)
-    step = casadi_step(method, fit_ode(model, keys))
+    method = get_method(cfg.simulate.integrator)
+    step = casadi_step(method, fit_ode(model, cfg, keys))
     x0, u, h = ca.MX.sym("x0", 2), ca.MX.sym("u", len(keys)), ca.MX.sym("h")
     x = x0
     for _ in range(n):
@@ -68,13 +68,13 @@ class FitNLP:
     """The NLP of one shape: ``shapes`` a tuple per stroke of (kind, rest, window, moving)
     sample counts."""
 
-    def __init__(self, model, keys, shapes, n_move: int, n_release: int):
+    def __init__(self, model, cfg, keys, shapes, n_move: int, n_release: int):
         self.keys, self.shapes = tuple(keys), tuple(shapes)
         nk = len(keys)
-        Fm = _flow(model, keys, n_move)
-        Fr = _flow(model, keys, n_release)
-        Fm2 = _flow(model, keys, 2 * n_move)      # the step halved: the integration error
-        Fr2 = _flow(model, keys, 2 * n_release)
+        Fm = _flow(model, cfg, keys, n_move)
+        Fr = _flow(model, cfg, keys, n_release)
+        Fm2 = _flow(model, cfg, keys, 2 * n_move)      # the step halved: the integration error
+        Fr2 = _flow(model, cfg, keys, 2 * n_release)
         defects = []
         u = ca.MX.sym("u", nk)           # scaled keys
         scale = ca.MX.sym("scale", nk)
@@ -119,7 +119,7 @@ class FitNLP:
             res.append(ym - (X[1, :].T + b if rate else X[0, :].T))
             r.append(ca.vertcat(*res) / sig)
             if rate:
-                r.append(ca.reshape((X[0, -1] - model.cfg.stroke.theta_closed - sc / 2)
+                r.append(ca.reshape((X[0, -1] - model.stroke.theta_closed - sc / 2)
                                     / (sc / math.sqrt(12.0)), 1, 1))
             w += [v, ca.vec(X)]
             P += pars
@@ -155,13 +155,14 @@ class FitNLP:
             int(self.solver.stats().get("iter_count", 0))
 
 
-def get_nlp(model, keys, shapes, n_move, n_release) -> FitNLP:
-    c = model.cfg     # the keys not fitted are numbers of the NLP's functions
+def get_nlp(model, cfg, keys, shapes, n_move, n_release) -> FitNLP:
+    """The fit's NLP of ``cfg``'s ``model`` (cached)."""
+    c = cfg     # the keys not fitted are numbers of the NLP's functions
     key = (c.geometry, c.mass, c.design, c.friction, c.stroke, c.simulate.integrator,
            tuple(keys), tuple(shapes), n_move, n_release)
     nlp = _CACHE.get(key)
     if nlp is None:
-        nlp = _CACHE[key] = FitNLP(model, keys, shapes, n_move, n_release)
+        nlp = _CACHE[key] = FitNLP(model, cfg, keys, shapes, n_move, n_release)
     return nlp
 
 

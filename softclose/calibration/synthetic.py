@@ -14,6 +14,7 @@ import numpy as np
 from ..errors import NumericalError
 from ..simulation.reference import Reference
 from ..model.lid import LidModel
+from ..problem import resolve
 
 
 def stroke_samples(cfg, rate: float = 120.0, before: float = 0.1, after: float = 0.1,
@@ -22,10 +23,11 @@ def stroke_samples(cfg, rate: float = 120.0, before: float = 0.1, after: float =
     t_release, t_closed)`` (s, rad, rad/s). The lid rests at ``stroke.theta0_deg`` for
     ``before`` seconds, is released at ``t_release`` (``phase`` of a frame after a frame),
     closes at ``t_closed`` and rests on the rim for ``after`` seconds."""
-    model = LidModel.cached(cfg)
-    ref = Reference(model)
+    case = resolve(cfg)
+    model = LidModel.cached(case)
+    ref = Reference(model, case.solver.reference_tol)
     p = model.params()
-    res = ref.simulate(p)
+    res = ref.simulate(p, case)
     if not res.closed:
         raise NumericalError("the synthetic stroke does not close: choose other parameters")
     T = float(res.closing_time)

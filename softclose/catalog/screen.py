@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass, replace
-from types import SimpleNamespace
 
 import numpy as np
 
@@ -29,7 +28,7 @@ from ..config.load import from_dict
 from ..model.elements.springs import KINDS
 from ..robust.box import Box, box_of
 from ..robust.evaluate import evaluate, point_values, simulator, slow_keys
-from ..problem import LID_MASS, param_rows
+from ..problem import LID_MASS, param_rows, resolve
 
 #: the [tolerance] keys a catalog's own tolerances replace
 OWNED = ("design.spring_k", "design.spring_rest_length", "design.damper_c",
@@ -57,8 +56,7 @@ def without_limits(cfg: Config) -> Config:
 
 def limits_view(cfg: Config, lo, hi):
     """What the range check reads of a config, with a part's limits (None: no limit)."""
-    return SimpleNamespace(design=SimpleNamespace(spring_min_length=lo, spring_max_length=hi),
-                           stroke=cfg.stroke)
+    return resolve(cfg).lid.mounting._replace(spring_min_length=lo, spring_max_length=hi)
 
 
 @dataclass(frozen=True)

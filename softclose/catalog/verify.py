@@ -18,16 +18,17 @@ from ..problem import DESIGN_KEYS
 from .screen import LIMIT_RTOL, PairBox, pair_rows, pivot_config
 from ..optimiser.verify import Checker, verify
 from ..model.lid import LidModel, model_key
+from ..problem import resolve
 
 _CHECKERS: dict = {}
 
 
 def _checker(cfg):
-    key = model_key(cfg)
+    key = model_key(resolve(cfg))
     if key not in _CHECKERS:
         if len(_CHECKERS) > 64:
             _CHECKERS.clear()
-        _CHECKERS[key] = Checker(LidModel.cached(cfg))
+        _CHECKERS[key] = Checker(LidModel.cached(resolve(cfg)), cfg.simulate.reference_tol)
     return _CHECKERS[key]
 
 

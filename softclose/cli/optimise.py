@@ -16,6 +16,7 @@ from .common import (DESIGN_FILE, Outcome, add_common, add_out, add_slow_motion,
                      metrics_line, prepare_out, slow_motion, write_design, write_outputs,
                      wrote)
 from .text import closing_time_text, design_text, objective_text
+from ..problem import resolve
 
 #: the default closing times of ``pareto`` (s)
 PARETO_DEFAULT = "0.3:3:10:log"
@@ -131,7 +132,7 @@ def write_optimum(res, out, slow_motion=None) -> list:
                           [f"verified by the adaptive reference: "
                            f"{metrics_line(res.metrics, res.verified_objective)}"
                            if res.verification is not None else ""])]
-    sim = Simulator(res.design_config())   # its model carries the design
+    sim = Simulator(resolve(res.design_config()))   # its model carries the design
     stroke = sim.run(trajectory=True)
     files.append(out / "optimise.json")
     files[-1].write_text(dumps(res.to_json(), indent=1))
@@ -140,7 +141,7 @@ def write_optimum(res, out, slow_motion=None) -> list:
     if any("[" in k for k in res.design) or cfg.optimise.keep_out:   # where it attaches
         from ..optimiser.cache import get_model
         from ..present.figures.attachment import plot_attachments
-        files.append(save(plot_attachments(get_model(cfg)), out / "attachments.png"))
+        files.append(save(plot_attachments(get_model(cfg), cfg), out / "attachments.png"))
     files += write_stroke_outputs(sim.model, stroke, out, stem="optimum",
                                   slow_motion=slow_motion)
     return files

@@ -322,7 +322,8 @@ def robust_outcome(cfg, args) -> Outcome:
         if res.design and any("[" in k for k in res.design):   # the chosen attachment points
             from ..optimiser.cache import get_model
             from ..present.figures.attachment import plot_attachments
-            files.append(save(plot_attachments(get_model(res.design_config())),
+            files.append(save(plot_attachments(get_model(res.design_config()),
+                                               res.design_config()),
                               out / "attachments.png"))
         payload["files"] = [str(f) for f in files]
     return Outcome(payload, format_robust(res) + wrote(files), 0 if res.success else 3,

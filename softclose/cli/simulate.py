@@ -7,6 +7,7 @@ import math
 
 from .common import (Outcome, add_common, add_out, add_slow_motion, format_metrics,
                      prepare_out, slow_motion, wrote)
+from ..problem import resolve
 
 DESCRIPTION = """\
 One closing stroke of the config's design: the lid released from rest at stroke.theta0_deg
@@ -52,14 +53,14 @@ def run(cfg, args) -> Outcome:
     from ..simulation.simulator import Simulator
     factor = slow_motion(args)
     out = prepare_out(args.out)
-    sim = Simulator(cfg, cached=True)
+    sim = Simulator(resolve(cfg), cached=True)
     res = sim.run(trajectory=out is not None)
     payload = res.to_json()
     payload["integrator"] = res.method
     hf = None
     if res.ok:                           # the hand force and the zones (SPEC §13)
         from ..simulation.handforce import hand_force
-        hf = hand_force(sim.model, cfg=cfg)
+        hf = hand_force(sim.model, case=sim.case)
         payload.update({k: v for k, v in hf.metrics().items() if k != "opening_force"})
     if not res.ok:
         payload["error"] = res.message

@@ -6,6 +6,7 @@ import math
 
 from ..errors import ConfigError
 from .common import Outcome, add_common
+from ..problem import resolve
 
 
 def register(sub) -> None:
@@ -47,7 +48,7 @@ def run(cfg, args) -> Outcome:
         raise ConfigError(f"--theta-deg: {args.theta_deg:g} deg is outside -360..360 deg")
     if not abs(args.theta_dot) <= 1e4:     # its square enters the reactions
         raise ConfigError(f"--theta-dot: {args.theta_dot:g} rad/s is outside -1e4..1e4 rad/s")
-    model = LidModel(cfg)
+    model = LidModel(resolve(cfg))
     theta = math.radians(args.theta_deg)
     toggle = model.toggle_between(cfg.stroke.theta0, theta)
     if toggle is not None:  # the branch followed from the stroke does not reach theta

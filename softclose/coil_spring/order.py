@@ -18,6 +18,7 @@ import numpy as np
 from ..errors import ConfigError
 from ..model.lid import shared_model
 from . import PREFERRED_WIRE_D, CoilSpring, Duty, check, design
+from ..problem import resolve
 
 #: angles of the grid on which the spring's extremes over the stroke are bracketed
 GRID = 801
@@ -29,7 +30,7 @@ def working_lengths(cfg) -> tuple[float, float]:
     in the cells about it."""
     from scipy.optimize import minimize_scalar
 
-    q = shared_model(cfg).coordinate_fns["spring"]
+    q = shared_model(resolve(cfg)).coordinate_fns["spring"]
     a, b = cfg.stroke.theta_closed, cfg.stroke.theta0
     grid = np.linspace(a, b, GRID)
     lv = np.asarray(q.map(GRID)(grid)[0], float).ravel()

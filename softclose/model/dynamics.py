@@ -65,37 +65,38 @@ def pose(theta, geo, mass, sigma) -> Pose:
     return Pose(theta, phi, gamma, points(theta, phi, gamma, geo), geo, mass)
 
 
-def coordinates(theta, cfg, sigma, ps: Pose | None = None) -> dict:
-    """Each element's coordinate at theta: {name: :class:`Coord`} (CasADi expressions)."""
-    ps = ps or pose(theta, cfg.geometry, cfg.mass, sigma)
+def coordinates(theta, lid, sigma, ps: Pose | None = None) -> dict:
+    """Each element's coordinate at theta on ``lid`` (:class:`softclose.model.resolved.Lid`):
+    {name: :class:`Coord`} (CasADi expressions)."""
+    ps = ps or pose(theta, lid.geometry, lid.mass, sigma)
     out = {}
     for e in ELEMENTS:
-        q = e.coordinate(cfg).value(ps)
+        q = e.coordinate(lid).value(ps)
         out[e.name] = Coord(q, ca.jacobian(q, theta))
     return out
 
 
-def coordinates_of_columns(columns: dict, cfg, theta=None) -> dict:
-    """Each element's :class:`Coord` in ``cfg`` from tabulated columns (``columns[name]``:
+def coordinates_of_columns(columns: dict, mounting, theta=None) -> dict:
+    """Each element's :class:`Coord` with ``mounting`` from tabulated columns (``columns[name]``:
     numbers or arrays): what the element declares it tabulates (its q, q' or q'^2); an element
     on the lid's own angle has q' = 1 (and q = ``theta``, the angle of the columns, when
     given). An element whose columns are not in ``columns`` (the extra table, not read) is
     left out."""
     out = {}
     for e in ELEMENTS:
-        if not e.columns or e.unit_rate(cfg):
+        if not e.columns or e.unit_rate(mounting):
             out[e.name] = Coord(theta, 1.0, 1.0)
         elif all(col in columns for col, _ in e.columns):
             out[e.name] = Coord(**{what: columns[col] for col, what in e.columns})
     return out
 
 
-def coefficients(theta, cfg, sigma) -> dict:
+def coefficients(theta, lid, sigma) -> dict:
     """The coefficients of theta as CasADi expressions: M (kg m^2), dM = M', tau = |dT/dtheta|
     (m), every element's columns (:data:`COEFFS`, :data:`EXTRA_COEFFS`: gravity's Vg (J) and
     dVg (N m), the spring's l (m) and dl, the dashpot's dd = (e_OC . dC/dtheta)^2 (m^2), and
     those of the elements added since the seed), and ``"coords"``: {element: :class:`Coord`}."""
-    geo, mass = cfg.geometry, cfg.mass
+    geo, mass = lid.geometry, lid.mass
     ps = pose(theta, geo, mass, sigma)
     p = ps.points
     jac = {k: ca.jacobian(p[k], theta) for k in ("G1", "G2", "G3", "T")}
@@ -104,7 +105,7 @@ def coefficients(theta, cfg, sigma) -> dict:
          + mass.crank_oa * ca.sumsqr(jac["G2"]) + mass.inertia_oa * phi_t ** 2
          + mass.crank_bc * ca.sumsqr(jac["G3"]) + mass.inertia_bc * gamma_t ** 2)
     out = {"M": M, "dM": ca.jacobian(M, theta), "tau": ca.norm_2(jac["T"])}
-    coords = coordinates(theta, cfg, sigma, ps)
+    coords = coordinates(theta, lid, sigma, ps)
     for e in ELEMENTS:
         for col, what in e.columns:
             out[col] = getattr(coords[e.name], what)
@@ -205,7 +206,7 @@ def damper_power(cf, theta_d, p):
     return power if fr is None else power - fr * _abs(theta_d)
 
 
-def newton_euler_system(theta, theta_d, p, cfg, sigma):
+def newton_euler_system(theta, theta_d, p, lid, sigma):
     """The nine Newton-Euler equations as ``(A, b)`` with ``A z = b``.
 
     Unknowns z = (R_O, R_A, R_B, R_C, theta'') -- R_A, R_C act on the lid from the
@@ -214,7 +215,7 @@ def newton_euler_system(theta, theta_d, p, cfg, sigma):
     its force along its coordinate, ``-(T(q) + B q-dot)`` with q-dot from the velocity loop,
     on the bodies it acts on (:mod:`softclose.model.elements.coordinates`).
     """
-    geo, mass = cfg.geometry, cfg.mass
+    geo, mass = lid.geometry, lid.mass
     z = ca.SX.sym("z", 9)
     R_O, R_A, R_B, R_C, tdd = z[0:2], z[2:4], z[4:6], z[6:8], z[8]
     ps = pose(theta, geo, mass, sigma)
@@ -236,7 +237,7 @@ def newton_euler_system(theta, theta_d, p, cfg, sigma):
     P = elements.params(p)
     forces = {"lid": [], "oa": [], "bc": []}    # (point name or None, force or moment)
     for e in ELEMENTS:
-        coord = e.coordinate(cfg)
+        coord = e.coordinate(lid)
         q = coord.value(ps)
         f = -e.tension(q, P)
         if e.viscous(P) is not None:

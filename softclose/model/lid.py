@@ -1,7 +1,9 @@
 """The lid model: one geometry and mass set, its branch, and its CasADi functions.
 
-``LidModel(cfg)`` picks the branch on the side named by ``geometry.assembly`` (the sign of
-``sin(gamma - phi)``, which only a toggle changes; see :mod:`softclose.model.kinematics`), checks
+``LidModel(case)`` (a config resolved by :func:`softclose.problem.resolve`; from a config:
+``softclose.LidModel.from_config(cfg)``) picks the branch on the side named by
+``geometry.assembly`` (the sign of ``sin(gamma - phi)``, which only a toggle changes; see
+:mod:`softclose.model.kinematics`), checks
 that the loop closes without a toggle from the assembly angle over every angle the stroke
 visits, and builds the CasADi functions the rest of softclose calls:
 
@@ -25,10 +27,10 @@ import casadi as ca
 import numpy as np
 
 from . import dynamics as dyn, elements
-from ..config import Config
 from ..errors import ConfigError
 from .kinematics import branch_of, closure, points, velocity_loop
 from ..problem import as_params
+from .resolved import LidCase
 from ..buildcache import text
 
 #: |u| above which the linkage counts as "at a toggle": acos|u| < 0.81 deg, i.e. the crank
@@ -47,12 +49,13 @@ def _wrap(a):
     return (a + math.pi) % (2 * math.pi) - math.pi
 
 
-def model_key(cfg: Config) -> tuple:
+def model_key(case: LidCase) -> tuple:
     """What a model depends on: geometry, masses, the stroke's angles and the element choices
     that change its structure (:func:`softclose.model.elements.structure`). Equal keys, equal
     models: every cache of models, tables and NLPs is keyed by it."""
-    return (cfg.geometry, cfg.mass, cfg.stroke.theta0_deg, cfg.stroke.theta_closed_deg,
-            elements.structure(cfg))
+    lid, st = case.lid, case.stroke
+    return (lid.geometry, lid.mass, st.theta0_deg, st.theta_closed_deg,
+            elements.structure(lid.mounting))
 
 
 #: the CasADi functions a model carries (attribute names), kept serialised in the disk cache
@@ -63,34 +66,44 @@ FUNCTIONS = ("ode", "ode_moving", "coeffs", "xcoeffs", "energy_fn", "power_fn", 
 _SHARED: dict = {}
 
 
-def shared_model(cfg: Config) -> "LidModel":
-    """The LidModel of cfg's geometry, mass and stroke, kept for the process (and on disk:
-    :meth:`LidModel.cached`): every model a process needs is built or loaded once."""
-    key = model_key(cfg)
+def shared_model(case: LidCase) -> "LidModel":
+    """The LidModel of the case's geometry, mass and stroke, kept for the process (and on
+    disk: :meth:`LidModel.cached`): every model a process needs is built or loaded once (its
+    own design, :meth:`LidModel.params`, is that of the first case it was built for)."""
+    key = model_key(case)
     if key not in _SHARED:
-        _SHARED[key] = LidModel.cached(cfg)
+        _SHARED[key] = LidModel.cached(case)
     return _SHARED[key]
 
 
+def _checked(case) -> LidCase:
+    """``case`` if it is a resolved config, else a TypeError saying how to make one."""
+    if not isinstance(case, LidCase):
+        raise TypeError(f"LidModel takes a resolved config (softclose.problem.resolve(cfg), "
+                        f"or LidModel.from_config(cfg)), got {type(case).__name__}")
+    return case
+
+
 class LidModel:
-    """The lid linkage of one config (geometry + mass); design values are parameters."""
+    """The lid linkage of one resolved config (geometry + mass, the mounting of its elements,
+    the stroke); design values are parameters."""
 
     @classmethod
-    def cached(cls, cfg: Config) -> "LidModel":
-        """``LidModel(cfg)``, loaded from the disk cache (:mod:`softclose.buildcache`) when
+    def cached(cls, case: LidCase) -> "LidModel":
+        """``LidModel(case)``, loaded from the disk cache (:mod:`softclose.buildcache`) when
         this software built it before, else built and stored. A loaded model deserialises
         each CasADi function when it is first used; its numbers are the built model's."""
         from .. import buildcache
-        key = buildcache.key_of("model", model_key(cfg))
+        key = buildcache.key_of("model", model_key(_checked(case)))
         entry = buildcache.load("model", key)
         if entry is not None:
             try:
-                m = cls._restore(cfg, entry)
+                m = cls._restore(case, entry)
                 m.cache_key = key
                 return m
             except Exception:   # noqa: BLE001  (a foreign or damaged entry: build anew)
                 pass
-        m = cls(cfg)
+        m = cls(case)
         m.cache_key = key
         buildcache.store("model", key, m._state())
         return m
@@ -105,9 +118,9 @@ class LidModel:
         return out
 
     @classmethod
-    def _restore(cls, cfg: Config, entry: dict) -> "LidModel":
+    def _restore(cls, case: LidCase, entry: dict) -> "LidModel":
         m = cls.__new__(cls)
-        m.cfg, m.geo, m.mass = cfg, cfg.geometry, cfg.mass
+        m._keep(case)
         sigma, lo, hi, u = (float(v) for v in entry["numbers"])
         m.sigma, m.theta_range, m.max_abs_u = int(sigma), (lo, hi), u
         m._serialised = {k: text(v) for k, v in entry.items() if k != "numbers"}
@@ -130,14 +143,28 @@ class LidModel:
         setattr(self, name, value)
         return value
 
-    def __init__(self, cfg: Config):
-        self.cfg = cfg
-        self.geo, self.mass = cfg.geometry, cfg.mass
+    def __init__(self, case: LidCase):
+        """``case``: a config resolved (:func:`softclose.problem.resolve`); the model keeps
+        its lid, its stroke and its design (the default of every ``p``)."""
+        self._keep(_checked(case))
         th = ca.SX.sym("theta")
         self._u = ca.Function("u", [th], [closure(th, self.geo, 1)[2]])
         self.sigma = self._pick_branch()
         self.theta_range = self._check_range()
         self._build()
+
+    def _keep(self, case: LidCase) -> None:
+        #: the lid on its mechanism (:class:`softclose.model.resolved.Lid`), the stroke's ends
+        self.lid, self.stroke = case.lid, case.stroke
+        #: the design's parameter vector (a tuple): the default of every ``p``
+        self.design = case.design
+        self.geo, self.mass = case.lid.geometry, case.lid.mass
+
+    @property
+    def mounting(self):
+        """Where the elements sit and the spring's limits
+        (:class:`softclose.model.resolved.Mounting`)."""
+        return self.lid.mounting
 
     # -- branch and range ------------------------------------------------------------
     def _pick_branch(self) -> int:
@@ -197,7 +224,7 @@ class LidModel:
 
     def _check_range(self) -> tuple[float, float]:
         """Check closure from the assembly angle over the stroke; return the table range."""
-        st = self.cfg.stroke
+        st = self.stroke
         th_a = math.radians(self.geo.assembly[0])
         lo, hi = min(th_a, st.theta_closed), max(th_a, st.theta0)
         th_bad, u = self._scan(lo, hi, th_a)
@@ -220,7 +247,7 @@ class LidModel:
 
     def _toggle_message(self, th_bad: float, th_a: float) -> str:
         """One line: the toggle met first from the assembly, and the keys that move it."""
-        st = self.cfg.stroke
+        st = self.stroke
         inside = st.theta_closed <= th_bad <= st.theta0
         reached = not abs(float(self._u(th_bad))) < 1
         # print the angle rounded away from the assembly: the loop does not close there
@@ -275,7 +302,7 @@ class LidModel:
         s = self.sigma
         th, thd = ca.SX.sym("theta"), ca.SX.sym("theta_dot")
         x, p = ca.vertcat(th, thd), ca.SX.sym("p", len(elements.PARAMS))
-        cf = dyn.coefficients(th, self.cfg, s)
+        cf = dyn.coefficients(th, self.lid, s)
         tdd = dyn.theta_ddot(cf, thd, p)
         self.ode = ca.Function("ode", [x, p], [ca.vertcat(thd, tdd)], ["x", "p"], ["xdot"])
         # the same with dry friction for a given direction of motion (+1 up, -1 down) and
@@ -320,17 +347,17 @@ class LidModel:
         """(theta, theta', p) -> z = (R_O, R_A, R_B, R_C, theta''): built on first use."""
         npar = len(elements.PARAMS)
         th, thd, p = ca.SX.sym("theta"), ca.SX.sym("theta_dot"), ca.SX.sym("p", npar)
-        A, b = dyn.newton_euler_system(th, thd, p, self.cfg, self.sigma)
+        A, b = dyn.newton_euler_system(th, thd, p, self.lid, self.sigma)
         sys = ca.Function("ne_sys", [th, thd, p], [A, b])
         thm, thdm, pm = ca.MX.sym("theta"), ca.MX.sym("theta_dot"), ca.MX.sym("p", npar)
         Am, bm = sys(thm, thdm, pm)
         return ca.Function("newton_euler", [thm, thdm, pm], [ca.solve(Am, bm)])
 
     # -- conveniences (numbers in, numbers out) ----------------------------------------
-    def params(self, design=None) -> np.ndarray:
-        """The parameter vector p of the config (``design``: another [design] section)."""
-        cfg = self.cfg if design is None else self.cfg.replace(design=design._asdict())
-        return np.array([q.number(q.value(cfg)) for q in elements.PARAMS], float)
+    def params(self) -> np.ndarray:
+        """The parameter vector p of the model's design (another design's:
+        :func:`softclose.problem.params_of` of its config)."""
+        return np.array(self.design, float)
 
     def closure(self, theta: float) -> tuple[float, float]:
         """(phi, gamma) in radians on this model's branch."""
@@ -344,7 +371,7 @@ class LidModel:
     def holding_moment(self, p=None) -> float:
         """dV/dtheta at theta_closed (N m); > 0 presses the lid onto the rim."""
         p = self.params() if p is None else as_params(p)
-        return float(self.dV(self.cfg.stroke.theta_closed, p))
+        return float(self.dV(self.stroke.theta_closed, p))
 
     def state(self, theta: float, theta_dot: float, p=None) -> dict:
         """Every quantity of SPEC §7 ``state`` at one state (SI units, radians)."""

@@ -30,15 +30,18 @@ VISCOUS = ("damper_c", "rotary_damper_c", "end_damper_c")
 COIL = ("spring_k", "spring_preload", "torsion_k")
 
 
-def parameter_factors(cfg) -> np.ndarray | None:
+def parameter_factors(temperatures) -> np.ndarray | None:
     """The factor of each parameter of p (:data:`softclose.model.elements.PARAMS`) at
-    ``cfg.operating.temperature_c``; None at the reference temperature (every factor 1)."""
-    op = cfg.operating
+    ``temperatures.temperature_c`` (a :class:`softclose.model.resolved.Temperatures`); None
+    at the reference temperature (every factor 1), and for None."""
+    op = temperatures
+    if op is None:
+        return None
     dT = op.temperature_c - op.reference_temperature_c
     if dT == 0.0:
         return None
-    damping = math.exp(cfg.design.damper_temperature_coeff * dT)
-    coil = material(cfg.spring.material).g_factor(op.temperature_c, op.reference_temperature_c)
+    damping = math.exp(op.damper_temperature_coeff * dT)
+    coil = material(op.spring_material).g_factor(op.temperature_c, op.reference_temperature_c)
     names = [q.name for q in elements.PARAMS]
     f = np.ones(len(names))
     for name in VISCOUS:

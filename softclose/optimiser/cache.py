@@ -18,14 +18,18 @@ from .lid import padded_degree
 from .nlp import ShootingNLP, ShootingStructure
 from .free_points import placement_layout, slot_values
 from . import compiled
+from ..problem import resolve
 
 _NLPS: dict = {}
 #: the NLP structures built in this process, by :func:`nlp_key`
 _STRUCTURES: dict = {}
 _FITS: dict = {}
-#: the LidModel of cfg's geometry, mass and stroke, kept for the process
-#: (:func:`softclose.model.lid.shared_model`)
-get_model = shared_model
+
+
+def get_model(cfg):
+    """The LidModel of cfg's geometry, mass and stroke, kept for the process
+    (:func:`softclose.model.lid.shared_model` of the config resolved)."""
+    return shared_model(resolve(cfg))
 
 
 def lid_fit(cfg) -> ChebyshevFit:
@@ -33,7 +37,7 @@ def lid_fit(cfg) -> ChebyshevFit:
     series with free attachment points), kept for the process."""
     els = nlp_elements(cfg)
     pose = bool(placement_layout(cfg))
-    key = model_key(cfg) + (tuple(e.name for e in els), pose)
+    key = model_key(resolve(cfg)) + (tuple(e.name for e in els), pose)
     if key not in _FITS:
         _FITS[key] = ChebyshevFit(get_model(cfg), els=els, pose=pose)
     return _FITS[key]
@@ -125,7 +129,7 @@ def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
     """The ShootingNLP of cfg's lid and discretisation: the structure's NLP (built once per
     structure, :func:`get_structure`) bound to the lid's numbers (kept per lid)."""
     key = nlp_key(cfg, nodes, substeps, substeps2)
-    lid = (key, model_key(cfg), free_layout(cfg), placement_layout(cfg),
+    lid = (key, model_key(resolve(cfg)), free_layout(cfg), placement_layout(cfg),
            tuple(slot_values(cfg)))
     if lid not in _NLPS:
         nlp = _bind(cfg, get_structure(key, describe_nlp(cfg, key[-5], key[-4], key[-6])))
@@ -157,7 +161,7 @@ def stroke_simulator(cfg, t_end: float | None = None) -> Simulator:
     if t_end is not None and t_end < cfg.stroke.t_max:
         c = cfg.replace(stroke={"t_max": float(t_end)})
     step = min(cfg.simulate.step, 1e-3)
-    return Simulator(c, model=get_model(cfg), integrator="rk4", step=step, cached=True)
+    return Simulator(resolve(c), model=get_model(cfg), integrator="rk4", step=step, cached=True)
 
 
 def forget() -> None:

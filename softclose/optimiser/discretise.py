@@ -20,6 +20,7 @@ from ..errors import ConfigError
 from .interval import END_C, end_damper_mode, free_of
 from ..model.lid import shared_model
 from ..model.dynamics import COEFFS
+from ..problem import resolve
 
 
 #: largest RK4 step of the NLP (s) when the sub-steps are chosen automatically: the default
@@ -44,7 +45,7 @@ def phase_two_rate(cfg) -> float:
     ce = free[END_C][1] if END_C in free else cfg.design.end_damper_c
     a_hi = free.get("design.end_damper_angle_deg", (0, cfg.design.end_damper_angle_deg))[1]
     th = np.radians(np.linspace(st.theta_closed_deg, min(a_hi, st.theta0_deg), 101))
-    C = np.asarray(shared_model(cfg).coeffs.map(len(th))(th)[0])
+    C = np.asarray(shared_model(resolve(cfg)).coeffs.map(len(th))(th)[0])
     M, dd = C[COEFFS.index("M")], C[COEFFS.index("dd")]
     return float(np.max((o.damper_c[1] * dd + ce) / M))
 

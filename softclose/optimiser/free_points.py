@@ -56,7 +56,8 @@ def placement_layout(cfg) -> tuple:
 
 
 def slot_values(cfg) -> np.ndarray:
-    """g of ``cfg``: the 8 components of D, E, F, H."""
+    """g of ``cfg`` (or of a model's lid, :class:`softclose.model.resolved.Lid`): the 8
+    components of D, E, F, H."""
     return np.array([config_value(cfg, k) for k in SLOTS])
 
 

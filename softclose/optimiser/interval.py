@@ -23,7 +23,7 @@ import numpy as np
 from ..model import elements
 from ..model.dynamics import coefficients
 from ..errors import ConfigError
-from ..problem import PARAM_COLUMNS, PARAM_KEYS
+from ..problem import PARAM_COLUMNS, PARAM_KEYS, params_of
 from .free_points import POSE_SERIES, SLOTS, lengths, pose_functions
 from .hermite import hermite_max
 from .lid import SymbolicSeries, chebyshev_basis, padded_degree
@@ -126,7 +126,7 @@ def nlp_elements(cfg) -> tuple:
     force adds nothing but series to fit)."""
     extra = {k.split(".", 1)[1]: max(abs(lo), abs(hi)) for k, lo, hi in free_of(cfg)
              if k.startswith("design.")}
-    acting = elements.acting(cfg, extra)
+    acting = elements.acting(params_of(cfg), extra)
     never = end_damper_mode(cfg) is None        # an end damper that never engages
     return tuple(e for e in elements.ELEMENTS if e.seed or e in acting and not (
         never and e in elements.ENGAGING))
@@ -163,17 +163,20 @@ class ChebyshevFit:
 
     def __init__(self, model, tol: float = 1e-13, max_degree: int = 64, els=None,
                  pose: bool = False):
+        if els is None:
+            raise TypeError("ChebyshevFit: els, the elements the NLP carries "
+                            "(nlp_elements(cfg)), must be given")
         th = ca.SX.sym("theta")
-        cf = coefficients(th, model.cfg, model.sigma)
+        cf = coefficients(th, model.lid, model.sigma)
         M, co = cf["M"], cf["coords"]
-        self.elements = tuple(els if els is not None else nlp_elements(model.cfg))
+        self.elements = tuple(els)
         terms = series_terms(self.elements)
         what = {"a": lambda c: -c.dq / M, "b": lambda c: -c.q * c.dq / M,
                 "B": lambda c: -c.dq2 / M, "C": lambda c: ca.fabs(c.dq) / M}
         funcs = [what[w](co[e]) for _, e, w in terms]
         names = [n for n, _, _ in terms]
         if pose:        # the closure itself, for attachment points as design variables
-            funcs += pose_functions(th, model.cfg, model.sigma, M)
+            funcs += pose_functions(th, model.lid, model.sigma, M)
             names += list(POSE_SERIES)
         funcs += [-0.5 * cf["dM"] / M, cf["tau"]]
         self.names = tuple(names) + ("inertia", "tau", "dtau")
@@ -181,7 +184,7 @@ class ChebyshevFit:
         self.exact = ca.Function("g_exact", [th], [ca.cse(g)])
         # the stroke's angles with a margin for overshooting stages and iterates (the
         # series extrapolate smoothly beyond it), within the range where the loop closes
-        st = model.cfg.stroke
+        st = model.stroke
         lo = max(model.theta_range[0], st.theta_closed - math.radians(FIT_MARGIN_DEG))
         hi = min(model.theta_range[1], st.theta0 + math.radians(FIT_MARGIN_DEG))
         self.lo, self.hi = lo, hi

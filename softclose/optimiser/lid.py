@@ -129,7 +129,7 @@ class LidLayout:
 
 def closed_values(model) -> np.ndarray:
     """(q, q') of each conservative element at theta_closed."""
-    th = model.cfg.stroke.theta_closed
+    th = model.stroke.theta_closed
     out = []
     for name in HOLDING:
         q, dq = model.coordinate_fns[name](th)
@@ -181,7 +181,7 @@ def opening_effort(values, P, names):
 
 def opening_angles(model, n: int) -> np.ndarray:
     """The n + 1 angles of the opening effort's grid on [theta_closed, theta0]."""
-    st = model.cfg.stroke
+    st = model.stroke
     return st.theta_closed + (st.theta0 - st.theta_closed) * np.linspace(0.0, 1.0, n + 1)
 
 

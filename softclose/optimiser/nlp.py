@@ -361,7 +361,7 @@ class ShootingNLP:
         # the design variables: k, l0, c, then the free ones (optimise.free: free_layout),
         # then the free attachment points (placement_layout): (key, column/slot, scale)
         self.free, self.place = tuple(free), tuple(placement)
-        self.g0 = slot_values(model.cfg)
+        self.g0 = slot_values(model.lid)
         self.scales = np.r_[SCALES, [sc for _, _, sc in self.free],
                             [sc for _, _, sc in self.place]]
         lay = structure.lid

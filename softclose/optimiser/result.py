@@ -16,6 +16,7 @@ from ..problem import DESIGN_KEYS, ENGAGE_KEYS, ENGAGE_METRICS, METRIC_KEYS, MET
 from .verify import Verification
 from ..jsonio import jsonable
 from ..simulation.simulator import Simulator
+from ..problem import resolve
 
 
 @dataclass(frozen=True)
@@ -177,7 +178,7 @@ class OptimiseResult(Displayed):
         """The optimal design's stroke by the fixed-step simulator (with its trajectory)."""
         if self.design is None or self.config is None:
             raise ValueError("this result has no design to simulate")
-        return Simulator(self.config.with_design(**self.design), cached=True).run(trajectory=trajectory)
+        return Simulator(resolve(self.config.with_design(**self.design)), cached=True).run(trajectory=trajectory)
 
     def _display(self) -> Display:
         bounds = self.problem.get("bounds", {})

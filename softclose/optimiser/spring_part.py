@@ -17,6 +17,7 @@ import numpy as np
 from ..model import elements
 from ..problem import PARAM_KEYS, feasible, params_of
 from ..simulation.simulator import Simulator
+from ..problem import resolve
 
 #: the ladders of deviations tried, each side: free length (m), rate (relative)
 FREE_LENGTH_STEPS = np.r_[np.arange(1, 101) * 1e-5, np.arange(11, 301) * 1e-4]   # to 30 mm
@@ -87,7 +88,7 @@ def margins(cfg, p, model=None) -> dict:
     :data:`LADDER_STRIDE`-th step, then step by step below the first that fails)."""
     # the model at hand (else built), its table from the build cache when it has been built
     # before: a whole model and table cost ~20 ms against ~10 ms for the strokes
-    sim = Simulator(cfg, model=model, cached=model is not None)
+    sim = Simulator(resolve(cfg), model=model, cached=model is not None)
     p = np.asarray(p, float)
     ladders = []                  # (name, steps, column, relative, sign), each side
     for key, steps, relative in (("spring_rest_length", FREE_LENGTH_STEPS, False),

@@ -24,7 +24,8 @@ import numpy as np
 from ..errors import ConfigError, NumericalError
 from ..interrupt import solving
 from ..problem import (CONSTRAINT_TOL, ENGAGE_KEYS, METRIC_KEYS, UNITS,
-                       VERIFY_RTOL, PARAM_KEYS, agreement_tolerance, objective, params_of)
+                       VERIFY_RTOL, PARAM_KEYS, REFERENCE_TOL, agreement_tolerance, objective,
+                       params_of, resolve)
 from ..simulation.stroke import StrokeResult, StrokeStatus
 from ..simulation.handforce import HandForce, hand_force
 from .cache import get_model
@@ -45,12 +46,13 @@ REBOUND_GRID = 800
 class Checker:
     """Independent checks of one model: the CVODES reference and theta' on a fine grid."""
 
-    def __init__(self, model):
+    def __init__(self, model, reference_tol: float = REFERENCE_TOL):
+        """``reference_tol``: the config's ``simulate.reference_tol``."""
         self.model = model
-        self.reference = Reference(model, grid_step=VERIFY_GRID)
+        self.reference = Reference(model, reference_tol, grid_step=VERIFY_GRID)
         x, tau = ca.SX.sym("x", 2), ca.SX.sym("tau")
         p = ca.SX.sym("p", len(PARAM_KEYS))
-        tol = min(1e-10, model.cfg.simulate.reference_tol * 100)
+        tol = min(1e-10, reference_tol * 100)
         grid = list(np.linspace(0.0, 1.0, REBOUND_GRID + 1)[1:])
         dae = {"x": x, "p": ca.vertcat(p, tau), "ode": tau * model.ode(x, p)}
         self._grid_flow = ca.integrator("check_grid", "cvodes", dae, 0.0, grid,
@@ -59,7 +61,7 @@ class Checker:
 
     def theta_dot_max(self, p, T) -> float:
         """max theta' over (0, T] of the exact equation (CVODES on a fine grid)."""
-        st = self.model.cfg.stroke
+        st = self.model.stroke
         with solving():          # Ctrl-C: noted, raised when CVODES returns
             out = self._grid_flow(x0=[st.theta0, 0.0], p=np.r_[p, T])["xf"]
         return float(np.max(np.asarray(out)[1]))
@@ -95,7 +97,7 @@ def get_checker(cfg) -> Checker:
     """The Checker of cfg's model (cached with the model)."""
     model = get_model(cfg)
     if id(model) not in _CHECKERS:
-        _CHECKERS[id(model)] = Checker(model)
+        _CHECKERS[id(model)] = Checker(model, cfg.simulate.reference_tol)
     return _CHECKERS[id(model)]
 
 
@@ -228,7 +230,7 @@ def verify(cfg, design: dict, claims: dict | None = None,
               f"{chk.reference.tol:g}")
     t0 = time.perf_counter()
     try:
-        ref = chk.reference.simulate(p, cfg=cfg)     # cfg's limits, not the cached model's
+        ref = chk.reference.simulate(p, resolve(cfg))   # cfg's limits, not the cached model's
     except NumericalError as exc:
         return Verification(None, None, method=method, time=time.perf_counter() - t0,
                             error=str(exc))
@@ -261,7 +263,7 @@ def verify(cfg, design: dict, claims: dict | None = None,
         cons["opening_force_max"] = {"value": of, "bound": o.opening_force_max, "unit": "N",
                                      "ok": of <= o.opening_force_max + CONSTRAINT_TOL}
     try:                                    # the hand force and the zones (SPEC §13)
-        hand = hand_force(model, p, cfg)
+        hand = hand_force(model, p, resolve(cfg))
     except ConfigError:                     # (the linkage does not reach theta_open)
         hand = None
     if o.self_close_min_deg is not None:    # closes by itself from every angle up to it

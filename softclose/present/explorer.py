@@ -19,6 +19,7 @@ from ..config import Config
 from ..problem import DESIGN_KEYS, feasible, objective, params_of
 from ..simulation.simulator import Simulator
 from ..simulation.stroke import StrokeStatus
+from ..problem import resolve
 
 #: the sliders: key, label, unit
 SLIDERS = (("spring_k", "spring k", "N/m"), ("spring_rest_length", "rest length l0", "m"),
@@ -34,7 +35,7 @@ class Explorer:
 
     def __init__(self, cfg: Config, span: float = 0.5, n: int = 21):
         self.cfg = cfg
-        self.sim = Simulator(cfg, cached=True)
+        self.sim = Simulator(resolve(cfg), cached=True)
         self.span, self.n = float(span), int(n)
 
     def bounds(self) -> dict:

@@ -30,6 +30,7 @@ from ..config.free import PLACEMENT_KEYS, point_refusals
 from ..problem import LID_MASS, METRIC_KEYS, PARAM_COLUMNS, infeasibility, objective, params_of
 from ..model import elements
 from ..simulation.simulator import Simulator
+from ..problem import resolve
 
 #: the kernel's output columns kept per sample
 COLUMNS = METRIC_KEYS + ("theta_dot_max", "theta_min", "status", "objective", "reason", "feasible")
@@ -65,12 +66,13 @@ def simulator(cfg: Config, t_end: float | None = None):
         cfg = cfg.replace(stroke={"t_max": float(t_end)})
     # the element choices (a rotary damper's pivot) and the spring's length limits are the
     # simulator's too: its table and its range check read them
-    key = (cfg.geometry, cfg.mass, cfg.stroke, cfg.simulate, elements.structure(cfg),
+    key = (cfg.geometry, cfg.mass, cfg.stroke, cfg.simulate,
+           elements.structure(resolve(cfg).lid.mounting),
            cfg.design.spring_min_length, cfg.design.spring_max_length)
     if key not in _SIMS:
         if len(_SIMS) > 32:
             _SIMS.clear()
-        _SIMS[key] = Simulator(cfg)
+        _SIMS[key] = Simulator(resolve(cfg))
     return _SIMS[key]
 
 

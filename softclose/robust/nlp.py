@@ -66,6 +66,7 @@ from ..buildcache import text
 from ..optimiser.keep_out import keep_out_constraints
 from ..model.lid import model_key
 from .evaluate import with_values
+from ..problem import resolve
 
 #: the parameters of p that are not design variables: NLP parameters
 FIXED = PARAM_KEYS[len(DESIGN_KEYS):]
@@ -94,7 +95,7 @@ def model_config(cfg: Config, values: dict) -> Config:
 
 def _model_key(cfg: Config) -> tuple:
     """A scenario model's key: the model's, and the elements the NLP carries."""
-    return model_key(cfg) + (tuple(e.name for e in nlp_elements(cfg)),)
+    return model_key(resolve(cfg)) + (tuple(e.name for e in nlp_elements(cfg)),)
 
 
 def scenario_fit(cfg_model: Config, placement: bool = False):

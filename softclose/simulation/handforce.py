@@ -22,7 +22,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConfigError
-from ..model import elements
 from ..model.dynamics import COEFFS
 from ..model.temperature import at_temperature, parameter_factors
 from .roots import illinois
@@ -118,21 +117,19 @@ def _roots(g, th, gv):
     return out
 
 
-def config_params(cfg) -> np.ndarray:
-    """The parameter vector p of a config (a shared model's own config may be another's of
-    the same structure)."""
-    return np.array([q.number(q.value(cfg)) for q in elements.PARAMS], float)
-
-
-def hand_force(model, p=None, cfg=None, grid: int = HAND_GRID) -> HandForce:
-    """The hand force and the zones of the lid ``model`` with parameters ``p`` (default: those
-    of ``cfg``, default the model's config; a design at the reference temperature, its parts
-    moved to ``cfg``'s operating temperature) over [stroke.theta_closed_deg,
-    stroke.theta_open_deg] of ``cfg``."""
-    cfg = model.cfg if cfg is None else cfg
-    p = config_params(cfg) if p is None else np.asarray(p, float)
-    p = at_temperature(p, parameter_factors(cfg))      # the parts at the operating temperature
-    st = cfg.stroke
+def hand_force(model, p=None, case=None, grid: int = HAND_GRID) -> HandForce:
+    """The hand force and the zones of the lid ``model`` with parameters ``p`` (default: the
+    design of ``case``, a resolved config (:class:`softclose.model.resolved.LidCase`; a
+    shared model's own design may be another's of the same structure), default the model's;
+    a design at the reference temperature, its parts moved to the case's operating
+    temperature) over [stroke.theta_closed_deg, stroke.theta_open_deg] of the case's stroke
+    (default the model's)."""
+    if p is None:
+        p = model.params() if case is None else case.p
+    p = np.asarray(p, float)
+    if case is not None:                 # the parts at the operating temperature
+        p = at_temperature(p, parameter_factors(case.temperatures))
+    st = model.stroke if case is None else case.stroke
     lo, hi = st.theta_closed, math.radians(st.theta_open_deg)
     th = np.linspace(lo, hi, grid)
     dV, fr, tau = _parts(model, p, th)
@@ -165,7 +162,7 @@ def hand_force(model, p=None, cfg=None, grid: int = HAND_GRID) -> HandForce:
         else math.degrees(x)                          # noqa: E731  (the ends exactly)
     zones = tuple((z, deg(a), deg(b)) for z, a, b in zones)
     f_open, f_close = (dV + fr) / tau, (dV - fr) / tau
-    if st.theta_open_deg == st.theta0_deg and model.cfg.stroke.theta0_deg == st.theta0_deg:
+    if st.theta_open_deg == st.theta0_deg and model.stroke.theta0_deg == st.theta0_deg:
         opening = float(opening_force_exact(model, p))
     else:
         opening = float(_parabola_max(f_open[None, :], th)[0])
@@ -178,4 +175,4 @@ def hand_force(model, p=None, cfg=None, grid: int = HAND_GRID) -> HandForce:
                      zones, opening, closing, self_close, self_rise, hold)
 
 
-__all__ = ["HandForce", "hand_force", "config_params", "HAND_GRID", "ZONES"]
+__all__ = ["HandForce", "hand_force", "HAND_GRID", "ZONES"]

@@ -1,7 +1,7 @@
 """The adaptive reference: CVODES (through CasADi) on the exact equation of motion.
 
 Independent of the fast path: no table, no fixed step. It integrates on an output grid
-(tolerance ``simulate.reference_tol``) and locates each event by Newton's method on the
+(tolerance ``simulate.reference_tol``, :data:`REFERENCE_TOL` unless given) and locates each event by Newton's method on the
 length of a last integration, ``x(tau) = CVODES(x_k, tau)`` (time scaled to [0, 1] with
 tau as a parameter); interior maxima of the tip speed and the lowest angle of a stroke that
 turns back are located the same way on the root of their time derivative. With dry friction
@@ -27,7 +27,7 @@ from . import statics
 from ..errors import NumericalError
 from ..interrupt import solving
 from ..model.temperature import at_temperature, parameter_factors
-from ..problem import as_params
+from ..problem import REFERENCE_TOL, as_params
 from .roots import illinois
 from .stroke import StrokeResult, StrokeStatus
 
@@ -40,11 +40,15 @@ CHUNK_MAX_STEPS = 4000
 
 
 class Reference:
-    """Adaptive reference simulation of one model."""
+    """Adaptive reference simulation of one model (from a config:
+    ``softclose.Reference.from_config(cfg)``)."""
 
     def __init__(self, model, tol: float | None = None, grid_step: float = 2e-3):
+        """``tol``: the CVODES tolerance (a config's ``simulate.reference_tol``,
+        :attr:`softclose.model.resolved.SolverSettings.reference_tol`); None: its default
+        :data:`softclose.problem.REFERENCE_TOL`."""
         self.model = model
-        self.tol = tol if tol is not None else model.cfg.simulate.reference_tol
+        self.tol = tol if tol is not None else REFERENCE_TOL
         self.grid_step = grid_step
         x, tau, s = ca.SX.sym("x", 2), ca.SX.sym("tau"), ca.SX.sym("moving")
         eg = ca.SX.sym("engaged", len(elements.ENGAGING))
@@ -144,21 +148,24 @@ class Reference:
             s *= 0.5
         return 0.0
 
-    def simulate(self, p=None, cfg=None) -> StrokeResult:
+    def simulate(self, p=None, case=None) -> StrokeResult:
         """The metrics of one stroke (plus ``theta_min``, ``theta_max``), adaptively.
 
         Returns the same :class:`~softclose.simulation.stroke.StrokeResult` as the fixed-step
         simulator, with ``method`` "cvodes" and ``tolerance`` the CVODES tolerance. A failure
-        of CVODES raises :class:`~softclose.errors.NumericalError`. ``cfg``: the config whose
-        spring length limits (``design.spring_min_length``, ``spring_max_length``) the stroke
-        is checked against -- default the model's own; a model shared between configs (the
-        caches key models by their structure, not by these limits) is given the one judged.
-        ``p`` is a design at the reference temperature; the stroke runs at that config's
+        of CVODES raises :class:`~softclose.errors.NumericalError`. ``case``: the resolved config
+        (:class:`softclose.model.resolved.LidCase`) whose spring length limits
+        (``design.spring_min_length``, ``spring_max_length``) the stroke is checked against
+        and whose temperatures it runs at -- default the model's own lid at the reference
+        temperature; a model shared between configs (the caches key models by their
+        structure, not by these limits) is given the one judged. ``p`` is a design at the
+        reference temperature (default the model's); the stroke runs at the case's
         ``operating.temperature_c`` (:mod:`softclose.model.temperature`).
         """
-        m, st = self.model, self.model.cfg.stroke
+        m, st = self.model, self.model.stroke
         p = at_temperature(m.params() if p is None else as_params(p),
-                           parameter_factors(cfg if cfg is not None else m.cfg))
+                           None if case is None else parameter_factors(case.temperatures))
+        mounting = m.mounting if case is None else case.lid.mounting
         thc, t_max, dt = st.theta_closed, st.t_max, self.grid_step
         x = np.array([st.theta0, 0.0])
         t, peak, th_min, th_max = 0.0, 0.0, st.theta0, st.theta0
@@ -170,7 +177,7 @@ class Reference:
         # a spring outside its valid range at every angle from the rim to the release is an
         # invalid design whatever the stroke does: not integrated (such a lid may oscillate
         # wildly, every turn an event); the reason is the one its stroke would give
-        invalid = self._invalid_throughout(p, cfg, thc, st.theta0)
+        invalid = self._invalid_throughout(p, mounting, thc, st.theta0)
         if invalid is not None:
             return invalid
         T_f = sum(float(e.coulomb(elements.params(p))) for e in elements.FRICTIONS)
@@ -287,7 +294,7 @@ class Reference:
         eng = {} if engage is None else {"engage_time": engage[0],
                                          "engage_theta_dot": engage[1]}
         lmin, lmax = self._l_extremes(th_min, th_max)
-        invalid = self._invalid(p, cfg, lmin, lmax, th_min, th_max, **eng)
+        invalid = self._invalid(p, mounting, lmin, lmax, th_min, th_max, **eng)
         if invalid is not None:
             return invalid
         why = None if stuck is None else f"held by friction at theta = {math.degrees(stuck):.1f} deg"
@@ -302,14 +309,14 @@ class Reference:
             method="cvodes", tolerance=self.tol, theta_min=float(th_min),
             theta_max=float(th_max), **eng)
 
-    def _invalid(self, p, cfg, lmin, lmax, th_min, th_max, **eng) -> StrokeResult | None:
+    def _invalid(self, p, mounting, lmin, lmax, th_min, th_max, **eng) -> StrokeResult | None:
         """The result of a stroke over [th_min, th_max] whose spring lengths lmin..lmax leave
-        an element's valid range (``cfg``'s, else the model's): an invalid design (with the
+        an element's valid range (with ``mounting``'s limits): an invalid design (with the
         engagement ``eng`` of its end damper, if any); None if the stroke is valid."""
         m = self.model
         _, why = statics.out_of_range(
             lambda e, t: np.asarray(m.coordinate_fns[e.name].map(t.size)(t.ravel())[0]).ravel(),
-            cfg if cfg is not None else m.cfg, p[None, :],
+            mounting, p[None, :],
             {"min_spring_length": [lmin], "max_spring_length": [lmax],
              "theta_min": [th_min], "theta_max": [th_max]})
         if not why[0]:
@@ -322,16 +329,16 @@ class Reference:
             message=f"invalid design: {why[0]}", reason=why[0], theta_min=float(th_min),
             theta_max=float(th_max), **eng)
 
-    def _invalid_throughout(self, p, cfg, a, b) -> StrokeResult | None:
+    def _invalid_throughout(self, p, mounting, a, b) -> StrokeResult | None:
         """:meth:`_invalid` for a spring whose every length over theta in [a, b] lies outside
         its valid range (the lid cannot be anywhere there with a valid spring); else None."""
         lmin, lmax = self._l_extremes(a, b)
         P = elements.params(p[None, :])
         lo, hi = (float(np.asarray(v, float).ravel()[0]) for v in
-                  elements.BY_NAME["spring"].valid(P, cfg if cfg is not None else self.model.cfg))
+                  elements.BY_NAME["spring"].valid(P, mounting))
         if not (lmin > hi or lmax < lo):
             return None
-        return self._invalid(p, cfg, lmin, lmax, a, b)
+        return self._invalid(p, mounting, lmin, lmax, a, b)
 
     def _rest(self, theta, p, T_f):
         """At rest at theta: (theta, None) if dry friction holds the lid there (|dV/dtheta| <=

@@ -1,12 +1,13 @@
 """Closing strokes: metrics (SPEC §4), stability checks, accuracy estimates, trajectories.
 
-``Simulator(cfg)`` holds one model, its coefficient table and one fixed-step method; it
-runs single strokes (``run``) and batches of designs (``run_batch``) in the C kernel.
+``Simulator(case)`` (a config resolved by :func:`softclose.problem.resolve`; from a config:
+``softclose.Simulator.from_config(cfg)``) holds one model, its coefficient table and one
+fixed-step method; it runs single strokes (``run``) and batches of designs (``run_batch``) in the C kernel.
 Metric-only runs keep no trajectory and evaluate no reactions; ``run(trajectory=True)``
 also returns the per-step trajectory with the derived quantities a figure needs.
 
-``simulate(cfg)`` is the one-call wrapper. Every result knows how far it is from the
-converged answer: ``accuracy`` holds the estimated error of each metric (Richardson, from
+``simulate(case)`` is the one-call wrapper (``softclose.simulate(cfg)`` from a config).
+Every result knows how far it is from the converged answer: ``accuracy`` holds the estimated error of each metric (Richardson, from
 the same stroke at half the step), and a stroke that the method cannot integrate stably
 is reported with the step it would need -- never as a NaN.
 """
@@ -21,17 +22,17 @@ import numpy as np
 from ..model import elements
 from .kernel import binding as native
 from . import statics
-from ..config import RANGES, STEP_BUDGET, TRAJECTORY_BUDGET, Config, default_config
 from ..errors import ConfigError, NumericalError
 from .integrators import Method, amplification, get_method, spectral_radius
 from ..model.lid import LidModel
 from ..model.dynamics import COEFFS
 from ..model.temperature import at_temperature, parameter_factors
-from ..problem import ERROR_KEYS, as_params, target
+from ..model.resolved import LidCase
+from ..problem import (DEFAULT_STEP, ERROR_KEYS, MIN_STEP, STEP_BUDGET, TRAJECTORY_BUDGET,
+                       as_params, target)
 from .stroke import StrokeResult, StrokeStatus, none_if_nan
 from .kernel.table import CoefficientTable
 
-DEFAULT_STEP = default_config().simulate.step
 #: the per-step quantities of a trajectory, in order
 TRAJECTORY_KEYS = ("t", "theta", "theta_dot", "theta_ddot", "phi", "gamma", "tip_speed",
                    "spring_length", "energy")
@@ -39,8 +40,6 @@ TRAJECTORY_KEYS = ("t", "theta", "theta_dot", "theta_ddot", "phi", "gamma", "tip
 TABLE_TOL = 1e-7
 #: h |lambda|max above which an explicit method is outside its asymptotic regime
 STIFF_H_LAMBDA = 1.0
-#: the smallest step the config admits (simulate.step): no recommendation goes below it
-MIN_STEP = RANGES["simulate.step"][0]
 #: the shortest spring length a stroke at a row's own points may reach (m; shorter: the row
 #: is reported as invalid, Simulator.run_batch's ``points``). Near a lid point passing by its
 #: anchor at a distance d, l is sqrt(d^2 + v^2 t^2): a cubic piece over a cell (the lid point
@@ -115,20 +114,28 @@ def _pipeline(kernel, statics_of, bounds) -> list:
 class Simulator:
     """Strokes of one config's geometry with one fixed-step method."""
 
-    def __init__(self, cfg: Config, model: LidModel | None = None, integrator: str | None = None,
-                 step: float | None = None, cached: bool = False):
-        """``cached``: load the model and its table from the disk cache when this software
-        built them before, else build and store them (:mod:`softclose.buildcache`; for
-        one config at a time, not for the many configs of a sweep)."""
-        self.cfg = cfg
-        self.model = model or (LidModel.cached(cfg) if cached else LidModel(cfg))
-        self.method = get_method(integrator or cfg.simulate.integrator)
-        self.step = step or cfg.simulate.step
+    def __init__(self, case: LidCase, model: LidModel | None = None,
+                 integrator: str | None = None, step: float | None = None,
+                 cached: bool = False):
+        """``case``: a config resolved (:func:`softclose.problem.resolve`: the lid, its
+        stroke, its design, the solver settings and the temperatures). ``cached``: load the
+        model and its table from the disk cache when this software built them before, else
+        build and store them (:mod:`softclose.buildcache`; for one config at a time, not for
+        the many configs of a sweep)."""
+        if not isinstance(case, LidCase):
+            raise TypeError(f"Simulator takes a resolved config (softclose.problem.resolve("
+                            f"cfg), or Simulator.from_config(cfg)), got {type(case).__name__}")
+        self.case = case
+        #: the stroke's ends (:class:`softclose.model.resolved.StrokeEnds`)
+        self.stroke = case.stroke
+        self.model = model or (LidModel.cached(case) if cached else LidModel(case))
+        self.method = get_method(integrator or case.solver.integrator)
+        self.step = step or case.solver.step
         self.table = _table(self.model, cached)
         #: the parameters' factors at ``operating.temperature_c`` (None: the reference
         #: temperature): every p given to :meth:`run` and :meth:`run_batch` is a design at
         #: the reference temperature, and its stroke runs at the operating one
-        self.temperature_factors = parameter_factors(cfg)
+        self.temperature_factors = parameter_factors(case.temperatures)
         if self.table.max_rel_error > TABLE_TOL:
             raise NumericalError(
                 f"the linkage passes close to a toggle position (transmission angle "
@@ -141,7 +148,7 @@ class Simulator:
     def energy_tol(self, P: np.ndarray, lid_mass=None, points=None) -> np.ndarray:
         """Energy rise that flags an unstable stroke: 5 % of the energy to be released
         (``points``: the rows' own attachment points, the kernel's convention)."""
-        st = self.cfg.stroke
+        st = self.stroke
         E0 = statics.potential_energy(self.table, st.theta0, P, lid_mass, points)
         Vc = statics.potential_energy(self.table, st.theta_closed, P, lid_mass, points)
         scale = np.maximum(np.abs(E0 - Vc), 1e-6 * (np.abs(E0) + np.abs(Vc)) + 1e-12)
@@ -181,7 +188,7 @@ class Simulator:
         """
         P = at_temperature(as_params(np.atleast_2d(np.asarray(P, float))),
                            self.temperature_factors)
-        st = self.cfg.stroke
+        st = self.stroke
         m = None if lid_mass is None else \
             np.broadcast_to(np.asarray(lid_mass, float), (len(P),)).copy()
         X = native.point_rows(self.table, points, len(P))
@@ -209,10 +216,10 @@ class Simulator:
             res["closed"] = res["status"] == StrokeStatus.CLOSED
             # (Xr is already the kernel's point columns: not checked again)
             res["holding_moment"] = statics.holding_moments(
-                self.table, self.cfg.stroke.theta_closed, P[r], mr, Xr)
+                self.table, self.stroke.theta_closed, P[r], mr, Xr)
             if opening:
-                res["opening_force"] = statics.opening_forces(self.table, self.cfg, P[r], mr,
-                                                              Xr)
+                res["opening_force"] = statics.opening_forces(self.table, self.stroke, P[r],
+                                                              mr, Xr)
             return res
 
         # (in blocks only with the rows' own points, whose statics weigh: a block's end is a
@@ -252,7 +259,7 @@ class Simulator:
         idx = np.flatnonzero(ok)
         coord = statics.table_coordinate(self.table, None if points is None else
                                          np.asarray(points)[idx])
-        _, why = statics.out_of_range(coord, self.cfg, P[idx],
+        _, why = statics.out_of_range(coord, self.case.lid.mounting, P[idx],
                                       {k: np.asarray(v)[idx] for k, v in res.items()
                                        if k in native.OUT_FIELDS}, explain)
         bad = why != ""
@@ -265,20 +272,20 @@ class Simulator:
         part of :meth:`run_batch` (statics, which a search of designs does not need);
         ``points`` as :meth:`run_batch` takes them."""
         P = as_params(np.atleast_2d(np.asarray(P, float)))
-        return statics.opening_forces(self.table, self.cfg, P, lid_mass,
+        return statics.opening_forces(self.table, self.stroke, P, lid_mass,
                                       native.point_rows(self.table, points, len(P)))
 
     def holding_moments(self, P: np.ndarray, lid_mass=None, points=None) -> np.ndarray:
         """dV/dtheta at theta_closed (N m) for rows of P (``points`` as :meth:`run_batch`)."""
         P = as_params(np.atleast_2d(np.asarray(P, float)))
-        return statics.holding_moments(self.table, self.cfg.stroke.theta_closed, P, lid_mass,
+        return statics.holding_moments(self.table, self.stroke.theta_closed, P, lid_mass,
                                        native.point_rows(self.table, points, len(P)))
 
     # -- one stroke ------------------------------------------------------------------
     def run(self, p=None, trajectory: bool = False, estimate_error: bool = True) -> StrokeResult:
         p = at_temperature(self.model.params() if p is None else as_params(p),
                            self.temperature_factors)
-        st = self.cfg.stroke
+        st = self.stroke
         design = np.r_[native.kernel_rows(p), self.energy_tol(p[None, :])]
         if trajectory:
             self._check_trajectory_size(design)
@@ -289,8 +296,8 @@ class Simulator:
                                      st.theta_closed, design[None, :], threads=1)[0]
         res = self._result(out, p)
         if res.ok:
-            _, why = statics.out_of_range(statics.table_coordinate(self.table), self.cfg,
-                                          p[None, :], res.__dict__)
+            _, why = statics.out_of_range(statics.table_coordinate(self.table),
+                                          self.case.lid.mounting, p[None, :], res.__dict__)
             if why[0]:                # an invalid design: no stroke metrics are its
                 res = replace(res, status=StrokeStatus.OUT_OF_RANGE, closed=False,
                               closing_time=None, impact_theta_dot=None,
@@ -307,7 +314,7 @@ class Simulator:
     def _check_trajectory_size(self, design) -> None:
         """Refuse a trajectory of more than TRAJECTORY_BUDGET rows (one a step: to the closing,
         or to t_max for a lid that does not close), counted by a stroke without one."""
-        st = self.cfg.stroke
+        st = self.stroke
         if st.t_max / self.step + 2 <= TRAJECTORY_BUDGET:
             return
         out = native.run_strokes(self.table, self.method, self.step, st.t_max, st.theta0,
@@ -362,7 +369,7 @@ class Simulator:
                  elements.FRICTIONS)
         if Tf <= 0:
             return 1.0
-        dV = abs(float(self.model.dV(self.cfg.stroke.theta0, p)))
+        dV = abs(float(self.model.dV(self.stroke.theta0, p)))
         return (dV + Tf) / max(abs(dV - Tf), 1e-300 + 1e-15 * (dV + Tf))
 
     def _error_estimate(self, res: StrokeResult, p) -> tuple[dict, str | None]:
@@ -414,7 +421,7 @@ class Simulator:
         """Linearised (theta, theta') Jacobian entries at rest along the stroke (at
         ``lid_mass``, kg; None: the table's own; ``points``: the design's own, as
         :meth:`run_batch` takes them)."""
-        th = np.linspace(self.cfg.stroke.theta_closed, self.cfg.stroke.theta0, 41)
+        th = np.linspace(self.stroke.theta_closed, self.stroke.theta0, 41)
         X = native.point_rows(self.table, points, 1)
         return statics.rest_jacobian(self.table, th, p, lid_mass, None if X is None else X[0])
 
@@ -432,7 +439,7 @@ class Simulator:
         stroke ran at that lid mass, kg, through the table's lid-mass column; ``points``:
         at its own attachment points, as :meth:`run_batch` takes them)."""
         m, h = self.method, self.step
-        st = self.cfg.stroke
+        st = self.stroke
         status = StrokeStatus(status)
         p = as_params(p)
         if lid_mass == self.table.lid_mass:
@@ -486,7 +493,7 @@ class Simulator:
         th = np.linspace(self.table.lo, self.table.hi, 20 * self.table.ncell + 1)
         X = np.asarray(points, float).reshape(1, -1)
         A = self.table.pose_at(th)
-        scale = 1e-6 * max(self.cfg.geometry.crank_oa, self.cfg.geometry.crank_bc)
+        scale = 1e-6 * max(self.model.geo.crank_oa, self.model.geo.crank_bc)
         for name, (blk, _), key in (("spring", statics.POINT_BLOCKS["spring"],
                                      "geometry.spring_anchor and geometry.lid_e"),
                                     ("dashpot", statics.POINT_BLOCKS["dashpot"],
@@ -555,8 +562,10 @@ class Simulator:
                                                                    ("t", "theta", "theta_dot"))}
 
 
-def simulate(cfg: Config, trajectory: bool = False) -> StrokeResult:
-    """One closing stroke of ``cfg``'s design with ``cfg``'s integrator and step.
+def simulate(case: LidCase, trajectory: bool = False) -> StrokeResult:
+    """One closing stroke of a resolved config's design (``case``,
+    :func:`softclose.problem.resolve`) with its integrator and step (from a config:
+    ``softclose.simulate(cfg)``).
 
     Returns a :class:`~softclose.simulation.stroke.StrokeResult`: the metrics, each fixed-step one with
     its estimated distance from the converged answer (``accuracy``), and with
@@ -564,4 +573,4 @@ def simulate(cfg: Config, trajectory: bool = False) -> StrokeResult:
     the method cannot integrate is reported (``ok`` False, ``message`` says what to change),
     never raised.
     """
-    return Simulator(cfg, cached=True).run(trajectory=trajectory)
+    return Simulator(case, cached=True).run(trajectory=trajectory)

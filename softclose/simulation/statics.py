@@ -63,9 +63,9 @@ def columns(table, theta, n: int, lid_mass=None, extra: bool = False, points=Non
 
 def _at(table, theta, P, lid_mass, points=None):
     P = as_params(np.atleast_2d(np.asarray(P, float)))
-    cfg = table.model.cfg
-    cols = columns(table, theta, len(P), lid_mass, elements.needs_extra(P, cfg), points)
-    return cols, coordinates_of_columns(cols, cfg, theta), elements.params(P)
+    mounting = table.model.mounting
+    cols = columns(table, theta, len(P), lid_mass, elements.needs_extra(P, mounting), points)
+    return cols, coordinates_of_columns(cols, mounting, theta), elements.params(P)
 
 
 def potential_energy(table, theta, P, lid_mass=None, points=None) -> np.ndarray:
@@ -109,7 +109,7 @@ def rest_jacobian(table, theta, p, lid_mass=None, points=None) -> tuple[np.ndarr
         return a, -damping(co, Pn) / cols["M"]
 
 
-def out_of_range(coordinate, cfg, P, metrics: dict, explain: bool = True
+def out_of_range(coordinate, mounting, P, metrics: dict, explain: bool = True
                  ) -> tuple[np.ndarray, np.ndarray]:
     """Which strokes take an element outside its valid range (a spring past its free length:
     an extension spring shorter, a compression spring longer; or past its length limits).
@@ -130,7 +130,7 @@ def out_of_range(coordinate, cfg, P, metrics: dict, explain: bool = True
     for e in elements.ELEMENTS:
         if not e.extremes:
             continue
-        lo, hi = (np.broadcast_to(np.asarray(v, float), (n,)) for v in e.valid(Pn, cfg))
+        lo, hi = (np.broadcast_to(np.asarray(v, float), (n,)) for v in e.valid(Pn, mounting))
         qmin, qmax = (np.atleast_1d(np.asarray(metrics[k], float)) for k in e.extremes)
         scale = 1e-9 * np.maximum(np.abs(qmax), 1.0)       # rounding of the extremes
         with np.errstate(invalid="ignore"):
@@ -152,7 +152,7 @@ def out_of_range(coordinate, cfg, P, metrics: dict, explain: bool = True
             (lambda t, r: coordinate(e, t))
         edge, worst = _leaves(rows_q, th,
                               np.where(short, lo[bad], hi[bad]), short)
-        words = e.range_messages(Pn, cfg, bad, short, edge, worst, beyond)
+        words = e.range_messages(Pn, mounting, bad, short, edge, worst, beyond)
         free = text[bad] == ""                 # (the first element out of range says it)
         text[bad[free]] = np.array(words, dtype=object)[free]
     return excess, text
@@ -220,7 +220,7 @@ OPENING_GRID = 241
 OPENING_CHUNK = 2048
 
 
-def opening_forces(table, cfg, P, lid_mass=None, points=None) -> np.ndarray:
+def opening_forces(table, stroke, P, lid_mass=None, points=None) -> np.ndarray:
     """The opening effort of each design (N): the largest hand force at the tip, along its
     path, that lifts the lid slowly from theta_closed to theta0 against gravity, every spring
     and friction: max over theta of (dV/dtheta + T_f) / |dr_T/dtheta| (SPEC §9).
@@ -235,11 +235,11 @@ def opening_forces(table, cfg, P, lid_mass=None, points=None) -> np.ndarray:
         m = None if lid_mass is None else np.broadcast_to(np.asarray(lid_mass, float),
                                                           (len(P),))
         pts = None if points is None else np.asarray(points, float)
-        return np.concatenate([opening_forces(table, cfg, P[i:i + OPENING_CHUNK],
+        return np.concatenate([opening_forces(table, stroke, P[i:i + OPENING_CHUNK],
                                               None if m is None else m[i:i + OPENING_CHUNK],
                                               None if pts is None else pts[i:i + OPENING_CHUNK])
                                for i in range(0, len(P), OPENING_CHUNK)])
-    st = cfg.stroke
+    st = stroke
     th = np.linspace(st.theta_closed, st.theta0, OPENING_GRID)
     own = None                                 # the rows whose spring has its own points
     if points is not None:
@@ -257,7 +257,7 @@ def opening_forces(table, cfg, P, lid_mass=None, points=None) -> np.ndarray:
         m = np.where(np.isfinite(m), m, table.lid_mass)
     rest = np.flatnonzero(~has)
     if len(rest):
-        F[rest] = opening_forces(table, cfg, P[rest], None if m is None else m[rest])
+        F[rest] = opening_forces(table, stroke, P[rest], None if m is None else m[rest])
     key = P[own] if m is None else np.column_stack([P[own], m[own]])
     if (key == key[0]).all():                  # (a sweep over the points alone: one set)
         uniq, inv = key[:1], np.zeros(len(key), np.int64)
@@ -275,13 +275,13 @@ def opening_forces(table, cfg, P, lid_mass=None, points=None) -> np.ndarray:
 def _opening_slopes(table, P, lid_mass, th, skip: str | None = None):
     """(dV/dtheta + friction of rows of P over the angles th, (len(P), len(th)); the tip's
     lever tau there), leaving out the element ``skip``."""
-    extra = elements.needs_extra(P, table.model.cfg)
+    extra = elements.needs_extra(P, table.model.mounting)
     c = table.evaluate(th)
     cols = {name: c[:, j] for j, name in enumerate(COEFFS)}
     if extra:
         x = table.rows_extra(th, len(th))
         cols.update({name: x[:, j] for j, name in enumerate(EXTRA_COEFFS)})
-    co = coordinates_of_columns(cols, table.model.cfg)
+    co = coordinates_of_columns(cols, table.model.mounting)
     Pn = elements.params(P)
     slope = np.zeros((len(P), len(th)))
     for e in elements.SPRINGS:
@@ -324,7 +324,7 @@ def opening_force_exact(model, p) -> float:
     (dV/dtheta + T_f) / |dr_T/dtheta| (``model.opening``) over a 2001-point grid of
     [theta_closed, theta0], then the root of its theta-derivative between the neighbours of
     the largest point (Illinois false position; an end stays an end)."""
-    st = model.cfg.stroke
+    st = model.stroke
     p = np.asarray(p, float)
     last = model.__dict__.get("_opening_last")     # the optimiser's claims, then the
     if last is not None and last[0] == p.tobytes():  # reference's: the same design twice

@@ -44,6 +44,7 @@ from ..simulation.stroke import StrokeStatus
 from ..errors import SoftcloseError
 from ..config import from_dict, RANGES, to_dict
 from ..simulation.simulator import Simulator
+from ..problem import resolve
 
 #: designs per chunk: the unit of progress, of Ctrl-C and resume, and of a Parquet part file
 CHUNK = 16384
@@ -88,7 +89,7 @@ def _simulator(cfg):
     d = to_dict(cfg)
     d.pop("optimise", None)
     d.pop("tolerance", None)
-    return _lru(_sims, json.dumps(d, sort_keys=True), lambda: Simulator(cfg))
+    return _lru(_sims, json.dumps(d, sort_keys=True), lambda: Simulator(resolve(cfg)))
 
 
 def empty(keys, n: int) -> dict[str, np.ndarray]:

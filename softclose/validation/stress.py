@@ -34,6 +34,7 @@ from ..problem import RELATIVE, TARGETS
 from ..simulation.reference import Reference
 from ..simulation.simulator import Simulator
 from ..model.kinematics import branch_of, closure
+from ..problem import resolve
 
 #: outcomes that are findings (a defect of softclose), not answers or reports
 FAILURES = ("MISMATCH", "NaN", "EXCEPTION")
@@ -87,7 +88,7 @@ def geometry_with_assembly(**geometry) -> dict:
 def _release_moment() -> float:
     """|dV/dtheta| of the default lid at its release (N m): what friction must exceed."""
     cfg = default_config()
-    m = LidModel(cfg)
+    m = LidModel(resolve(cfg))
     return abs(float(m.dV(cfg.stroke.theta0, m.params())))
 
 
@@ -239,8 +240,9 @@ def run_stress_case(case: StressCase, ref_tol: float = 1e-12, rerun: bool = True
            "energy_drift_rel": None, "max_err_ratio": None, "rerun": "", "time_s": None}
     try:
         cfg = default_config().replace(**case.overrides)
-        model = LidModel(cfg)
-        sim = Simulator(cfg, model=model)
+        case = resolve(cfg)
+        model = LidModel(case)
+        sim = Simulator(case, model=model)
     except ConfigError as exc:
         row.update(outcome="config error", message=str(exc), time_s=time.perf_counter() - t0)
         return row
@@ -276,7 +278,7 @@ def run_stress_case(case: StressCase, ref_tol: float = 1e-12, rerun: bool = True
                                                  overrides), ref_tol, rerun=False)
                 row["rerun"] = f"at {h_ok:.3g} s: {sub['outcome']} ({sub['status']})"
         else:
-            ref = Reference(model, ref_tol).simulate(p)
+            ref = Reference(model, ref_tol).simulate(p, case)
             ok, err, allowed = confirm(res, ref)
             row["max_err_ratio"] = max((err[k] / allowed[k] for k in err), default=0.0)
             row["ref_closed"] = ref.closed

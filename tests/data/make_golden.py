@@ -16,7 +16,7 @@ import softclose
 from softclose.simulation.kernel import binding as native
 from softclose.config import default_config, from_dict
 from softclose.model.lid import LidModel
-from softclose.optimiser.interval import ChebyshevFit
+from softclose.optimiser.interval import ChebyshevFit, nlp_elements
 from softclose.simulation.reference import Reference
 from softclose.simulation.simulator import Simulator
 
@@ -50,18 +50,18 @@ def compute() -> dict[str, np.ndarray]:
     out: dict[str, np.ndarray] = {}
     cfg = default_config()
     geo2 = dict(GEOMETRY2)
-    probe = LidModel(from_dict({"geometry": {**geo2, "assembly": [18.0, 108.0, 150.0]}}))
+    probe = LidModel.from_config(from_dict({"geometry": {**geo2, "assembly": [18.0, 108.0, 150.0]}}))
     phi, gamma = probe.closure(np.radians(18.0))
     geo2["assembly"] = [18.0, float(np.degrees(phi)) % 360, float(np.degrees(gamma)) % 360]
     cfg2 = from_dict({"geometry": geo2, "mass": {"lid": 0.6}})
     out["assembly2"] = np.array(geo2["assembly"])
     for tag, c in (("g1", cfg), ("g2", cfg2)):
-        sim = Simulator(c)
+        sim = Simulator.from_config(c)
         out[f"{tag}_table_cc"] = sim.table.cc
         P = designs(400, 7 if tag == "g1" else 8)
         out[f"{tag}_P"] = P[:, :4]
         for method in ("rk4", "euler_cromer", "gauss4", "radau5"):
-            s = Simulator(c, model=sim.model, integrator=method)
+            s = Simulator.from_config(c, model=sim.model, integrator=method)
             r = s.run_batch(P)
             out[f"{tag}_{method}"] = np.column_stack([r[k] for k in GOLDEN_FIELDS])
         masses = np.random.default_rng(3).uniform(0.3, 0.8, len(P))
@@ -103,7 +103,7 @@ def compute() -> dict[str, np.ndarray]:
                            s["gamma_dot"], *s["tip_velocity"],
                            *[v for k in "OABC" for v in s["reactions"][k]]])
         out[f"{tag}_states"] = np.array(states)
-        fit = ChebyshevFit(sim.model)
+        fit = ChebyshevFit(sim.model, els=nlp_elements(c))
         if hasattr(fit, "names"):   # named series (since the element registry): the rows
             # of the layout of b33652c, g_grav, g_kl, g_kl0 = +dl/M, g_c, g_dM, g_rot, tau, dtau
             row = {n: fit.coef[i] for i, n in enumerate(fit.names)}

@@ -55,31 +55,33 @@ def params(p) -> Params:
     return Params(p, PARAMS)
 
 
-def structure(cfg) -> tuple:
-    """The element choices that change the model itself (not a per-stroke value): part of
-    every cache key of a model, its table or an NLP."""
-    return tuple(x for e in ELEMENTS for x in e.structure(cfg))
+def structure(mounting) -> tuple:
+    """The element choices of ``mounting`` (:class:`softclose.model.resolved.Mounting`) that
+    change the model itself (not a per-stroke value): part of every cache key of a model, its
+    table or an NLP."""
+    return tuple(x for e in ELEMENTS for x in e.structure(mounting))
 
 
 #: the elements in the kernel's table of element columns (tabulated when a stroke needs it)
 EXTRA = tuple(e for e in ELEMENTS if e.table == "extra")
 
 
-def acting(cfg, extra_values: dict | None = None) -> tuple[Element, ...]:
-    """The elements that exert a force with ``cfg``'s design (and ``extra_values``, a dict
-    of design values that vary, e.g. swept or freed: their largest magnitude)."""
-    values = {q.name: q.number(q.value(cfg)) for q in PARAMS}
+def acting(p, extra_values: dict | None = None) -> tuple[Element, ...]:
+    """The elements that exert a force with the design's parameter vector ``p`` (and
+    ``extra_values``, a dict of design values that vary, e.g. swept or freed: their largest
+    magnitude)."""
+    values = {q.name: float(v) for q, v in zip(PARAMS, p)}
     values.update(extra_values or {})
     return tuple(e for e in ELEMENTS if bool(e.acts(values)))
 
 
-def needs_extra(P, cfg) -> bool:
+def needs_extra(P, mounting) -> bool:
     """Does any row of P (parameter vectors) have an element acting that reads the table of
-    element columns in ``cfg`` (a torsion spring, a rotary damper at a pivot)?"""
+    element columns with ``mounting`` (a torsion spring, a rotary damper at a pivot)?"""
     import numpy as np
     P = np.atleast_2d(np.asarray(P, float))
     values = {q.name: P[:, i] for i, q in enumerate(PARAMS)}
-    return any(bool(np.any(e.acts(values))) for e in EXTRA if e.in_extra(cfg))
+    return any(bool(np.any(e.acts(values))) for e in EXTRA if e.in_extra(mounting))
 
 
 #: the flags of a table the kernel reads (after ncell, lo, h, m0): its structural element
@@ -87,9 +89,9 @@ def needs_extra(P, cfg) -> bool:
 KERNEL_META = ("rotary_at_pivot",)
 
 
-def kernel_meta(cfg) -> tuple[float, ...]:
-    """The values of :data:`KERNEL_META` in ``cfg``."""
-    return (float(BY_NAME["rotary"].in_extra(cfg)),)
+def kernel_meta(mounting) -> tuple[float, ...]:
+    """The values of :data:`KERNEL_META` with ``mounting``."""
+    return (float(BY_NAME["rotary"].in_extra(mounting)),)
 
 
 def one_way(P, theta_d):

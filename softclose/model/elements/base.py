@@ -61,11 +61,6 @@ class Param(NamedTuple):
     def key(self) -> str:
         return self.config_key or f"design.{self.name}"
 
-    def value(self, cfg):
-        """The parameter's value in ``cfg`` (as the config holds it)."""
-        section, attr = self.key.split(".")
-        return getattr(getattr(cfg, section), attr)
-
     def number(self, value) -> float:
         """The config value as the number p holds (a word by its code)."""
         return float(self.codes[value] if self.codes is not None else value)
@@ -121,8 +116,9 @@ class Element:
     extremes: tuple[str, str] | None = None
 
     # -- the coordinate ---------------------------------------------------------------------
-    def coordinate(self, cfg):
-        """The element's coordinate for config ``cfg`` (:mod:`.coordinates`)."""
+    def coordinate(self, lid):
+        """The element's coordinate on ``lid`` (a :class:`softclose.model.resolved.Lid`:
+        its geometry and mounting; :mod:`.coordinates`)."""
         raise NotImplementedError
 
     # -- the law ----------------------------------------------------------------------------
@@ -147,12 +143,13 @@ class Element:
         any driving force up to C (stick). None: no friction."""
         return None
 
-    def valid(self, P, cfg=None):
-        """The valid range (lo, hi) of q (per design for rows of P; ``cfg`` gives the limits
-        that are not per-stroke values): a stroke that leaves it is an invalid design."""
+    def valid(self, P, mounting=None):
+        """The valid range (lo, hi) of q (per design for rows of P; ``mounting``, a
+        :class:`softclose.model.resolved.Mounting`, gives the limits that are not per-stroke
+        values): a stroke that leaves it is an invalid design."""
         return (-math.inf, math.inf)
 
-    def range_message(self, P, cfg, i: int, short: bool, where: tuple, excess: float) -> str:
+    def range_message(self, P, mounting, i: int, short: bool, where: tuple, excess: float) -> str:
         """One line: design i takes the element out of its valid range (``short``: below its
         lower end), from the angle ``where[0]``, furthest at ``where[1]`` (rad), by
         ``excess``."""
@@ -162,24 +159,24 @@ class Element:
         return (f"the {self.name} leaves its valid range ({side} it {edge}, by up to "
                 f"{excess:.3g} at theta = {math.degrees(where[1]):.1f} deg)")
 
-    def range_messages(self, P, cfg, rows, short, edge, worst, excess) -> list[str]:
+    def range_messages(self, P, mounting, rows, short, edge, worst, excess) -> list[str]:
         """:meth:`range_message` of the designs ``rows`` (arrays: ``edge`` NaN for "over the
         whole stroke"); an element may state them at once, faster for many rows."""
-        return [self.range_message(P, cfg, int(i), bool(sh),
+        return [self.range_message(P, mounting, int(i), bool(sh),
                                    (None if np.isnan(e) else float(e), float(w)), float(x))
                 for i, sh, e, w, x in zip(rows, short, edge, worst, excess)]
 
-    def unit_rate(self, cfg) -> bool:
-        """True when the element's coordinate is the lid's own angle in ``cfg`` (q' = 1: no
-        column is read for it)."""
+    def unit_rate(self, mounting) -> bool:
+        """True when the element's coordinate is the lid's own angle with ``mounting`` (q' =
+        1: no column is read for it)."""
         return False
 
-    def in_extra(self, cfg) -> bool:
-        """Does the element read the table of element columns in ``cfg``?"""
-        return self.table == "extra" and not self.unit_rate(cfg)
+    def in_extra(self, mounting) -> bool:
+        """Does the element read the table of element columns with ``mounting``?"""
+        return self.table == "extra" and not self.unit_rate(mounting)
 
     # -- what it changes in the model ---------------------------------------------------------
-    def structure(self, cfg) -> tuple:
+    def structure(self, mounting) -> tuple:
         """The element's choices that change the model itself rather than a per-stroke value
         (where it is mounted, say): part of every model's cache key."""
         return ()

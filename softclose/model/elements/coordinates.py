@@ -37,7 +37,7 @@ HINGE_PIVOTS = ("lid", "H")
 
 
 class Pose(NamedTuple):
-    """The linkage at theta: angles, named points (world), and the config's sections."""
+    """The linkage at theta: angles, named points (world), and the lid's geometry and mass."""
 
     theta: object
     phi: object

@@ -36,8 +36,8 @@ class Dashpot(Element):
     acting_params = ("damper_c",)
     columns = (("dd", "dq2"),)
 
-    def coordinate(self, cfg):
-        g = cfg.geometry
+    def coordinate(self, lid):
+        g = lid.geometry
         if tuple(g.dashpot_lid) == tuple(g.lid_c) and tuple(g.dashpot_anchor) == (0.0, 0.0):
             return Length("C", None, None, (0.0, 0.0))     # the seed's: C to O
         return Length("H", "dashpot_lid", "dashpot_anchor")
@@ -65,14 +65,14 @@ class RotaryDamper(Element):
     columns = (("dpr2", "dq2"),)
     table = "extra"
 
-    def coordinate(self, cfg):
-        return PivotAngle(cfg.design.rotary_damper_pivot)
+    def coordinate(self, lid):
+        return PivotAngle(lid.mounting.rotary_damper_pivot)
 
-    def structure(self, cfg):
-        return (cfg.design.rotary_damper_pivot,)
+    def structure(self, mounting):
+        return (mounting.rotary_damper_pivot,)
 
-    def unit_rate(self, cfg) -> bool:
-        return cfg.design.rotary_damper_pivot == "lid"
+    def unit_rate(self, mounting) -> bool:
+        return mounting.rotary_damper_pivot == "lid"
 
     def viscous(self, P):
         return P["rotary_damper_c"]
@@ -104,10 +104,10 @@ class EndDamper(Element):
     #: the parameter (in P) of the angle below which the element acts (module docstring)
     engagement = "end_damper_angle_deg"
 
-    def coordinate(self, cfg):
+    def coordinate(self, lid):
         return PivotAngle("lid")
 
-    def unit_rate(self, cfg) -> bool:
+    def unit_rate(self, mounting) -> bool:
         return True
 
     def viscous(self, P):

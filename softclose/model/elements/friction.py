@@ -27,10 +27,10 @@ class Friction(Element):
     params = (Param("friction_torque", config_key="friction.torque"),)
     columns = ()
 
-    def coordinate(self, cfg):
+    def coordinate(self, lid):
         return PivotAngle("lid")
 
-    def unit_rate(self, cfg) -> bool:
+    def unit_rate(self, mounting) -> bool:
         return True
 
     def coulomb(self, P):

@@ -17,7 +17,7 @@ class Gravity(Element):
     columns = (("Vg", "q"), ("dVg", "dq"))
     mass_dependent = True
 
-    def coordinate(self, cfg):
+    def coordinate(self, lid):
         return Weights()
 
     def potential(self, q, P):

@@ -83,7 +83,7 @@ class Spring(Element):
     acting_params = ("spring_k", "spring_preload")
     columns = (("l", "q"), ("dl", "dq"))
 
-    def coordinate(self, cfg):
+    def coordinate(self, lid):
         return Length("E", "lid_e", "spring_anchor")
 
     def preload(self, P):
@@ -101,7 +101,7 @@ class Spring(Element):
 
     extremes = ("min_spring_length", "max_spring_length")
 
-    def range_messages(self, P, cfg, rows, short, edge, worst, excess):
+    def range_messages(self, P, mounting, rows, short, edge, worst, excess):
         """:meth:`range_message` of many rows at once: the rows of each case (:meth:`_case`)
         formatted by its one template (:meth:`_template`), the parameters read once."""
         s = np.asarray(P["spring_kind"], float)[rows]
@@ -117,17 +117,17 @@ class Spring(Element):
         key = case * 3 + span
         for g in np.unique(key).tolist():
             c, sp = divmod(g, 3)
-            t = self._template(c, sp, cfg.design)
+            t = self._template(c, sp, mounting)
             idx = np.flatnonzero(key == g).tolist()
             cols = ([l0] if c < 2 else []) + ([e] if sp else []) + [x, w]
             for i, a in zip(idx, zip(*([col[i] for i in idx] for col in cols))):
                 out[i] = t % a
         return out
 
-    def range_message(self, P, cfg, i, short, where, excess):
+    def range_message(self, P, mounting, i, short, where, excess):
         s, l0 = float(P["spring_kind"][i]), float(P["spring_rest_length"][i])
         edge, worst = (None if a is None else math.degrees(a) for a in where)
-        return self._message(s, l0, short, cfg.design, edge, worst, excess)
+        return self._message(s, l0, short, mounting, edge, worst, excess)
 
     @staticmethod
     def _case(s, short) -> int:
@@ -169,11 +169,11 @@ class Spring(Element):
             (excess * 1e3, worst)
         return cls._template(case, span, d) % args
 
-    def valid(self, P, cfg=None):
+    def valid(self, P, mounting=None):
         """(lo, hi) of l, per design: an extension spring from l0 up to its maximum length, a
         compression spring from its solid length up to l0, the linear one within its limits."""
         s, l0 = P["spring_kind"], P["spring_rest_length"]
-        d = cfg.design if cfg is not None else None
+        d = mounting
         lmin = d.spring_min_length if d is not None and d.spring_min_length else -math.inf
         lmax = d.spring_max_length if d is not None and d.spring_max_length else math.inf
         return np.where(s > 0, l0, lmin), np.where(s < 0, l0, lmax)
@@ -199,10 +199,10 @@ class TorsionSpring(_Linear):
     columns = (("psi", "q"), ("dpsi", "dq"))
     table = "extra"
 
-    def coordinate(self, cfg):
-        return PivotAngle(cfg.design.torsion_pivot)
+    def coordinate(self, lid):
+        return PivotAngle(lid.mounting.torsion_pivot)
 
-    def structure(self, cfg):
-        return (cfg.design.torsion_pivot,)
+    def structure(self, mounting):
+        return (mounting.torsion_pivot,)
 
     acting_params = ("torsion_k",)

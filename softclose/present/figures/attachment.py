@@ -21,14 +21,13 @@ def _lid_point(model, theta: float, p) -> np.ndarray:
     return A + np.array([c * p[0] - s * p[1], s * p[0] + c * p[1]])
 
 
-def plot_attachments(model, title: str = "Attachment points", before=None):
-    """The linkage of ``model`` (a :class:`~softclose.model.lid.LidModel`, its config's points
-    set) at the open and closed angles, the spring and
+def plot_attachments(model, cfg, title: str = "Attachment points", before=None):
+    """The linkage of ``model`` (a :class:`~softclose.model.lid.LidModel` of ``cfg``, its
+    points set) at the open and closed angles, the spring and
     dashpot lines at :data:`LINES_OVER_STROKE` angles of the stroke, the paths of the lid
     points E and H, each free ground point's box (``optimise.free``) and the keep-out
     polygons; ``before`` (another model) draws its spring line at the closed angle for comparison."""
-    cfg = model.cfg
-    geo, st = cfg.geometry, cfg.stroke
+    geo, st = model.geo, model.stroke
     fig, ax = plt.subplots(figsize=(7.5, 5.6), layout="constrained")
     for poly in cfg.optimise.keep_out or ():
         P = np.asarray(poly)
@@ -56,9 +55,9 @@ def plot_attachments(model, title: str = "Attachment points", before=None):
         ax.plot(path[:, 0], path[:, 1], ":", color=color, lw=1)
         ax.plot(*ground, "^", color=color, ms=8)
     if before is not None:
-        m0, before = before, before.cfg
-        E0 = _lid_point(m0, st.theta_closed, before.geometry.lid_e)
-        D0 = np.asarray(before.geometry.spring_anchor)
+        m0 = before
+        E0 = _lid_point(m0, st.theta_closed, m0.geo.lid_e)
+        D0 = np.asarray(m0.geo.spring_anchor)
         ax.plot([D0[0], E0[0]], [D0[1], E0[1]], "--", color="0.4", lw=1.2,
                 label="spring before (closed)")
     for name, q, off in (("D", D, (-6, -14)), ("F", F, (6, -12)),

@@ -94,7 +94,7 @@ from .layout import (DESIGN_COLUMNS, KERNEL_ABI, LAYOUT, NPT, OUT_FIELDS, POINT_
 from .library import load
 from .table import POINT_NAMES, CoefficientTable
 from ...problem import as_params
-from ...config import RANGES
+from ...problem import RANGES
 
 _COL = {name: i for i, name in enumerate(OUT_FIELDS)}
 
@@ -135,7 +135,7 @@ _NP = len(elements.PARAMS)
 
 def _extra(designs: np.ndarray, table: CoefficientTable) -> np.ndarray | None:
     """The extra table in the kernel's layout if any row has an element of it, else None."""
-    return table.extra_kernel if elements.needs_extra(designs[:, :_NP], table.model.cfg) \
+    return table.extra_kernel if elements.needs_extra(designs[:, :_NP], table.model.mounting) \
         else None
 
 

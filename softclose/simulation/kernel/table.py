@@ -22,6 +22,7 @@ from ...model import elements
 from ...model.dynamics import COEFFS, EXTRA_COEFFS, pose
 from ...errors import NumericalError
 from ...model.lid import LidModel
+from ...model.resolved import LidCase
 
 #: element columns per row of the extra table (the kernel's NX: its columns, then zeros)
 NX = 4
@@ -131,7 +132,7 @@ class CoefficientTable:
         h = (hi - lo) / n
         nodes = np.linspace(lo, hi, n + 1)
         self.cc, v = _pieces(model, nodes, h)                  # (ncell, NC, 4)
-        self.meta = np.array([n, lo, h, self.lid_mass, *elements.kernel_meta(model.cfg)],
+        self.meta = np.array([n, lo, h, self.lid_mass, *elements.kernel_meta(model.mounting)],
                              float)
         self.lo, self.hi, self.h, self.ncell = lo, hi, h, n
         # interpolation error at the cell midpoints, relative to each coefficient's scale
@@ -161,7 +162,7 @@ class CoefficientTable:
         n, t.lo, t.h, _ = (float(v) for v in t.meta[:4])
         t.ncell, t.hi = int(n), model.theta_range[1]
         t.max_rel_error = float(state["error"][0])
-        expect = np.array([t.lid_mass, *elements.kernel_meta(model.cfg)], float)
+        expect = np.array([t.lid_mass, *elements.kernel_meta(model.mounting)], float)
         if t.cc.shape[0] != t.ncell or not np.array_equal(t.meta[3:], expect):
             raise ValueError("the table does not match its model")
         return t
@@ -192,8 +193,8 @@ class CoefficientTable:
         tables at m0 and 2 m0 (same cells, same inertia rule: derived I = m L^2/12 unless
         ``mass.inertia_lid`` is configured) is exact up to rounding.
         """
-        cfg, m0 = self.model.cfg, self.lid_mass
-        other = LidModel(cfg.replace(mass={"lid": 2.0 * m0}))
+        m, m0 = self.model, self.lid_mass
+        other = LidModel(LidCase(m.lid.with_lid_mass(2.0 * m0), m.stroke, m.design))
         nodes = np.linspace(self.lo, self.hi, self.ncell + 1)
         cc2, _ = _pieces(other, nodes, self.h)
         return np.ascontiguousarray((cc2[:, :4] - self.cc[:, :4]) / m0)
@@ -293,7 +294,7 @@ class CoefficientTable:
         import casadi as ca
         m = self.model
         th = ca.SX.sym("theta")
-        A = pose(th, m.cfg.geometry, m.cfg.mass, m.sigma).points["A"]
+        A = pose(th, m.geo, m.mass, m.sigma).points["A"]
         dA = ca.jacobian(A, th)
         vec = ca.vertcat(A, dA, ca.cos(th), ca.sin(th))
         fn = ca.Function("pose", [th], [vec, ca.jacobian(vec, th)])
@@ -315,7 +316,7 @@ class CoefficientTable:
     def own_points(self) -> np.ndarray:
         """The config's attachment points (8,), in the order of :data:`POINT_NAMES` (x, y
         each; the dashpot's lid point derived from ``lid_c`` when not given)."""
-        g = self.model.cfg.geometry
+        g = self.model.geo
         return np.array([float(v) for name in POINT_NAMES for v in getattr(g, name)])
 
     def pose_at(self, theta) -> np.ndarray:
