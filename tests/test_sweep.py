@@ -426,7 +426,7 @@ def test_lid_mass_sweep_agrees_with_a_model_per_mass(monkeypatch):
     real_init = Simulator.__init__
 
     def counting_init(self, c, *a, **kw):
-        built.append(c.mass.lid)
+        built.append(c.lid.mass.lid)
         real_init(self, c, *a, **kw)
     monkeypatch.setattr(Simulator, "__init__", counting_init)
     chunks._sims.clear()
