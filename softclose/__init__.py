@@ -83,10 +83,10 @@ def _simulator_from_config(cls, cfg: Config, model: LidModel | None = None,
 
 def _reference_from_config(cls, cfg: Config, model: LidModel | None = None,
                            grid_step: float = 2e-3) -> Reference:
-    """The adaptive reference of ``cfg`` (its ``simulate.reference_tol``), of ``model`` or
-    ``cfg``'s own."""
+    """The adaptive reference of ``cfg`` (its ``simulate.reference_tol``; its strokes judged
+    by its spring limits, at its temperature), of ``model`` or ``cfg``'s own."""
     case = resolve(cfg)
-    return cls(model or LidModel(case), case.solver.reference_tol, grid_step)
+    return cls(model or LidModel(case), case.solver.reference_tol, grid_step, case)
 
 
 # the public classes' constructors from a config, defined here, where the config is read

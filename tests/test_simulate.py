@@ -341,3 +341,44 @@ def test_simulate_out_writes_csv_figures_gif(capsys, tmp_path):
     assert np.all(np.diff(data[:, 0]) > 0)
 
 
+
+
+def test_the_config_is_resolved_once_at_the_top(cfg):
+    """``softclose.resolve`` gives immutable values (equal and hashed by value); the model,
+    the simulator and the reference take them, each public class has a constructor from a
+    config, and a config given below the features is refused in one line."""
+    import softclose
+    from softclose.problem import params_of, resolve
+    case = resolve(cfg)
+    assert case == resolve(cfg) and hash(case) == hash(resolve(cfg))
+    assert case.p.tolist() == params_of(cfg).tolist()
+    assert (case.stroke.theta0, case.stroke.theta_closed) == (cfg.stroke.theta0,
+                                                              cfg.stroke.theta_closed)
+    assert case.solver.step == cfg.simulate.step and case.lid.geometry is cfg.geometry
+    with pytest.raises(AttributeError):
+        case.stroke.t_max = 1.0
+    for cls in (LidModel, Simulator):
+        with pytest.raises(TypeError, match="resolve"):
+            cls(cfg)
+    model = LidModel(case)
+    assert not hasattr(model, "cfg") and model.lid == case.lid
+    assert Simulator.from_config(cfg).run().closing_time == \
+        softclose.simulate(cfg).closing_time == Simulator(case).run().closing_time
+    # the reference of a config runs at its temperature, as one given the resolved config
+    cold = cfg.update({"operating.temperature_c": 0.0, "design.damper_c": 500.0,
+                       "design.damper_temperature_coeff": -0.005})
+    ref = Reference.from_config(cold)
+    a = ref.simulate()
+    b = Reference(LidModel.from_config(cold)).simulate(None, resolve(cold))
+    warm = Reference(LidModel.from_config(cold)).simulate()      # at the reference temperature
+    assert a.closing_time == b.closing_time > warm.closing_time
+
+
+@pytest.mark.parametrize("inertia", [None, 0.02])
+def test_a_resolved_lid_at_another_mass_is_the_configs(cfg, inertia):
+    """What the coefficient table's lid-mass derivative builds (a model at twice the mass)
+    is the lid a config with that mass resolves to, its inertia following the mass unless
+    the config gives it."""
+    from softclose.problem import resolve
+    c = cfg if inertia is None else cfg.set("mass.inertia_lid", inertia)
+    assert resolve(c).lid.with_lid_mass(1.3) == resolve(c.set("mass.lid", 1.3)).lid

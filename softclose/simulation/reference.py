@@ -43,12 +43,16 @@ class Reference:
     """Adaptive reference simulation of one model (from a config:
     ``softclose.Reference.from_config(cfg)``)."""
 
-    def __init__(self, model, tol: float | None = None, grid_step: float = 2e-3):
+    def __init__(self, model, tol: float | None = None, grid_step: float = 2e-3,
+                 case=None):
         """``tol``: the CVODES tolerance (a config's ``simulate.reference_tol``,
         :attr:`softclose.model.resolved.SolverSettings.reference_tol`); None: its default
-        :data:`softclose.problem.REFERENCE_TOL`."""
+        :data:`softclose.problem.REFERENCE_TOL`. ``case``: the resolved config
+        (:class:`softclose.model.resolved.LidCase`) :meth:`simulate` judges and runs at when
+        given none."""
         self.model = model
         self.tol = tol if tol is not None else REFERENCE_TOL
+        self.case = case
         self.grid_step = grid_step
         x, tau, s = ca.SX.sym("x", 2), ca.SX.sym("tau"), ca.SX.sym("moving")
         eg = ca.SX.sym("engaged", len(elements.ENGAGING))
@@ -156,13 +160,14 @@ class Reference:
         of CVODES raises :class:`~softclose.errors.NumericalError`. ``case``: the resolved config
         (:class:`softclose.model.resolved.LidCase`) whose spring length limits
         (``design.spring_min_length``, ``spring_max_length``) the stroke is checked against
-        and whose temperatures it runs at -- default the model's own lid at the reference
-        temperature; a model shared between configs (the caches key models by their
+        and whose temperatures it runs at -- default the reference's own (``case`` given to
+        it), else the model's lid at the reference temperature; a model shared between configs (the caches key models by their
         structure, not by these limits) is given the one judged. ``p`` is a design at the
         reference temperature (default the model's); the stroke runs at the case's
         ``operating.temperature_c`` (:mod:`softclose.model.temperature`).
         """
         m, st = self.model, self.model.stroke
+        case = self.case if case is None else case
         p = at_temperature(m.params() if p is None else as_params(p),
                            None if case is None else parameter_factors(case.temperatures))
         mounting = m.mounting if case is None else case.lid.mounting

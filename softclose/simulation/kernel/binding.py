@@ -34,7 +34,7 @@ The point columns (:data:`POINT_COLUMNS`; after ``lid_mass``, which must then be
 NaN for the table's) give a row its own attachment points: the spring's anchor D (world) and
 lid point E (lid frame, from pin A), the dashpot's anchor F and lid point H. The spring's
 four, or the dashpot's, are NaN for the table's own points (:func:`point_rows` turns a row's
-points into this form: a partly given set is completed from the table's config, and a set
+points into this form: a partly given set is completed from the table's lid, and a set
 equal to the table's own becomes NaN, so such a row gives the same bits as without the
 columns). Every lid point is P = A(theta) + R(theta) p, so from the table's pose pieces
 (:attr:`~softclose.simulation.kernel.table.CoefficientTable.pose`: the crank pin A, its slope, cos, sin, exact
@@ -169,7 +169,7 @@ def point_rows(table: CoefficientTable, points, n: int) -> np.ndarray | None:
     ``points``: None; an array (n, 8) or (8,) in the order of :data:`POINT_KEYS` (m; NaN:
     the table's own component); or a mapping {placement key (``geometry.lid_e[0]`` or
     ``lid_e[0]``): a value or one per row}. A spring (or dashpot) whose points are partly
-    given takes the others from the table's config; one whose points are the table's own
+    given takes the others from the table's lid; one whose points are the table's own
     becomes NaN (it reads the table's columns: the same bits as without points). A given
     component must be a finite number within the key's range (ConfigError naming it)."""
     if points is None:

@@ -314,7 +314,7 @@ class CoefficientTable:
 
     @cached_property
     def own_points(self) -> np.ndarray:
-        """The config's attachment points (8,), in the order of :data:`POINT_NAMES` (x, y
+        """The lid's attachment points (8,), in the order of :data:`POINT_NAMES` (x, y
         each; the dashpot's lid point derived from ``lid_c`` when not given)."""
         g = self.model.geo
         return np.array([float(v) for name in POINT_NAMES for v in getattr(g, name)])
