@@ -21,10 +21,10 @@ keys), ``.to_json()`` and ``.plot()`` (a matplotlib Figure):
 
 Lower layers for scripts that need them: :class:`LidModel`, :class:`Simulator`,
 :class:`Reference` (each from a config: ``Simulator.from_config(cfg)``; below the features
-they take the config resolved once, :func:`resolve`), :mod:`softclose.problem` (design keys, metrics and units, objective,
-constraints, accuracy targets). The feature packages are :mod:`softclose.optimiser`,
-:mod:`softclose.sweeps` and :mod:`softclose.robust`; they are imported on first use, so
-``import softclose`` stays light.
+they take the config resolved once, :func:`resolve`), :mod:`softclose.problem` (design
+keys, metrics and units, objective, constraints, accuracy targets). The feature packages
+are :mod:`softclose.optimiser`, :mod:`softclose.sweeps` and :mod:`softclose.robust`; they
+are imported on first use, so ``import softclose`` stays light.
 """
 
 from importlib import import_module

@@ -77,11 +77,11 @@ def coordinates(theta, lid, sigma, ps: Pose | None = None) -> dict:
 
 
 def coordinates_of_columns(columns: dict, mounting, theta=None) -> dict:
-    """Each element's :class:`Coord` with ``mounting`` from tabulated columns (``columns[name]``:
-    numbers or arrays): what the element declares it tabulates (its q, q' or q'^2); an element
-    on the lid's own angle has q' = 1 (and q = ``theta``, the angle of the columns, when
-    given). An element whose columns are not in ``columns`` (the extra table, not read) is
-    left out."""
+    """Each element's :class:`Coord` with ``mounting`` (where the elements sit) from tabulated
+    columns (``columns[name]``: numbers or arrays): what the element declares it
+    tabulates (its q, q' or q'^2); an element on the lid's own angle has q' = 1 (and q =
+    ``theta``, the angle of the columns, when given). An element whose columns are not
+    in ``columns`` (the extra table, not read) is left out."""
     out = {}
     for e in ELEMENTS:
         if not e.columns or e.unit_rate(mounting):

@@ -95,7 +95,7 @@ def clearance(cfg, polys=None) -> dict:
     if not polys:
         return {}
     st, geo = cfg.stroke, cfg.geometry
-    model = LidModel.cached(resolve(cfg))     # (the model's disk cache: no optimiser cache below)
+    model = LidModel.cached(resolve(cfg))   # (the model's disk cache: no optimiser cache below)
     th = np.linspace(st.theta_closed, st.theta0, CHECK_ANGLES)
     A = np.asarray(model.kin.map(CHECK_ANGLES)(np.vstack([th, np.zeros_like(th)]))[5])
     c, s = np.cos(th), np.sin(th)

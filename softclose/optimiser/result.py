@@ -178,7 +178,8 @@ class OptimiseResult(Displayed):
         """The optimal design's stroke by the fixed-step simulator (with its trajectory)."""
         if self.design is None or self.config is None:
             raise ValueError("this result has no design to simulate")
-        return Simulator(resolve(self.config.with_design(**self.design)), cached=True).run(trajectory=trajectory)
+        return Simulator(resolve(self.config.with_design(**self.design)),
+                         cached=True).run(trajectory=trajectory)
 
     def _display(self) -> Display:
         bounds = self.problem.get("bounds", {})

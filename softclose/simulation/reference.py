@@ -1,18 +1,18 @@
 """The adaptive reference: CVODES (through CasADi) on the exact equation of motion.
 
 Independent of the fast path: no table, no fixed step. It integrates on an output grid
-(tolerance ``simulate.reference_tol``, :data:`REFERENCE_TOL` unless given) and locates each event by Newton's method on the
-length of a last integration, ``x(tau) = CVODES(x_k, tau)`` (time scaled to [0, 1] with
-tau as a parameter); interior maxima of the tip speed and the lowest angle of a stroke that
-turns back are located the same way on the root of their time derivative. With dry friction
-the direction of motion is a parameter of the flow: each rest (theta' = 0) is an event,
-located the same way, where the lid sticks if the driving moment |dV/dtheta| does not exceed
-the friction moment T_f, and otherwise moves on the way -dV/dtheta drives it (so also at the
-release). An end damper acts only below its engagement angle: each crossing of that angle
-is an event, located the same way, at which the damper engages (moving down) or lets go
-(moving up); its first engagement gives ``engage_time`` and ``engage_theta_dot``. Between
-events the flow is smooth (CVODES never steps across the switch). Used by tests, by
-``optimise``'s verification and by ``bench``.
+(tolerance ``simulate.reference_tol``; :data:`softclose.problem.REFERENCE_TOL` unless given)
+and locates each event by Newton's method on the length of a last integration, ``x(tau) =
+CVODES(x_k, tau)`` (time scaled to [0, 1] with tau as a parameter); interior maxima of the
+tip speed and the lowest angle of a stroke that turns back are located the same way on the
+root of their time derivative. With dry friction the direction of motion is a parameter of
+the flow: each rest (theta' = 0) is an event, located the same way, where the lid sticks if
+the driving moment |dV/dtheta| does not exceed the friction moment T_f, and otherwise moves
+on the way -dV/dtheta drives it (so also at the release). An end damper acts only below its
+engagement angle: each crossing of that angle is an event, located the same way, at which
+the damper engages (moving down) or lets go (moving up); its first engagement gives
+``engage_time`` and ``engage_theta_dot``. Between events the flow is smooth (CVODES never
+steps across the switch). Used by tests, by ``optimise``'s verification and by ``bench``.
 """
 
 from __future__ import annotations
@@ -157,12 +157,13 @@ class Reference:
 
         Returns the same :class:`~softclose.simulation.stroke.StrokeResult` as the fixed-step
         simulator, with ``method`` "cvodes" and ``tolerance`` the CVODES tolerance. A failure
-        of CVODES raises :class:`~softclose.errors.NumericalError`. ``case``: the resolved config
-        (:class:`softclose.model.resolved.LidCase`) whose spring length limits
+        of CVODES raises :class:`~softclose.errors.NumericalError`. ``case``: the resolved
+        config (:class:`softclose.model.resolved.LidCase`) whose spring length limits
         (``design.spring_min_length``, ``spring_max_length``) the stroke is checked against
         and whose temperatures it runs at -- default the reference's own (``case`` given to
-        it), else the model's lid at the reference temperature; a model shared between configs (the caches key models by their
-        structure, not by these limits) is given the one judged. ``p`` is a design at the
+        it), else the model's lid at the reference temperature; a model shared between
+        configs (the caches key models by their structure, not by these limits) is given the
+        one judged. ``p`` is a design at the
         reference temperature (default the model's); the stroke runs at the case's
         ``operating.temperature_c`` (:mod:`softclose.model.temperature`).
         """

@@ -2,14 +2,16 @@
 
 ``Simulator(case)`` (a config resolved by :func:`softclose.problem.resolve`; from a config:
 ``softclose.Simulator.from_config(cfg)``) holds one model, its coefficient table and one
-fixed-step method; it runs single strokes (``run``) and batches of designs (``run_batch``) in the C kernel.
-Metric-only runs keep no trajectory and evaluate no reactions; ``run(trajectory=True)``
-also returns the per-step trajectory with the derived quantities a figure needs.
+fixed-step method; it runs single strokes (``run``) and batches of designs (``run_batch``)
+in the C kernel. Metric-only runs keep no trajectory and evaluate no reactions;
+``run(trajectory=True)`` also returns the per-step trajectory with the derived quantities a
+figure needs.
 
 ``simulate(case)`` is the one-call wrapper (``softclose.simulate(cfg)`` from a config).
-Every result knows how far it is from the converged answer: ``accuracy`` holds the estimated error of each metric (Richardson, from
-the same stroke at half the step), and a stroke that the method cannot integrate stably
-is reported with the step it would need -- never as a NaN.
+Every result knows how far it is from the converged answer: ``accuracy`` holds the
+estimated error of each metric (Richardson, from the same stroke at half the step), and a
+stroke that the method cannot integrate stably is reported with the step it would need --
+never as a NaN.
 """
 
 from __future__ import annotations

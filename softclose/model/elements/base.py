@@ -149,7 +149,8 @@ class Element:
         values): a stroke that leaves it is an invalid design."""
         return (-math.inf, math.inf)
 
-    def range_message(self, P, mounting, i: int, short: bool, where: tuple, excess: float) -> str:
+    def range_message(self, P, mounting, i: int, short: bool, where: tuple,
+                      excess: float) -> str:
         """One line: design i takes the element out of its valid range (``short``: below its
         lower end), from the angle ``where[0]``, furthest at ``where[1]`` (rad), by
         ``excess``."""
