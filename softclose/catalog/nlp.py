@@ -46,7 +46,7 @@ def solve_c(cfg: Config, spring, damper) -> dict:
     from ..robust import optimise_robust
     try:
         c = spring_config(cfg, spring, damper)
-        r = optimise_robust(c, samples=NLP_SAMPLES, verify=False)
+        r = optimise_robust(c, samples=NLP_SAMPLES, verify=False, report=False)
     except SoftcloseError as exc:
         return {"c": None, "success": False, "objective": None,
                 "message": str(exc).splitlines()[0]}
