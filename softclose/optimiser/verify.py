@@ -304,5 +304,6 @@ def verify(cfg, design: dict, claims: dict | None = None,
 
 def verify_design(cfg, design: dict, metrics: dict | None = None,
                   objective: float | None = None) -> dict:
-    """:func:`verify` as plain JSON values (``Verification.to_json()``)."""
-    return verify(cfg, design, metrics, objective).to_json()
+    """:func:`verify` as plain JSON values (``Verification.to_json()``, which holds no hand
+    force: it is computed only where ``optimise.self_close_min_deg`` needs it)."""
+    return verify(cfg, design, metrics, objective, hand=False).to_json()
