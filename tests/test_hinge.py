@@ -25,6 +25,18 @@ def test_hinge_refuses_crank_keys(section, key, value):
     assert "\n" not in msg and msg.startswith(f"{section}.{key}:")
 
 
+@pytest.mark.parametrize("spread", ["geometry.crank_bc", "geometry.pivot_b[1]",
+                                    "mass.inertia_oa"])
+def test_hinge_refuses_a_spread_of_a_crank_key(spread):
+    raw = {"geometry": {"mechanism": "hinge"}, "tolerance": {spread: 1e-3, "mass.lid": 0.01}}
+    with pytest.raises(ConfigError) as exc:
+        from_dict(raw)
+    msg = str(exc.value)
+    assert "\n" not in msg and msg.startswith(f"tolerance.{spread}:") and "hinge" in msg
+    del raw["tolerance"][spread]
+    assert from_dict(raw).tolerance        # the lid's own spreads stay
+
+
 @pytest.mark.parametrize("raw,key", [({"mechanism": "flap"}, "geometry.mechanism"),
                                      ({"mechanism": "hinge", "hinge": [0.0]}, "geometry.hinge"),
                                      ({"mechanism": "hinge", "hinge": [99.0, 0.0]},

@@ -22,7 +22,10 @@ from . import compiled
 _NLPS: dict = {}
 #: the NLP structures built in this process, by :func:`nlp_key`
 _STRUCTURES: dict = {}
+#: the lids' Chebyshev fits, by model and elements (at most FITS_KEPT: a sweep over lids
+#: would otherwise keep one per point)
 _FITS: dict = {}
+FITS_KEPT = 32
 #: the LidModel of cfg's geometry, mass and stroke, kept for the process
 #: (:func:`softclose.model.lid.shared_model`)
 get_model = shared_model
@@ -35,6 +38,8 @@ def lid_fit(cfg) -> ChebyshevFit:
     pose = bool(placement_layout(cfg))
     key = model_key(cfg) + (tuple(e.name for e in els), pose)
     if key not in _FITS:
+        if len(_FITS) >= FITS_KEPT:
+            _FITS.pop(next(iter(_FITS)))          # the oldest
         _FITS[key] = ChebyshevFit(get_model(cfg), els=els, pose=pose)
     return _FITS[key]
 
