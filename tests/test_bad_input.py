@@ -70,6 +70,8 @@ CLI_CASES = [
      "design.spring_q"),
     ("prepare: --free reversed bounds", ["prepare", "--free", "design.end_damper_c=2:0"],
      "design.end_damper_c"),
+    ("prepare: --select missing catalog", ["prepare", "--select", "no-such-springs.csv"],
+     "no-such-springs.csv"),
     ("--set without =", ["simulate", "--set", "design.spring_k"], "design.spring_k"),
     ("--set unknown section", ["simulate", "--set", "desing.spring_k=1"], "desing"),
     ("--set unknown key", ["simulate", "--set", "design.spring=1"], "design.spring"),
@@ -122,6 +124,7 @@ def test_bad_command_line(capsys, argv, key):
 
 @pytest.mark.parametrize("command", ["state --theta-deg 10", "simulate", "optimise", "bench",
                                      "prepare", "prepare --robust",
+                                     "prepare --select examples/catalogs/springs.csv",
                                      "sweep --grid design.spring_k=0:100:3 --out OUT"])
 def test_every_command_rejects_a_bad_config(capsys, tmp_path, command):
     """The config is checked before any command runs (no command starts its work)."""

@@ -723,7 +723,7 @@ EXAMPLES = {"state": (100, 400), "simulate": (400, 1500), "sweep": (60, 300),
             "optimise": (25, 120), "yield": (25, 100), "sensitivity": (15, 60),
             "pareto": (10, 30), "optimise --robust": (10, 15), "bench": (10, 8),
             "docs": (30, 100), "select": (25, 100), "fit": (25, 100),
-            "prepare": (10, 20), "spring": (60, 300)}
+            "prepare": (10, 6), "spring": (60, 300)}
 
 
 @pytest.fixture(scope="module")

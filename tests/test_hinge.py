@@ -25,6 +25,18 @@ def test_hinge_refuses_crank_keys(section, key, value):
     assert "\n" not in msg and msg.startswith(f"{section}.{key}:")
 
 
+@pytest.mark.parametrize("spread", ["geometry.crank_bc", "geometry.pivot_b[1]",
+                                    "mass.inertia_oa"])
+def test_hinge_refuses_a_spread_of_a_crank_key(spread):
+    raw = {"geometry": {"mechanism": "hinge"}, "tolerance": {spread: 1e-3, "mass.lid": 0.01}}
+    with pytest.raises(ConfigError) as exc:
+        from_dict(raw)
+    msg = str(exc.value)
+    assert "\n" not in msg and msg.startswith(f"tolerance.{spread}:") and "hinge" in msg
+    del raw["tolerance"][spread]
+    assert from_dict(raw).tolerance        # the lid's own spreads stay
+
+
 @pytest.mark.parametrize("raw,key", [({"mechanism": "flap"}, "geometry.mechanism"),
                                      ({"mechanism": "hinge", "hinge": [0.0]}, "geometry.hinge"),
                                      ({"mechanism": "hinge", "hinge": [99.0, 0.0]},
@@ -197,3 +209,24 @@ def test_hinge_config_file_round_trip(tmp_path):
     back = load_config(path)
     for section in ("geometry", "mass", "design", "stroke"):
         assert getattr(back, section) == getattr(cfg, section)
+
+
+def test_state_on_a_hinge_gives_the_hinge_reaction_of_the_textbook(tmp_path, capsys):
+    """``softclose state`` on a bare hinge lid at rest: theta'' from the moment about H,
+    I_H theta'' = (r_G x m g), and the one reaction R_H = m (a_G - g); no crank angles."""
+    from softclose.cli import main
+    cfg = tmp_path / "hinge.toml"
+    cfg.write_text('[geometry]\nmechanism = "hinge"\n')
+    assert main(["state", "--config", str(cfg), "--theta-deg", "40", "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    c = from_dict({"geometry": {"mechanism": "hinge"}})
+    m, ig, (gx, gy), g = c.mass.lid, c.mass.inertia_lid, c.geometry.lid_g, 9.81
+    th = math.radians(40.0)
+    r = np.array([gx * math.cos(th) - gy * math.sin(th), gx * math.sin(th) + gy * math.cos(th)])
+    i_h = ig + m * (r @ r)
+    tdd = m * (r[0] * -g) / i_h                  # (r x m g)_z with g = (0, -g)
+    a_g = tdd * np.array([-r[1], r[0]])           # at rest: the tangential part only
+    assert s["theta_ddot"] == pytest.approx(tdd, rel=1e-9)
+    assert list(s["reactions"]) == ["H"] and s["phi"] is None and s["gamma"] is None
+    np.testing.assert_allclose(s["reactions"]["H"], m * (a_g - np.array([0.0, -g])),
+                               rtol=1e-9, atol=1e-12)

@@ -13,6 +13,7 @@ import io
 import itertools
 import json
 import math
+import os
 from contextlib import redirect_stdout
 
 import numpy as np
@@ -426,3 +427,66 @@ def test_free_points_are_re_optimised_per_part(capsys):
     assert main(["select", "--springs", str(springs), "--free",
                  "design.spring_preload=0:10"]) == 2
     assert "design.spring_preload cannot be free here" in capsys.readouterr().err
+
+
+def test_one_nlp_serves_every_spring_and_the_re_solve_is_the_robust_design(tmp_path):
+    """The best springs' c re-solved by the robust NLP: every spring fills one NLP structure
+    with its numbers (none is built per part), and the re-solve's design, worst-case
+    objective and verdict are those of the whole robust design (``report=True``) for the
+    same spring."""
+    import softclose.robust.nlp as rnlp
+    from softclose.catalog import read_springs, select
+    from softclose.catalog.nlp import NLP_SAMPLES, solve_c, spring_config
+    from softclose.catalog.files import DamperEntry
+    from softclose.robust import optimise_robust
+    rnlp.forget()
+    s = read_springs(_write(tmp_path, "s.csv", SPRINGS))
+    r = select(_cfg(), s, samples=16, verify=3)
+    solved = [e for e in r.ranking if e.get("nlp")]
+    assert len(solved) == 3 and all(e["nlp"]["success"] for e in solved)
+    sizes = {key[0] for key in rnlp._STRUCTURES}      # (scenarios of each structure)
+    assert len(rnlp._STRUCTURES) == len(sizes) == 1, rnlp._STRUCTURES.keys()
+    spring = next(x for x in s.parts if x.part == solved[0]["spring"])
+    damper = DamperEntry(None, "dashpot", solved[0]["nlp"]["c_grid"], None, 0.2)
+    lean = solve_c(_cfg(), spring, damper)
+    full = optimise_robust(spring_config(_cfg(), spring, damper), samples=NLP_SAMPLES,
+                           verify=False)
+    assert lean["c"] == full.design["damper_c"] == solved[0]["nlp"]["c"]
+    assert lean["objective"] == full.objective
+    assert lean["success"] == (full.design is not None) and lean["message"] == full.message
+
+
+@pytest.mark.slow
+def test_prepare_select_compiles_the_nlp_and_select_loads_it(tmp_path, monkeypatch, capsys):
+    """``softclose prepare --select FILE`` compiles select's NLP (in the foreground, named on
+    stderr); select then loads it and ranks with the same numbers as CasADi's virtual
+    machine; a bad catalog is exit 2 before anything is built."""
+    import shutil
+    from softclose import buildcache
+    import softclose.robust.nlp as rnlp
+    from softclose.catalog import select
+    if shutil.which(os.environ.get("CC", "cc")) is None:
+        pytest.skip("no C compiler")
+    monkeypatch.setenv(buildcache.ENV_FOLDER, str(tmp_path / "cache"))
+    s = _write(tmp_path, "s.csv", SPRINGS)
+    cfgfile = _write(tmp_path, "cfg.toml", "[tolerance]\n\"mass.lid\" = 0.0\n")
+    rnlp.forget()
+    vm = select(_cfg(), s, samples=16, verify=2)
+    assert all(st.library is None for st in rnlp._STRUCTURES.values())
+    rnlp.forget()
+    code, out = _run("prepare", "--select", str(s), "--config", str(cfgfile), "--json")
+    err = capsys.readouterr().err
+    assert code == 0, err
+    done = json.loads(out)
+    # the first solve's NLP (nominal lid and 8 corners), and any a search round enlarged
+    assert 1 <= len(done["compiled"]) <= 3 and not done["failed"], (done, err)
+    assert "building the NLP of the robust optimiser (9 scenarios" in err
+    rnlp.forget()
+    fast = select(_cfg(), s, samples=16, verify=2)
+    assert rnlp._STRUCTURES and all(st.library is not None
+                                    for st in rnlp._STRUCTURES.values())
+    assert [(e["spring"], e.get("nlp")) for e in fast.ranking] == \
+        [(e["spring"], e.get("nlp")) for e in vm.ranking]
+    bad = _write(tmp_path, "bad.csv", "part,kind\n")
+    assert main(["prepare", "--select", str(bad)]) == 2
+    assert "missing column" in capsys.readouterr().err

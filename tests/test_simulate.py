@@ -382,3 +382,23 @@ def test_a_resolved_lid_at_another_mass_is_the_configs(cfg, inertia):
     from softclose.problem import resolve
     c = cfg if inertia is None else cfg.set("mass.inertia_lid", inertia)
     assert resolve(c).lid.with_lid_mass(1.3) == resolve(c.set("mass.lid", 1.3)).lid
+
+
+def test_a_simulator_for_another_case_of_its_model(cfg, sim):
+    """``for_case``: another spring limit, stroke time or temperature on the same model and
+    table gives the bits of a simulator built for it; another model is refused."""
+    from softclose.problem import resolve
+    base = {"design.spring_k": 800.0, "stroke.t_max": 2.0, "operating.temperature_c": 5.0,
+            "design.damper_temperature_coeff": -0.005, "design.damper_c": 300.0}
+    for limit in (0.05, 0.09):          # the spring too long at 50 mm: an invalid design
+        c = cfg.update({**base, "design.spring_max_length": limit})
+        shared, fresh = sim.for_case(resolve(c)), Simulator.from_config(c)
+        assert shared.table is sim.table and shared.case == fresh.case
+        P = np.tile(resolve(c).p, (2, 1))
+        a, b = shared.run_batch(P), fresh.run_batch(P)
+        assert all(np.array_equal(a[k], b[k], equal_nan=True) for k in METRIC_KEYS if k in a)
+        assert a["status"].tolist() == b["status"].tolist()
+        assert list(a["reason"]) == list(b["reason"])
+        assert bool(a["reason"][0]) == (limit == 0.05)
+    with pytest.raises(ValueError):
+        sim.for_case(resolve(cfg.set("mass.lid", 0.7)))

@@ -41,7 +41,7 @@ def place_pair(cfg: Config, spring, damper, samples: int) -> dict:
     try:
         c = spring_config(cfg, spring, damper).update(
             {"optimise.damper_c": [damper.c, damper.c]})
-        r = optimise_robust(c, samples=samples, verify=False)
+        r = optimise_robust(c, samples=samples, verify=False, report=False)
     except SoftcloseError as exc:
         return {"values": None, "success": False, "objective": None,
                 "message": str(exc).splitlines()[0]}

@@ -6,7 +6,15 @@ the free length's as an absolute spread), the dashpot carries ``[tolerance]``'s 
 ``design.damper_c``; :func:`softclose.robust.optimise_robust` then chooses c within
 ``optimise.damper_c`` for the worst scenario of that box. The NLP's own verification is left
 to the caller, which re-screens the pair with that c in the kernel and checks every corner
-with the reference.
+with the reference; nor is the rest of the robust design's report made
+(``report=False``: the design, worst-case objective and verdict are the same).
+
+The NLP is the robust scenario NLP (:class:`softclose.robust.nlp.ScenarioStructure`), keyed
+by its structure alone -- the scenarios (1 + 2^d of the box's d axes), the discretisation, the
+elements, the solver -- and never by a part's numbers: the spring's rate and free length are
+the design's bounds (lo = hi), its preload and kind NLP parameters, its tolerances the
+scenario maps (parameters too). So one NLP serves every spring of a catalog, built once (in
+CasADi's virtual machine) or loaded compiled (``softclose prepare --select FILE``).
 """
 
 from __future__ import annotations
@@ -46,7 +54,7 @@ def solve_c(cfg: Config, spring, damper) -> dict:
     start): {c (None when it found none), success, objective (worst scenario), message}."""
     try:
         c = spring_config(cfg, spring, damper)
-        r = optimise_robust(c, samples=NLP_SAMPLES, verify=False)
+        r = optimise_robust(c, samples=NLP_SAMPLES, verify=False, report=False)
     except SoftcloseError as exc:
         return {"c": None, "success": False, "objective": None,
                 "message": str(exc).splitlines()[0]}

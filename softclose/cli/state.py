@@ -55,11 +55,17 @@ def run(cfg, args) -> Outcome:
         raise ConfigError(f"--theta-deg: the loop cannot close at {args.theta_deg} deg on this "
                           f"branch (toggle position at {math.degrees(toggle):.3f} deg)")
     s = _no_negative_zero(model.state(theta, args.theta_dot))
+    hinge = cfg.geometry.mechanism == "hinge"
+    if hinge:       # no cranks: their angles are none, the one reaction is the hinge's (A's)
+        s = dict(s, phi=None, gamma=None, phi_dot=None, gamma_dot=None,
+                 reactions={"H": s["reactions"]["A"]})
     lines = [f"theta      = {args.theta_deg + 0.0:.6g} deg   theta' = {s['theta_dot']:.6g} rad/s",
-             f"theta''    = {s['theta_ddot']:.8g} rad/s^2",
-             f"phi        = {math.degrees(s['phi']):.6f} deg   gamma = {math.degrees(s['gamma']):.6f} deg",
-             f"phi'       = {s['phi_dot']:.6g} rad/s   gamma' = {s['gamma_dot']:.6g} rad/s",
-             f"tip v      = [{s['tip_velocity'][0]:.6g}, {s['tip_velocity'][1]:.6g}] m/s",
-             "reactions (N): " + ", ".join(f"R_{k} = [{v[0]:.5g}, {v[1]:.5g}]"
-                                            for k, v in s["reactions"].items())]
+             f"theta''    = {s['theta_ddot']:.8g} rad/s^2"]
+    if not hinge:
+        lines += [f"phi        = {math.degrees(s['phi']):.6f} deg   "
+                  f"gamma = {math.degrees(s['gamma']):.6f} deg",
+                  f"phi'       = {s['phi_dot']:.6g} rad/s   gamma' = {s['gamma_dot']:.6g} rad/s"]
+    lines += [f"tip v      = [{s['tip_velocity'][0]:.6g}, {s['tip_velocity'][1]:.6g}] m/s",
+              ("hinge reaction (N): " if hinge else "reactions (N): ")
+              + ", ".join(f"R_{k} = [{v[0]:.5g}, {v[1]:.5g}]" for k, v in s["reactions"].items())]
     return Outcome(s, "\n".join(lines))

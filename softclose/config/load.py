@@ -183,6 +183,10 @@ def _check_mechanism(raw: dict[str, Any]) -> None:
         if name in raw.get(section, {}):
             raise ConfigError(f"{section}.{name}: a hinge lid (geometry.mechanism = \"hinge\") "
                               f"has no cranks; remove the key")
+    for key in raw.get("tolerance", {}):           # a spread of a crank's key: none either
+        if (key.split("[")[0].split(".")[0], key.split("[")[0].split(".")[-1]) in CRANK_KEYS:
+            raise ConfigError(f"tolerance.{key}: a hinge lid (geometry.mechanism = "
+                              f"\"hinge\") has no cranks; remove the spread")
 
 
 def _pivots(raw: dict[str, Any], values: dict[str, dict[str, Any]]) -> None:

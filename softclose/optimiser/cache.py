@@ -23,7 +23,10 @@ from ..problem import resolve
 _NLPS: dict = {}
 #: the NLP structures built in this process, by :func:`nlp_key`
 _STRUCTURES: dict = {}
+#: the lids' Chebyshev fits, by model and elements (at most FITS_KEPT: a sweep over lids
+#: would otherwise keep one per point)
 _FITS: dict = {}
+FITS_KEPT = 32
 
 
 def get_model(cfg):
@@ -39,6 +42,8 @@ def lid_fit(cfg) -> ChebyshevFit:
     pose = bool(placement_layout(cfg))
     key = model_key(resolve(cfg)) + (tuple(e.name for e in els), pose)
     if key not in _FITS:
+        if len(_FITS) >= FITS_KEPT:
+            _FITS.pop(next(iter(_FITS)))          # the oldest
         _FITS[key] = ChebyshevFit(get_model(cfg), els=els, pose=pose)
     return _FITS[key]
 

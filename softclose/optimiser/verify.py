@@ -214,13 +214,14 @@ def _g(v) -> str:
 
 
 def verify(cfg, design: dict, claims: dict | None = None,
-           claimed_objective: float | None = None, checker: Checker | None = None
-           ) -> Verification:
+           claimed_objective: float | None = None, checker: Checker | None = None,
+           hand: bool = True) -> Verification:
     """Re-simulate ``design`` with the adaptive reference and check it (module docstring).
 
     ``claims``: the optimiser's own §4 metrics; ``claimed_objective``: its J; ``checker``:
     the :class:`Checker` of cfg's model (default: the cached one of its geometry). Never
-    raises for a design the reference cannot simulate: ``error`` says why.
+    raises for a design the reference cannot simulate: ``error`` says why. ``hand=False``:
+    no hand force and zones (``hand`` None) unless ``optimise.self_close_min_deg`` needs them.
     """
     o, st = cfg.optimise, cfg.stroke
     chk = checker or get_checker(cfg)
@@ -262,12 +263,14 @@ def verify(cfg, design: dict, claims: dict | None = None,
         of = ref.opening_force
         cons["opening_force_max"] = {"value": of, "bound": o.opening_force_max, "unit": "N",
                                      "ok": of <= o.opening_force_max + CONSTRAINT_TOL}
-    try:                                    # the hand force and the zones (SPEC §13)
-        hand = hand_force(model, p, resolve(cfg))
-    except ConfigError:                     # (the linkage does not reach theta_open)
-        hand = None
+    hand_zones = None
+    if hand or o.self_close_min_deg is not None:
+        try:                                # the hand force and the zones (SPEC §13)
+            hand_zones = hand_force(model, p, resolve(cfg))
+        except ConfigError:                 # (the linkage does not reach theta_open)
+            pass
     if o.self_close_min_deg is not None:    # closes by itself from every angle up to it
-        sc = None if hand is None else hand.self_close_deg
+        sc = None if hand_zones is None else hand_zones.self_close_deg
         cons["self_close_min_deg"] = {"value": sc, "bound": o.self_close_min_deg,
                                       "unit": "deg",
                                       "ok": sc is not None and sc >= o.self_close_min_deg
@@ -298,10 +301,11 @@ def verify(cfg, design: dict, claims: dict | None = None,
                                       "difference": claimed_objective - J, "tolerance": tol,
                                       "ok": abs(claimed_objective - J) <= tol}
     return Verification(ref, J, cons, agreement, method, time.perf_counter() - t0,
-                        hand=hand)
+                        hand=hand_zones)
 
 
 def verify_design(cfg, design: dict, metrics: dict | None = None,
                   objective: float | None = None) -> dict:
-    """:func:`verify` as plain JSON values (``Verification.to_json()``)."""
-    return verify(cfg, design, metrics, objective).to_json()
+    """:func:`verify` as plain JSON values (``Verification.to_json()``, which holds no hand
+    force: it is computed only where ``optimise.self_close_min_deg`` needs it)."""
+    return verify(cfg, design, metrics, objective, hand=False).to_json()

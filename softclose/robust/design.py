@@ -86,7 +86,7 @@ from ..problem import check_reference_temperature
 
 
 def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None = None,
-                    seed: int = 0, verify: bool = True) -> RobustResult:
+                    seed: int = 0, verify: bool = True, report: bool = True) -> RobustResult:
     """The robust soft-close design over cfg's ``[tolerance]`` box, for each spring kind the
     optimiser may choose (``optimise.spring_kinds``; the free length bounded so that the
     spring stays valid over the stroke and its own tolerance:
@@ -94,7 +94,10 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     part to buy (``part``) and every kind tried (``kinds``).
 
     ``samples`` (default ``[tolerance] samples``) and ``seed`` fix the yield estimate;
-    ``verify`` re-simulates every scenario with the adaptive reference.
+    ``verify`` re-simulates every scenario with the adaptive reference. ``report=False``
+    (``softclose select``'s re-solves, which read the design, its worst-case objective and
+    the verdict): the same design, objective, success and message, without what only the
+    report shows (:func:`optimise_robust_kind`).
     """
     check_reference_temperature(cfg, "the robust optimiser")
     from dataclasses import replace
@@ -141,7 +144,7 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
                          "message": why})
             continue
         r = optimise_robust_kind(c, progress=progress, samples=samples, seed=seed,
-                                 verify=verify)
+                                 verify=verify, report=report)
         if placed:              # stage 2 ran at the points (end damper): report them
             r = replace(r, design={**(r.design or {}), **{k.split(".", 1)[1]: v
                                                           for k, v in points.items()}},
@@ -195,9 +198,17 @@ def _keep_out_check(cfg: Config, r: RobustResult) -> RobustResult:
 
 
 def optimise_robust_kind(cfg: Config, *, progress: bool = False, samples: int | None = None,
-                         seed: int = 0, verify: bool = True) -> RobustResult:
+                         seed: int = 0, verify: bool = True, report: bool = True
+                         ) -> RobustResult:
     """The robust soft-close design over cfg's ``[tolerance]`` box with cfg's spring kind (see
-    the module docstring)."""
+    the module docstring).
+
+    ``report=False``: the design, its objective, ``success`` and ``message`` alone, the
+    numbers those have with ``report`` (and ``verify=False``). Left out is what they do not
+    depend on: the nominal optimum (solved only when it chooses the scenarios the NLP starts
+    from, a box of more than :func:`~.policy.max_corners` corners; else ``nominal`` is
+    :data:`NOT_SOLVED`), its yield, the scenarios' report and their verification, the
+    active set (``metrics``, ``scenarios`` and ``active`` empty)."""
     t_start = time.perf_counter()
     tol = cfg.tolerance
     check_batch(cfg, int(samples or tol.samples), "--samples" if samples else "tolerance.samples")
@@ -205,8 +216,11 @@ def optimise_robust_kind(cfg: Config, *, progress: bool = False, samples: int | 
     log = _Log(Progress(10, "robust design", enabled=progress, unit=""), t_start)
     log.bar.update(0, "nominal optimum")
     t0 = time.perf_counter()
-    nominal = _nominal(cfg)
-    log.times["nominal_optimise"] = time.perf_counter() - t0
+    if report or 2 ** box_of(cfg).dim > max_corners(cfg):
+        nominal = _nominal(cfg)
+        log.times["nominal_optimise"] = time.perf_counter() - t0
+    else:           # every corner is a scenario: the nominal optimum chooses none of them
+        nominal = dict(NOT_SOLVED)
     N, M, _, disc_notes = discretise(cfg)
     log.notes += disc_notes
     z_yield = _yield_samples(cfg, samples, seed, log.notes)
@@ -219,14 +233,23 @@ def optimise_robust_kind(cfg: Config, *, progress: bool = False, samples: int | 
                 box=box_summary(box_of(cfg, scale=scale)))
     if not run.success:
         return _no_design(cfg, problem, run, nominal, N, M, seed, log, base)
+    design = dict(zip(DESIGN_KEYS, map(float, run.design)))
+    J_obj = float(np.max(run.J)) if tol.robust_objective == "worst" else float(np.mean(run.J))
+    if not report:
+        corner_check = _corner_guarantee(cfg, scale, problem, run, log)
+        msgs = _failures(None, [], corner_check, yres, tol.required_yield, scale)
+        log.finish()
+        return RobustResult(not msgs, "; ".join(msgs), run.r["status"], design, J_obj,
+                            metrics=None, scenarios=[], verification=None, yield_result=yres,
+                            nominal=_nominal_json(nominal, None), nominal_yield=None,
+                            notes=tuple(log.notes), times=log.times,
+                            corner_check=corner_check, config=cfg, **base)
     # the nominal optimum on the same samples
     log.bar.update(9, "verification")
     nyield = _nominal_yield(cfg, nominal, z_yield, seed, log)
     t0 = time.perf_counter()
     scen, verified = scenario_report(cfg, problem, run, verify)
     log.times["verification"] = time.perf_counter() - t0
-    design = dict(zip(DESIGN_KEYS, map(float, run.design)))
-    J_obj = float(np.max(run.J)) if tol.robust_objective == "worst" else float(np.mean(run.J))
     corner_check = _corner_guarantee(cfg, scale, problem, run, log)
     verification = _verification(scen, verified) if verify else None
     msgs = _failures(verification, scen, corner_check, yres, tol.required_yield, scale)
@@ -262,6 +285,11 @@ class _Log:
 
 
 # -- the steps ------------------------------------------------------------------------------------
+#: the nominal optimum of a result that did not need it (``report=False``)
+NOT_SOLVED = {"success": None, "design": None, "objective": None,
+              "message": "not solved (it chooses none of the scenarios)"}
+
+
 def _nominal(cfg: Config) -> dict:
     """The nominal optimum (no tolerances) with cfg's spring kind, for the start and the
     comparison."""

@@ -29,12 +29,16 @@ from ..errors import ConfigError, SoftcloseError
 from ..config.free import PLACEMENT_KEYS, point_refusals
 from ..problem import LID_MASS, METRIC_KEYS, PARAM_COLUMNS, infeasibility, objective, params_of
 from ..model import elements
+from ..model.lid import model_key
 from ..simulation.simulator import Simulator
 from ..problem import resolve
 
 #: the kernel's output columns kept per sample
 COLUMNS = METRIC_KEYS + ("theta_dot_max", "theta_min", "status", "objective", "reason", "feasible")
 _SIMS: dict = {}
+#: the first simulator of each (model key, [simulate] settings): its model and table serve
+#: every simulator of that model (:func:`simulator`)
+_BASES: dict = {}
 
 
 def slow_keys(keys) -> list[str]:
@@ -61,7 +65,12 @@ def with_values(cfg: Config, values: dict[str, float]) -> Config:
 def simulator(cfg: Config, t_end: float | None = None):
     """The fixed-step simulator of cfg's model (cached per geometry, mass, stroke, method,
     element choices and spring limits);
-    strokes are cut at ``t_end`` when it is below stroke.t_max."""
+    strokes are cut at ``t_end`` when it is below stroke.t_max.
+
+    Simulators of one model (:func:`softclose.model.model_key`) and method share its model
+    and coefficient table: another stroke end or other spring length limits (``select``'s
+    parts each bring theirs) are read from the simulator's config when it runs, so such a
+    simulator is the first one's with its own config, not a model and table built again."""
     if t_end is not None and t_end < cfg.stroke.t_max:
         cfg = cfg.replace(stroke={"t_max": float(t_end)})
     # the element choices (a rotary damper's pivot) and the spring's length limits are the
@@ -72,7 +81,15 @@ def simulator(cfg: Config, t_end: float | None = None):
     if key not in _SIMS:
         if len(_SIMS) > 32:
             _SIMS.clear()
-        _SIMS[key] = Simulator(resolve(cfg))
+        base = (model_key(resolve(cfg)), cfg.simulate)
+        first = _BASES.get(base)
+        if first is None:
+            if len(_BASES) > 32:
+                _BASES.clear()
+            sim = _BASES[base] = Simulator(resolve(cfg))
+        else:                   # the same model, table, method and step; cfg's own limits
+            sim = first.for_case(resolve(cfg))
+        _SIMS[key] = sim
     return _SIMS[key]
 
 

@@ -37,15 +37,20 @@ from ..model import elements
 
 def start_design(cfg: Config, box: Box, Z: np.ndarray,
                  shape=(8, 6, 8)) -> tuple[np.ndarray, dict]:
-    """The design of a coarse sweep with the best worst-case objective over the scenarios."""
+    """The design of a coarse sweep with the best worst-case objective over the scenarios.
+
+    A design the grid holds more than once (a bound with lo = hi, as ``select`` fixes the
+    catalog spring's rate and free length) is simulated once, for every copy of it."""
     o = cfg.optimise
     axes = [np.linspace(*getattr(o, k), n) for k, n in zip(DESIGN_KEYS, shape)]
     G = np.array(np.meshgrid(*axes, indexing="ij")).reshape(3, -1).T
-    keys, X = scenario_rows(box, G, Z, cfg)
+    _, first, of = np.unique(G, axis=0, return_index=True, return_inverse=True)
+    keys, X = scenario_rows(box, G[first], Z, cfg)
     cols = evaluate(cfg, keys, X, t_end=t_end(cfg))
     S = len(Z)
-    m = margins(cols, o).reshape(len(G), S)
-    J = np.asarray(cols["objective"], float).reshape(len(G), S)
+    of = np.asarray(of).ravel()                 # each design of G -> its distinct design
+    m = margins(cols, o).reshape(-1, S)[of]
+    J = np.asarray(cols["objective"], float).reshape(-1, S)[of]
     viol = np.where(np.isfinite(m), np.maximum(-m, 0.0), 10.0).sum(axis=1)
     Jf = np.where(np.isfinite(J), J, np.inf)      # a stroke without an objective: inf
     Jw = Jf.max(axis=1) if cfg.tolerance.robust_objective == "worst" else Jf.mean(axis=1)

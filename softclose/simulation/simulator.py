@@ -16,6 +16,7 @@ never as a NaN.
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import replace
 
@@ -26,7 +27,7 @@ from .kernel import binding as native
 from . import statics
 from ..errors import ConfigError, NumericalError
 from .integrators import Method, amplification, get_method, spectral_radius
-from ..model.lid import LidModel
+from ..model.lid import LidModel, model_key
 from ..model.dynamics import COEFFS
 from ..model.temperature import at_temperature, parameter_factors
 from ..model.resolved import LidCase
@@ -145,6 +146,19 @@ class Simulator:
                 f"tabulated equation of motion is only accurate to "
                 f"{self.table.max_rel_error:.1e} there; move the stroke away from the toggle "
                 "(geometry, stroke.theta0_deg, stroke.theta_closed_deg)")
+
+    def for_case(self, case: LidCase) -> "Simulator":
+        """A simulator of ``case`` on this one's model, coefficient table, method and step:
+        ``case`` is of the same model (:func:`softclose.model.lid.model_key`) -- another
+        ``stroke.t_max``, other spring length limits, another temperature -- so nothing is
+        built again."""
+        if model_key(case) != model_key(self.case):
+            raise ValueError("Simulator.for_case: the case is of another model (geometry, "
+                             "mass, stroke ends or mounting)")
+        other = copy.copy(self)
+        other.case, other.stroke = case, case.stroke
+        other.temperature_factors = parameter_factors(case.temperatures)
+        return other
 
     # -- batches ---------------------------------------------------------------------
     def energy_tol(self, P: np.ndarray, lid_mass=None, points=None) -> np.ndarray:
