@@ -240,9 +240,9 @@ def run_stress_case(case: StressCase, ref_tol: float = 1e-12, rerun: bool = True
            "energy_drift_rel": None, "max_err_ratio": None, "rerun": "", "time_s": None}
     try:
         cfg = default_config().replace(**case.overrides)
-        case = resolve(cfg)
-        model = LidModel(case)
-        sim = Simulator(case, model=model)
+        resolved = resolve(cfg)
+        model = LidModel(resolved)
+        sim = Simulator(resolved, model=model)
     except ConfigError as exc:
         row.update(outcome="config error", message=str(exc), time_s=time.perf_counter() - t0)
         return row
@@ -278,7 +278,7 @@ def run_stress_case(case: StressCase, ref_tol: float = 1e-12, rerun: bool = True
                                                  overrides), ref_tol, rerun=False)
                 row["rerun"] = f"at {h_ok:.3g} s: {sub['outcome']} ({sub['status']})"
         else:
-            ref = Reference(model, ref_tol).simulate(p, case)
+            ref = Reference(model, ref_tol).simulate(p, resolved)
             ok, err, allowed = confirm(res, ref)
             row["max_err_ratio"] = max((err[k] / allowed[k] for k in err), default=0.0)
             row["ref_closed"] = ref.closed
