@@ -27,6 +27,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from ..coil_spring.materials import DEFAULT_MATERIAL
+
 
 class Mounting(NamedTuple):
     """Where the elements sit and the limits that are not per-stroke values."""
@@ -107,7 +109,7 @@ class Temperatures(NamedTuple):
     #: beta of every viscous coefficient, c exp(beta (T - T_ref)) (1/K)
     damper_temperature_coeff: float = 0.0
     #: the coil springs' wire (``spring.material``)
-    spring_material: str = ""
+    spring_material: str = DEFAULT_MATERIAL
 
 
 class LidCase(NamedTuple):
