@@ -161,7 +161,7 @@ def test_end_damper_co_design_is_verified_where_it_engages(tmp_path):
     c = load_config(tmp_path / "design.toml")
     assert c.design.end_damper_c == r.design["end_damper_c"]
     assert c.design.end_damper_angle_deg == r.design["end_damper_angle_deg"]
-    ref = Reference(get_model(c)).simulate(params_of(c), cfg=c)
+    ref = Reference(get_model(c)).simulate(params_of(c), resolve(c))
     J = c.optimise.weight_impact * ref.impact_theta_dot ** 2 \
         + c.optimise.weight_peak_tip * ref.peak_tip_speed ** 2
     assert J == pytest.approx(r.verified_objective, rel=1e-9)

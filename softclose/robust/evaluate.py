@@ -69,26 +69,28 @@ def simulator(cfg: Config, t_end: float | None = None):
 
     Simulators of one model (:func:`softclose.model.model_key`) and method share its model
     and coefficient table: another stroke end or other spring length limits (``select``'s
-    parts each bring theirs) are read from the simulator's config when it runs, so such a
-    simulator is the first one's with its own config, not a model and table built again."""
+    parts each bring theirs) are read from the simulator's resolved config when it runs, so
+    such a simulator is the first one's for its own (``Simulator.for_case``), not a model and
+    table built again."""
     if t_end is not None and t_end < cfg.stroke.t_max:
         cfg = cfg.replace(stroke={"t_max": float(t_end)})
+    case = resolve(cfg)
     # the element choices (a rotary damper's pivot) and the spring's length limits are the
     # simulator's too: its table and its range check read them
     key = (cfg.geometry, cfg.mass, cfg.stroke, cfg.simulate,
-           elements.structure(resolve(cfg).lid.mounting),
+           elements.structure(case.lid.mounting),
            cfg.design.spring_min_length, cfg.design.spring_max_length)
     if key not in _SIMS:
         if len(_SIMS) > 32:
             _SIMS.clear()
-        base = (model_key(resolve(cfg)), cfg.simulate)
+        base = (model_key(case), cfg.simulate)
         first = _BASES.get(base)
         if first is None:
             if len(_BASES) > 32:
                 _BASES.clear()
-            sim = _BASES[base] = Simulator(resolve(cfg))
+            sim = _BASES[base] = Simulator(case)
         else:                   # the same model, table, method and step; cfg's own limits
-            sim = first.for_case(resolve(cfg))
+            sim = first.for_case(case)
         _SIMS[key] = sim
     return _SIMS[key]
 
