@@ -18,7 +18,7 @@ import numpy as np
 
 from ..config import Config, default_config, to_dict
 from ..model.lid import LidModel
-from ..problem import PARAM_COLUMNS, objective, params_of
+from ..problem import PARAM_COLUMNS, objective, params_of, resolve
 from ..simulation.reference import Reference
 from ..simulation.simulator import Simulator
 from .precision import TRUTH_TOL
@@ -33,7 +33,6 @@ from ..config.free import parse_free_option
 from .fitting import fit_entries
 from ..robust import optimise_robust, sensitivity as sens, tolerance_analysis as ta
 from ..sweeps import sweep
-from ..problem import resolve
 
 #: a feature entry is repeated (up to its repeat count) only while its runs took less than this
 FEATURE_BUDGET_S = 30.0

@@ -15,13 +15,12 @@ import numpy as np
 from ..config import Config
 from ..simulation.integrators import METHODS, SEED
 from ..model.lid import LidModel
-from ..problem import as_params, PARAM_DEFAULTS, params_of, RELATIVE, TARGETS
+from ..problem import as_params, PARAM_DEFAULTS, params_of, RELATIVE, resolve, TARGETS
 from ..simulation.reference import Reference
 from ..simulation.simulator import Simulator
 from .timing import kernel_times, time_stats
 from ..jsonio import jsonable
 from ..model.elements import PARAMS
-from ..problem import resolve
 
 #: the metrics with an accuracy target, in table order
 METRICS = tuple(TARGETS)

@@ -12,11 +12,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from ..present.display import Display, Displayed, Table, num, with_unit
-from ..problem import DESIGN_KEYS, ENGAGE_KEYS, ENGAGE_METRICS, METRIC_KEYS, METRICS, UNITS
+from ..problem import (DESIGN_KEYS, ENGAGE_KEYS, ENGAGE_METRICS, METRIC_KEYS, METRICS, UNITS,
+                       resolve)
 from .verify import Verification
 from ..jsonio import jsonable
 from ..simulation.simulator import Simulator
-from ..problem import resolve
 
 
 @dataclass(frozen=True)

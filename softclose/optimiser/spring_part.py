@@ -15,9 +15,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..model import elements
-from ..problem import PARAM_KEYS, feasible, params_of
+from ..problem import PARAM_KEYS, feasible, params_of, resolve
 from ..simulation.simulator import Simulator
-from ..problem import resolve
 
 #: the ladders of deviations tried, each side: free length (m), rate (relative)
 FREE_LENGTH_STEPS = np.r_[np.arange(1, 101) * 1e-5, np.arange(11, 301) * 1e-4]   # to 30 mm

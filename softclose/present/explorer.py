@@ -16,10 +16,9 @@ import numpy as np
 
 from ..simulation.kernel import binding as native
 from ..config import Config
-from ..problem import DESIGN_KEYS, feasible, objective, params_of
+from ..problem import DESIGN_KEYS, feasible, objective, params_of, resolve
 from ..simulation.simulator import Simulator
 from ..simulation.stroke import StrokeStatus
-from ..problem import resolve
 
 #: the sliders: key, label, unit
 SLIDERS = (("spring_k", "spring k", "N/m"), ("spring_rest_length", "rest length l0", "m"),

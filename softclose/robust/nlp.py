@@ -49,7 +49,7 @@ import numpy as np
 
 from ..config import Config
 from ..interrupt import ipopt_options, solving
-from ..problem import DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, params_of, SCALES
+from ..problem import DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, params_of, resolve, SCALES
 from .discretisation import mapped, phase_grid, phase_two, t_limit, two_phase
 from ..optimiser import compiled
 from ..optimiser.free_points import (length_bounds, placed_bounds, placement_layout, slot_values,
@@ -66,7 +66,6 @@ from ..buildcache import text
 from ..optimiser.keep_out import keep_out_constraints
 from ..model.lid import model_key
 from .evaluate import with_values
-from ..problem import resolve
 
 #: the parameters of p that are not design variables: NLP parameters
 FIXED = PARAM_KEYS[len(DESIGN_KEYS):]

@@ -39,12 +39,11 @@ import numpy as np
 
 from ..config.free import PLACEMENT_KEYS, point_refusals
 from ..problem import (LID_MASS, METRIC_KEYS, PARAM_COLUMNS, infeasibility, objective,
-                       params_of)
+                       params_of, resolve)
 from ..simulation.stroke import StrokeStatus
 from ..errors import SoftcloseError
 from ..config import from_dict, RANGES, to_dict
 from ..simulation.simulator import Simulator
-from ..problem import resolve
 
 #: designs per chunk: the unit of progress, of Ctrl-C and resume, and of a Parquet part file
 CHUNK = 16384

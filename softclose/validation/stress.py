@@ -30,11 +30,10 @@ from types import SimpleNamespace
 from ..config import default_config
 from ..errors import ConfigError, NumericalError
 from ..model.lid import LidModel
-from ..problem import RELATIVE, TARGETS
+from ..problem import RELATIVE, TARGETS, resolve
 from ..simulation.reference import Reference
 from ..simulation.simulator import Simulator
 from ..model.kinematics import branch_of, closure
-from ..problem import resolve
 
 #: outcomes that are findings (a defect of softclose), not answers or reports
 FAILURES = ("MISMATCH", "NaN", "EXCEPTION")

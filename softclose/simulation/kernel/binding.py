@@ -93,8 +93,7 @@ from .layout import (DESIGN_COLUMNS, KERNEL_ABI, LAYOUT, NPT, OUT_FIELDS, POINT_
                      STATUS, STOP_REASONS, SI)
 from .library import load
 from .table import POINT_NAMES, CoefficientTable
-from ...problem import as_params
-from ...problem import RANGES
+from ...problem import RANGES, as_params
 
 _COL = {name: i for i, name in enumerate(OUT_FIELDS)}
 
