@@ -718,12 +718,13 @@ def run_case(command: str, values, out_dir: Path, as_json: bool,
 
 
 # -- profiles -------------------------------------------------------------------------------
-#: examples per command: (fast default run, long "-m fuzz" run)
-EXAMPLES = {"state": (100, 400), "simulate": (400, 1500), "sweep": (60, 300),
-            "optimise": (25, 120), "yield": (25, 100), "sensitivity": (15, 60),
-            "pareto": (10, 30), "optimise --robust": (10, 15), "bench": (10, 8),
-            "docs": (30, 100), "select": (25, 100), "fit": (25, 100),
-            "prepare": (10, 6), "spring": (60, 300)}
+#: examples per command: (fast default run, long "-m fuzz" run); the long profile is sized to
+#: run in about five minutes on 2 cores (an accepted prepare compiles an NLP: 10-120 s)
+EXAMPLES = {"state": (100, 400), "simulate": (400, 1000), "sweep": (60, 200),
+            "optimise": (25, 80), "yield": (25, 100), "sensitivity": (15, 60),
+            "pareto": (10, 30), "optimise --robust": (10, 15), "bench": (10, 5),
+            "docs": (30, 100), "select": (25, 60), "fit": (25, 60),
+            "prepare": (10, 6), "spring": (60, 150)}
 
 
 @pytest.fixture(scope="module")
