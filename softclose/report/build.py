@@ -9,12 +9,12 @@ import time
 from ..config import Config, to_toml
 from ..errors import ConfigError
 from ..jsonio import jsonable
-from ..problem import METRIC_KEYS, UNITS
+from ..problem import METRIC_KEYS
 from ..simulation.handforce import hand_force
 from ..simulation.simulator import Simulator
 from ..version import __version__
 from . import parts, signoff
-from .result import ReportResult, SECTIONS
+from .result import ReportResult
 
 
 def _stroke(cfg: Config) -> dict:
@@ -205,4 +205,4 @@ def report(cfg: Config, *, optimiser: dict | None = None, samples: int | None = 
                  "hands": {T: strokes[T]["hand"] for T in temps}})
 
 
-__all__ = ["report", "SECTIONS", "UNITS"]
+__all__ = ["report"]

@@ -25,8 +25,8 @@ def plot_strokes(strokes: dict, limit: float | None = None):
     if limit is not None:
         for a in (a1, a2):
             a.axvline(limit, color="k", ls="--", lw=1)
-        a1.annotate("closing_time_max", (limit, a1.get_ylim()[1]), xytext=(3, -12),
-                    textcoords="offset points", fontsize=8)
+        a1.annotate("closing_time_max", (limit, a1.get_ylim()[1]), xytext=(-3, -12),
+                    textcoords="offset points", fontsize=8, ha="right")
     a1.set_ylabel(r"$\theta$ [deg]")
     a2.set_ylabel(r"tip speed $|v_T|$ [m/s]")
     a2.set_xlabel("time t [s]")

@@ -8,8 +8,7 @@ import io
 import re
 
 from ..present.display import num
-from .result import SECTIONS
-from .text import (config_lines, damper_rows, design_rows, limit_lines, matrix_cell,
+from .text import (SECTIONS, config_lines, damper_rows, design_rows, limit_lines, matrix_cell,
                    metric_rows, spring_rows, stroke_rows, yield_rows)
 
 CSS = """

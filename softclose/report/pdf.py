@@ -7,8 +7,7 @@ from __future__ import annotations
 import textwrap
 
 from ..present.figures import plt
-from .result import SECTIONS
-from .text import (config_lines, damper_rows, design_rows, limit_lines, matrix_cell,
+from .text import (SECTIONS, config_lines, damper_rows, design_rows, limit_lines, matrix_cell,
                    metric_rows, spring_rows, stroke_rows, yield_rows)
 
 #: A4 portrait (in), lines of text a page holds, characters a line holds

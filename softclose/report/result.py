@@ -7,12 +7,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import ConfigError
-
-#: the report's sections, in order (the HTML's and the PDF's headings)
-SECTIONS = ("1. The lid and the design", "2. The parts to buy",
-            "3. The metrics of the stroke, verified", "4. The stroke and the hand force",
-            "5. The sign-off matrix", "6. Yield", "7. What limits the design",
-            "8. The config and the software")
+from .text import SECTIONS
 #: the report's file formats (by a path's suffix)
 FORMATS = ("html", "pdf")
 

@@ -132,7 +132,6 @@ def worst_corners(cfg, temps) -> tuple[dict, dict]:
     if not box0.dim:
         return {}, {"keys": [], "corners": 0}
     Z = box0.corners()
-    candidates = []                      # (badness, temperature, corner index) per row
     boxes = {}
     best: dict = {}
     for T in temps:

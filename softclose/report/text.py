@@ -5,6 +5,12 @@ from __future__ import annotations
 from ..present.display import num
 from ..problem import METRIC_KEYS, UNITS
 
+#: the report's sections, in order (the HTML's and the PDF's headings)
+SECTIONS = ("1. The lid and the design", "2. The parts to buy",
+            "3. The metrics of the stroke, verified", "4. The stroke and the hand force",
+            "5. The sign-off matrix", "6. Yield", "7. What limits the design",
+            "8. The config and the software")
+
 
 def _u(v, unit: str = "", digits: int = 6) -> str:
     t = num(v, digits)
@@ -159,16 +165,19 @@ def limit_lines(r) -> list[str]:
         dj = a.get("dJ")
         out.append(f"{a['name']} is active at its {a.get('bound', '')} bound "
                    f"{num(a.get('value'))} {a.get('unit') or ''}".rstrip()
-                   + (f": dJ = {dj:.4g} per unit of the bound (relaxing it by one unit "
-                      f"changes the objective by that much)" if dj is not None else ""))
+                   + (f": dJ = {dj:.4g} (the objective's change per unit change of the "
+                      "bound)" if dj is not None else ""))
     if not lim.get("active"):
         out.append("The optimiser's active constraints are not known (no optimise.json next "
                    "to the design file): the constraint with the smallest margin limits it.")
     sm = lim.get("smallest_margin")
     if sm:
-        out.append(f"The smallest margin: {sm['constraint']} at {sm['column']}: value "
-                   f"{num(sm['value'])}, limit {num(sm['limit'])}, margin "
-                   f"{num(sm['margin'], 4)}.")
+        value = sm["value"]
+        value = ("yes" if value else "no") if isinstance(value, bool) else num(value)
+        out.append(f"The tightest cell of the sign-off matrix: {sm['constraint']} at "
+                   f"{sm['column']}: value {value}, limit {num(sm['limit'])}"
+                   + (f", margin {num(sm['margin'], 4)}" if sm["margin"] is not None else
+                      " (fails)") + ".")
     return out
 
 
@@ -178,5 +187,5 @@ def config_lines(r) -> tuple:
     return facts, r.config_toml
 
 
-__all__ = ["design_rows", "spring_rows", "damper_rows", "metric_rows", "stroke_rows",
+__all__ = ["SECTIONS", "design_rows", "spring_rows", "damper_rows", "metric_rows", "stroke_rows",
            "matrix_cell", "yield_rows", "limit_lines", "config_lines"]
