@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 import time
 
-from ..config import Config, to_toml
+from ..config import Config, check_batch, to_toml
 from ..errors import ConfigError
 from ..jsonio import jsonable
 from ..problem import METRIC_KEYS
@@ -149,6 +149,11 @@ def report(cfg: Config, *, optimiser: dict | None = None, samples: int | None = 
     t0 = time.perf_counter()
     timings = {}
     temps = signoff.temperatures(cfg)
+    if samples is not None and samples < 1:
+        raise ConfigError(f"samples: {samples}; expected a whole number >= 1")
+    # each yield samples this many strokes at each temperature: refused before any work
+    check_batch(cfg, int(samples or cfg.tolerance.samples),
+                "--samples" if samples else "tolerance.samples")
     nominal = _stroke(cfg)
     strokes = {}
     for T in temps:
