@@ -14,6 +14,8 @@ from .text import (SECTIONS, config_lines, damper_rows, design_rows, limit_lines
 PAGE = (8.27, 11.69)
 LINES = 78
 WIDTH = 140
+#: the text's size (pt): WIDTH characters of Courier fill the page's width
+FONT = 6.2
 
 
 def columns(head, rows) -> list[str]:
@@ -31,17 +33,42 @@ def wrap(text: str) -> list[str]:
     return textwrap.wrap(text, WIDTH) or [""]
 
 
+#: the characters outside Latin-1 the text pages spell out (their fonts are the PDF's own)
+PLAIN = str.maketrans({"≤": "<=", "≥": ">=", "θ": "theta", "–": "-", "−": "-", "β": "beta",
+                       "·": "*", "—": "-", "±": "+/-"})
+#: the text pages in the PDF's standard fonts (Courier, Helvetica: nothing to embed or lay
+#: out glyph by glyph; 10x faster than a TrueType font)
+TEXT_RC = {"pdf.use14corefonts": True, "font.family": "sans-serif",
+           "font.sans-serif": ["Helvetica"], "font.monospace": ["Courier"]}
+
+
+def plain(text: str) -> str:
+    """``text`` in Latin-1 (what the standard fonts hold)."""
+    return text.translate(PLAIN).encode("latin-1", "replace").decode("latin-1")
+
+
 def _text_pages(pdf, title: str, lines: list[str]) -> int:
     """Write ``lines`` under ``title`` on as many pages as they need; returns the pages."""
+    with plt.rc_context(TEXT_RC):
+        return _pages(pdf, plain(title), [plain(x) for x in lines])
+
+
+def _pages(pdf, title: str, lines: list[str], table_width: int = 200) -> int:
+    """The pages of ``lines``: a table up to ``table_width`` characters wide is set in a
+    smaller font to keep its columns; longer lines are wrapped."""
     pages = 0
-    lines = [w for x in lines for w in (textwrap.wrap(x, WIDTH, subsequent_indent="    ")
-                                        if len(x) > WIDTH else [x])]
+    longest = max((len(x) for x in lines if len(x) <= table_width), default=0)
+    size = FONT * min(1.0, WIDTH / max(longest, 1))
+    width = int(WIDTH * FONT / size)
+    lines = [w for x in lines for w in (textwrap.wrap(x, width, subsequent_indent="    ")
+                                        if len(x) > width else [x])]
     chunks = [lines[i:i + LINES - 3] for i in range(0, max(len(lines), 1), LINES - 3)]
     for k, chunk in enumerate(chunks):
         fig = plt.figure(figsize=PAGE)
         fig.text(0.06, 0.965, title + (" (continued)" if k else ""), fontsize=13,
                  weight="bold", va="top")
-        fig.text(0.06, 0.935, "\n".join(chunk), family="monospace", fontsize=6.2, va="top")
+        fig.text(0.06, 0.935, "\n".join(chunk), family="monospace", weight="medium",
+                 fontsize=size, va="top")
         pdf.savefig(fig, bbox_inches=None)     # a whole page (tight would draw it twice)
         plt.close(fig)
         pages += 1
