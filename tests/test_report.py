@@ -241,3 +241,17 @@ def test_report_of_the_default_optimum_at_three_temperatures_takes_at_most_10_s(
     r.save(tmp_path / "report.html", figs)
     r.save(tmp_path / "report.pdf", figs)
     assert time.perf_counter() - t0 <= 10.0
+
+
+def test_the_optimisers_json_of_the_same_design_says_what_limits_it(tmp_path, cold_cfg):
+    from softclose.cli.report import optimiser_json
+    design = {k: getattr(cold_cfg.design, k) for k in ("spring_k", "spring_rest_length",
+                                                       "damper_c")}
+    active = [{"name": "closing_time_max", "kind": "constraint", "bound": "upper",
+               "value": 1.0, "unit": "s", "dJ": -0.031}]
+    (tmp_path / "optimise.json").write_text(json.dumps({"design": design, "active": active}))
+    config = str(tmp_path / "design.toml")
+    assert optimiser_json(config, cold_cfg)["active"] == active
+    other = dict(design, damper_c=design["damper_c"] * 1.01)     # a stale file: not used
+    (tmp_path / "optimise.json").write_text(json.dumps({"design": other, "active": active}))
+    assert optimiser_json(config, cold_cfg) is None

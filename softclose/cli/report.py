@@ -21,7 +21,8 @@ the hand force with its zones at each temperature of operating.temperatures_c; t
 matrix: every constraint of [optimise] at the nominal lid, at each temperature and at the
 worst corner of the [tolerance] box (value, limit, margin, pass); the yield with its 95 %
 interval per temperature; what limits the design (the optimiser's active constraints with
-dJ from the optimise.json next to the config file, else the smallest margin); the config
+dJ from the optimise.json or robust.json next to the config file, when its design is the
+config's; and the smallest margin); the config
 and the software version.
 
 Exit 3 when the design fails a requirement (the report is still written and says which)."""
@@ -42,16 +43,27 @@ def register(sub) -> None:
     p.set_defaults(run=run)
 
 
-def optimiser_json(config: str | None) -> dict | None:
-    """The optimiser's JSON next to a design file (``optimise.json``), if it is there and
-    readable; it says which constraints are active and their dJ."""
+#: the optimisers' JSON files that `--out D` writes next to D/design.toml
+OPTIMISER_FILES = ("robust.json", "optimise.json")
+
+
+def optimiser_json(config: str | None, cfg) -> dict | None:
+    """The optimiser's JSON next to a design file (``robust.json`` or ``optimise.json``) whose
+    design is cfg's, if there is one; it says which constraints are active and their dJ. A
+    file of another design (a folder written twice, a design edited since) is not used."""
     if not config:
         return None
-    path = Path(config).parent / "optimise.json"
-    try:
-        return json.loads(path.read_text())
-    except (OSError, ValueError):
-        return None
+    for name in OPTIMISER_FILES:
+        try:
+            payload = json.loads((Path(config).parent / name).read_text())
+            design = payload["design"]
+            same = all(abs(float(v) - float(getattr(cfg.design, k))) <= 1e-12 * max(1.0, abs(v))
+                       for k, v in design.items())
+        except (OSError, ValueError, KeyError, TypeError, AttributeError):
+            continue
+        if same:
+            return payload
+    return None
 
 
 def format_report(payload: dict) -> str:
@@ -79,7 +91,7 @@ def run(cfg, args) -> Outcome:
     if args.samples is not None and args.samples < 1:
         raise ConfigError(f"--samples {args.samples}: expected a whole number >= 1")
     out = prepare_out(args.out if args.out is not None else ".")
-    res = report(cfg, optimiser=optimiser_json(args.config), samples=args.samples)
+    res = report(cfg, optimiser=optimiser_json(args.config, cfg), samples=args.samples)
     payload = res.to_json()
     import time
     t0 = time.perf_counter()

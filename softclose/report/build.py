@@ -142,8 +142,8 @@ def report(cfg: Config, *, optimiser: dict | None = None, samples: int | None = 
     :class:`~softclose.report.ReportResult` whose ``success`` says whether the design meets
     every requirement and ``message`` says so in one line.
 
-    ``optimiser``: the optimiser's JSON (``optimise.json`` next to a design file), whose
-    active constraints and their dJ say what limits the design; ``samples``: Monte Carlo
+    ``optimiser``: the optimiser's JSON (``optimise.json`` or ``robust.json`` next to a
+    design file), whose active constraints and their dJ say what limits the design; ``samples``: Monte Carlo
     samples of each yield (default ``[tolerance] samples``).
     """
     t0 = time.perf_counter()

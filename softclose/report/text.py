@@ -168,8 +168,9 @@ def limit_lines(r) -> list[str]:
                    + (f": dJ = {dj:.4g} (the objective's change per unit change of the "
                       "bound)" if dj is not None else ""))
     if not lim.get("active"):
-        out.append("The optimiser's active constraints are not known (no optimise.json next "
-                   "to the design file): the constraint with the smallest margin limits it.")
+        out.append("The optimiser's active constraints are not known (no optimise.json or "
+                   "robust.json of this design next to the config file): the constraint with "
+                   "the smallest margin limits it.")
     sm = lim.get("smallest_margin")
     if sm:
         value = sm["value"]
