@@ -10,7 +10,6 @@ from ..config import Config, check_batch, to_toml
 from ..errors import ConfigError
 from ..jsonio import jsonable
 from ..problem import METRIC_KEYS
-from ..simulation.handforce import hand_force
 from ..simulation.simulator import Simulator
 from ..version import __version__
 from . import parts, signoff
@@ -22,14 +21,8 @@ def _stroke(cfg: Config) -> dict:
     reference's verification and the hand force, at cfg's temperature."""
     sim = Simulator(cfg, cached=True)
     res = sim.run(trajectory=True)
-    ver = signoff.check(cfg, hand=True)
-    hf = ver.hand
-    if hf is None and res.ok:
-        try:
-            hf = hand_force(sim.model, cfg=cfg)
-        except ConfigError:
-            hf = None
-    return {"simulate": res, "verification": ver, "hand": hf, "model": sim.model}
+    ver = signoff.check(cfg, hand=True)      # (no hand force where the linkage cannot open)
+    return {"simulate": res, "verification": ver, "hand": ver.hand, "model": sim.model}
 
 
 def _metrics(s: dict) -> dict:
@@ -106,12 +99,17 @@ def _verdict(cfg, matrix: dict, parts_: dict, yields: dict, temps) -> tuple[bool
     """(every requirement met, the one-line verdict, the failures in words)."""
     fails = []
     for col in matrix["columns"]:
+        if col == "nominal" and cfg.operating.temperature_c in temps:
+            continue                     # the same lid as its temperature's column
+        shut = matrix["cells"]["closed"].get(col, {}).get("ok", True)
         for r, cells in matrix["cells"].items():
             what, rel, unit = signoff.ROWS[r]
             c = cells.get(col)
-            if c is None or c["ok"]:
-                continue
-            where = "at the worst tolerance corner" if col == "worst corner" else f"at {col}"
+            if c is None or c["ok"] or (not shut and r.startswith("closing_time")):
+                continue                 # (a lid that does not close: said once)
+            where = {"worst corner": "at the worst tolerance corner",
+                     "nominal": f"at nominal ({cfg.operating.temperature_c:g} °C)"}.get(
+                         col, f"at {col}")
             if col == "worst corner" and c.get("where"):
                 where += f" ({c['where']})"
             if r == "closed":

@@ -42,8 +42,8 @@ def at_temperature(cfg, temperature_c: float):
 
 def temperatures(cfg) -> tuple[float, ...]:
     """The sign-off temperatures: ``operating.temperatures_c``, or ``[temperature_c]``."""
-    return tuple(float(t) for t in (cfg.operating.temperatures_c
-                                    or (cfg.operating.temperature_c,)))
+    temps = cfg.operating.temperatures_c or (cfg.operating.temperature_c,)
+    return tuple(dict.fromkeys(float(t) for t in temps))     # each once, in order
 
 
 def design_values(cfg) -> dict:
@@ -71,10 +71,8 @@ def cell(name: str, c: dict | None, where: str = "") -> dict:
                 "where": where or "not computed"}
     v, lim = c.get("value"), c.get("bound")
     margin = None
-    if isinstance(v, (int, float)) and not isinstance(v, bool) and v is not None \
-            and isinstance(lim, (int, float)):
-        rel = ROWS[name][1]
-        margin = float(lim - v) if rel == "≤" else float(v - lim)
+    if all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in (v, lim)):
+        margin = float(lim - v) if ROWS[name][1] == "≤" else float(v - lim)
     out = {"value": v, "limit": lim, "margin": margin, "ok": bool(c.get("ok"))}
     if where:
         out["where"] = where
