@@ -43,15 +43,29 @@ def _metrics(s: dict) -> dict:
     return out
 
 
+#: the yield's samples a temperature, unless given, when a toleranced key gives every sample
+#: its own model (a geometry or inertia key: ~0.1 s a sample instead of ~20 us)
+SLOW_SAMPLES = 100
+
+
 def _yields(cfg: Config, temps, samples: int | None) -> dict:
     """The Monte Carlo yield at each temperature and jointly (the same samples: a lid
     counts when it passes at every temperature); skipped without a tolerance box."""
     from ..robust.analysis import tolerance_analysis
     from ..robust.box import box_of
     from ..robust.stats import wilson
-    if not box_of(cfg).dim:
+    from ..robust.evaluate import slow_keys
+    box = box_of(cfg)
+    if not box.dim:
         return {"skipped": "No tolerance box is set ([tolerance] spreads none of the keys): "
                            "there is no yield to estimate."}
+    note = ""
+    slow = slow_keys(box.keys)
+    if samples is None and slow and cfg.tolerance.samples > SLOW_SAMPLES:
+        samples = SLOW_SAMPLES
+        note = (f"{', '.join(slow)} gives every sample its own model (about 0.1 s each): "
+                f"{SLOW_SAMPLES} samples a temperature instead of tolerance.samples = "
+                f"{cfg.tolerance.samples} (--samples N to choose)")
     per, joint = [], None
     results = []
     for T in temps:
@@ -63,7 +77,7 @@ def _yields(cfg: Config, temps, samples: int | None) -> dict:
                     "samples": y.samples, "failures": y.failures,
                     "meets_required": y.meets_required, "message": y.message})
     n, k = len(joint), int(joint.sum())
-    return {"required_yield": cfg.tolerance.required_yield,
+    return {"required_yield": cfg.tolerance.required_yield, "note": note,
             "distribution": cfg.tolerance.distribution, "keys": list(results[0].keys),
             "per_temperature": per,
             "joint": {"yield": k / n, "yield_ci": list(wilson(k, n)), "samples": n,

@@ -154,7 +154,8 @@ def yield_rows(r) -> tuple:
                  str(j["samples"]), "", "met" if j["meets_required"] else "NOT met"))
     note = (f"Monte Carlo over the tolerance box ({', '.join(y['keys'])}; "
             f"{y['distribution']}), the same samples at every temperature; required yield "
-            f"{100 * y['required_yield']:.4g} %. Interval: Wilson score, 95 %.")
+            f"{100 * y['required_yield']:.4g} %. Interval: Wilson score, 95 %."
+            + (f" Note: {y['note']}." if y.get("note") else ""))
     return head, rows, note
 
 
