@@ -100,6 +100,9 @@ def test_html_is_one_balanced_page_that_fetches_nothing(page):
     p.close()
     assert p.errors == [] and p.stack == []
     assert {"html", "head", "body", "style", "svg", "table"} <= p.tags
+    css = page.split("<style>")[1].split("</style>")[0]       # every rule the report's own
+    selectors = [x.strip() for chunk in re.split(r"\{[^}]*\}", css) for x in chunk.split(",")]
+    assert all(x.startswith(".sc-report") for x in selectors if x) and len(selectors) > 10
     assert not ({"script", "link", "img", "iframe", "object"} & p.tags)
     assert re.search(r"(?i)\b(https?|file|ftp):", page) is None
     assert "url(" not in page.replace("url(#", "")        # only ids of the page itself
@@ -172,7 +175,9 @@ def test_result_is_immutable_and_its_json_strict(rep):
     back = json.loads(text)
     assert back["sections"] == list(SECTIONS) and back["message"] == rep.message
     assert back["limits"]["smallest_margin"]["constraint"] in rep.matrix["cells"]
-    assert rep._repr_html_().startswith("<!DOCTYPE html>")
+    frag = rep._repr_html_()                      # a notebook's: styles under its own class
+    assert frag.startswith("<style>") and "<body" not in frag and "\nbody{" not in frag
+    assert frag.count("<svg") == 5
 
 
 def pdf_string(data: bytes, key: bytes) -> str:

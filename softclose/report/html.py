@@ -11,17 +11,23 @@ from ..present.display import num
 from .text import (SECTIONS, config_lines, damper_rows, design_rows, limit_lines, matrix_cell,
                    metric_rows, spring_rows, stroke_rows, yield_rows)
 
+#: the page's styles, every rule under the report's own class (a notebook shows the report
+#: inside its page: nothing of the notebook is restyled)
 CSS = """
-body{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;max-width:1100px;margin:2em auto;
-padding:0 1em;color:#222;line-height:1.4}
-h1{font-size:1.6em;margin-bottom:.2em}h2{border-bottom:1px solid #ccc;margin-top:1.8em}
-.verdict{font-size:1.15em;font-weight:600;padding:.6em .9em;border-radius:6px}
-.pass{background:#e6f4ea;color:#17612d}.fail{background:#fce8e6;color:#a50e0e}
-table{border-collapse:collapse;margin:.6em 0;font-size:.92em}
-th,td{border:1px solid #ccc;padding:.25em .6em;text-align:left;vertical-align:top}
-th{background:#f3f3f3}td.ok{background:#eef8f0}td.bad{background:#fdecea}
-.small{font-size:.82em;color:#555}pre{background:#f7f7f7;padding:.8em;overflow-x:auto;
-font-size:.82em}figure{margin:1em 0}svg{max-width:100%;height:auto}
+.sc-report{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;max-width:1100px;
+margin:2em auto;padding:0 1em;color:#222;line-height:1.4}
+.sc-report h1{font-size:1.6em;margin-bottom:.2em}
+.sc-report h2{border-bottom:1px solid #ccc;margin-top:1.8em}
+.sc-report .verdict{font-size:1.15em;font-weight:600;padding:.6em .9em;border-radius:6px}
+.sc-report .pass{background:#e6f4ea;color:#17612d}
+.sc-report .fail{background:#fce8e6;color:#a50e0e}
+.sc-report table{border-collapse:collapse;margin:.6em 0;font-size:.92em}
+.sc-report th,.sc-report td{border:1px solid #ccc;padding:.25em .6em;text-align:left;
+vertical-align:top}
+.sc-report th{background:#f3f3f3}.sc-report td.ok{background:#eef8f0}
+.sc-report td.bad{background:#fdecea}.sc-report .small{font-size:.82em;color:#555}
+.sc-report pre{background:#f7f7f7;padding:.8em;overflow-x:auto;font-size:.82em}
+.sc-report figure{margin:1em 0}.sc-report svg{max-width:100%;height:auto}
 """
 
 
@@ -65,9 +71,10 @@ def _figure(figs, name, caption) -> str:
             f"{esc(caption)}</figcaption></figure>")
 
 
-def render_html(r, figures: dict | None = None) -> str:
-    """The page of the report ``r`` (a :class:`~softclose.report.ReportResult`);
-    ``figures``: the report's figures already drawn (default: drawn and closed here)."""
+def render_fragment(r, figures: dict | None = None) -> str:
+    """The report ``r`` as an HTML fragment: its styles and one <div> (what a notebook
+    shows); ``figures``: the report's figures already drawn (default: drawn and closed
+    here)."""
     from .figures import close, report_figures
     figs = figures if figures is not None else report_figures(r)
     try:
@@ -75,9 +82,15 @@ def render_html(r, figures: dict | None = None) -> str:
     finally:
         if figures is None:
             close(figs)
+    return f"<style>{CSS}</style>\n<div class=\"sc-report\">\n{body}\n</div>"
+
+
+def render_html(r, figures: dict | None = None) -> str:
+    """The page of the report ``r`` (a :class:`~softclose.report.ReportResult`);
+    ``figures``: the report's figures already drawn (default: drawn and closed here)."""
     return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
-            f"<title>softclose sign-off report</title><style>{CSS}</style></head>\n"
-            f"<body>\n{body}\n</body></html>\n")
+            "<title>softclose sign-off report</title></head>\n"
+            f"<body>\n{render_fragment(r, figures)}\n</body></html>\n")
 
 
 def _body(r, figs) -> str:
@@ -171,4 +184,4 @@ def _matrix(r) -> str:
     return "\n".join(out)
 
 
-__all__ = ["render_html", "svg_inline", "CSS"]
+__all__ = ["render_html", "render_fragment", "svg_inline", "CSS"]

@@ -62,7 +62,9 @@ class ReportResult:
         return render_html(self, figures)
 
     def _repr_html_(self) -> str:
-        return self.html()
+        """The report inside a notebook's page (its styles apply to the report only)."""
+        from .html import render_fragment
+        return render_fragment(self)
 
     def __repr__(self) -> str:
         return f"ReportResult({self.message})"
