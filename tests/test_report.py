@@ -263,3 +263,13 @@ def test_the_optimisers_json_of_the_same_design_says_what_limits_it(tmp_path, co
     other = dict(design, damper_c=design["damper_c"] * 1.01)     # a stale file: not used
     (tmp_path / "optimise.json").write_text(json.dumps({"design": other, "active": active}))
     assert optimiser_json(config, cold_cfg) is None
+
+
+def test_softclose_report_is_the_function_after_the_package_is_imported():
+    """Importing softclose.report binds the package on softclose: it stays callable."""
+    import softclose
+    import softclose.report as package
+    cfg = load_config(str(ROOT / "examples" / "hinge_chest_lid.toml"))
+    for call in (softclose.report, package, package.report):
+        r = call(cfg, samples=50)
+        assert isinstance(r, softclose.ReportResult) and r.design["mechanism"] == "hinge"
