@@ -177,7 +177,7 @@ def test_result_is_immutable_and_its_json_strict(rep):
     assert back["limits"]["smallest_margin"]["constraint"] in rep.matrix["cells"]
     frag = rep._repr_html_()                      # a notebook's: styles under its own class
     assert frag.startswith("<style>") and "<body" not in frag and "\nbody{" not in frag
-    assert frag.count("<svg") == 5
+    assert frag.count("<svg") == 6
 
 
 def pdf_string(data: bytes, key: bytes) -> str:
@@ -205,7 +205,7 @@ def test_a_figure_of_the_report_renders_to_an_image(figs, tmp_path):
     img = mpimg.imread(path)
     assert img.shape[0] > 100 and img.shape[1] > 100
     assert np.ptp(img[..., :3]) > 0.5                   # drawn, not blank
-    assert set(figs) == {"linkage", "strokes", "hand_force_0C", "hand_force_23C",
+    assert set(figs) == {"linkage", "attachments", "strokes", "hand_force_0C", "hand_force_23C",
                          "hand_force_40C"}
 
 

@@ -1,5 +1,6 @@
-"""The report's figures: the linkage with its spring and dashpot (the attachment figure), the
-stroke at each operating temperature, and the hand force with its zones at each."""
+"""The report's figures: the lid open and closed, its spring and dashpot over the stroke
+(the attachment figure), the stroke at each operating temperature, and the hand force with
+its zones at each."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ import numpy as np
 from ..present.figures import plt
 from ..present.figures.attachment import plot_attachments
 from ..present.figures.handforce import plot_hand_force
+from ..present.figures.stroke import plot_linkage
 
 
 def plot_strokes(strokes: dict, limit: float | None = None):
@@ -40,8 +42,11 @@ def report_figures(result) -> dict:
     """The figures of a :class:`~softclose.report.ReportResult`, by name, in the order the
     report shows them."""
     d = result.drawing
-    figs = {"linkage": plot_attachments(d["model"], title="The lid, its spring and dashpot "
-                                                          "over the stroke"),
+    model, st = d["model"], d["cfg"].stroke
+    figs = {"linkage": plot_linkage(model, [st.theta0, st.theta_closed], ["open", "closed"],
+                                    title="The lid open and closed"),
+            "attachments": plot_attachments(model, title="The spring and the dashpot over "
+                                                         "the stroke"),
             "strokes": plot_strokes(d["strokes"], result.problem["closing_time_max"])}
     for T, hf in d["hands"].items():
         if hf is not None:

@@ -51,9 +51,12 @@ _ID = re.compile(r'\bid="([^"]+)"')
 
 def svg_inline(fig, tag: str) -> str:
     """``fig`` as an inline <svg> element: no XML header, doctype, metadata or namespace
-    URL; every id prefixed with ``tag`` (ids stay unique across the page's figures)."""
+    URL; every id prefixed with ``tag`` (ids stay unique across the page's figures); its
+    text as SVG text in the page's fonts."""
+    from matplotlib import rc_context
     buf = io.StringIO()
-    fig.savefig(buf, format="svg", bbox_inches="tight", metadata={"Date": None})
+    with rc_context({"svg.fonttype": "none"}):    # text as text: searchable, light, fast
+        fig.savefig(buf, format="svg", bbox_inches="tight", metadata={"Date": None})
     s = buf.getvalue()
     s = s[s.index("<svg"):]
     s = re.sub(r"<metadata>.*?</metadata>", "", s, flags=re.S)
@@ -101,8 +104,11 @@ def _body(r, figs) -> str:
         out.append("<ul>" + "".join(f"<li>{esc(f)}</li>" for f in r.failures) + "</ul>")
     out.append(f"<h2>{esc(S[0])}</h2>")
     out.append(table(("design value", "value"), design_rows(r)))
-    out.append(_figure(figs, "linkage", "The linkage open (faint) and closed, the spring's "
-                                        "line D–E and the dashpot's F–H over the stroke."))
+    out.append(_figure(figs, "linkage", "The lid open and closed, with a zoom on its "
+                                        "pivots and the spring's points."))
+    out.append(_figure(figs, "attachments", "The spring's line D–E and the dashpot's F–H "
+                                            "over the stroke, the lid open (faint) and "
+                                            "closed."))
     out.append(f"<h2>{esc(S[1])}</h2>")
     title, rows, checks, note = spring_rows(r)
     out.append(f"<h3>{esc(title)}</h3>")

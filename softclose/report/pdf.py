@@ -10,6 +10,8 @@ from ..present.figures import plt
 from .text import (SECTIONS, config_lines, damper_rows, design_rows, limit_lines, matrix_cell,
                    metric_rows, spring_rows, stroke_rows, yield_rows)
 
+#: the figures of the first section (the others follow section 4's text)
+FIRST = ("linkage", "attachments")
 #: A4 portrait (in), lines of text a page holds, characters a line holds
 PAGE = (8.27, 11.69)
 LINES = 78
@@ -113,8 +115,9 @@ def write_pdf(r, path, figures: dict | None = None) -> None:
             _text_pages(pdf, "Sign-off report", wrap(r.message) + [""]
                         + [w for f in r.failures for w in wrap("- " + f)])
             _text_pages(pdf, S[0], columns(("design value", "value"), design_rows(r)))
-            if "linkage" in figs:
-                pdf.savefig(figs["linkage"])
+            for name in FIRST:
+                if name in figs:
+                    pdf.savefig(figs[name])
             title, rows, checks, note = spring_rows(r)
             lines = [title] + columns(("", "value"), rows) + [""]
             if checks:
@@ -129,7 +132,7 @@ def write_pdf(r, path, figures: dict | None = None) -> None:
             head, rows = stroke_rows(r)
             _text_pages(pdf, S[3], columns(head, rows))
             for name, fig in figs.items():
-                if name != "linkage":
+                if name not in FIRST:
                     pdf.savefig(fig)
             _text_pages(pdf, S[4], _matrix_lines(r))
             head, rows, note = yield_rows(r)
