@@ -25,8 +25,8 @@ keys), ``.to_json()`` and ``.plot()`` (a matplotlib Figure):
 Lower layers for scripts that need them: :class:`LidModel`, :class:`Simulator`,
 :class:`Reference`, :mod:`softclose.problem` (design keys, metrics and units, objective,
 constraints, accuracy targets). The feature packages are :mod:`softclose.optimiser`,
-:mod:`softclose.sweeps` and :mod:`softclose.robust`; they are imported on first use, so
-``import softclose`` stays light.
+:mod:`softclose.sweeps`, :mod:`softclose.robust` and :mod:`softclose.report`; they are
+imported on first use, so ``import softclose`` stays light.
 """
 
 from importlib import import_module
