@@ -273,3 +273,11 @@ def test_softclose_report_is_the_function_after_the_package_is_imported():
     for call in (softclose.report, package, package.report):
         r = call(cfg, samples=50)
         assert isinstance(r, softclose.ReportResult) and r.design["mechanism"] == "hinge"
+
+
+def test_the_spring_to_buy_is_that_of_softclose_spring(rep):
+    rc, out, _ = run_cli(["spring", "--json"] + [a for s in COLD for a in ("--set", s)])
+    spring = json.loads(out)
+    part = rep.parts["spring"]
+    assert rc == 0 and part["ok"] and part["mode"] == "designed"
+    assert part["coil_spring"] == spring["spring"] and part["checks"] == spring["checks"]
