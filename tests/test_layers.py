@@ -8,7 +8,7 @@ records, progress lines); the integrators, a root finder and the coil spring's s
 the config; the design problem; what is shown (tables, figures); the CasADi model of a lid;
 the simulation (the simulator, its C kernel, the reference, statics, the stroke's result); the
 features (optimiser, robust design, sweeps, catalog, calibration, the coil spring made to
-order, the notebook explorer); benchmarks and validation; the command line. Nothing imports the command
+order, the notebook explorer, the sign-off report); benchmarks and validation; the command line. Nothing imports the command
 line, and nothing below the top imports the package root's API.
 """
 
@@ -32,7 +32,8 @@ LAYERS = [
     ["softclose.model"],
     ["softclose.simulation"],
     ["softclose.optimiser", "softclose.robust", "softclose.sweeps", "softclose.catalog",
-     "softclose.calibration", "softclose.coil_spring.order", "softclose.present.explorer"],
+     "softclose.calibration", "softclose.coil_spring.order", "softclose.present.explorer",
+     "softclose.report"],
     ["softclose.bench", "softclose.validation"],
     ["softclose.cli", "softclose.__main__"],
 ]

@@ -96,6 +96,19 @@ def test_a_sweep_over_temperature_runs_each_stroke_at_its_temperature():
     assert df["closing_time"].is_monotonic_decreasing
 
 
+def test_the_tolerance_boxs_strokes_run_at_each_configs_temperature():
+    """The cached simulators of the tolerance box are one per temperature: a yield at 0 °C
+    after one at 23 °C runs its strokes at 0 °C (and back)."""
+    from softclose.robust.box import box_of
+    from softclose.robust.evaluate import evaluate
+    cfg = lid().update({"design.damper_temperature_coeff": -0.005})
+    for T in (23.0, 0.0, 23.0, 40.0):
+        c = cfg.update({"operating.temperature_c": T})
+        box = box_of(c)
+        got = evaluate(c, box.keys, box.values(np.zeros((1, box.dim))))["closing_time"][0]
+        assert got == pytest.approx(Simulator(c).run().closing_time, rel=1e-12)
+
+
 def test_the_optimiser_designs_at_the_reference_temperature():
     from softclose.optimiser import optimise
     with pytest.raises(ConfigError, match=r"^operating\.temperature_c: the optimiser works at "
