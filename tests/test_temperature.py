@@ -81,6 +81,11 @@ def test_a_stroke_at_temperature_is_the_stroke_of_the_moved_values(T):
     ra, rb = Reference(model).simulate(params_of(hot), hot), Reference(model).simulate(moved)
     assert ra.closing_time == rb.closing_time
     assert a.closing_time == pytest.approx(ra.closing_time, rel=1e-4)
+    # the accuracy estimate is that of the moved stroke (the half step at the same
+    # temperature), and the reference is within it
+    assert a.accuracy == b.accuracy
+    assert abs(a.closing_time - ra.closing_time) <= 10 * a.accuracy["closing_time"] + 1e-9
+    assert a.accuracy["closing_time"] < 1e-7
     # and the temperature matters: colder dampers are stronger, the lid closes later
     base = Simulator(ref).run(params_of(ref))
     assert (a.closing_time > base.closing_time) == (T < 23.0)
