@@ -17,14 +17,18 @@ keys), ``.to_json()`` and ``.plot()`` (a matplotlib Figure):
 - :func:`select` -- the springs and dampers of catalog files ranked over their own tolerances;
 - :func:`fit` -- the model calibrated to measured closing strokes: estimates with 95 %
   intervals, correlations, identifiability, the calibrated config (``softclose.fit``);
+- :func:`report` -- the sign-off report of a design: every constraint at the nominal lid, at
+  each operating temperature and at the worst tolerance corner, as HTML and PDF
+  (``.html()``, ``.save(path)``);
 - :func:`load_config`, :func:`default_config`; ``cfg.set("mass.lid", 0.6)`` changes one key.
 
 Lower layers for scripts that need them: :class:`LidModel`, :class:`Simulator`,
 :class:`Reference` (each from a config: ``Simulator.from_config(cfg)``; below the features
 they take the config resolved once, :func:`resolve`), :mod:`softclose.problem` (design
 keys, metrics and units, objective, constraints, accuracy targets). The feature packages
-are :mod:`softclose.optimiser`, :mod:`softclose.sweeps` and :mod:`softclose.robust`; they
-are imported on first use, so ``import softclose`` stays light.
+are :mod:`softclose.optimiser`, :mod:`softclose.sweeps`, :mod:`softclose.robust` and
+:mod:`softclose.report`; they are imported on first use, so ``import softclose`` stays
+light.
 """
 
 from importlib import import_module
@@ -47,13 +51,15 @@ _LAZY = {
     "YieldResult": "robust", "SensitivityResult": "robust",
     "select": "catalog", "SelectResult": "catalog",
     "fit": "calibration", "FitResult": "calibration",
+    "report": "report", "ReportResult": "report",
 }
 
 __all__ = ["simulate", "optimise", "front", "sweep", "sample", "tolerance_analysis",
            "sensitivity", "fit", "FitResult", "load_config", "default_config", "Config", "StrokeResult",
            "StrokeStatus", "OptimiseResult", "FrontResult", "SweepResult", "RobustResult",
            "YieldResult", "SensitivityResult", "select", "SelectResult", "ConfigError",
-           "NumericalError", "SoftcloseError", "LidModel", "Reference", "Simulator", "resolve"]
+           "NumericalError", "SoftcloseError", "LidModel", "Reference", "Simulator",
+           "report", "ReportResult", "resolve"]
 
 
 def simulate(cfg: Config, trajectory: bool = False) -> StrokeResult:

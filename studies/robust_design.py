@@ -13,6 +13,7 @@ Writes to studies/out/robust_design/:
   histograms.png        closing time and impact speed, nominal against robust, same samples
   sobol_nominal.png     Sobol indices of the nominal optimum
   sobol_robust.png      Sobol indices of the robust design
+  report.html           the sign-off report of the robust design (softclose.report)
 
 Usage: python studies/robust_design.py [--fast] [--json] [--out DIR]
 """
@@ -74,6 +75,9 @@ def main(argv=None) -> int:
                     "sobol_not_closed": sob["nominal"].not_closed},
         "success": res.success, "message": res.message, "time": res.times.get("total"),
     }
+    sign_off = softclose.report(res.design_config(), optimiser=res.to_json(), samples=samples)
+    files.append(sign_off.save(a.out / "report.html"))
+    summary["report"] = sign_off.message
     path = a.out / "designs.json"
     path.write_text(json.dumps(jsonable(summary), indent=1, allow_nan=False))
     files.append(path)

@@ -88,6 +88,8 @@ COMMANDS = {
     "spring": (["spring", "--out", "{out}", "--set", 'design.spring_kind="compression"',
                 "--set", "design.spring_k=1914.709", "--set",
                 "design.spring_rest_length=0.07925707"], "cheap"),
+    # the sign-off report of the default lid: HTML only, 200 yield samples a temperature
+    "report": (["report", "--out", "{out}", "--format", "html", "--samples", "200"], "medium"),
 }
 #: the pairs of the catalog the fuzzed select runs (4 springs x 2 dampers)
 SELECT_PAIRS = 8
@@ -504,6 +506,9 @@ def strokes_of(command: str, cfg, argv: list[str]) -> int:
         return max(n or 0, 0) * (len(cfg.tolerance.spreads) + 2)
     if command == "sweep":
         return _grid_points(argv) or 0
+    if command == "report":       # a yield's samples (at each temperature: one batch each)
+        n = _int_option(argv, "--samples", cfg.tolerance.samples)
+        return max(n or 0, 0)
     if command == "select":       # every pair at its corners, the nominal point, the samples
         n = _int_option(argv, "--samples", 256)
         return SELECT_PAIRS * (2 ** (3 + _select_axes(cfg)) + 1 + max(n or 0, 0))
@@ -577,6 +582,9 @@ def work_seconds(command: str, cfg, argv: list[str]) -> float:
         return 120.0 + (240.0 if _option(argv, "--free") else 0.0) + 0.1 * _nlp_steps(cfg)
     if command == "spring":       # a model (its spring's lengths), then < 1 s of design
         return 30.0
+    if command == "report":       # per temperature: strokes, the reference, corners, a yield
+        temps = max(1, len(cfg.operating.temperatures_c or ()))
+        return 60.0 + temps * (30.0 + 2 * batch + 500 * stroke)
     if command == "select":       # the kernel's batch, a model per distinct geometry, the
         # reference at every corner of the verified pairs (0.5 s each)
         d = 3 + _select_axes(cfg)
@@ -718,12 +726,13 @@ def run_case(command: str, values, out_dir: Path, as_json: bool,
 
 
 # -- profiles -------------------------------------------------------------------------------
-#: examples per command: (fast default run, long "-m fuzz" run)
-EXAMPLES = {"state": (100, 400), "simulate": (400, 1500), "sweep": (60, 300),
-            "optimise": (25, 120), "yield": (25, 100), "sensitivity": (15, 60),
-            "pareto": (10, 30), "optimise --robust": (10, 15), "bench": (10, 8),
-            "docs": (30, 100), "select": (25, 100), "fit": (25, 100),
-            "prepare": (10, 6), "spring": (60, 300)}
+#: examples per command: (fast default run, long "-m fuzz" run); the long profile is sized to
+#: run in about five minutes on 2 cores (an accepted prepare compiles an NLP: 10-120 s)
+EXAMPLES = {"state": (100, 400), "simulate": (400, 1000), "sweep": (60, 200),
+            "optimise": (25, 80), "yield": (25, 100), "sensitivity": (15, 60),
+            "pareto": (10, 30), "optimise --robust": (10, 15), "bench": (10, 5),
+            "docs": (30, 100), "select": (25, 60), "fit": (25, 60),
+            "prepare": (10, 6), "spring": (60, 150), "report": (4, 12)}
 
 
 @pytest.fixture(scope="module")

@@ -9,7 +9,7 @@ and what a config resolves to (the lid, the stroke, the solver settings, the tem
 :mod:`softclose.model.resolved`); the config; the design problem (which resolves a config); what is shown (tables, figures); the CasADi model of a lid;
 the simulation (the simulator, its C kernel, the reference, statics, the stroke's result); the
 features (optimiser, robust design, sweeps, catalog, calibration, the coil spring made to
-order, the notebook explorer); benchmarks and validation; the command line. Nothing imports the command
+order, the notebook explorer, the sign-off report); benchmarks and validation; the command line. Nothing imports the command
 line, and nothing below the top imports the package root's API. The config is resolved once,
 at the top: no module of the model or the simulation imports the config (its key records,
 :mod:`softclose.config.keys`, aside) or has a function taking a ``cfg`` or ``config``.
@@ -35,7 +35,8 @@ LAYERS = [
     ["softclose.model"],
     ["softclose.simulation"],
     ["softclose.optimiser", "softclose.robust", "softclose.sweeps", "softclose.catalog",
-     "softclose.calibration", "softclose.coil_spring.order", "softclose.present.explorer"],
+     "softclose.calibration", "softclose.coil_spring.order", "softclose.present.explorer",
+     "softclose.report"],
     ["softclose.bench", "softclose.validation"],
     ["softclose.cli", "softclose.__main__"],
 ]

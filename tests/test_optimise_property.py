@@ -84,7 +84,7 @@ def test_reported_numbers_are_verified(w, win):
 
 
 @pytest.mark.slow
-@settings(max_examples=24, deadline=None, phases=PHASES,
+@settings(max_examples=12, deadline=None, phases=PHASES,
           suppress_health_check=[HealthCheck.too_slow])
 @given(weights(), window(3.0))
 def test_reported_numbers_are_verified_wide(w, win):

@@ -87,6 +87,11 @@ def test_a_stroke_at_temperature_is_the_stroke_of_the_moved_values(T):
     ra, rb = Reference(model).simulate(params_of(hot), resolve(hot)), Reference(model).simulate(moved)
     assert ra.closing_time == rb.closing_time
     assert a.closing_time == pytest.approx(ra.closing_time, rel=1e-4)
+    # the accuracy estimate is that of the moved stroke (the half step at the same
+    # temperature), and the reference is within it
+    assert a.accuracy == b.accuracy
+    assert abs(a.closing_time - ra.closing_time) <= 10 * a.accuracy["closing_time"] + 1e-9
+    assert a.accuracy["closing_time"] < 1e-7
     # and the temperature matters: colder dampers are stronger, the lid closes later
     base = Simulator.from_config(ref).run(params_of(ref))
     assert (a.closing_time > base.closing_time) == (T < 23.0)
@@ -100,6 +105,19 @@ def test_a_sweep_over_temperature_runs_each_stroke_at_its_temperature():
         one = Simulator.from_config(cfg.update({"operating.temperature_c": float(T)})).run(params_of(cfg))
         assert t == pytest.approx(one.closing_time, rel=1e-12)
     assert df["closing_time"].is_monotonic_decreasing
+
+
+def test_the_tolerance_boxs_strokes_run_at_each_configs_temperature():
+    """The cached simulators of the tolerance box are one per temperature: a yield at 0 °C
+    after one at 23 °C runs its strokes at 0 °C (and back)."""
+    from softclose.robust.box import box_of
+    from softclose.robust.evaluate import evaluate
+    cfg = lid().update({"design.damper_temperature_coeff": -0.005})
+    for T in (23.0, 0.0, 23.0, 40.0):
+        c = cfg.update({"operating.temperature_c": T})
+        box = box_of(c)
+        got = evaluate(c, box.keys, box.values(np.zeros((1, box.dim))))["closing_time"][0]
+        assert got == pytest.approx(Simulator.from_config(c).run().closing_time, rel=1e-12)
 
 
 def test_the_optimiser_designs_at_the_reference_temperature():

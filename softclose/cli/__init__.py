@@ -21,14 +21,14 @@ from .common import Outcome
 
 #: command modules, in the order ``--help`` lists them
 COMMAND_MODULES = ("state", "simulate", "optimise", "prepare", "sweep", "bench", "robust",
-                   "select", "fit", "spring", "docs")
+                   "select", "fit", "spring", "report", "docs")
 #: the module of each command (a command line names one: only its module is imported and
 #: only its parser built -- the others' cost ~10 ms of start-up)
 COMMANDS = {"state": "state", "simulate": "simulate", "optimise": "optimise",
             "optimize": "optimise", "pareto": "optimise", "prepare": "prepare", "sweep": "sweep",
             "bench": "bench",
             "yield": "robust", "sensitivity": "robust", "select": "select", "fit": "fit",
-            "spring": "spring", "docs": "docs"}
+            "spring": "spring", "report": "report", "docs": "docs"}
 
 #: the program's name: every error line starts ``softclose: error:``
 PROG = "softclose"

@@ -135,6 +135,8 @@ def files() -> str:
              "keys and a [tolerance] proposal; softclose optimise --robust --config "
              "D/calibrated.toml designs for it), fit.csv, samples.csv, fit.png"),
             ("spring --out D", "spring.json, spring_checks.csv, spring_candidates.csv"),
+            ("report --out D", "report.html (one self-contained page) and report.pdf "
+             "(--format html|pdf|both)"),
             ("bench --out D", "work_precision.csv, speed.csv, optimiser.csv, bench.md, "
              "bench.json and figures")]
     lines = ["files the commands write (--out D is checked before any work):"]

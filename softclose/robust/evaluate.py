@@ -30,6 +30,7 @@ from ..config.free import PLACEMENT_KEYS, point_refusals
 from ..problem import LID_MASS, METRIC_KEYS, PARAM_COLUMNS, infeasibility, objective, params_of
 from ..model import elements
 from ..model.lid import model_key
+from ..model.temperature import parameter_factors
 from ..simulation.simulator import Simulator
 from ..problem import resolve
 
@@ -75,11 +76,14 @@ def simulator(cfg: Config, t_end: float | None = None):
     if t_end is not None and t_end < cfg.stroke.t_max:
         cfg = cfg.replace(stroke={"t_max": float(t_end)})
     case = resolve(cfg)
-    # the element choices (a rotary damper's pivot) and the spring's length limits are the
-    # simulator's too: its table and its range check read them
+    # the element choices (a rotary damper's pivot), the spring's length limits and the
+    # parts' factors at the operating temperature are the simulator's too: its table, its
+    # range check and its strokes read them
+    factors = parameter_factors(case.temperatures)
     key = (cfg.geometry, cfg.mass, cfg.stroke, cfg.simulate,
            elements.structure(case.lid.mounting),
-           cfg.design.spring_min_length, cfg.design.spring_max_length)
+           cfg.design.spring_min_length, cfg.design.spring_max_length,
+           None if factors is None else tuple(map(float, factors)))
     if key not in _SIMS:
         if len(_SIMS) > 32:
             _SIMS.clear()
@@ -90,7 +94,7 @@ def simulator(cfg: Config, t_end: float | None = None):
                 _BASES.clear()
             sim = _BASES[base] = Simulator(case)
         else:                   # the same model, table, method and step; cfg's own limits
-            sim = first.for_case(case)
+            sim = first.for_case(case)       # (its own temperature factors too)
         _SIMS[key] = sim
     return _SIMS[key]
 

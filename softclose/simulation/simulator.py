@@ -394,6 +394,7 @@ class Simulator:
         half = Simulator.__new__(Simulator)
         half.__dict__.update(self.__dict__)
         half.step = self.step / 2
+        half.temperature_factors = None        # (p holds the parts at the temperature)
         r2 = half.run(p, estimate_error=False)
         q = 2.0 ** self.method.order
         tab = self.table.max_rel_error * self.friction_gain(p)

@@ -1,0 +1,112 @@
+"""``softclose report [--out DIR] [--format html|pdf|both]``: the sign-off report of a design."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from .common import Outcome, add_common, add_out, prepare_out, wrote
+
+DESCRIPTION = """\
+The sign-off report of the config's design (e.g. the design.toml of `softclose optimise --out
+D`, a robust design, a calibrated config; a four-bar or a hinge lid): one self-contained HTML
+page (figures inline, nothing fetched: it opens offline) and a PDF of the same sections.
+
+At the top, the verdict in one line. Then: the lid and the design (a linkage drawing); the
+parts to buy (the spring, with the EN 13906-1 checks of a compression spring, and the
+dampers with their coefficients at each operating temperature); the metrics of the stroke
+verified by the adaptive reference, with the fixed-step simulator's accuracy; the stroke and
+the hand force with its zones at each temperature of operating.temperatures_c; the sign-off
+matrix: every constraint of [optimise] at the nominal lid, at each temperature and at the
+worst corner of the [tolerance] box (value, limit, margin, pass); the yield with its 95 %
+interval per temperature; what limits the design (the optimiser's active constraints with
+dJ from the optimise.json or robust.json next to the config file, when its design is the
+config's; and the smallest margin); the config
+and the software version.
+
+Exit 3 when the design fails a requirement (the report is still written and says which)."""
+
+
+def register(sub) -> None:
+    p = sub.add_parser("report", help="the sign-off report of a design: one self-contained "
+                                      "HTML page and a PDF",
+                       description=DESCRIPTION,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_common(p)
+    add_out(p, what="folder for report.html and report.pdf (default: the current folder)",
+            figures=False)
+    p.add_argument("--format", choices=("html", "pdf", "both"), default="both",
+                   help="which files to write (default both)")
+    p.add_argument("--samples", metavar="N", type=int, default=None,
+                   help="Monte Carlo samples of each yield (default tolerance.samples)")
+    p.set_defaults(run=run)
+
+
+#: the optimisers' JSON files that `--out D` writes next to D/design.toml
+OPTIMISER_FILES = ("robust.json", "optimise.json")
+
+
+def optimiser_json(config: str | None, cfg) -> dict | None:
+    """The optimiser's JSON next to a design file (``robust.json`` or ``optimise.json``) whose
+    design is cfg's, if there is one; it says which constraints are active and their dJ. A
+    file of another design (a folder written twice, a design edited since) is not used."""
+    if not config:
+        return None
+    for name in OPTIMISER_FILES:
+        try:
+            payload = json.loads((Path(config).parent / name).read_text())
+            design = payload["design"]
+            same = all(abs(float(v) - float(getattr(cfg.design, k))) <= 1e-12 * max(1.0, abs(v))
+                       for k, v in design.items())
+        except (OSError, ValueError, KeyError, TypeError, AttributeError):
+            continue
+        if same:
+            return payload
+    return None
+
+
+def format_report(payload: dict) -> str:
+    """The text form: the verdict, the sign-off matrix in short, the time."""
+    m = payload["matrix"]
+    lines = [payload["message"], "sign-off matrix (PASS/FAIL per column: "
+             + ", ".join(m["columns"]) + "):"]
+    for row in m["rows"]:
+        cells = m["cells"][row["name"]]
+        lines.append(f"  {row['name']:<19} " + "  ".join(
+            ("PASS" if cells[c]["ok"] else "FAIL") if c in cells else "  — "
+            for c in m["columns"]))
+    y = payload["yield"]
+    if "joint" in y:
+        j = y["joint"]
+        lines.append(f"  yield at every temperature {100 * j['yield']:.4g} % (95 % interval "
+                     f"{100 * j['yield_ci'][0]:.4g}–{100 * j['yield_ci'][1]:.4g} %)")
+    lines.append(f"  ({payload['time']:.2f} s)")
+    return "\n".join(lines)
+
+
+def run(cfg, args) -> Outcome:
+    from ..errors import ConfigError
+    from ..report import report
+    if args.samples is not None and args.samples < 1:
+        raise ConfigError(f"--samples {args.samples}: expected a whole number >= 1")
+    out = prepare_out(args.out if args.out is not None else ".")
+    res = report(cfg, optimiser=optimiser_json(args.config, cfg), samples=args.samples)
+    payload = res.to_json()
+    import time
+    t0 = time.perf_counter()
+    figs = res.figures()
+    files = []
+    try:
+        for kind in (("html", "pdf") if args.format == "both" else (args.format,)):
+            files.append(res.save(out / f"report.{kind}", figs))
+    finally:
+        from ..report.figures import close
+        close(figs)
+    payload["files"] = [str(f) for f in files]
+    payload["timings"]["files"] = time.perf_counter() - t0
+    text = format_report(payload) + wrote(files)
+    if res.success:
+        return Outcome(payload, text, 0, tuple(files))
+    payload["exit_code"] = 3
+    return Outcome(payload, text, 3, tuple(files), error=res.message)

@@ -1,0 +1,225 @@
+""":func:`report`: the sign-off report of one design (the numbers; :mod:`.html` and
+:mod:`.pdf` write them out)."""
+
+from __future__ import annotations
+
+import math
+import time
+
+from ..config import Config, check_batch, to_toml
+from ..errors import ConfigError
+from ..jsonio import jsonable
+from ..problem import METRIC_KEYS, resolve
+from ..simulation.simulator import Simulator
+from ..version import __version__
+from . import parts, signoff
+from .result import ReportResult
+
+
+def _stroke(cfg: Config) -> dict:
+    """The fixed-step stroke of cfg (with its trajectory and estimated accuracy), the
+    reference's verification and the hand force, at cfg's temperature."""
+    sim = Simulator(resolve(cfg), cached=True)
+    res = sim.run(trajectory=True)
+    ver = signoff.check(cfg, hand=True)      # (no hand force where the linkage cannot open)
+    return {"simulate": res, "verification": ver, "hand": ver.hand, "model": sim.model}
+
+
+def _metrics(s: dict) -> dict:
+    """The reference's metrics, the fixed-step simulator's with their ± and the differences."""
+    ver, res = s["verification"], s["simulate"]
+    ref = ver.metrics or {}
+    sim = res.to_json()
+    diff = {}
+    for k in METRIC_KEYS:
+        a, b = sim.get(k), ref.get(k)
+        if isinstance(a, float) and isinstance(b, float):
+            diff[k] = a - b
+    out = {"reference": ref, "reference_method": ver.method, "simulate": sim,
+           "accuracy": sim.get("accuracy") or {}, "differences": diff,
+           "objective": ver.objective}
+    if s["hand"] is not None:
+        out["hand"] = s["hand"].metrics()
+    return out
+
+
+#: the yield's samples a temperature, unless given, when a toleranced key gives every sample
+#: its own model (a geometry or inertia key: ~0.1 s a sample instead of ~20 us)
+SLOW_SAMPLES = 100
+
+
+def _yields(cfg: Config, temps, samples: int | None) -> dict:
+    """The Monte Carlo yield at each temperature and jointly (the same samples: a lid
+    counts when it passes at every temperature); skipped without a tolerance box."""
+    from ..robust.analysis import tolerance_analysis
+    from ..robust.box import box_of
+    from ..robust.stats import wilson
+    from ..robust.evaluate import slow_keys
+    box = box_of(cfg)
+    if not box.dim:
+        return {"skipped": "No tolerance box is set ([tolerance] spreads none of the keys): "
+                           "there is no yield to estimate."}
+    note = ""
+    slow = slow_keys(box.keys)
+    if samples is None and slow and cfg.tolerance.samples > SLOW_SAMPLES:
+        samples = SLOW_SAMPLES
+        note = (f"{', '.join(slow)} gives every sample its own model (about 0.1 s each): "
+                f"{SLOW_SAMPLES} samples a temperature instead of tolerance.samples = "
+                f"{cfg.tolerance.samples} (--samples N to choose)")
+    per, joint = [], None
+    results = []
+    for T in temps:
+        y = tolerance_analysis(signoff.at_temperature(cfg, T), samples=samples, reference=0)
+        results.append(y)
+        ok = y.data["cols"]["feasible"].astype(bool)
+        joint = ok if joint is None else joint & ok
+        per.append({"temperature_c": T, "yield": y.yield_, "yield_ci": list(y.yield_ci),
+                    "samples": y.samples, "failures": y.failures,
+                    "meets_required": y.meets_required, "message": y.message})
+    n, k = len(joint), int(joint.sum())
+    return {"required_yield": cfg.tolerance.required_yield, "note": note,
+            "distribution": cfg.tolerance.distribution, "keys": list(results[0].keys),
+            "per_temperature": per,
+            "joint": {"yield": k / n, "yield_ci": list(wilson(k, n)), "samples": n,
+                      "meets_required": k / n >= cfg.tolerance.required_yield}}
+
+
+def _limits(cfg: Config, matrix: dict, optimiser: dict | None) -> dict:
+    """What limits the design: the optimiser's active constraints with dJ when its JSON is
+    given, and the row with the smallest relative margin in the matrix."""
+    out = {}
+    if optimiser and optimiser.get("active"):
+        out["active"] = [{k: a.get(k) for k in ("name", "kind", "bound", "value", "unit", "dJ")}
+                         for a in optimiser["active"]]
+    tight = None
+    for r, cells in matrix["cells"].items():
+        for col, c in cells.items():
+            m = signoff.relative_margin(cfg, r, c)
+            if tight is None or m < tight[0]:
+                tight = (m, r, col, c)
+    if tight is not None:
+        m, r, col, c = tight
+        out["smallest_margin"] = {"constraint": r, "column": col, "value": c["value"],
+                                  "limit": c["limit"], "margin": c["margin"],
+                                  "relative_margin": m if math.isfinite(m) else None}
+    return out
+
+
+def _column_name(T: float) -> str:
+    return f"{T:g} °C"
+
+
+def _verdict(cfg, matrix: dict, parts_: dict, yields: dict, temps) -> tuple[bool, str, list]:
+    """(every requirement met, the one-line verdict, the failures in words)."""
+    fails = []
+    for col in matrix["columns"]:
+        if col == "nominal" and cfg.operating.temperature_c in temps:
+            continue                     # the same lid as its temperature's column
+        shut = matrix["cells"]["closed"].get(col, {}).get("ok", True)
+        for r, cells in matrix["cells"].items():
+            what, rel, unit = signoff.ROWS[r]
+            c = cells.get(col)
+            if c is None or c["ok"] or (not shut and r.startswith("closing_time")):
+                continue                 # (a lid that does not close: said once)
+            where = {"worst corner": "at the worst tolerance corner",
+                     "nominal": f"at nominal ({cfg.operating.temperature_c:g} °C)"}.get(
+                         col, f"at {col}")
+            if col == "worst corner" and c.get("where"):
+                where += f" ({c['where']})"
+            if r == "closed":
+                fails.append(f"the lid does not close {where}")
+            elif c["value"] is None or isinstance(c["value"], bool):
+                fails.append(f"{r} {where}: {c.get('reason') or 'fails'}")
+            else:
+                fails.append(f"{r} {where} is {c['value']:.4g} {unit}".rstrip()
+                             + f", limit {c['limit']:.4g} {unit}".rstrip())
+    for f in parts_.get("failures", ()):
+        fails.append(f)
+    for y in yields.get("per_temperature", ()):
+        if not y["meets_required"]:
+            fails.append(f"yield at {y['temperature_c']:g} °C is {100 * y['yield']:.3g} %, "
+                         f"required {100 * yields['required_yield']:.3g} %")
+    at = ", ".join(_column_name(T) for T in temps)
+    if not fails:
+        corner = " and at every corner of the tolerance box" if "worst corner" in \
+            matrix["columns"] else ""
+        return True, f"This design meets every requirement at {at}{corner}.", fails
+    more = f" (and {len(fails) - 3} more)" if len(fails) > 3 else ""
+    return False, "This design FAILS: " + "; ".join(fails[:3]) + more, fails
+
+
+def report(cfg: Config, *, optimiser: dict | None = None, samples: int | None = None,
+           progress: bool = False) -> ReportResult:
+    """The sign-off report of cfg's design (SPEC §16): an immutable
+    :class:`~softclose.report.ReportResult` whose ``success`` says whether the design meets
+    every requirement and ``message`` says so in one line.
+
+    ``optimiser``: the optimiser's JSON (``optimise.json`` or ``robust.json`` next to a
+    design file), whose active constraints and their dJ say what limits the design; ``samples``: Monte Carlo
+    samples of each yield (default ``[tolerance] samples``).
+    """
+    t0 = time.perf_counter()
+    timings = {}
+    temps = signoff.temperatures(cfg)
+    if samples is not None and samples < 1:
+        raise ConfigError(f"samples: {samples}; expected a whole number >= 1")
+    # each yield samples this many strokes at each temperature: refused before any work
+    check_batch(cfg, int(samples or cfg.tolerance.samples),
+                "--samples" if samples else "tolerance.samples")
+    nominal = _stroke(cfg)
+    strokes = {}
+    for T in temps:
+        strokes[T] = (nominal if T == cfg.operating.temperature_c
+                      else _stroke(signoff.at_temperature(cfg, T)))
+    timings["strokes"] = time.perf_counter() - t0
+    if progress:
+        print(f"report: strokes at {len(temps)} temperatures", flush=True)
+    columns = ["nominal"] + [_column_name(T) for T in temps]
+    cells = {r: {} for r in signoff.constraint_rows(cfg)}
+    for col, s in [("nominal", nominal)] + [(_column_name(T), strokes[T]) for T in temps]:
+        for r, c in signoff.column(cfg, s["verification"]).items():
+            cells[r][col] = c
+    t1 = time.perf_counter()
+    corners, corner_facts = signoff.worst_corners(cfg, temps)
+    if corners:
+        columns.append("worst corner")
+        for r, c in corners.items():
+            cells[r]["worst corner"] = c
+    timings["corners"] = time.perf_counter() - t1
+    matrix = {"rows": [{"name": r, "what": signoff.ROWS[r][0], "relation": signoff.ROWS[r][1],
+                        "unit": signoff.ROWS[r][2]} for r in cells],
+              "columns": columns, "cells": cells, "corners": corner_facts}
+    t1 = time.perf_counter()
+    parts_ = parts.parts(cfg, nominal["verification"].stroke, temps)
+    timings["parts"] = time.perf_counter() - t1
+    t1 = time.perf_counter()
+    yields = _yields(cfg, temps, samples)
+    timings["yield"] = time.perf_counter() - t1
+    ok, verdict, fails = _verdict(cfg, matrix, parts_, yields, temps)
+    by_t = {_column_name(T): {"temperature_c": T, **_metrics(strokes[T])} for T in temps}
+    design = {"mechanism": cfg.geometry.mechanism, "spring_kind": cfg.design.spring_kind,
+              **signoff.design_values(cfg),
+              "rotary_damper_c": cfg.design.rotary_damper_c,
+              "end_damper_c": cfg.design.end_damper_c,
+              "damper_temperature_coeff": cfg.design.damper_temperature_coeff,
+              "reference_temperature_c": cfg.operating.reference_temperature_c,
+              "temperature_c": cfg.operating.temperature_c}
+    timings["total"] = time.perf_counter() - t0
+    return ReportResult(
+        success=ok, message=verdict, failures=tuple(fails), version=__version__,
+        temperatures=temps, design=jsonable(design), parts=jsonable(parts_),
+        metrics=jsonable(_metrics(nominal)), strokes=jsonable(by_t),
+        matrix=jsonable(matrix), yields=jsonable(yields),
+        limits=jsonable(_limits(cfg, matrix, optimiser)), config_toml=to_toml(cfg),
+        problem={"closing_time_max": cfg.optimise.closing_time_max,
+                 "closing_time_min": cfg.optimise.closing_time_min,
+                 "holding_moment_min": cfg.optimise.holding_moment_min,
+                 "opening_force_max": cfg.optimise.opening_force_max,
+                 "self_close_min_deg": cfg.optimise.self_close_min_deg},
+        time=timings["total"], timings=timings,
+        drawing={"cfg": cfg, "model": nominal["model"],
+                 "strokes": {T: strokes[T]["simulate"] for T in temps},
+                 "hands": {T: strokes[T]["hand"] for T in temps}})
+
+
+__all__ = ["report"]

@@ -1,0 +1,88 @@
+"""The sign-off report as an immutable result: its numbers (``to_json``), its HTML
+(``html``, ``_repr_html_``) and its files (``save``)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..errors import ConfigError
+from .text import SECTIONS
+#: the report's file formats (by a path's suffix)
+FORMATS = ("html", "pdf")
+
+
+@dataclass(frozen=True, repr=False)
+class ReportResult:
+    """The sign-off report of one design (SPEC §16).
+
+    ``success``: the design meets every requirement (every cell of the sign-off matrix, the
+    parts, the required yield); ``message``: the one-line verdict; ``failures``: each failed
+    requirement in words. The sections' numbers are plain JSON values; ``drawing`` holds
+    what the figures are drawn from (not compared, not in the JSON).
+    """
+
+    success: bool
+    message: str
+    failures: tuple
+    version: str
+    temperatures: tuple
+    design: dict
+    parts: dict
+    metrics: dict
+    strokes: dict
+    matrix: dict
+    yields: dict
+    limits: dict
+    config_toml: str
+    problem: dict
+    time: float = 0.0
+    timings: dict = field(default_factory=dict)
+    drawing: dict = field(default_factory=dict, compare=False)
+
+    def to_json(self) -> dict:
+        """Every number of the report as plain JSON values, by section."""
+        return {"success": self.success, "message": self.message,
+                "failures": list(self.failures), "version": self.version,
+                "sections": list(SECTIONS), "temperatures": list(self.temperatures),
+                "design": self.design, "problem": self.problem, "parts": self.parts,
+                "metrics": self.metrics, "strokes": self.strokes, "matrix": self.matrix,
+                "yield": self.yields, "limits": self.limits, "config": self.config_toml,
+                "time": self.time, "timings": self.timings}
+
+    def figures(self) -> dict:
+        """The report's figures (matplotlib Figures), by name, in the order shown."""
+        from .figures import report_figures
+        return report_figures(self)
+
+    def html(self, figures: dict | None = None) -> str:
+        """The report as one self-contained HTML page (figures inline as SVG, CSS inline,
+        nothing fetched); ``figures``: :meth:`figures` already drawn."""
+        from .html import render_html
+        return render_html(self, figures)
+
+    def _repr_html_(self) -> str:
+        """The report inside a notebook's page (its styles apply to the report only)."""
+        from .html import render_fragment
+        return render_fragment(self)
+
+    def __repr__(self) -> str:
+        return f"ReportResult({self.message})"
+
+    def save(self, path, figures: dict | None = None) -> Path:
+        """Write the report as ``path``: HTML (``.html``) or PDF (``.pdf``); ``figures``:
+        :meth:`figures` already drawn (to write both formats drawing them once)."""
+        path = Path(path)
+        kind = path.suffix.lower().lstrip(".")
+        if kind not in FORMATS:
+            raise ConfigError(f"{path}: a report is written as .html or .pdf, not "
+                              f"'{path.suffix or 'no suffix'}'")
+        if kind == "html":
+            path.write_text(self.html(figures), encoding="utf-8")
+        else:
+            from .pdf import write_pdf
+            write_pdf(self, path, figures)
+        return path
+
+
+__all__ = ["ReportResult", "SECTIONS", "FORMATS"]
