@@ -134,7 +134,7 @@ def files() -> str:
             ("fit DATA --free KEY --out D", "calibrated.toml (the config with the fitted "
              "keys and a [tolerance] proposal; softclose optimise --robust --config "
              "D/calibrated.toml designs for it), fit.csv, samples.csv, fit.png"),
-            ("spring --out D", "spring.json, spring_checks.csv, spring_candidates.csv"),
+            ("spring --out D", "spring.json, spring_checks.csv, spring_candidates.csv, spring.png"),
             ("report --out D", "report.html (one self-contained page) and report.pdf "
              "(--format html|pdf|both)"),
             ("bench --out D", "work_precision.csv, speed.csv, optimiser.csv, bench.md, "
