@@ -51,9 +51,8 @@ SLOW_SAMPLES = 100
 def _yields(cfg: Config, temps, samples: int | None) -> dict:
     """The Monte Carlo yield at each temperature and jointly (the same samples: a lid
     counts when it passes at every temperature); skipped without a tolerance box."""
-    from ..robust.analysis import tolerance_analysis
+    from ..robust.analysis import yield_by_temperature
     from ..robust.box import box_of
-    from ..robust.stats import wilson
     from ..robust.evaluate import slow_keys
     box = box_of(cfg)
     if not box.dim:
@@ -66,22 +65,17 @@ def _yields(cfg: Config, temps, samples: int | None) -> dict:
         note = (f"{', '.join(slow)} gives every sample its own model (about 0.1 s each): "
                 f"{SLOW_SAMPLES} samples a temperature instead of tolerance.samples = "
                 f"{cfg.tolerance.samples} (--samples N to choose)")
-    per, joint = [], None
-    results = []
-    for T in temps:
-        y = tolerance_analysis(signoff.at_temperature(cfg, T), samples=samples, reference=0)
-        results.append(y)
-        ok = y.data["cols"]["feasible"].astype(bool)
-        joint = ok if joint is None else joint & ok
-        per.append({"temperature_c": T, "yield": y.yield_, "yield_ci": list(y.yield_ci),
-                    "samples": y.samples, "failures": y.failures,
-                    "meets_required": y.meets_required, "message": y.message})
-    n, k = len(joint), int(joint.sum())
+    t = yield_by_temperature(cfg, samples=samples, reference=0)
+    per = [{"temperature_c": T, "yield": y.yield_, "yield_ci": list(y.yield_ci),
+            "samples": y.samples, "failures": y.failures,
+            "meets_required": y.meets_required, "message": y.message}
+           for T, y in zip(t.temperatures, t.results)]
+    results = t.results
     return {"required_yield": cfg.tolerance.required_yield, "note": note,
             "distribution": cfg.tolerance.distribution, "keys": list(results[0].keys),
             "per_temperature": per,
-            "joint": {"yield": k / n, "yield_ci": list(wilson(k, n)), "samples": n,
-                      "meets_required": k / n >= cfg.tolerance.required_yield}}
+            "joint": {"yield": t.yield_, "yield_ci": list(t.yield_ci), "samples": t.samples,
+                      "meets_required": t.meets_required}}
 
 
 def _limits(cfg: Config, matrix: dict, optimiser: dict | None) -> dict:
