@@ -25,7 +25,7 @@ keys), ``.to_json()`` and ``.plot()`` (a matplotlib Figure):
 Lower layers for scripts that need them: :class:`LidModel`, :class:`Simulator`,
 :class:`Reference`, :mod:`softclose.problem` (design keys, metrics and units, objective,
 constraints, accuracy targets). The feature packages are :mod:`softclose.optimiser`,
-:mod:`softclose.sweeps`, :mod:`softclose.robust` and :mod:`softclose.report`; they are
+:mod:`softclose.sweeps`, :mod:`softclose.robust` and :mod:`softclose.signoff`; they are
 imported on first use, so ``import softclose`` stays light.
 """
 
@@ -48,7 +48,7 @@ _LAZY = {
     "YieldResult": "robust", "SensitivityResult": "robust",
     "select": "catalog", "SelectResult": "catalog",
     "fit": "calibration", "FitResult": "calibration",
-    "report": "report", "ReportResult": "report",
+    "report": "signoff", "ReportResult": "signoff",
 }
 
 __all__ = ["simulate", "optimise", "front", "sweep", "sample", "tolerance_analysis",
