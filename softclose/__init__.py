@@ -27,7 +27,7 @@ Lower layers for scripts that need them: :class:`LidModel`, :class:`Simulator`,
 they take the config resolved once, :func:`resolve`), :mod:`softclose.problem` (design
 keys, metrics and units, objective, constraints, accuracy targets). The feature packages
 are :mod:`softclose.optimiser`, :mod:`softclose.sweeps`, :mod:`softclose.robust` and
-:mod:`softclose.report`; they are imported on first use, so ``import softclose`` stays
+:mod:`softclose.signoff`; they are imported on first use, so ``import softclose`` stays
 light.
 """
 
@@ -51,7 +51,7 @@ _LAZY = {
     "YieldResult": "robust", "SensitivityResult": "robust",
     "select": "catalog", "SelectResult": "catalog",
     "fit": "calibration", "FitResult": "calibration",
-    "report": "report", "ReportResult": "report",
+    "report": "signoff", "ReportResult": "signoff",
 }
 
 __all__ = ["simulate", "optimise", "front", "sweep", "sample", "tolerance_analysis",

@@ -16,6 +16,7 @@ Writes to studies/out/buildable_design/:
   kinds.csv          one row per (problem, kind): objective, success, why not
   spring_force.png   spring force over the stroke of each design, the valid sides shaded
   price.png          the objective of each kind, nominal and robust, against the idealised
+  report.html        the sign-off report of the robust design with buildable springs
 
 Usage: python studies/buildable_design.py [--fast] [--json] [--out DIR]
 """
@@ -157,6 +158,12 @@ def main(argv=None) -> int:
     files.append(draw_price(rows, a.out / "price.png"))
     summary = {"designs": designs, "price": price,
                "note": "price: J with the springs one can buy over J with the idealised one"}
+    chosen = answers[("robust", "buildable")]
+    if chosen.design is not None:                  # its sign-off report
+        sign_off = softclose.report(chosen.design_config(), optimiser=chosen.to_json(),
+                                    samples=2000 if a.fast else None)
+        files.append(sign_off.save(a.out / "report.html"))
+        summary["report"] = sign_off.message
     path = a.out / "designs.json"
     path.write_text(json.dumps(jsonable(summary), indent=1, allow_nan=False))
     files.append(path)

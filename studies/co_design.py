@@ -28,6 +28,7 @@ Writes to studies/out/co_design/:
   levers.json         the same with every design, and the gains against today's points
   gains.png           J of each lever, nominal and robust
   attachments.png     the best robust design's points, lines over the stroke, its boxes
+  report.html         the sign-off report of the best robust design
 
 Usage: python studies/co_design.py [--fast] [--json] [--out DIR]
 """
@@ -147,6 +148,10 @@ def main(argv=None) -> int:
                "note": "gain: J(lever) / J(today's points) - 1; compression spring; the end "
                        "damper lever's answer sits on its bounds (active: end_damper_c upper, "
                        "end_damper_angle_deg lower)"}
+    sign_off = softclose.report(best.design_config(), optimiser=best.to_json(),
+                                samples=2000 if a.fast else None)
+    files.append(sign_off.save(a.out / "report.html"))
+    summary["report"] = sign_off.message
     path = a.out / "levers.json"
     path.write_text(json.dumps(jsonable(summary), indent=1, allow_nan=False))
     files.append(path)

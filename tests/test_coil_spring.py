@@ -443,8 +443,33 @@ def test_spring_command_designs(capsys, tmp_path):
     assert [c["mass"] for c in out["candidates"]] == sorted(c["mass"] for c in
                                                             out["candidates"])
     assert {p.name for p in tmp_path.iterdir()} == {"spring.json", "spring_checks.csv",
-                                                   "spring_candidates.csv"}
+                                                   "spring_candidates.csv", "spring.png"}
+    assert (tmp_path / "spring.png").read_bytes().startswith(b"\x89PNG")
     assert json.loads((tmp_path / "spring.json").read_text())["spring"] == s
+
+
+def test_the_spring_figure_draws_the_checked_forces_and_stresses():
+    """The figure's curves pass through the check's numbers: F1, F2 at the working lengths,
+    tau_k1, tau_k2 (corrected) there, tau_c (uncorrected) at the solid length."""
+    from softclose.present.figures.spring import plot_spring, spring_curves
+    spring = CoilSpring(wire_d=0.002, coil_d=0.0272, active_coils=4.25)
+    duty = Duty(rate=1914.709, free_length=0.07925707, longest_length=0.0584337386,
+                shortest_length=0.0522687386)
+    c = check(spring, duty)
+    curves = spring_curves(c, n=2001)
+    L = curves["length"][::-1]                     # increasing, for np.interp
+    at = {k: (lambda x, k=k: float(np.interp(x, L, curves[k][::-1])))
+          for k in ("force", "stress", "stress_corrected")}
+    assert at["force"](duty.longest_length) == pytest.approx(c.forces["F1"], rel=1e-9)
+    assert at["force"](duty.shortest_length) == pytest.approx(c.forces["F2"], rel=1e-9)
+    assert at["stress_corrected"](duty.longest_length) == pytest.approx(
+        c.stresses["tau_k1"], rel=1e-9)
+    assert at["stress_corrected"](duty.shortest_length) == pytest.approx(
+        c.stresses["tau_k2"], rel=1e-9)
+    assert curves["stress"][-1] == pytest.approx(c.stresses["tau_c"], rel=1e-9)
+    assert curves["length"][-1] == spring.solid_length
+    fig = plot_spring(c)
+    assert len(fig.axes) == 2 and fig.axes[1].get_ylabel() == "shear stress (MPa)"
 
 
 def test_spring_command_checks(capsys):

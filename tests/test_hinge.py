@@ -153,7 +153,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "hinge_chest_lid.toml"
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "lids" / "chest_lid.toml"
 
 
 def _cli(*args):

@@ -36,7 +36,7 @@ LAYERS = [
     ["softclose.simulation"],
     ["softclose.optimiser", "softclose.robust", "softclose.sweeps", "softclose.catalog",
      "softclose.calibration", "softclose.coil_spring.order", "softclose.present.explorer",
-     "softclose.report"],
+     "softclose.signoff"],
     ["softclose.bench", "softclose.validation"],
     ["softclose.cli", "softclose.__main__"],
 ]

@@ -18,8 +18,8 @@ import pytest
 
 from softclose.cli import main
 from softclose.config import load_config
-from softclose.report import SECTIONS, report
-from softclose.report.signoff import at_temperature
+from softclose.robust.analysis import at_temperature
+from softclose.signoff import SECTIONS, report
 
 ROOT = Path(__file__).resolve().parents[1]
 #: the default optimum (softclose optimise's design.toml) with silicone-oil dampers
@@ -49,7 +49,7 @@ def rep(cold_cfg):
 
 @pytest.fixture(scope="module")
 def figs(rep):
-    from softclose.report.figures import close
+    from softclose.signoff.figures import close
     f = rep.figures()
     yield f
     close(f)
@@ -209,7 +209,7 @@ def test_a_figure_of_the_report_renders_to_an_image(figs, tmp_path):
 
 
 def test_hinge_lid_report_from_the_command_line(tmp_path):
-    rc, out, err = run_cli(["report", "--config", str(ROOT / "examples" / "hinge_chest_lid.toml"),
+    rc, out, err = run_cli(["report", "--config", str(ROOT / "examples" / "lids" / "chest_lid.toml"),
                             "--out", str(tmp_path), "--format", "html", "--samples", "200",
                             "--json"])
     payload = json.loads(out)
@@ -265,11 +265,13 @@ def test_the_optimisers_json_of_the_same_design_says_what_limits_it(tmp_path, co
 
 
 def test_softclose_report_is_the_function_after_the_package_is_imported():
-    """Importing softclose.report binds the package on softclose: it stays callable."""
+    """softclose.report is the sign-off package's function, also once the package
+    (softclose.signoff) is imported."""
     import softclose
-    import softclose.report as package
-    cfg = load_config(str(ROOT / "examples" / "hinge_chest_lid.toml"))
-    for call in (softclose.report, package, package.report):
+    import softclose.signoff as package
+    cfg = load_config(str(ROOT / "examples" / "lids" / "chest_lid.toml"))
+    assert softclose.report is package.report
+    for call in (softclose.report, package.report):
         r = call(cfg, samples=50)
         assert isinstance(r, softclose.ReportResult) and r.design["mechanism"] == "hinge"
 

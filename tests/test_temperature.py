@@ -138,3 +138,34 @@ def test_the_optimiser_designs_at_the_reference_temperature():
 def test_out_of_range_temperatures_are_refused_in_one_line(key, value):
     with pytest.raises(ConfigError, match=rf"^{key}"):
         default_config().update({key: value})
+
+
+def test_yield_at_each_sign_off_temperature_and_jointly(capsys, tmp_path):
+    """``operating.temperatures_c``: the yield at each temperature equals
+    tolerance_analysis at that temperature (the same samples), the joint yield counts the
+    lids that pass at all of them (no more than the lowest), and ``softclose yield`` gives
+    both (JSON ``temperatures``)."""
+    import json
+    from softclose.cli import main
+    from softclose.robust import tolerance_analysis, yield_by_temperature
+    cfg = lid().update({"design.damper_temperature_coeff": -0.005,
+                        "operating.temperatures_c": [0.0, 40.0],
+                        "tolerance.design.damper_c": 0.2, "tolerance.samples": 300})
+    t = yield_by_temperature(cfg, reference=0)
+    assert t.temperatures == (0.0, 40.0) and t.samples == 300
+    for T, r in zip(t.temperatures, t.results):
+        alone = tolerance_analysis(cfg.replace(operating={"temperature_c": T}), reference=0)
+        assert r.yield_ == alone.yield_ and r.failures == alone.failures
+    both = np.asarray(t.results[0].data["cols"]["feasible"], bool) & \
+        np.asarray(t.results[1].data["cols"]["feasible"], bool)
+    assert t.yield_ == both.mean() <= min(r.yield_ for r in t.results)
+    assert t.limiting == min(zip(t.results, t.temperatures), key=lambda x: x[0].yield_)[1]
+    cfgfile = tmp_path / "lid.toml"
+    from softclose.config import to_toml
+    cfgfile.write_text(to_toml(cfg))
+    rc = main(["yield", "--config", str(cfgfile), "--json"])
+    out = json.loads(capsys.readouterr().out)
+    assert rc == (0 if t.meets_required else 3)
+    assert out["yield"] == t.yield_ and [x["temperature_c"] for x in out["temperatures"]] == \
+        [0.0, 40.0]
+    assert [x["yield"] for x in out["temperatures"]] == [r.yield_ for r in t.results]

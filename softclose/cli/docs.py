@@ -128,13 +128,13 @@ def files() -> str:
             ("sweep --out D", "sweep.csv or sweep.parquet/, manifest.json, map_*.png or "
              "profile_*.png; with --optimise: optimal.csv, optimal.png, "
              "designs/design_<id>.toml"),
-            ("yield --out D", "yield_samples.csv, yield_histograms.png"),
+            ("yield --out D", "yield_samples.csv, yield_histograms.png (with several operating.temperatures_c: one pair per temperature, yield_samples_0C.csv, ...)"),
             ("sensitivity --out D", "sobol.csv, sobol.png"),
             ("select --out D", "select.csv (every pair, best first), select.json, select.png"),
             ("fit DATA --free KEY --out D", "calibrated.toml (the config with the fitted "
              "keys and a [tolerance] proposal; softclose optimise --robust --config "
              "D/calibrated.toml designs for it), fit.csv, samples.csv, fit.png"),
-            ("spring --out D", "spring.json, spring_checks.csv, spring_candidates.csv"),
+            ("spring --out D", "spring.json, spring_checks.csv, spring_candidates.csv, spring.png"),
             ("report --out D", "report.html (one self-contained page) and report.pdf "
              "(--format html|pdf|both)"),
             ("bench --out D", "work_precision.csv, speed.csv, optimiser.csv, bench.md, "

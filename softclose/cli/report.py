@@ -87,7 +87,7 @@ def format_report(payload: dict) -> str:
 
 def run(cfg, args) -> Outcome:
     from ..errors import ConfigError
-    from ..report import report
+    from ..signoff import report
     if args.samples is not None and args.samples < 1:
         raise ConfigError(f"--samples {args.samples}: expected a whole number >= 1")
     out = prepare_out(args.out if args.out is not None else ".")
@@ -101,7 +101,7 @@ def run(cfg, args) -> Outcome:
         for kind in (("html", "pdf") if args.format == "both" else (args.format,)):
             files.append(res.save(out / f"report.{kind}", figs))
     finally:
-        from ..report.figures import close
+        from ..signoff.figures import close
         close(figs)
     payload["files"] = [str(f) for f in files]
     payload["timings"]["files"] = time.perf_counter() - t0

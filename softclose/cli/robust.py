@@ -158,6 +158,7 @@ def _box_line(box: dict) -> str:
 
 def run_yield(cfg, args) -> Outcome:
     from ..robust import tolerance_analysis
+    from ..robust.analysis import sign_off_temperatures
     _check_samples(args.samples)
     seed = _seed(args)
     out = prepare_out(args.out)
@@ -165,6 +166,8 @@ def run_yield(cfg, args) -> Outcome:
         from ..errors import ConfigError
         raise ConfigError("tolerance: no key has a spread; give at least one "
                           "(e.g. --set tolerance.design.spring_k=0.1)")
+    if len(sign_off_temperatures(cfg)) > 1:
+        return _yield_by_temperature(cfg, args, seed, out)
     r = tolerance_analysis(cfg, samples=args.samples, seed=seed)
     payload = r.to_json()
     lines = [f"softclose yield: tolerance box {_box_line(r.box)} ({r.distribution})"]
@@ -181,6 +184,39 @@ def run_yield(cfg, args) -> Outcome:
     code = 0 if r.success else 3
     return Outcome(payload, "\n".join(lines) + wrote(files), code, tuple(files),
                    error=None if r.success else r.message)
+
+
+def _yield_by_temperature(cfg, args, seed, out) -> Outcome:
+    """``softclose yield`` over several sign-off temperatures (operating.temperatures_c):
+    each temperature's yield (the same samples) and the joint one."""
+    from ..robust import yield_by_temperature
+    t = yield_by_temperature(cfg, samples=args.samples, seed=seed)
+    first = t.results[0]
+    payload = t.to_json()
+    payload.update(design=first.design, box=first.box, distribution=first.distribution,
+                   seed=first.seed)
+    lines = [f"softclose yield: tolerance box {_box_line(first.box)} ({first.distribution}), "
+             f"at {', '.join(f'{T:g}' for T in t.temperatures)} °C, the same samples at each"]
+    for T, r in zip(t.temperatures, t.results):
+        lines.append(f"  at {T:g} °C:")
+        lines += ["  " + x for x in format_yield(r, _source(args))]
+    lo, hi = t.yield_ci
+    lines.append(f"  at every temperature: yield {100 * t.yield_:.2f} % (95 % Wilson interval "
+                 f"{100 * lo:.2f} – {100 * hi:.2f} %) of {t.samples} samples; required "
+                 f"{100 * t.required_yield:g} %: {'met' if t.meets_required else 'NOT met'}; "
+                 f"lowest at {t.limiting:g} °C")
+    files = []
+    if out is not None:
+        for T, r in zip(t.temperatures, t.results):
+            files += write_outputs(out, f"yield_samples_{T:g}C.csv", r.to_frame(),
+                                   f"yield_histograms_{T:g}C.png", r.plot)
+        payload["files"] = [str(f) for f in files]
+    message = (f"the yield at every temperature is {100 * t.yield_:.2f} %, below the "
+               f"required {100 * t.required_yield:g} % (lowest at {t.limiting:g} °C)")
+    payload["success"] = t.meets_required
+    payload["message"] = "" if t.meets_required else message
+    return Outcome(payload, "\n".join(lines) + wrote(files), 0 if t.meets_required else 3,
+                   tuple(files), error=None if t.meets_required else message)
 
 
 def run_sensitivity(cfg, args) -> Outcome:

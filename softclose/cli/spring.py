@@ -25,7 +25,8 @@ wire's temperatures. The EN 15800 tolerances are those of spring.grade.
 
 Exit 3 when the spring checked fails a check, or no spring meets them all (the nearest miss
 is shown). With --out: spring.json, the checks (spring_checks.csv) and the candidates
-(spring_candidates.csv)."""
+(spring_candidates.csv), and spring.png: the force and the stress over the spring's length
+with the working range and the limits."""
 
 
 def register(sub) -> None:
@@ -34,8 +35,8 @@ def register(sub) -> None:
                        description=DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     add_common(p)
-    add_out(p, what="also write spring.json and the checks and candidates as CSV to this "
-                    "folder", figures=False)
+    add_out(p, what="also write spring.json, the checks and candidates as CSV and the "
+                    "figure of the spring's force and stress over its length to this folder")
     p.set_defaults(run=run)
 
 
@@ -149,6 +150,10 @@ def run(cfg, args) -> Outcome:
         if not isinstance(res, SpringCheck):
             res.to_frame().to_csv(out / "spring_candidates.csv", index=False)
             files.append(out / "spring_candidates.csv")
+        if best is not None:
+            from .common import save_figure
+            from ..present.figures.spring import plot_spring
+            files.append(save_figure(plot_spring(best), out / "spring.png"))
         payload["files"] = [str(f) for f in files]
     text = format_spring(payload) + wrote(files)
     if ok:

@@ -18,13 +18,13 @@ points of the box the NLP holds), :mod:`.solve` (the NLP solved over one box),
 :mod:`.result`.
 """
 
-from .analysis import YieldResult, tolerance_analysis
+from .analysis import TemperatureYield, YieldResult, tolerance_analysis, yield_by_temperature
 from .design import optimise_robust
 from .result import RobustResult
 from .sensitivity import SensitivityResult, sensitivity
 from ..config import default_config
 
-__all__ = ["tolerance_analysis", "sensitivity", "optimise_robust", "YieldResult",
+__all__ = ["tolerance_analysis", "yield_by_temperature", "TemperatureYield", "sensitivity", "optimise_robust", "YieldResult",
            "SensitivityResult", "RobustResult", "bench_numbers"]
 
 

@@ -238,6 +238,74 @@ def nominal_stroke(cfg: Config) -> dict:
     return out
 
 
+def sign_off_temperatures(cfg: Config) -> tuple[float, ...]:
+    """The temperatures a design must meet its constraints at (SPEC §12):
+    ``operating.temperatures_c``, or ``[operating.temperature_c]`` when it is empty; each
+    once, in order."""
+    temps = cfg.operating.temperatures_c or (cfg.operating.temperature_c,)
+    return tuple(dict.fromkeys(float(t) for t in temps))
+
+
+def at_temperature(cfg: Config, temperature_c: float) -> Config:
+    """``cfg`` with its strokes at ``temperature_c`` (the design's values stay those given at
+    the reference temperature)."""
+    if cfg.operating.temperature_c == temperature_c:
+        return cfg
+    return cfg.replace(operating={"temperature_c": float(temperature_c)})
+
+
+@dataclass(frozen=True)
+class TemperatureYield:
+    """The yield at each sign-off temperature and jointly (the same samples at every
+    temperature: a lid counts when it meets every constraint at all of them)."""
+
+    temperatures: tuple            # the temperatures (°C)
+    results: tuple                 # a YieldResult at each
+    yield_: float                  # jointly
+    yield_ci: tuple
+    samples: int
+    required_yield: float
+
+    @property
+    def meets_required(self) -> bool:
+        return self.yield_ >= self.required_yield
+
+    @property
+    def success(self) -> bool:
+        return self.meets_required and all(r.success or r.meets_required for r in self.results)
+
+    @property
+    def limiting(self) -> float:
+        """The temperature with the lowest yield."""
+        return min(zip(self.results, self.temperatures), key=lambda x: x[0].yield_)[1]
+
+    def to_json(self) -> dict:
+        """The joint yield's keys, and ``temperatures``: each temperature's yield."""
+        return jsonable({
+            "yield": self.yield_, "yield_ci": list(self.yield_ci), "ci_method": CI_METHOD,
+            "samples": self.samples, "required_yield": self.required_yield,
+            "meets_required": self.meets_required, "limiting_temperature_c": self.limiting,
+            "temperatures": [dict(r.to_json(), temperature_c=T)
+                             for T, r in zip(self.temperatures, self.results)]})
+
+
+def yield_by_temperature(cfg: Config, *, samples: int | None = None, seed: int = 0,
+                         reference: int = 3, progress: bool = False) -> TemperatureYield:
+    """:func:`tolerance_analysis` at each sign-off temperature
+    (:func:`sign_off_temperatures`), with the same samples, and the joint yield."""
+    temps = sign_off_temperatures(cfg)
+    results, joint = [], None
+    for T in temps:
+        y = tolerance_analysis(at_temperature(cfg, T), samples=samples, seed=seed,
+                               reference=reference, progress=progress)
+        results.append(y)
+        ok = np.asarray(y.data["cols"]["feasible"], bool)
+        joint = ok if joint is None else joint & ok
+    n, k = len(joint), int(joint.sum())
+    return TemperatureYield(temps, tuple(results), k / n, wilson(k, n), n,
+                            cfg.tolerance.required_yield)
+
+
 def tolerance_analysis(cfg: Config, *, samples: int | None = None, seed: int = 0,
                        design: dict | None = None, reference: int = 3,
                        progress: bool = False) -> YieldResult:

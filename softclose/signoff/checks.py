@@ -16,6 +16,7 @@ import numpy as np
 
 from ..optimiser.verify import verify
 from ..problem import DESIGN_KEYS, design_of, params_of
+from ..robust.analysis import at_temperature, sign_off_temperatures as temperatures
 from ..robust.box import box_of
 from ..robust.evaluate import evaluate
 from ..robust.verify import point_config
@@ -31,19 +32,6 @@ ROWS = {
     "opening_force_max": ("opening force", "≤", "N"),
     "self_close_min_deg": ("closes by itself up to", "≥", "deg"),
 }
-
-
-def at_temperature(cfg, temperature_c: float):
-    """``cfg`` with its strokes at ``temperature_c`` (the design as it is)."""
-    if cfg.operating.temperature_c == temperature_c:
-        return cfg
-    return cfg.replace(operating={"temperature_c": float(temperature_c)})
-
-
-def temperatures(cfg) -> tuple[float, ...]:
-    """The sign-off temperatures: ``operating.temperatures_c``, or ``[temperature_c]``."""
-    temps = cfg.operating.temperatures_c or (cfg.operating.temperature_c,)
-    return tuple(dict.fromkeys(float(t) for t in temps))     # each once, in order
 
 
 def design_values(cfg) -> dict:

@@ -89,7 +89,7 @@ def render_fragment(r, figures: dict | None = None) -> str:
 
 
 def render_html(r, figures: dict | None = None) -> str:
-    """The page of the report ``r`` (a :class:`~softclose.report.ReportResult`);
+    """The page of the report ``r`` (a :class:`~softclose.signoff.ReportResult`);
     ``figures``: the report's figures already drawn (default: drawn and closed here)."""
     return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             "<title>softclose sign-off report</title></head>\n"

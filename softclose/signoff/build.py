@@ -12,7 +12,7 @@ from ..jsonio import jsonable
 from ..problem import METRIC_KEYS, resolve
 from ..simulation.simulator import Simulator
 from ..version import __version__
-from . import parts, signoff
+from . import checks, parts
 from .result import ReportResult
 
 
@@ -21,7 +21,7 @@ def _stroke(cfg: Config) -> dict:
     reference's verification and the hand force, at cfg's temperature."""
     sim = Simulator(resolve(cfg), cached=True)
     res = sim.run(trajectory=True)
-    ver = signoff.check(cfg, hand=True)      # (no hand force where the linkage cannot open)
+    ver = checks.check(cfg, hand=True)      # (no hand force where the linkage cannot open)
     return {"simulate": res, "verification": ver, "hand": ver.hand, "model": sim.model}
 
 
@@ -51,9 +51,8 @@ SLOW_SAMPLES = 100
 def _yields(cfg: Config, temps, samples: int | None) -> dict:
     """The Monte Carlo yield at each temperature and jointly (the same samples: a lid
     counts when it passes at every temperature); skipped without a tolerance box."""
-    from ..robust.analysis import tolerance_analysis
+    from ..robust.analysis import yield_by_temperature
     from ..robust.box import box_of
-    from ..robust.stats import wilson
     from ..robust.evaluate import slow_keys
     box = box_of(cfg)
     if not box.dim:
@@ -66,22 +65,17 @@ def _yields(cfg: Config, temps, samples: int | None) -> dict:
         note = (f"{', '.join(slow)} gives every sample its own model (about 0.1 s each): "
                 f"{SLOW_SAMPLES} samples a temperature instead of tolerance.samples = "
                 f"{cfg.tolerance.samples} (--samples N to choose)")
-    per, joint = [], None
-    results = []
-    for T in temps:
-        y = tolerance_analysis(signoff.at_temperature(cfg, T), samples=samples, reference=0)
-        results.append(y)
-        ok = y.data["cols"]["feasible"].astype(bool)
-        joint = ok if joint is None else joint & ok
-        per.append({"temperature_c": T, "yield": y.yield_, "yield_ci": list(y.yield_ci),
-                    "samples": y.samples, "failures": y.failures,
-                    "meets_required": y.meets_required, "message": y.message})
-    n, k = len(joint), int(joint.sum())
+    t = yield_by_temperature(cfg, samples=samples, reference=0)
+    per = [{"temperature_c": T, "yield": y.yield_, "yield_ci": list(y.yield_ci),
+            "samples": y.samples, "failures": y.failures,
+            "meets_required": y.meets_required, "message": y.message}
+           for T, y in zip(t.temperatures, t.results)]
+    results = t.results
     return {"required_yield": cfg.tolerance.required_yield, "note": note,
             "distribution": cfg.tolerance.distribution, "keys": list(results[0].keys),
             "per_temperature": per,
-            "joint": {"yield": k / n, "yield_ci": list(wilson(k, n)), "samples": n,
-                      "meets_required": k / n >= cfg.tolerance.required_yield}}
+            "joint": {"yield": t.yield_, "yield_ci": list(t.yield_ci), "samples": t.samples,
+                      "meets_required": t.meets_required}}
 
 
 def _limits(cfg: Config, matrix: dict, optimiser: dict | None) -> dict:
@@ -94,7 +88,7 @@ def _limits(cfg: Config, matrix: dict, optimiser: dict | None) -> dict:
     tight = None
     for r, cells in matrix["cells"].items():
         for col, c in cells.items():
-            m = signoff.relative_margin(cfg, r, c)
+            m = checks.relative_margin(cfg, r, c)
             if tight is None or m < tight[0]:
                 tight = (m, r, col, c)
     if tight is not None:
@@ -117,7 +111,7 @@ def _verdict(cfg, matrix: dict, parts_: dict, yields: dict, temps) -> tuple[bool
             continue                     # the same lid as its temperature's column
         shut = matrix["cells"]["closed"].get(col, {}).get("ok", True)
         for r, cells in matrix["cells"].items():
-            what, rel, unit = signoff.ROWS[r]
+            what, rel, unit = checks.ROWS[r]
             c = cells.get(col)
             if c is None or c["ok"] or (not shut and r.startswith("closing_time")):
                 continue                 # (a lid that does not close: said once)
@@ -151,7 +145,7 @@ def _verdict(cfg, matrix: dict, parts_: dict, yields: dict, temps) -> tuple[bool
 def report(cfg: Config, *, optimiser: dict | None = None, samples: int | None = None,
            progress: bool = False) -> ReportResult:
     """The sign-off report of cfg's design (SPEC §16): an immutable
-    :class:`~softclose.report.ReportResult` whose ``success`` says whether the design meets
+    :class:`~softclose.signoff.ReportResult` whose ``success`` says whether the design meets
     every requirement and ``message`` says so in one line.
 
     ``optimiser``: the optimiser's JSON (``optimise.json`` or ``robust.json`` next to a
@@ -160,7 +154,7 @@ def report(cfg: Config, *, optimiser: dict | None = None, samples: int | None = 
     """
     t0 = time.perf_counter()
     timings = {}
-    temps = signoff.temperatures(cfg)
+    temps = checks.temperatures(cfg)
     if samples is not None and samples < 1:
         raise ConfigError(f"samples: {samples}; expected a whole number >= 1")
     # each yield samples this many strokes at each temperature: refused before any work
@@ -170,24 +164,24 @@ def report(cfg: Config, *, optimiser: dict | None = None, samples: int | None = 
     strokes = {}
     for T in temps:
         strokes[T] = (nominal if T == cfg.operating.temperature_c
-                      else _stroke(signoff.at_temperature(cfg, T)))
+                      else _stroke(checks.at_temperature(cfg, T)))
     timings["strokes"] = time.perf_counter() - t0
     if progress:
         print(f"report: strokes at {len(temps)} temperatures", flush=True)
     columns = ["nominal"] + [_column_name(T) for T in temps]
-    cells = {r: {} for r in signoff.constraint_rows(cfg)}
+    cells = {r: {} for r in checks.constraint_rows(cfg)}
     for col, s in [("nominal", nominal)] + [(_column_name(T), strokes[T]) for T in temps]:
-        for r, c in signoff.column(cfg, s["verification"]).items():
+        for r, c in checks.column(cfg, s["verification"]).items():
             cells[r][col] = c
     t1 = time.perf_counter()
-    corners, corner_facts = signoff.worst_corners(cfg, temps)
+    corners, corner_facts = checks.worst_corners(cfg, temps)
     if corners:
         columns.append("worst corner")
         for r, c in corners.items():
             cells[r]["worst corner"] = c
     timings["corners"] = time.perf_counter() - t1
-    matrix = {"rows": [{"name": r, "what": signoff.ROWS[r][0], "relation": signoff.ROWS[r][1],
-                        "unit": signoff.ROWS[r][2]} for r in cells],
+    matrix = {"rows": [{"name": r, "what": checks.ROWS[r][0], "relation": checks.ROWS[r][1],
+                        "unit": checks.ROWS[r][2]} for r in cells],
               "columns": columns, "cells": cells, "corners": corner_facts}
     t1 = time.perf_counter()
     parts_ = parts.parts(cfg, nominal["verification"].stroke, temps)
@@ -198,7 +192,7 @@ def report(cfg: Config, *, optimiser: dict | None = None, samples: int | None = 
     ok, verdict, fails = _verdict(cfg, matrix, parts_, yields, temps)
     by_t = {_column_name(T): {"temperature_c": T, **_metrics(strokes[T])} for T in temps}
     design = {"mechanism": cfg.geometry.mechanism, "spring_kind": cfg.design.spring_kind,
-              **signoff.design_values(cfg),
+              **checks.design_values(cfg),
               "rotary_damper_c": cfg.design.rotary_damper_c,
               "end_damper_c": cfg.design.end_damper_c,
               "damper_temperature_coeff": cfg.design.damper_temperature_coeff,

@@ -39,7 +39,7 @@ def plot_strokes(strokes: dict, limit: float | None = None):
 
 
 def report_figures(result) -> dict:
-    """The figures of a :class:`~softclose.report.ReportResult`, by name, in the order the
+    """The figures of a :class:`~softclose.signoff.ReportResult`, by name, in the order the
     report shows them."""
     d = result.drawing
     model, st = d["model"], d["cfg"].stroke

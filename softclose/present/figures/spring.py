@@ -1,0 +1,68 @@
+"""The coil spring made to order (``softclose spring --out``): its force and its stress over
+its length, from the free length down to the solid length, with the working range and the
+limits of EN 13906-1."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import plt
+
+
+def spring_curves(check, n: int = 200) -> dict:
+    """Force F = R (L0 - L), shear stress tau = 8 D F / (pi d^3) and its corrected value
+    tau_k = k tau of the spring of ``check`` (a :class:`softclose.coil_spring.SpringCheck`)
+    over its length L from the free length L0 to the solid length L_c (SI units)."""
+    s, d = check.spring, check.duty
+    L = np.linspace(d.free_length, s.solid_length, n)
+    F = check.rate * (d.free_length - L)
+    tau = 8.0 * s.coil_d * F / (math.pi * s.wire_d ** 3)
+    return {"length": L, "force": F, "stress": tau, "stress_corrected": s.stress_correction * tau}
+
+
+def plot_spring(check):
+    """Two panels against the spring's length (mm, the free length on the left): the force,
+    and the stresses: tau, which at the solid length must stay below 0.56 R_m (static), and
+    the corrected tau_k, whose upper value over the stroke must stay below the Goodman
+    line's at ``cycles`` (fatigue). The working range L1..L2 is shaded; the buckling length,
+    where there is one, is marked."""
+    c = spring_curves(check)
+    s, d, st = check.spring, check.duty, check.stresses
+    mm = 1e3 * c["length"]
+    fig, (af, at) = plt.subplots(1, 2, figsize=(11.0, 3.6), layout="constrained")
+    for ax in (af, at):
+        ax.axvspan(1e3 * d.shortest_length, 1e3 * d.longest_length, color="tab:green",
+                   alpha=0.15, label="working range L1..L2")
+        ax.axvline(1e3 * s.min_working_length, color="0.4", ls=":", lw=1,
+                   label="shortest allowed length L_n")
+        ax.set_xlabel("spring length (mm)")
+        ax.set_xlim(mm[0], mm[-1])
+    af.plot(mm, c["force"], color="tab:blue")
+    af.set_ylabel("force (N)")
+    s_k = check.buckling.get("s_k")
+    if s_k is not None and s_k < d.free_length - s.solid_length:
+        af.axvline(1e3 * (d.free_length - s_k), color="tab:red", ls="--", lw=1,
+                   label="buckles below (unguided)")
+    af.legend(fontsize=7, loc="upper left")
+    af.set_title(f"{s.material}: d = {1e3 * s.wire_d:g} mm, D = {1e3 * s.coil_d:g} mm, "
+                 f"n = {s.active_coils:g}", fontsize=9)
+    at.plot(mm, 1e-6 * c["stress"], color="tab:red", label="tau (static check)")
+    at.plot(mm[-1], 1e-6 * c["stress"][-1], "o", color="tab:red")
+    at.axhline(1e-6 * st["tau_c_allowed"], color="tab:red", ls="--", lw=1,
+               label="0.56 R_m: tau at the solid length below it")
+    at.plot(mm, 1e-6 * c["stress_corrected"], color="tab:purple",
+            label="tau_k, corrected (fatigue check)")
+    upper = st["tau_k1"] + st["tau_kh_allowed"]
+    at.hlines(1e-6 * upper, 1e3 * d.longest_length, 1e3 * d.shortest_length,
+              color="tab:purple", ls="-.", lw=1.5,
+              label=f"largest tau_k over the stroke for {d.cycles:.3g} cycles")
+    at.set_ylabel("shear stress (MPa)")
+    at.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    at.set_title("ok: every check met" if check.ok else
+                 "fails: " + ", ".join(check.failed), fontsize=9)
+    return fig
+
+
+__all__ = ["plot_spring", "spring_curves"]
