@@ -17,6 +17,7 @@ Writes to studies/out/catalog_selection/:
   comparison.json   the robust optimum (its own box and as a part), the best pairs, the prices
   ranking.csv       every pair of the catalog, best first (softclose select's table)
   selection.png     yield against worst-case J of every pair, the robust optimum marked
+  report.html       the sign-off report of the best catalog pair
 
 Usage: python studies/catalog_selection.py [--fast] [--json] [--out DIR]
 """
@@ -129,6 +130,11 @@ def main(argv=None) -> int:
     sel.to_frame().to_csv(path, index=False)
     files.append(path)
     files.append(draw(sel, own, a.out / "selection.png"))
+    if best is not None:                  # the best pair, signed off
+        from softclose.catalog import pair_config
+        sign_off = softclose.report(pair_config(cfg, best), samples=samples)
+        files.append(sign_off.save(a.out / "report.html"))
+        out["report"] = sign_off.message
     path = a.out / "comparison.json"
     path.write_text(json.dumps(jsonable(out), indent=1, allow_nan=False))
     files.append(path)

@@ -274,7 +274,9 @@ def test_result_api_out_and_figure(tmp_path, catalog):
                      "--figure-format", "svg")
     assert code == 0
     names = sorted(p.name for p in (tmp_path / "o").iterdir())
-    assert names == ["select.csv", "select.json", "select.svg"]
+    assert names == ["pairs", "select.csv", "select.json", "select.svg"]
+    pairs = sorted((tmp_path / "o" / "pairs").iterdir())
+    assert len(pairs) == 10 and pairs[0].name.startswith("01_")
     import pandas as pd
     df = pd.read_csv(tmp_path / "o" / "select.csv")
     assert len(df) == 36 and list(df["rank"]) == list(range(1, 37))
@@ -289,6 +291,32 @@ def test_result_api_out_and_figure(tmp_path, catalog):
     assert fig.axes[0].get_xlabel().startswith("worst-case J")
     with pytest.raises(Exception):
         r.ranking = ()          # immutable
+
+
+def test_a_pairs_config_is_its_parts_and_their_tolerances(tmp_path, catalog):
+    """pair_config (what select --out writes in pairs/): the pair's nominal stroke is the
+    ranking's, its [tolerance] box the parts' own, and its sign-off report judges the pair's
+    box as select did (every corner met)."""
+    import softclose
+    from softclose.catalog import pair_config, select
+    from softclose.config import load_config, to_toml
+    from softclose.robust.box import box_of
+    cfg = load_config(str(catalog["dir"] / "cfg.toml"))
+    r = select(cfg, catalog["dir"] / "s.csv", catalog["dir"] / "d.csv", samples=16, verify=1)
+    e = r.best
+    c = pair_config(cfg, e)
+    assert softclose.simulate(c).closing_time == pytest.approx(
+        e["nominal"]["closing_time"], rel=1e-12)
+    box = box_of(c)
+    half = dict(zip(box.keys, box.half))
+    assert half["design.spring_k"] == pytest.approx(
+        e["spring_part"]["rate_tolerance"] * e["spring_part"]["rate_N_per_m"], rel=1e-12)
+    assert half["design.spring_rest_length"] == pytest.approx(
+        e["spring_part"]["free_length_tolerance_m"], rel=1e-12)
+    path = tmp_path / "pair.toml"
+    path.write_text(to_toml(c))
+    rep = softclose.report(load_config(str(path)), samples=64)
+    assert e["feasible"] and rep.success, rep.message
 
 
 def test_ctrl_c_keeps_the_pairs_screened(tmp_path, monkeypatch):

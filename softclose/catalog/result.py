@@ -28,6 +28,20 @@ def pair_entry(spring, damper, feasible: bool, yld: float, worst: float, reason:
             "reference": None}
 
 
+def pair_config(cfg, entry: dict):
+    """The config of a ranked pair (an entry of :attr:`SelectResult.ranking`) in ``cfg``: its
+    parts as the design, their own tolerances as ``[tolerance]`` (the rate's and the
+    damper's relative, the free length's absolute): what ``softclose report`` signs off."""
+    spring, damper = entry["spring_part"], entry["damper_part"]
+    values = {f"design.{k}": v for k, v in entry["design"].items() if v is not None}
+    c_key = "design.damper_c" if damper["kind"] == "dashpot" else "design.rotary_damper_c"
+    values.update({"tolerance.design.spring_k": spring["rate_tolerance"],
+                   "tolerance.design.spring_rest_length":
+                       {"absolute": spring["free_length_tolerance_m"]},
+                   f"tolerance.{c_key}": damper["c_tolerance"]})
+    return cfg.update(values)
+
+
 @dataclass(frozen=True, repr=False)
 class SelectResult(Displayed):
     """The ranked pairs (``ranking``, best first: feasible at every corner of its box, then

@@ -130,7 +130,7 @@ def files() -> str:
              "designs/design_<id>.toml"),
             ("yield --out D", "yield_samples.csv, yield_histograms.png (with several operating.temperatures_c: one pair per temperature, yield_samples_0C.csv, ...)"),
             ("sensitivity --out D", "sobol.csv, sobol.png"),
-            ("select --out D", "select.csv (every pair, best first), select.json, select.png"),
+            ("select --out D", "select.csv (every pair, best first), select.json, select.png, pairs/NN_<spring>_<damper>.toml (the best ten pairs' configs)"),
             ("fit DATA --free KEY --out D", "calibrated.toml (the config with the fitted "
              "keys and a [tolerance] proposal; softclose optimise --robust --config "
              "D/calibrated.toml designs for it), fit.csv, samples.csv, fit.png"),

@@ -3,7 +3,8 @@
     softclose select --springs FILE [--dampers FILE] [--samples N] [--seed S] [--verify N]
                      [--free KEY=LO:HI ...] [--dask ADDRESS|local:N] [--json] [--out DIR]
 
-``--out DIR`` writes ``select.csv`` (every pair, best first), ``select.json`` and the figure
+``--out DIR`` writes ``select.csv`` (every pair, best first), ``select.json``, the best
+pairs' configs (``pairs/01_<spring>_<damper>.toml``, ...) and the figure
 ``select.png`` (yield against worst-case J). Exit 0 when the best pair meets every
 constraint at every corner of its tolerance box and the reference agrees; 3 when no pair
 does (the ranking is still printed and written); 2 for a bad file or option; 130 after
@@ -52,7 +53,8 @@ def register(sub) -> None:
     p.add_argument("--dampers", metavar="FILE",
                    help="damper catalog (CSV: part, kind, c, pivot, c_tolerance); without "
                         "it the dashpot's c is chosen per spring within optimise.damper_c")
-    add_out(p, what="write select.csv, select.json and select.png to this folder")
+    add_out(p, what="write select.csv, select.json, select.png and the best pairs' configs "
+                    "(pairs/*.toml) to this folder")
     p.add_argument("--samples", type=int, metavar="N", default=256,
                    help="Monte Carlo samples per pair (default 256)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
@@ -125,7 +127,7 @@ def format_select(r, top: int = 15) -> str:
                         else ""))
         if b.get("nlp"):
             n = b["nlp"]
-            lines.append(f"  its c by the robust NLP (the spring fixed, over its box): "
+            lines.append("  its c by the robust NLP (the spring fixed, over its box): "
                          + (f"{n['c']:.6g} N s/m, worst-scenario J {n['objective']:.6g}"
                             if n["c"] is not None else f"no solution ({n['message']})")
                          + f"; the grid's {n['c_grid']:.6g} N s/m; kept the "
@@ -155,6 +157,31 @@ def format_select(r, top: int = 15) -> str:
     return "\n".join(lines)
 
 
+#: the ranked pairs whose config ``--out`` writes (the best first)
+PAIR_CONFIGS = 10
+
+
+def _pair_configs(cfg, res, out) -> list:
+    """The best pairs' configs, ``pairs/01_<spring>_<damper>.toml`` (softclose report
+    --config signs one off)."""
+    import re
+    from ..catalog import pair_config
+    from ..config import to_toml
+    if not res.ranking:
+        return []
+    folder = out / "pairs"
+    folder.mkdir(exist_ok=True)
+    files = []
+    for rank, e in enumerate(res.ranking[:PAIR_CONFIGS], 1):
+        name = re.sub(r"[^\w.-]+", "-", f"{rank:02d}_{e['spring']}_{e['damper']}")
+        path = folder / f"{name}.toml"
+        path.write_text(to_toml(pair_config(cfg, e), header=(
+            f"softclose select: pair {rank}, {e['spring']} + {e['damper']}: its parts and "
+            "their own tolerances")))
+        files.append(path)
+    return files
+
+
 def run(cfg, args) -> Outcome:
     from ..catalog import read_dampers, read_springs, select
     _check(args)
@@ -182,6 +209,7 @@ def run(cfg, args) -> Outcome:
         files.append(path)
         if res.ranking and not res.interrupted:
             files.append(save_figure(res.plot(), out / "select.png"))
+        files += _pair_configs(cfg, res, out)
         payload["files"] = [str(f) for f in files]
     code = 130 if res.interrupted else (0 if res.success else 3)
     return Outcome(payload, format_select(res) + wrote(files), code, tuple(files),
