@@ -164,3 +164,27 @@ def test_bad_key_on_the_command_line(capsys):
     rc = cli.main(["simulate", "--set", "stroke.theta_open_deg=-5"])
     err = capsys.readouterr().err.strip()
     assert rc == 2 and "stroke.theta_open_deg" in err and len(err.splitlines()) == 1
+
+
+def test_simulate_gives_the_hand_force_at_each_sign_off_temperature(capsys, tmp_path):
+    """With several operating.temperatures_c, simulate's JSON ``temperatures`` holds the hand
+    force's metrics at each: those of a stroke run at that temperature; --out draws them."""
+    import json
+    from softclose.cli import main
+    sets = ['design.spring_kind="compression"', "design.spring_k=1914.709",
+            "design.spring_rest_length=0.07925707", "friction.torque=0.03",
+            "design.damper_temperature_coeff=-0.005"]
+    args = [a for s in sets for a in ("--set", s)]
+    assert main(["simulate", "--json", "--out", str(tmp_path), *args, "--set",
+                 "operating.temperatures_c=[-20, 60]"]) == 0
+    both = json.loads(capsys.readouterr().out)
+    assert [t["temperature_c"] for t in both["temperatures"]] == [-20.0, 60.0]
+    assert (tmp_path / "hand_force_temperatures.png").exists()
+    for t in both["temperatures"]:
+        assert main(["simulate", "--json", *args, "--set",
+                     f"operating.temperature_c={t['temperature_c']}"]) == 0
+        alone = json.loads(capsys.readouterr().out)
+        for k in ("closing_force", "self_close_deg", "self_rise_deg", "hold_open"):
+            assert t[k] == alone[k], k
+    # the coil spring's rate moves with the temperature, and with it the lifting effort
+    assert both["temperatures"][0]["opening_force"] != both["temperatures"][1]["opening_force"]

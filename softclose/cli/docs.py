@@ -118,7 +118,8 @@ def problem() -> str:
 
 def files() -> str:
     rows = [("simulate --out D", "stroke_trajectory.csv (units in the header), stroke_time.png, "
-             "stroke_linkage.png, stroke_animation.gif (slow motion: --slow-motion)"),
+             "stroke_linkage.png, stroke_animation.gif (slow motion: --slow-motion), "
+             "hand_force.png, hand_force_temperatures.png (several operating.temperatures_c)"),
             ("optimise --out D", "design.toml (the whole config with the optimum as [design]; "
              "any command takes it with --config), optimise.json, optimum.png and the "
              "optimum's stroke files"),

@@ -49,6 +49,17 @@ def end_damper_note(cfg, res) -> str | None:
     return None
 
 
+def _hand_forces(cfg, sim) -> list:
+    """[(T, hand force)] at each sign-off temperature of ``operating.temperatures_c`` when it
+    lists more than one (the design as given, its parts moved to each); else []."""
+    from ..simulation.handforce import hand_force
+    temps = tuple(dict.fromkeys(float(t) for t in cfg.operating.temperatures_c))
+    if len(temps) < 2:
+        return []
+    return [(T, hand_force(sim.model, case=resolve(cfg.replace(operating={"temperature_c": T}))))
+            for T in temps]
+
+
 def run(cfg, args) -> Outcome:
     from ..simulation.simulator import Simulator
     factor = slow_motion(args)
@@ -62,6 +73,10 @@ def run(cfg, args) -> Outcome:
         from ..simulation.handforce import hand_force
         hf = hand_force(sim.model, case=sim.case)
         payload.update({k: v for k, v in hf.metrics().items() if k != "opening_force"})
+    by_temperature = _hand_forces(cfg, sim) if res.ok else []
+    if by_temperature:                   # at each sign-off temperature (SPEC §12, §13)
+        payload["temperatures"] = [dict(h.metrics(), temperature_c=T)
+                                   for T, h in by_temperature]
     if not res.ok:
         payload["error"] = res.message
         from ..simulation.stroke import StrokeStatus
@@ -72,8 +87,11 @@ def run(cfg, args) -> Outcome:
         from .files import write_stroke_outputs
         files = write_stroke_outputs(sim.model, res, out, slow_motion=factor)
         from .common import save_figure
-        from ..present.figures.handforce import plot_hand_force
+        from ..present.figures.handforce import plot_hand_force, plot_hand_force_by_temperature
         files.append(save_figure(plot_hand_force(hf), out / "hand_force.png"))
+        if by_temperature:
+            files.append(save_figure(plot_hand_force_by_temperature(by_temperature),
+                                     out / "hand_force_temperatures.png"))
         payload["files"] = [str(f) for f in files]
     text = format_metrics(payload) + f"\n  hand force: {hf.describe()}"
     note = end_damper_note(cfg, res)
