@@ -388,3 +388,25 @@ def test_a_trial_stopped_at_its_iteration_cap_counts_as_not_shown_feasible(monke
     scale = r.infeasibility["feasible_scale"]
     assert 0.25 <= scale < 0.390625
     assert f"spreads up to x{scale:.2f} of the configured ones" in r.message
+
+
+def test_only_the_kept_kind_is_verified_and_its_report_is_the_whole_one(robust):
+    """optimise_robust verifies and reports the kind it keeps only: a kind's deferred report
+    (defer=True, then finish()) is its whole report (report=True), and the kind not kept
+    says it was not verified."""
+    from softclose.optimiser.kinds import kind_config
+    from softclose.robust.design import optimise_robust_kind
+    cfg = default_config()
+    c, why = kind_config(cfg, "compression", robust=True)
+    assert why is None
+    lean, finish = optimise_robust_kind(c, defer=True)
+    full = finish()
+    assert lean.design == full.design == robust.design and lean.objective == full.objective
+    assert full.success == robust.success and full.message == robust.message
+    assert [s["label"] for s in full.scenarios] == [s["label"] for s in robust.scenarios]
+    assert full.nominal["objective"] == robust.nominal["objective"]
+    assert full.nominal_yield.yield_ == robust.nominal_yield.yield_
+    assert lean.scenarios == [] and lean.verification is None
+    rows = {r["kind"]: r for r in robust.kinds}
+    assert rows["extension"]["message"].startswith("not verified by the reference") \
+        or not rows["extension"]["success"]

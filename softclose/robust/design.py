@@ -51,7 +51,7 @@ fraction of them for which the scenario NLP still has a solution, by bisection:
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -121,7 +121,7 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
         if toleranced:
             raise ConfigError(f"[tolerance]: {toleranced[0]} is a free attachment point; a "
                               "point the optimiser chooses carries no tolerance here")
-    rows, results = [], []
+    rows, results, deferred = [], [], {}
     configs = [(kind, *kind_config(cfg, kind, robust=True))
                for kind in cfg.optimise.spring_kinds]
     for kind, c, why in configs:
@@ -143,8 +143,13 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
             rows.append({"kind": kind, "success": False, "objective": None,
                          "message": why})
             continue
-        r = optimise_robust_kind(c, progress=progress, samples=samples, seed=seed,
-                                 verify=verify, report=report)
+        if report and not placed:       # the report of the kind kept only (below)
+            r, finish = optimise_robust_kind(c, progress=progress, samples=samples,
+                                             seed=seed, verify=verify, defer=True)
+            deferred[kind] = finish
+        else:
+            r = optimise_robust_kind(c, progress=progress, samples=samples, seed=seed,
+                                     verify=verify, report=report)
         if placed:              # stage 2 ran at the points (end damper): report them
             r = replace(r, design={**(r.design or {}), **{k.split(".", 1)[1]: v
                                                           for k, v in points.items()}},
@@ -153,11 +158,12 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
         rows.append({"kind": kind, "success": r.success, "objective": r.objective,
                      "message": r.message})
         results.append((kind, r, c))
-    pool = [x for x in results if x[1].success] or [x for x in results if x[1].design] \
-        or results
-    if not pool:
+    if not results:
         raise ConfigError("no spring kind of optimise.spring_kinds can be valid: "
                           + "; ".join(f"{r['kind']}: {r['message']}" for r in rows))
+    results = _finish_kinds(results, rows, deferred)
+    pool = [x for x in results if x[1].success] or [x for x in results if x[1].design] \
+        or results
     kind, best, c = min(pool, key=lambda x: x[1].objective if x[1].objective is not None
                         else np.inf)
     part = spring_part(c, best.design, best.metrics) if best.design is not None else None
@@ -175,6 +181,42 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
                                          if full in chosen})
     return replace(best, kind=kind, kinds=tuple(rows), part=part, notes=notes, times=times,
                    config=out_cfg)
+
+
+def _objective(x) -> float:
+    return x[1].objective if x[1].objective is not None else np.inf
+
+
+def _finish_kinds(results: list, rows: list, deferred: dict) -> list:
+    """The whole report of the kind :func:`optimise_robust` keeps, and of no other: the
+    kinds whose lean results succeeded are finished (their scenarios verified) in the order
+    of their worst-case objectives until one succeeds -- verification can only fail a design,
+    so that one is the best successful kind, as if every kind had been finished; without
+    one, the kind the rule keeps then (the best with a design) is finished. A kind left
+    unfinished says so in its row."""
+    if not deferred:
+        return results
+    results = list(results)
+
+    def finish(i):
+        kind, lean, c = results[i]
+        full = deferred.pop(kind)()
+        results[i] = (kind, full, c)
+        rows[:] = [dict(r, success=full.success, message=full.message)
+                   if r["kind"] == kind else r for r in rows]
+        return full
+
+    order = sorted(range(len(results)), key=lambda i: _objective(results[i]))
+    if not any(results[i][1].success and finish(i).success for i in order
+               if results[i][0] in deferred):
+        pool = [i for i in order if results[i][1].design] or order
+        if results[pool[0]][0] in deferred:
+            finish(pool[0])
+    for r in rows:
+        if r["kind"] in deferred and r["success"]:
+            r["message"] = ("not verified by the reference: a kind with a lower worst-case J "
+                            "was kept")
+    return results
 
 
 def _keep_out_check(cfg: Config, r: RobustResult) -> RobustResult:
@@ -198,8 +240,8 @@ def _keep_out_check(cfg: Config, r: RobustResult) -> RobustResult:
 
 
 def optimise_robust_kind(cfg: Config, *, progress: bool = False, samples: int | None = None,
-                         seed: int = 0, verify: bool = True, report: bool = True
-                         ) -> RobustResult:
+                         seed: int = 0, verify: bool = True, report: bool = True,
+                         defer: bool = False):
     """The robust soft-close design over cfg's ``[tolerance]`` box with cfg's spring kind (see
     the module docstring).
 
@@ -208,7 +250,12 @@ def optimise_robust_kind(cfg: Config, *, progress: bool = False, samples: int | 
     depend on: the nominal optimum (solved only when it chooses the scenarios the NLP starts
     from, a box of more than :func:`~.policy.max_corners` corners; else ``nominal`` is
     :data:`NOT_SOLVED`), its yield, the scenarios' report and their verification, the
-    active set (``metrics``, ``scenarios`` and ``active`` empty)."""
+    active set (``metrics``, ``scenarios`` and ``active`` empty).
+
+    ``defer=True``: ``(the report=False result, finish)``, where ``finish()`` returns the
+    whole report's result (the same as ``report=True``) -- what :func:`optimise_robust` makes
+    of the kind it keeps only. Its ``success`` can only be that result's or False (the
+    verification of the scenarios can fail a design, nothing else changes)."""
     t_start = time.perf_counter()
     tol = cfg.tolerance
     check_batch(cfg, int(samples or tol.samples), "--samples" if samples else "tolerance.samples")
@@ -216,7 +263,7 @@ def optimise_robust_kind(cfg: Config, *, progress: bool = False, samples: int | 
     log = _Log(Progress(10, "robust design", enabled=progress, unit=""), t_start)
     log.bar.update(0, "nominal optimum")
     t0 = time.perf_counter()
-    if report or 2 ** box_of(cfg).dim > max_corners(cfg):
+    if (report and not defer) or 2 ** box_of(cfg).dim > max_corners(cfg):
         nominal = _nominal(cfg)
         log.times["nominal_optimise"] = time.perf_counter() - t0
     else:           # every corner is a scenario: the nominal optimum chooses none of them
@@ -232,25 +279,49 @@ def optimise_robust_kind(cfg: Config, *, progress: bool = False, samples: int | 
                 solver=_solver(problem, log.rounds, N, M), rounds=log.rounds, box_scale=scale,
                 box=box_summary(box_of(cfg, scale=scale)))
     if not run.success:
-        return _no_design(cfg, problem, run, nominal, N, M, seed, log, base)
+        if report and nominal is not None and nominal.get("success") is None:
+            nominal = _nominal(cfg)          # (deferred: the report of no design shows it)
+        done = _no_design(cfg, problem, run, nominal, N, M, seed, log, base)
+        return (done, lambda: done) if defer else done
     design = dict(zip(DESIGN_KEYS, map(float, run.design)))
     J_obj = float(np.max(run.J)) if tol.robust_objective == "worst" else float(np.mean(run.J))
-    if not report:
+    if not report or defer:
         corner_check = _corner_guarantee(cfg, scale, problem, run, log)
         msgs = _failures(None, [], corner_check, yres, tol.required_yield, scale)
-        log.finish()
-        return RobustResult(not msgs, "; ".join(msgs), run.r["status"], design, J_obj,
+        lean = RobustResult(not msgs, "; ".join(msgs), run.r["status"], design, J_obj,
                             metrics=None, scenarios=[], verification=None, yield_result=yres,
                             nominal=_nominal_json(nominal, None), nominal_yield=None,
-                            notes=tuple(log.notes), times=log.times,
+                            notes=tuple(log.notes), times=dict(log.times),
                             corner_check=corner_check, config=cfg, **base)
-    # the nominal optimum on the same samples
+        if not report:
+            log.finish()
+            return replace(lean, times=log.times)
+
+        def finish() -> RobustResult:
+            return _report(cfg, nominal, problem, run, yres, scale, z_yield, seed, verify,
+                           log, base, design, J_obj, corner_check)
+        return lean, finish
+    return _report(cfg, nominal, problem, run, yres, scale, z_yield, seed, verify, log, base,
+                   design, J_obj, None)
+
+
+def _report(cfg, nominal, problem, run, yres, scale, z_yield, seed, verify, log, base, design,
+            J_obj, corner_check) -> RobustResult:
+    """The whole robust result of a solved kind: the nominal optimum (if not solved yet) and
+    its yield on the same samples, every scenario verified by the reference, the corner
+    guarantee (``corner_check``, unless checked already), the active set."""
+    tol = cfg.tolerance
+    if nominal.get("success") is None:
+        t0 = time.perf_counter()
+        nominal = _nominal(cfg)
+        log.times["nominal_optimise"] = time.perf_counter() - t0
     log.bar.update(9, "verification")
     nyield = _nominal_yield(cfg, nominal, z_yield, seed, log)
     t0 = time.perf_counter()
     scen, verified = scenario_report(cfg, problem, run, verify)
     log.times["verification"] = time.perf_counter() - t0
-    corner_check = _corner_guarantee(cfg, scale, problem, run, log)
+    if corner_check is None:
+        corner_check = _corner_guarantee(cfg, scale, problem, run, log)
     verification = _verification(scen, verified) if verify else None
     msgs = _failures(verification, scen, corner_check, yres, tol.required_yield, scale)
     active = active_set(run, [s["label"] for s in scen])
