@@ -391,3 +391,19 @@ def check_reference_temperature(cfg, what: str) -> None:
             f"(operating.reference_temperature_c = {op.reference_temperature_c:g} °C), not at "
             f"{op.temperature_c:g} °C; simulate, sweep and yield run strokes at other "
             "temperatures")
+
+
+def sign_off_temperatures(cfg) -> tuple[float, ...]:
+    """The temperatures a design must meet its constraints at (SPEC §12):
+    ``operating.temperatures_c``, or ``[operating.temperature_c]`` when it is empty; each
+    once, in order."""
+    temps = cfg.operating.temperatures_c or (cfg.operating.temperature_c,)
+    return tuple(dict.fromkeys(float(t) for t in temps))
+
+
+def at_temperature(cfg, temperature_c: float):
+    """``cfg`` with its strokes at ``temperature_c`` (the design's values stay those given at
+    the reference temperature)."""
+    if cfg.operating.temperature_c == temperature_c:
+        return cfg
+    return cfg.replace(operating={"temperature_c": float(temperature_c)})

@@ -18,7 +18,7 @@ import pytest
 
 from softclose.cli import main
 from softclose.config import load_config
-from softclose.robust.analysis import at_temperature
+from softclose.problem import at_temperature
 from softclose.signoff import SECTIONS, report
 
 ROOT = Path(__file__).resolve().parents[1]

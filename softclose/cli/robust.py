@@ -158,7 +158,7 @@ def _box_line(box: dict) -> str:
 
 def run_yield(cfg, args) -> Outcome:
     from ..robust import tolerance_analysis
-    from ..robust.analysis import sign_off_temperatures
+    from ..problem import sign_off_temperatures
     _check_samples(args.samples)
     seed = _seed(args)
     out = prepare_out(args.out)

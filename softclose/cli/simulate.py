@@ -7,7 +7,7 @@ import math
 
 from .common import (Outcome, add_common, add_out, add_slow_motion, format_metrics,
                      prepare_out, slow_motion, wrote)
-from ..problem import resolve
+from ..problem import at_temperature, resolve, sign_off_temperatures
 
 DESCRIPTION = """\
 One closing stroke of the config's design: the lid released from rest at stroke.theta0_deg
@@ -53,11 +53,10 @@ def _hand_forces(cfg, sim) -> list:
     """[(T, hand force)] at each sign-off temperature of ``operating.temperatures_c`` when it
     lists more than one (the design as given, its parts moved to each); else []."""
     from ..simulation.handforce import hand_force
-    temps = tuple(dict.fromkeys(float(t) for t in cfg.operating.temperatures_c))
+    temps = sign_off_temperatures(cfg)
     if len(temps) < 2:
         return []
-    return [(T, hand_force(sim.model, case=resolve(cfg.replace(operating={"temperature_c": T}))))
-            for T in temps]
+    return [(T, hand_force(sim.model, case=resolve(at_temperature(cfg, T)))) for T in temps]
 
 
 def run(cfg, args) -> Outcome:

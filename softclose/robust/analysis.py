@@ -37,7 +37,7 @@ from .box import Box, box_of
 from .evaluate import evaluate
 from .stats import CI_METHOD, margins, percentiles, wilson
 from .verify import reference_check
-from ..problem import UNITS
+from ..problem import UNITS, at_temperature, sign_off_temperatures
 from ..jsonio import jsonable
 
 #: metrics whose percentiles are reported (closing time over every sample, the others over
@@ -236,22 +236,6 @@ def nominal_stroke(cfg: Config) -> dict:
     out["reason"] = str(cols["reason"][0])
     out["bare"] = bare_lid(cfg)
     return out
-
-
-def sign_off_temperatures(cfg: Config) -> tuple[float, ...]:
-    """The temperatures a design must meet its constraints at (SPEC §12):
-    ``operating.temperatures_c``, or ``[operating.temperature_c]`` when it is empty; each
-    once, in order."""
-    temps = cfg.operating.temperatures_c or (cfg.operating.temperature_c,)
-    return tuple(dict.fromkeys(float(t) for t in temps))
-
-
-def at_temperature(cfg: Config, temperature_c: float) -> Config:
-    """``cfg`` with its strokes at ``temperature_c`` (the design's values stay those given at
-    the reference temperature)."""
-    if cfg.operating.temperature_c == temperature_c:
-        return cfg
-    return cfg.replace(operating={"temperature_c": float(temperature_c)})
 
 
 @dataclass(frozen=True)

@@ -48,7 +48,7 @@ def _metrics(s: dict) -> dict:
 SLOW_SAMPLES = 100
 
 
-def _yields(cfg: Config, temps, samples: int | None) -> dict:
+def _yields(cfg: Config, samples: int | None) -> dict:
     """The Monte Carlo yield at each temperature and jointly (the same samples: a lid
     counts when it passes at every temperature); skipped without a tolerance box."""
     from ..robust.analysis import yield_by_temperature
@@ -187,7 +187,7 @@ def report(cfg: Config, *, optimiser: dict | None = None, samples: int | None = 
     parts_ = parts.parts(cfg, nominal["verification"].stroke, temps)
     timings["parts"] = time.perf_counter() - t1
     t1 = time.perf_counter()
-    yields = _yields(cfg, temps, samples)
+    yields = _yields(cfg, samples)
     timings["yield"] = time.perf_counter() - t1
     ok, verdict, fails = _verdict(cfg, matrix, parts_, yields, temps)
     by_t = {_column_name(T): {"temperature_c": T, **_metrics(strokes[T])} for T in temps}

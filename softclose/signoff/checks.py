@@ -16,7 +16,7 @@ import numpy as np
 
 from ..optimiser.verify import verify
 from ..problem import DESIGN_KEYS, design_of, params_of
-from ..robust.analysis import at_temperature, sign_off_temperatures as temperatures
+from ..problem import at_temperature, sign_off_temperatures as temperatures
 from ..robust.box import box_of
 from ..robust.evaluate import evaluate
 from ..robust.verify import point_config

@@ -4,10 +4,9 @@ limits of EN 13906-1."""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
+from ...coil_spring.standard import shear_stress
 from . import plt
 
 
@@ -18,7 +17,7 @@ def spring_curves(check, n: int = 200) -> dict:
     s, d = check.spring, check.duty
     L = np.linspace(d.free_length, s.solid_length, n)
     F = check.rate * (d.free_length - L)
-    tau = 8.0 * s.coil_d * F / (math.pi * s.wire_d ** 3)
+    tau = shear_stress(F, s.wire_d, s.coil_d)
     return {"length": L, "force": F, "stress": tau, "stress_corrected": s.stress_correction * tau}
 
 
