@@ -22,8 +22,9 @@ from softclose.problem import PARAM_KEYS, params_of, resolve
 
 
 def factors_of(cfg):
-    """The parameters' factors at ``cfg``'s operating temperature."""
-    return parameter_factors(resolve(cfg).temperatures)
+    """The parameters' factors at ``cfg``'s operating temperature (a coil spring's design)."""
+    f = parameter_factors(resolve(cfg).temperatures)
+    return None if f is None else f[0]
 
 
 ROOT = Path(__file__).resolve().parents[1]

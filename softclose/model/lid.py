@@ -60,7 +60,7 @@ def model_key(case: LidCase) -> tuple:
 
 #: the CasADi functions a model carries (attribute names), kept serialised in the disk cache
 FUNCTIONS = ("ode", "ode_moving", "coeffs", "xcoeffs", "energy_fn", "power_fn", "kin", "dV",
-             "opening", "_u")
+             "opening", "friction_moment", "_u")
 
 
 _SHARED: dict = {}
@@ -336,6 +336,9 @@ class LidModel:
         # the hand force at the tip that lifts the lid slowly through theta: (dV + friction,
         # which opposes the lifting) / tau
         fr = dyn.friction(cf["coords"], elements.params(p))
+        # the friction moment T_fr(theta) = T_f + F_R |dl/dtheta| (what holds a lid at rest)
+        self.friction_moment = ca.Function("friction_moment", [th, p],
+                                           [0.0 if fr is None else fr])
         F = (slope if fr is None else slope + fr) / cf["tau"]
         self.opening = ca.Function("opening", [th, p], [F, ca.jacobian(F, th)])
         # every element's coordinate and its theta-derivative: {name: Function theta -> (q, q')}

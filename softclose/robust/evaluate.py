@@ -83,7 +83,7 @@ def simulator(cfg: Config, t_end: float | None = None):
     key = (cfg.geometry, cfg.mass, cfg.stroke, cfg.simulate,
            elements.structure(case.lid.mounting),
            cfg.design.spring_min_length, cfg.design.spring_max_length,
-           None if factors is None else tuple(map(float, factors)))
+           None if factors is None else tuple(map(float, factors.ravel())))
     if key not in _SIMS:
         if len(_SIMS) > 32:
             _SIMS.clear()

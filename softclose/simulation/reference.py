@@ -348,9 +348,10 @@ class Reference:
 
     def _rest(self, theta, p, T_f):
         """At rest at theta: (theta, None) if dry friction holds the lid there (|dV/dtheta| <=
-        T_f), else (None, the way -dV/dtheta drives it)."""
+        T_fr(theta), the friction moment there: ``T_f`` and the strut's F_R |dl/dtheta|), else
+        (None, the way -dV/dtheta drives it)."""
         dV = float(self.model.dV(theta, p))
-        if abs(dV) <= T_f:
+        if abs(dV) <= float(self.model.friction_moment(theta, p)):
             return theta, None
         return None, (1.0 if dV < 0 else -1.0)
 

@@ -381,10 +381,10 @@ class Simulator:
         moment barely exceeds the friction moves on their small difference, which the
         table knows only to its error times the moments themselves (a lid released at 1.0001
         x T_f closes 4e-7 s off at any step: the table's 7.8e-12, amplified 2e4 times)."""
-        Tf = sum(float(e.coulomb(elements.params(np.asarray(p, float)))) for e in
-                 elements.FRICTIONS)
-        if Tf <= 0:
+        if sum(float(e.coulomb(elements.params(np.asarray(p, float)))) for e in
+               elements.FRICTIONS) <= 0:
             return 1.0
+        Tf = float(self.model.friction_moment(self.stroke.theta0, p))
         dV = abs(float(self.model.dV(self.stroke.theta0, p)))
         return (dV + Tf) / max(abs(dV - Tf), 1e-300 + 1e-15 * (dV + Tf))
 

@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import ConfigError
+
 from ..model import elements
 from ..model.dynamics import COEFFS, EXTRA_COEFFS, coordinates_of_columns, damping, potential, slope
 from ..problem import as_params
@@ -266,6 +268,10 @@ def opening_forces(table, stroke, P, lid_mass=None, points=None) -> np.ndarray:
     Pu = uniq[:, :P.shape[1]]
     base, tau = _opening_slopes(table, Pu, None if m is None else uniq[:, -1], th,
                                 skip="spring")
+    if elements.BY_NAME["spring"]._any_gas(elements.params(P[own])):
+        raise ConfigError("a gas strut's opening effort with the spring's points varied "
+                          "per design is not computed; vary the points of a coil spring, "
+                          "or give the strut's points in [geometry]")
     a, b = elements.BY_NAME["spring"].affine(elements.params(P[own]))
     ab = np.column_stack([np.broadcast_to(np.asarray(v, float), (len(own),)) for v in (a, b)])
     F[own] = point_opening(table, th, pts[own], ab, base, np.asarray(inv).ravel(), tau)
@@ -288,6 +294,9 @@ def _opening_slopes(table, P, lid_mass, th, skip: str | None = None):
         if e.name not in co or e.name == skip:
             continue
         q, dq = co[e.name].q, co[e.name].dq
+        if e.name == "spring" and e._any_gas(Pn):     # the gas law is not affine in q
+            slope += e.tension(np.asarray(q)[None, :], _ColumnParams(Pn)) * dq
+            continue
         a, b = e.affine(Pn)
         a = np.broadcast_to(np.asarray(a, float), (len(P),))
         slope += np.multiply.outer(a, dq)
@@ -296,10 +305,21 @@ def _opening_slopes(table, P, lid_mass, th, skip: str | None = None):
     dm = table.mass_offsets(lid_mass, (len(P),))
     if dm is not None:               # gravity's slope at another lid mass: affine in it
         slope += np.multiply.outer(dm, table.mass_slope_at(th)[:, COEFFS.index("dVg")])
-    fr = [e.coulomb(Pn) for e in elements.FRICTIONS]     # (on the lid's angle: q' = 1)
-    for f in fr:
-        slope += np.asarray(f, float)[:, None]
+    for e in elements.FRICTIONS:     # T_fr = sum C |q'| (the lid's angle: q' = 1)
+        if e.name in co:
+            f = np.broadcast_to(np.asarray(e.coulomb(Pn), float), (len(P),))
+            slope += f[:, None] * np.abs(np.atleast_1d(np.asarray(co[e.name].dq, float)))
     return slope, cols["tau"]
+
+
+class _ColumnParams:
+    """Rows' named parameters as columns (n, 1), to broadcast against angles (1, m)."""
+
+    def __init__(self, Pn):
+        self._P = Pn
+
+    def __getitem__(self, name):
+        return np.asarray(self._P[name], float)[:, None]
 
 
 def _parabola_max(F: np.ndarray, th: np.ndarray) -> np.ndarray:

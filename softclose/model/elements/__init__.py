@@ -21,15 +21,16 @@ from __future__ import annotations
 from ...config.keys import Key
 from .base import Element, Param, Params
 from .dampers import Dashpot, EndDamper, RotaryDamper
-from .friction import Friction
+from .friction import Friction, StrutFriction
 from .gravity import Gravity
 from .springs import Spring, TorsionSpring
 
 #: every element, in the order their contributions are summed (gravity first, then the
 #: springs, then the dampers: the order of the seed's equation, so its sums are unchanged);
-#: the end damper, added last, puts its parameters after every earlier one in p
+#: the end damper and the strut's friction, added last, put their parameters after every
+#: earlier one in p
 ELEMENTS: tuple[Element, ...] = (Gravity(), Spring(), TorsionSpring(), Dashpot(),
-                                 RotaryDamper(), Friction(), EndDamper())
+                                 RotaryDamper(), Friction(), EndDamper(), StrutFriction())
 BY_NAME = {e.name: e for e in ELEMENTS}
 #: the seed's parameters, which come first in p: (k, l0, c, c_rot)
 SEED = ("spring_k", "spring_rest_length", "damper_c", "rotary_damper_c")

@@ -56,13 +56,16 @@ class Param(NamedTuple):
     si: float = 1.0
     codes: dict | None = None
     config_key: str | None = None        # when not ``design.<name>``
+    none: float | None = None            # the number p holds for a key left at none
 
     @property
     def key(self) -> str:
         return self.config_key or f"design.{self.name}"
 
     def number(self, value) -> float:
-        """The config value as the number p holds (a word by its code)."""
+        """The config value as the number p holds (a word by its code; none by :attr:`none`)."""
+        if value is None and self.none is not None:
+            return self.none
         return float(self.codes[value] if self.codes is not None else value)
 
     def word(self, number: float) -> str:
@@ -105,7 +108,8 @@ class Element:
     #: or q'^2 ("dq2"), as (column name, what)
     columns: tuple[tuple[str, str], ...] = ()
     #: "base": in the kernel's fixed table (always tabulated); "extra": in the table of
-    #: element columns, tabulated when a stroke needs it
+    #: element columns, tabulated when a stroke needs it; another element's name: it reads
+    #: that element's columns (the same coordinate), tabulated for it
     table: str = "base"
     #: one of the seed's elements (gravity, the spring, the dashpot, the rotary damper)
     seed: bool = False

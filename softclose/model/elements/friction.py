@@ -15,7 +15,7 @@ import numpy as np
 
 from ...config.keys import Key
 from .base import Element, Param
-from .coordinates import PivotAngle
+from .coordinates import Length, PivotAngle
 
 
 class Friction(Element):
@@ -38,3 +38,32 @@ class Friction(Element):
 
     def acts(self, values):
         return np.asarray(values.get("friction_torque", 0.0)) != 0.0
+
+
+class StrutFriction(Element):
+    """Coulomb friction along the spring's length: a gas strut's seals (SPEC §12).
+
+    A force F_R along the strut against its sliding, ``-F_R sign(l-dot)``; on the lid's
+    coordinate the moment ``-F_R |dl/dtheta| sign(theta')``. With the lumped friction it makes
+    the friction moment ``T_fr(theta) = T_f + F_R |dl/dtheta|``, which the stick at the release
+    and at a turning point compares with the driving moment there (a datasheet's friction
+    band F3 - F1 is 2 F_R)."""
+
+    name = "strut_friction"
+    doc = "Coulomb friction along the spring (a gas strut's seals), stick and slip"
+    keys = (Key("design", "strut_friction", "nonneg", 0.0, "N",
+                "F_R (>= 0): friction along the spring or gas strut, against its sliding (a "
+                "datasheet's friction band F3 - F1 is 2 F_R)", lo=0.0, hi=1e4),)
+    params = (Param("strut_friction"),)
+    #: it reads the spring's own columns (its length and dl/dtheta), tabulated for the spring
+    columns = (("l", "q"), ("dl", "dq"))
+    table = "spring"
+
+    def coordinate(self, lid):
+        return Length("E", "lid_e", "spring_anchor")
+
+    def coulomb(self, P):
+        return P["strut_friction"]
+
+    def acts(self, values):
+        return np.asarray(values.get("strut_friction", 0.0)) != 0.0

@@ -43,6 +43,7 @@
  * No Python API is used by the solver; the module init only lets setuptools build it.
  */
 #include <Python.h>
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -124,6 +125,9 @@ typedef struct {
  *   gravity   its potential      Vg, dVg (+ mass) V = q, T = 1
  *   spring    |D - E|            l, dl            V = k (q - l0)^2 / 2 + F q, T = F + k (q - l0)
  *                                                (F = s F0: its kind's sign times its preload)
+ *                                                + a gas strut's V = G u psi(b u), T = G / (1 +
+ *                                                b u), u = q - l0 (G = -F1, b = (1 - 1/K)/s;
+ *                                                k = F = 0 for a strut, G = b = 0 for a coil)
  *   torsion   psi at its pivot   psi, dpsi (x)    V = k_t (q - psi0)^2 / 2, T = k_t (q - psi0)
  *   dashpot   |C - O|            dd = q'^2        B = c
  *   rotary    psi at its pivot   dpr2 = q'^2 (x)  B = c_rot (at the lid, q' = 1: no column)
@@ -138,7 +142,9 @@ typedef struct {
  *   friction  theta              (q' = 1)         a moment -T_f fs against the motion: fs = the
  *                                                 direction the lid moves, a state of the stroke;
  *                                                 at rest (release, a turning point, located to
- *                                                 the method's order) it sticks unless |V'| > T_f
+ *                                                 the method's order) it sticks unless |V'| > T_fr
+ *   strut     |D - E|            |dl|             F_R along the spring: with friction the moment
+ *   friction                                      T_fr = T_f + F_R |l'| against the motion
  *
  * The laws are macros over numbers, so the scalar code (double) and the SIMD lanes (v4) use
  * the same operations in the same order. For the early exit every conservative law also
@@ -174,6 +180,8 @@ enum { D_PT = NDESIGN, NPT = 8 };
 #define PKB 8 /* cells a block of a row's own pieces holds */
 typedef struct { int base, nb; double blk[PKB][4 * NC]; } PtCache;
 typedef struct { double k, l0, F, c, cr, crp, kt, psi0, Tf, fs, dm, ce, the, cen;
+                 double G, gb, lc, FR; /* a gas strut's law (G, b), its compressed end lc
+                                        * = l0 - s (-inf for a coil spring); strut friction */
                  int x, ow, e, eg;
                  int ps, pd; double pt[NPT]; /* own spring / dashpot points (D_PT ...) */
                  PtCache *pc; /* their pieces (with ps or pd) */ } Par;
@@ -181,7 +189,7 @@ typedef struct { double k, l0, F, c, cr, crp, kt, psi0, Tf, fs, dm, ce, the, cen
  * element columns (its element terms are added for every lane of the group: the others add
  * a zero, k_t = 0); anye: a lane with an end damper (cen added for every lane of the group:
  * the others add a zero; the = -inf and egm = 0 in them, so no crossing is ever seen) */
-typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs, cen, the; v4l ow, egm;
+typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs, cen, the, G, gb, FR; v4l ow, egm;
                  double dm[VW]; int any, anyx, anyow, anyf, anye;
                  const Par *lp[VW]; int lpts[VW], anyp; /* the lanes' rows; which have
                                                           * points; any of them */ } Par4;
@@ -190,7 +198,14 @@ typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs, cen, the; v4l ow, eg
         (p)->k = (d)[D_SPRING_K]; (p)->l0 = (d)[D_SPRING_REST_LENGTH]; (p)->c = (d)[D_DAMPER_C]; (p)->cr = (d)[D_ROTARY_DAMPER_C]; \
         (p)->crp = 0.0; \
         if ((T)->rot_pivot) { (p)->crp = (p)->cr; (p)->cr = 0.0; } \
-        (p)->F = (d)[D_SPRING_KIND] * (d)[D_SPRING_PRELOAD]; \
+        (p)->F = (d)[D_SPRING_KIND] * (d)[D_SPRING_PRELOAD]; (p)->G = 0.0; (p)->gb = 0.0; \
+        (p)->lc = -INFINITY; \
+        if ((d)[D_SPRING_KIND] == KIND_GAS) { \
+            double s_ = (d)[D_STRUT_STROKE] > 0 ? (d)[D_STRUT_STROKE] : STROKE_FRACTION * (p)->l0; \
+            (p)->G = -(d)[D_SPRING_PRELOAD]; (p)->gb = (1.0 - 1.0 / (d)[D_STRUT_PROGRESSION]) / s_; \
+            (p)->lc = (p)->l0 - s_; (p)->F = 0.0; (p)->k = 0.0; \
+        } \
+        (p)->FR = (d)[D_STRUT_FRICTION]; \
         (p)->kt = (d)[D_TORSION_K]; (p)->psi0 = (d)[D_TORSION_FREE_ANGLE]; (p)->ow = (d)[D_DAMPER_ONE_WAY] != 0.0; \
         (p)->Tf = (d)[D_FRICTION_TORQUE]; (p)->fs = 0.0; \
         (p)->x = (p)->kt != 0.0 || (p)->crp != 0.0; \
@@ -213,7 +228,7 @@ typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs, cen, the; v4l ow, eg
 /* copy row p into lane q of the group G (then G->anyx |= p->x) */
 #define ELEM_LANE(G, q, p) do { \
         (G)->k[q] = (p)->k; (G)->l0[q] = (p)->l0; (G)->c[q] = (p)->c; (G)->cr[q] = (p)->cr; \
-        (G)->F[q] = (p)->F; \
+        (G)->F[q] = (p)->F; (G)->G[q] = (p)->G; (G)->gb[q] = (p)->gb; (G)->FR[q] = (p)->FR; \
         (G)->kt[q] = (p)->kt; (G)->psi0[q] = (p)->psi0; (G)->crp[q] = (p)->crp; \
         (G)->ow[q] = -(long long)(p)->ow; (G)->Tf[q] = (p)->Tf; (G)->fs[q] = (p)->fs; \
         ELEM_LANE_ENGAGE(G, q, p); \
@@ -223,6 +238,10 @@ typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs, cen, the; v4l ow, eg
         (G)->cen[q] = (p)->cen; (G)->the[q] = (p)->e ? (p)->the : -INFINITY; \
         (G)->egm[q] = -(long long)(p)->eg; \
     } while (0)
+/* the kernel's number of a gas strut (softclose.model.elements.springs.GAS) and a strut's
+ * stroke as a fraction of its extended length when none is given (STROKE_FRACTION) */
+#define KIND_GAS (-2.0)
+#define STROKE_FRACTION 0.4
 #define LAW_LINEAR_T(k, q0, q) ((k) * ((q) - (q0)))                  /* T = dV/dq */
 #define LAW_LINEAR_V(k, q0, q) (0.5 * (k) * ((q) - (q0)) * ((q) - (q0)))
 /* d/dtheta of T q' (for the implicit methods' Jacobian): k (q'^2 + (q - q0) q'') */
@@ -233,16 +252,40 @@ typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs, cen, the; v4l ow, eg
 #define LAW_PRELOADED_DSLOPE(k, q0, F, q, dq_th, dq, ddq) \
     (LAW_LINEAR_DSLOPE(k, q0, q, dq_th, dq, ddq) + (F) * (ddq))
 
+/* a gas strut at u = q - l0 (its extended length): T = G / (1 + b u) with G = -F1 (it
+ * pushes), b = (1 - 1/K)/s; dT/dq; V = G u psi(b u), psi(z) = ln(1 + z)/z (psi(0) = 1: a
+ * constant force with K = 1). G = b = 0 for every other spring: T = 0/1 = 0, V = 0 */
+#define LAW_GAS_T(G, b, u) ((G) / (1.0 + (b) * (u)))
+#define LAW_GAS_DT(G, b, u) (-(G) * (b) / ((1.0 + (b) * (u)) * (1.0 + (b) * (u))))
+static inline double law_gas_v(double G, double b, double u)
+{
+    if (G == 0.0) return 0.0;
+    double z = b * u;
+    return G * u * (fabs(z) < 1e-8 ? 1.0 - 0.5 * z : log1p(z) / z);
+}
+static inline v4 law_gas_v4(v4 G, v4 b, v4 u)
+{
+    v4 r;
+    for (int q = 0; q < VW; q++) r[q] = law_gas_v(G[q], b[q], u[q]);
+    return r;
+}
+static inline v4 elem_abs4(v4 x) { return (v4)((v4l)x & ~(v4l){LLONG_MIN, LLONG_MIN, LLONG_MIN, LLONG_MIN}); }
+/* (numbers or lanes alike) */
+#define LAW_GAS_V(G, b, u) _Generic((G), v4: law_gas_v4, default: law_gas_v)(G, b, u)
+#define ELEM_ABS(x) _Generic((x), v4: elem_abs4, default: fabs)(x)
+/* the spring's tension T(l): its coil law and its gas law (one of them 0) */
+#define ELEM_SPRING_T(P, l) \
+    (LAW_PRELOADED_T((P)->k, (P)->l0, (P)->F, l) + LAW_GAS_T((P)->G, (P)->gb, (l) - (P)->l0))
 /* the slope dV/dtheta of gravity and the spring, from the coefficient values c[] (numbers
  * or lanes); a row with element columns (has x) adds the torsion spring's term from x[] */
-#define ELEM_SLOPE(P, cv) \
-    ((cv)[C_DVG] + LAW_PRELOADED_T((P)->k, (P)->l0, (P)->F, (cv)[C_L]) * (cv)[C_DL])
+#define ELEM_SLOPE(P, cv) ((cv)[C_DVG] + ELEM_SPRING_T(P, (cv)[C_L]) * (cv)[C_DL])
 #define ELEM_SLOPE_X(P, x) (LAW_LINEAR_T((P)->kt, (P)->psi0, (x)[X_PSI]) * (x)[X_DPSI])
 /* the potential V of gravity and the spring (then + ELEM_POTENTIAL_X); the energy is the
  * kinetic energy KE plus the same potentials, summed in this order */
-#define ELEM_POTENTIAL(P, cv) ((cv)[C_VG] + LAW_PRELOADED_V((P)->k, (P)->l0, (P)->F, (cv)[C_L]))
-#define ELEM_ENERGY(P, cv, KE) \
-    ((KE) + (cv)[C_VG] + LAW_PRELOADED_V((P)->k, (P)->l0, (P)->F, (cv)[C_L]))
+#define ELEM_SPRING_V(P, l) \
+    (LAW_PRELOADED_V((P)->k, (P)->l0, (P)->F, l) + LAW_GAS_V((P)->G, (P)->gb, (l) - (P)->l0))
+#define ELEM_POTENTIAL(P, cv) ((cv)[C_VG] + ELEM_SPRING_V(P, (cv)[C_L]))
+#define ELEM_ENERGY(P, cv, KE) ((KE) + (cv)[C_VG] + ELEM_SPRING_V(P, (cv)[C_L]))
 #define ELEM_POTENTIAL_X(P, x) LAW_LINEAR_V((P)->kt, (P)->psi0, (x)[X_PSI])
 /* the damping on theta': the dashpot and the rotary damper at the lid (then + the rotary
  * damper at a pivot, from x[]); a one-way row's damping is 0 while th' > 0 */
@@ -252,12 +295,16 @@ typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs, cen, the; v4l ow, eg
  * a row has one (Par.e; Par4.anye for a group) */
 #define ELEM_DAMPING_E(P) ((P)->cen)
 #define ELEM_ONE_WAY(p, thd, damp) ((p)->ow && (thd) > 0 ? 0.0 : (damp))
-/* dry friction's moment against the motion (fs: the lane's direction, set at its rests) */
-#define ELEM_FRICTION(p) ((p)->Tf * (p)->fs)
+/* dry friction's moment T_fr = T_f + F_R |l'| (the lumped friction and the strut's) and
+ * its moment against the motion (fs: the lane's direction, set at its rests) */
+#define ELEM_FRICTION_MOMENT(p, cv) ((p)->Tf + (p)->FR * ELEM_ABS((cv)[C_DL]))
+#define ELEM_FRICTION(p, cv) (ELEM_FRICTION_MOMENT(p, cv) * (p)->fs)
 /* d/dtheta of the slope and of the damping (values c, x; their derivatives dc, dx) */
 #define ELEM_DSLOPE(P, cv, dcv) \
     ((dcv)[C_DVG] + LAW_PRELOADED_DSLOPE((P)->k, (P)->l0, (P)->F, (cv)[C_L], (dcv)[C_L], \
-                                         (cv)[C_DL], (dcv)[C_DL]))
+                                         (cv)[C_DL], (dcv)[C_DL]) \
+     + LAW_GAS_DT((P)->G, (P)->gb, (cv)[C_L] - (P)->l0) * (dcv)[C_L] * (cv)[C_DL] \
+     + LAW_GAS_T((P)->G, (P)->gb, (cv)[C_L] - (P)->l0) * (dcv)[C_DL])
 #define ELEM_DSLOPE_X(P, x, dx) \
     LAW_LINEAR_DSLOPE((P)->kt, (P)->psi0, (x)[X_PSI], (dx)[X_PSI], (x)[X_DPSI], (dx)[X_DPSI])
 #define ELEM_DDAMPING(P, dcv) ((P)->c * (dcv)[C_DD])
@@ -267,11 +314,12 @@ typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs, cen, the; v4l ow, eg
  * reaches theta_e is undamped, and runs to t_max as one without the end damper */
 #define ELEM_DISSIPATES(P) ((P)->c > 0 || (P)->cr > 0 || (P)->crp > 0 || (P)->cen > 0)
 /* a friction row stops at its first stick, exactly: the energy rule is not used for it */
-#define ELEM_STICKS(P) ((P)->Tf > 0)
+#define ELEM_STICKS(P) ((P)->Tf > 0 || (P)->FR > 0)
 #define ELEM_DAMPERS_VALID(P) ((P)->c >= 0 && (P)->cr >= 0 && (P)->crp >= 0 && (P)->ce >= 0)
 /* the size of the springs' potential terms (the energy's rounding scale) */
 #define ELEM_SIZE(P, cv) (fabs((cv)[C_VG]) + 0.5 * fabs((P)->k) * ((cv)[C_L] - (P)->l0) \
-                          * ((cv)[C_L] - (P)->l0) + fabs((P)->F * (cv)[C_L]))
+                          * ((cv)[C_L] - (P)->l0) + fabs((P)->F * (cv)[C_L]) \
+                          + fabs((P)->G * ((cv)[C_L] - (P)->l0)))
 #define ELEM_SIZE_X(P, x) fabs(ELEM_POTENTIAL_X(P, x))
 
 /* a linear law on q in [qlo, qhi] with q' in [dlo, dhi]: its least potential and the range
@@ -285,6 +333,25 @@ static inline void law_linear_bounds(double k, double q0, double qlo, double qhi
     double x1 = e1 * dlo, x2 = e1 * dhi, x3 = e2 * dlo, x4 = e2 * dhi;
     double plo = MIN2(MIN2(x1, x2), MIN2(x3, x4)), phi = MAX2(MAX2(x1, x2), MAX2(x3, x4));
     *slo = k * plo; *shi = k * phi;
+}
+
+/* a gas strut's law (G, b; extended length q0) on q in [qlo, qhi] with q' in [dlo, dhi]:
+ * its least potential and the range of T q'. T = G / (1 + b (q - q0)) is monotone in q and
+ * V' = T keeps G's sign, so both come from the ends; beyond the law's pole (1 + b u <= 0,
+ * far past the strut's stroke: an invalid design) nothing is bounded */
+static inline void law_gas_bounds(double G, double b, double q0, double qlo, double qhi,
+                                  double dlo, double dhi, double *Vmin, double *slo,
+                                  double *shi)
+{
+    double ulo = qlo - q0, uhi = qhi - q0;
+    if (!(1.0 + b * ulo > 0.0 && 1.0 + b * uhi > 0.0)) {
+        *Vmin = -INFINITY; *slo = -INFINITY; *shi = INFINITY; return;
+    }
+    double Va = law_gas_v(G, b, ulo), Vb = law_gas_v(G, b, uhi);
+    *Vmin = MIN2(Va, Vb);
+    double t1 = LAW_GAS_T(G, b, ulo), t2 = LAW_GAS_T(G, b, uhi);
+    double x1 = t1 * dlo, x2 = t1 * dhi, x3 = t2 * dlo, x4 = t2 * dhi;
+    *slo = MIN2(MIN2(x1, x2), MIN2(x3, x4)); *shi = MAX2(MAX2(x1, x2), MAX2(x3, x4));
 }
 
 /* the same with a preload F (V = k (q - q0)^2 / 2 + F q): the least potential from the
@@ -682,7 +749,7 @@ static inline int rhs(const Table *T, const Par *p, double th, double thd, doubl
     if (p->e) damp += ELEM_DAMPING_E(p); /* (constant in theta: no term in ddamp) */
     damp = ELEM_ONE_WAY(p, thd, damp);
     double N = -slope - 0.5 * v[C_DM] * thd * thd - damp * thd;
-    if (p->Tf != 0.0) N -= ELEM_FRICTION(p);
+    if (ELEM_STICKS(p)) N -= ELEM_FRICTION(p, v);
     *thdd = N / v[C_M];
     if (J) {
         double dslope = ELEM_DSLOPE(p, v, dv), ddamp = ELEM_DDAMPING(p, dv);
@@ -725,6 +792,17 @@ static inline int potential(const Table *T, const Par *p, double th, double *V, 
     int i = cell_index(T, th, &s);
     if (i < 0) return 1;
     potential_at(T, p, i, s, V, dV);
+    return 0;
+}
+
+/* the friction moment T_fr at th (the lumped friction and the strut's F_R |l'|): what holds
+ * a lane at rest there; 1 outside the table */
+static int friction_moment(const Table *T, const Par *p, double th, double *Tfr)
+{
+    double v[NC];
+    if (p->FR == 0.0) { *Tfr = p->Tf; return 0; }
+    if (tab_eval(T, p, th, v, NULL)) return 1;
+    *Tfr = ELEM_FRICTION_MOMENT(p, v);
     return 0;
 }
 
@@ -1000,6 +1078,11 @@ static int speed_piece_ok(const Table *T, const Par *p, int i, double s0, double
     if (p->x) { xtab_eval(T, i, sm, x, NULL); Vm += ELEM_POTENTIAL_X(p, x); }
     double Vsp, sslo, sshi;
     law_preloaded_bounds(p->k, p->l0, p->F, llo, lhi, dllo, dlhi, &Vsp, &sslo, &sshi);
+    if (p->G != 0.0) {
+        double Vg, gslo, gshi;
+        law_gas_bounds(p->G, p->gb, p->l0, llo, lhi, dllo, dlhi, &Vg, &gslo, &gshi);
+        Vsp += Vg; sslo += gslo; sshi += gshi;
+    }
     double V1 = glo + Vsp;
     double slo = dglo + sslo, shi = dghi + sshi;
     if (p->x) elem_bounds_x(T->xcc, p, i, s0, s1, &V1, &slo, &shi);
@@ -1213,7 +1296,7 @@ static inline int node_eval(const Table *T, const Par *p, double th, double thd,
     if (p->e) damp += ELEM_DAMPING_E(p);
     damp = ELEM_ONE_WAY(p, thd, damp);
     double N = -slope - 0.5 * dM * thd * thd - damp * thd;
-    if (p->Tf != 0.0) N -= ELEM_FRICTION(p);
+    if (ELEM_STICKS(p)) N -= ELEM_FRICTION(p, c);
     double acc = N / M;
     double sg = thd >= 0 ? 1.0 : -1.0;
     *a = acc;
@@ -1246,7 +1329,8 @@ static int lane_invalid_throughout(const Table *T, Lane *L, double s, double th0
     if (L->p.ps) l_extremes_pts(T, &L->p, thc, th0, &lmin, &lmax);
     else l_extremes(T, thc, th0, &lmin, &lmax);
     double margin = 1e-6 * MAX2(MAX2(fabs(lmin), fabs(lmax)), 1.0);
-    if (!(s < 0 ? lmin > L->p.l0 + margin : lmax < L->p.l0 - margin)) return 0;
+    if (!(s < 0 ? lmin > L->p.l0 + margin || lmax < L->p.lc - margin
+                : lmax < L->p.l0 - margin)) return 0;
     L->th_min = thc; L->th_max = th0;
     L->E0 = L->Emax = 0.0; L->thd_max = 0.0;
     lane_record(L); /* (a trajectory of its release alone) */
@@ -1282,13 +1366,13 @@ static int lane_start(const Table *T, Lane *L, const double *d, int ncol, double
     if (L->p.eg) { out[O_ENGAGE_TIME] = 0.0; out[O_ENGAGE_THETA_DOT] = 0.0; } /* released engaged, at rest */
     lane_record(L);
     double E0, V0;
-    if (ELEM_STICKS(&L->p)) { /* released from rest: it moves only if |V'| exceeds T_f */
-        double Vr, dVr;
+    if (ELEM_STICKS(&L->p)) { /* released from rest: it moves only if |V'| exceeds T_fr */
+        double Vr, dVr, Tfr;
         if ((L->p.dm != 0.0 && !T->dcc) || (L->p.x && !T->xcc) || ((L->p.ps | L->p.pd) && !T->pcc)
-            || potential(T, &L->p, th0, &Vr, &dVr)) {
+            || potential(T, &L->p, th0, &Vr, &dVr) || friction_moment(T, &L->p, th0, &Tfr)) {
             L->E0 = L->Emax = NAN; L->status = S_RANGE; return 1;
         }
-        if (fabs(dVr) <= L->p.Tf) {
+        if (fabs(dVr) <= Tfr) {
             L->E0 = L->Emax = L->E = Vr; L->Vlo = L->Vhi = Vr;
             L->reason = R_STUCK; L->stop_theta = th0;
             return 1;
@@ -1409,7 +1493,9 @@ __attribute__((noinline)) static int lane_friction_rest(const Table *T, const Me
     L->gp = L->g; L->thp = th; L->thdp = thd; L->hp = tau;
     L->E = V;
     lane_record(L);
-    if (fabs(dV) <= p->Tf) { L->reason = R_STUCK; L->stop_theta = y0; return 1; }
+    double Tfr;
+    if (friction_moment(T, p, y0, &Tfr)) { L->status = S_RANGE; return 1; }
+    if (fabs(dV) <= Tfr) { L->reason = R_STUCK; L->stop_theta = y0; return 1; }
     p->fs = dV < 0 ? 1.0 : -1.0;
     double E1, V1;
     if (node_eval(T, p, y0, 0.0, &L->a, &L->g, &L->dg, &E1, &V1)) {
@@ -1767,7 +1853,7 @@ ALWAYS v4 rhs4_impl(const Table *T, const Par4 *P, v4 th, v4 thd, v4l *okm, cons
     if (P->anye) damp += ELEM_DAMPING_E(P);
     if (P->anyow) damp = one_way4(P, thd, damp);
     v4 N = -slope - 0.5 * c[C_DM] * thd * thd - damp * thd;
-    if (P->anyf) N -= ELEM_FRICTION(P);
+    if (P->anyf) N -= ELEM_FRICTION(P, c);
     return N / c[C_M];
 }
 
@@ -1816,7 +1902,7 @@ ALWAYS void node4_impl(const Table *T, const Par4 *P, v4 th, v4 thd, v4 *a, v4 *
     if (P->anye) damp += ELEM_DAMPING_E(P);
     if (P->anyow) damp = one_way4(P, thd, damp);
     v4 N = -slope - 0.5 * dM * thd * thd - damp * thd;
-    if (P->anyf) N -= ELEM_FRICTION(P);
+    if (P->anyf) N -= ELEM_FRICTION(P, c);
     v4 acc = N / M;
     *Ev = En;
     *Vv = Vn;
@@ -1874,7 +1960,7 @@ ALWAYS int rhs_fast(const Table *T, const Par *p, double th, double thd, double 
     if (p->e) damp += ELEM_DAMPING_E(p);
     damp = ELEM_ONE_WAY(p, thd, damp);
     double N = -slope - 0.5 * dM * thd * thd - damp * thd;
-    if (p->Tf != 0.0) N -= ELEM_FRICTION(p);
+    if (ELEM_STICKS(p)) N -= ELEM_FRICTION(p, c);
     *thdd = N / M;
     return 0;
 }
@@ -2167,7 +2253,7 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
                     G->any |= G->dm[e] != 0.0;
                     G->anyx |= lanes[k - q + e].p.x && used[k - q + e];
                     G->anyow |= lanes[k - q + e].p.ow && used[k - q + e];
-                    G->anyf |= lanes[k - q + e].p.Tf != 0.0 && used[k - q + e];
+                    G->anyf |= ELEM_STICKS(&lanes[k - q + e].p) && used[k - q + e];
                     G->anye |= lanes[k - q + e].p.e && used[k - q + e];
                 }
                 if (over) {

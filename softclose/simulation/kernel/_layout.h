@@ -8,9 +8,9 @@
 #define KERNEL_ABI 6 /* bumped when the exported signatures or outputs change */
 /* the design-row columns: the elements' parameters (the registry's order), e_tol, m_lid */
 enum { D_SPRING_K, D_SPRING_REST_LENGTH, D_DAMPER_C, D_ROTARY_DAMPER_C, D_SPRING_KIND,
-       D_SPRING_PRELOAD, D_TORSION_K, D_TORSION_FREE_ANGLE, D_DAMPER_ONE_WAY,
-       D_FRICTION_TORQUE, D_END_DAMPER_C, D_END_DAMPER_ANGLE, D_ENERGY_TOL, D_LID_MASS,
-       NDESIGN };
+       D_SPRING_PRELOAD, D_STRUT_STROKE, D_STRUT_PROGRESSION, D_TORSION_K,
+       D_TORSION_FREE_ANGLE, D_DAMPER_ONE_WAY, D_FRICTION_TORQUE, D_END_DAMPER_C,
+       D_END_DAMPER_ANGLE, D_STRUT_FRICTION, D_ENERGY_TOL, D_LID_MASS, NDESIGN };
 /* the table's coefficients, and those that depend on the lid's mass (the first NMASS) */
 #define NC 8
 #define NMASS 4
@@ -35,9 +35,10 @@ static const char LAYOUT[] =
     "xcc=psi,dpsi,dpr2,-;"
     "pose=Ax,Ay,dAx,dAy,cos,sin,-,-;"
     "row=spring_k,spring_rest_length,damper_c,rotary_damper_c,spring_kind,"
-    "spring_preload,torsion_k,torsion_free_angle,damper_one_way,friction_torque,"
-    "end_damper_c,end_damper_angle,energy_tol,lid_mass,spring_anchor_x,spring_anchor_y,"
-    "lid_e_x,lid_e_y,dashpot_anchor_x,dashpot_anchor_y,dashpot_lid_x,dashpot_lid_y;"
+    "spring_preload,strut_stroke,strut_progression,torsion_k,torsion_free_angle,"
+    "damper_one_way,friction_torque,end_damper_c,end_damper_angle,strut_friction,"
+    "energy_tol,lid_mass,spring_anchor_x,spring_anchor_y,lid_e_x,lid_e_y,"
+    "dashpot_anchor_x,dashpot_anchor_y,dashpot_lid_x,dashpot_lid_y;"
     "out=status,closing_time,impact_theta_dot,impact_tip_speed,peak_tip_speed,"
     "min_spring_length,max_spring_length,steps,energy_rise,theta_min,theta_dot_max,"
     "theta_max,stop_reason,stop_theta,stop_time,engage_time,engage_theta_dot;"
