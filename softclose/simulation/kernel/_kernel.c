@@ -182,7 +182,7 @@ typedef struct { int base, nb; double blk[PKB][4 * NC]; } PtCache;
 typedef struct { double k, l0, F, c, cr, crp, kt, psi0, Tf, fs, dm, ce, the, cen;
                  double G, gb, lc, FR; /* a gas strut's law (G, b), its compressed end lc
                                         * = l0 - s (-inf for a coil spring); strut friction */
-                 int x, ow, e, eg;
+                 int x, ow, e, eg, anyg; /* anyg: a gas strut (G != 0) */
                  int ps, pd; double pt[NPT]; /* own spring / dashpot points (D_PT ...) */
                  PtCache *pc; /* their pieces (with ps or pd) */ } Par;
 /* the lanes' parameters as vectors; any: a lane at another lid mass; anyx: a lane with
@@ -190,7 +190,7 @@ typedef struct { double k, l0, F, c, cr, crp, kt, psi0, Tf, fs, dm, ce, the, cen
  * a zero, k_t = 0); anye: a lane with an end damper (cen added for every lane of the group:
  * the others add a zero; the = -inf and egm = 0 in them, so no crossing is ever seen) */
 typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs, cen, the, G, gb, FR; v4l ow, egm;
-                 double dm[VW]; int any, anyx, anyow, anyf, anye;
+                 double dm[VW]; int any, anyx, anyow, anyf, anye, anyg;
                  const Par *lp[VW]; int lpts[VW], anyp; /* the lanes' rows; which have
                                                           * points; any of them */ } Par4;
 /* read a design row d of table T into p (not dm) */
@@ -205,6 +205,7 @@ typedef struct { v4 k, l0, F, c, cr, crp, kt, psi0, Tf, fs, cen, the, G, gb, FR;
             (p)->G = -(d)[D_SPRING_PRELOAD]; (p)->gb = (1.0 - 1.0 / (d)[D_STRUT_PROGRESSION]) / s_; \
             (p)->lc = (p)->l0 - s_; (p)->F = 0.0; (p)->k = 0.0; \
         } \
+        (p)->anyg = (p)->G != 0.0; \
         (p)->FR = (d)[D_STRUT_FRICTION]; \
         (p)->kt = (d)[D_TORSION_K]; (p)->psi0 = (d)[D_TORSION_FREE_ANGLE]; (p)->ow = (d)[D_DAMPER_ONE_WAY] != 0.0; \
         (p)->Tf = (d)[D_FRICTION_TORQUE]; (p)->fs = 0.0; \
@@ -274,16 +275,16 @@ static inline v4 elem_abs4(v4 x) { return (v4)((v4l)x & ~(v4l){LLONG_MIN, LLONG_
 #define LAW_GAS_V(G, b, u) _Generic((G), v4: law_gas_v4, default: law_gas_v)(G, b, u)
 #define ELEM_ABS(x) _Generic((x), v4: elem_abs4, default: fabs)(x)
 /* the spring's tension T(l): its coil law and its gas law (one of them 0) */
-#define ELEM_SPRING_T(P, l) \
-    (LAW_PRELOADED_T((P)->k, (P)->l0, (P)->F, l) + LAW_GAS_T((P)->G, (P)->gb, (l) - (P)->l0))
+#define ELEM_SPRING_T(P, l) (LAW_PRELOADED_T((P)->k, (P)->l0, (P)->F, l) \
+    + ((P)->anyg ? LAW_GAS_T((P)->G, (P)->gb, (l) - (P)->l0) : 0.0 * (l)))
 /* the slope dV/dtheta of gravity and the spring, from the coefficient values c[] (numbers
  * or lanes); a row with element columns (has x) adds the torsion spring's term from x[] */
 #define ELEM_SLOPE(P, cv) ((cv)[C_DVG] + ELEM_SPRING_T(P, (cv)[C_L]) * (cv)[C_DL])
 #define ELEM_SLOPE_X(P, x) (LAW_LINEAR_T((P)->kt, (P)->psi0, (x)[X_PSI]) * (x)[X_DPSI])
 /* the potential V of gravity and the spring (then + ELEM_POTENTIAL_X); the energy is the
  * kinetic energy KE plus the same potentials, summed in this order */
-#define ELEM_SPRING_V(P, l) \
-    (LAW_PRELOADED_V((P)->k, (P)->l0, (P)->F, l) + LAW_GAS_V((P)->G, (P)->gb, (l) - (P)->l0))
+#define ELEM_SPRING_V(P, l) (LAW_PRELOADED_V((P)->k, (P)->l0, (P)->F, l) \
+    + ((P)->anyg ? LAW_GAS_V((P)->G, (P)->gb, (l) - (P)->l0) : 0.0 * (l)))
 #define ELEM_POTENTIAL(P, cv) ((cv)[C_VG] + ELEM_SPRING_V(P, (cv)[C_L]))
 #define ELEM_ENERGY(P, cv, KE) ((KE) + (cv)[C_VG] + ELEM_SPRING_V(P, (cv)[C_L]))
 #define ELEM_POTENTIAL_X(P, x) LAW_LINEAR_V((P)->kt, (P)->psi0, (x)[X_PSI])
@@ -303,8 +304,8 @@ static inline v4 elem_abs4(v4 x) { return (v4)((v4l)x & ~(v4l){LLONG_MIN, LLONG_
 #define ELEM_DSLOPE(P, cv, dcv) \
     ((dcv)[C_DVG] + LAW_PRELOADED_DSLOPE((P)->k, (P)->l0, (P)->F, (cv)[C_L], (dcv)[C_L], \
                                          (cv)[C_DL], (dcv)[C_DL]) \
-     + LAW_GAS_DT((P)->G, (P)->gb, (cv)[C_L] - (P)->l0) * (dcv)[C_L] * (cv)[C_DL] \
-     + LAW_GAS_T((P)->G, (P)->gb, (cv)[C_L] - (P)->l0) * (dcv)[C_DL])
+     + ((P)->anyg ? LAW_GAS_DT((P)->G, (P)->gb, (cv)[C_L] - (P)->l0) * (dcv)[C_L] * (cv)[C_DL] \
+        + LAW_GAS_T((P)->G, (P)->gb, (cv)[C_L] - (P)->l0) * (dcv)[C_DL] : 0.0 * (cv)[C_L]))
 #define ELEM_DSLOPE_X(P, x, dx) \
     LAW_LINEAR_DSLOPE((P)->kt, (P)->psi0, (x)[X_PSI], (dx)[X_PSI], (x)[X_DPSI], (dx)[X_DPSI])
 #define ELEM_DDAMPING(P, dcv) ((P)->c * (dcv)[C_DD])
@@ -2246,6 +2247,7 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
                 G->dm[q] = L->p.dm;
                 G->lp[q] = &L->p;
                 G->any = 0; G->anyx = 0; G->anyow = 0; G->anyf = 0; G->anye = 0; G->anyp = 0;
+                G->anyg = 0;
                 for (int e = 0; e < VW; e++) {
                     G->lp[e] = &lanes[k - q + e].p;
                     G->lpts[e] = lanes[k - q + e].p.ps | lanes[k - q + e].p.pd;
@@ -2255,6 +2257,7 @@ ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, do
                     G->anyow |= lanes[k - q + e].p.ow && used[k - q + e];
                     G->anyf |= ELEM_STICKS(&lanes[k - q + e].p) && used[k - q + e];
                     G->anye |= lanes[k - q + e].p.e && used[k - q + e];
+                    G->anyg |= lanes[k - q + e].p.anyg && used[k - q + e];
                 }
                 if (over) {
                     lane_finish(T, L, thc, t_max);
