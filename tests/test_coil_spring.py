@@ -498,8 +498,9 @@ def test_spring_command_checks(capsys):
 
 
 @pytest.mark.parametrize("sets, message", [
-    ((), "design.spring_kind: softclose spring makes a compression spring to order; the "
-         "design's spring is 'linear' (set design.spring_kind = \"compression\")"),
+    ((), "design.spring_kind: softclose spring makes a compression or an extension spring to "
+         "order; the design's spring is 'linear' (set design.spring_kind = \"compression\" or "
+         "\"extension\")"),
     (COMPRESSION + ["spring.wire_d=0.001", "spring.coil_d=0.025"],
      "spring.coil_d: the spring index w = D/d = 25 is outside EN 13906-1's 4 <= w <= 20 "
      "(d = 1 mm, D = 25 mm)"),

@@ -1,4 +1,5 @@
-"""``softclose spring [--out DIR]``: the design's compression spring made to order (SPEC §14)."""
+"""``softclose spring [--out DIR]``: the design's compression or extension spring made to order
+(SPEC §14)."""
 
 from __future__ import annotations
 
@@ -8,9 +9,10 @@ import json
 from .common import Outcome, add_common, add_out, prepare_out, wrote
 
 DESCRIPTION = """\
-The design's compression spring (design.spring_kind = "compression") as a part a spring maker
-can coil: wire, mean coil diameter and active coils, checked by EN 13906-1 for the lengths it
-works at as the lid turns between stroke.theta_closed_deg and stroke.theta0_deg.
+The design's compression spring (design.spring_kind = "compression", EN 13906-1) or extension
+spring ("extension", EN 13906-2: its body) as a part a spring maker can coil: wire, mean coil
+diameter and active coils, checked for the lengths it works at as the lid turns between
+stroke.theta_closed_deg and stroke.theta0_deg.
 
 With spring.wire_d, spring.coil_d and spring.active_coils all given, that spring is checked;
 otherwise one is designed: preferred EN 10270 wire diameters (or the spring.wire_d given),
@@ -23,6 +25,13 @@ minimum coil gaps S_a; the stress at solid length tau_c <= 0.56 R_m; the stroke 
 the wire's Goodman line at spring.cycles; buckling (seating spring.seating); the space; the
 wire's temperatures. The EN 15800 tolerances are those of spring.grade.
 
+An extension spring (free length design.spring_rest_length with the body closed, initial
+tension design.spring_preload): the rate; the closed body (n + 1) d within the free length,
+leaving at least 0.8 D_i for each hook; the initial tension stress within the preferred range
+at its index; the stress at the largest working force tau_2 <= 0.45 R_m (EN 13906-2); the
+body's stroke stress under the unpeened wire's Goodman line; the space; the temperatures.
+It does not buckle. Its hooks are not covered (EN 13906-2 §11 and Annex A: ask the maker).
+
 Exit 3 when the spring checked fails a check, or no spring meets them all (the nearest miss
 is shown). With --out: spring.json, the checks (spring_checks.csv) and the candidates
 (spring_candidates.csv), and spring.png: the force and the stress over the spring's length
@@ -30,8 +39,8 @@ with the working range and the limits."""
 
 
 def register(sub) -> None:
-    p = sub.add_parser("spring", help="the design's compression spring made to order "
-                                      "(EN 13906-1 checks, EN 15800 tolerances)",
+    p = sub.add_parser("spring", help="the design's compression or extension spring made to "
+                                      "order (EN 13906-1/-2 checks, EN 15800 tolerances)",
                        description=DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     add_common(p)
@@ -66,15 +75,40 @@ def _failed(c: dict) -> str:
             f"{c['limit'] * scale:.4g} {shown}")
 
 
+def _format_extension(payload: dict, s: dict, life: str) -> list[str]:
+    st, F = s["stresses"], s["forces"]
+    return [
+        f"extension spring {'checked' if payload['mode'] == 'check' else 'designed'}: "
+        f"{s['material']}, d = {_mm(s['wire_d'])}, D = {_mm(s['coil_d'])} (outer "
+        f"{_mm(s['outer_d'])}, inner {_mm(s['inner_d'])}), n = {s['active_coils']:g} active",
+        f"  free length {_mm(s['free_length'])} (body closed {_mm(s['body_length'])}, "
+        f"{_mm(s['length_for_hooks'])} left for the hooks), works from "
+        f"{_mm(s['working_lengths'][0])} to {_mm(s['working_lengths'][1])}",
+        f"  rate {s['rate']:.5g} N/m (requested {s['rate_required']:.5g} N/m, "
+        f"{s['rate_deviation']:+.2%}); initial tension F0 = {F['F0']:.4g} N, forces F1 = "
+        f"{F['F1']:.4g} N, F2 = {F['F2']:.4g} N",
+        f"  stresses (MPa): initial tau_0 = {_mpa(st['tau_0'])} (at most "
+        f"{_mpa(st['tau_0_allowed'])} at w = {s['index']:.3g}), tau_k1 = {_mpa(st['tau_k1'])}, "
+        f"tau_k2 = {_mpa(st['tau_k2'])}, stroke tau_kh = {_mpa(st['tau_kh'])} (allowed "
+        f"{_mpa(st['tau_kh_allowed'])} for {s['cycles']:.3g} strokes), at F2 tau_2 = "
+        f"{_mpa(st['tau_2'])} (allowed 0.45 R_m = {_mpa(st['tau_2_allowed'])}); body life "
+        f"{life}",
+        f"  does not buckle; natural frequency {s['natural_frequency']:.4g} Hz; mass "
+        f"{s['mass'] * 1e3:.4g} g (hooks as one coil each)",
+        f"  {s['hooks']}",
+        "checks (value, relation, limit):"]
+
+
 def format_spring(payload: dict) -> str:
     """The text form of ``softclose spring``'s payload."""
     s = payload["spring"]
     if s is None:
         return f"  {payload['message']}"
+    if s.get("kind") == "extension":
+        return _format_rest(payload, _format_extension(payload, s, _life(s)))
     st, b, tol = s["stresses"], s["buckling"], s["tolerance"]
     ends = {"closed_ground": "closed and ground", "closed": "closed, not ground"}[s["ends"]]
-    life = ("10^7 strokes or more" if s["life"] >= 1e7 else
-            "fewer than 10^3 strokes" if s["life"] < 1e3 else f"{s['life']:.3g} strokes")
+    life = _life(s)
     lines = [
         f"spring {'checked' if payload['mode'] == 'check' else 'designed'}: {s['material']}, "
         f"d = {_mm(s['wire_d'])}, D = {_mm(s['coil_d'])} (outer {_mm(s['outer_d'])}, inner "
@@ -97,6 +131,17 @@ def format_spring(payload: dict) -> str:
         f"  EN 15800 grade {tol['grade']}: free length ±{_mm(tol['free_length'])}, F1 "
         f"±{tol['force']['F1']:.3g} N, F2 ±{tol['force']['F2']:.3g} N",
         "checks (value, relation, limit):"]
+    return _format_rest(payload, lines)
+
+
+def _life(s: dict) -> str:
+    return ("10^7 strokes or more" if s["life"] >= 1e7 else
+            "fewer than 10^3 strokes" if s["life"] < 1e3 else f"{s['life']:.3g} strokes")
+
+
+def _format_rest(payload: dict, lines: list[str]) -> str:
+    """The checks, the candidates and the message after the spring's lines."""
+    lines = list(lines)
     lines += [_check_line(c) for c in payload["checks"]]
     cands = payload.get("candidates") or []
     if cands:
@@ -132,7 +177,11 @@ def run(cfg, args) -> Outcome:
         payload = res.to_json()
         ok = res.success
         payload["mode"] = "design"
-        if not ok:
+        if not ok and duty.kind == "extension":
+            payload["message"] += (" (more room: spring.max_outer_d, spring.min_inner_d; "
+                                   "fewer spring.cycles; a longer free length, a stiffer "
+                                   "rate or a lower initial tension of the design)")
+        elif not ok:
             payload["message"] += (" (more room: spring.max_outer_d, spring.min_inner_d; "
                                    "fewer spring.cycles; shot-peened wire; another free "
                                    "length or rate of the design)")

@@ -35,9 +35,26 @@ reported are at the reference temperature; the working stresses tau_k1, tau_k2, 
 are at the operating temperature where G is largest (the coldest), where they are
 highest.
 
-Extension springs: the body checks above (rate, static, fatigue on the body's shear
-stress) apply to the coiled body only; hooks, initial tension and their bending stresses
-are not checked here.
+Extension springs (``Duty(kind="extension", initial_tension=F0)``, EN 13906-2,
+:mod:`softclose.coil_spring.extension`): the body's checks, each ``value <relation> limit``:
+
+- ``rate`` as above;
+- ``body_length``: ``L_K = (n + 1) d <= L0 - 2 * 0.8 D_i``, the closed body fits within the
+  free length with room for two hooks of at least 0.8 D_i each
+  (:func:`softclose.coil_spring.extension.hook_room`);
+- ``initial_tension``: ``tau_0 = 8 D F0 / (pi d^3)`` at the reference temperature within
+  the upper end of the preferred range of initial stress at w
+  (:func:`softclose.coil_spring.extension.initial_stress_range`): a body can be wound so;
+- ``static``: ``tau_2 = 8 D F2 / (pi d^3) <= 0.45 R_m``, the uncorrected stress at the
+  largest working force F2 = F0 + R (L2 - L0) (EN 13906-2 §10.2);
+- ``fatigue``: the corrected stroke stress ``tau_kh = tau_k2 - tau_k1`` (tau_k1 at
+  F1 = F0 + R (L1 - L0), the initial tension included) under the unpeened wire's Goodman
+  line at N = ``cycles`` -- the body only;
+- ``outer_d``, ``inner_d``, ``temperature_min``, ``temperature_max`` as above.
+
+No buckling (an extension spring does not buckle), no solid length or coil gaps; the hooks are not
+covered (``hooks`` in the result: EN 13906-2 §11 and Annex A; ask the maker); EN 15800's
+tolerances are those of compression springs, so none are given.
 """
 
 from __future__ import annotations
@@ -46,6 +63,7 @@ import math
 from dataclasses import dataclass
 
 from ..errors import ConfigError
+from . import extension as en13906_2
 from . import standard as en13906
 from . import tolerances as en15800
 from .materials import (DEFAULT_MATERIAL, Material, material as
@@ -190,9 +208,14 @@ class CoilSpring:
                 "active_coils": self.active_coils, "ends": self.ends}
 
 
+#: the kinds of coil spring a duty asks for
+DUTY_KINDS = ("compression", "extension")
+
+
 @dataclass(frozen=True)
 class Duty:
-    """What the lid asks of its compression spring (SI).
+    """What the lid asks of its coil spring (SI): a compression spring (the default) or an
+    extension spring (``kind="extension"``).
 
     Parameters
     ----------
@@ -201,8 +224,9 @@ class Duty:
     free_length : float
         L0 (m).
     longest_length, shortest_length : float
-        L1 and L2 (m): the longest and shortest length the spring works at over the
-        stroke, over every operating temperature; ``L2 <= L1 <= L0``.
+        The longest and shortest length the spring works at over the stroke, over every
+        operating temperature (m). Compression: L1 and L2, ``L2 <= L1 <= L0``; extension:
+        L2 and L1, ``L0 <= L1 <= L2`` (the longest is the most loaded).
     cycles : float
         Design life N (strokes), default 1e5.
     seating : float
@@ -211,6 +235,11 @@ class Duty:
         Operating temperatures (degC), default ``(23.0,)``.
     reference_temperature_c : float
         T_ref (degC) at which ``rate`` is given.
+    kind : str
+        ``"compression"`` (default) or ``"extension"``.
+    initial_tension : float
+        An extension spring's initial tension F0 (N, >= 0; at the reference temperature);
+        0 for a compression spring.
 
     Raises
     ------
@@ -226,16 +255,36 @@ class Duty:
     seating: float = DEFAULT_SEATING
     temperatures_c: tuple = (DEFAULT_REFERENCE_C,)
     reference_temperature_c: float = DEFAULT_REFERENCE_C
+    kind: str = "compression"
+    initial_tension: float = 0.0
 
     def __post_init__(self):
         _positive("duty.rate", self.rate, "N/m")
         L0 = _positive("duty.free_length", self.free_length, "m")
         L1 = _positive("duty.longest_length", self.longest_length, "m")
         L2 = _positive("duty.shortest_length", self.shortest_length, "m")
-        if L1 > L0:
+        if self.kind not in DUTY_KINDS:
+            raise ConfigError(f"duty.kind: {self.kind!r} is not a coil spring made to order "
+                              f"(one of {', '.join(DUTY_KINDS)})")
+        F0 = self.initial_tension
+        if not _number(F0) or F0 < 0:
+            raise ConfigError(f"duty.initial_tension: must be a number of newtons >= 0, "
+                              f"got {F0!r}")
+        if self.kind == "compression" and F0:
+            raise ConfigError("duty.initial_tension: only an extension spring has an initial "
+                              "tension (a compression spring's preload moves its free length)")
+        if self.kind == "extension":
+            if L2 < L0:
+                raise ConfigError(f"duty.shortest_length: {L2:.6g} m is shorter than the "
+                                  f"extension spring's free length L0 = {L0:.6g} m (it "
+                                  "would go slack)")
+            if L2 > L1:
+                raise ConfigError(f"duty.shortest_length: {L2:.6g} m is longer than the "
+                                  f"longest working length {L1:.6g} m")
+        elif L1 > L0:
             raise ConfigError(f"duty.longest_length: L1 = {L1:.6g} m is longer than the free "
                               f"length L0 = {L0:.6g} m (a compression spring would come loose)")
-        if L2 > L1:
+        if self.kind == "compression" and L2 > L1:
             raise ConfigError(f"duty.shortest_length: L2 = {L2:.6g} m is longer than the "
                               f"longest working length L1 = {L1:.6g} m")
         _positive("spring.cycles", self.cycles, "strokes")
@@ -257,7 +306,8 @@ class Duty:
                 "longest_length": self.longest_length,
                 "shortest_length": self.shortest_length, "cycles": self.cycles,
                 "seating": self.seating, "temperatures_c": list(self.temperatures_c),
-                "reference_temperature_c": self.reference_temperature_c}
+                "reference_temperature_c": self.reference_temperature_c, "kind": self.kind,
+                "initial_tension": self.initial_tension}
 
 
 @dataclass(frozen=True)
@@ -310,15 +360,22 @@ class SpringCheck:
     Attributes
     ----------
     forces : dict
-        ``F1``, ``F2`` at L1 and L2, ``Fn`` at L_n, ``Fc`` at L_c (N), reference temperature.
+        ``F1``, ``F2`` at L1 and L2, ``Fn`` at L_n, ``Fc`` at L_c (N), reference temperature;
+        an extension spring: ``F0`` (the initial tension), ``F1``, ``F2``.
     stresses : dict
         ``tau_k1``, ``tau_k2``, ``tau_kh`` (corrected, at the governing temperature),
         ``tau_c`` (uncorrected at solid length), ``tau_c_allowed`` = 0.56 R_m,
-        ``tau_kh_allowed`` = the Goodman stroke at tau_k1 and ``cycles`` (Pa).
+        ``tau_kh_allowed`` = the Goodman stroke at tau_k1 and ``cycles`` (Pa); an extension
+        spring: ``tau_0`` (initial tension, as wound) and ``tau_0_allowed`` (the upper end of
+        its preferred range), ``tau_2`` (uncorrected at F2) and
+        ``tau_2_allowed`` = 0.45 R_m instead of tau_c and its limit.
     life : float
         Cycles the stroke stress endures (1e7: 10^7 or more; 0: fewer than 10^3).
     buckling : dict
-        ``s_k`` (m, None: never buckles), ``s_2`` (m), ``safe``.
+        ``s_k`` (m, None: never buckles), ``s_2`` (m), ``safe``; an extension spring:
+        ``{"s_k": None, "s_2": None, "safe": True}`` (it does not buckle).
+    tolerance : Tolerances or None
+        EN 15800's (compression springs); None for an extension spring.
     temperatures : tuple
         Per operating temperature: its rate and working forces.
     """
@@ -336,10 +393,15 @@ class SpringCheck:
     buckling: dict
     natural_frequency: float
     mass: float
-    tolerance: en15800.Tolerances
+    tolerance: en15800.Tolerances | None
     governing_temperature_c: float
     temperatures: tuple
     checks: tuple
+
+    @property
+    def kind(self) -> str:
+        """``"compression"`` or ``"extension"`` (the duty's)."""
+        return self.duty.kind
 
     @property
     def ok(self) -> bool:
@@ -362,9 +424,34 @@ class SpringCheck:
         return max((c.ratio for c in self.checks if not c.ok), default=0.0)
 
     def spring_json(self) -> dict:
-        """SPEC §14's ``spring`` object (SI), then the details."""
+        """SPEC §14's ``spring`` object (SI), then the details (an extension spring:
+        ``kind``, ``initial_tension``, ``body_length``, ``length_for_hooks`` (L0 - L_K, for both
+        hooks), ``hooks`` (what is not covered); ``solid_length``, ``min_working_length``
+        and ``tolerance`` are None)."""
         s, d = self.spring, self.duty
-        return {
+        if self.kind == "extension":
+            Lk = en13906_2.body_length(s.active_coils, s.wire_d)
+            return {
+                "kind": "extension", "material": s.material, "wire_d": s.wire_d,
+                "coil_d": s.coil_d, "outer_d": s.outer_d, "inner_d": s.inner_d,
+                "active_coils": s.active_coils, "total_coils": s.active_coils,
+                "free_length": d.free_length, "solid_length": None,
+                "min_working_length": None, "body_length": Lk,
+                "length_for_hooks": d.free_length - Lk, "initial_tension": d.initial_tension,
+                "rate": self.rate, "forces": dict(self.forces),
+                "stresses": dict(self.stresses), "life": self.life,
+                "buckling": dict(self.buckling), "natural_frequency": self.natural_frequency,
+                "mass": self.mass, "tolerance": None, "hooks": en13906_2.HOOKS_NOTE,
+                "index": s.index, "stress_correction": s.stress_correction,
+                "tensile_strength": s.tensile_strength, "rate_required": d.rate,
+                "rate_deviation": self.rate_deviation,
+                "working_lengths": [d.shortest_length, d.longest_length],
+                "wire_length": en13906_2.wire_length(s.coil_d, s.active_coils),
+                "cycles": d.cycles,
+                "governing_temperature_c": self.governing_temperature_c,
+                "temperatures": [dict(t) for t in self.temperatures],
+                "ok": self.ok, "failed": list(self.failed)}
+        return {"kind": "compression",
             "material": s.material, "wire_d": s.wire_d, "coil_d": s.coil_d,
             "outer_d": s.outer_d, "inner_d": s.inner_d, "active_coils": s.active_coils,
             "total_coils": s.total_coils, "free_length": d.free_length,
@@ -442,10 +529,15 @@ def check(spring: CoilSpring, duty: Duty, *, grade: int = en15800.DEFAULT_GRADE,
     en15800.quality_factor(grade)
     max_outer_d = _space("spring.max_outer_d", max_outer_d)
     min_inner_d = _space("spring.min_inner_d", min_inner_d)
+    if duty.kind == "extension":
+        en13906_2.validate(spring.active_coils)
+        en13906_2.check_material(spring.material)
     return _evaluate(spring, duty, grade, max_outer_d, min_inner_d)
 
 
 def _evaluate(spring, duty, grade, max_outer_d, min_inner_d) -> SpringCheck:
+    if duty.kind == "extension":
+        return _evaluate_extension(spring, duty, grade, max_outer_d, min_inner_d)
     s, m = spring, spring.mat
     d, D, n = s.wire_d, s.coil_d, s.active_coils
     L0, L1, L2 = duty.free_length, duty.longest_length, duty.shortest_length
@@ -496,3 +588,65 @@ def _evaluate(spring, duty, grade, max_outer_d, min_inner_d) -> SpringCheck:
         life=life, buckling=buckling, natural_frequency=s.natural_frequency, mass=s.mass,
         tolerance=tol, governing_temperature_c=t_gov, temperatures=temps,
         checks=tuple(checks))
+
+
+def _governing(m, duty):
+    """({temperature: G factor}, the temperature where G is largest, its factor)."""
+    t_ref = duty.reference_temperature_c
+    factors = {t: m.g_factor(t, t_ref) for t in duty.temperatures_c}
+    t_gov = max(factors, key=lambda t: (factors[t], -t))
+    return factors, t_gov, factors[t_gov]
+
+
+def _evaluate_extension(spring, duty, grade, max_outer_d, min_inner_d) -> SpringCheck:
+    """EN 13906-2's body checks (module docstring): F = F0 + R (L - L0)."""
+    s, m = spring, spring.mat
+    d, D, n = s.wire_d, s.coil_d, s.active_coils
+    L0, F0 = duty.free_length, duty.initial_tension
+    L1, L2 = duty.shortest_length, duty.longest_length
+    R = s.rate
+    s1, s2 = L1 - L0, L2 - L0
+    forces = {"F0": F0, "F1": F0 + R * s1, "F2": F0 + R * s2}
+    k = s.stress_correction
+    per_newton = en13906.shear_stress(1.0, d, D)          # tau per N of force
+    Rm = s.tensile_strength
+    # rate and initial tension scale with G: the working stresses where G is largest
+    factors, t_gov, f_gov = _governing(m, duty)
+    tau_k1 = k * per_newton * f_gov * forces["F1"]
+    tau_k2 = k * per_newton * f_gov * forces["F2"]
+    tau_kh = tau_k2 - tau_k1
+    tau_0 = per_newton * F0                                # as wound (T_ref)
+    tau_0_allowed = en13906_2.initial_stress_range(s.index)[1]
+    tau_2 = per_newton * f_gov * forces["F2"]
+    tau_2_allowed = en13906_2.static_limit(Rm)
+    goodman = m.goodman(d)
+    tau_kh_allowed = goodman.permissible_stroke(tau_k1, duty.cycles)
+    life = goodman.life(tau_k1, tau_kh)
+    temps = tuple({"temperature_c": t, "rate": R * f, "F0": F0 * f,
+                   "F1": forces["F1"] * f, "F2": forces["F2"] * f}
+                  for t, f in factors.items())
+    dev = R / duty.rate - 1.0
+    Lk = en13906_2.body_length(n, d)
+    checks = [
+        _check("rate", abs(dev), COIL_ROUNDING / 2 / n, "<=", "1"),
+        _check("body_length", Lk, L0 - en13906_2.hook_room(D, d), "<=", "m"),
+        _check("initial_tension", tau_0, tau_0_allowed, "<=", "Pa"),
+        _check("static", tau_2, tau_2_allowed, "<=", "Pa"),
+        _check("fatigue", tau_kh, tau_kh_allowed, "<=", "Pa"),
+    ]
+    if max_outer_d is not None:
+        checks.append(_check("outer_d", s.outer_d, max_outer_d, "<=", "m"))
+    if min_inner_d is not None:
+        checks.append(_check("inner_d", s.inner_d, min_inner_d, ">=", "m"))
+    checks.append(_check("temperature_min", min(duty.temperatures_c), m.t_min, ">=", "degC"))
+    checks.append(_check("temperature_max", max(duty.temperatures_c), m.t_max, "<=", "degC"))
+    return SpringCheck(
+        spring=s, duty=duty, grade=int(grade), max_outer_d=max_outer_d,
+        min_inner_d=min_inner_d, rate=R, rate_deviation=dev, forces=forces,
+        stresses={"tau_0": tau_0, "tau_0_allowed": tau_0_allowed, "tau_k1": tau_k1, "tau_k2": tau_k2, "tau_kh": tau_kh,
+                  "tau_2": tau_2, "tau_2_allowed": tau_2_allowed,
+                  "tau_kh_allowed": tau_kh_allowed},
+        life=life, buckling={"s_k": None, "s_2": None, "safe": True},
+        natural_frequency=s.natural_frequency,
+        mass=en13906_2.mass(d, D, n, m.rho), tolerance=None, governing_temperature_c=t_gov,
+        temperatures=temps, checks=tuple(checks))

@@ -8,6 +8,7 @@ import math
 from dataclasses import dataclass, field
 
 from ..errors import ConfigError
+from . import extension as en13906_2
 from . import standard as en13906
 from . import tolerances as en15800
 from .materials import DEFAULT_MATERIAL, PREFERRED_WIRE_D, material as get_material
@@ -55,15 +56,26 @@ class SpringDesign:
         rows = []
         for r, c in enumerate(self.candidates, 1):
             s = c.spring
-            rows.append({
+            row = {
                 "rank": r, "material": s.material, "wire_d": s.wire_d, "coil_d": s.coil_d,
                 "outer_d": s.outer_d, "active_coils": s.active_coils, "rate": c.rate,
-                "rate_deviation": c.rate_deviation, "mass": c.mass,
-                "solid_length": s.solid_length, "min_working_length": s.min_working_length,
-                "tau_kh": c.stresses["tau_kh"], "tau_kh_allowed": c.stresses["tau_kh_allowed"],
-                "tau_c": c.stresses["tau_c"], "tau_c_allowed": c.stresses["tau_c_allowed"],
-                "life": c.life, "s_2": c.buckling["s_2"], "s_k": c.buckling["s_k"],
-                "natural_frequency": c.natural_frequency, "ok": c.ok})
+                "rate_deviation": c.rate_deviation, "mass": c.mass}
+            if c.kind == "extension":          # EN 13906-2: the body, no buckling
+                row.update({
+                    "body_length": en13906_2.body_length(s.active_coils, s.wire_d),
+                    "tau_kh": c.stresses["tau_kh"],
+                    "tau_kh_allowed": c.stresses["tau_kh_allowed"],
+                    "tau_2": c.stresses["tau_2"], "tau_2_allowed": c.stresses["tau_2_allowed"],
+                    "life": c.life})
+            else:
+                row.update({
+                    "solid_length": s.solid_length, "min_working_length": s.min_working_length,
+                    "tau_kh": c.stresses["tau_kh"],
+                    "tau_kh_allowed": c.stresses["tau_kh_allowed"],
+                    "tau_c": c.stresses["tau_c"], "tau_c_allowed": c.stresses["tau_c_allowed"],
+                    "life": c.life, "s_2": c.buckling["s_2"], "s_k": c.buckling["s_k"]})
+            row.update(natural_frequency=c.natural_frequency, ok=c.ok)
+            rows.append(row)
         return pd.DataFrame(rows)
 
     def __repr__(self) -> str:
@@ -80,14 +92,17 @@ def design(duty: Duty, material: str = DEFAULT_MATERIAL, *, ends: str = "closed_
            max_outer_d: float | None = None, min_inner_d: float | None = None,
            grade: int = en15800.DEFAULT_GRADE, wires=PREFERRED_WIRE_D,
            coil_step: float = COIL_STEP, coil_ds=None) -> SpringDesign:
-    """Design the lightest compression spring of ``material`` for ``duty``.
+    """Design the lightest compression spring (or extension spring, ``duty.kind``) of
+    ``material`` for ``duty``.
 
     For every preferred wire diameter d of EN 10270 (``wires``) the material covers, and
     every mean coil diameter D on a ``coil_step`` grid with ``4 <= D/d <= 20`` and the
     space (``D + d <= max_outer_d``, ``D - d >= min_inner_d``), the active coils are
     ``n = G d^4 / (8 D^3 R)`` rounded to a quarter coil (n >= 2), so the achieved rate
-    ``R = G d^4 / (8 D^3 n)`` lies within ``0.125/n`` (relative) of the request. Each
-    spring is judged by :func:`check`; those meeting every check are ranked by mass.
+    ``R = G d^4 / (8 D^3 n)`` lies within ``0.125/n`` (relative) of the request (an
+    extension spring: n >= 3, EN 13906-2, and its closed body ``(n + 1) d`` within the free
+    length is one of the checks). Each spring is judged by :func:`check`; those meeting
+    every check are ranked by mass.
 
     Parameters
     ----------
@@ -116,6 +131,10 @@ def design(duty: Duty, material: str = DEFAULT_MATERIAL, *, ends: str = "closed_
     if not isinstance(duty, Duty):
         raise ConfigError(f"duty: expected a Duty, got {type(duty).__name__}")
     mat = get_material(material)
+    min_coils = en13906.MIN_ACTIVE_COILS
+    if duty.kind == "extension":
+        en13906_2.check_material(mat.name)
+        min_coils = en13906_2.MIN_ACTIVE_COILS
     if ends not in en13906.ENDS:
         raise ConfigError(f"spring.ends: unknown end form {ends!r} (one of "
                           f"{', '.join(en13906.ENDS)})")
@@ -149,7 +168,7 @@ def design(duty: Duty, material: str = DEFAULT_MATERIAL, *, ends: str = "closed_
                 continue
             n_exact = en13906.active_coils_for_rate(mat.G, d, D, duty.rate)
             n = round(n_exact / COIL_ROUNDING) * COIL_ROUNDING
-            if n < en13906.MIN_ACTIVE_COILS:
+            if n < min_coils:
                 break                           # a larger D gives still fewer coils
             spring = CoilSpring(d, D, n, mat.name, ends)
             res = _evaluate(spring, duty, grade, max_outer_d, min_inner_d)
@@ -174,7 +193,7 @@ def design(duty: Duty, material: str = DEFAULT_MATERIAL, *, ends: str = "closed_
         return SpringDesign(True, msg, b, candidates, evaluated, duty, mat.name, failures)
     if evaluated == 0:
         msg = ("no spring to try: no preferred wire diameter and coil diameter within "
-               "4 <= D/d <= 20, the space and n >= 2 give the rate")
+               f"4 <= D/d <= 20, the space and n >= {min_coils:g} give the rate")
     else:
         counts = ", ".join(f"{k} {v}" for k, v in sorted(failures.items(),
                                                            key=lambda kv: -kv[1]))

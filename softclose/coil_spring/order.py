@@ -9,6 +9,10 @@ at the model's l0 is then F0). :func:`spring_duty` states that duty
 (:class:`softclose.coil_spring.Duty`); :func:`spring_order` checks the ``[spring]`` given
 (wire, coil diameter and active coils all set) or designs one
 (:func:`softclose.coil_spring.design`).
+
+An extension spring (``design.spring_kind = "extension"``, EN 13906-2) is asked for its rate,
+its free length ``spring_rest_length`` (its body closed: the model's l0), its initial tension
+``spring_preload`` and the same working lengths, all at or above the free length.
 """
 
 from __future__ import annotations
@@ -48,23 +52,27 @@ def working_lengths(cfg) -> tuple[float, float]:
 
 
 def spring_duty(cfg) -> Duty:
-    """What the config's lid asks of its compression spring (see the module docstring).
+    """What the config's lid asks of its compression or extension spring (see the module
+    docstring).
 
     Raises
     ------
     softclose.errors.ConfigError
-        In one line naming the key: the design's spring is not a compression spring
-        (``design.spring_kind``), has no rate (``design.spring_k``), or is longer than its
-        free length somewhere over the stroke (``design.spring_rest_length``).
+        In one line naming the key: the design's spring is not a coil spring
+        (``design.spring_kind``), has no rate (``design.spring_k``), or leaves its side of
+        its free length somewhere over the stroke (``design.spring_rest_length``).
     """
     d = cfg.design
-    if d.spring_kind != "compression":
-        raise ConfigError(f"design.spring_kind: softclose spring makes a compression spring to "
-                          f"order; the design's spring is {d.spring_kind!r} (set "
-                          "design.spring_kind = \"compression\")")
+    if d.spring_kind not in ("compression", "extension"):
+        raise ConfigError(f"design.spring_kind: softclose spring makes a compression or an "
+                          f"extension spring to order; the design's spring is "
+                          f"{d.spring_kind!r} (set design.spring_kind = \"compression\" or "
+                          "\"extension\")")
     if not d.spring_k > 0:
-        raise ConfigError("design.spring_k: the compression spring has no rate (0 N/m); a "
-                          "coil spring to order needs a rate above 0")
+        raise ConfigError(f"design.spring_k: the {d.spring_kind} spring has no rate (0 N/m); "
+                          "a coil spring to order needs a rate above 0")
+    if d.spring_kind == "extension":
+        return _extension_duty(cfg)
     free = d.spring_rest_length + d.spring_preload / d.spring_k
     longest, shortest = working_lengths(cfg)
     if longest > free * (1 + 1e-12):
@@ -75,6 +83,21 @@ def spring_duty(cfg) -> Duty:
     return Duty(rate=d.spring_k, free_length=free, longest_length=min(longest, free),
                 shortest_length=shortest, cycles=cfg.spring.cycles,
                 seating=cfg.spring.seating)
+
+
+def _extension_duty(cfg) -> Duty:
+    d = cfg.design
+    free = d.spring_rest_length
+    longest, shortest = working_lengths(cfg)
+    if shortest < free * (1 - 1e-12):
+        raise ConfigError(f"design.spring_rest_length: the extension spring's free length "
+                          f"{free * 1e3:.4g} mm is longer than its shortest length over the "
+                          f"stroke, {shortest * 1e3:.4g} mm: it would go slack (a shorter "
+                          "free length keeps it pulling)")
+    return Duty(rate=d.spring_k, free_length=free, longest_length=longest,
+                shortest_length=max(shortest, free), cycles=cfg.spring.cycles,
+                seating=cfg.spring.seating, kind="extension",
+                initial_tension=d.spring_preload)
 
 
 def spring_order(cfg, duty: Duty | None = None):

@@ -13,8 +13,17 @@ from . import plt
 def spring_curves(check, n: int = 200) -> dict:
     """Force F = R (L0 - L), shear stress tau = 8 D F / (pi d^3) and its corrected value
     tau_k = k tau of the spring of ``check`` (a :class:`softclose.coil_spring.SpringCheck`)
-    over its length L from the free length L0 to the solid length L_c (SI units)."""
+    over its length L from the free length L0 to the solid length L_c (SI units). An
+    extension spring: F = F0 + R (L - L0) from L0 to 1.25 times its longest working
+    extension."""
     s, d = check.spring, check.duty
+    if check.kind == "extension":
+        L = np.linspace(d.free_length, d.free_length + 1.25 * (d.longest_length
+                                                               - d.free_length), n)
+        F = d.initial_tension + check.rate * (L - d.free_length)
+        tau = shear_stress(F, s.wire_d, s.coil_d)
+        return {"length": L, "force": F, "stress": tau,
+                "stress_corrected": s.stress_correction * tau}
     L = np.linspace(d.free_length, s.solid_length, n)
     F = check.rate * (d.free_length - L)
     tau = shear_stress(F, s.wire_d, s.coil_d)
@@ -27,6 +36,8 @@ def plot_spring(check):
     the corrected tau_k, whose upper value over the stroke must stay below the Goodman
     line's at ``cycles`` (fatigue). The working range L1..L2 is shaded; the buckling length,
     where there is one, is marked."""
+    if check.kind == "extension":
+        return _plot_extension(check)
     c = spring_curves(check)
     s, d, st = check.spring, check.duty, check.stresses
     mm = 1e3 * c["length"]
@@ -55,6 +66,42 @@ def plot_spring(check):
             label="tau_k, corrected (fatigue check)")
     upper = st["tau_k1"] + st["tau_kh_allowed"]
     at.hlines(1e-6 * upper, 1e3 * d.longest_length, 1e3 * d.shortest_length,
+              color="tab:purple", ls="-.", lw=1.5,
+              label=f"largest tau_k over the stroke for {d.cycles:.3g} cycles")
+    at.set_ylabel("shear stress (MPa)")
+    at.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    at.set_title("ok: every check met" if check.ok else
+                 "fails: " + ", ".join(check.failed), fontsize=9)
+    return fig
+
+
+def _plot_extension(check):
+    """An extension spring's force and stresses over its length (the free length on the
+    left): tau at the longest working length below 0.45 R_m (static), the corrected tau_k's
+    upper value over the stroke below the Goodman line's (the body's fatigue)."""
+    c = spring_curves(check)
+    s, d, st = check.spring, check.duty, check.stresses
+    mm = 1e3 * c["length"]
+    fig, (af, at) = plt.subplots(1, 2, figsize=(11.0, 3.6), layout="constrained")
+    for ax in (af, at):
+        ax.axvspan(1e3 * d.shortest_length, 1e3 * d.longest_length, color="tab:green",
+                   alpha=0.15, label="working range L1..L2")
+        ax.set_xlabel("spring length (mm)")
+        ax.set_xlim(mm[0], mm[-1])
+    af.plot(mm, c["force"], color="tab:blue")
+    af.axhline(d.initial_tension, color="0.4", ls=":", lw=1, label="initial tension F0")
+    af.set_ylabel("force (N)")
+    af.legend(fontsize=7, loc="upper left")
+    af.set_title(f"extension spring, {s.material}: d = {1e3 * s.wire_d:g} mm, "
+                 f"D = {1e3 * s.coil_d:g} mm, n = {s.active_coils:g} (hooks not covered)",
+                 fontsize=9)
+    at.plot(mm, 1e-6 * c["stress"], color="tab:red", label="tau (static check)")
+    at.axhline(1e-6 * st["tau_2_allowed"], color="tab:red", ls="--", lw=1,
+               label="0.45 R_m: tau at the longest working length below it")
+    at.plot(mm, 1e-6 * c["stress_corrected"], color="tab:purple",
+            label="tau_k, corrected (the body's fatigue)")
+    upper = st["tau_k1"] + st["tau_kh_allowed"]
+    at.hlines(1e-6 * upper, 1e3 * d.shortest_length, 1e3 * d.longest_length,
               color="tab:purple", ls="-.", lw=1.5,
               label=f"largest tau_k over the stroke for {d.cycles:.3g} cycles")
     at.set_ylabel("shear stress (MPa)")
