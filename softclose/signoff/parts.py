@@ -1,6 +1,6 @@
-"""The parts to buy: the spring (a coil spring's EN 13906-1 checks, a gas strut's datasheet
-values, an ideal spring's rate) and the dampers with their coefficients at each operating
-temperature, c(T) = c exp(β (T − T_ref))."""
+"""The parts to buy: the spring (a compression spring's EN 13906-1 checks, an extension
+spring's EN 13906-2 body checks, a gas strut's datasheet values, an ideal spring's rate) and the
+dampers with their coefficients at each operating temperature, c(T) = c exp(β (T − T_ref))."""
 
 from __future__ import annotations
 
@@ -29,10 +29,9 @@ def _spring(cfg, stroke, temps) -> dict:
         return {"kind": "none", "what": "no spring"}
     out = {"kind": d.spring_kind, "what": f"{d.spring_kind} spring", "rate": d.spring_k,
            "rest_length": d.spring_rest_length, "preload": d.spring_preload, **lengths}
-    if d.spring_kind != "compression":
-        out["note"] = ("the EN 13906-1 checks apply to a compression spring made to order "
-                       "(design.spring_kind = \"compression\"); this spring is given by its "
-                       "rate and rest length")
+    if d.spring_kind not in ("compression", "extension"):
+        out["note"] = ("the EN 13906-1/-2 checks apply to a compression or extension spring "
+                       "made to order; this spring is given by its rate and rest length")
         return out
     from ..coil_spring.order import spring_duty, spring_order
     try:

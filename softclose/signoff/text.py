@@ -64,7 +64,11 @@ def spring_rows(r) -> tuple:
                   f"{_mm(c['coil_d'])}, {c['active_coils']:g} active coils of "
                   f"{c['total_coils']:g}"),
                  ("free length / solid length", f"{_mm(c['free_length'])} / "
-                                                f"{_mm(c['solid_length'])}"),
+                                                f"{_mm(c['solid_length'])}")
+                 if c.get("kind") != "extension" else
+                 ("free length / closed body", f"{_mm(c['free_length'])} / "
+                                               f"{_mm(c['body_length'])}; hooks: "
+                                               f"{c['hooks']}"),
                  ("outer diameter", _mm(c["outer_d"])), ("mass", f"{c['mass'] * 1e3:.4g} g")]
         for ch in s.get("checks", ()):
             scale, unit = {"m": (1e3, "mm"), "Pa": (1e-6, "MPa"), "1": (100.0, "%")}.get(
