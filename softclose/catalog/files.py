@@ -15,6 +15,14 @@ free_length_tolerance_mm``): the header names the unit. Kinds and how each maps 
   length as the free length and its compressed length as ``min_length`` (the strut's own
   friction is not modelled: give it as ``friction.torque`` if it matters).
 
+Optional coil columns (compression and extension springs): ``wire_d_m`` (wire diameter d),
+``coil_d_m`` (mean coil diameter D), ``active_coils`` (n) -- or ``wire_d_mm``, ``coil_d_mm``
+-- and ``material`` (an EN 10270 wire of ``spring.material``; empty: EN10270-1-SH). A row
+that gives them (all three, or none) is checked by ``select`` at its working lengths
+(:mod:`.coil`: static stress, fatigue life, buckling); its rate must be the coil's,
+``G d^4 / (8 D^3 n)``, within ``rate_tolerance`` (else the row is left out). Rows without
+them are ranked as before.
+
 An empty ``min_length``/``max_length`` cell is no limit. ``rate_tolerance`` is relative (0.1:
 ±10 %); ``free_length_tolerance`` absolute; absent (column or cell), the free length is held
 to a spring maker's standard grade (:func:`standard_free_length_tolerance`).
@@ -56,6 +64,16 @@ _SPRING_COLS = {
                               ("free_length_tolerance_mm", 1e-3)),
 }
 _SPRING_OPTIONAL = ("free_length_tolerance",)
+#: the optional coil columns of a spring: name -> (header names with their factor to SI)
+_COIL_COLS = {
+    "wire_d": (("wire_d_m", 1.0), ("wire_d_mm", 1e-3)),
+    "coil_d": (("coil_d_m", 1.0), ("coil_d_mm", 1e-3)),
+    "active_coils": (("active_coils", 1.0),),
+}
+#: the optional column naming a coil spring's wire
+MATERIAL_COLUMN = "material"
+#: the catalog kinds a coil can be given for
+COIL_KINDS = ("compression", "extension")
 _DAMPER_COLS = {
     "c": (("c", 1.0), ("c_N_s_per_m", 1.0), ("c_N_m_s_per_rad", 1.0), ("c_N_s_per_mm", 1e3)),
     "c_tolerance": (("c_tolerance", 1.0),),
@@ -90,10 +108,24 @@ class SpringEntry:
     rate_tolerance: float
     free_length_tolerance: float
     line: int = field(default=0, compare=False)
+    wire_d: float | None = None
+    coil_d: float | None = None
+    active_coils: float | None = None
+    material: str | None = None
 
     @property
     def spring_kind(self) -> str:
         return SPRING_KINDS[self.kind]
+
+    @property
+    def coil(self):
+        """The :class:`softclose.coil_spring.CoilSpring` of the row's coil columns (None
+        when the row gives none)."""
+        if self.wire_d is None:
+            return None
+        from ..coil_spring import DEFAULT_MATERIAL, CoilSpring
+        return CoilSpring(self.wire_d, self.coil_d, self.active_coils,
+                          self.material or DEFAULT_MATERIAL)
 
     def design(self) -> dict:
         """The [design] values of this spring (nominal)."""
@@ -105,7 +137,10 @@ class SpringEntry:
                 "free_length_m": self.free_length, "preload_N": self.preload,
                 "min_length_m": self.min_length, "max_length_m": self.max_length,
                 "rate_tolerance": self.rate_tolerance,
-                "free_length_tolerance_m": self.free_length_tolerance}
+                "free_length_tolerance_m": self.free_length_tolerance,
+                **({} if self.wire_d is None else {
+                    "wire_d_m": self.wire_d, "coil_d_m": self.coil_d,
+                    "active_coils": self.active_coils, "material": self.material})}
 
 
 @dataclass(frozen=True)
@@ -240,12 +275,68 @@ def _finish(path, parts, warnings, what) -> Catalog:
     return Catalog(str(path), tuple(parts), tuple(f"{path}: {w}" for w in warnings))
 
 
+def _coil_header(path, head: list[str], line: int) -> dict:
+    """Which columns hold the coil (``{name: (index, factor, header)}``, ``material``
+    included when given); {} when the header has none. Some of d, D, n without the
+    others is a :class:`ConfigError`."""
+    where = _header(path, head, line, _COIL_COLS, (), tuple(_COIL_COLS))
+    if where and len(where) < len(_COIL_COLS):
+        missing = [" or ".join(h for h, _ in alts) for n, alts in _COIL_COLS.items()
+                   if n not in where]
+        raise ConfigError(f"{path}: line {line}: the coil columns come together: missing "
+                          f"{', '.join(missing)}")
+    if MATERIAL_COLUMN in head:
+        if not where:
+            raise ConfigError(f"{path}: line {line}: column {MATERIAL_COLUMN} without the "
+                              "coil columns wire_d_m, coil_d_m, active_coils")
+        where[MATERIAL_COLUMN] = (head.index(MATERIAL_COLUMN), 1.0, MATERIAL_COLUMN)
+    return where
+
+
+def _coil_cells(row, where: dict, line: int, kind: str, rate: float, rate_tol: float) -> dict:
+    """The coil of one row (SI; {} when its cells are empty), checked: all three or none,
+    a compression or extension spring, a wire and index EN 13906 covers, its rate the
+    row's within ``rate_tolerance``."""
+    if not where:
+        return {}
+    v = {n: _cell(row, where, n, line, required=False) for n in _COIL_COLS}
+    j = where.get(MATERIAL_COLUMN, (None,))[0]
+    mat = (row[j] if j is not None and j < len(row) else "") or None
+    if all(x is None for x in v.values()):
+        _check(mat is None, line, MATERIAL_COLUMN, "a material without wire_d, coil_d, "
+                                                   "active_coils")
+        return {}
+    for n, x in v.items():
+        _check(x is not None, line, where[n][2], "missing value (the coil columns come "
+                                                 "together)")
+    _check(kind in COIL_KINDS, line, "kind", f"a {kind} has no coil (leave the coil "
+                                             "columns empty)")
+    from ..coil_spring import CoilSpring, DEFAULT_MATERIAL
+    try:
+        coil = CoilSpring(v["wire_d"], v["coil_d"], v["active_coils"], mat or DEFAULT_MATERIAL)
+        if kind == "extension":
+            from ..coil_spring import extension
+            extension.validate(coil.active_coils)
+    except ConfigError as exc:
+        key = str(exc).split(":", 1)[0]
+        col = {"spring.wire_d": where["wire_d"][2], "spring.coil_d": where["coil_d"][2],
+               "spring.active_coils": where["active_coils"][2],
+               "spring.material": MATERIAL_COLUMN}.get(key, key)
+        raise _Bad(f"line {line}, column {col}: {str(exc).split(': ', 1)[-1]}") from None
+    off = coil.rate / rate - 1.0 if rate > 0 else math.inf
+    _check(abs(off) <= rate_tol + 1e-12, line, "rate", f"the coil's rate G d^4/(8 D^3 n) = "
+           f"{coil.rate:.5g} N/m is {off:+.1%} off the row's {rate:.5g} N/m, beyond its "
+           f"rate_tolerance")
+    return {**v, "material": coil.material}
+
+
 def read_springs(path) -> Catalog:
     """The springs of a catalog file (module docstring); rows that cannot be used are left
     out with a warning naming their line and column."""
     lines = _lines(path)
     hline, head = lines[0]
     where = _header(path, head, hline, _SPRING_COLS, ("part", "kind"), _SPRING_OPTIONAL)
+    coil_where = _coil_header(path, head, hline)
     parts, warnings = [], []
     for line, row in lines[1:]:
         try:
@@ -284,8 +375,9 @@ def read_springs(path) -> Catalog:
             else:
                 _check(0 <= flt < v["free_length"], line, h["free_length_tolerance"],
                        "must be >= 0 and below the free length")
+            coil = _coil_cells(row, coil_where, line, kind, v["rate"], v["rate_tolerance"])
             parts.append(SpringEntry(part, kind, v["rate"], v["free_length"], v["preload"],
-                                     lo, hi, v["rate_tolerance"], flt, line))
+                                     lo, hi, v["rate_tolerance"], flt, line, **coil))
         except _Bad as exc:
             warnings.append(f"{exc}; row left out")
     return _finish(path, parts, warnings, "spring")

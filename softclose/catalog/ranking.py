@@ -7,7 +7,9 @@ The procedure, step by step:
    the corners of the box over a geometric grid of ``optimise.damper_c``'s bounds, then a
    finer grid around the best), made to the ``[tolerance]`` spread of ``design.damper_c``.
 2. **Screen** (:mod:`.screen`): each pair at the corners of its own tolerance box, at its
-   nominal point and on the same Monte Carlo samples, in the C kernel, chunk by chunk.
+   nominal point and on the same Monte Carlo samples, in the C kernel, chunk by chunk. A
+   spring whose coil the catalog gives is checked at its working lengths (:mod:`.coil`:
+   static stress, fatigue, buckling); one that fails makes its pair infeasible.
 3. **Rank**: meets every constraint at every corner first, then yield (the share of samples
    that meet every constraint), then worst-case J (over corners and samples), lower first.
 4. **Re-solve** (no damper catalog): the best pairs' c by the robust NLP with the spring
@@ -33,7 +35,7 @@ from .screen import (RANGE, PairBox, pair_box, range_texts, reason_text, run_pai
                      summarise)
 from .nlp import NLP_SAMPLES, solve_c
 from .mounting import place_pair, placement_keys
-from . import verify
+from . import coil, verify
 from ..problem import check_reference_temperature
 
 #: rows of the kernel per chunk of pairs (a chunk is the unit of progress and of Ctrl-C)
@@ -239,6 +241,7 @@ def _verify_best(cfg, box, pairs, entries, kernel, order, n, checked: dict,
                 e["kernel_reason"] = e["reason"]
                 e["feasible"] = v["feasible"]
                 e["reason"] = "" if v["feasible"] else f"the reference: {v['reason']}"
+                coil.apply(e, e.get("spring_checks"))     # (the spring's checks stand too)
         order = sorted(entries, key=lambda i: _rank_key(entries[i]))
     return order
 
@@ -302,6 +305,8 @@ def screen_chunk(cfg: Config, box: PairBox, a: int, chunk: list) -> tuple[int, l
     where = dict(zip(rng, range_texts(cfg, box, [(*chunk[p], sm["fail_row"][p])
                                                   for p in rng]))) if rng else {}
     out = []
+    lengths = coil.working_lengths(cfg) if any(s.coil is not None for s, _ in chunk) \
+        else None
     for p, (s, d) in enumerate(chunk):
         reason = sm["reason"][p]
         text = "" if not reason else reason_text(box, cols, p, sm["fail_row"][p], reason,
@@ -310,6 +315,7 @@ def screen_chunk(cfg: Config, box: PairBox, a: int, chunk: list) -> tuple[int, l
                        float(sm["worst_objective"][p]), text,
                        int(sm["corner_count"][p]), nc,
                        {k: float(v[p]) for k, v in sm["nominal"].items()})
+        coil.apply(e, coil.spring_checks(cfg, s, lengths))
         F = cols["feasible"][p * n:p * n + nc].copy()
         J = np.asarray(cols["objective"][p * n:p * n + nc], float).copy()
         out.append((e, (F, J)))

@@ -15,7 +15,9 @@ SPEC_KEYS = ("spring", "damper", "feasible", "yield", "worst_objective", "design
 def pair_entry(spring, damper, feasible: bool, yld: float, worst: float, reason: str,
                corners_ok: int, corners: int, nominal: dict) -> dict:
     """One ranked pair: SPEC §10's keys, then why it fails (``reason``, "" if it does not),
-    how many corners meet every constraint, the nominal point's metrics, the parts."""
+    how many corners meet every constraint, the nominal point's metrics, the parts;
+    ``spring_checks`` (None: the catalog gives no coil) the coil spring's checks at its
+    working lengths (:func:`softclose.catalog.coil.spring_checks`)."""
     design = {**spring.design(), "spring_min_length": spring.min_length,
               "spring_max_length": spring.max_length}
     design.update({"damper_c": 0.0, "rotary_damper_c": 0.0})
@@ -25,7 +27,7 @@ def pair_entry(spring, damper, feasible: bool, yld: float, worst: float, reason:
             "design": design, "verified": None, "reason": reason,
             "corners_feasible": corners_ok, "corners": corners, "nominal": nominal,
             "spring_part": spring.to_json(), "damper_part": damper.to_json(),
-            "reference": None}
+            "reference": None, "spring_checks": None}
 
 
 def pair_config(cfg, entry: dict):
