@@ -4,6 +4,8 @@
   and dampers (dashpot, rotary at a pivot), SI or mm in the header, bad rows reported by line
   and column;
 - :mod:`.screen` -- every pair over its own tolerance box in the C kernel;
+- :mod:`.coil` -- a catalog spring whose coil is given, checked at its working lengths
+  (EN 13906-1/-2: static stress, fatigue, buckling);
 - :mod:`.verify` -- the adaptive reference at every corner of the best pairs' boxes;
 - :mod:`.ranking` -- the procedure (:func:`select`); :mod:`.result` -- :class:`SelectResult`.
 """

@@ -10,6 +10,12 @@ it as ``DIR/springs.csv`` and ``DIR/dampers.csv`` (what ``examples/catalogs/`` h
   steps, progression F2/F1 = 1.3 (rate = 0.3 F1 / stroke), force ±10 %, length ±1.5 mm;
 - dampers: dashpots of 1,000-6,000 N s/m (±20 %), rotary dampers of 0.5-2 N m s/rad at pivots
   O and A (±30 %).
+
+A few springs give their coil (:data:`COILS`: EN 10270-1 SH wire d, mean coil diameter D,
+active coils n, the rate G d^4/(8 D^3 n) within 1 % of the row's, the solid length within
+its minimum length), which ``select`` checks at the working lengths: on the default lid
+CS-060-04000, CS-064-02500 and ES-040-0400-T2 pass; CS-062-03150 (D = 9.6 mm, L0/D = 6.5)
+buckles; CS-070-02000 (two active coils of D = 21.6 mm) is overstressed at its solid length.
 """
 
 from __future__ import annotations
@@ -25,6 +31,26 @@ HEADER = """\
 # supplier's catalog export (see examples/catalogs/README.md) before buying anything.
 """
 R10 = (500, 630, 800, 1000, 1250, 1600, 2000, 2500, 3150, 4000, 5000, 6300, 8000, 10000)
+
+
+#: part -> (wire d, mean coil diameter D (m), active coils n) of EN 10270-1 SH wire
+COILS = {
+    "CS-060-04000": (0.0018, 0.0147, 8.5),
+    "CS-062-03150": (0.0014, 0.0096, 14.0),
+    "CS-064-02500": (0.0018, 0.0192, 6.0),
+    "CS-070-02000": (0.0014, 0.0216, 2.0),
+    "ES-040-0400-T2": (0.0009, 0.009, 23.0),
+}
+#: the wire of the springs of :data:`COILS`
+COIL_MATERIAL = "EN10270-1-SH"
+
+
+def _with_coil(e: SpringEntry) -> SpringEntry:
+    from dataclasses import replace
+    if e.part not in COILS:
+        return e
+    d, D, n = COILS[e.part]
+    return replace(e, wire_d=d, coil_d=D, active_coils=n, material=COIL_MATERIAL)
 
 
 def springs() -> list[SpringEntry]:
@@ -46,7 +72,7 @@ def springs() -> list[SpringEntry]:
         for F1 in (10, 20, 30, 40, 50, 60, 80, 100, 120, 150, 200):
             out.append(SpringEntry(f"GS-{L:03d}-F{F1:03d}", "gas_strut", round(F1 * 0.3 / 0.020, 1),
                                    L / 1e3, float(F1), (L - 20) / 1e3, None, 0.10, 0.0015))
-    return out
+    return [_with_coil(e) for e in out]
 
 
 def dampers() -> list[DamperEntry]:
@@ -67,10 +93,13 @@ def write(folder) -> tuple[Path, Path]:
     folder.mkdir(parents=True, exist_ok=True)
     s = folder / "springs.csv"
     cols = ("part", "kind", "rate_N_per_m", "free_length_m", "preload_N", "min_length_m",
-            "max_length_m", "rate_tolerance", "free_length_tolerance_m")
+            "max_length_m", "rate_tolerance", "free_length_tolerance_m", "wire_d_m",
+            "coil_d_m", "active_coils", "material")
+    # (a row without a coil leaves its coil cells off: missing cells are empty)
     lines = [",".join(cols)] + [",".join(_cell(x) for x in (
         e.part, e.kind, e.rate, e.free_length, e.preload, e.min_length, e.max_length,
-        e.rate_tolerance, e.free_length_tolerance)) for e in springs()]
+        e.rate_tolerance, e.free_length_tolerance) + (() if e.wire_d is None else (
+            e.wire_d, e.coil_d, e.active_coils, e.material))) for e in springs()]
     s.write_text(HEADER + "\n".join(lines) + "\n")
     d = folder / "dampers.csv"
     lines = ["part,kind,c,pivot,c_tolerance"] + [",".join(_cell(x) for x in (

@@ -35,7 +35,17 @@ N/mm instead (free_length_mm, rate_N_per_mm, ...). Damper columns: part, kind (d
 rotary), c (N s/m, or N m s/rad for a rotary damper), pivot (rotary: O, B, A, C or lid),
 c_tolerance (relative). A gas strut is a compression spring whose preload is its force at
 full extension and whose rate is its progression. Rows that cannot be used are reported by
-line and column and left out. An illustrative catalog (not real parts):
+line and column and left out.
+
+Optional coil columns of a compression or extension spring: wire_d_m (wire diameter d),
+coil_d_m (mean coil diameter D) -- or wire_d_mm, coil_d_mm -- active_coils (n) and material
+(an EN 10270 wire as spring.material names it; empty: EN10270-1-SH); all of d, D, n or none,
+the coil's rate G d^4/(8 D^3 n) the row's within its rate_tolerance. Such a spring is checked
+at its working lengths as `softclose spring` checks one (EN 13906-1; an extension spring's
+body by EN 13906-2, its hooks not covered), at the free length's end of its tolerance that
+deflects it more, for spring.cycles and spring.seating: a spring that would be overstressed,
+fail fatigue or buckle makes its pair infeasible, the reason naming the check and its margin
+(each row's spring_checks in --json). Springs without a coil are ranked as before. An illustrative catalog (not real parts):
 `python -m softclose.catalog.illustrative DIR`. The robust NLP that re-solves the best
 springs' c (no --dampers) is one NLP for every spring, evaluated by CasADi's virtual machine
 unless `softclose prepare --select FILE` compiled it (~3x faster solves, the same numbers)."""
@@ -49,7 +59,9 @@ def register(sub) -> None:
     p.add_argument("--springs", metavar="FILE", required=True,
                    help="spring catalog (CSV: part, kind, rate_N_per_m, free_length_m, "
                         "preload_N, min_length_m, max_length_m, rate_tolerance"
-                        "[, free_length_tolerance_m])")
+                        "[, free_length_tolerance_m][, wire_d_m, coil_d_m, active_coils"
+                        "[, material]]: a spring whose coil is given is checked for static "
+                        "stress, fatigue and buckling at its working lengths)")
     p.add_argument("--dampers", metavar="FILE",
                    help="damper catalog (CSV: part, kind, c, pivot, c_tolerance); without "
                         "it the dashpot's c is chosen per spring within optimise.damper_c")
