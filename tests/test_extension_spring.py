@@ -252,3 +252,24 @@ def test_hook_and_body_helpers():
     lo, hi = en13906_2.initial_stress_range(8.0)
     assert (lo + hi) / 2e6 == pytest.approx(231 / math.exp(0.84), rel=1e-12)
     assert en13906_2.static_limit(2220e6) == pytest.approx(999e6)
+
+
+def test_the_report_buys_the_extension_spring_of_softclose_spring():
+    """The sign-off report's spring: the same design as `softclose spring`, its body checks,
+    and the hooks named as not covered."""
+    from types import SimpleNamespace
+
+    from softclose.coil_spring.order import spring_order
+    from softclose.config import load_config
+    from softclose.signoff.parts import parts
+    from softclose.signoff.text import spring_rows
+    cfg = load_config(None, EXTENSION)
+    p = parts(cfg, None, [23.0])["spring"]
+    own = spring_order(cfg).best
+    assert p["ok"] and p["mode"] == "designed"
+    assert p["coil_spring"] == own.spring_json()
+    assert [c["name"] for c in p["checks"]] == [c.name for c in own.checks]
+    _, rows, checks, _ = spring_rows(SimpleNamespace(parts={"spring": p}))
+    row = dict(rows)["free length / closed body"]
+    assert row.startswith("45 mm / ") and "hooks/loops not covered" in row
+    assert [c[0] for c in checks][:4] == ["rate", "body_length", "initial_tension", "static"]

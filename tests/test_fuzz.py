@@ -845,6 +845,10 @@ ISSUE_CASES = [
     ("spring", [("spring.max_outer_d", "edge", "0.0001")], []),
     ("spring", [("design.spring_rest_length", "in_range", "0.05")], []),
     ("spring", [("design.spring_kind", "string", '"extension"')], []),
+    # an extension spring made to order (EN 13906-2's body): designed, its figure drawn
+    ("spring", [("design.spring_kind", "string", '"extension"'),
+                ("design.spring_rest_length", "in_range", "0.045"),
+                ("design.spring_preload", "in_range", "2.0")], []),
 ]
 
 
