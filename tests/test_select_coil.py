@@ -200,3 +200,7 @@ def test_select_command_shows_the_refusal(tmp_path):
     assert "spring buckles" in rows["C-60-4000-slim"]["reason"]
     assert rows["C-60-4000-slim"]["feasible"] is False
     assert rows["C-60-4000-plain"]["spring_checks"] is None
+    f = select(_cfg(), read_springs(p), DAMPER, samples=4, verify=0).to_frame()
+    ok = dict(zip(f["spring"], f["spring_ok"]))
+    assert ok["C-60-4000"] is True and ok["C-60-4000-slim"] is False
+    assert ok["C-60-4000-plain"] is None

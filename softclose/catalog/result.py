@@ -88,8 +88,9 @@ class SelectResult(Displayed):
             "times": self.times, "springs": self.springs, "dampers": self.dampers})
 
     def to_frame(self):
-        """One row per pair, best first: rank, the parts, the verdicts, why it fails, the
-        nominal metrics and the design values."""
+        """One row per pair, best first: rank, the parts, the verdicts, why it fails,
+        ``spring_ok`` (its coil spring's checks met; empty without a coil), the nominal
+        metrics and the design values."""
         import pandas as pd
         rows = []
         for r, e in enumerate(self.ranking, 1):
@@ -97,7 +98,9 @@ class SelectResult(Displayed):
                    "feasible": e["feasible"], "yield": e["yield"],
                    "worst_objective": e["worst_objective"], "verified": e["verified"],
                    "corners_feasible": e["corners_feasible"], "corners": e["corners"],
-                   "reason": e["reason"]}
+                   "reason": e["reason"],
+                   "spring_ok": None if e.get("spring_checks") is None
+                   else e["spring_checks"]["ok"]}
             row.update({f"nominal_{k}": v for k, v in e["nominal"].items()})
             row.update(e["design"])
             rows.append(row)
