@@ -15,6 +15,7 @@ import io
 import json
 import math
 from contextlib import redirect_stdout
+from pathlib import Path
 
 import pytest
 
@@ -34,6 +35,8 @@ C-60-4000-plain,compression,4000,0.060,0,0.030,,0.1,0.0009,,,,
 E-40-400,extension,400,0.040,2,,0.080,0.1,0.0009,0.0009,0.009,23,EN10270-1-DH
 """
 DAMPER = [DamperEntry("D-5000", "dashpot", 5000.0, None, 0.2)]
+#: the shipped, illustrative catalog
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "catalogs" / "springs.csv"
 
 
 def _cfg():
@@ -204,3 +207,28 @@ def test_select_command_shows_the_refusal(tmp_path):
     ok = dict(zip(f["spring"], f["spring_ok"]))
     assert ok["C-60-4000"] is True and ok["C-60-4000-slim"] is False
     assert ok["C-60-4000-plain"] is None
+
+
+def test_an_overstressed_catalog_spring_by_hand():
+    """The shipped catalog's CS-070-02000: d = 1.4 mm, D = 21.6 mm, n = 2 (solid length
+    4 * 1.4 = 5.6 mm), free length 70 + 1.3 mm: R = 81500 * 1.4^4 / (8 * 21.6^3 * 2) N/mm,
+    tau_c = 8 D R (71.3 - 5.6) / (pi d^3) = 2557 MPa above 0.56 R_m = 1176 MPa."""
+    from softclose.catalog import coil
+    e = next(p for p in read_springs(EXAMPLE).parts
+             if p.part == "CS-070-02000")
+    R = 81500 * 1.4 ** 4 / (8 * 21.6 ** 3 * 2)                       # N/mm
+    tau_c = 8 * 21.6 * R * (71.3 - 5.6) / (math.pi * 1.4 ** 3)        # MPa
+    limit = 0.56 * (2220 - 820 * math.log10(1.4))
+    assert round(tau_c) == 2557 and round(limit) == 1176
+    sc = coil.spring_checks(default_config(), e)
+    st = {c["name"]: c for c in sc["checks"]}["static"]
+    assert st["value"] / 1e6 == pytest.approx(tau_c, rel=1e-12)
+    assert st["limit"] / 1e6 == pytest.approx(limit, rel=1e-12)
+    assert not sc["ok"] and sc["reason"] == (
+        f"spring overstressed: stress at solid length {tau_c:.4g} MPa against 0.56 R_m = "
+        f"{limit:.4g} MPa, margin {100 * (limit - tau_c) / limit:+.1f} % (EN 13906-1)")
+    # the shipped catalog's other coils: two pass at the default lid, the 62 mm one buckles
+    ok = {p.part: coil.spring_checks(default_config(), p)["ok"]
+          for p in read_springs(EXAMPLE).parts if p.coil is not None}
+    assert ok == {"CS-060-04000": True, "CS-062-03150": False, "CS-064-02500": True,
+                  "CS-070-02000": False, "ES-040-0400-T2": True}

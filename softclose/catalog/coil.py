@@ -87,8 +87,11 @@ def _unit(c) -> tuple[float, str]:
 
 def _words(c, res) -> str:
     scale, unit = _unit(c)
-    what = {"static": "stress", "fatigue": "stroke stress", "buckling": "deflection"}[c.name]
-    limit = {"static": "permissible", "fatigue": f"Goodman's for {res.duty.cycles:.3g} strokes",
+    static = ("stress at the longest working length" if res.kind == "extension" else
+              "stress at solid length")
+    what = {"static": static, "fatigue": "stroke stress", "buckling": "deflection"}[c.name]
+    limit = {"static": "0.45 R_m =" if res.kind == "extension" else "0.56 R_m =",
+             "fatigue": f"Goodman's for {res.duty.cycles:.3g} strokes",
              "buckling": "s_K"}[c.name]
     return (f"spring {WORDS[c.name]}: {what} {c.value * scale:.4g} {unit} against {limit} "
             f"{c.limit * scale:.4g} {unit}, margin {100 * _margin(c):+.1f} %")
