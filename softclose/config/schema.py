@@ -124,10 +124,11 @@ CORE: tuple[Key, ...] = (
         "bounds of spring_rest_length (lower > 0)", lo=1e-4, hi=10.0),
     Key("optimise", "damper_c", "bounds", (0.0, 5000.0), "N s/m", "bounds of damper_c",
         lo=0.0, hi=1e7),
-    Key("optimise", "spring_kinds", "words:compression,extension,linear",
+    Key("optimise", "spring_kinds", "words:compression,extension,linear,gas_strut",
         ("compression", "extension"), "",
         "the kinds of spring the optimiser may choose (one problem each, the best kept): "
-        "springs one can buy; `linear` (the idealised element) only when listed"),
+        "springs one can buy; `linear` (the idealised element) and `gas_strut` only when "
+        "listed"),
     Key("optimise", "free", "free", None, "",
         "further design variables, a table `KEY = [lo, hi]` in the key's own unit (also "
         "`--free KEY=LO:HI`): `design.spring_preload`, `design.torsion_k`, "

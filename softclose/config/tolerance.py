@@ -71,8 +71,16 @@ def read_tolerance(table: Any, values: dict[str, dict[str, Any]]) -> Tolerance:
         raise ConfigError(f"tolerance.required_yield: must lie in (0, 1], got "
                           f"{opts['required_yield']}")
     given = {k: v for k, v in table.items() if k not in TOLERANCE_OPTIONS}
+    defaults = dict(DEFAULT_SPREADS)
+    if values["design"].get("spring_kind") == "gas_strut":
+        # a gas strut has no rate: its force F1 carries the spring's default spread (the
+        # datasheets' ±5-10 % on F1), and a spread of the unused rate is none
+        rate = defaults.pop("design.spring_k", None)
+        given.pop("design.spring_k", None)
+        if rate is not None:
+            defaults.setdefault("design.spring_preload", rate)
     spreads = []
-    for key, v in {**DEFAULT_SPREADS, **given}.items():
+    for key, v in {**defaults, **given}.items():
         name = f"tolerance.{key}"
         m = _TOL_KEY.match(key) if isinstance(key, str) else None
         if m is None or m.group(1) not in SCHEMA or m.group(2) not in SCHEMA[m.group(1)]:

@@ -13,7 +13,7 @@ from ..model import elements
 from ..model.lid import model_key, shared_model
 from ..simulation.simulator import Simulator
 from .discretise import phase_two_substeps
-from .interval import ChebyshevFit, end_damper_mode, free_layout, nlp_elements
+from .interval import ChebyshevFit, end_damper_mode, free_layout, gas_nlp, nlp_elements
 from .lid import padded_degree
 from .nlp import ShootingNLP, ShootingStructure
 from .free_points import placement_layout, slot_values
@@ -39,12 +39,12 @@ def lid_fit(cfg) -> ChebyshevFit:
     """The Chebyshev fit of cfg's model for its NLP (the elements it carries, the closure's
     series with free attachment points), kept for the process."""
     els = nlp_elements(cfg)
-    pose = bool(placement_layout(cfg))
-    key = model_key(resolve(cfg)) + (tuple(e.name for e in els), pose)
+    pose, gas = bool(placement_layout(cfg)), gas_nlp(cfg)
+    key = model_key(resolve(cfg)) + (tuple(e.name for e in els), pose, gas)
     if key not in _FITS:
         if len(_FITS) >= FITS_KEPT:
             _FITS.pop(next(iter(_FITS)))          # the oldest
-        _FITS[key] = ChebyshevFit(get_model(cfg), els=els, pose=pose)
+        _FITS[key] = ChebyshevFit(get_model(cfg), els=els, pose=pose, gas=gas)
     return _FITS[key]
 
 

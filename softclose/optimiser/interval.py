@@ -4,7 +4,9 @@ shooting interval of RK4 sub-steps on them.
 theta'' = a0(theta) + a1(theta) theta' + a2(theta) theta'^2, with every element's law affine
 in its parameters (:mod:`softclose.model.elements.base`): a0 sums the conservative elements'
 a_e (-q_e'/M) + b_e (-q_e q_e'/M) (T_e = a_e + b_e q) and dry friction's C_e |q_e'|/M (the
-stroke is monotone, theta' <= 0), a1 the dampers' B_e (-q_e'^2/M), a2 = -M'/(2M). The
+stroke is monotone, theta' <= 0), a1 the dampers' B_e (-q_e'^2/M), a2 = -M'/(2M). A gas
+strut's law is not affine in its length: its NLP (a structure of its own, :func:`gas_nlp`)
+carries the spring's length l(theta) and -l'/M as series and adds T(l) (-l'/M) per stage. The
 geometric functions are fitted once per geometry as Chebyshev series to machine precision
 (:class:`ChebyshevFit`); the elements' parameters -- design variables or NLP parameters --
 combine them once per interval (:func:`interval_function`). Which elements the NLP carries
@@ -132,16 +134,24 @@ def nlp_elements(cfg) -> tuple:
         never and e in elements.ENGAGING))
 
 
-def series_terms(els) -> list[tuple[str, str, str]]:
+def gas_nlp(cfg) -> bool:
+    """Is ``cfg``'s spring a gas strut (an NLP structure of its own: :func:`series_terms`)?"""
+    return cfg.design.spring_kind == "gas_strut"
+
+
+def series_terms(els, gas: bool = False) -> list[tuple[str, str, str]]:
     """(name, element, what) of the geometric functions of the equation of motion carried by
     the elements ``els``: per conservative element "b" (-q q'/M; not for gravity, whose T
     is constant) and "a" (-q'/M), per damper "B" (-q'^2/M), per dry friction "C" (|q'|/M:
     the stroke is monotone, theta' <= 0, so friction is the constant force C against it);
-    summed in this order."""
+    summed in this order. With ``gas`` the spring is a gas strut: "l" (its length) and "a"
+    (-l'/M), which a stage combines through the gas law."""
     out = []
     for e in els:
         if e in elements.SPRINGS:
-            if e.name != "gravity":
+            if e.name == "spring" and gas:
+                out.append(("spring:l", e.name, "l"))
+            elif e.name != "gravity":
                 out.append((f"{e.name}:b", e.name, "b"))
             out.append((f"{e.name}:a", e.name, "a"))
         if e in elements.DAMPERS:
@@ -162,7 +172,7 @@ class ChebyshevFit:
     """
 
     def __init__(self, model, tol: float = 1e-13, max_degree: int = 64, els=None,
-                 pose: bool = False):
+                 pose: bool = False, gas: bool = False):
         if els is None:
             raise TypeError("ChebyshevFit: els, the elements the NLP carries "
                             "(nlp_elements(cfg)), must be given")
@@ -170,9 +180,10 @@ class ChebyshevFit:
         cf = coefficients(th, model.lid, model.sigma)
         M, co = cf["M"], cf["coords"]
         self.elements = tuple(els)
-        terms = series_terms(self.elements)
+        terms = series_terms(self.elements, gas)
         what = {"a": lambda c: -c.dq / M, "b": lambda c: -c.q * c.dq / M,
-                "B": lambda c: -c.dq2 / M, "C": lambda c: ca.fabs(c.dq) / M}
+                "B": lambda c: -c.dq2 / M, "C": lambda c: ca.fabs(c.dq) / M,
+                "l": lambda c: c.q}
         funcs = [what[w](co[e]) for _, e, w in terms]
         names = [n for n, _, _ in terms]
         if pose:        # the closure itself, for attachment points as design variables
@@ -216,6 +227,11 @@ class ChebyshevFit:
         """Does the fit hold the closure's series (attachment points as variables)?"""
         return "pose:Ax" in self.names
 
+    @property
+    def gas(self) -> bool:
+        """Is the spring a gas strut (its length a series of its own)?"""
+        return "spring:l" in self.names
+
     @classmethod
     def restore(cls, state: dict, els) -> "ChebyshevFit":
         """The fit from :meth:`state`'s numbers (the elements ``els`` as when it was made)."""
@@ -226,7 +242,7 @@ class ChebyshevFit:
         f.lo, f.hi, f.degree, f.max_rel_error = lo, hi, int(degree), err
         f.coef = np.array(state["fit_coef"], float)
         pose = POSE_SERIES if "pose:Ax" in f.names else ()
-        if f.names != tuple(n for n, _, _ in series_terms(f.elements)) + pose + (
+        if f.names != tuple(n for n, _, _ in series_terms(f.elements, f.gas)) + pose + (
                 "inertia", "tau", "dtau"):
             raise ValueError("the fit's series are not those of its elements")
         return f
@@ -251,10 +267,15 @@ def combine_function(series, placement: bool = False):
     L themselves). ``q`` the parameter vector (:data:`softclose.problem.PARAM_KEYS`), ``L``
     the series' numbers (``series.sym``)."""
     q, L = ca.SX.sym("q", len(PARAM_KEYS)), series.sym
-    P = elements.params(q)
+    gas = "spring:l" in series.names
+    if gas and placement:
+        raise ConfigError("a gas strut with free attachment points (optimise.free "
+                          "geometry.*) is not optimised: fix its points, or optimise a coil "
+                          "spring's")
+    P = elements.params(q, "gas" if gas else "coil")
     a0, a1 = [], []
-    placed = ("spring", "dashpot") if placement else ()
-    for name, e, what in series_terms(series.elements):
+    placed = ("spring", "dashpot") if placement else ("spring",) if gas else ()
+    for name, e, what in series_terms(series.elements, gas):
         if e in placed:
             continue
         el = elements.BY_NAME[e]
@@ -262,6 +283,9 @@ def combine_function(series, placement: bool = False):
             el.affine(P)["ab".index(what)]
         (a1 if what == "B" else a0).append(coef * series.series(name))
     cq = [sum(a0[1:], a0[0]), sum(a1[1:], a1[0])]
+    if gas:             # the gas law's G = -F1, beta and the extended length
+        G, beta = elements.BY_NAME["spring"].gas(P)
+        cq += [G, beta, P["spring_rest_length"]]
     ins = [q]
     if placement:
         g = ca.SX.sym("g", len(SLOTS))
@@ -278,7 +302,9 @@ def combine_function(series, placement: bool = False):
 def _step_series(series, placement: bool, vector=None):
     """The series a sub-step reads beside the combined coefficients (the inertia's, the
     tip's lever tau and tau', with ``placement`` the closure's), as the tail of c."""
-    names = (POSE_SERIES if placement else ()) + ("inertia", "tau", "dtau")
+    names = (POSE_SERIES if placement else ()) + (
+        ("spring:l", "spring:a") if "spring:l" in series.names else ()) + (
+        "inertia", "tau", "dtau")
     if vector is None:
         vector = ca.SX.sym("s", len(names) * (series.degree + 1) + 2)
     return SymbolicSeries(names, series.elements, series.degree, vector)
@@ -308,6 +334,10 @@ def interval_function(series, substeps: int, with_ode: bool = False,
     B = fit.basis(xs[0])
     acc = (ca.dot(cs[:nb], B) + ca.dot(cs[nb:2 * nb], B) * xs[1]
            + ca.dot(fit.series("inertia"), B) * xs[1] ** 2)
+    if "spring:l" in series.names:      # the gas strut: T(l) (-l'/M)
+        G, beta, L_ext = cs[2 * nb], cs[2 * nb + 1], cs[2 * nb + 2]
+        u = ca.dot(fit.series("spring:l"), B) - L_ext
+        acc = acc + G / (1 + beta * u) * ca.dot(fit.series("spring:a"), B)
     if placement:
         l, ldl, dq2, invM = lengths(fit, xs[0], B, cs[2 * nb + 3:2 * nb + 11])
         a_s, b_s, c_d = cs[2 * nb], cs[2 * nb + 1], cs[2 * nb + 2]
@@ -389,6 +419,6 @@ def bound_interval(fit, substeps: int, with_ode: bool = False, placement: bool =
 
 
 __all__ = ["FIT_MARGIN_DEG", "UNROLL_MAX", "END_C", "END_ANGLE", "ANGLE_MARGIN", "angle_bounds",
-           "end_damper_mode", "free_of", "free_layout", "nlp_elements",
+           "end_damper_mode", "free_of", "gas_nlp", "free_layout", "nlp_elements",
            "series_terms", "ChebyshevFit", "hermite_max", "interval_function",
            "combine_function", "bound_interval"]

@@ -2,20 +2,29 @@
 that the spring stays on its side of it over the whole stroke.
 
 A spring of kind ``extension`` only pulls (valid while l >= l0), ``compression`` only pushes
-(valid while l <= l0), ``linear`` does both (SPEC §9). The optimiser's strokes are monotone
+(valid while l <= l0), ``linear`` does both (SPEC §9), a ``gas_strut`` pushes over its stroke
+s (valid while l0 - s <= l <= l0, SPEC §12). The optimiser's strokes are monotone
 (theta' <= 0 is a constraint), so a stroke visits exactly [theta_closed, theta0], and the
 spring's length over it runs over [l_min, l_max] of the geometry alone. Validity is then a
 bound on the free length: l0 >= l_max for a compression spring, l0 <= l_min for an extension
-spring -- tightened by the free length's own tolerance when the design must hold over a
-tolerance box -- plus the length limits (``design.spring_min_length``,
+spring, l_max <= l0 <= l_min + s for a gas strut (l0 <= l_min / 0.6 when its stroke is the
+default 0.4 l0) -- tightened by the free length's own tolerance when the design must hold
+over a tolerance box -- plus the length limits (``design.spring_min_length``,
 ``spring_max_length``), which the geometry either meets or not.
+
+A gas strut's variables are its extended length l0 and its force F1
+(``design.spring_preload``; bounded by ``--free design.spring_preload=LO:HI``, or by default
+from 0 to :func:`strut_force_bound`); its rate is not used (bounded to 0).
 """
 
 from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ..config import Config
+from ..model.elements.springs import STROKE_FRACTION
 from .free_points import placement_layout
 from .verify import get_checker
 
@@ -34,6 +43,24 @@ def free_length_spread(cfg: Config, l0: float) -> float:
     return 0.0
 
 
+def strut_force_bound(cfg: Config) -> float:
+    """A gas strut's largest F1 by default (N): five times the force whose moment along the
+    strut's best lever over the stroke equals gravity's largest moment, rounded up to 1, 2 or
+    5 times a power of ten -- more than any lid of this geometry can use."""
+    from ..model.lid import shared_model
+    from ..problem import resolve
+    model = shared_model(resolve(cfg))
+    st = cfg.stroke
+    th = np.linspace(st.theta_closed, st.theta0, 201)
+    c = np.asarray(model.coeffs.map(len(th))(th)[0])
+    from ..model.dynamics import COEFFS
+    dVg = np.abs(c[COEFFS.index("dVg")]).max()
+    dl = np.abs(c[COEFFS.index("dl")]).max()
+    F = 5 * dVg / max(dl, 1e-9)
+    e = 10 ** math.floor(math.log10(F))
+    return float(next(m * e for m in (1, 2, 5, 10) if m * e >= F))
+
+
 def kind_config(cfg: Config, kind: str, robust: bool = False) -> tuple[Config, str | None]:
     """``cfg`` for solving with a spring of ``kind``: design.spring_kind set, and the free
     length's bounds tightened so that the spring stays valid over the whole stroke (with
@@ -49,6 +76,8 @@ def kind_config(cfg: Config, kind: str, robust: bool = False) -> tuple[Config, s
                  None)
     else:
         s = None
+    if kind == "gas_strut":
+        return _strut_config(cfg, lo, hi, lmin, lmax, s)
     if kind == "compression":
         need = lmax if s is None else (lmax / (1 - s.value) if s.relative else lmax + s.value)
         lo = max(lo, need)
@@ -79,6 +108,42 @@ def kind_config(cfg: Config, kind: str, robust: bool = False) -> tuple[Config, s
                      f"{o.spring_rest_length[1]:g}] m")
     out = cfg.update({"design.spring_kind": kind,
                       "optimise.spring_rest_length": [float(lo), float(hi)]})
+    return out, None
+
+
+def _strut_config(cfg, lo, hi, lmin, lmax, s) -> tuple[Config, str | None]:
+    """:func:`kind_config` of a gas strut: lmax <= l0 (its extended length) and l0 - stroke
+    <= lmin; F1 free; the rate 0."""
+    d, o = cfg.design, cfg.optimise
+    free = dict((k, (a, b)) for k, a, b in o.free or ())
+    if "design.strut_stroke" in free:
+        return cfg, ("design.strut_stroke cannot be free (the strut's stroke bounds its "
+                     "extended length): give it, or leave it at 0.4 x the extended length")
+    if d.spring_min_length is not None and d.spring_min_length > lmin:
+        return cfg, (f"a gas strut would be pushed in to {lmin * 1e3:.2f} mm, below its "
+                     f"compressed length design.spring_min_length = "
+                     f"{d.spring_min_length * 1e3:.2f} mm")
+    grow = (lambda x: x / (1 - s.value)) if s is not None and s.relative else \
+        (lambda x: x + s.value) if s is not None else (lambda x: x)
+    shrink = (lambda x: x / (1 + s.value)) if s is not None and s.relative else \
+        (lambda x: x - s.value) if s is not None else (lambda x: x)
+    lo = max(lo, grow(lmax))
+    top = lmin + d.strut_stroke if d.strut_stroke else lmin / (1 - STROKE_FRACTION)
+    hi = min(hi, shrink(top))
+    if not lo <= hi:
+        stroke = (f"its stroke {d.strut_stroke * 1e3:.2f} mm" if d.strut_stroke else
+                  f"its stroke {STROKE_FRACTION:g} x its extended length")
+        return cfg, (f"a gas strut needs an extended length between {lo * 1e3:.2f} and "
+                     f"{hi * 1e3:.2f} mm (its length runs {lmin * 1e3:.2f}..{lmax * 1e3:.2f} "
+                     f"mm over the stroke, {stroke}) within optimise.spring_rest_length = "
+                     f"[{o.spring_rest_length[0]:g}, {o.spring_rest_length[1]:g}] m: "
+                     "none fits; give design.strut_stroke or widen the bounds")
+    if "design.spring_preload" not in free:
+        free["design.spring_preload"] = (0.0, strut_force_bound(cfg))
+    out = cfg.update({"design.spring_kind": "gas_strut", "design.spring_k": 0.0,
+                      "optimise.spring_k": [0.0, 0.0],
+                      "optimise.spring_rest_length": [float(lo), float(hi)],
+                      "optimise.free": {k: [float(a), float(b)] for k, (a, b) in free.items()}})
     return out, None
 
 

@@ -192,15 +192,16 @@ def opening_angles(model, n: int) -> np.ndarray:
 OPENING_INTERVALS = 32
 
 
-def opening_bound(layout, values, theta0, thc, design):
+def opening_bound(layout, values, theta0, thc, design, spring: str = "coil"):
     """The opening effort at the nodes of a grid of [theta_closed, theta0] and the maxima of
     its cubic Hermite interpolant in every interval (error O(h^4)): every value <= the bound
     bounds the largest effort over the stroke. ``values``: the lid vector's opening part
-    (the geometry at the grid's angles, :func:`softclose.optimiser.lid.opening_values`)."""
+    (the geometry at the grid's angles, :func:`softclose.optimiser.lid.opening_values`);
+    ``spring``: the NLP's spring law ("coil" or "gas")."""
     n = OPENING_INTERVALS
     names = layout.opening_elements
     k = 3 * len(names) + 2
-    P = elements.params(design)
+    P = elements.params(design, spring)
     F, dF = [], []
     for i in range(n + 1):
         f, df = opening_effort(values[i * k:(i + 1) * k], P, names)

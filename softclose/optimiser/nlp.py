@@ -195,6 +195,8 @@ class ShootingStructure:
         self.iT1 = self.nd + 1 if self.two_phase else None
         self.iX = self.nd + (2 if self.two_phase else 1)
         self.series = SymbolicSeries(names, self.els, degree)
+        #: the spring law of the structure: a gas strut's NLP carries its length's series
+        self.spring = "gas" if "spring:l" in self.series.names else "coil"
         self.lid = LidLayout(self.series, len(self.free) + len(self.place), self.placed,
                              OPENING_INTERVALS + 1 if opening else 0)
         self.n_params = len(NLP_PARAMS) + N + self.lid.size
@@ -269,7 +271,8 @@ class ShootingStructure:
                 g_all["keep_out"] = keep_out_constraints(self.series, theta0, thc, gvec,
                                                          keep_out, self.place, L)
         else:
-            g_all = {"holding_moment": holding_moment(lid["closed"], elements.params(design)),
+            g_all = {"holding_moment": holding_moment(lid["closed"],
+                                                      elements.params(design, self.spring)),
                      "release_downwards": self.f(ca.vertcat(theta0, 0), c)[1]}
         g_all = {"continuity": ca.vec(xe - X),                  # = 0
                  "theta_above_closed": ca.vec(a) - thc,          # >= 0
@@ -278,7 +281,7 @@ class ShootingStructure:
                  **g_all}      # holding moment >= holding_moment_min, release <= 0, ...
         if opening:        # the opening effort (optimise.opening_force_max): <= the bound
             g_all["opening_force"] = opening_bound(self.lid, lid["opening"], theta0, thc,
-                                                   design)
+                                                   design, self.spring)
         if self.two_phase:  # the node between the phases on theta_e; phase 2 lasts
             g_all["engagement"] = X[0, nodes - 1] - theta_e           # = 0
             g_all["phase_two"] = T - T1                               # >= PHASE_FLOOR

@@ -1,11 +1,12 @@
 """What to buy: the spring of a design as a part, and how precisely it must be made.
 
 A design's spring is a part with a kind, a free length, a rate, a preload, the lengths it
-works over (the stroke's), and the largest force it must carry there. How precisely: the
-largest deviations of its free length (mm) and rate (relative) -- each on its own, every other
-value nominal -- within which the design still meets every constraint of the problem and the
-spring stays valid, found with the C kernel over a fine ladder of deviations (a design on a
-constraint's edge has no margin on that side: the report says 0).
+works over (the stroke's), and the largest force it must carry there; a gas strut's with its
+extended length, stroke, F1, progression and friction band. How precisely: the largest
+deviations of its free length (mm) and rate (relative; a strut's F1) -- each on its own,
+every other value nominal -- within which the design still meets every constraint of the
+problem and the spring stays valid, found with the C kernel over a fine ladder of deviations
+(a design on a constraint's edge has no margin on that side: the report says 0).
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..model import elements
+from ..model.elements.springs import GAS, strut_stroke
 from ..problem import PARAM_KEYS, feasible, params_of, resolve
 from ..simulation.simulator import Simulator
 
@@ -35,16 +37,26 @@ class SpringPart:
     working_length: tuple[float, float]
     largest_force: float
     tolerance: dict = field(default_factory=dict)
+    #: a gas strut's stroke (m), progression K and friction F_R (N); None for a coil spring
+    stroke: float | None = None
+    progression: float | None = None
+    friction: float | None = None
 
     def to_json(self) -> dict:
-        return {"kind": self.kind, "free_length": self.free_length, "rate": self.rate,
-                "preload": self.preload, "working_length": list(self.working_length),
-                "largest_force": self.largest_force,
-                "tolerance": {k: list(v) for k, v in self.tolerance.items()}}
+        out = {"kind": self.kind, "free_length": self.free_length, "rate": self.rate,
+               "preload": self.preload, "working_length": list(self.working_length),
+               "largest_force": self.largest_force,
+               "tolerance": {k: list(v) for k, v in self.tolerance.items()}}
+        if self.kind == "gas_strut":
+            out.update(stroke=self.stroke, progression=self.progression,
+                       friction=self.friction)
+        return out
 
     def text(self) -> str:
         """Two lines: the part, and how precisely it must be made."""
         lo, hi = self.working_length
+        if self.kind == "gas_strut":
+            return self._strut_text()
         what = {"compression": "compression spring or gas strut (pushes)",
                 "extension": "extension spring (pulls)",
                 "linear": "linear double-acting cartridge (pushes and pulls)"}[self.kind]
@@ -57,6 +69,24 @@ class SpringPart:
             line += (f"\n  made to: free length -{fl[0] * 1e3:.3f}/+{fl[1] * 1e3:.3f} mm, rate "
                      f"-{k[0] * 100:.2f}/+{k[1] * 100:.2f} % (each alone; beyond, a constraint "
                      "fails or the spring leaves its valid range)")
+        return line
+
+    def _strut_text(self) -> str:
+        lo, hi = self.working_length
+        L, s, K = self.free_length, self.stroke, self.progression
+        line = (f"gas strut (pushes): extended length {L * 1e3:.2f} mm, stroke {s * 1e3:.2f} "
+                f"mm (compressed {(L - s) * 1e3:.2f} mm), F1 {self.preload:.4g} N at the "
+                f"reference temperature, progression {K:.3g} (F2 {K * self.preload:.4g} N); "
+                f"works between {lo * 1e3:.2f} and {hi * 1e3:.2f} mm, largest force "
+                f"{self.largest_force:.4g} N")
+        if self.friction:
+            line += f"; friction band F3 - F1 = {2 * self.friction:.3g} N"
+        t = self.tolerance
+        if t:
+            fl, f1 = t.get("free_length", (0, 0)), t.get("force", (0, 0))
+            line += (f"\n  made to: extended length -{fl[0] * 1e3:.3f}/+{fl[1] * 1e3:.3f} mm, "
+                     f"F1 -{f1[0] * 100:.2f}/+{f1[1] * 100:.2f} % (each alone; beyond, a "
+                     "constraint fails or the strut leaves its stroke)")
         return line
 
 
@@ -73,11 +103,16 @@ def spring_part(cfg, design: dict | None, metrics: dict | None,
     kind = cfg.design.spring_kind if design is None or "spring_kind" not in design \
         else design["spring_kind"]
     lo, hi = float(metrics["min_spring_length"]), float(metrics["max_spring_length"])
-    a, b = elements.BY_NAME["spring"].affine(elements.params(p))    # its law T = a + b l
-    forces = [float(a + b * x) for x in (lo, hi)]
+    spring = elements.BY_NAME["spring"]
+    forces = [float(spring.tension(x, elements.params(p))) for x in (lo, hi)]
+    strut = {}
+    if kind == "gas_strut":
+        strut = {"stroke": float(strut_stroke(elements.params(p))),
+                 "progression": float(P["strut_progression"]),
+                 "friction": float(P["strut_friction"])}
     return SpringPart(kind, float(P["spring_rest_length"]), float(P["spring_k"]),
                       float(P["spring_preload"]), (lo, hi), float(max(abs(f) for f in forces)),
-                      margins(cfg, p, model) if tolerance else {})
+                      margins(cfg, p, model) if tolerance else {}, **strut)
 
 
 def margins(cfg, p, model=None) -> dict:
@@ -90,10 +125,12 @@ def margins(cfg, p, model=None) -> dict:
     sim = Simulator(resolve(cfg), model=model, cached=model is not None)
     p = np.asarray(p, float)
     ladders = []                  # (name, steps, column, relative, sign), each side
+    gas = p[PARAM_KEYS.index("spring_kind")] == GAS        # (a strut's force: its F1)
     for key, steps, relative in (("spring_rest_length", FREE_LENGTH_STEPS, False),
-                                 ("spring_k", RATE_STEPS, True)):
+                                 ("spring_preload" if gas else "spring_k", RATE_STEPS, True)):
         for sign in (-1.0, 1.0):
-            ladders.append(("free_length" if key == "spring_rest_length" else "rate", steps,
+            ladders.append(("free_length" if key == "spring_rest_length" else
+                            "force" if gas else "rate", steps,
                             PARAM_KEYS.index(key), relative, sign))
 
     def ok_at(which: list) -> list:

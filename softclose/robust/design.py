@@ -70,7 +70,7 @@ from .nlp import T_FLOOR
 from .policy import (MAX_WIDEN, SLOW_YIELD_SAMPLES, WIDEN, YIELD_REFERENCE, check_keys,
                      max_corners)
 from .result import RobustResult, box_summary
-from .scenarios import initial_scenarios
+from .scenarios import design_dict, initial_scenarios
 from .solve import Problem, Run, solve_box, start_design
 from .verify import scenario_report
 from .worst_cases import check_corners
@@ -106,7 +106,9 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     check_batch(cfg, int(samples or cfg.tolerance.samples),
                 "--samples" if samples else "tolerance.samples")
     check_keys(cfg)
-    others = [k for k, _, _ in cfg.optimise.free or () if k not in SLOTS + (END_C, END_ANGLE)]
+    gas = "gas_strut" in cfg.optimise.spring_kinds
+    others = [k for k, _, _ in cfg.optimise.free or () if k not in SLOTS + (END_C, END_ANGLE)
+              and not (gas and k == "design.spring_preload")]
     if others:
         raise ConfigError(
             "optimise.free: the robust design chooses k, l0, c, the attachment points "
@@ -283,7 +285,7 @@ def optimise_robust_kind(cfg: Config, *, progress: bool = False, samples: int | 
             nominal = _nominal(cfg)          # (deferred: the report of no design shows it)
         done = _no_design(cfg, problem, run, nominal, N, M, seed, log, base)
         return (done, lambda: done) if defer else done
-    design = dict(zip(DESIGN_KEYS, map(float, run.design)))
+    design = design_dict(problem, run.design)
     J_obj = float(np.max(run.J)) if tol.robust_objective == "worst" else float(np.mean(run.J))
     if not report or defer:
         corner_check = _corner_guarantee(cfg, scale, problem, run, log)
@@ -407,7 +409,7 @@ def _solve_widening(cfg: Config, nominal: dict, N: int, M: int, z_yield: np.ndar
             break
         log.bar.update(8, "yield")
         t0 = time.perf_counter()
-        design = dict(zip(DESIGN_KEYS, map(float, run.design)))
+        design = design_dict(problem, run.design)
         c_rob = cfg.with_design(**design)
         yres = analyse_samples(c_rob, box_of(c_rob), z_yield, seed=seed,
                                reference=YIELD_REFERENCE)

@@ -55,6 +55,7 @@ from ..optimiser import compiled
 from ..optimiser.free_points import (length_bounds, placed_bounds, placement_layout, slot_values,
                                      spring_moment)
 from ..optimiser.interval import (ChebyshevFit, combine_function, END_ANGLE, END_C, free_layout,
+                                  gas_nlp,
                                   free_of, interval_function, nlp_elements)
 from ..model import elements
 from ..optimiser.nlp import check_linear_solver, PHASE_FLOOR
@@ -94,14 +95,15 @@ def model_config(cfg: Config, values: dict) -> Config:
 
 def _model_key(cfg: Config) -> tuple:
     """A scenario model's key: the model's, and the elements the NLP carries."""
-    return model_key(resolve(cfg)) + (tuple(e.name for e in nlp_elements(cfg)),)
+    return model_key(resolve(cfg)) + (tuple(e.name for e in nlp_elements(cfg)), gas_nlp(cfg))
 
 
 def scenario_fit(cfg_model: Config, placement: bool = False):
     """(model, Chebyshev fit) of a scenario's model: the nominal optimiser's (with
     ``placement`` the closure's series too; the points do not change them)."""
     model = get_model(cfg_model)
-    return model, ChebyshevFit(model, els=nlp_elements(cfg_model), pose=placement)
+    return model, ChebyshevFit(model, els=nlp_elements(cfg_model), pose=placement,
+                               gas=gas_nlp(cfg_model))
 
 
 class ScenarioStructure:
@@ -125,6 +127,7 @@ class ScenarioStructure:
         self.robust_objective = robust_objective
         self.nd = 3 + len(self.free) + len(self.place)
         self.series = SymbolicSeries(names, els, degree)
+        self.spring = "gas" if "spring:l" in self.series.names else "coil"
         self.lid = LidLayout(self.series, 0, False, OPENING_INTERVALS + 1 if opening else 0)
         n_sc = len(self.free) + len(self.place)
         self.n_params = len(PARAMS) + N + 2 * NP * S + n_sc + (8 if self.placed else 0) + \
@@ -227,7 +230,7 @@ class ScenarioStructure:
                            ca.vertcat(ca.vec(Ln), ca.vec(Lmin)) - l0,
                            ca.vertcat(ca.vec(Ln), ca.vec(Lmax), ca.vec(Lmin))]
             else:
-                hold = holding_moment(lids[s]["closed"], elements.params(ps[s]))
+                hold = holding_moment(lids[s]["closed"], elements.params(ps[s], self.spring))
                 lengths = [none, none, none]
             if self.two_phase:  # the node between the phases on the scenario's theta_e
                 phases = [X[s][0, n1 - 1] - elements.params(ps[s])["end_damper_angle_deg"],
@@ -235,7 +238,8 @@ class ScenarioStructure:
             else:
                 phases = [none, none]
             if opening and not self.placed:
-                op = opening_bound(self.lid, lids[s]["opening"], theta0, thc, ps[s])
+                op = opening_bound(self.lid, lids[s]["opening"], theta0, thc, ps[s],
+                                   self.spring)
             else:
                 op = none
             ko = none
@@ -297,6 +301,12 @@ class ScenarioStructure:
                 "J": self.J_fn.serialize().encode()}
 
 
+#: the free design variables (``optimise.free``) a scenario NLP carries: the end damper's, and
+#: a gas strut's force
+ROBUST_FREE = (END_C, END_ANGLE)
+STRUT_FORCE = "design.spring_preload"
+
+
 class ScenarioNLP:
     """The multiple-shooting NLP of S scenarios (see the module docstring): a
     :class:`ScenarioStructure` bound to the scenarios' models (their lid vectors).
@@ -319,7 +329,9 @@ class ScenarioNLP:
         self.N = 2 * nodes if self.two_phase else nodes
         self.robust_objective = robust_objective
         # the free end damper (optimise.free) and attachment points, shared by every scenario
-        self.free = tuple(x for x in free_layout(cfg) if x[0] in (END_C, END_ANGLE))
+        # (a gas strut's force F1 too: its design variable beside l0 and c)
+        self.free = tuple(x for x in free_layout(cfg) if x[0] in ROBUST_FREE
+                          or x[0] == STRUT_FORCE and gas_nlp(cfg))
         self.place = placement_layout(cfg)
         self.placed = bool(self.place)
         self.g0 = slot_values(cfg)

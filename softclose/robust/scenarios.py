@@ -79,10 +79,19 @@ def fractional_factorial(d: int) -> np.ndarray:
     return np.column_stack(cols)
 
 
+def design_dict(problem: "softclose.robust.solve.Problem", d) -> dict:
+    """The design vector ``d`` of a solve by name: k, l0, c, then the NLP's free design
+    variables (a gas strut's F1, the end damper's), as ``design`` keys."""
+    names = DESIGN_KEYS + tuple(k.split(".", 1)[1] for k, _, _ in problem.nlp.free)
+    return {n: float(v) for n, v in zip(names, np.asarray(d, float))}
+
+
 def corner_columns(cfg: Config, scale: float, design):
     """(box at ``design``, its corners Z (2^d, d), cfg with ``design``, the kernel's columns
-    of every corner); a box without a dimension has no corners (Z empty, columns None)."""
-    design = dict(zip(DESIGN_KEYS, map(float, design)))
+    of every corner); a box without a dimension has no corners (Z empty, columns None).
+    ``design``: (k, l0, c), or a dict of design values by name (with a gas strut's F1)."""
+    if not isinstance(design, dict):
+        design = dict(zip(DESIGN_KEYS, map(float, design)))
     box_d = box_of(cfg, design, scale=scale)
     c = cfg.with_design(**design)
     if not box_d.dim:

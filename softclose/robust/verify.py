@@ -22,6 +22,7 @@ from ..problem import (DESIGN_KEYS, ENGAGE_KEYS, METRIC_KEYS, VERIFY_RTOL, agree
                        design_of, params_of)
 from ..problem import PARAM_COLUMNS
 from .box import box_of
+from .scenarios import design_dict
 from .evaluate import with_values
 from ..optimiser.verify import verify_design
 
@@ -100,7 +101,7 @@ def reference_check(cfg: Config, keys, x, label: str = "", kernel: dict | None =
 def scenario_report(cfg, problem, run, verify: bool) -> tuple[list, bool]:
     """Per scenario: its values, the NLP's metrics and the reference's verdict (``problem``
     and ``run``: a :class:`softclose.robust.solve.Problem` and its solve)."""
-    box_d = box_of(cfg, dict(zip(DESIGN_KEYS, run.design)), scale=problem.scale)
+    box_d = box_of(cfg, design_dict(problem, run.design), scale=problem.scale)
     out, ok_all = [], True
     worst = int(np.argmax(run.J))
     for s, sc in enumerate(problem.scenarios):
@@ -121,7 +122,7 @@ def scenario_report(cfg, problem, run, verify: bool) -> tuple[list, bool]:
                  "worst": s == worst}
         if verify:
             # the NLP's own numbers of this scenario against the reference's
-            c_d = cfg.with_design(**dict(zip(DESIGN_KEYS, map(float, run.design))))
+            c_d = cfg.with_design(**design_dict(problem, run.design))
             chk = reference_check(c_d, box_d.keys, box_d.values(z)[0], entry["label"], None,
                                   float(run.J[s]),
                                   claims={**metrics, "objective": entry["objective"]})

@@ -23,7 +23,7 @@ from ..problem import DESIGN_KEYS
 from .box import Box, box_of
 from .evaluate import evaluate
 from .policy import ADD_PER_ROUND, MC_TOL, OBJ_RTOL, t_end
-from .scenarios import badness, corner_columns
+from .scenarios import badness, corner_columns, design_dict
 from .stats import margins
 
 
@@ -71,9 +71,10 @@ def search(cfg: Config, scale: float, run, seed: int, n: int) -> tuple[list, dic
     """Points inside the box that break a constraint or exceed the worst objective: the
     highest-scoring of ``n`` uniform samples (:func:`_scores`), each improved by a local
     ascent (:func:`_climb`); those scoring above MC_TOL become scenarios."""
-    box_d = box_of(cfg, dict(zip(DESIGN_KEYS, run.design)), scale=scale)
+    design = design_dict(run.problem, run.design)
+    box_d = box_of(cfg, design, scale=scale)
     z = box_d.draw(n, seed, "uniform")
-    c = cfg.with_design(**dict(zip(DESIGN_KEYS, map(float, run.design))))
+    c = cfg.with_design(**design)
     Jmax = float(np.max(run.J))
     score, m = _scores(cfg, c, box_d, z, Jmax)
     bad = score > MC_TOL
@@ -101,7 +102,7 @@ def check_corners(cfg: Config, scale: float, run, have=()) -> tuple[list, dict]:
     (say the nominal optimum, where most corners fail) does not bring all 2^d corners into
     the NLP at once -- and a summary (``breaking``: every corner outside ``have`` that
     breaks a constraint)."""
-    box_d, Z, c, cols = corner_columns(cfg, scale, run.design)
+    box_d, Z, c, cols = corner_columns(cfg, scale, design_dict(run.problem, run.design))
     if not len(Z):
         return [], {"corners": 0, "violating": 0, "breaking": [], "added": []}
     score, m = _scores(cfg, c, box_d, Z, float(np.max(run.J)), cols=cols)

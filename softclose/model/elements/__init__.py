@@ -51,9 +51,11 @@ FRICTIONS = tuple(e for e in ELEMENTS if e.coulomb.__func__ is not Element.coulo
 ENGAGING = tuple(e for e in ELEMENTS if e.engagement is not None)
 
 
-def params(p) -> Params:
-    """The parameter vector (or rows) p as named SI values: ``params(p)["spring_k"]``."""
-    return Params(p, PARAMS)
+def params(p, spring: str | None = None) -> Params:
+    """The parameter vector (or rows) p as named SI values: ``params(p)["spring_k"]``;
+    ``spring`` = "coil" or "gas": the spring law symbolic expressions serve (default: the
+    kind in p decides; :class:`Params`)."""
+    return Params(p, PARAMS, spring)
 
 
 def structure(mounting) -> tuple:

@@ -78,11 +78,16 @@ class Params:
 
     ``p`` is a vector (CasADi or numpy, one design) or an array of rows (numpy, one design a
     row); a parameter with an SI factor other than 1 (an angle in degrees) is scaled, the
-    others are passed through untouched.
+    others are passed through untouched. ``spring``: the spring law the expressions serve
+    (:attr:`spring`).
     """
 
-    def __init__(self, p, order: tuple[Param, ...]):
+    def __init__(self, p, order: tuple[Param, ...], spring: str | None = None):
         self._p = p
+        #: the spring law an expression serves: "coil", "gas" (a gas strut), or None -- any,
+        #: by the kind in p (a CasADi expression of a symbolic kind then holds both laws,
+        #: selected by the kind; an NLP, whose spring kind is part of its structure, names one)
+        self.spring = spring
         self._index = {q.name: (i, q.si) for i, q in enumerate(order)}
         self._rows = getattr(p, "ndim", 1) == 2
 

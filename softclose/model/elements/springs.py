@@ -48,6 +48,8 @@ def _symbolic(*xs) -> bool:
 
 def _where(c, a, b):
     """``a`` where ``c`` else ``b`` (numbers, arrays or CasADi expressions alike)."""
+    if c is True or c is False:
+        return a if c else b
     if _symbolic(c, a, b):
         import casadi as ca
         return ca.if_else(c, a, b)
@@ -157,11 +159,6 @@ class Spring(Element):
     def coordinate(self, lid):
         return Length("E", "lid_e", "spring_anchor")
 
-    @staticmethod
-    def is_gas(P):
-        """True (per row) where the spring is a gas strut."""
-        return P["spring_kind"] == GAS
-
     def preload(self, P):
         """s F0: a coil spring's signed preload (+ pulls, - pushes)."""
         return P["spring_kind"] * P["spring_preload"]
@@ -193,8 +190,19 @@ class Spring(Element):
     @staticmethod
     def _any_gas(P):
         """Might a row be a gas strut (always, for a symbolic kind)?"""
+        law = getattr(P, "spring", None)
+        if law is not None:
+            return law == "gas"
         kind = P["spring_kind"]
         return _symbolic(kind) or bool(np.any(np.asarray(kind) == GAS))
+
+    @staticmethod
+    def is_gas(P):
+        """True (per row) where the spring is a gas strut."""
+        law = getattr(P, "spring", None)
+        if law is not None:
+            return law == "gas"
+        return P["spring_kind"] == GAS
 
     extremes = ("min_spring_length", "max_spring_length")
 
