@@ -167,11 +167,16 @@ def test_optimise_hinge_chest_lid_is_verified():
     assert rc == 0, err
     res = json.loads(out)
     assert res["success"] and res["verification"]["ok"] and res["closed"]
-    assert res["kind"] == "compression"
-    assert res["objective"] == pytest.approx(0.14367169, rel=1e-5)
+    # a gas strut (the example's), its force F1 chosen with the opening force at its bound
+    assert res["kind"] == "gas_strut"
+    assert res["objective"] == pytest.approx(1.0194747, rel=1e-5)
     assert res["closing_time"] == pytest.approx(1.0, abs=1e-6)
-    assert res["holding_moment"] == pytest.approx(0.1, abs=1e-6)
+    assert res["opening_force"] == pytest.approx(8.0, abs=1e-6)
+    assert res["design"]["spring_preload"] == pytest.approx(77.0436, rel=1e-4)
     assert res["min_spring_length"] == pytest.approx(math.hypot(0.06, 0.07), rel=1e-9)
+    # the strut spans exactly the stroke's lengths: extended at the open lid
+    assert res["design"]["spring_rest_length"] == pytest.approx(res["max_spring_length"],
+                                                                rel=1e-9)
 
 
 def test_cli_refuses_crank_key_on_hinge_in_one_line():

@@ -136,7 +136,7 @@ class Spring(Element):
         Key("design", "strut_stroke", "pos", None, "m",
             "a gas strut's stroke s; none: 0.4 x its extended length (design.spring_rest_length)",
             lo=1e-4, hi=10.0),
-        Key("design", "strut_progression", "pos", 1.3, "",
+        Key("design", "strut_progression", "pos", 1.3, "1",
             "a gas strut's progression K (>= 1): its force at full compression over F1",
             lo=1.0, hi=5.0),
         Key("design", "spring_min_length", "pos", None, "m",
