@@ -8,6 +8,8 @@ import math
 
 from ..coil_spring import SpringCheck
 from ..errors import ConfigError
+from ..model.elements.springs import STROKE_FRACTION
+from ..model.temperature import gas_factor
 
 
 def _spring(cfg, stroke, temps) -> dict:
@@ -16,15 +18,15 @@ def _spring(cfg, stroke, temps) -> dict:
                "longest_length": None if stroke is None else stroke.max_spring_length}
     if d.spring_kind == "gas_strut":
         t_ref = cfg.operating.reference_temperature_c
-        stroke_s = d.strut_stroke if getattr(d, "strut_stroke", None) else \
-            0.4 * d.spring_rest_length
+        stroke_s = d.strut_stroke or STROKE_FRACTION * d.spring_rest_length
         return {"kind": "gas_strut", "what": "gas strut (pushes only)",
                 "extended_length": d.spring_rest_length, "stroke": stroke_s,
-                "force_f1": d.spring_preload,
-                "progression": getattr(d, "strut_progression", None),
-                "friction": getattr(d, "strut_friction", 0.0), **lengths,
+                "force_f1": d.spring_preload, "progression": d.strut_progression,
+                "force_f2": d.strut_progression * d.spring_preload,
+                "friction": d.strut_friction, "friction_band": 2 * d.strut_friction,
+                **lengths,
                 "force_f1_at": [{"temperature_c": T, "force_f1": d.spring_preload
-                                 * (T + 273.15) / (t_ref + 273.15)} for T in temps]}
+                                 * gas_factor(T, t_ref)} for T in temps]}
     if not d.spring_k and not d.spring_preload:
         return {"kind": "none", "what": "no spring"}
     out = {"kind": d.spring_kind, "what": f"{d.spring_kind} spring", "rate": d.spring_k,

@@ -49,7 +49,8 @@ def spring_rows(r) -> tuple:
         rows = [("extended length", _mm(s["extended_length"])), ("stroke", _mm(s["stroke"])),
                 ("force F1 at full extension", _u(s["force_f1"], "N")),
                 ("progression K", num(s["progression"])),
-                ("friction", _u(s["friction"], "N"))] + lengths
+                ("force F2 at full compression", _u(s["force_f2"], "N")),
+                ("friction band F3 - F1", _u(s["friction_band"], "N"))] + lengths
         rows += [(f"F1 at {a['temperature_c']:g} °C", _u(a["force_f1"], "N", 4))
                  for a in s["force_f1_at"]]
         return "Gas strut", rows, [], ""
