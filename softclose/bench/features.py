@@ -16,13 +16,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config import Config, default_config, to_dict
+from ..config import Config, default_config, load_config, to_dict
 from ..model.lid import LidModel
 from ..problem import PARAM_COLUMNS, objective, params_of, resolve
 from ..simulation.reference import Reference
 from ..simulation.simulator import Simulator
 from .precision import TRUTH_TOL
-from .timing import cli_time, fresh_command, fresh_env, not_measured, OtherLoad, speed_row
+from .timing import (SPEED_TARGETS, cli_time, fresh_command, fresh_env, not_measured, OtherLoad,
+                     speed_row)
 from ..optimiser import optimise, solve
 from ..catalog.illustrative import dampers, springs
 from ..catalog import select
@@ -40,6 +41,17 @@ FEATURE_BUDGET_S = 30.0
 SWEEP_GRID = {"design.spring_k": (500.0, 9500.0, 40),
               "design.spring_rest_length": (0.05, 0.09, 40),
               "design.damper_c": (100.0, 4000.0, 25)}
+
+#: the gas strut's 40,000-design grid on the default lid (its extended length from the
+#: stroke's longest length to where its stroke still reaches the shortest) and the hinge
+#: lid's (the chest lid of examples/lids with a linear spring)
+GAS_STRUT_GRID = {"design.spring_preload": (5.0, 50.0, 40),
+                  "design.spring_rest_length": (0.0585, 0.087, 40),
+                  "design.damper_c": (100.0, 4000.0, 25)}
+HINGE_GRID = {"design.spring_k": (0.0, 3000.0, 40),
+              "design.spring_rest_length": (0.05, 0.2, 40),
+              "design.damper_c": (20.0, 800.0, 25)}
+CHEST_LID = Path(__file__).resolve().parents[2] / "examples" / "lids" / "chest_lid.toml"
 
 #: the placement sample (issue 23): the co-design's box of the spring's points, at the
 #: README's robust design (a compression spring)
@@ -61,6 +73,41 @@ OPT_SUBSTEPS = (1, 2, 4)
 def sweep_axes() -> dict[str, np.ndarray]:
     """The 40,000-design grid of the sweep throughput entry (:data:`SWEEP_GRID`)."""
     return {k: np.linspace(a, b, n) for k, (a, b, n) in SWEEP_GRID.items()}
+
+
+def grid_rows(cfg: Config, grid: dict) -> np.ndarray:
+    """The parameter vectors of ``cfg`` over a full grid {key: (lo, hi, n)}."""
+    g = make_grid({k: np.linspace(a, b, n) for k, (a, b, n) in grid.items()})
+    n = int(np.prod([n for _, _, n in grid.values()]))
+    P = np.tile(params_of(cfg), (n, 1))
+    P[:, [PARAM_COLUMNS[k] for k in g.keys]] = g.points(np.arange(n))
+    return P
+
+
+def _hinge_row(rows: list, timed, rep: int, per_step: float | None) -> None:
+    """The kernel on a hinge lid (the chest lid of examples/lids with the four-bar row's
+    linear spring and dashpot: k x l0 x c), held to the four-bar's time per integration step
+    (its strokes are longer: the row's ratio is its time per step over the four-bar's)."""
+    key = "kernel_40000_hinge"
+    what = ("Simulator.run_batch: 40,000 strokes of the chest lid on its hinge "
+            "(examples/lids), a linear spring and a dashpot, k x l0 x c")
+    if not CHEST_LID.exists():              # (an installed package without the examples)
+        rows.append(not_measured(key, what, f"{CHEST_LID} is not here", rep))
+        return
+    c = load_config(CHEST_LID).update({"design.spring_kind": "linear",
+                                       "design.strut_friction": 0.0})
+    P = grid_rows(c, HINGE_GRID)
+    sim = Simulator(resolve(c))
+    sim.run_batch(P[:1000])
+    r = timed(key, what, lambda: sim.run_batch(P), rep, count=len(P))
+    if r is None or per_step is None:
+        return
+    row = rows[-1]
+    row["ratio"] = row["median_s"] / float(np.sum(r["steps"])) / per_step
+    row["target"] = SPEED_TARGETS[key]
+    row["met"] = row["ratio"] <= row["target"]["max_ratio"]
+    row["note"] = (f"{np.mean(r['steps']):.0f} steps a stroke; time per step "
+                   f"{row['ratio']:.2f} x the four-bar's (kernel_40000)")
 
 
 def feature_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
@@ -106,9 +153,11 @@ def feature_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
     P = np.tile(params_of(cfg), (n_grid, 1))
     P[:, [PARAM_COLUMNS[k] for k in grid.keys]] = grid.points(np.arange(n_grid))
     sim.run_batch(P[:1000])                             # warm-up: threads up
-    timed("kernel_40000", f"Simulator.run_batch: the {n_grid:,} strokes of that grid, "
-          "all cores", lambda: sim.run_batch(P), rep, count=n_grid,
-          note="closing and not closing alike; a lid that creeps open runs to t_max")
+    base = timed("kernel_40000", f"Simulator.run_batch: the {n_grid:,} strokes of that grid, "
+                 "all cores", lambda: sim.run_batch(P), rep, count=n_grid,
+                 note="closing and not closing alike; a lid that creeps open runs to t_max")
+    # its time per integration step: what the hinge lid's row is held to
+    per_step = None if base is None else rows[-1]["median_s"] / float(np.sum(base["steps"]))
     # the same grid with the real elements: a preloaded compression spring (rows whose free
     # length is below the stroke's lengths are invalid designs, found and reported as such),
     # then friction with a rotary damper at pivot O (its psi'^2 from the element table)
@@ -126,6 +175,17 @@ def feature_entries(cfg: Config, quick: bool = False, log=None) -> list[dict]:
         timed(key, f"Simulator.run_batch: the same {n_grid:,} strokes with {what}",
               lambda: sim_el.run_batch(P_el), rep, count=n_grid,
               note="invalid designs and their reasons included")
+    # a gas strut with its friction band (F1 x extended length x c over the strut's valid
+    # lengths) on the default lid
+    c_gas = cfg.update({"design.spring_kind": "gas_strut", "design.strut_friction": 2.0})
+    P_gas = grid_rows(c_gas, GAS_STRUT_GRID)
+    sim_gas = Simulator(resolve(c_gas))
+    sim_gas.run_batch(P_gas[:1000])
+    timed("kernel_40000_gas_strut", f"Simulator.run_batch: {len(P_gas):,} strokes of a gas "
+          "strut (F1 x extended length x c) with a 4 N friction band",
+          lambda: sim_gas.run_batch(P_gas), rep, count=len(P_gas),
+          note="closing, sticking and not closing alike")
+    _hinge_row(rows, timed, rep, per_step)
     _placement_rows(cfg, rows, timed, quick)
     what = f"sweep(cfg, axes): the {n_grid:,}-design grid k × l0 × c, in-process"
     res = timed("sweep_40000", what, lambda: sweep(cfg, axes), rep, count=n_grid)

@@ -30,6 +30,8 @@ SPEED_TARGETS = {
     "kernel_40000": {"min_per_s": 100000.0},
     "kernel_40000_compression": {"min_per_s": 100000.0},
     "kernel_40000_friction_pivot": {"min_per_s": 60000.0},
+    "kernel_40000_gas_strut": {"min_per_s": 80000.0},     # with its friction band
+    "kernel_40000_hinge": {"max_ratio": 1.0},       # per step as fast as the four-bar's
     "sweep_40000": {"min_per_s": 20000.0},
     "sweep_cli_40000": {"min_per_s": 20000.0},
     "sweep_maps": {"max_s": 1.0},
