@@ -1,7 +1,7 @@
 """What does it cost to design with springs one can buy instead of the idealised one?
 
 The seed's spring ``k (l - l0)`` pushes and pulls through its free length; a real extension
-spring only pulls (l >= l0), a compression spring or gas strut only pushes (l <= l0). This
+spring only pulls (l >= l0), a compression spring only pushes (l <= l0). This
 study solves the default problem nominally and robustly (the default [tolerance] box), once
 with the idealised spring (``optimise.spring_kinds = ["linear"]``) and once with the kinds
 one can buy (compression, extension), and reports per kind the objective (nominal J, robust

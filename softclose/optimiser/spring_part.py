@@ -57,7 +57,7 @@ class SpringPart:
         lo, hi = self.working_length
         if self.kind == "gas_strut":
             return self._strut_text()
-        what = {"compression": "compression spring or gas strut (pushes)",
+        what = {"compression": "compression spring (pushes)",
                 "extension": "extension spring (pulls)",
                 "linear": "linear double-acting cartridge (pushes and pulls)"}[self.kind]
         line = (f"{what}: free length {self.free_length * 1e3:.2f} mm, rate "

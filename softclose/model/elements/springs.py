@@ -117,7 +117,8 @@ class Spring(Element):
     name = "spring"
     seed = True
     doc = ("spring between E on the lid and the anchor D: an extension spring (pulls), a "
-           "compression spring or gas strut (pushes), or the seed's linear cartridge")
+           "compression spring (pushes), a gas strut (pushes with the gas law), or the "
+           "seed's linear cartridge")
     keys = (
         Key("design", "spring_k", "nonneg", 0.0, "N/m", "spring rate k (>= 0)",
             lo=0.0, hi=1e7, spread=0.10),
