@@ -285,7 +285,7 @@ def scalar_value(draw, key: str, kind: str, vkind: str):
         return toml(draw(st.sampled_from(choices + ["RK4", "rk45", "bfgs", "pardiso"])))
     if kind.startswith("words:"):                   # a list of the words, or not quite
         choices = kind[6:].split(",")
-        words = draw(st.lists(st.sampled_from(choices + ["Linear", "spiral", "gas_strut"]),
+        words = draw(st.lists(st.sampled_from(choices + ["Linear", "spiral", "gas strut"]),
                               min_size=0, max_size=4))
         return toml(words)
     if vkind in ("in_range", "scaled") and rng is None and kind == "spread":
@@ -379,8 +379,9 @@ def grid_spec(draw) -> str:
     key = draw(st.sampled_from([k for k, _ in KEYS] + ["design.nope", "mass"]))
     if draw(st.integers(0, 4)) == 0:   # a word key: its words, or anything else
         key = draw(st.sampled_from(["design.spring_kind", "design.damper_one_way"]))
-        words = draw(st.lists(st.sampled_from(["linear", "extension", "compression", "true",
-                                               "false", "bogus", "", "1", "-1", "nan", "[]"]),
+        words = draw(st.lists(st.sampled_from(["linear", "extension", "compression", "gas_strut",
+                                               "true", "false", "bogus", "", "1", "-1", "nan",
+                                               "[]"]),
                               min_size=1, max_size=3))
         return f"{key}={','.join(words)}" if draw(st.booleans()) else \
             f"{key}=[{', '.join(words)}]"
