@@ -52,7 +52,7 @@ def nlp_key(cfg, nodes: int | None = None, substeps: int | None = None,
             substeps2: int | None = None) -> tuple:
     """The NLP's structure, and nothing of the lid's numbers: the elements it carries and
     the series' padded degree, the free variables and points (which), the opening bound,
-    the keep-out regions, the discretisation (with an end damper engaging inside the
+    the self-close constraint (whether; its angle is a parameter), the keep-out regions, the discretisation (with an end damper engaging inside the
     stroke: two phases, phase 2's sub-steps ``substeps2``, by default
     :func:`.nlp.phase_two_substeps`), the solver."""
     o = cfg.optimise
@@ -62,7 +62,7 @@ def nlp_key(cfg, nodes: int | None = None, substeps: int | None = None,
         M2 = int(substeps2 or phase_two_substeps(cfg, N, M))
     fit = lid_fit(cfg)
     return (tuple(e.name for e in fit.elements), fit.names, padded_degree(fit.degree),
-            o.opening_force_max is not None,
+            o.opening_force_max is not None, o.self_close_min_deg is not None,
             tuple((k, col) for k, col, _ in free_layout(cfg)),
             tuple((k, slot) for k, slot, _ in placement_layout(cfg)), keep_out_of(cfg), M2,
             N, M, o.hessian, o.linear_solver, o.max_iter)
@@ -85,10 +85,12 @@ def has_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
 def build_structure(key: tuple, library=None, meta=None) -> ShootingStructure:
     """The ShootingStructure of a :func:`nlp_key`, built symbolically (or its compiled
     ``library`` loaded, with its ``meta``)."""
-    els, names, degree, opening, free, place, keep_out, M2, N, M, hess, lin, it = key
+    els, names, degree, opening, self_close, free, place, keep_out, M2, N, M, hess, lin, \
+        it = key
     return ShootingStructure(tuple(elements.BY_NAME[e] for e in els), names, degree, N, M,
                              None if M2 is None else (N, M2), free, place, opening,
-                             keep_out, hess, lin, it, library=library, meta=meta)
+                             keep_out, hess, lin, it, library=library, meta=meta,
+                             self_close=self_close)
 
 
 def get_structure(key: tuple, what: str = "") -> ShootingStructure:

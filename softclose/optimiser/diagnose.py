@@ -4,8 +4,9 @@ When no start converges, :func:`diagnose` checks in order: Ipopt stopped at its 
 limit; the largest holding moment within the design bounds (linear in k for fixed l0, so a
 box corner) is below holding_moment_min; the fastest (and, with a lower bound, the slowest)
 stroke that meets every other constraint misses the closing-time window (the same NLP with
-objective ±T and the closing-time bounds relaxed to [0, t_max]); otherwise Ipopt's verdict
-and the largest violated constraint group.
+objective ±T and the closing-time bounds relaxed to [0, t_max]); a self-close angle
+(optimise.self_close_min_deg) out of reach when its constraint is the most violated; otherwise
+Ipopt's verdict and the largest violated constraint group.
 """
 
 from __future__ import annotations
@@ -95,6 +96,11 @@ def diagnose(cfg, nlp: ShootingNLP, runs: list[Run]) -> tuple[str, dict]:
     viol = r.violations
     worst = max(viol, key=viol.get) if viol else None
     info["violations"] = viol
+    if worst == "self_close" and viol[worst] > 0:
+        return (f"optimise.self_close_min_deg = {o.self_close_min_deg:g} deg cannot be met: "
+                f"at best (Ipopt: {r.status}) the self-closing moment dV/dtheta - T_fr falls "
+                f"{viol[worst]:.3g} N m short somewhere below it; lower self_close_min_deg or "
+                "widen the spring bounds", info)
     hint = (f"the largest violation is in {worst} ({viol[worst]:.3g})" if worst and viol[worst] > 0
             else "no constraint group is clearly violated")
     return (f"Ipopt did not converge from any start (best status {r.status}); {hint}; "

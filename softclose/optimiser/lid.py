@@ -4,7 +4,8 @@ An NLP's CasADi graph holds no number of the lid. What the equation of motion an
 constraints read of the mechanism -- the Chebyshev series of the geometric functions
 (:class:`~softclose.optimiser.interval.ChebyshevFit`), the elements' coordinates at the
 closed angle (the holding moment), the scales of the free variables, the fixed attachment
-points, the opening effort's geometry on its angle grid -- enters as one parameter vector
+points, the opening effort's geometry on its angle grid, the self-close angle and the geometry
+on its grid -- enters as one parameter vector
 ``L``, laid out by :class:`LidLayout`. So one NLP serves every lid, mass scenario and start
 of the same structure (its elements, free variables, discretisation, scenario count), and a
 compiled NLP is keyed by that structure alone.
@@ -21,6 +22,7 @@ from types import SimpleNamespace
 import casadi as ca
 import numpy as np
 
+from ..errors import ConfigError
 from ..model import elements
 from ..model.dynamics import COEFFS, friction, slope
 from .hermite import hermite_max
@@ -92,16 +94,22 @@ class LidLayout:
     padded Chebyshev series), ``closed`` (q and q' of the conservative elements at
     theta_closed), ``scales`` (of the free variables and points), ``points`` (the 8
     attachment-point components, with free points), ``opening`` (per angle of the opening
-    grid: q, q', q'' of every conservative and friction element, tau and tau')."""
+    grid: q, q', q'' of every conservative and friction element, tau and tau'),
+    ``self_close`` (the same per angle of the self-close grid on [theta_closed, theta_sc],
+    then theta_sc: ``optimise.self_close_min_deg`` in radians, a parameter)."""
 
     def __init__(self, series: SymbolicSeries, n_scales: int, points: bool,
-                 opening_angles: int = 0):
+                 opening_angles: int = 0, self_close_angles: int = 0):
         self.series = series
         self.opening_elements = tuple(e.name for e in elements.SPRINGS + elements.FRICTIONS)
         self.opening_angles = int(opening_angles)
+        self.self_close_angles = int(self_close_angles)
+        per = 3 * len(self.opening_elements) + 2
         self.sizes = {"series": series.size, "closed": 2 * len(HOLDING),
                       "scales": int(n_scales), "points": 8 if points else 0,
-                      "opening": self.opening_angles * (3 * len(self.opening_elements) + 2)}
+                      "opening": self.opening_angles * per,
+                      "self_close": self.self_close_angles * per + (
+                          1 if self.self_close_angles else 0)}
         self.size = sum(self.sizes.values())
 
     def split(self, L) -> dict:
@@ -113,18 +121,36 @@ class LidLayout:
         return out
 
     # -- numbers of one lid ----------------------------------------------------------------
-    def values(self, model, fit, scales=(), points=None, opening_grid=None) -> np.ndarray:
+    def values(self, model, fit, scales=(), points=None, opening_grid=None,
+               self_close_deg: float | None = None) -> np.ndarray:
         """L of ``model`` (its ``fit``), the free variables' ``scales``, the attachment
-        ``points`` and the opening grid's angles."""
+        ``points``, the opening grid's angles and the self-close angle (deg,
+        ``optimise.self_close_min_deg``): without it (None) L without its last part, the
+        self-close part (:meth:`self_close_values`), which a problem appends."""
         parts = [self.series.values(fit), closed_values(model),
                  np.asarray(scales, float).ravel()]
         if self.sizes["points"]:
             parts.append(np.asarray(points, float).ravel())
         if self.opening_angles:
             parts.append(opening_values(model, opening_grid, self.opening_elements))
+        if self.self_close_angles and self_close_deg is not None:
+            parts.append(self.self_close_values(model, self_close_deg))
         L = np.concatenate(parts)
-        assert L.size == self.size
+        assert L.size == self.size - (self.sizes["self_close"] if self_close_deg is None
+                                      else 0)
         return L
+
+    def self_close_values(self, model, self_close_deg: float) -> np.ndarray:
+        """The self-close part of L: the geometry on the grid of [theta_closed, theta_sc]
+        (:func:`self_close_angles`), then theta_sc (rad). An angle where the linkage does not
+        assemble is a ConfigError (one above the open angle: :func:`check_self_close`)."""
+        deg = float(self_close_deg)
+        grid = self_close_angles(model, deg, self.self_close_angles - 1)
+        v = np.r_[opening_values(model, grid, self.opening_elements), grid[-1]]
+        if not np.isfinite(v).all():
+            raise ConfigError(f"optimise.self_close_min_deg: the linkage does not assemble "
+                              f"between stroke.theta_closed_deg and {deg:g} deg")
+        return v
 
 
 def closed_values(model) -> np.ndarray:
@@ -160,10 +186,10 @@ def opening_values(model, angles, names) -> np.ndarray:
     return V.T.ravel()
 
 
-def opening_effort(values, P, names):
-    """(F, dF/dtheta) of the opening effort at one angle from its ``values`` (q, q', q''
-    per element, tau, tau'): (dV/dtheta + friction) / tau, differentiated exactly (the
-    angle enters through a local coordinate t at t = 0)."""
+def _at_angle(values, P, names, quantity):
+    """(Q, dQ/dtheta) at one angle of ``quantity(dV/dtheta, friction moment or None, tau)``
+    from the angle's ``values`` (q, q', q'' per element, tau, tau'), differentiated exactly
+    (the angle enters through a local coordinate t at t = 0)."""
     t = ca.MX.sym("t")
     coords = {}
     for i, name in enumerate(names):
@@ -171,12 +197,23 @@ def opening_effort(values, P, names):
         coords[name] = SimpleNamespace(q=q + dq * t + 0.5 * ddq * t * t, dq=dq + ddq * t)
     k = 3 * len(names)
     tau = values[k] + values[k + 1] * t
-    fr = friction(coords, P)
-    s = slope(coords, P)
-    F = (s if fr is None else s + fr) / tau
-    dF = ca.jacobian(F, t)
-    F0, dF0 = ca.substitute([F, dF], [t], [ca.MX(0.0)])
-    return F0, dF0
+    Q = quantity(slope(coords, P), friction(coords, P), tau)
+    dQ = ca.jacobian(Q, t)
+    Q0, dQ0 = ca.substitute([Q, dQ], [t], [ca.MX(0.0)])
+    return Q0, dQ0
+
+
+def opening_effort(values, P, names):
+    """(F, dF/dtheta) of the opening effort at one angle from its ``values`` (q, q', q''
+    per element, tau, tau'): (dV/dtheta + friction) / tau."""
+    return _at_angle(values, P, names,
+                     lambda s, fr, tau: (s if fr is None else s + fr) / tau)
+
+
+def self_close_moment(values, P, names):
+    """(m, dm/dtheta) of the self-closing moment at one angle from its ``values``: dV/dtheta
+    - T_fr (N m; > 0: a lid released there at rest starts to close, SPEC §13)."""
+    return _at_angle(values, P, names, lambda s, fr, tau: s if fr is None else s - fr)
 
 
 def opening_angles(model, n: int) -> np.ndarray:
@@ -213,6 +250,57 @@ def opening_bound(layout, values, theta0, thc, design, spring: str = "coil"):
     return ca.vertcat(F.T, hermite_max(va.T, ma.T, vb.T, mb.T))
 
 
+def check_self_close(cfg) -> None:
+    """ConfigError when ``optimise.self_close_min_deg`` lies above ``stroke.theta_open_deg``:
+    the hand force and its zones (SPEC §13), which the verification reads, end there."""
+    deg, top = cfg.optimise.self_close_min_deg, cfg.stroke.theta_open_deg
+    if deg is not None and deg > top:
+        raise ConfigError(f"optimise.self_close_min_deg: {deg:g} deg is above the open angle "
+                          f"stroke.theta_open_deg = {top:g} deg: lower it or open the lid further")
+
+
+def self_close_angles(model, self_close_deg: float, n: int) -> np.ndarray:
+    """The n + 1 angles (rad) of the self-close grid on [theta_closed, theta_sc], theta_sc
+    = ``self_close_deg`` (at theta_closed or below it: every angle is theta_closed)."""
+    thc = model.stroke.theta_closed
+    hi = max(np.radians(float(self_close_deg)), thc)
+    return thc + (hi - thc) * np.linspace(0.0, 1.0, n + 1)
+
+
+#: intervals of the angle grid over which the self-closing moment is kept positive (when
+#: optimise.self_close_min_deg is set): the nodes and the cubic Hermite minima between them
+SELF_CLOSE_INTERVALS = 32
+#: the least self-closing moment (N m) the NLP allows on [theta_closed, theta_sc]: "closes
+#: by itself" is strict (dV/dtheta > T_fr), and the margin keeps the edge of the zone (a root
+#: the verification locates) above theta_sc however closely Ipopt meets the bound
+SELF_CLOSE_MARGIN = 1e-6
+
+
+def self_close_bound(layout, values, thc, design, spring: str = "coil"):
+    """The self-closing moment dV/dtheta - T_fr (N m) at the nodes of the grid of
+    [theta_closed, theta_sc] and the minima of its cubic Hermite interpolant in every
+    interval (error O(h^4)): every value >= :data:`SELF_CLOSE_MARGIN` keeps the lid closing by
+    itself from every angle up to theta_sc. ``values``: the lid vector's self-close part
+    (the geometry at the grid's angles, then theta_sc); ``spring``: the NLP's spring law
+    ("coil" or "gas")."""
+    n = layout.self_close_angles - 1
+    names = layout.opening_elements
+    k = 3 * len(names) + 2
+    P = elements.params(design, spring)
+    m, dm = [], []
+    for i in range(n + 1):
+        f, df = self_close_moment(values[i * k:(i + 1) * k], P, names)
+        m.append(f)
+        dm.append(df)
+    m, dm = ca.vertcat(*m).T, ca.vertcat(*dm).T
+    theta_sc = values[(n + 1) * k]
+    h = (ca.fmax(theta_sc, thc) - thc) / n
+    va, vb, ma, mb = m[:n], m[1:], dm[:n] * h, dm[1:] * h
+    return ca.vertcat(m.T, -hermite_max(-va.T, -ma.T, -vb.T, -mb.T))
+
+
 __all__ = ["DEGREES", "HOLDING", "padded_degree", "SymbolicSeries", "LidLayout",
            "closed_values", "holding_moment", "opening_values", "opening_effort",
-           "opening_angles", "OPENING_INTERVALS", "opening_bound"]
+           "opening_angles", "OPENING_INTERVALS", "opening_bound", "self_close_moment", "check_self_close",
+           "self_close_angles", "SELF_CLOSE_INTERVALS", "SELF_CLOSE_MARGIN",
+           "self_close_bound"]

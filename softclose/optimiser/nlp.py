@@ -73,8 +73,9 @@ from ..problem import DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, SCALES, params_of
 from ..model import elements
 from .interval import (END_C, ChebyshevFit, bound_interval, combine_function, free_of,
                        interval_function)
-from .lid import (OPENING_INTERVALS, LidLayout, SymbolicSeries, holding_moment, opening_angles,
-                  opening_bound)
+from .lid import (OPENING_INTERVALS, SELF_CLOSE_INTERVALS, SELF_CLOSE_MARGIN, LidLayout,
+                  SymbolicSeries, check_self_close, holding_moment, opening_angles,
+                  opening_bound, self_close_bound)
 from .keep_out import keep_out_constraints
 from .free_points import placed_bounds, placed_config, placed_constraints, slot_values
 from ..buildcache import text
@@ -164,7 +165,8 @@ class Run:
 class ShootingStructure:
     """The multiple-shooting NLP of one structure: the elements it carries, the series'
     names and padded degree, the free variables and points (which, not their values), the
-    discretisation, the opening bound and the keep-out regions. It holds no number of a lid:
+    discretisation, the opening bound, the self-close constraint and the keep-out regions. It
+    holds no number of a lid (nor the self-close angle):
     those are the lid vector L at the end of the NLP's parameters
     (:mod:`softclose.optimiser.lid`), so one structure serves every lid
     (:class:`ShootingNLP` binds one).
@@ -178,7 +180,7 @@ class ShootingStructure:
                  phase2: tuple | None = None, free: tuple = (), place: tuple = (),
                  opening: bool = False, keep_out: tuple = (), hessian: str = "exact",
                  linear_solver: str = "mumps", max_iter: int = 500, tol: float = 1e-10,
-                 library=None, meta: dict | None = None):
+                 library=None, meta: dict | None = None, self_close: bool = False):
         t0 = time.perf_counter()
         check_linear_solver(linear_solver)
         self.els = tuple(els)
@@ -198,7 +200,8 @@ class ShootingStructure:
         #: the spring law of the structure: a gas strut's NLP carries its length's series
         self.spring = "gas" if "spring:l" in self.series.names else "coil"
         self.lid = LidLayout(self.series, len(self.free) + len(self.place), self.placed,
-                             OPENING_INTERVALS + 1 if opening else 0)
+                             OPENING_INTERVALS + 1 if opening else 0,
+                             SELF_CLOSE_INTERVALS + 1 if self_close else 0)
         self.n_params = len(NLP_PARAMS) + N + self.lid.size
         self.ipopt_options = {"print_time": False, "show_eval_warnings": False,
                               "calc_lam_p": False,
@@ -219,6 +222,10 @@ class ShootingStructure:
             raise ConfigError("optimise.opening_force_max cannot yet be combined with free "
                               "attachment points (optimise.free geometry.*): fix the points "
                               "or drop the bound")
+        if self.placed and self_close:
+            raise ConfigError("optimise.self_close_min_deg cannot yet be combined with free "
+                              "attachment points (optimise.free geometry.*): fix the points "
+                              "or drop the constraint")
         self.interval, self.f = interval_function(self.series, substeps, with_ode=True,
                                                   placement=self.placed)
         if self.two_phase:
@@ -282,6 +289,9 @@ class ShootingStructure:
         if opening:        # the opening effort (optimise.opening_force_max): <= the bound
             g_all["opening_force"] = opening_bound(self.lid, lid["opening"], theta0, thc,
                                                    design, self.spring)
+        if self_close:     # closes by itself up to optimise.self_close_min_deg: >= margin
+            g_all["self_close"] = self_close_bound(self.lid, lid["self_close"], thc, design,
+                                                   self.spring)
         if self.two_phase:  # the node between the phases on theta_e; phase 2 lasts
             g_all["engagement"] = X[0, nodes - 1] - theta_e           # = 0
             g_all["phase_two"] = T - T1                               # >= PHASE_FLOOR
@@ -371,7 +381,37 @@ class ShootingNLP:
         self.lid_vector = lay.values(
             model, fit, self.scales[len(DESIGN_KEYS):], self.g0,
             opening_angles(model, OPENING_INTERVALS) if lay.opening_angles else None)
+        self._self_close = {}       # the lid vector's self-close part, per angle
         self.key = None
+
+    def self_close_part(self, self_close_deg: float | None) -> np.ndarray:
+        """The lid vector's self-close part at ``self_close_deg`` (the structure's
+        constraint; empty without one): the angle is a parameter of the problem, like
+        holding_moment_min, so one bound NLP serves every angle."""
+        lay = self.structure.lid
+        if not lay.self_close_angles:
+            return np.zeros(0)
+        if self_close_deg is None:
+            raise ValueError("this NLP constrains the self-close angle: give one")
+        deg = float(self_close_deg)
+        if deg not in self._self_close:
+            self._self_close[deg] = lay.self_close_values(self.model, deg)
+        return self._self_close[deg]
+
+    def self_close_moments(self, p, self_close_deg: float) -> np.ndarray:
+        """The NLP's self-close constraint values (N m: the moment at the grid's nodes, then
+        the Hermite minima between them) of the parameter vector ``p`` at the angle
+        ``self_close_deg``: the same expressions as the NLP's, evaluated apart (the active
+        set's price per degree differentiates them in the angle)."""
+        lay = self.structure.lid
+        if "_self_close_fn" not in self.__dict__:
+            v = ca.MX.sym("v", lay.sizes["self_close"])
+            q, thc = ca.MX.sym("p", len(PARAM_KEYS)), ca.MX.sym("thc")
+            self._self_close_fn = ca.Function("self_close", [v, q, thc],
+                                              [self_close_bound(lay, v, thc, q)])
+        return np.asarray(self._self_close_fn(self.self_close_part(self_close_deg),
+                                              np.asarray(p, float),
+                                              self.model.stroke.theta_closed)).ravel()
 
     def __getattr__(self, name):
         """``interval``, ``f``, ``interval2``: the structure's with this lid's series bound
@@ -487,12 +527,13 @@ class ShootingNLP:
         lbx[-1] = 0.0
         lo = {"continuity": 0.0, "theta_above_closed": 0.0, "theta_dot_nonpositive": -np.inf,
               "peak_tip_speed": 0.0, "holding_moment": o.holding_moment_min,
-              "release_downwards": -np.inf, "opening_force": -np.inf, "engagement": 0.0,
+              "release_downwards": -np.inf, "opening_force": -np.inf,
+              "self_close": SELF_CLOSE_MARGIN, "engagement": 0.0,
               "phase_two": PHASE_FLOOR}
         hi = {"continuity": 0.0, "theta_above_closed": np.inf, "theta_dot_nonpositive": 0.0,
               "peak_tip_speed": np.inf, "holding_moment": np.inf, "release_downwards": 0.0,
               "opening_force": np.inf if o.opening_force_max is None else o.opening_force_max,
-              "engagement": 0.0, "phase_two": np.inf}
+              "self_close": np.inf, "engagement": 0.0, "phase_two": np.inf}
         if self.placed:
             placed_bounds(cfg, lo, hi)
         lbg = np.concatenate([np.full(n, lo[k]) for k, n in zip(self.g_names, self.g_sizes)])
@@ -516,8 +557,11 @@ class ShootingNLP:
         o, st = cfg.optimise, cfg.stroke
         wi, wp = (o.weight_impact, o.weight_peak_tip) if weights is None else weights
         fixed = params_of(cfg)[len(DESIGN_KEYS):]
+        if self.structure.lid.self_close_angles:
+            check_self_close(cfg)
         return np.r_[st.theta0, st.theta_closed, wi, wp, weight_time, fixed, J_ref,
-                     self.time_grid(), self.lid_vector]
+                     self.time_grid(), self.lid_vector,
+                     self.self_close_part(o.self_close_min_deg)]
 
     def time_grid(self) -> np.ndarray:
         """Fractions of T of the N intervals: uniform (two phases: each phase's N intervals

@@ -150,6 +150,17 @@ def active_set(nlp: ShootingNLP, cfg, run: Run, t_limit: float) -> tuple[Active,
         if lam_of > ACTIVE_LAM:
             out.append(Active("opening_force_max", "constraint", "upper", o.opening_force_max,
                               "N", -Jr * lam_of))
+    if "self_close" in groups:
+        lam_sc = np.minimum(lam_g[groups["self_close"]], 0)
+        if -lam_sc.sum() > ACTIVE_LAM:
+            # the angle moves the grid: dJ per degree the bound is lowered is -dL/dtheta_sc,
+            # dL/dtheta_sc = J_ref lam . dg/dtheta_sc (central differences of the grid's
+            # values, nodes and Hermite minima alike)
+            p, deg, h = nlp.param_vector(cfg, nlp.unpack(run.x)[0]), o.self_close_min_deg, 1e-3
+            dg = (nlp.self_close_moments(p, deg + h) - nlp.self_close_moments(p, deg - h)) \
+                / (2 * h)
+            out.append(Active("self_close_min_deg", "constraint", "lower", deg, "deg",
+                              -Jr * float(lam_sc @ dg)))
     return tuple(out)
 
 

@@ -48,6 +48,7 @@ import casadi as ca
 import numpy as np
 
 from ..config import Config
+from ..errors import ConfigError
 from ..interrupt import ipopt_options, solving
 from ..problem import DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, params_of, resolve, SCALES
 from .discretisation import mapped, phase_grid, phase_two, t_limit, two_phase
@@ -62,7 +63,9 @@ from ..optimiser.nlp import check_linear_solver, PHASE_FLOOR
 from ..optimiser.cache import get_model, keep_out_of
 from ..config.free import config_value
 from ..optimiser.lid import (holding_moment, LidLayout, opening_angles, opening_bound,
-                             OPENING_INTERVALS, padded_degree, SymbolicSeries)
+                             OPENING_INTERVALS, padded_degree, SELF_CLOSE_INTERVALS,
+                             SELF_CLOSE_MARGIN, check_self_close, self_close_bound,
+                             SymbolicSeries)
 from ..buildcache import text
 from ..optimiser.keep_out import keep_out_constraints
 from ..model.lid import model_key
@@ -78,7 +81,7 @@ PARAMS = ("theta0", "theta_closed", "weight_impact", "weight_peak_tip", *FIXED, 
 T_FLOOR = 1e-3
 #: per-scenario constraint groups, in order
 GROUPS = ("continuity", "theta_above_closed", "theta_dot_nonpositive", "peak_tip_speed",
-          "holding_moment", "release_downwards", "epigraph", "opening_force",
+          "holding_moment", "release_downwards", "epigraph", "opening_force", "self_close",
           "spring_long", "spring_short", "spring_length", "keep_out", "engagement",
           "phase_two")
 CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
@@ -109,15 +112,18 @@ def scenario_fit(cfg_model: Config, placement: bool = False):
 class ScenarioStructure:
     """The symbolic scenario NLP of one structure: S scenarios of a model with the elements
     ``els`` (series ``names`` at the padded ``degree``), the free variables and points
-    (which), the discretisation, the objective, the opening bound and keep-out regions. No
-    number of a lid or a scenario is in it: the scenario maps (a_s, b_s), the free
+    (which), the discretisation, the objective, the opening bound, the self-close constraint
+    (every scenario closes by itself up to optimise.self_close_min_deg) and keep-out regions.
+    No number of a lid or a scenario is in it: the scenario maps (a_s, b_s), the free
     variables' scales, the attachment points and every scenario's lid vector
-    (:mod:`softclose.optimiser.lid`) are parameters (:meth:`ScenarioNLP.params`)."""
+    (:mod:`softclose.optimiser.lid`, with the self-close angle) are parameters
+    (:meth:`ScenarioNLP.params`)."""
 
     def __init__(self, S: int, els, names, degree: int, nodes: int, substeps: int,
                  M2: int | None, free: tuple, place: tuple, robust_objective: str,
                  opening: bool, keep_out: tuple, hessian: str, linear_solver: str,
-                 max_iter: int, tol: float = 1e-10, library=None, meta=None):
+                 max_iter: int, tol: float = 1e-10, library=None, meta=None,
+                 self_close: bool = False):
         t0 = time.perf_counter()
         self.S, self.nodes, self.M, self.M2 = S, nodes, substeps, M2
         self.two_phase = M2 is not None
@@ -128,7 +134,12 @@ class ScenarioStructure:
         self.nd = 3 + len(self.free) + len(self.place)
         self.series = SymbolicSeries(names, els, degree)
         self.spring = "gas" if "spring:l" in self.series.names else "coil"
-        self.lid = LidLayout(self.series, 0, False, OPENING_INTERVALS + 1 if opening else 0)
+        if self.placed and self_close:
+            raise ConfigError("optimise.self_close_min_deg cannot yet be combined with free "
+                              "attachment points (optimise.free geometry.*): fix the points "
+                              "or drop the constraint")
+        self.lid = LidLayout(self.series, 0, False, OPENING_INTERVALS + 1 if opening else 0,
+                             SELF_CLOSE_INTERVALS + 1 if self_close else 0)
         n_sc = len(self.free) + len(self.place)
         self.n_params = len(PARAMS) + N + 2 * NP * S + n_sc + (8 if self.placed else 0) + \
             S * self.lid.size
@@ -242,12 +253,14 @@ class ScenarioStructure:
                                    self.spring)
             else:
                 op = none
+            sc = self_close_bound(self.lid, lids[s]["self_close"], thc, ps[s], self.spring) \
+                if self_close else none
             ko = none
             if self.placed and s == 0 and keep_out:
                 ko = keep_out_constraints(self.series, theta0, thc, gvec, keep_out,
                                           self.place, Ls)
             blocks = [ca.vec(xe - X[s]), ca.vec(a) - thc, ca.vec(b), pk[s] - ca.vec(sp),
-                      hold, release, t - Js / Jref, op] + lengths + [ko] + phases
+                      hold, release, t - Js / Jref, op, sc] + lengths + [ko] + phases
             g += blocks
             self.g_sizes.append([int(v.numel()) for v in blocks])
         self.block = sum(self.g_sizes[0])
@@ -361,15 +374,19 @@ class ScenarioNLP:
                               tuple((k, col) for k, col, _ in self.free),
                               tuple((k, slot) for k, slot, _ in self.place),
                               robust_objective, o.opening_force_max is not None,
-                              keep_out_of(cfg), o.hessian, o.linear_solver, o.max_iter, tol)
+                              keep_out_of(cfg), o.hessian, o.linear_solver, o.max_iter, tol,
+                              o.self_close_min_deg is not None)
         st = structure or get_scenario_structure(self.structure_key)
         self.structure = st
         for k in ("g_sizes", "block", "nw", "peak_fn", "J_fn", "solver", "warm_solver",
                   "library", "options"):
             setattr(self, k, getattr(st, k))
         lay = st.lid
+        if lay.self_close_angles:
+            check_self_close(cfg)
         per_model = [lay.values(m, f, (), None, opening_angles(m, OPENING_INTERVALS)
-                                if lay.opening_angles else None)
+                                if lay.opening_angles else None,
+                                o.self_close_min_deg if lay.self_close_angles else None)
                      for m, f in zip(self.models, fits)]
         self.lid_vector = np.r_[self.scales[3:], self.g0 if self.placed else [],
                                 np.concatenate([per_model[i] for i in self.model_index])]
@@ -463,12 +480,13 @@ class ScenarioNLP:
               "peak_tip_speed": 0.0, "holding_moment": o.holding_moment_min,
               "release_downwards": -np.inf,
               "epigraph": 0.0 if self.robust_objective == "worst" else -np.inf,
-              "opening_force": -np.inf, "engagement": 0.0, "phase_two": PHASE_FLOOR}
+              "opening_force": -np.inf, "self_close": SELF_CLOSE_MARGIN, "engagement": 0.0,
+              "phase_two": PHASE_FLOOR}
         hi = {"continuity": 0.0, "theta_above_closed": np.inf, "theta_dot_nonpositive": 0.0,
               "peak_tip_speed": np.inf, "holding_moment": np.inf, "release_downwards": 0.0,
               "epigraph": np.inf,
               "opening_force": np.inf if o.opening_force_max is None else o.opening_force_max,
-              "engagement": 0.0, "phase_two": np.inf}
+              "self_close": np.inf, "engagement": 0.0, "phase_two": np.inf}
         placed_bounds(cfg, lo, hi)
         lbg = np.concatenate([np.full(n, lo[k]) for sizes in self.g_sizes
                               for k, n in zip(GROUPS, sizes)])
@@ -534,13 +552,13 @@ def get_scenario_structure(key: tuple) -> ScenarioStructure:
         from .. import buildcache
         disk = buildcache.key_of("scenario-nlp", key)
         (S, els, names, degree, nodes, substeps, M2, free, place, objective, opening,
-         keep_out, hessian, linear_solver, max_iter, tol) = key
+         keep_out, hessian, linear_solver, max_iter, tol, self_close) = key
 
         def make(library=None, meta=None):
             return ScenarioStructure(S, tuple(elements.BY_NAME[e] for e in els), names,
                                      degree, nodes, substeps, M2, free, place, objective,
                                      opening, keep_out, hessian, linear_solver, max_iter,
-                                     tol, library=library, meta=meta)
+                                     tol, library=library, meta=meta, self_close=self_close)
         what = (f"of the robust optimiser ({S} scenarios, {nodes} x {substeps} RK4 steps, "
                 f"{objective} case)")
         st = compiled.load_or_build(disk, make, make, what, compiled.SCENARIO_CFLAGS)
@@ -565,6 +583,7 @@ def get_scenario_nlp(cfg: Config, model_cfgs: list[Config], nodes: int, substeps
     key = (tuple(_model_key(c)
                  for c in model_cfgs), nodes, substeps, M2, robust_objective, o.hessian,
            o.linear_solver, o.max_iter, o.opening_force_max is not None,
+           o.self_close_min_deg,
            placement_layout(cfg), free_layout(cfg), tuple(slot_values(cfg)))
     if key in _NLPS:
         return _NLPS[key], True
