@@ -108,9 +108,11 @@ CORE: tuple[Key, ...] = (
     Key("optimise", "holding_moment_min", "real", 0.1, "N m", "least holding moment",
         lo=-1e6, hi=1e6),
     Key("optimise", "self_close_min_deg", "real", None, "deg",
-        "the lid closes by itself from every angle up to this one; none: not "
+        "the lid closes by itself from every angle up to this one (dV/dθ > friction "
+        "moment: a constraint of the optimiser, verified by the hand force); none: not "
         "required",
-        lo=-360.0, hi=360.0),
+        lo=-360.0, hi=360.0, note="at most `stroke.theta_open_deg`; not with free "
+        "attachment points"),
     Key("optimise", "opening_force_max", "pos", None, "N",
         "largest opening effort allowed (the hand force at the tip that lifts the lid); "
         "none: not bounded", lo=1e-6, hi=1e6),
