@@ -833,6 +833,13 @@ ISSUE_CASES = [
     ("optimise", [], ["--free=design.end_damper_c=0:2", "--free=design.end_damper_angle_deg=1:10"]),
     ("optimise", [], ["--free=design.end_damper_angle_deg=1:10"]),
     ("optimise", [("design.end_damper_c", "edge", "100000.0")], []),
+    # the self-close constraint in the optimiser: an angle it meets; one below the rim (the
+    # rim alone); one above the open angle (exit 2); with free attachment points (refused)
+    ("optimise", [("optimise.self_close_min_deg", "in_range", "10.0")], []),
+    ("optimise", [("optimise.self_close_min_deg", "edge", "-360.0")], []),
+    ("optimise", [("optimise.self_close_min_deg", "edge", "360.0")], []),
+    ("optimise", [("optimise.self_close_min_deg", "in_range", "10.0")],
+     ["--free=geometry.spring_anchor[0]=-0.09:-0.03"]),
     # the coil spring made to order: designed; checked (fails buckling and the rate: exit 3);
     # an index outside 4..20, coils without the wire, a wire the material lacks (exit 2);
     # no room at all (exit 3); a free length shorter than the stroke's longest (exit 2)
