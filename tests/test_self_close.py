@@ -13,10 +13,13 @@ never closes by itself from rest; an extension spring closes it by itself up to 
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from softclose.cli import main
+from softclose import load_config
 from softclose.config import default_config
 from softclose.optimiser import optimise
 from softclose.optimiser.cache import get_nlp
@@ -25,6 +28,7 @@ from softclose.optimiser.cache import get_model
 from softclose.problem import params_of, resolve, with_designs
 from softclose.simulation.handforce import _parts, hand_force
 
+ROOT = Path(__file__).resolve().parents[1]
 FRICTION = {"friction.torque": 1.0, "stroke.theta_open_deg": 80.0}
 
 
@@ -152,3 +156,19 @@ def test_free_attachment_points_are_refused(capsys):
     out, err = capsys.readouterr()
     assert code == 2, err
     assert "optimise.self_close_min_deg" in err and "attachment points" in err
+
+
+def test_the_nlp_moment_with_strut_friction():
+    """A gas strut with friction along it (the chest lid): T_fr = T_f + F_R |dl/dtheta| varies
+    with the angle, and the NLP's moment at the nodes is still the statics' dV/dtheta - T_fr."""
+    cfg = load_config(ROOT / "examples" / "lids" / "chest_lid.toml").replace(design={
+        "spring_kind": "gas_strut", "spring_rest_length": 0.14, "strut_stroke": 0.05,
+        "spring_preload": 300.0, "strut_progression": 1.3, "spring_k": 0.0,
+        "strut_friction": 10.0, "damper_c": 0.0}).update({"optimise.self_close_min_deg": 30.0})
+    p = params_of(cfg)
+    g = get_nlp(cfg).self_close_moments(p, 30.0)
+    n = SELF_CLOSE_INTERVALS
+    th = np.linspace(cfg.stroke.theta_closed, np.radians(30.0), n + 1)
+    dV, fr, _ = _parts(get_model(cfg), p, th)
+    assert fr.max() - fr.min() > 0.1             # (the strut's friction moment varies)
+    np.testing.assert_allclose(g[:n + 1], dV - fr, rtol=1e-10, atol=1e-12)
