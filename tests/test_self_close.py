@@ -131,14 +131,24 @@ def test_an_inactive_constraint_changes_nothing():
 @pytest.mark.slow
 def test_the_robust_design_closes_by_itself_in_every_scenario():
     """optimise --robust: every scenario of the tolerance box closes by itself up to 43 deg
-    (the robust optimum at 40 deg reaches only 42.47 deg in its worst scenario)."""
+    (the robust optimum at 40 deg reaches only 42.47 deg in its worst scenario); the limit is
+    active in the scenarios of the light lid and the weak spring, priced per degree as the
+    finite difference of the worst-case J."""
     from softclose.robust import optimise_robust
-    r = optimise_robust(_cfg(self_close_min_deg=43.0, spring_kinds=["extension"]))
+    ext = dict(spring_kinds=["extension"])
+    r = optimise_robust(_cfg(self_close_min_deg=43.0, **ext))
     assert r.success
     cons = [s["constraints"]["self_close_min_deg"] for s in r.scenarios]
     assert len(cons) == 9 and all(c["ok"] for c in cons)
     worst = min(c["value"] for c in cons)
     assert 43.0 <= worst < 43.001
+    act = {a.name: a for a in r.active}["self_close_min_deg"]
+    assert act.scenarios and all("spring_k -10 %" in s and "mass.lid -5 %" in s
+                                 for s in act.scenarios)
+    lo, hi = (optimise_robust(_cfg(self_close_min_deg=v, **ext)).objective
+              for v in (42.95, 43.05))
+    assert hi > r.objective > lo
+    assert -act.dJ == pytest.approx((hi - lo) / 0.1, rel=0.02)
 
 
 def test_an_angle_above_the_open_angle_is_refused(capsys):

@@ -299,8 +299,21 @@ def self_close_bound(layout, values, thc, design, spring: str = "coil"):
     return ca.vertcat(m.T, -hermite_max(-va.T, -ma.T, -vb.T, -mb.T))
 
 
+def self_close_function(layout) -> ca.Function:
+    """(the self-close part of L, a parameter vector p, theta_closed) -> the values of
+    :func:`self_close_bound`: the NLP's constraint evaluated apart from it (the active sets
+    differentiate it in the angle); built once per layout."""
+    fn = layout.__dict__.get("_self_close_fn")
+    if fn is None:
+        v = ca.MX.sym("v", layout.sizes["self_close"])
+        q, thc = ca.MX.sym("p", len(elements.PARAM_NAMES)), ca.MX.sym("thc")
+        fn = layout._self_close_fn = ca.Function("self_close", [v, q, thc],
+                                                 [self_close_bound(layout, v, thc, q)])
+    return fn
+
+
 __all__ = ["DEGREES", "HOLDING", "padded_degree", "SymbolicSeries", "LidLayout",
            "closed_values", "holding_moment", "opening_values", "opening_effort",
            "opening_angles", "OPENING_INTERVALS", "opening_bound", "self_close_moment", "check_self_close",
            "self_close_angles", "SELF_CLOSE_INTERVALS", "SELF_CLOSE_MARGIN",
-           "self_close_bound"]
+           "self_close_bound", "self_close_function"]

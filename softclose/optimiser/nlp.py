@@ -75,7 +75,7 @@ from .interval import (END_C, ChebyshevFit, bound_interval, combine_function, fr
                        interval_function)
 from .lid import (OPENING_INTERVALS, SELF_CLOSE_INTERVALS, SELF_CLOSE_MARGIN, LidLayout,
                   SymbolicSeries, check_self_close, holding_moment, opening_angles,
-                  opening_bound, self_close_bound)
+                  opening_bound, self_close_bound, self_close_function)
 from .keep_out import keep_out_constraints
 from .free_points import placed_bounds, placed_config, placed_constraints, slot_values
 from ..buildcache import text
@@ -403,15 +403,9 @@ class ShootingNLP:
         the Hermite minima between them) of the parameter vector ``p`` at the angle
         ``self_close_deg``: the same expressions as the NLP's, evaluated apart (the active
         set's price per degree differentiates them in the angle)."""
-        lay = self.structure.lid
-        if "_self_close_fn" not in self.__dict__:
-            v = ca.MX.sym("v", lay.sizes["self_close"])
-            q, thc = ca.MX.sym("p", len(PARAM_KEYS)), ca.MX.sym("thc")
-            self._self_close_fn = ca.Function("self_close", [v, q, thc],
-                                              [self_close_bound(lay, v, thc, q)])
-        return np.asarray(self._self_close_fn(self.self_close_part(self_close_deg),
-                                              np.asarray(p, float),
-                                              self.model.stroke.theta_closed)).ravel()
+        fn = self_close_function(self.structure.lid)
+        return np.asarray(fn(self.self_close_part(self_close_deg), np.asarray(p, float),
+                             self.model.stroke.theta_closed)).ravel()
 
     def __getattr__(self, name):
         """``interval``, ``f``, ``interval2``: the structure's with this lid's series bound

@@ -76,7 +76,33 @@ def active_set(run, labels) -> tuple[Active, ...]:
          for g, t in zip(groups, th)], -1.0)
     add("release_downwards", "upper", 0.0, "rad/s^2",
         [g["release_downwards"].sum() for g in groups], 1.0)
+    if o.opening_force_max is not None:
+        add("opening_force_max", "upper", o.opening_force_max, "N",
+            [np.maximum(g["opening_force"], 0).sum() for g in groups], 1.0)
+    if o.self_close_min_deg is not None:
+        out += _self_close(problem, x, groups, labels, Jr)
     return tuple(out)
+
+
+def _self_close(problem, x, groups, labels, Jr) -> list[Active]:
+    """optimise.self_close_min_deg when it limits the design: the angle moves every
+    scenario's grid, so dJ per degree it is lowered is -J_ref sum_s lam_s . dg_s/dtheta_sc
+    (central differences of each scenario's constraint values at its parameters), as in the
+    nominal optimiser."""
+    nlp, deg, h = problem.nlp, problem.cfg.optimise.self_close_min_deg, 1e-3
+    lam = [np.minimum(g["self_close"], 0) for g in groups]
+    where = [s for s in range(nlp.S) if -lam[s].sum() > ACTIVE_LAM]
+    if not where:
+        return []
+    design = nlp.unpack(x)[0]
+    total = 0.0
+    for s in where:
+        p = problem.scenario_params(design, s)
+        dg = (nlp.self_close_moments(s, p, deg + h) - nlp.self_close_moments(s, p, deg - h)) \
+            / (2 * h)
+        total += float(lam[s] @ dg)
+    return [Active("self_close_min_deg", "constraint", "lower", float(deg), "deg", -Jr * total,
+                   tuple(labels[s] for s in where))]
 
 
 def _groups(nlp, lam_g) -> list[dict]:

@@ -65,7 +65,7 @@ from ..config.free import config_value
 from ..optimiser.lid import (holding_moment, LidLayout, opening_angles, opening_bound,
                              OPENING_INTERVALS, padded_degree, SELF_CLOSE_INTERVALS,
                              SELF_CLOSE_MARGIN, check_self_close, self_close_bound,
-                             SymbolicSeries)
+                             self_close_function, SymbolicSeries)
 from ..buildcache import text
 from ..optimiser.keep_out import keep_out_constraints
 from ..model.lid import model_key
@@ -391,6 +391,15 @@ class ScenarioNLP:
         self.lid_vector = np.r_[self.scales[3:], self.g0 if self.placed else [],
                                 np.concatenate([per_model[i] for i in self.model_index])]
         self.build_time = time.perf_counter() - t0
+
+    def self_close_moments(self, s: int, p, self_close_deg: float) -> np.ndarray:
+        """Scenario s's self-close constraint values (N m) at its parameter vector ``p`` and
+        the angle ``self_close_deg`` (:meth:`softclose.optimiser.nlp.ShootingNLP.self_close_moments`):
+        the active set's price per degree differentiates them in the angle."""
+        lay, model = self.structure.lid, self.scenario_models[s]
+        return np.asarray(self_close_function(lay)(lay.self_close_values(model, self_close_deg),
+                                                   np.asarray(p, float),
+                                                   model.stroke.theta_closed)).ravel()
 
     # -- layout ------------------------------------------------------------------------
     @property
