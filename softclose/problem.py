@@ -348,7 +348,8 @@ def describe(cfg) -> dict[str, Any]:
     o = cfg.optimise
     return {"closing_time_min": o.closing_time_min, "closing_time_max": o.closing_time_max,
             "holding_moment_min": o.holding_moment_min,
-            "opening_force_max": o.opening_force_max, "weight_impact": o.weight_impact,
+            "opening_force_max": o.opening_force_max,
+            "self_close_min_deg": o.self_close_min_deg, "weight_impact": o.weight_impact,
             "weight_peak_tip": o.weight_peak_tip, "t_max": cfg.stroke.t_max,
             "bounds": {k: list(getattr(o, k)) for k in DESIGN_KEYS}}
 

@@ -109,6 +109,7 @@ def test_an_active_self_close_angle_and_its_price():
     assert r.objective > free.objective
     act = {a.name: a for a in r.active}["self_close_min_deg"]
     assert (act.bound, act.value, act.unit) == ("lower", 44.0, "deg")
+    assert r.problem["self_close_min_deg"] == 44.0
     lo, hi = (optimise(_cfg(self_close_min_deg=v, **base)).objective for v in (43.95, 44.05))
     assert -act.dJ == pytest.approx((hi - lo) / 0.1, rel=0.02)
 

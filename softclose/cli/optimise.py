@@ -15,7 +15,7 @@ from ..errors import ConfigError
 from .common import (DESIGN_FILE, Outcome, add_common, add_out, add_slow_motion, interactive,
                      metrics_line, prepare_out, slow_motion, write_design, write_outputs,
                      wrote)
-from .text import closing_time_text, design_text, objective_text
+from .text import closing_time_text, design_text, hand_limits_text, objective_text
 from ..problem import resolve
 
 #: the default closing times of ``pareto`` (s)
@@ -168,7 +168,7 @@ def format_result(res) -> str:
     pr = res.problem
     if pr:
         lines.append(f"  problem: {objective_text(pr)}, {closing_time_text(pr)}, holding "
-                     f"moment >= {pr['holding_moment_min']:g} N m")
+                     f"moment >= {pr['holding_moment_min']:g} N m{hand_limits_text(pr)}")
     if res.design:
         lines.append("  design: " + design_text(res.design)
                      + (f" ({res.kind} spring)" if getattr(res, "kind", None) else ""))

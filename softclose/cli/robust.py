@@ -12,7 +12,7 @@ import argparse
 import math
 
 from .common import Outcome, add_common, add_out, prepare_out, write_outputs, wrote
-from .text import closing_time_text, design_text, objective_text
+from .text import closing_time_text, design_text, hand_limits_text, objective_text
 
 
 YIELD = """\
@@ -262,7 +262,8 @@ def format_robust(res) -> str:
     pr = res.problem
     lines.append(f"  problem: minimise the {res.robust_objective} scenario's "
                  f"{objective_text(pr)}, every scenario: {closing_time_text(pr)}, holding "
-                 f"moment >= {pr['holding_moment_min']:g} N m, no rebound")
+                 f"moment >= {pr['holding_moment_min']:g} N m{hand_limits_text(pr)}, no "
+                 "rebound")
     lines.append(f"  tolerance box: {_box_line(res.box)}"
                  + (f" (widened x{res.box_scale:.3g})" if res.box_scale != 1 else ""))
     if res.design:

@@ -24,6 +24,17 @@ def objective_text(pr: dict) -> str:
             "(dimensionless)")
 
 
+def hand_limits_text(pr: dict) -> str:
+    """The hand-force limits of the problem when set (", opening effort <= F N, closes by
+    itself up to A deg"), else ""."""
+    parts = []
+    if pr.get("opening_force_max") is not None:
+        parts.append(f"opening effort <= {pr['opening_force_max']:g} N")
+    if pr.get("self_close_min_deg") is not None:
+        parts.append(f"closes by itself up to {pr['self_close_min_deg']:g} deg")
+    return "".join(", " + t for t in parts)
+
+
 def closing_time_text(pr: dict) -> str:
     """The closing-time window of the problem, and the window the NLP solved when that
     differs (closing_time_min raised to the NLP's floor, a limit corrected for the NLP's own
