@@ -52,9 +52,9 @@ def nlp_key(cfg, nodes: int | None = None, substeps: int | None = None,
             substeps2: int | None = None) -> tuple:
     """The NLP's structure, and nothing of the lid's numbers: the elements it carries and
     the series' padded degree, the free variables and points (which), the opening bound,
-    the self-close constraint (whether; its angle is a parameter), the keep-out regions, the discretisation (with an end damper engaging inside the
-    stroke: two phases, phase 2's sub-steps ``substeps2``, by default
-    :func:`.nlp.phase_two_substeps`), the solver."""
+    the self-close constraint (whether; its angle is a parameter), the keep-out regions, the
+    discretisation (with an end damper engaging inside the stroke: two phases, phase 2's
+    sub-steps ``substeps2``, by default :func:`.nlp.phase_two_substeps`), the solver."""
     o = cfg.optimise
     N, M = nodes or o.nodes, substeps or o.substeps
     M2 = None

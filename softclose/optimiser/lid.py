@@ -299,17 +299,17 @@ def self_close_bound(layout, values, thc, design, spring: str = "coil"):
     return ca.vertcat(m.T, -hermite_max(-va.T, -ma.T, -vb.T, -mb.T))
 
 
-def self_close_function(layout) -> ca.Function:
+def self_close_function(layout, spring: str = "coil") -> ca.Function:
     """(the self-close part of L, a parameter vector p, theta_closed) -> the values of
-    :func:`self_close_bound`: the NLP's constraint evaluated apart from it (the active sets
-    differentiate it in the angle); built once per layout."""
-    fn = layout.__dict__.get("_self_close_fn")
-    if fn is None:
+    :func:`self_close_bound` with the spring law ``spring``: the NLP's constraint evaluated
+    apart from it (the active sets differentiate it in the angle); built once per layout."""
+    fns = layout.__dict__.setdefault("_self_close_fns", {})
+    if spring not in fns:
         v = ca.MX.sym("v", layout.sizes["self_close"])
         q, thc = ca.MX.sym("p", len(elements.PARAM_NAMES)), ca.MX.sym("thc")
-        fn = layout._self_close_fn = ca.Function("self_close", [v, q, thc],
-                                                 [self_close_bound(layout, v, thc, q)])
-    return fn
+        fns[spring] = ca.Function("self_close", [v, q, thc],
+                                  [self_close_bound(layout, v, thc, q, spring)])
+    return fns[spring]
 
 
 __all__ = ["DEGREES", "HOLDING", "padded_degree", "SymbolicSeries", "LidLayout",

@@ -403,7 +403,7 @@ class ShootingNLP:
         the Hermite minima between them) of the parameter vector ``p`` at the angle
         ``self_close_deg``: the same expressions as the NLP's, evaluated apart (the active
         set's price per degree differentiates them in the angle)."""
-        fn = self_close_function(self.structure.lid)
+        fn = self_close_function(self.structure.lid, self.structure.spring)
         return np.asarray(fn(self.self_close_part(self_close_deg), np.asarray(p, float),
                              self.model.stroke.theta_closed)).ravel()
 

@@ -394,12 +394,12 @@ class ScenarioNLP:
 
     def self_close_moments(self, s: int, p, self_close_deg: float) -> np.ndarray:
         """Scenario s's self-close constraint values (N m) at its parameter vector ``p`` and
-        the angle ``self_close_deg`` (:meth:`softclose.optimiser.nlp.ShootingNLP.self_close_moments`):
-        the active set's price per degree differentiates them in the angle."""
+        the angle ``self_close_deg`` (as the nominal NLP's ``self_close_moments``): the
+        active set's price per degree differentiates them in the angle."""
         lay, model = self.structure.lid, self.scenario_models[s]
-        return np.asarray(self_close_function(lay)(lay.self_close_values(model, self_close_deg),
-                                                   np.asarray(p, float),
-                                                   model.stroke.theta_closed)).ravel()
+        fn = self_close_function(lay, self.structure.spring)
+        return np.asarray(fn(lay.self_close_values(model, self_close_deg), np.asarray(p, float),
+                             model.stroke.theta_closed)).ravel()
 
     # -- layout ------------------------------------------------------------------------
     @property
