@@ -300,6 +300,18 @@ def format_robust(res) -> str:
         lines.append(f"  corner check (the kernel at every corner of the box): {cc['corners']} "
                      f"corners, {cc['in_nlp']} of them scenarios of the NLP; "
                      f"{len(cc['breaking'])} outside the NLP break a constraint")
+    temps = tuple(getattr(res, "temperatures", ()) or ())
+    ref = getattr(getattr(res.config, "operating", None), "reference_temperature_c", None)
+    if temps and temps != (ref,):
+        lim = res.limiting_temperature_c
+        by_T = {t["temperature_c"]: t["worst_margin"] for t in (cc or {}).get("temperatures", ())}
+        lines.append("  sign-off temperatures (every scenario at each; the design's values at "
+                     f"{ref:g} °C): " + ", ".join(
+                         f"{T:g} °C" + (f" (smallest corner margin {by_T[T]:.3g})"
+                                        if by_T.get(T) is not None else "") for T in temps))
+        if lim is not None:
+            lines.append(f"  limiting temperature: {lim:g} °C (its corner is the closest of "
+                         "all to breaking a constraint)")
     if res.yield_result is not None:
         lines.append("  Monte Carlo, both designs on the same samples:")
         lines += ["  " + x for x in format_yield(res.yield_result, "robust design")]

@@ -120,7 +120,7 @@ def _joint(c: Config, nominal):
     ref = ([nominal.design[k] for k in DESIGN_KEYS] if nominal.design else
            [getattr(c.design, k) for k in DESIGN_KEYS])
     first = initial_scenarios(box, c, [ref], 1.0)
-    start, _ = start_design(c, box, np.array([s.z for s in first]))
+    start, _ = start_design(c, box, first)
     scen = initial_scenarios(box, c, [start], 1.0)
     problem = Problem(c, 1.0, scen, N, M)
     x0, J_ref = problem.initial(start)

@@ -70,7 +70,8 @@ from .nlp import T_FLOOR
 from .policy import (MAX_WIDEN, SLOW_YIELD_SAMPLES, WIDEN, YIELD_REFERENCE, check_keys,
                      max_corners)
 from .result import RobustResult, box_summary
-from .scenarios import design_dict, initial_scenarios
+from .scenarios import (all_corners, at_reference, corner_count, design_dict, initial_scenarios,
+                        temperatures)
 from .solve import Problem, Run, solve_box, start_design
 from .verify import scenario_report
 from .worst_cases import check_corners
@@ -82,7 +83,7 @@ from ..optimiser.free_points import SLOTS
 from ..optimiser.interval import END_ANGLE, END_C
 from ..optimiser.spring_part import spring_part
 from ..optimiser.kinds import kind_config
-from ..problem import check_reference_temperature
+from ..problem import at_temperature
 
 
 def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None = None,
@@ -99,10 +100,10 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     the verdict): the same design, objective, success and message, without what only the
     report shows (:func:`optimise_robust_kind`).
     """
-    check_reference_temperature(cfg, "the robust optimiser")
     from dataclasses import replace
 
     t_start = time.perf_counter()
+    given, cfg = cfg, at_reference(cfg)      # (every scenario at its sign-off temperature)
     check_batch(cfg, int(samples or cfg.tolerance.samples),
                 "--samples" if samples else "tolerance.samples")
     check_keys(cfg)
@@ -175,14 +176,18 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
                                                  f" ({r['message'] or 'failed'})")
         for r in rows),)
     times = dict(best.times, total=time.perf_counter() - t_start)
-    out_cfg = cfg.set("design.spring_kind", kind)         # (not the kind's bounds)
+    out_cfg = given.set("design.spring_kind", kind)       # (not the kind's bounds)
     if placed:                          # with the points (end damper) set, no longer free
         chosen = {k for k, _, _ in cfg.optimise.free}
         out_cfg = fixed_points(out_cfg, {full: v for k, v in (best.design or {}).items()
                                          for full in (f"geometry.{k}", f"design.{k}")
                                          if full in chosen})
+    temps = temperatures(cfg)
+    limiting = (best.corner_check or {}).get("limiting_temperature_c")
+    if limiting is None and len(temps) == 1 and best.design is not None:
+        limiting = temps[0]
     return replace(best, kind=kind, kinds=tuple(rows), part=part, notes=notes, times=times,
-                   config=out_cfg)
+                   config=out_cfg, temperatures=temps, limiting_temperature_c=limiting)
 
 
 def _objective(x) -> float:
@@ -259,13 +264,14 @@ def optimise_robust_kind(cfg: Config, *, progress: bool = False, samples: int | 
     of the kind it keeps only. Its ``success`` can only be that result's or False (the
     verification of the scenarios can fail a design, nothing else changes)."""
     t_start = time.perf_counter()
+    cfg = at_reference(cfg)
     tol = cfg.tolerance
     check_batch(cfg, int(samples or tol.samples), "--samples" if samples else "tolerance.samples")
     check_keys(cfg)
     log = _Log(Progress(10, "robust design", enabled=progress, unit=""), t_start)
     log.bar.update(0, "nominal optimum")
     t0 = time.perf_counter()
-    if (report and not defer) or 2 ** box_of(cfg).dim > max_corners(cfg):
+    if (report and not defer) or not all_corners(cfg, box_of(cfg)):
         nominal = _nominal(cfg)
         log.times["nominal_optimise"] = time.perf_counter() - t0
     else:           # every corner is a scenario: the nominal optimum chooses none of them
@@ -411,8 +417,7 @@ def _solve_widening(cfg: Config, nominal: dict, N: int, M: int, z_yield: np.ndar
         t0 = time.perf_counter()
         design = design_dict(problem, run.design)
         c_rob = cfg.with_design(**design)
-        yres = analyse_samples(c_rob, box_of(c_rob), z_yield, seed=seed,
-                               reference=YIELD_REFERENCE)
+        yres, at = _lowest_yield(c_rob, box_of(c_rob), z_yield, seed)
         log.add_time("yield", t0)
         if yres.meets_required or attempt == MAX_WIDEN:
             break
@@ -455,6 +460,27 @@ def _no_design(cfg: Config, problem: Problem, run: Run, nominal: dict, N: int, M
                         times=log.times, config=cfg, **base)
 
 
+def _lowest_yield(c: Config, box, z: np.ndarray, seed: int) -> tuple[YieldResult, float]:
+    """The yield of ``c``'s design on the unit samples ``z`` at each sign-off temperature
+    (the same samples at each): the lowest of them and its temperature (the reference
+    temperature's alone by default). ``softclose yield`` with ``operating.temperatures_c``
+    reports each and the joint one."""
+    out, at = None, None
+    for T in temperatures(c):
+        y = analyse_samples(at_temperature(c, T), box, z, seed=seed, reference=YIELD_REFERENCE)
+        if out is None or y.yield_ < out.yield_:
+            out, at = y, T
+    return out, at
+
+
+def _yield_note(cfg: Config, what: str, at: float) -> str | None:
+    """Which temperature a reported yield is at, with several sign-off temperatures."""
+    if len(temperatures(cfg)) <= 1:
+        return None
+    return (f"{what}'s yield and nominal lid: at {at:g} °C, the lowest yield of the sign-off "
+            "temperatures (the same samples at each; softclose yield gives the joint one)")
+
+
 def _nominal_yield(cfg: Config, nominal: dict, z_yield: np.ndarray, seed: int,
                    log: _Log) -> YieldResult | None:
     """The yield of the nominal optimum on the robust design's samples (None without one)."""
@@ -462,8 +488,8 @@ def _nominal_yield(cfg: Config, nominal: dict, z_yield: np.ndarray, seed: int,
         return None
     t0 = time.perf_counter()
     c_nom = cfg.with_design(**nominal["design"])
-    nyield = analyse_samples(c_nom, box_of(c_nom, scale=1.0), z_yield, seed=seed,
-                             reference=YIELD_REFERENCE)
+    nyield, at = _lowest_yield(c_nom, box_of(c_nom, scale=1.0), z_yield, seed)
+    log.notes += filter(None, [_yield_note(cfg, "the nominal optimum", at)])
     log.times["nominal_yield"] = time.perf_counter() - t0
     return nyield
 
@@ -482,15 +508,21 @@ def _corner_guarantee(cfg: Config, scale: float, problem: Problem, run: Run, log
     """Every corner of the box at the answer, in the kernel (the scenarios' corners are the
     reference's to judge): the guarantee when the NLP did not have them all."""
     t0 = time.perf_counter()
-    _, corner_check = check_corners(cfg, scale, run, [sc.z for sc in problem.scenarios])
+    _, corner_check = check_corners(cfg, scale, run, [(sc.z, sc.temperature_c)
+                                                      for sc in problem.scenarios])
     log.times["corner_check"] = time.perf_counter() - t0
-    n_corners = 2 ** problem.box.dim if problem.box.dim else 0
+    n_corners = corner_count(cfg, problem.box)
+    temps = temperatures(cfg)
+    at = f" at {len(temps)} temperatures" if len(temps) > 1 else ""
     in_nlp = sum(1 for sc in problem.scenarios if sc.z and all(abs(v) == 1.0 for v in sc.z))
+    n_nom = sum(1 for sc in problem.scenarios if sc.origin == "nominal")
     corner_check.update(in_nlp=in_nlp, scenarios=len(problem.scenarios))
     if n_corners > max_corners(cfg):
-        log.notes.append(f"{len(problem.scenarios)} scenarios instead of {n_corners + 1}: the "
-                         f"nominal lid, {in_nlp} of the {n_corners} corners and "
-                         f"{len(problem.scenarios) - 1 - in_nlp} interior points; all "
+        lids = "the nominal lid" + (f" at each of the {n_nom} temperatures" if n_nom > 1
+                                    else "")
+        log.notes.append(f"{len(problem.scenarios)} scenarios instead of {n_corners + n_nom}: "
+                         f"{lids}, {in_nlp} of the {n_corners} corners{at} and "
+                         f"{len(problem.scenarios) - n_nom - in_nlp} interior points; all "
                          f"{n_corners} corners simulated in the kernel at the design, "
                          f"{len(corner_check['breaking'])} outside the NLP break a constraint")
     return corner_check

@@ -19,11 +19,12 @@ import numpy as np
 
 from ..config import Config
 from ..errors import NumericalError
-from ..problem import DESIGN_KEYS
+from ..problem import DESIGN_KEYS, at_temperature
 from .box import box_of
 from .evaluate import evaluate
-from .policy import MC_TOL, max_corners
-from .scenarios import corner_columns, initial_scenarios
+from .policy import MC_TOL
+from .scenarios import all_corners, corner_columns, initial_scenarios, temperatures
+from .scenarios import label as scenario_label
 from .solve import Problem, Run, start_design
 from .stats import margins
 
@@ -58,14 +59,14 @@ def diagnose(cfg: Config, run: Run, problem: Problem, N: int, M: int, seed: int)
     o = cfg.optimise
     trial_cfg = cfg.set("optimise.max_iter", min(o.max_iter, TRIAL_MAX_ITER))
     lo, hi, best, capped = 0.0, 1.0, None, 0
-    subset = 2 ** problem.box.dim > max_corners(cfg)
+    subset = not all_corners(cfg, problem.box)
 
     def holds(a, design) -> bool:
         """With a subset of the corners as scenarios, a design counts only if every corner
         holds in the kernel."""
         if not subset:
             return True
-        _, _, _, cols = corner_columns(cfg, a, design)
+        _, _, _, _, cols = corner_columns(cfg, a, design)
         return bool(np.all(margins(cols, o) >= -MC_TOL))
 
     for _ in range(6):
@@ -73,7 +74,7 @@ def diagnose(cfg: Config, run: Run, problem: Problem, N: int, M: int, seed: int)
         box_a = box_of(cfg, scale=a)
         try:
             scen = initial_scenarios(box_a, cfg, [run.design], a)
-            start, info_a = start_design(cfg, box_a, np.array([s.z for s in scen]))
+            start, info_a = start_design(cfg, box_a, scen)
         except NumericalError:
             hi = a
             continue
@@ -93,9 +94,13 @@ def diagnose(cfg: Config, run: Run, problem: Problem, N: int, M: int, seed: int)
             capped += ra is not None and ra.r["status"] == "Maximum_Iterations_Exceeded"
     design = best if best is not None else run.design
     box1 = box_of(cfg, dict(zip(DESIGN_KEYS, design)))
-    Z = box1.corners()
+    corners = box1.corners()
     c = cfg.with_design(**dict(zip(DESIGN_KEYS, map(float, design))))
-    cols = evaluate(c, box1.keys, box1.values(Z))
+    temps = temperatures(cfg)
+    parts = [evaluate(at_temperature(c, T), box1.keys, box1.values(corners)) for T in temps]
+    cols = {k: np.concatenate([np.asarray(q[k]) for q in parts]) for k in parts[0]}
+    Z = np.tile(corners, (len(temps), 1))
+    Ts = np.repeat(np.asarray(temps, float), len(corners))
     m = margins(cols, o)
     i = int(np.argmin(m))
     info = {"feasible_scale": lo if best is not None else 0.0,
@@ -103,7 +108,7 @@ def diagnose(cfg: Config, run: Run, problem: Problem, N: int, M: int, seed: int)
     parts = []
     if m[i] < 0:
         constraint, amount = _violation(cols, i, o)
-        label = box1.label(Z[i])
+        label = scenario_label(box1, Z[i], Ts[i], temps)
         info.update(constraint=constraint, scenario=label, detail=amount)
         ds = ", ".join(f"{k} = {v:.5g}" for k, v in info["design_tried"].items())
         parts.append(f"at the best design found ({ds}) the scenario {label} {amount}")

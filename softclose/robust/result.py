@@ -51,6 +51,13 @@ class RobustResult(Displayed):
     #: the bounds and constraints that limit the robust design, with dJ per unit relaxation
     #: (:class:`softclose.optimiser.Active`, ``scenarios`` naming where each holds)
     active: tuple = ()
+    #: the sign-off temperatures (°C) every scenario was checked at (SPEC §12), and the one
+    #: that limits the design: the temperature of the corner with the smallest constraint
+    #: margin (:func:`softclose.robust.stats.margins`) among every corner of the box at every
+    #: sign-off temperature, simulated in the kernel at the design (``corner_check``); None
+    #: without a design or a box
+    temperatures: tuple = ()
+    limiting_temperature_c: float | None = None
     #: the config it was designed for
     config: object = field(default=None, repr=False, compare=False)
 
@@ -75,7 +82,8 @@ class RobustResult(Displayed):
                "design": self.design, "objective": self.objective,
                "robust_objective": self.robust_objective, "kind": self.kind,
                "part": None if self.part is None else self.part.to_json(),
-               "kinds": list(self.kinds)}
+               "kinds": list(self.kinds), "temperatures": list(self.temperatures),
+               "limiting_temperature_c": self.limiting_temperature_c}
         for k in METRIC_KEYS:
             out[k] = None if self.metrics is None else self.metrics.get(k)
         for k in ENGAGE_KEYS:       # the nominal lid's end damper engages: when, how fast
@@ -131,6 +139,13 @@ class RobustResult(Displayed):
             facts.append(("nominal optimum's yield", f"{percent(ny.yield_)} (95 % interval "
                                                      f"{interval(ny.yield_ci)})"))
         facts.append(("scenarios", f"{len(self.scenarios)} (box scale {num(self.box_scale)})"))
+        ref = getattr(getattr(self.config, "operating", None), "reference_temperature_c", None)
+        if self.temperatures and tuple(self.temperatures) != (ref,):
+            lim = self.limiting_temperature_c
+            facts.append(("sign-off temperatures",
+                          ", ".join(f"{T:g}" for T in self.temperatures) + " °C"
+                          + ("" if lim is None else f" (limiting: {lim:g} °C, the corner "
+                             "closest to breaking a constraint)")))
         tables = []
         if self.design:
             nom = (self.nominal or {}).get("design") or {}

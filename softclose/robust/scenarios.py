@@ -4,6 +4,14 @@ at the faces), how a point maps onto the kernel's parameters and the model's key
 the nominal lid and every corner of the box, or, beyond :data:`MAX_CORNERS` corners, the
 corners worst for each constraint at a design (every corner simulated in the C kernel) and a
 fractional factorial (:func:`fractional_factorial`).
+
+Temperature is a scenario dimension (SPEC §12): a scenario is a point z of the box at one
+sign-off temperature T (:func:`temperatures`). The design's values are given at the reference
+temperature; at T every parameter p_i moves by its factor f_i
+(:func:`softclose.model.temperature.parameter_factors`), so a scenario at T maps
+``p_T = f (a p + b)``: (a f, b f), more scenarios of the same NLP. The robust procedure runs on
+:func:`at_reference` of the config (its strokes at the reference temperature, the sign-off
+temperatures in ``operating.temperatures_c``) and moves each scenario to its own T.
 """
 
 from __future__ import annotations
@@ -15,7 +23,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..config import Config
-from ..problem import DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, with_designs
+from ..model.temperature import parameter_factors
+from ..problem import (DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, at_temperature,
+                       resolve_temperatures, sign_off_temperatures, with_designs)
 from .box import Box, box_of
 from .evaluate import evaluate
 from .policy import max_corners, t_end
@@ -27,11 +37,50 @@ class Scenario:
 
     z: tuple
     origin: str           # "nominal", "corner", "Monte Carlo, round r"
+    #: the sign-off temperature (°C) of the stroke; None: the reference temperature
+    temperature_c: float | None = None
 
 
-def maps(box: Box, z) -> tuple[np.ndarray, np.ndarray, dict]:
+def at_reference(cfg: Config) -> Config:
+    """``cfg`` as the robust procedure runs on it: its strokes at the reference temperature
+    (the design's values are given there) and its sign-off temperatures
+    (:func:`softclose.problem.sign_off_temperatures`: ``operating.temperatures_c``, or
+    ``[operating.temperature_c]`` alone) listed in ``operating.temperatures_c``. The same
+    config back when it is so already (the default)."""
+    op = cfg.operating
+    temps = sign_off_temperatures(cfg)
+    if op.temperature_c == op.reference_temperature_c and tuple(op.temperatures_c) in (
+            (), temps) and temps == (op.reference_temperature_c,):
+        return cfg
+    return cfg.replace(operating={"temperature_c": float(op.reference_temperature_c),
+                                  "temperatures_c": [float(t) for t in temps]})
+
+
+def temperatures(cfg: Config) -> tuple[float, ...]:
+    """The sign-off temperatures (°C) every scenario point is checked at."""
+    return sign_off_temperatures(cfg)
+
+
+def factors(cfg: Config, temperature_c: float | None) -> np.ndarray | None:
+    """The parameter factors of a stroke at ``temperature_c`` (None at the reference
+    temperature, and for None)."""
+    if temperature_c is None:
+        return None
+    return parameter_factors(resolve_temperatures(at_temperature(cfg, temperature_c)))
+
+
+def label(box: Box, z, temperature_c: float | None, temps=()) -> str:
+    """A scenario's name: the box's label of z, and `` at T °C`` with several sign-off
+    temperatures."""
+    text = box.label(z)
+    return text if temperature_c is None or len(temps) <= 1 else \
+        f"{text} at {temperature_c:g} °C"
+
+
+def maps(box: Box, z, factors: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, dict]:
     """(a, b, model values) of the point z: p = a * p_design + b (the parameter vector,
-    PARAM_KEYS), model keys."""
+    PARAM_KEYS), model keys. With the ``factors`` of a temperature (:func:`factors`) the
+    stroke's p is f (a p_design + b): (a f, b f)."""
     a, b, values = np.ones(len(PARAM_KEYS)), np.zeros(len(PARAM_KEYS)), {}
     for j, key in enumerate(box.keys):
         if key in PARAM_COLUMNS:
@@ -43,16 +92,22 @@ def maps(box: Box, z) -> tuple[np.ndarray, np.ndarray, dict]:
                 b[col] = box.spreads[j] * zj
         else:
             values[key] = float(box.nominal[j] + box.half[j] * max(z[j], box.z_min[j]))
+    if factors is not None:
+        a, b = a * factors, b * factors
     return a, b, values
 
 
-def scenario_rows(box: Box, designs: np.ndarray, Z: np.ndarray, cfg):
-    """Evaluation rows of every design (G, 3) in every scenario (S, d): (keys, X (G S, .))."""
+def scenario_rows(box: Box, designs: np.ndarray, scenarios, cfg):
+    """Evaluation rows of every design (G, 3) in every scenario (a list of
+    :class:`Scenario`, or unit points (S, d) at the reference temperature): (keys, X (G S,
+    .)), to evaluate at ``cfg``'s reference temperature (a scenario's temperature is in its
+    parameter columns)."""
     keys = list(PARAM_COLUMNS) + [k for k in box.keys if k not in PARAM_COLUMNS]
+    scen = [s if isinstance(s, Scenario) else Scenario(tuple(s), "") for s in scenarios]
+    m = [maps(box, s.z, factors(cfg, s.temperature_c)) for s in scen]
     rows = []
     for q in with_designs(cfg, np.atleast_2d(designs)):
-        for z in Z:
-            a, b, vals = maps(box, z)
+        for a, b, vals in m:
             rows.append(np.r_[a * q + b, [vals[k] for k in keys[len(PARAM_KEYS):]]])
     return keys, np.array(rows)
 
@@ -87,35 +142,57 @@ def design_dict(problem: "softclose.robust.solve.Problem", d) -> dict:
 
 
 def corner_columns(cfg: Config, scale: float, design):
-    """(box at ``design``, its corners Z (2^d, d), cfg with ``design``, the kernel's columns
-    of every corner); a box without a dimension has no corners (Z empty, columns None).
-    ``design``: (k, l0, c), or a dict of design values by name (with a gas strut's F1)."""
+    """(box at ``design``, its corners Z, their temperatures Ts, cfg with ``design``, the
+    kernel's columns of every corner): every corner at every sign-off temperature
+    (:func:`temperatures`), temperature by temperature (Z (n T 2^d, d), Ts (n T 2^d,)); a
+    box without a dimension has no corners (Z empty, columns None). ``design``: (k, l0, c),
+    or a dict of design values by name (with a gas strut's F1)."""
     if not isinstance(design, dict):
         design = dict(zip(DESIGN_KEYS, map(float, design)))
     box_d = box_of(cfg, design, scale=scale)
     c = cfg.with_design(**design)
     if not box_d.dim:
-        return box_d, np.zeros((0, 0)), c, None
-    Z = box_d.corners()
-    return box_d, Z, c, evaluate(c, box_d.keys, box_d.values(Z), t_end=t_end(cfg))
+        return box_d, np.zeros((0, 0)), np.zeros(0), c, None
+    corners = box_d.corners()
+    temps = temperatures(cfg)
+    parts = [evaluate(at_temperature(c, T), box_d.keys, box_d.values(corners),
+                      t_end=t_end(cfg)) for T in temps]
+    cols = parts[0] if len(parts) == 1 else \
+        {k: np.concatenate([np.asarray(q[k]) for q in parts]) for k in parts[0]}
+    Z = np.tile(corners, (len(temps), 1))
+    Ts = np.repeat(np.asarray(temps, float), len(corners))
+    return box_d, Z, Ts, c, cols
 
 
-def _worst_corners(cfg: Config, scale: float, design) -> list[tuple[tuple, str]]:
+def corner_count(cfg: Config, box: Box) -> int:
+    """The corner scenarios of the box: its 2^d corners at every sign-off temperature."""
+    return (2 ** box.dim if box.dim else 0) * len(temperatures(cfg))
+
+
+def all_corners(cfg: Config, box: Box) -> bool:
+    """True when every corner at every sign-off temperature enters the scenario NLP
+    together (at most :func:`~.policy.max_corners`)."""
+    return corner_count(cfg, box) <= max_corners(cfg)
+
+
+def _worst_corners(cfg: Config, scale: float, design) -> list[tuple[tuple, float, str]]:
     """The corners of the box worst for each constraint, and for the objective in
-    worst-case mode, at ``design``: (z, why) for each distinct one.
+    worst-case mode, at ``design``, over every sign-off temperature: (z, T, why) for each
+    distinct one.
 
-    Every corner is simulated in the kernel (2^d strokes: what one NLP scenario costs
-    buys thousands of them), so the worst corner is exact at the design, not a first-order
-    guess: the slowest (a lid that does not close counts as slowest, the one stopping
-    highest first), the fastest (when closing_time_min > 0), the weakest holding moment,
-    the one closest to rebounding (only when one rebounds), the largest J.
+    Every corner is simulated in the kernel (2^d strokes at each temperature: what one NLP
+    scenario costs buys thousands of them), so the worst corner is exact at the design, not
+    a first-order guess: the slowest (a lid that does not close counts as slowest, the one
+    stopping highest first), the fastest (when closing_time_min > 0), the weakest holding
+    moment, the one closest to rebounding (only when one rebounds), the largest J.
     """
-    _, Z, _, cols = corner_columns(cfg, scale, design)
+    _, Z, Ts, _, cols = corner_columns(cfg, scale, design)
     out: dict = {}
     for why, v in badness(cfg, cols).items():
-        z = tuple(map(float, Z[int(np.argmax(v))]))
-        out[z] = f"{out[z]}, {why}" if z in out else why
-    return list(out.items())
+        i = int(np.argmax(v))
+        key = (tuple(map(float, Z[i])), float(Ts[i]))
+        out[key] = f"{out[key]}, {why}" if key in out else why
+    return [(z, T, why) for (z, T), why in out.items()]
 
 
 def badness(cfg: Config, cols: dict) -> dict:
@@ -142,38 +219,52 @@ def badness(cfg: Config, cols: dict) -> dict:
 
 def initial_scenarios(box: Box, cfg: Config | None = None, designs=(),
                       scale: float = 1.0) -> list[Scenario]:
-    """The scenarios the NLP starts from: the nominal lid and every corner of the box when
-    there are at most :data:`MAX_CORNERS` of them (:func:`~.policy.max_corners` with two
-    phases; or no ``cfg`` is given).
+    """The scenarios the NLP starts from: the nominal lid and every corner of the box, each
+    at every sign-off temperature (:func:`temperatures`; the nominal lid nearest the
+    reference temperature first), when there are at most :data:`MAX_CORNERS` corner
+    scenarios (:func:`~.policy.max_corners` with two phases; or no ``cfg`` is given: the
+    reference temperature alone).
 
-    Beyond, the nominal lid and, at each of ``designs``, the corners worst for each
-    constraint and for the objective (:func:`_worst_corners`); in mean mode also a
-    resolution-III fraction of the corners (:func:`fractional_factorial`, 8 or 16 runs),
-    so that the mean objective is not an average over worst cases only.
+    Beyond, the nominal lid at every temperature and, at each of ``designs``, the corners
+    worst for each constraint and for the objective over every temperature
+    (:func:`_worst_corners`); in mean mode also a resolution-III fraction of the corners
+    (:func:`fractional_factorial`, 8 or 16 runs) at every temperature, so that the mean
+    objective is not an average over worst cases only.
 
     Why these: each constraint that binds in a robust design is set by one extreme lid (the
-    slowest closes last, the weakest spring holds least, one lid has the worst J), and the
-    scenario NLP needs exactly those; the other corners only cost size. Which corner is
-    worst can change as the NLP moves the design: the corner check after every solve
+    slowest closes last -- often the coldest, its damper the thickest --, the weakest spring
+    holds least, one lid has the worst J), and the scenario NLP needs exactly those; the
+    other corners only cost size. Which corner is worst can change as the NLP moves the
+    design: the corner check after every solve
     (:func:`softclose.robust.worst_cases.check_corners`) adds any that then violates, so the
-    result still holds at every corner. (A fraction or a first-order model would guess the
-    worst corners; the kernel simulates them all for less than one NLP scenario costs.)
+    result still holds at every corner at every temperature. (A fraction or a first-order
+    model would guess the worst corners; the kernel simulates them all for less than one NLP
+    scenario costs.)
     """
-    out = [Scenario(tuple([0.0] * box.dim), "nominal")]
+    if cfg is None:
+        temps, ref = (None,), None
+    else:
+        ref = cfg.operating.reference_temperature_c
+        temps = sorted(temperatures(cfg), key=lambda T: abs(T - ref))
+    zero = tuple([0.0] * box.dim)
+    out = [Scenario(zero, "nominal", T) for T in temps]
     if not box.dim:
         return out
-    if cfg is None or 2 ** box.dim <= max_corners(cfg):
-        return out + [Scenario(tuple(map(float, z)), "corner") for z in box.corners()]
-    seen = {out[0].z}
+    if cfg is None or all_corners(cfg, box):
+        return out + [Scenario(tuple(map(float, z)), "corner", T)
+                      for T in (temps if cfg is None else temperatures(cfg))
+                      for z in box.corners()]
+    seen = {(s.z, s.temperature_c) for s in out}
     for design in designs:
-        for z, why in _worst_corners(cfg, scale, design):
-            if z not in seen:
-                seen.add(z)
-                out.append(Scenario(z, f"corner ({why})"))
+        for z, T, why in _worst_corners(cfg, scale, design):
+            if (z, T) not in seen:
+                seen.add((z, T))
+                out.append(Scenario(z, f"corner ({why})", T))
     if cfg.tolerance.robust_objective == "mean":
-        for z in fractional_factorial(box.dim):
-            z = tuple(map(float, z))
-            if z not in seen:
-                seen.add(z)
-                out.append(Scenario(z, "corner (fractional factorial)"))
+        for T in temperatures(cfg):
+            for z in fractional_factorial(box.dim):
+                z = tuple(map(float, z))
+                if (z, T) not in seen:
+                    seen.add((z, T))
+                    out.append(Scenario(z, "corner (fractional factorial)", T))
     return out

@@ -28,16 +28,18 @@ from .discretisation import node_times, t_limit
 from .nlp import T_FLOOR, ScenarioNLP, get_scenario_nlp, model_config
 from .policy import (AGREE_RTOL, CHECK_SAMPLES, MAX_REFINE, MAX_ROUNDS, REFINE_RTOL,
                      SLOW_CHECK_SAMPLES, t_end)
-from .scenarios import Scenario, maps, scenario_rows
+from .scenarios import Scenario, factors, maps, scenario_rows
 from .stats import margins
 from .worst_cases import check_corners, search
 from ..optimiser.nlp import PHASE_FLOOR
 from ..model import elements
 
 
-def start_design(cfg: Config, box: Box, Z: np.ndarray,
+def start_design(cfg: Config, box: Box, Z,
                  shape=(8, 6, 8)) -> tuple[np.ndarray, dict]:
-    """The design of a coarse sweep with the best worst-case objective over the scenarios.
+    """The design of a coarse sweep with the best worst-case objective over the scenarios
+    ``Z`` (:class:`~.scenarios.Scenario` objects, each at its temperature, or unit points at
+    the reference temperature).
 
     A design the grid holds more than once (a bound with lo = hi, as ``select`` fixes the
     catalog spring's rate and free length) is simulated once, for every copy of it."""
@@ -113,7 +115,9 @@ class Problem:
                  M2: int | None = None):
         self.cfg, self.scale, self.scenarios, self.N, self.M = cfg, scale, scenarios, N, M
         self.box = box = box_of(cfg, scale=scale)
-        self.maps = [maps(box, np.asarray(s.z)) for s in scenarios]
+        # a scenario at temperature T: p = f (a p_design + b) (SPEC §12)
+        self.maps = [maps(box, np.asarray(s.z), factors(cfg, s.temperature_c))
+                     for s in scenarios]
         self.model_cfgs = [model_config(cfg, v) for _, _, v in self.maps]
         self.nlp, cached = get_scenario_nlp(cfg, self.model_cfgs, N, M,
                                             cfg.tolerance.robust_objective, M2)
@@ -307,13 +311,14 @@ def solve_box(cfg: Config, scale: float, scenarios: list, N: int, M: int, start,
         bar.update(min(2 + k, 8), f"searching the box ({len(problem.scenarios)} scenarios)")
         n_check = SLOW_CHECK_SAMPLES if slow_keys(cfg.tolerance.keys) else CHECK_SAMPLES
         new, info = search(cfg, scale, run, seed + 1 + k, n_check)
-        corners, cinfo = check_corners(cfg, scale, run,
-                                       [s.z for s in problem.scenarios] + list(new))
+        corners, cinfo = check_corners(
+            cfg, scale, run, [(s.z, s.temperature_c) for s in problem.scenarios] + list(new))
         rounds[-1].update(search=info, corner_check=cinfo)
         if not new and not corners:
             break
-        scen = problem.scenarios + [Scenario(z, f"Monte Carlo, round {k + 1}") for z in new] \
-            + [Scenario(z, f"corner check, round {k + 1}") for z in corners]
+        scen = problem.scenarios \
+            + [Scenario(z, f"Monte Carlo, round {k + 1}", T) for z, T in new] \
+            + [Scenario(z, f"corner check, round {k + 1}", T) for z, T in corners]
         n_new = len(new) + len(corners)
         bigger = Problem(cfg, scale, scen, problem.N, problem.M, problem.M2)
         bigger.t_hi = problem.t_hi + [t_limit(cfg)] * n_new

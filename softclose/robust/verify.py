@@ -20,10 +20,11 @@ from ..simulation import statics
 from ..config import Config
 from ..problem import (DESIGN_KEYS, ENGAGE_KEYS, METRIC_KEYS, VERIFY_RTOL, agreement_tolerance,
                        design_of, params_of)
-from ..problem import PARAM_COLUMNS
+from ..problem import PARAM_COLUMNS, at_temperature
 from .box import box_of
 from .scenarios import design_dict
 from .evaluate import with_values
+from .scenarios import label, temperatures
 from ..optimiser.verify import verify_design
 
 
@@ -99,9 +100,12 @@ def reference_check(cfg: Config, keys, x, label: str = "", kernel: dict | None =
 
 
 def scenario_report(cfg, problem, run, verify: bool) -> tuple[list, bool]:
-    """Per scenario: its values, the NLP's metrics and the reference's verdict (``problem``
-    and ``run``: a :class:`softclose.robust.solve.Problem` and its solve)."""
+    """Per scenario: its values, the NLP's metrics and the reference's verdict at the
+    scenario's temperature (``temperature_c``, given with several sign-off temperatures or
+    one other than the reference) (``problem`` and ``run``: a
+    :class:`softclose.robust.solve.Problem` and its solve)."""
     box_d = box_of(cfg, design_dict(problem, run.design), scale=problem.scale)
+    temps = temperatures(cfg)
     out, ok_all = [], True
     worst = int(np.argmax(run.J))
     for s, sc in enumerate(problem.scenarios):
@@ -116,13 +120,19 @@ def scenario_report(cfg, problem, run, verify: bool) -> tuple[list, bool]:
         if run.engage is not None and p[PARAM_COLUMNS["design.end_damper_c"]] != 0:
             # two phases: the node between them, against the reference's engagement
             metrics["engage_time"], metrics["engage_theta_dot"] = run.engage[s]
-        entry = {"label": box_d.label(z), "origin": sc.origin,
+        T = sc.temperature_c
+        entry = {"label": label(box_d, z, T, temps), "origin": sc.origin,
                  "values": {k: float(v) for k, v in zip(box_d.keys, box_d.values(z)[0])},
                  "z": list(map(float, z)), "metrics": metrics, "objective": float(run.J[s]),
                  "worst": s == worst}
+        if len(temps) > 1 or (T is not None and T != cfg.operating.reference_temperature_c):
+            entry["temperature_c"] = T
         if verify:
-            # the NLP's own numbers of this scenario against the reference's
+            # the NLP's own numbers of this scenario against the reference's, the reference
+            # at the scenario's temperature (the NLP's parameters moved by its factors)
             c_d = cfg.with_design(**design_dict(problem, run.design))
+            if T is not None:
+                c_d = at_temperature(c_d, T)
             chk = reference_check(c_d, box_d.keys, box_d.values(z)[0], entry["label"], None,
                                   float(run.J[s]),
                                   claims={**metrics, "objective": entry["objective"]})

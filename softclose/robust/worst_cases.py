@@ -9,7 +9,8 @@ box that break a constraint or exceed the worst scenario's objective at the NLP'
   started from, every corner holds at the answer.
 
 Both take a solve of the scenario NLP (a :class:`softclose.robust.solve.Run`: its
-``design`` and each scenario's objective ``J``).
+``design`` and each scenario's objective ``J``) and look at every sign-off temperature
+(:func:`softclose.robust.scenarios.temperatures`): a point they return is (z, T).
 """
 
 from __future__ import annotations
@@ -19,11 +20,11 @@ import math
 import numpy as np
 
 from ..config import Config
-from ..problem import DESIGN_KEYS
+from ..problem import DESIGN_KEYS, at_temperature
 from .box import Box, box_of
 from .evaluate import evaluate
 from .policy import ADD_PER_ROUND, MC_TOL, OBJ_RTOL, t_end
-from .scenarios import badness, corner_columns, design_dict
+from .scenarios import badness, corner_columns, design_dict, label, temperatures
 from .stats import margins
 
 
@@ -69,46 +70,57 @@ def _climb(cfg, c, box_d, z, f, Jmax, step: float = 0.5, min_step: float = 1e-3)
 
 def search(cfg: Config, scale: float, run, seed: int, n: int) -> tuple[list, dict]:
     """Points inside the box that break a constraint or exceed the worst objective: the
-    highest-scoring of ``n`` uniform samples (:func:`_scores`), each improved by a local
-    ascent (:func:`_climb`); those scoring above MC_TOL become scenarios."""
+    highest-scoring of ``n`` uniform samples at each sign-off temperature (the same samples
+    at each: :func:`_scores`), each improved by a local ascent at its temperature
+    (:func:`_climb`); those scoring above MC_TOL become scenarios, as (z, T)."""
     design = design_dict(run.problem, run.design)
     box_d = box_of(cfg, design, scale=scale)
     z = box_d.draw(n, seed, "uniform")
     c = cfg.with_design(**design)
     Jmax = float(np.max(run.J))
-    score, m = _scores(cfg, c, box_d, z, Jmax)
+    temps = temperatures(cfg)
+    parts = [_scores(cfg, at_temperature(c, T), box_d, z, Jmax) for T in temps]
+    score = np.concatenate([q[0] for q in parts])
+    m = np.concatenate([q[1] for q in parts])
     bad = score > MC_TOL
     picks = []
     for i in np.argsort(-score)[:ADD_PER_ROUND]:
         if not bad[i]:
             break
-        zi, fi = _climb(cfg, c, box_d, z[i], float(score[i]), Jmax)
-        if all(np.max(np.abs(zi - zj)) > 1e-6 for zj, _ in picks):
-            picks.append((zi, fi))
-    info = {"samples": int(n), "violating": int(bad.sum()),
+        T = temps[i // n]
+        zi, fi = _climb(cfg, at_temperature(c, T), box_d, z[i % n], float(score[i]), Jmax)
+        if all(T != Tj or np.max(np.abs(zi - zj)) > 1e-6 for zj, Tj, _ in picks):
+            picks.append((zi, T, fi))
+    info = {"samples": int(n * len(temps)), "violating": int(bad.sum()),
             "worst_margin": float(np.min(m)) if len(m) else None,
-            "added": [box_d.label(zi) for zi, _ in picks],
-            "added_scores": [fi for _, fi in picks]}
-    return [tuple(map(float, zi)) for zi, _ in picks], info
+            "added": [label(box_d, zi, T, temps) for zi, T, _ in picks],
+            "added_scores": [fi for _, _, fi in picks]}
+    return [(tuple(map(float, zi)), T) for zi, T, _ in picks], info
 
 
 def check_corners(cfg: Config, scale: float, run, have=()) -> tuple[list, dict]:
-    """Every corner of the box at the design of ``run``, in the kernel. A corner violates
-    when it breaks a constraint by more than MC_TOL or, in worst-case mode, its J exceeds
-    the worst scenario's by more than OBJ_RTOL (as in :func:`_scores`). Returns the
-    violating corners to add -- among those not in ``have`` (unit points), the most
-    violating one and the worst for each constraint and the objective
-    (:func:`softclose.robust.scenarios.badness`): at most six a round, so that a poor design
-    (say the nominal optimum, where most corners fail) does not bring all 2^d corners into
-    the NLP at once -- and a summary (``breaking``: every corner outside ``have`` that
-    breaks a constraint)."""
-    box_d, Z, c, cols = corner_columns(cfg, scale, design_dict(run.problem, run.design))
+    """Every corner of the box at every sign-off temperature at the design of ``run``, in
+    the kernel. A corner violates when it breaks a constraint by more than MC_TOL or, in
+    worst-case mode, its J exceeds the worst scenario's by more than OBJ_RTOL (as in
+    :func:`_scores`). Returns the violating corners to add, as (z, T) -- among those not in
+    ``have`` ((z, T) of the scenarios), the most violating one and the worst for each
+    constraint and the objective (:func:`softclose.robust.scenarios.badness`): at most six
+    a round, so that a poor design (say the nominal optimum, where most corners fail) does
+    not bring all 2^d corners into the NLP at once -- and a summary (``breaking``: every
+    corner outside ``have`` that breaks a constraint; ``temperatures``: the smallest margin
+    over the corners at each temperature; ``limiting_temperature_c``: the temperature of the
+    corner with the smallest margin of all, the one closest to breaking a constraint or
+    breaking one the most)."""
+    box_d, Z, Ts, c, cols = corner_columns(cfg, scale, design_dict(run.problem, run.design))
     if not len(Z):
         return [], {"corners": 0, "violating": 0, "breaking": [], "added": []}
+    temps = temperatures(cfg)
     score, m = _scores(cfg, c, box_d, Z, float(np.max(run.J)), cols=cols)
-    H = np.array([h for h in have if len(h) == box_d.dim]).reshape(-1, box_d.dim)
-    outside = np.array([not len(H) or np.min(np.max(np.abs(H - z), axis=1)) > 1e-6
-                        for z in Z])
+    ref = cfg.operating.reference_temperature_c        # (a scenario without one: there)
+    have = [(np.asarray(h, float), ref if T is None else T) for h, T in have
+            if len(h) == box_d.dim]
+    outside = np.array([all(T != Th or np.max(np.abs(h - z)) > 1e-6 for h, Th in have)
+                        for z, T in zip(Z, Ts)])
     bad = (score > MC_TOL) & outside
     picks = []
     if bad.any():
@@ -117,8 +129,12 @@ def check_corners(cfg: Config, scale: float, run, have=()) -> tuple[list, dict]:
             i = int(np.argmax(np.where(bad, v, -np.inf)))
             if bad[i] and i not in picks:
                 picks.append(i)
-    breaking = [box_d.label(Z[i]) for i in np.nonzero(outside & (m < -MC_TOL))[0]]
-    return [tuple(map(float, Z[i])) for i in picks], {
+    breaking = [label(box_d, Z[i], Ts[i], temps)
+                for i in np.nonzero(outside & (m < -MC_TOL))[0]]
+    by_T = [float(np.min(m[Ts == T])) for T in temps]
+    return [(tuple(map(float, Z[i])), float(Ts[i])) for i in picks], {
         "corners": int(len(Z)), "violating": int(np.sum(score > MC_TOL)),
         "worst_margin": float(np.min(m)) if np.all(np.isfinite(m)) else -math.inf,
-        "breaking": breaking, "added": [box_d.label(Z[i]) for i in picks]}
+        "breaking": breaking, "added": [label(box_d, Z[i], Ts[i], temps) for i in picks],
+        "temperatures": [{"temperature_c": T, "worst_margin": w} for T, w in zip(temps, by_T)],
+        "limiting_temperature_c": float(Ts[int(np.argmin(m))])}
