@@ -124,3 +124,53 @@ def test_the_issue_command_meets_every_corner_at_every_temperature(capsys, cold_
     # the cold damper is the thickest: the slowest corner is at 0 °C, and it binds
     assert j["limiting_temperature_c"] == min(margins, key=margins.get) == 0.0
     assert margins[0.0] < 1e-4 < margins[40.0]
+
+
+SPRINGS = """\
+part,kind,rate_N_per_m,free_length_m,preload_N,min_length_m,max_length_m,rate_tolerance,free_length_tolerance_m
+C-60-5000,compression,5000,0.060,0,0.030,,0.1,0.0009
+"""
+DAMPERS = """\
+part,kind,c,pivot,c_tolerance
+D-2500,dashpot,2500,,0.2
+D-3250,dashpot,3250,,0.2
+"""
+
+
+def test_select_a_pair_that_holds_at_23_fails_cold(tmp_path):
+    """With a silicone-oil damper (-0.5 %/K) the dashpot of 3250 N s/m is 12 % thicker at
+    0 °C: the spring's slow corner (rate +10 %, free length +0.9 mm, c +20 %) closes within
+    the second at 23 °C and not at 0 °C. Selected at 23 °C alone the pair is feasible, at 0
+    and 23 °C it is not (at that corner at 0 °C, confirmed by the adaptive reference) and the
+    thinner damper ranks first."""
+    from softclose.catalog.ranking import select
+    sp, dp = tmp_path / "springs.csv", tmp_path / "dampers.csv"
+    sp.write_text(SPRINGS)
+    dp.write_text(DAMPERS)
+    base = default_config().update({"tolerance.mass.lid": 0.0,
+                                    "design.damper_temperature_coeff": -0.005})
+    warm = {e["damper"]: e for e in select(base, sp, dp, samples=64, verify=2).ranking}
+    assert warm["D-3250"]["feasible"] and warm["D-3250"]["verified"]
+    assert "limiting_temperature_c" not in warm["D-3250"]
+    both = select(base.update({"operating.temperatures_c": [0.0, 23.0]}), sp, dp, samples=64,
+                  verify=2)
+    j = json.loads(json.dumps(both.to_json(), allow_nan=False))
+    assert [e["damper"] for e in j["ranking"]] == ["D-2500", "D-3250"]
+    first, cold = j["ranking"]
+    for key in ("spring", "damper", "feasible", "yield", "worst_objective", "design",
+                "verified"):
+        assert key in first and key in cold
+    assert first["feasible"] and first["verified"] and not cold["feasible"]
+    assert cold["verified"]                          # the reference agrees at every corner
+    assert cold["limiting_temperature_c"] == 0.0 and "at 0 °C" in cold["reason"]
+    assert cold["yield"] < warm["D-3250"]["yield"] + 1e-12
+    bad = [c for c in both.ranking[1]["reference"]["corners"] if not c["ok"]]
+    assert bad and all(c["label"].endswith("at 0 °C") for c in bad)
+    # independently: that corner at 0 °C, by the reference, is too slow; at 23 °C it is not
+    corner = base.update({"design.spring_kind": "compression", "design.spring_k": 5500.0,
+                          "design.spring_rest_length": 0.0609,
+                          "design.damper_c": 3250.0 * 1.2})
+    o = base.optimise
+    assert Reference.from_config(at_temperature(corner, 0.0)).simulate().closing_time \
+        > o.closing_time_max
+    assert Reference.from_config(corner).simulate().closing_time < o.closing_time_max

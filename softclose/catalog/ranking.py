@@ -36,7 +36,8 @@ from .screen import (RANGE, PairBox, pair_box, range_texts, reason_text, run_pai
 from .nlp import NLP_SAMPLES, solve_c
 from .mounting import place_pair, placement_keys
 from . import coil, verify
-from ..problem import check_reference_temperature
+from ..robust.scenarios import at_reference
+from .screen import limiting_temperature
 
 #: rows of the kernel per chunk of pairs (a chunk is the unit of progress and of Ctrl-C)
 CHUNK_ROWS = 40_000
@@ -61,7 +62,7 @@ def choose_c(cfg: Config, box: PairBox, springs, progress: bool = False) -> list
     lo = max(lo, hi * 1e-3)
     tol = next((s.half_width(1.0) for s in cfg.tolerance.spreads
                 if s.key == "design.damper_c" and s.relative), 0.0)
-    corners = PairBox(box.other, box.Z[:box.corners + 1], box.corners, 0)
+    corners = box.head()
 
     def best_of(grids):
         pairs = [(s, DamperEntry("c", "dashpot", float(c), None, tol))
@@ -112,8 +113,8 @@ def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: 
     (``result.interrupted``). Returns a :class:`SelectResult`; never raises for a part
     that fails (it is ranked with the reason).
     """
-    check_reference_temperature(cfg, "the catalog selection")
     t0 = time.perf_counter()
+    cfg = at_reference(cfg)         # (every row at its sign-off temperature: screen.py)
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) \
             or not 0 <= samples <= 100_000:
         raise ConfigError(f"samples: expected a whole number 0..100000, got {samples!r}")
@@ -316,6 +317,9 @@ def screen_chunk(cfg: Config, box: PairBox, a: int, chunk: list) -> tuple[int, l
                        int(sm["corner_count"][p]), nc,
                        {k: float(v[p]) for k, v in sm["nominal"].items()})
         coil.apply(e, coil.spring_checks(cfg, s, lengths))
+        if len(box.temperatures) > 1:
+            e["limiting_temperature_c"] = limiting_temperature(box, cols, cfg.optimise, p,
+                                                               sm["fail_row"][p])
         F = cols["feasible"][p * n:p * n + nc].copy()
         J = np.asarray(cols["objective"][p * n:p * n + nc], float).copy()
         out.append((e, (F, J)))

@@ -9,6 +9,12 @@ the 2^d corners, the nominal point and the same Monte Carlo samples (common rand
 two pairs see the same relative deviations), all rows of a chunk of pairs in one kernel
 batch (:func:`softclose.robust.evaluate.evaluate`).
 
+With several sign-off temperatures (``operating.temperatures_c``, SPEC §12) every corner and
+every sample is a row at each temperature (the parts' values given at the reference
+temperature, moved by their laws at each): a pair is feasible when every corner meets every
+constraint at every temperature, and a sample counts towards the yield when it does at
+all of them (the joint yield).
+
 A row meets every constraint of the problem (:func:`softclose.problem.infeasibility`) and
 keeps the spring in its valid range: the kind's side of its free length (the kernel's own
 range check) and the part's ``min_length`` / ``max_length`` (checked here against the
@@ -28,7 +34,9 @@ from ..config.load import from_dict
 from ..model.elements.springs import KINDS
 from ..robust.box import Box, box_of
 from ..robust.evaluate import evaluate, point_values, simulator, slow_keys
-from ..problem import LID_MASS, param_rows, resolve
+from ..problem import LID_MASS, at_temperature, param_rows, resolve
+from ..robust.scenarios import temperatures as sign_off
+from ..robust.stats import margins
 
 #: the [tolerance] keys a catalog's own tolerances replace
 OWNED = ("design.spring_k", "design.spring_rest_length", "design.damper_c",
@@ -66,8 +74,31 @@ class PairBox:
 
     other: Box
     Z: np.ndarray          # (n_points, 3 + other.dim)
-    corners: int
-    samples: int
+    corners: int           # the corner rows (2^d at each temperature)
+    samples: int           # Monte Carlo samples (at each temperature)
+    #: the temperature (°C) of each row, with several sign-off temperatures (corners at each,
+    #: the nominal point once, samples at each); None: every row at the config's own
+    Ts: np.ndarray | None = None
+
+    @property
+    def temperatures(self) -> tuple:
+        """The sign-off temperatures of the rows (() when they are the config's own)."""
+        return () if self.Ts is None else tuple(dict.fromkeys(map(float, self.Ts)))
+
+    def head(self) -> "PairBox":
+        """The corners and the nominal point alone (no samples)."""
+        n = self.corners + 1
+        return PairBox(self.other, self.Z[:n], self.corners, 0,
+                       None if self.Ts is None else self.Ts[:n])
+
+    def config_at(self, cfg: Config, row: int) -> Config:
+        """``cfg`` at the temperature of row ``row``."""
+        return cfg if self.Ts is None else at_temperature(cfg, float(self.Ts[row]))
+
+    def row_label(self, row: int, spring, damper) -> str:
+        """:meth:`label` of a row, with its temperature when there are several."""
+        text = self.label(self.Z[row], spring, damper)
+        return text if self.Ts is None else f"{text} at {self.Ts[row]:g} °C"
 
     @property
     def points(self) -> int:
@@ -95,7 +126,9 @@ class PairBox:
 
 def pair_box(cfg: Config, samples: int, seed: int = 0) -> PairBox:
     """The unit points of every pair: 2^d corners (d = 3 + the other toleranced keys), the
-    nominal point, ``samples`` Monte Carlo points of ``[tolerance] distribution``."""
+    nominal point, ``samples`` Monte Carlo points of ``[tolerance] distribution``; with
+    several sign-off temperatures (or one other than ``cfg``'s own), the corners at each,
+    the nominal point at the one nearest the reference, the same samples at each."""
     tol = cfg.tolerance
     tol = replace(tol, spreads=tuple(s for s in tol.spreads if s.key not in OWNED))
     other = box_of(cfg, tolerance=tol)
@@ -108,8 +141,15 @@ def pair_box(cfg: Config, samples: int, seed: int = 0) -> PairBox:
         z = rng.standard_normal((samples, d)) / 3.0
     if other.dim:
         z[:, 3:] = np.maximum(z[:, 3:], other.z_min)
-    Z = np.vstack([corners, np.zeros((1, d)), z])
-    return PairBox(other, Z, len(corners), samples)
+    temps = sign_off(cfg)
+    if temps == (cfg.operating.temperature_c,):
+        Z = np.vstack([corners, np.zeros((1, d)), z])
+        return PairBox(other, Z, len(corners), samples)
+    nT, ref = len(temps), cfg.operating.reference_temperature_c
+    Z = np.vstack([np.tile(corners, (nT, 1)), np.zeros((1, d)), np.tile(z, (nT, 1))])
+    Ts = np.r_[np.repeat(temps, len(corners)), min(temps, key=lambda T: abs(T - ref)),
+               np.repeat(temps, samples)].astype(float)
+    return PairBox(other, Z, nT * len(corners), samples, Ts)
 
 
 def pair_rows(box: PairBox, spring, damper) -> tuple[list[str], np.ndarray]:
@@ -162,7 +202,7 @@ def run_pairs(cfg: Config, box: PairBox, pairs: list) -> dict:
         for i in idx:
             keys, x = pair_rows(box, *pairs[i])
             X.append(x)
-        cols = evaluate(c, keys, np.vstack(X), explain=False)
+        cols = _evaluate(c, box, keys, np.vstack(X), len(idx))
         if out is None:
             out = {k: np.empty((len(pairs) * n,) + np.shape(v)[1:], np.asarray(v).dtype)
                    for k, v in cols.items()}
@@ -184,6 +224,36 @@ def run_pairs(cfg: Config, box: PairBox, pairs: list) -> dict:
     return out
 
 
+def _evaluate(c: Config, box: PairBox, keys, X: np.ndarray, npairs: int) -> dict:
+    """:func:`softclose.robust.evaluate.evaluate` of the rows X of ``npairs`` pairs, each
+    row at its temperature."""
+    if box.Ts is None:
+        return evaluate(c, keys, X, explain=False)
+    Trow = np.tile(box.Ts, npairs)
+    cols: dict = {}
+    for T in box.temperatures:
+        m = Trow == T
+        part = evaluate(at_temperature(c, T), keys, X[m], explain=False)
+        for k, v in part.items():
+            v = np.asarray(v)
+            if k not in cols:
+                cols[k] = np.empty((len(X),) + v.shape[1:], v.dtype)
+            cols[k][m] = v
+    return cols
+
+
+def limiting_temperature(box: PairBox, cols: dict, opt, p: int, fail_row: int) -> float:
+    """The temperature that limits pair ``p``: the one of the corner it fails at
+    (``fail_row``), else of its corner with the smallest constraint margin
+    (:func:`softclose.robust.stats.margins`)."""
+    if 0 <= fail_row < box.corners:
+        return float(box.Ts[fail_row])
+    rows = slice(p * box.points, p * box.points + box.corners)
+    m = margins({k: cols[k][rows] for k in ("closing_time", "holding_moment",
+                                            "theta_dot_max", "closed")}, opt)
+    return float(box.Ts[int(np.argmin(m))])
+
+
 def summarise(box: PairBox, cols: dict, npairs: int) -> dict:
     """Per pair: feasible at every corner, yield over the samples, worst J (over corners,
     nominal and samples; inf when a row did not close), the nominal metrics, why it fails
@@ -194,7 +264,9 @@ def summarise(box: PairBox, cols: dict, npairs: int) -> dict:
     R = cols["reason"].reshape(npairs, n)
     corners_ok = F[:, :nc].all(axis=1)
     corner_count = F[:, :nc].sum(axis=1)
-    yld = F[:, nc + 1:].mean(axis=1) if box.samples else corners_ok.astype(float)
+    nT = max(len(box.temperatures), 1)        # (a sample counts when it holds at every T)
+    yld = F[:, nc + 1:].reshape(npairs, nT, -1).all(axis=1).mean(axis=1) if box.samples \
+        else corners_ok.astype(float)
     with np.errstate(invalid="ignore"):
         worst = np.where(np.isnan(J).any(axis=1), np.inf, np.nanmax(np.where(
             np.isnan(J), -np.inf, J), axis=1))
@@ -227,7 +299,7 @@ def reason_text(box: PairBox, cols: dict, p: int, row: int, reason: str, spring,
         what = "at the nominal point"
     else:
         what = ("at the corner " if row < box.corners else "at the sample ") \
-            + box.label(box.Z[row], spring, damper)
+            + box.row_label(row, spring, damper)
     if reason in ("too slow", "too fast"):
         return f"{reason}: closes in {cols['closing_time'][r]:.4g} s {what}"
     if reason == "not held shut":
@@ -246,11 +318,12 @@ def range_texts(cfg, box: PairBox, items: list) -> list[str]:
     part limits."""
     out = [RANGE] * len(items)
     groups: dict = {}
-    for n, (s, d, _) in enumerate(items):
-        key = (d.pivot if d.kind == "rotary" else None, s.min_length, s.max_length)
+    for n, (s, d, row) in enumerate(items):
+        key = (d.pivot if d.kind == "rotary" else None, s.min_length, s.max_length,
+               None if box.Ts is None else float(box.Ts[row]))
         groups.setdefault(key, []).append(n)
-    for (_, lo, hi), idx in groups.items():
-        c0 = pivot_config(cfg, items[idx[0]][1])
+    for (_, lo, hi, _), idx in groups.items():
+        c0 = box.config_at(pivot_config(cfg, items[idx[0]][1]), items[idx[0]][2])
         rows, keys = [], None
         for n in idx:
             s, d, row = items[n]

@@ -34,11 +34,11 @@ def _checker(cfg):
 
 def corner_config(cfg, box: PairBox, spring, damper, row: int):
     """The config of one point (row of the box) of a pair: its design values and the other
-    toleranced keys set, no spring length limits."""
+    toleranced keys set, no spring length limits, at the row's temperature."""
     keys, X = pair_rows(box, spring, damper)
     values = {k: float(v) for k, v in zip(keys, X[row])}
     values["design.spring_kind"] = spring.spring_kind
-    return pivot_config(cfg, damper).update(values)
+    return box.config_at(pivot_config(cfg, damper).update(values), row)
 
 
 def check_point(cfg, box: PairBox, spring, damper, row: int) -> dict:
@@ -76,7 +76,7 @@ def verify_pair(cfg, box: PairBox, spring, damper, kernel_feasible: np.ndarray,
     corners = []
     for r in range(box.corners):
         chk = check_point(cfg, box, spring, damper, r)
-        chk["label"] = box.label(box.Z[r], spring, damper)
+        chk["label"] = box.row_label(r, spring, damper)
         chk["kernel_feasible"] = bool(kernel_feasible[r])
         kj = kernel_J[r]
         chk["kernel_objective"] = None if not np.isfinite(kj) else float(kj)
