@@ -174,3 +174,20 @@ def test_select_a_pair_that_holds_at_23_fails_cold(tmp_path):
     assert Reference.from_config(at_temperature(corner, 0.0)).simulate().closing_time \
         > o.closing_time_max
     assert Reference.from_config(corner).simulate().closing_time < o.closing_time_max
+
+
+def test_operating_temperature_is_a_sweep_key():
+    """A grid over operating.temperature_c: each row is the stroke of the design at that
+    temperature (the simulator's own, to 1e-12), and the damper thickens the cold."""
+    from softclose.simulation.simulator import Simulator
+    from softclose.sweeps import sweep
+    cfg = default_config().update({**DESIGN, "design.damper_temperature_coeff": -0.005})
+    temps = np.array([-10.0, 23.0, 50.0])
+    res = sweep(cfg, {"operating.temperature_c": temps})
+    df = res.to_frame()
+    ct = np.asarray(df["closing_time"], float)
+    for T, t in zip(temps, ct):
+        c = at_temperature(cfg, T)
+        r = Simulator.from_config(c).run(params_of(c), estimate_error=False)
+        assert t == pytest.approx(r.closing_time, rel=1e-12)
+    assert ct[0] > ct[1] > ct[2]
