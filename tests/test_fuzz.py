@@ -511,8 +511,9 @@ def strokes_of(command: str, cfg, argv: list[str]) -> int:
         n = _int_option(argv, "--samples", cfg.tolerance.samples)
         return max(n or 0, 0)
     if command == "select":       # every pair at its corners, the nominal point, the samples
-        n = _int_option(argv, "--samples", 256)
-        return SELECT_PAIRS * (2 ** (3 + _select_axes(cfg)) + 1 + max(n or 0, 0))
+        n = _int_option(argv, "--samples", 256)      # (corners and samples at each sign-off T)
+        temps = max(1, len(cfg.operating.temperatures_c or ()))
+        return SELECT_PAIRS * (temps * (2 ** (3 + _select_axes(cfg)) + max(n or 0, 0)) + 1)
     return 0
 
 
@@ -573,8 +574,9 @@ def work_seconds(command: str, cfg, argv: list[str]) -> float:
         return 90.0 + (int(count) if count.isdigit() else 10) * (grid + 20 * stroke)
     if command in ("yield", "sensitivity"):
         return 60.0 + 2 * batch
-    if command == "optimise --robust":
-        return 300.0 + 10 * grid + 500 * stroke
+    temps = max(1, len(cfg.operating.temperatures_c or ()))   # (sign-off temperatures)
+    if command == "optimise --robust":  # every corner, the search and the yield at each T
+        return 300.0 + 10 * grid + 500 * stroke * temps
     if command == "bench":
         return 400.0
     if command == "docs":
@@ -584,15 +586,15 @@ def work_seconds(command: str, cfg, argv: list[str]) -> float:
     if command == "spring":       # a model (its spring's lengths), then < 1 s of design
         return 30.0
     if command == "report":       # per temperature: strokes, the reference, corners, a yield
-        temps = max(1, len(cfg.operating.temperatures_c or ()))
         return 60.0 + temps * (30.0 + 2 * batch + 500 * stroke)
     if command == "select":       # the kernel's batch, a model per distinct geometry, the
         # reference at every corner of the verified pairs (0.5 s each)
         d = 3 + _select_axes(cfg)
         verify = max(_int_option(argv, "--verify", 10) or 0, 0)
         placing = 120.0 * min(verify, SELECT_PAIRS) if _option(argv, "--free") else 0.0
-        return 60.0 + 2 * batch + 0.2 * SELECT_PAIRS * 2 ** d \
-            + min(verify, SELECT_PAIRS) * 2 ** d * 0.5 + 200 * stroke + placing
+        return 60.0 + 2 * batch + (0.2 * SELECT_PAIRS * 2 ** d
+                                   + min(verify, SELECT_PAIRS) * 2 ** d * 0.5) * temps \
+            + 200 * stroke + placing
     if command == "fit":    # ~1 s a start at the default step; the step halved when needed
         return 60.0 + 3e3 * stroke * int((_option(argv, "--starts") or ["1"])[-1]
                                          if (_option(argv, "--starts") or ["1"])[-1].isdigit()
@@ -857,12 +859,25 @@ ISSUE_CASES = [
     ("spring", [("design.spring_kind", "string", '"extension"'),
                 ("design.spring_rest_length", "in_range", "0.045"),
                 ("design.spring_preload", "in_range", "2.0")], []),
+    # temperature as a scenario dimension: the robust design and select at 0, 23 and 40 °C
+    # with a silicone-oil damper, a stroke temperature alone (its one sign-off temperature),
+    # a sweep over the stroke's temperature
+    ("optimise --robust", [("operating.temperatures_c", "in_range", "[0.0, 23.0, 40.0]"),
+                           ("design.damper_temperature_coeff", "in_range", "-0.005")], []),
+    ("optimise --robust", [("operating.temperature_c", "in_range", "-10.0")], []),
+    ("select", [("operating.temperatures_c", "in_range", "[0.0, 23.0, 40.0]"),
+                ("design.damper_temperature_coeff", "in_range", "-0.005")], []),
+    ("sweep", [("design.damper_temperature_coeff", "in_range", "-0.005")],
+     ["--grid=operating.temperature_c=-60:150:4"]),
 ]
 
 
 #: explicit cases of 10-30 s each, run with the slow tests (a faster case covers each command)
 SLOW_ISSUE_CASES = {"fit mass.lid=0.6 --starts=2", "optimise optimise.closing_time_max=30.0",
-                    "optimise --free=design.end_damper_c=0:2 --free=design.end_damper_angle_deg=1:10"}
+                    "optimise --free=design.end_damper_c=0:2 --free=design.end_damper_angle_deg=1:10",
+                    "optimise --robust operating.temperatures_c=[0.0, 23 "
+                    "design.damper_temperature_coeff=-0.005",
+                    "optimise --robust operating.temperature_c=-10.0"}
 ISSUE_IDS = [f"{c} " + " ".join([f"{k}={t[:8]}" for k, _, t in v] + o) for c, v, o in ISSUE_CASES]
 
 
