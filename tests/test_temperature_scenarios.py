@@ -191,3 +191,26 @@ def test_operating_temperature_is_a_sweep_key():
         r = Simulator.from_config(c).run(params_of(c), estimate_error=False)
         assert t == pytest.approx(r.closing_time, rel=1e-12)
     assert ct[0] > ct[1] > ct[2]
+
+
+@pytest.mark.slow
+def test_one_other_temperature_moves_the_spring_by_its_factor(default_robust):
+    """``operating.temperature_c = -10`` alone, no damper law: the one sign-off temperature
+    multiplies the spring's rate by 1 + 2.5e-4 x 33 and touches nothing else, so the robust
+    design given at 23 °C is the default one with its rate divided by that factor (the
+    strokes are the same), its worst-case J the same, and -10 °C limits it."""
+    from softclose.robust import optimise_robust
+    cold = optimise_robust(default_config().update({"operating.temperature_c": -10.0}))
+    assert cold.success, cold.message
+    g = 1 + 2.5e-4 * 33.0
+    ref = default_robust.design
+    assert cold.design["spring_k"] == pytest.approx(ref["spring_k"] / g, rel=1e-5)
+    assert cold.design["damper_c"] == pytest.approx(ref["damper_c"], rel=1e-5)
+    assert cold.design["spring_rest_length"] == pytest.approx(ref["spring_rest_length"],
+                                                              rel=1e-6)
+    assert cold.objective == pytest.approx(default_robust.objective, rel=1e-5)
+    assert cold.temperatures == (-10.0,) and cold.limiting_temperature_c == -10.0
+    assert default_robust.temperatures == (23.0,)
+    assert default_robust.limiting_temperature_c == 23.0
+    # the design the result hands on keeps the stroke temperature it was asked for
+    assert cold.design_config().operating.temperature_c == -10.0
