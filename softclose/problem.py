@@ -382,16 +382,18 @@ def categorise(status: np.ndarray, reason: np.ndarray) -> np.ndarray:
 
 def check_reference_temperature(cfg, what: str) -> None:
     """ConfigError (one line, naming ``operating.temperature_c``) unless ``cfg``'s strokes run
-    at the reference temperature: ``what`` (the optimiser, the catalog selection, the fit)
+    at the reference temperature: ``what`` (the optimiser, the Pareto front, the fit)
     designs at the temperature the parts' values are given at; strokes, sweeps and yields
-    run at any other (:mod:`softclose.model.temperature`)."""
+    run at any other (:mod:`softclose.model.temperature`), and the robust optimiser and the
+    catalog selection meet every constraint at each sign-off temperature
+    (:func:`sign_off_temperatures`)."""
     op = cfg.operating
     if op.temperature_c != op.reference_temperature_c:
         raise ConfigError(
             f"operating.temperature_c: {what} works at the reference temperature "
             f"(operating.reference_temperature_c = {op.reference_temperature_c:g} °C), not at "
             f"{op.temperature_c:g} °C; simulate, sweep and yield run strokes at other "
-            "temperatures")
+            "temperatures, optimise --robust and select sign off at them")
 
 
 def sign_off_temperatures(cfg) -> tuple[float, ...]:
