@@ -16,7 +16,7 @@ import pytest
 
 from softclose import cli
 from softclose.config import default_config
-from softclose.problem import (CONSTRAINT_TOL, VERIFY_RTOL, at_temperature, objective,
+from softclose.problem import (CONSTRAINT_TOL, PARAM_KEYS, VERIFY_RTOL, at_temperature, objective,
                                params_of)
 from softclose.robust import scenarios
 from softclose.robust.box import box_of
@@ -33,10 +33,17 @@ DESIGN = {"design.spring_kind": "compression", "design.spring_k": 4600.0,
           "design.spring_rest_length": 0.0585, "design.damper_c": 4500.0}
 
 
-def test_a_scenario_at_a_temperature_is_the_stroke_at_that_temperature():
+#: a gas strut (F1 20 N, 70 mm extended): its force follows its gas, not a coil's wire
+STRUT = {"design.spring_kind": "gas_strut", "design.spring_preload": 20.0,
+         "design.spring_rest_length": 0.07, "design.damper_c": 3000.0}
+
+
+@pytest.mark.parametrize("design", [DESIGN, STRUT], ids=["coil", "gas_strut"])
+def test_a_scenario_at_a_temperature_is_the_stroke_at_that_temperature(design):
     """maps(box, z, f) on the design's p at the reference temperature gives the p the
-    simulator runs at T for the corner's config: the same strokes to 1e-12."""
-    cfg = scenarios.at_reference(default_config().update({**COLD_HOT, **DESIGN}))
+    simulator runs at T for the corner's config: the same strokes to 1e-12 (the factors
+    of the design's spring kind: a coil spring's wire, a gas strut's gas)."""
+    cfg = scenarios.at_reference(default_config().update({**COLD_HOT, **design}))
     assert cfg.operating.temperature_c == cfg.operating.reference_temperature_c == 23.0
     assert scenarios.temperatures(cfg) == (0.0, 23.0, 40.0)
     box = box_of(cfg)
@@ -52,13 +59,17 @@ def test_a_scenario_at_a_temperature_is_the_stroke_at_that_temperature():
         for k in ("closing_time", "impact_theta_dot", "peak_tip_speed", "holding_moment"):
             assert getattr(mine, k) == pytest.approx(getattr(theirs, k), rel=1e-12, abs=1e-15)
         # the start sweep's rows (the same map, evaluated at the reference temperature)
-        keys, X = scenarios.scenario_rows(box, [[4600.0, 0.0585, 4500.0]],
-                                          [scenarios.Scenario(tuple(z), "", T)], cfg)
+        d = [cfg.design.spring_k, cfg.design.spring_rest_length, cfg.design.damper_c]
+        keys, X = scenarios.scenario_rows(box, [d], [scenarios.Scenario(tuple(z), "", T)], cfg)
         cols = evaluate(cfg, keys, X)
         assert cols["closing_time"][0] == pytest.approx(theirs.closing_time, rel=1e-12)
-    # the damper's factor at 0 °C is exp(0.005 * 23): thicker oil, a slower lid
+    # the damper's factor at 0 °C is exp(0.005 * 23): thicker oil, a slower lid; the
+    # preload's is the wire's (1 + 2.5e-4 * 23) or the gas's 273.15 / 296.15
     f0 = scenarios.factors(cfg, 0.0)
     assert f0[2] == pytest.approx(np.exp(0.005 * 23.0), rel=1e-15)
+    preload = PARAM_KEYS.index("spring_preload")
+    assert f0[preload] == pytest.approx(273.15 / 296.15 if design is STRUT
+                                        else 1 + 2.5e-4 * 23.0, rel=1e-15)
 
 
 def test_the_default_has_one_scenario_temperature_and_no_factors():

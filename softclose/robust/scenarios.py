@@ -23,8 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..config import Config
-from ..model.temperature import parameter_factors
-from ..problem import (DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, at_temperature,
+from ..model.temperature import factors_of, parameter_factors
+from ..problem import (DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, at_temperature, params_of,
                        resolve_temperatures, sign_off_temperatures, with_designs)
 from .box import Box, box_of
 from .evaluate import evaluate
@@ -62,11 +62,13 @@ def temperatures(cfg: Config) -> tuple[float, ...]:
 
 
 def factors(cfg: Config, temperature_c: float | None) -> np.ndarray | None:
-    """The parameter factors of a stroke at ``temperature_c`` (None at the reference
-    temperature, and for None)."""
+    """The parameter factors of a stroke of ``cfg``'s design at ``temperature_c``: the row of
+    its spring's kind (a coil spring's or a gas strut's; every scenario of a robust design
+    has the design's kind). None at the reference temperature, and for None."""
     if temperature_c is None:
         return None
-    return parameter_factors(resolve_temperatures(at_temperature(cfg, temperature_c)))
+    return factors_of(parameter_factors(resolve_temperatures(at_temperature(
+        cfg, temperature_c))), params_of(cfg))
 
 
 def label(box: Box, z, temperature_c: float | None, temps=()) -> str:
