@@ -16,8 +16,8 @@ import pytest
 
 from softclose import cli
 from softclose.config import default_config
-from softclose.problem import (CONSTRAINT_TOL, PARAM_KEYS, VERIFY_RTOL, at_temperature, objective,
-                               params_of)
+from softclose.problem import (CONSTRAINT_TOL, PARAM_KEYS, VERIFY_RTOL, at_temperature,
+                               objective, params_of)
 from softclose.robust import scenarios
 from softclose.robust.box import box_of
 from softclose.robust.evaluate import evaluate, simulator, with_values
