@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from ..config import Config
-from ..problem import DESIGN_KEYS, at_temperature
+from ..problem import at_temperature
 from .box import Box, box_of
 from .evaluate import evaluate
 from .policy import ADD_PER_ROUND, MC_TOL, OBJ_RTOL, t_end
