@@ -16,7 +16,7 @@ import pytest
 from softclose import buildcache
 from softclose.optimiser import compiled
 
-rnlp = importlib.import_module("softclose.robust.nlp")
+rnlp = importlib.import_module("softclose.robust.scenario_cache")
 rdisc = importlib.import_module("softclose.robust.discretisation")
 
 #: a small problem: 2 scenarios of the default box, 4 intervals of 2 sub-steps (the

@@ -462,7 +462,7 @@ def test_one_nlp_serves_every_spring_and_the_re_solve_is_the_robust_design(tmp_p
     with its numbers (none is built per part), and the re-solve's design, worst-case
     objective and verdict are those of the whole robust design (``report=True``) for the
     same spring."""
-    import softclose.robust.nlp as rnlp
+    import softclose.robust.scenario_cache as rnlp
     from softclose.catalog import read_springs, select
     from softclose.catalog.nlp import NLP_SAMPLES, solve_c, spring_config
     from softclose.catalog.files import DamperEntry
@@ -491,7 +491,7 @@ def test_prepare_select_compiles_the_nlp_and_select_loads_it(tmp_path, monkeypat
     machine; a bad catalog is exit 2 before anything is built."""
     import shutil
     from softclose import buildcache
-    import softclose.robust.nlp as rnlp
+    import softclose.robust.scenario_cache as rnlp
     from softclose.catalog import select
     if shutil.which(os.environ.get("CC", "cc")) is None:
         pytest.skip("no C compiler")

@@ -14,7 +14,7 @@ import subprocess
 import tempfile
 import time
 from pathlib import Path
-from ..robust import nlp as rn, optimise_robust
+from ..robust import optimise_robust, scenario_cache as rn
 from ..optimiser import cache as oc, optimise
 from ..optimiser.compiled import CFLAGS, SCENARIO_CFLAGS
 

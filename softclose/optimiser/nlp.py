@@ -79,6 +79,8 @@ from .lid import (OPENING_INTERVALS, SELF_CLOSE_INTERVALS, SELF_CLOSE_MARGIN, Li
 from .keep_out import keep_out_constraints
 from .free_points import placed_bounds, placed_config, placed_constraints, slot_values
 from ..buildcache import text
+from .ipopt import (COLD_OPTIONS, LINEAR_ALGEBRA, MUMPS_OPTIONS,  # noqa: F401  (re-exported)
+                    WARM_OPTIONS, check_linear_solver, check_options)
 
 #: Ipopt return statuses that count as converged
 CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
@@ -88,53 +90,11 @@ FIXED_PARAMS = PARAM_KEYS[len(DESIGN_KEYS):]
 NLP_PARAMS = ("theta0", "theta_closed", "weight_impact", "weight_peak_tip", "weight_time",
               *FIXED_PARAMS, "J_ref")
 J_INDEX = NLP_PARAMS.index("J_ref")
-#: Ipopt options of the cold solver and of the warm re-solve (same NLP functions)
-COLD_OPTIONS = {"ipopt.mu_strategy": "adaptive"}
-#: the KKT systems of this small NLP (25 variables, ~160 constraints by default) are well
-#: scaled by the NLP's own scaling: no scaling of the linear systems and no residual check of
-#: each step (the same iterations and optimum on the default problem, to 1e-12; Ipopt's own
-#: work per iteration -16 %)
-LINEAR_ALGEBRA = {"ipopt.linear_system_scaling": "none", "ipopt.fast_step_computation": "yes"}
-MUMPS_OPTIONS = {"ipopt.mumps_permuting_scaling": 0, "ipopt.mumps_scaling": 0}
-WARM_OPTIONS = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-8,
-                "ipopt.warm_start_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9,
-                "ipopt.warm_start_slack_bound_push": 1e-9}
 #: smallest closing time the NLP may take (s): T = 0 would make every step vanish
 T_FLOOR = 1e-3
 #: shortest phase of a two-phase stroke (s): the engagement time T1 and T - T1 (a phase of
 #: no duration would be a node on both sides of the switch)
 PHASE_FLOOR = 1e-4
-def check_linear_solver(name: str) -> None:
-    """ConfigError unless Ipopt can load the linear solver ``name``.
-
-    MUMPS ships with CasADi's Ipopt. The HSL solvers (ma27, ma57, ma86, ma97) live in a
-    separate library (``libhsl``/``libcoinhsl``) that Ipopt loads at run time; asking for one
-    that is not installed must be refused here, before Ipopt is called: a failed load of
-    ma86/ma97 leaves Ipopt in a state that crashes the process at exit.
-    """
-    if name == "mumps":
-        return
-    import ctypes
-    import ctypes.util
-    for lib in ("hsl", "coinhsl"):
-        for candidate in filter(None, (ctypes.util.find_library(lib), f"lib{lib}.so")):
-            try:
-                ctypes.CDLL(candidate)
-                return
-            except OSError:
-                continue
-    raise ConfigError(f"optimise.linear_solver: \"{name}\" needs the HSL library (libhsl or "
-                      "libcoinhsl), which is not installed here; use \"mumps\"")
-
-
-def check_options(run: "Run", cfg) -> None:
-    """ConfigError when Ipopt refused an option of cfg (e.g. a linear solver that this Ipopt
-    build does not have)."""
-    if run.status == "Invalid_Option":
-        o = cfg.optimise
-        raise ConfigError(f"optimise.linear_solver: Ipopt refused its options (status "
-                          f"Invalid_Option); \"{o.linear_solver}\" is probably not in this Ipopt "
-                          "build: use \"mumps\"")
 
 
 # -- one Ipopt run ---------------------------------------------------------------------------

@@ -29,7 +29,7 @@ Chebyshev series of its model, with the Hermite peak bound), so the robust and t
 problem share their discretisation (N, M); only the node grid differs (:func:`~softclose.robust.discretisation.time_grid`:
 the first two intervals are half as long, for the release transient of the stiffly damped
 scenarios). The NLP is built for a given list of scenario models
-(:func:`get_scenario_nlp` caches it); the a_s, b_s are parameters.
+(:func:`softclose.robust.scenario_cache.get_scenario_nlp` caches it); the a_s, b_s are parameters.
 
 With an end damper that engages inside the stroke every scenario is two-phase as in the
 nominal NLP (:mod:`softclose.optimiser.nlp`): its own engagement time T1_s, the node
@@ -550,7 +550,7 @@ class ScenarioNLP:
                 "time": time.perf_counter() - t0}
 
 
-_NLPS: dict = {}
+#: the structures built in this process, by :attr:`ScenarioNLP.structure_key`
 _STRUCTURES: dict = {}
 
 
@@ -574,47 +574,3 @@ def get_scenario_structure(key: tuple) -> ScenarioStructure:
         st.key = disk
         _STRUCTURES[key] = st
     return _STRUCTURES[key]
-
-
-def forget() -> None:
-    """Drop the scenario NLPs and structures this process keeps."""
-    _NLPS.clear()
-    _STRUCTURES.clear()
-
-
-def get_scenario_nlp(cfg: Config, model_cfgs: list[Config], nodes: int, substeps: int,
-                     robust_objective: str, substeps2: int | None = None
-                     ) -> tuple[ScenarioNLP, bool]:
-    """The ScenarioNLP of these scenario models (cached); (nlp, was it cached).
-    ``substeps2``: phase 2's sub-steps of a two-phase stroke (default :func:`phase_two`)."""
-    o = cfg.optimise
-    M2 = (substeps2 or phase_two(cfg, nodes, substeps)) if two_phase(cfg) else None
-    key = (tuple(_model_key(c)
-                 for c in model_cfgs), nodes, substeps, M2, robust_objective, o.hessian,
-           o.linear_solver, o.max_iter, o.opening_force_max is not None,
-           o.self_close_min_deg,
-           placement_layout(cfg), free_layout(cfg), tuple(slot_values(cfg)))
-    if key in _NLPS:
-        return _NLPS[key], True
-    if len(_NLPS) > 16:
-        _NLPS.clear()
-    nlp = ScenarioNLP(cfg, model_cfgs, nodes, substeps, robust_objective, substeps2=M2)
-    nlp.key = nlp.structure.key
-    _NLPS[key] = nlp
-    return nlp, False
-
-
-def prepare(cfg: Config, model_cfgs: list[Config], nodes: int, substeps: int,
-            robust_objective: str, substeps2: int | None = None):
-    """Compile this scenario NLP's structure now, in the foreground (a line on stderr says
-    what is built), unless it is compiled: the path of its library, or None (no cache, no C
-    compiler). ``softclose prepare --robust`` compiles every one a robust design uses."""
-    with compiled.compiling():
-        nlp, cached = get_scenario_nlp(cfg, model_cfgs, nodes, substeps, robust_objective,
-                                       substeps2)
-    if nlp.library is None:      # built in this process before: compile it now
-        forget()
-        with compiled.compiling():
-            nlp, _ = get_scenario_nlp(cfg, model_cfgs, nodes, substeps, robust_objective,
-                                      substeps2)
-    return nlp.library

@@ -236,9 +236,22 @@ class Spring(Element):
         return out
 
     def range_message(self, P, mounting, i, short, where, excess):
-        return self.range_messages(P, mounting, [i], [short],
-                                   [np.nan if where[0] is None else where[0]], [where[1]],
-                                   [excess])[0]
+        s, l0 = float(P["spring_kind"][i]), float(P["spring_rest_length"][i])
+        end = l0 - float(np.asarray(strut_stroke(P), float)[i]) if s == GAS else None
+        edge, worst = (None if a is None else math.degrees(a) for a in where)
+        return self._message(s, l0, short, mounting, edge, worst, excess, end)
+
+    @classmethod
+    def _message(cls, s, l0, short, d, edge, worst, excess, end=None):
+        """The text of :meth:`range_message`, one row at a time (``edge``, ``worst`` in
+        degrees; ``edge`` None: beyond the range over the whole stroke; ``end``: a gas strut's
+        compressed length): the statement :meth:`range_messages` formats many rows at once."""
+        case = cls._case(s, short, end, d.spring_min_length if d is not None else None)
+        span = 0 if edge is None else 1 if worst < edge else 2
+        length = (end if case == 5 else l0) * 1e3
+        args = ((length,) if case in cls._LENGTH_CASES else ()) + ((edge,) if span else ()) \
+            + (excess * 1e3, worst)
+        return cls._template(case, span, d) % args
 
     #: the cases whose message names a length of the spring itself
     _LENGTH_CASES = (0, 1, 4, 5)
