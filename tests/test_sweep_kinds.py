@@ -69,7 +69,7 @@ def test_the_csv_shows_words_and_reads_back(swept, tmp_path):
 
 
 def test_words_are_checked():
-    with pytest.raises(ConfigError, match="takes linear, extension, compression, got 'coil'"):
+    with pytest.raises(ConfigError, match="takes linear, extension, compression, gas_strut, got 'coil'"):
         parse_grid_spec("design.spring_kind=compression,coil")
     with pytest.raises(ConfigError, match="repeated"):
         parse_grid_spec("design.spring_kind=[linear, linear]")
