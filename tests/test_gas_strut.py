@@ -237,3 +237,64 @@ def test_the_zones_of_a_counterbalanced_lid_match_their_statics():
     assert hf.zones[1][2] == pytest.approx(math.degrees(close_edge), abs=1e-7)
     assert hf.self_rise_deg is None and hf.self_close_deg is None
     assert hf.hold_open == ((hf.zones[1][1], hf.zones[1][2]),)
+
+
+# -- Newton-Euler, the early exit, the public strut-sizing example -----------------------------
+def test_newton_euler_agrees_with_the_reduced_equation_with_a_strut_and_its_friction():
+    """The pin reactions' system solves for theta'' with the strut's force and its friction
+    along the strut (-F_R sign(l-dot)) on the four-bar: the reduced equation's theta''."""
+    from softclose import default_config
+    cfg = default_config().update({"design.spring_kind": "gas_strut",
+                                   "design.spring_rest_length": 0.07,
+                                   "design.spring_preload": 30.0, "design.strut_friction": 4.0,
+                                   "design.damper_c": 500.0})
+    model = LidModel.from_config(cfg)
+    p = params_of(cfg)
+    for th, thd in ((0.3, -2.0), (0.6, 1.5), (0.9, -0.4)):
+        z = np.asarray(model.newton_euler(th, thd, p)).ravel()
+        assert z[8] == pytest.approx(model.theta_ddot(th, thd, p), rel=1e-11)
+    # and the friction moment is F_R |dl/dtheta| (the spring's coordinate)
+    l, dl = (float(v) for v in model.coordinate_fns["spring"](0.6))
+    assert float(model.friction_moment(0.6, p)) == pytest.approx(4.0 * abs(dl), rel=1e-14)
+
+
+def test_the_early_exit_changes_nothing_with_a_gas_strut():
+    """Strokes of struts too strong to let the lid close stop early on the energy bound with
+    the strut's potential (those that reach their equilibrium within t_max) and report what
+    the full run reports."""
+    from softclose import default_config
+    from softclose.bench.features import GAS_STRUT_GRID, grid_rows
+    cfg = default_config().update({"design.spring_kind": "gas_strut"})
+    sim = Simulator.from_config(cfg)
+    P = grid_rows(cfg, {k: (a, b, 12 if n == 40 else 6) for k, (a, b, n) in
+                        GAS_STRUT_GRID.items()})
+    on, off = sim.run_batch(P), sim.run_batch(P, early_exit=False)
+    assert 20 < int(np.sum(~on["closed"])) < len(P) - 20
+    for key in ("closed", "closing_time", "impact_tip_speed", "peak_tip_speed", "status"):
+        assert np.array_equal(np.asarray(on[key]), np.asarray(off[key]), equal_nan=True), key
+    exited = ~on["closed"] & (on["steps"] < off["steps"])
+    assert exited.sum() >= 10 and np.all(on["stop_reason"][exited] > 0)
+
+
+@pytest.mark.parametrize("x_s,force", [(0.25, 784.8), (0.20, 981.0)])
+def test_the_public_strut_sizing_example(x_s, force):
+    """FIELD-NOTES: a 50 kg lid, its centre of gravity 0.8 m from the hinge, held closed
+    (horizontal) by two struts attached x_s from the hinge, normal to the lid: m g x_G = 2 F
+    x_s. One constant-force strut (K = 1) of 2 F balances it: the statics' holding moment is 0
+    and a strut 1 % stronger lifts it."""
+    from softclose import default_config
+    cfg = default_config().replace(
+        geometry={"mechanism": "hinge", "hinge": [0.0, 0.0], "lid_length": 1.2,
+                  "lid_g": [0.8, 0.0], "lid_tip": [1.2, 0.0], "lid_e": [x_s, 0.0],
+                  "spring_anchor": [x_s, -0.3]},
+        mass={"lid": 50.0},
+        design={"spring_kind": "gas_strut", "spring_rest_length": 0.4, "strut_stroke": 0.2,
+                "strut_progression": 1.0, "spring_preload": 2 * force, "spring_k": 0.0},
+        stroke={"theta0_deg": 30.0, "theta_closed_deg": 0.0})
+    model = LidModel.from_config(cfg)
+    p = params_of(cfg)
+    assert 50.0 * 9.81 * 0.8 == pytest.approx(2 * force * x_s, rel=1e-12)
+    assert abs(float(model.dV(0.0, p))) < 1e-9 * 50 * 9.81 * 0.8
+    q = p.copy()
+    q[elements.PARAM_NAMES.index("spring_preload")] *= 1.01
+    assert float(model.dV(0.0, q)) < 0          # it now pushes the lid open
