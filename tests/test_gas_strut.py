@@ -298,3 +298,23 @@ def test_the_public_strut_sizing_example(x_s, force):
     q = p.copy()
     q[elements.PARAM_NAMES.index("spring_preload")] *= 1.01
     assert float(model.dV(0.0, q)) < 0          # it now pushes the lid open
+
+
+@pytest.mark.slow
+def test_the_struts_points_co_designed_on_the_chest_lid_are_verified(tmp_path):
+    """Where to mount the strut: its lid point and anchor free with F1 (the strut's length
+    and its friction's lever follow the points in the NLP); the reference confirms the
+    answer, and the strut works within its stroke."""
+    import softclose
+    cfg = load_config(ROOT / "examples" / "lids" / "chest_lid.toml")
+    cfg = cfg.replace(optimise={"opening_force_max": None}).update(
+        {"optimise.free": {"design.spring_preload": [40.0, 200.0],
+                           "geometry.lid_e[0]": [0.03, 0.15],
+                           "geometry.spring_anchor[1]": [-0.15, -0.04]}})
+    res = softclose.optimise(cfg)
+    assert res.success and res.verification.ok
+    d, m = res.design, res.metrics
+    stroke = 0.4 * d["spring_rest_length"]
+    assert m["max_spring_length"] <= d["spring_rest_length"] * (1 + 1e-9)
+    assert m["min_spring_length"] >= (d["spring_rest_length"] - stroke) * (1 - 1e-9)
+    assert res.objective < 1.0194747          # better than at the example's fixed points

@@ -38,6 +38,7 @@ from .lid import holding_moment
 from ..problem import PARAM_COLUMNS
 from ..model import elements
 from ..model.dynamics import pose
+from ..model.elements.springs import strut_stroke
 
 #: the vector g of attachment points, in order: D (spring anchor, world), E (spring's lid
 #: point), F (dashpot anchor, world), H (dashpot's lid point)
@@ -118,13 +119,29 @@ def length_bounds(fit, theta0, thc, g, L):
             -hermite_max(-va.T, -ma.T, -vb.T, -mb.T))
 
 
-def spring_moment(fit, theta, g, a, b, L):
-    """The spring's moment T l' at theta (T = a + b l): its part of the holding moment."""
-    th, gs, ab = ca.SX.sym("theta"), ca.SX.sym("g", len(SLOTS)), ca.SX.sym("ab", 2)
+def spring_moment(fit, theta, g, a, b, L, gas=None):
+    """The spring's moment T l' at theta (T = a + b l; with ``gas`` = (G, beta, l0) a gas
+    strut's T = G / (1 + beta (l - l0))): its part of the holding moment."""
+    th, gs = ca.SX.sym("theta"), ca.SX.sym("g", len(SLOTS))
     l, ldl, _, _ = lengths(fit, th, fit.basis(th), gs)
+    if gas is not None:
+        law = ca.SX.sym("gas", 3)
+        fn = ca.Function("spring_moment", [th, gs, law, fit.sym],
+                         [law[0] / (1 + law[1] * (l - law[2])) * ldl / l])
+        return fn(theta, g, ca.vertcat(*gas), L)
+    ab = ca.SX.sym("ab", 2)
     fn = ca.Function("spring_moment", [th, gs, ab, fit.sym],
                      [ab[0] * ldl / l + ab[1] * ldl])
     return fn(theta, g, ca.vertcat(a, b), L)
+
+
+def strut_law(nlp, design):
+    """(G, beta, l0) of a gas strut's NLP (``nlp.spring == "gas"``), else None."""
+    if getattr(nlp, "spring", "coil") != "gas":
+        return None
+    P = elements.params(design, "gas")
+    G, beta = elements.BY_NAME["spring"].gas(P)
+    return G, beta, P["spring_rest_length"]
 
 
 def placed_constraints(nlp, design, g, theta0, thc, closed, L, c) -> dict:
@@ -132,21 +149,26 @@ def placed_constraints(nlp, design, g, theta0, thc, closed, L, c) -> dict:
     (every element's at theta_closed -- ``closed``: their coordinates there
     (:func:`softclose.optimiser.lid.holding_moment`) --, the spring's at the points g), the
     release downwards, the spring's length over the stroke against its kind
-    (``spring_long``: l0 - l >= 0 for a compression spring; ``spring_short``: l - l0 >= 0 for
-    an extension spring) and its limits (``spring_length``). ``L``: the series' numbers,
+    (``spring_long``: l0 - l >= 0 for a compression spring or gas strut; ``spring_short``:
+    l - l0 >= 0 for an extension spring, l - (l0 - s) >= 0 for a gas strut of stroke s) and
+    its limits (``spring_length``). ``L``: the series' numbers,
     ``c`` the combined coefficients (:func:`softclose.optimiser.interval.combine_function`)."""
     mask = np.ones(design.numel())
     for k in ("design.spring_k", "design.spring_preload"):
         mask[PARAM_COLUMNS[k]] = 0.0
     a, b = elements.BY_NAME["spring"].affine(elements.params(design))
-    hold = holding_moment(closed, elements.params(design * ca.DM(mask))) + \
-        spring_moment(nlp.series, thc, g, a, b, L)
+    gas = strut_law(nlp, design)
+    hold = holding_moment(closed, elements.params(design * ca.DM(mask), nlp.spring)) + \
+        spring_moment(nlp.series, thc, g, a, b, L, gas)
     Ln, Lmax, Lmin = length_bounds(nlp.series, theta0, thc, g, L)
     l0 = design[PARAM_COLUMNS["design.spring_rest_length"]]
+    # a gas strut's shortest length is its compressed one, l0 - s (a coil spring's short
+    # side is its free length: an extension spring's)
+    short = l0 - strut_stroke(elements.params(design, "gas")) if gas is not None else l0
     out = {"holding_moment": hold,
            "release_downwards": nlp.f(ca.vertcat(theta0, 0), c)[1],
            "spring_long": l0 - ca.vertcat(ca.vec(Ln), ca.vec(Lmax)),
-           "spring_short": ca.vertcat(ca.vec(Ln), ca.vec(Lmin)) - l0,
+           "spring_short": ca.vertcat(ca.vec(Ln), ca.vec(Lmin)) - short,
            "spring_length": ca.vertcat(ca.vec(Ln), ca.vec(Lmax), ca.vec(Lmin))}
     return out
 
@@ -156,8 +178,8 @@ def placed_bounds(cfg, lo: dict, hi: dict) -> None:
     limits (into ``lo``, ``hi``)."""
     d = cfg.design
     inf = np.inf
-    lo["spring_long"] = 0.0 if d.spring_kind == "compression" else -inf
-    lo["spring_short"] = 0.0 if d.spring_kind == "extension" else -inf
+    lo["spring_long"] = 0.0 if d.spring_kind in ("compression", "gas_strut") else -inf
+    lo["spring_short"] = 0.0 if d.spring_kind in ("extension", "gas_strut") else -inf
     hi["spring_long"] = hi["spring_short"] = inf
     lo["spring_length"] = d.spring_min_length if d.spring_min_length else -inf
     hi["spring_length"] = d.spring_max_length if d.spring_max_length else inf

@@ -268,13 +268,12 @@ def combine_function(series, placement: bool = False):
     the series' numbers (``series.sym``)."""
     q, L = ca.SX.sym("q", len(PARAM_KEYS)), series.sym
     gas = "spring:l" in series.names
-    if gas and placement:
-        raise ConfigError("a gas strut with free attachment points (optimise.free "
-                          "geometry.*) is not optimised: fix its points, or optimise a coil "
-                          "spring's")
     P = elements.params(q, "gas" if gas else "coil")
     a0, a1 = [], []
-    placed = ("spring", "dashpot") if placement else ("spring",) if gas else ()
+    # with placement the spring, the dashpot and the friction along the spring act through
+    # the points g: their laws' numbers go into c, not into the fixed series
+    placed = ("spring", "dashpot", "strut_friction") if placement else \
+        ("spring",) if gas else ()
     for name, e, what in series_terms(series.elements, gas):
         if e in placed:
             continue
@@ -283,20 +282,28 @@ def combine_function(series, placement: bool = False):
             el.affine(P)["ab".index(what)]
         (a1 if what == "B" else a0).append(coef * series.series(name))
     cq = [sum(a0[1:], a0[0]), sum(a1[1:], a1[0])]
-    if gas:             # the gas law's G = -F1, beta and the extended length
-        G, beta = elements.BY_NAME["spring"].gas(P)
-        cq += [G, beta, P["spring_rest_length"]]
     ins = [q]
     if placement:
         g = ca.SX.sym("g", len(SLOTS))
         sa, sb = elements.BY_NAME["spring"].affine(P)
         cq += [sa, sb, elements.BY_NAME["dashpot"].viscous(P), g]
         ins.append(g)
+    if gas:             # the gas law's G = -F1, beta and the extended length (then)
+        G, beta = elements.BY_NAME["spring"].gas(P)
+        cq += [G, beta, P["spring_rest_length"]]
+    if placed_friction(series, placement):    # F_R along the spring at the points (then)
+        cq.append(elements.BY_NAME["strut_friction"].coulomb(P))
     view = _step_series(series, placement)
     return ca.Function("combine", ins + [L],
                        [ca.vertcat(*cq, *[series.series(n) for n in view.names],
                                    series.lo, series.hi)],
                        ["q"] + (["g"] if placement else []) + ["L"], ["c"])
+
+
+def placed_friction(series, placement: bool) -> bool:
+    """Does the friction along the spring act through the points g (placement, and the NLP
+    carries it)?"""
+    return placement and any(e.name == "strut_friction" for e in series.elements)
 
 
 def _step_series(series, placement: bool, vector=None):
@@ -334,14 +341,21 @@ def interval_function(series, substeps: int, with_ode: bool = False,
     B = fit.basis(xs[0])
     acc = (ca.dot(cs[:nb], B) + ca.dot(cs[nb:2 * nb], B) * xs[1]
            + ca.dot(fit.series("inertia"), B) * xs[1] ** 2)
-    if "spring:l" in series.names:      # the gas strut: T(l) (-l'/M)
-        G, beta, L_ext = cs[2 * nb], cs[2 * nb + 1], cs[2 * nb + 2]
+    gas = "spring:l" in series.names
+    i = 2 * nb + (11 if placement else 0)   # the gas law's numbers, after the placement's
+    if gas:
+        G, beta, L_ext = cs[i], cs[i + 1], cs[i + 2]
+        i += 3
+    if gas and not placement:           # the gas strut: T(l) (-l'/M)
         u = ca.dot(fit.series("spring:l"), B) - L_ext
         acc = acc + G / (1 + beta * u) * ca.dot(fit.series("spring:a"), B)
     if placement:
         l, ldl, dq2, invM = lengths(fit, xs[0], B, cs[2 * nb + 3:2 * nb + 11])
         a_s, b_s, c_d = cs[2 * nb], cs[2 * nb + 1], cs[2 * nb + 2]
-        acc = acc - (a_s * ldl / l + b_s * ldl) * invM - c_d * dq2 * invM * xs[1]
+        moment = G / (1 + beta * (l - L_ext)) * ldl / l if gas else a_s * ldl / l + b_s * ldl
+        acc = acc - moment * invM - c_d * dq2 * invM * xs[1]
+        if placed_friction(series, placement):      # F_R |l'| (the stroke is monotone)
+            acc = acc + cs[i] * ca.fabs(ldl / l) * invM
     f = ca.Function("f", [xs, cs], [ca.vertcat(xs[1], acc)], ["x", "c"], ["xdot"])
     th = ca.SX.sym("th")
     Bt = fit.basis(th)

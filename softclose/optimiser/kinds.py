@@ -68,6 +68,8 @@ def kind_config(cfg: Config, kind: str, robust: bool = False) -> tuple[Config, s
     reason when no free length within optimise.spring_rest_length keeps it valid."""
     d, o = cfg.design, cfg.optimise
     if placement_layout(cfg):   # the points move: validity is the NLP's constraint
+        if kind == "gas_strut":
+            return _strut_variables(cfg), None
         return cfg.update({"design.spring_kind": kind}), None
     lmin, lmax = spring_range(cfg)
     lo, hi = o.spring_rest_length
@@ -138,13 +140,19 @@ def _strut_config(cfg, lo, hi, lmin, lmax, s) -> tuple[Config, str | None]:
                      f"mm over the stroke, {stroke}) within optimise.spring_rest_length = "
                      f"[{o.spring_rest_length[0]:g}, {o.spring_rest_length[1]:g}] m: "
                      "none fits; give design.strut_stroke or widen the bounds")
+    return _strut_variables(cfg.update(
+        {"optimise.spring_rest_length": [float(lo), float(hi)]})), None
+
+
+def _strut_variables(cfg) -> Config:
+    """``cfg`` with a gas strut: its F1 free (by default from 0 to
+    :func:`strut_force_bound`), its rate 0."""
+    free = {k: (a, b) for k, a, b in cfg.optimise.free or ()}
     if "design.spring_preload" not in free:
         free["design.spring_preload"] = (0.0, strut_force_bound(cfg))
-    out = cfg.update({"design.spring_kind": "gas_strut", "design.spring_k": 0.0,
-                      "optimise.spring_k": [0.0, 0.0],
-                      "optimise.spring_rest_length": [float(lo), float(hi)],
-                      "optimise.free": {k: [float(a), float(b)] for k, (a, b) in free.items()}})
-    return out, None
+    return cfg.update({"design.spring_kind": "gas_strut", "design.spring_k": 0.0,
+                       "optimise.spring_k": [0.0, 0.0],
+                       "optimise.free": {k: [float(a), float(b)] for k, (a, b) in free.items()}})
 
 
 def describe_range(cfg: Config) -> str:

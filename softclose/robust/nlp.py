@@ -54,7 +54,8 @@ from ..problem import DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, params_of, resolve
 from .discretisation import mapped, phase_grid, phase_two, t_limit, two_phase
 from ..optimiser import compiled
 from ..optimiser.free_points import (length_bounds, placed_bounds, placement_layout, slot_values,
-                                     spring_moment)
+                                     spring_moment, strut_law)
+from ..model.elements.springs import strut_stroke
 from ..optimiser.interval import (ChebyshevFit, combine_function, END_ANGLE, END_C, free_layout,
                                   gas_nlp,
                                   free_of, interval_function, nlp_elements)
@@ -233,12 +234,16 @@ class ScenarioStructure:
                 mask = np.ones(NP)
                 mask[[PARAM_COLUMNS["design.spring_k"], PARAM_COLUMNS["design.spring_preload"]]] = 0
                 sa, sb = elements.BY_NAME["spring"].affine(elements.params(ps[s]))
-                hold = holding_moment(lids[s]["closed"], elements.params(ps[s] * ca.DM(mask))) \
-                    + spring_moment(self.series, thc, gvec, sa, sb, Ls)
+                gas = strut_law(self, ps[s])
+                hold = holding_moment(lids[s]["closed"], elements.params(ps[s] * ca.DM(mask),
+                                                                          self.spring)) \
+                    + spring_moment(self.series, thc, gvec, sa, sb, Ls, gas)
                 Ln, Lmax, Lmin = length_bounds(self.series, theta0, thc, gvec, Ls)
                 l0 = ps[s][PARAM_COLUMNS["design.spring_rest_length"]]
+                short = l0 if gas is None else \
+                    l0 - strut_stroke(elements.params(ps[s], "gas"))     # its compressed end
                 lengths = [l0 - ca.vertcat(ca.vec(Ln), ca.vec(Lmax)),
-                           ca.vertcat(ca.vec(Ln), ca.vec(Lmin)) - l0,
+                           ca.vertcat(ca.vec(Ln), ca.vec(Lmin)) - short,
                            ca.vertcat(ca.vec(Ln), ca.vec(Lmax), ca.vec(Lmin))]
             else:
                 hold = holding_moment(lids[s]["closed"], elements.params(ps[s], self.spring))
