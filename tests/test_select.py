@@ -91,15 +91,20 @@ def _reference_verdicts():
     out = {}
     checkers = {}
     for s in springs:
-        kind = "compression" if s["kind"] == "gas_strut" else s["kind"]
+        kind = s["kind"]
         k, l0, F0 = (float(s[x]) for x in ("rate_N_per_m", "free_length_m", "preload_N"))
         rt, ft = float(s["rate_tolerance"]), float(s["free_length_tolerance_m"])
         limits = {f"design.spring_{n}_length": float(s[f"{n}_length_m"])
                   for n in ("min", "max") if s[f"{n}_length_m"]}
+        strut = {}
+        if kind == "gas_strut":     # F1 +-10 % (no force_tolerance column), its rate unused;
+            stroke = l0 - limits.pop("design.spring_min_length")     # its stroke's end
+            strut = {"design.strut_stroke": stroke,
+                     "design.strut_progression": 1 + k * stroke / F0}
         for d in dampers:
             c, ct = float(d["c"]), float(d["c_tolerance"])
             pivot = d["pivot"] or "lid"
-            base = cfg.update({**limits, "design.spring_kind": kind,
+            base = cfg.update({**limits, **strut, "design.spring_kind": kind,
                                "design.spring_preload": F0, "design.rotary_damper_pivot": pivot})
             key = (s["part"], pivot)
             if key not in checkers:
@@ -108,7 +113,8 @@ def _reference_verdicts():
             for zk, zl, zc in itertools.product((-1, 1), repeat=3):
                 cc = c * (1 + zc * ct)
                 corner = base.update({
-                    "design.spring_k": k * (1 + zk * rt),
+                    **({"design.spring_k": 0.0, "design.spring_preload": F0 * (1 + zk * 0.1)}
+                       if strut else {"design.spring_k": k * (1 + zk * rt)}),
                     "design.spring_rest_length": l0 + zl * ft,
                     "design.damper_c": cc if d["kind"] == "dashpot" else 0.0,
                     "design.rotary_damper_c": cc if d["kind"] == "rotary" else 0.0})
@@ -309,8 +315,14 @@ def test_a_pairs_config_is_its_parts_and_their_tolerances(tmp_path, catalog):
         e["nominal"]["closing_time"], rel=1e-12)
     box = box_of(c)
     half = dict(zip(box.keys, box.half))
-    assert half["design.spring_k"] == pytest.approx(
-        e["spring_part"]["rate_tolerance"] * e["spring_part"]["rate_N_per_m"], rel=1e-12)
+    part = e["spring_part"]
+    if part["kind"] == "gas_strut":     # its force F1 carries its spread, its rate none
+        assert "design.spring_k" not in half
+        assert half["design.spring_preload"] == pytest.approx(
+            part["force_tolerance"] * part["preload_N"], rel=1e-12)
+    else:
+        assert half["design.spring_k"] == pytest.approx(
+            part["rate_tolerance"] * part["rate_N_per_m"], rel=1e-12)
     assert half["design.spring_rest_length"] == pytest.approx(
         e["spring_part"]["free_length_tolerance_m"], rel=1e-12)
     path = tmp_path / "pair.toml"

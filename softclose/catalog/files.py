@@ -10,10 +10,19 @@ free_length_tolerance_mm``): the header names the unit. Kinds and how each maps 
   free length up to ``max_length``);
 - ``compression`` -> ``compression`` (pushes; the preload is usually 0, valid from
   ``min_length``, its solid length, up to the free length);
-- ``gas_strut`` -> ``compression`` with the strut's force at full extension F1 as the
-  preload and its progression as the rate (``rate = F1 (F2/F1 - 1) / stroke``), its extended
-  length as the free length and its compressed length as ``min_length`` (the strut's own
-  friction is not modelled: give it as ``friction.torque`` if it matters).
+- ``gas_strut`` -> ``gas_strut`` (pushes with the gas law, SPEC §12): its extended length
+  L_ext the free length (``design.spring_rest_length``), its force at full extension F1 the
+  preload (``design.spring_preload``, > 0), its compressed length ``min_length`` (required:
+  the stroke s = free length - min length is ``design.strut_stroke``). Its progression K
+  (``design.strut_progression``, F at full compression / F1, 1..5) from the optional
+  ``progression`` column, else from the rate as a linear spring's secant over the stroke:
+  ``K = 1 + rate s / F1`` (the rate cell may be empty when ``progression`` is given; the
+  entry's ``rate`` is then ``F1 (K - 1) / s``). Optional ``friction_band_N``: the
+  datasheet's friction band F3 - F1 (N, >= 0), the strut's friction F_R = band / 2
+  (``design.strut_friction``; empty: 0). Optional ``force_tolerance``: the relative spread
+  of F1 (datasheets: ±5-10 %; empty: :data:`STRUT_FORCE_TOLERANCE`), the strut's own in
+  place of ``rate_tolerance``, which does not apply to a strut (its cell may be empty).
+  The free length's tolerance is read as for a coil spring.
 
 Optional coil columns (compression and extension springs): ``wire_d_m`` (wire diameter d),
 ``coil_d_m`` (mean coil diameter D), ``active_coils`` (n) -- or ``wire_d_mm``, ``coil_d_mm``
@@ -29,7 +38,10 @@ to a spring maker's standard grade (:func:`standard_free_length_tolerance`).
 
 Dampers: ``part, kind, c, pivot, c_tolerance`` -- ``dashpot`` (c in N s/m, between the lid's
 ``geometry.dashpot_lid`` and ``geometry.dashpot_anchor``; ``c_N_s_per_mm`` is accepted too) or
-``rotary`` (c in N m s/rad at ``pivot``: lid, O, B, A or C).
+``rotary`` (c in N m s/rad at ``pivot``: lid, O, B, A or C). Optional
+``temperature_coeff_per_K``: the damper's temperature coefficient beta (1/K, -0.1..0.1;
+silicone oil about -0.005), its c(T) = c exp(beta (T - T_ref)): it sets
+``design.damper_temperature_coeff`` for that damper (empty: the config's).
 
 A row that cannot be used (a missing value, a negative rate, a free length above the maximum
 length, an unknown kind, ...) is left out with a warning naming its line and column; a header
@@ -48,7 +60,9 @@ from ..errors import ConfigError
 
 #: catalog kinds of spring -> design.spring_kind
 SPRING_KINDS = {"extension": "extension", "compression": "compression",
-                "gas_strut": "compression"}
+                "gas_strut": "gas_strut"}
+#: a gas strut's relative force tolerance when the row gives none (datasheets: ±5-10 % on F1)
+STRUT_FORCE_TOLERANCE = 0.1
 DAMPER_KINDS = ("dashpot", "rotary")
 PIVOTS = ("lid", "O", "B", "A", "C", "H")
 
@@ -62,8 +76,14 @@ _SPRING_COLS = {
     "rate_tolerance": (("rate_tolerance", 1.0),),
     "free_length_tolerance": (("free_length_tolerance_m", 1.0),
                               ("free_length_tolerance_mm", 1e-3)),
+    "progression": (("progression", 1.0),),
+    "friction_band": (("friction_band_N", 1.0),),
+    "force_tolerance": (("force_tolerance", 1.0),),
 }
-_SPRING_OPTIONAL = ("free_length_tolerance",)
+#: the optional spring columns (the last three a gas strut's)
+_SPRING_OPTIONAL = ("free_length_tolerance", "progression", "friction_band", "force_tolerance")
+#: the columns only a gas strut fills
+_STRUT_ONLY = ("progression", "friction_band", "force_tolerance")
 #: the optional coil columns of a spring: name -> (header names with their factor to SI)
 _COIL_COLS = {
     "wire_d": (("wire_d_m", 1.0), ("wire_d_mm", 1e-3)),
@@ -77,6 +97,7 @@ COIL_KINDS = ("compression", "extension")
 _DAMPER_COLS = {
     "c": (("c", 1.0), ("c_N_s_per_m", 1.0), ("c_N_m_s_per_rad", 1.0), ("c_N_s_per_mm", 1e3)),
     "c_tolerance": (("c_tolerance", 1.0),),
+    "temperature_coeff": (("temperature_coeff_per_K", 1.0),),
 }
 
 
@@ -96,7 +117,12 @@ def standard_free_length_tolerance(free_length: float) -> float:
 class SpringEntry:
     """One spring of a catalog, in SI: its ``kind`` as the catalog names it, ``spring_kind``
     the model's (:data:`SPRING_KINDS`), lengths in m, the rate in N/m, the preload in N, the
-    rate's relative and the free length's absolute (m) tolerance."""
+    rate's relative and the free length's absolute (m) tolerance.
+
+    A gas strut (kind ``gas_strut``) adds its ``stroke`` s (m: free length - min length), its
+    ``progression`` K, its friction ``friction`` F_R (N: half the datasheet's friction band)
+    and ``force_tolerance``, the relative spread of its F1 (``preload``); its ``rate`` is
+    F1 (K - 1) / s (shown, not used) and ``rate_tolerance`` does not apply to it."""
 
     part: str
     kind: str
@@ -112,10 +138,18 @@ class SpringEntry:
     coil_d: float | None = None
     active_coils: float | None = None
     material: str | None = None
+    stroke: float | None = None
+    progression: float | None = None
+    friction: float = 0.0
+    force_tolerance: float | None = None
 
     @property
     def spring_kind(self) -> str:
         return SPRING_KINDS[self.kind]
+
+    @property
+    def is_strut(self) -> bool:
+        return self.kind == "gas_strut"
 
     @property
     def coil(self):
@@ -128,7 +162,12 @@ class SpringEntry:
                           self.material or DEFAULT_MATERIAL)
 
     def design(self) -> dict:
-        """The [design] values of this spring (nominal)."""
+        """The [design] values of this spring (nominal); a gas strut's rate is 0 (unused)."""
+        if self.is_strut:
+            return {"spring_kind": "gas_strut", "spring_k": 0.0,
+                    "spring_rest_length": self.free_length, "spring_preload": self.preload,
+                    "strut_stroke": self.stroke, "strut_progression": self.progression,
+                    "strut_friction": self.friction}
         return {"spring_kind": self.spring_kind, "spring_k": self.rate,
                 "spring_rest_length": self.free_length, "spring_preload": self.preload}
 
@@ -140,13 +179,18 @@ class SpringEntry:
                 "free_length_tolerance_m": self.free_length_tolerance,
                 **({} if self.wire_d is None else {
                     "wire_d_m": self.wire_d, "coil_d_m": self.coil_d,
-                    "active_coils": self.active_coils, "material": self.material})}
+                    "active_coils": self.active_coils, "material": self.material}),
+                **({} if not self.is_strut else {
+                    "stroke_m": self.stroke, "progression": self.progression,
+                    "friction_band_N": 2 * self.friction,
+                    "force_tolerance": self.force_tolerance})}
 
 
 @dataclass(frozen=True)
 class DamperEntry:
     """One damper of a catalog: ``kind`` dashpot (c in N s/m) or rotary (c in N m s/rad at
-    ``pivot``), ``c_tolerance`` relative."""
+    ``pivot``), ``c_tolerance`` relative; ``temperature_coeff`` its beta (1/K; None: the
+    config's ``design.damper_temperature_coeff``)."""
 
     part: str
     kind: str
@@ -154,17 +198,22 @@ class DamperEntry:
     pivot: str | None
     c_tolerance: float
     line: int = field(default=0, compare=False)
+    temperature_coeff: float | None = None
 
     def design(self) -> dict:
         """The [design] values of this damper: it replaces the config's dashpot and rotary
-        damper (the other is 0)."""
-        if self.kind == "dashpot":
-            return {"damper_c": self.c, "rotary_damper_c": 0.0}
-        return {"damper_c": 0.0, "rotary_damper_c": self.c, "rotary_damper_pivot": self.pivot}
+        damper (the other is 0), and its temperature coefficient when it gives one."""
+        out = {"damper_c": self.c, "rotary_damper_c": 0.0} if self.kind == "dashpot" else \
+            {"damper_c": 0.0, "rotary_damper_c": self.c, "rotary_damper_pivot": self.pivot}
+        if self.temperature_coeff is not None:
+            out["damper_temperature_coeff"] = self.temperature_coeff
+        return out
 
     def to_json(self) -> dict:
         return {"part": self.part, "kind": self.kind, "c": self.c, "pivot": self.pivot,
-                "c_tolerance": self.c_tolerance}
+                "c_tolerance": self.c_tolerance,
+                **({} if self.temperature_coeff is None else
+                   {"temperature_coeff_per_K": self.temperature_coeff})}
 
 
 @dataclass(frozen=True)
@@ -330,6 +379,41 @@ def _coil_cells(row, where: dict, line: int, kind: str, rate: float, rate_tol: f
     return {**v, "material": coil.material}
 
 
+def _strut(v: dict, h: dict, line: int, part: str, lo, hi, flt) -> SpringEntry:
+    """The gas strut of one row (module docstring): its stroke from its compressed length,
+    its progression given or from the rate, its friction and force tolerance."""
+    from ..model.elements.springs import Spring
+    k_lo, k_hi = next((k.lo, k.hi) for k in Spring.keys if k.name == "strut_progression")
+    F1 = v["preload"]
+    _check(F1 > 0, line, h["preload"], "a gas strut's preload is its force F1 at full "
+                                       "extension: must be > 0")
+    _check(lo is not None, line, h["min_length"], "a gas strut needs its compressed length "
+                                                  "(its stroke is free length - min length)")
+    s = float(f"{v['free_length'] - lo:.12g}")
+    K = v.get("progression")
+    if K is None:
+        _check(v["rate"] is not None, line, h["rate"],
+               "missing value (a gas strut gives its rate or its progression)")
+        K = float(f"{1.0 + v['rate'] * s / F1:.12g}")
+        col, how = h["rate"], " (1 + rate x stroke / F1)"
+    else:
+        col, how = h["progression"], ""
+    _check(k_lo <= K <= k_hi, line, col, f"a gas strut's progression F2/F1{how} within "
+                                         f"[{k_lo:g}, {k_hi:g}], got {K:.4g}")
+    band = v.get("friction_band")
+    if band is not None:
+        _check(band >= 0, line, h["friction_band"], "a friction band F3 - F1 must be >= 0 N")
+    ft = v.get("force_tolerance")
+    if ft is None:
+        ft = STRUT_FORCE_TOLERANCE
+    else:
+        _check(0 <= ft < 1, line, h["force_tolerance"],
+               "a relative tolerance in [0, 1) (0.07 is ±7 %)")
+    return SpringEntry(part, "gas_strut", float(f"{F1 * (K - 1) / s:.12g}"), v["free_length"], F1, lo, hi,
+                       v["rate_tolerance"] or 0.0, flt, line, stroke=s, progression=K,
+                       friction=0.0 if band is None else band / 2, force_tolerance=ft)
+
+
 def read_springs(path) -> Catalog:
     """The springs of a catalog file (module docstring); rows that cannot be used are left
     out with a warning naming their line and column."""
@@ -347,17 +431,26 @@ def read_springs(path) -> Catalog:
             kind = row[where["kind"][0]] if where["kind"][0] < len(row) else ""
             _check(kind in SPRING_KINDS, line, "kind",
                    f"unknown kind '{kind}' (extension, compression or gas_strut)")
-            v = {n: _cell(row, where, n, line, required=n not in
-                          ("min_length", "max_length", "free_length_tolerance"))
+            strut = kind == "gas_strut"
+            optional = ("min_length", "max_length") + _SPRING_OPTIONAL + (
+                ("rate", "rate_tolerance") if strut else ())
+            v = {n: _cell(row, where, n, line, required=n not in optional)
                  for n in where if n not in ("part", "kind")}
             h = {n: where[n][2] for n in where}
-            _check(v["rate"] >= 0, line, h["rate"], f"negative rate {v['rate']:g} N/m")
+            if not strut:
+                for n in _STRUT_ONLY:
+                    _check(v.get(n) is None, line, h.get(n), f"a {kind} spring has no {h.get(n)}"
+                           " (a gas strut's; leave it empty)")
+            if v["rate"] is not None:
+                _check(v["rate"] >= 0, line, h["rate"], f"negative rate {v['rate']:g} N/m")
             _check(v["free_length"] > 0, line, h["free_length"], "the free length must be > 0")
             _check(v["preload"] >= 0, line, h["preload"], "negative preload")
-            _check(v["rate"] > 0 or v["preload"] > 0, line, h["rate"],
-                   "no rate and no preload: the part exerts no force")
-            _check(0 <= v["rate_tolerance"] < 1, line, h["rate_tolerance"],
-                   "a relative tolerance in [0, 1) (0.1 is ±10 %)")
+            if not strut:
+                _check(v["rate"] > 0 or v["preload"] > 0, line, h["rate"],
+                       "no rate and no preload: the part exerts no force")
+            if v["rate_tolerance"] is not None:
+                _check(0 <= v["rate_tolerance"] < 1, line, h["rate_tolerance"],
+                       "a relative tolerance in [0, 1) (0.1 is ±10 %)")
             lo, hi = v.get("min_length"), v.get("max_length")
             if lo is not None:
                 _check(lo > 0, line, h["min_length"], "must be > 0")
@@ -375,6 +468,9 @@ def read_springs(path) -> Catalog:
             else:
                 _check(0 <= flt < v["free_length"], line, h["free_length_tolerance"],
                        "must be >= 0 and below the free length")
+            if strut:
+                parts.append(_strut(v, h, line, part, lo, hi, flt))
+                continue
             coil = _coil_cells(row, coil_where, line, kind, v["rate"], v["rate_tolerance"])
             parts.append(SpringEntry(part, kind, v["rate"], v["free_length"], v["preload"],
                                      lo, hi, v["rate_tolerance"], flt, line, **coil))
@@ -387,7 +483,8 @@ def read_dampers(path) -> Catalog:
     """The dampers of a catalog file (module docstring)."""
     lines = _lines(path)
     hline, head = lines[0]
-    where = _header(path, head, hline, _DAMPER_COLS, ("part", "kind", "pivot"))
+    where = _header(path, head, hline, _DAMPER_COLS, ("part", "kind", "pivot"),
+                    ("temperature_coeff",))
     parts, warnings = [], []
     for line, row in lines[1:]:
         try:
@@ -413,7 +510,13 @@ def read_dampers(path) -> Catalog:
                        f"unknown pivot '{pivot}' ({', '.join(PIVOTS)})")
             else:
                 _check(pivot == "", line, "pivot", "a dashpot has no pivot (leave it empty)")
-            parts.append(DamperEntry(part, kind, c, pivot or None, tol, line))
+            beta = _cell(row, where, "temperature_coeff", line, required=False) \
+                if "temperature_coeff" in where else None
+            if beta is not None:
+                _check(-0.1 <= beta <= 0.1, line, where["temperature_coeff"][2],
+                       f"a temperature coefficient in [-0.1, 0.1] 1/K (silicone oil about "
+                       f"-0.005), got {beta:g}")
+            parts.append(DamperEntry(part, kind, c, pivot or None, tol, line, beta))
         except _Bad as exc:
             warnings.append(f"{exc}; row left out")
     return _finish(path, parts, warnings, "damper")

@@ -7,7 +7,9 @@ it as ``DIR/springs.csv`` and ``DIR/dampers.csv`` (what ``examples/catalogs/`` h
 - extension springs: free lengths 30-50 mm x rates 100-1,600 N/m (R5) x initial tensions 2 and
   5 N, maximum length twice the free length, rate ±10 %;
 - gas struts: extended lengths 60-80 mm, 20 mm stroke, forces F1 = 10-200 N in the usual
-  steps, progression F2/F1 = 1.3 (rate = 0.3 F1 / stroke), force ±10 %, length ±1.5 mm;
+  steps, progression F2/F1 1.2-1.5 (:data:`PROGRESSION`, by extended length; the rate column
+  the matching F1 (K - 1) / stroke), friction band F3 - F1 of 30 % of F1 up to 20 N, 20 % up
+  to 60 N, 10 % above (:func:`friction_band`), force ±7 %, length ±1.5 mm;
 - dampers: dashpots of 1,000-6,000 N s/m (±20 %), rotary dampers of 0.5-2 N m s/rad at pivots
   O and A (±30 %).
 
@@ -43,6 +45,16 @@ COILS = {
 }
 #: the wire of the springs of :data:`COILS`
 COIL_MATERIAL = "EN10270-1-SH"
+#: a gas strut's progression K by its extended length (mm)
+PROGRESSION = {60: 1.2, 65: 1.25, 70: 1.3, 75: 1.4, 80: 1.5}
+#: a gas strut's relative force tolerance (datasheets: ±5-10 % on F1)
+STRUT_FORCE_TOLERANCE = 0.07
+
+
+def friction_band(F1: float) -> float:
+    """A small strut's friction band F3 - F1 (N): its seals' share of F1 falls as F1 grows
+    (30 % up to 20 N, 20 % up to 60 N, 10 % above)."""
+    return round(F1 * (0.3 if F1 <= 20 else 0.2 if F1 <= 60 else 0.1), 1)
 
 
 def _with_coil(e: SpringEntry) -> SpringEntry:
@@ -70,8 +82,12 @@ def springs() -> list[SpringEntry]:
                                        standard_free_length_tolerance(l0)))
     for L in (60, 65, 70, 75, 80):
         for F1 in (10, 20, 30, 40, 50, 60, 80, 100, 120, 150, 200):
-            out.append(SpringEntry(f"GS-{L:03d}-F{F1:03d}", "gas_strut", round(F1 * 0.3 / 0.020, 1),
-                                   L / 1e3, float(F1), (L - 20) / 1e3, None, 0.10, 0.0015))
+            K = PROGRESSION[L]
+            out.append(SpringEntry(f"GS-{L:03d}-F{F1:03d}", "gas_strut",
+                                   round(F1 * (K - 1) / 0.020, 1), L / 1e3, float(F1),
+                                   (L - 20) / 1e3, None, 0.0, 0.0015, stroke=0.020,
+                                   progression=K, friction=friction_band(F1) / 2,
+                                   force_tolerance=STRUT_FORCE_TOLERANCE))
     return [_with_coil(e) for e in out]
 
 
@@ -94,12 +110,20 @@ def write(folder) -> tuple[Path, Path]:
     s = folder / "springs.csv"
     cols = ("part", "kind", "rate_N_per_m", "free_length_m", "preload_N", "min_length_m",
             "max_length_m", "rate_tolerance", "free_length_tolerance_m", "wire_d_m",
-            "coil_d_m", "active_coils", "material")
-    # (a row without a coil leaves its coil cells off: missing cells are empty)
-    lines = [",".join(cols)] + [",".join(_cell(x) for x in (
-        e.part, e.kind, e.rate, e.free_length, e.preload, e.min_length, e.max_length,
-        e.rate_tolerance, e.free_length_tolerance) + (() if e.wire_d is None else (
-            e.wire_d, e.coil_d, e.active_coils, e.material))) for e in springs()]
+            "coil_d_m", "active_coils", "material", "progression", "friction_band_N",
+            "force_tolerance")
+    # (a row leaves the cells it has no value for empty, trailing ones off; a strut's rate
+    # tolerance does not apply to it)
+    lines = [",".join(cols)]
+    for e in springs():
+        cells = [e.part, e.kind, e.rate, e.free_length, e.preload, e.min_length,
+                 e.max_length, None if e.is_strut else e.rate_tolerance,
+                 e.free_length_tolerance]
+        if e.wire_d is not None:
+            cells += [e.wire_d, e.coil_d, e.active_coils, e.material]
+        if e.is_strut:
+            cells += [None] * 4 + [e.progression, 2 * e.friction, e.force_tolerance]
+        lines.append(",".join(_cell(x) for x in cells))
     s.write_text(HEADER + "\n".join(lines) + "\n")
     d = folder / "dampers.csv"
     lines = ["part,kind,c,pivot,c_tolerance"] + [",".join(_cell(x) for x in (

@@ -13,7 +13,8 @@ The NLP is the robust scenario NLP (:class:`softclose.robust.nlp.ScenarioStructu
 by its structure alone -- the scenarios (1 + 2^d of the box's d axes), the discretisation, the
 elements, the solver -- and never by a part's numbers: the spring's rate and free length are
 the design's bounds (lo = hi), its preload and kind NLP parameters, its tolerances the
-scenario maps (parameters too). So one NLP serves every spring of a catalog, built once (in
+scenario maps (parameters too). So one NLP serves every coil spring of a catalog (and one every gas strut: its
+own structure, F1 a variable bounded to the part's), built once (in
 CasADi's virtual machine) or loaded compiled (``softclose prepare --select FILE``).
 """
 
@@ -26,7 +27,10 @@ from ..robust import optimise_robust
 
 
 def spring_config(cfg: Config, spring, damper) -> Config:
-    """``cfg`` with the spring fixed as the design and its tolerances as the box's."""
+    """``cfg`` with the spring fixed as the design and its tolerances as the box's. A gas
+    strut: its F1 fixed too (``optimise.free`` design.spring_preload = [F1, F1], the other
+    free keys kept), its stroke, progression and friction the part's, its force tolerance
+    the spread of ``design.spring_preload`` (a strut's rate is 0 and carries none)."""
     values = {"design.spring_kind": spring.spring_kind, "design.spring_k": spring.rate,
               "design.spring_rest_length": spring.free_length,
               "design.spring_preload": spring.preload, "design.damper_c": damper.c,
@@ -38,10 +42,23 @@ def spring_config(cfg: Config, spring, damper) -> Config:
               "tolerance.design.spring_rest_length": {"absolute":
                                                       spring.free_length_tolerance},
               "tolerance.design.damper_c": damper.c_tolerance}
-    if spring.min_length is not None:
+    if spring.is_strut:
+        free = {k: [a, b] for k, a, b in cfg.optimise.free or ()}
+        free["design.spring_preload"] = [spring.preload, spring.preload]
+        values.update({"design.spring_k": 0.0, "optimise.spring_k": [0.0, 0.0],
+                       "design.strut_stroke": spring.stroke,
+                       "design.strut_progression": spring.progression,
+                       "design.strut_friction": spring.friction,
+                       "optimise.free": free,
+                       "tolerance.design.spring_k": 0.0,
+                       "tolerance.design.spring_preload": spring.force_tolerance})
+    elif spring.min_length is not None:
         values["design.spring_min_length"] = spring.min_length
     if spring.max_length is not None:
         values["design.spring_max_length"] = spring.max_length
+    beta = getattr(damper, "temperature_coeff", None)
+    if beta is not None:
+        values["design.damper_temperature_coeff"] = beta
     return without_limits(cfg).update(values)
 
 

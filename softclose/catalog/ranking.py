@@ -329,6 +329,6 @@ def screen_chunk(cfg: Config, box: PairBox, a: int, chunk: list) -> tuple[int, l
 def _box_json(box: PairBox) -> dict:
     other = {k: {"spread": s, "relative": r} for k, s, r in
              zip(box.other.keys, box.other.spreads, box.other.relative)}
-    return {"parts": "each part's own: rate ± rate_tolerance, free length ± "
-                     "free_length_tolerance, c ± c_tolerance",
+    return {"parts": "each part's own: rate ± rate_tolerance (a gas strut: F1 ± "
+                     "force_tolerance), free length ± free_length_tolerance, c ± c_tolerance",
             "other": other, "distribution": box.other.distribution}

@@ -18,7 +18,8 @@ def pair_entry(spring, damper, feasible: bool, yld: float, worst: float, reason:
     how many corners meet every constraint, the nominal point's metrics, the parts;
     ``spring_checks`` (None: the catalog gives no coil) the coil spring's checks at its
     working lengths (:func:`softclose.catalog.coil.spring_checks`)."""
-    design = {**spring.design(), "spring_min_length": spring.min_length,
+    design = {**spring.design(),    # (a gas strut's compressed length: its stroke's end)
+              "spring_min_length": None if spring.is_strut else spring.min_length,
               "spring_max_length": spring.max_length}
     design.update({"damper_c": 0.0, "rotary_damper_c": 0.0})
     design.update(damper.design())
@@ -32,14 +33,18 @@ def pair_entry(spring, damper, feasible: bool, yld: float, worst: float, reason:
 
 def pair_config(cfg, entry: dict):
     """The config of a ranked pair (an entry of :attr:`SelectResult.ranking`) in ``cfg``: its
-    parts as the design, their own tolerances as ``[tolerance]`` (the rate's and the
-    damper's relative, the free length's absolute): what ``softclose report`` signs off."""
+    parts as the design, their own tolerances as ``[tolerance]`` (the rate's -- a gas
+    strut's force tolerance as the spread of ``design.spring_preload`` -- and the damper's
+    relative, the free length's absolute): what ``softclose report`` signs off."""
     spring, damper = entry["spring_part"], entry["damper_part"]
     values = {f"design.{k}": v for k, v in entry["design"].items() if v is not None}
     c_key = "design.damper_c" if damper["kind"] == "dashpot" else "design.rotary_damper_c"
-    values.update({"tolerance.design.spring_k": spring["rate_tolerance"],
-                   "tolerance.design.spring_rest_length":
-                       {"absolute": spring["free_length_tolerance_m"]},
+    if spring["kind"] == "gas_strut":
+        own = {"tolerance.design.spring_preload": spring["force_tolerance"]}
+    else:
+        own = {"tolerance.design.spring_k": spring["rate_tolerance"]}
+    values.update({**own, "tolerance.design.spring_rest_length":
+                   {"absolute": spring["free_length_tolerance_m"]},
                    f"tolerance.{c_key}": damper["c_tolerance"]})
     return cfg.update(values)
 

@@ -1,10 +1,13 @@
 """Screening spring x damper pairs in the C kernel, each over its own tolerance box.
 
 A pair's box has the axes (in unit coordinates z, z = ±1 at the faces): the spring's rate
-(``rate (1 + z rate_tolerance)``), its free length (``free_length + z free_length_tolerance``),
-the damper's coefficient (``c (1 + z c_tolerance)``), then every other key of
-``[tolerance]`` (the config's spreads of ``design.spring_k``, ``spring_rest_length``,
-``damper_c`` and ``rotary_damper_c`` are replaced by the parts' own). Each pair is run at
+(``rate (1 + z rate_tolerance)``; a gas strut's force F1 instead, ``F1 (1 + z
+force_tolerance)``), its free length (``free_length + z free_length_tolerance``), the
+damper's coefficient (``c (1 + z c_tolerance)``), then every other key of ``[tolerance]``
+(the config's spreads of ``design.spring_k``, ``spring_rest_length``, ``damper_c`` and
+``rotary_damper_c`` are replaced by the parts' own; a spread of the preload, or of a strut's
+progression, stroke or friction, is taken around the part's value, and a gas strut's F1
+carries its own spread only). Each pair is run at
 the 2^d corners, the nominal point and the same Monte Carlo samples (common random numbers:
 two pairs see the same relative deviations), all rows of a chunk of pairs in one kernel
 batch (:func:`softclose.robust.evaluate.evaluate`).
@@ -17,8 +20,10 @@ all of them (the joint yield).
 
 A row meets every constraint of the problem (:func:`softclose.problem.infeasibility`) and
 keeps the spring in its valid range: the kind's side of its free length (the kernel's own
-range check) and the part's ``min_length`` / ``max_length`` (checked here against the
-stroke's extremes, as the limits differ per part).
+range check; a gas strut's stroke from its extended length) and the part's ``min_length`` /
+``max_length`` (checked here against the stroke's extremes, as the limits differ per part;
+a gas strut's compressed length moves with its extended length, so its ``min_length`` is
+its stroke's end, checked by the kernel).
 """
 
 from __future__ import annotations
@@ -43,8 +48,11 @@ OWNED = ("design.spring_k", "design.spring_rest_length", "design.damper_c",
          "design.rotary_damper_c")
 #: the design keys a pair sets in every row (before the other toleranced keys)
 PAIR_KEYS = ("design.spring_k", "design.spring_rest_length", "design.spring_kind",
-             "design.spring_preload", "design.damper_c", "design.rotary_damper_c")
+             "design.spring_preload", "design.damper_c", "design.rotary_damper_c",
+             "design.strut_stroke", "design.strut_progression", "design.strut_friction")
 PRELOAD = "design.spring_preload"
+#: a gas strut's own values in a row (besides F1 and its extended length)
+STRUT_KEYS = ("design.strut_stroke", "design.strut_progression", "design.strut_friction")
 #: relative slack of the length limits (the extremes' rounding)
 LIMIT_RTOL = 1e-9
 #: the reason of a row whose spring leaves its valid range
@@ -79,6 +87,9 @@ class PairBox:
     #: the temperature (°C) of each row, with several sign-off temperatures (corners at each,
     #: the nominal point once, samples at each); None: every row at the config's own
     Ts: np.ndarray | None = None
+    #: the config's strut values (stroke, 0 for none; progression; friction): a coil
+    #: spring's rows keep them
+    strut: tuple = (0.0, 1.3, 0.0)
 
     @property
     def temperatures(self) -> tuple:
@@ -89,7 +100,7 @@ class PairBox:
         """The corners and the nominal point alone (no samples)."""
         n = self.corners + 1
         return PairBox(self.other, self.Z[:n], self.corners, 0,
-                       None if self.Ts is None else self.Ts[:n])
+                       None if self.Ts is None else self.Ts[:n], self.strut)
 
     def config_at(self, cfg: Config, row: int) -> Config:
         """``cfg`` at the temperature of row ``row``."""
@@ -112,7 +123,10 @@ class PairBox:
         """``rate +10 %, free length -0.9 mm, c -20 %, mass.lid +5 %`` at unit point z."""
         z = np.asarray(z, float)
         parts = []
-        if spring.rate_tolerance:
+        if spring.is_strut:
+            if spring.force_tolerance:
+                parts.append(f"F1 {100 * z[0] * spring.force_tolerance:+.3g} %")
+        elif spring.rate_tolerance:
             parts.append(f"rate {100 * z[0] * spring.rate_tolerance:+.3g} %")
         if spring.free_length_tolerance:
             parts.append(f"free length {1e3 * z[1] * spring.free_length_tolerance:+.3g} mm")
@@ -142,36 +156,52 @@ def pair_box(cfg: Config, samples: int, seed: int = 0) -> PairBox:
     if other.dim:
         z[:, 3:] = np.maximum(z[:, 3:], other.z_min)
     temps = sign_off(cfg)
+    de = cfg.design
+    strut = (de.strut_stroke or 0.0, de.strut_progression, de.strut_friction)
     if temps == (cfg.operating.temperature_c,):
         Z = np.vstack([corners, np.zeros((1, d)), z])
-        return PairBox(other, Z, len(corners), samples)
+        return PairBox(other, Z, len(corners), samples, None, strut)
     nT, ref = len(temps), cfg.operating.reference_temperature_c
     Z = np.vstack([np.tile(corners, (nT, 1)), np.zeros((1, d)), np.tile(z, (nT, 1))])
     Ts = np.r_[np.repeat(temps, len(corners)), min(temps, key=lambda T: abs(T - ref)),
                np.repeat(temps, samples)].astype(float)
-    return PairBox(other, Z, nT * len(corners), samples, Ts)
+    return PairBox(other, Z, nT * len(corners), samples, Ts, strut)
 
 
 def pair_rows(box: PairBox, spring, damper) -> tuple[list[str], np.ndarray]:
-    """The keys and their values at every unit point of one pair's box."""
+    """The keys and their values at every unit point of one pair's box (a gas strut: its
+    rate 0, its F1 spread by ``force_tolerance`` on the first axis)."""
     Z = box.Z
-    k = np.maximum(spring.rate * (1 + Z[:, 0] * spring.rate_tolerance), 0.0)
+    n = len(Z)
+    strut = spring.is_strut
+    if strut:
+        k = np.zeros(n)
+        F0 = np.maximum(spring.preload * (1 + Z[:, 0] * spring.force_tolerance), 0.0)
+        own = dict(zip(STRUT_KEYS, (spring.stroke, spring.progression, spring.friction)))
+    else:
+        k = np.maximum(spring.rate * (1 + Z[:, 0] * spring.rate_tolerance), 0.0)
+        F0 = np.full(n, spring.preload)
+        own = dict(zip(STRUT_KEYS, box.strut))
     l0 = np.maximum(spring.free_length + Z[:, 1] * spring.free_length_tolerance, 1e-4)
     c = np.maximum(damper.c * (1 + Z[:, 2] * damper.c_tolerance), 0.0)
-    n = len(Z)
     dash = damper.kind == "dashpot"
     cols = {"design.spring_k": k, "design.spring_rest_length": l0,
             "design.spring_kind": np.full(n, KINDS[spring.spring_kind]),
-            "design.spring_preload": np.full(n, spring.preload),
+            "design.spring_preload": F0,
             "design.damper_c": c if dash else np.zeros(n),
-            "design.rotary_damper_c": np.zeros(n) if dash else c}
+            "design.rotary_damper_c": np.zeros(n) if dash else c,
+            **{key: np.full(n, float(v)) for key, v in own.items()}}
+    around = {PRELOAD: spring.preload, **(own if strut else {})}
     if box.other.dim:
         V = box.other.values(Z[:, 3:])
         for j, key in enumerate(box.other.keys):
-            if key == PRELOAD:          # a spread of the preload: around this part's
-                h = box.other.half[j] / box.other.nominal[j] * spring.preload \
+            if key == PRELOAD and strut:      # its own spread (force_tolerance) stands
+                continue
+            if key in around:           # a spread around this part's value
+                x = around[key]
+                h = box.other.half[j] / box.other.nominal[j] * x \
                     if box.other.relative[j] and box.other.nominal[j] else box.other.half[j]
-                cols[key] = np.maximum(spring.preload + Z[:, 3 + j] * h, 0.0)
+                cols[key] = np.maximum(x + Z[:, 3 + j] * h, 0.0)
             else:
                 cols[key] = V[:, j]
     return list(cols), np.column_stack(list(cols.values()))
@@ -179,12 +209,23 @@ def pair_rows(box: PairBox, spring, damper) -> tuple[list[str], np.ndarray]:
 
 def pivot_config(cfg: Config, damper) -> Config:
     """The config a damper is run in: its pivot for a rotary damper (on a hinge lid, whatever
-    the catalog's pivot, the hinge H: the lid's only pivot), no spring limits."""
+    the catalog's pivot, the hinge H: the lid's only pivot), its temperature coefficient when
+    the catalog gives one, no spring limits."""
     cfg = without_limits(cfg)
     pivot = "H" if cfg.geometry.mechanism == "hinge" else damper.pivot
     if damper.kind == "rotary" and cfg.design.rotary_damper_pivot != pivot:
         cfg = cfg.replace(design={"rotary_damper_pivot": pivot})
+    beta = getattr(damper, "temperature_coeff", None)
+    if beta is not None and cfg.design.damper_temperature_coeff != beta:
+        cfg = cfg.replace(design={"damper_temperature_coeff": beta})
     return cfg
+
+
+def damper_group(damper) -> tuple:
+    """What of a damper makes its own config (:func:`pivot_config`): a rotary damper's pivot,
+    its temperature coefficient."""
+    return (damper.pivot if damper.kind == "rotary" else None,
+            getattr(damper, "temperature_coeff", None))
 
 
 def run_pairs(cfg: Config, box: PairBox, pairs: list) -> dict:
@@ -194,7 +235,7 @@ def run_pairs(cfg: Config, box: PairBox, pairs: list) -> dict:
     n = box.points
     groups: dict = {}
     for i, (s, d) in enumerate(pairs):
-        groups.setdefault(d.pivot if d.kind == "rotary" else None, []).append(i)
+        groups.setdefault(damper_group(d), []).append(i)
     out = None
     for _, idx in groups.items():
         c = pivot_config(cfg, pairs[idx[0]][1])
@@ -210,7 +251,8 @@ def run_pairs(cfg: Config, box: PairBox, pairs: list) -> dict:
         rows = (np.asarray(idx)[:, None] * n + np.arange(n)).ravel()
         for k, v in cols.items():
             out[k][rows] = v
-    lo = np.repeat([np.nan if s.min_length is None else s.min_length for s, _ in pairs], n)
+    lo = np.repeat([np.nan if s.min_length is None or s.is_strut else s.min_length
+                    for s, _ in pairs], n)
     hi = np.repeat([np.nan if s.max_length is None else s.max_length for s, _ in pairs], n)
     with np.errstate(invalid="ignore"):
         bad = (out["min_spring_length"] < lo * (1 - LIMIT_RTOL)) \
@@ -319,7 +361,7 @@ def range_texts(cfg, box: PairBox, items: list) -> list[str]:
     out = [RANGE] * len(items)
     groups: dict = {}
     for n, (s, d, row) in enumerate(items):
-        key = (d.pivot if d.kind == "rotary" else None, s.min_length, s.max_length,
+        key = (damper_group(d), None if s.is_strut else s.min_length, s.max_length,
                None if box.Ts is None else float(box.Ts[row]))
         groups.setdefault(key, []).append(n)
     for (_, lo, hi, _), idx in groups.items():

@@ -4,7 +4,8 @@ Each corner is a config of its own (the pair's design values there, the other to
 keys' values, a rotary damper's pivot); the reference (CVODES on the exact equation,
 :func:`softclose.optimiser.verify.verify`) checks every constraint of the problem there,
 and the part's length limits are checked against the reference's own spring-length extremes
-(its kind's free length is checked by the reference itself). The models are built without
+(its kind's free length is checked by the reference itself; a gas strut's compressed
+length, its extended length less its stroke, too). The models are built without
 length limits and kept here per geometry, mass and element choice.
 """
 
@@ -38,6 +39,8 @@ def corner_config(cfg, box: PairBox, spring, damper, row: int):
     keys, X = pair_rows(box, spring, damper)
     values = {k: float(v) for k, v in zip(keys, X[row])}
     values["design.spring_kind"] = spring.spring_kind
+    if values.get("design.strut_stroke") == 0.0:      # the config's none (0.4 x L_ext)
+        del values["design.strut_stroke"]
     return box.config_at(pivot_config(cfg, damper).update(values), row)
 
 
@@ -50,7 +53,7 @@ def check_point(cfg, box: PairBox, spring, damper, row: int) -> dict:
         return {"ok": False, "reason": f"the reference failed: {v.error}", "objective": None}
     s = v.stroke
     why = [k for k, con in v.constraints.items() if not con["ok"]]
-    lo, hi = spring.min_length, spring.max_length
+    lo, hi = (None if spring.is_strut else spring.min_length), spring.max_length
     if s.min_spring_length is not None and lo is not None \
             and s.min_spring_length < lo * (1 - LIMIT_RTOL):
         why.append(f"shorter than its minimum length {lo * 1e3:.2f} mm")

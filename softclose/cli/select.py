@@ -22,7 +22,8 @@ DESCRIPTION = """\
 Rank the springs one can buy (extension, compression, gas strut) -- with every damper of
 --dampers, or with the config's dashpot whose c is chosen per spring when no damper file
 is given -- by how the lid closes with them: each pair over its own tolerance box (the
-spring's rate and free length, the damper's c, as the catalog gives them; [tolerance] for
+spring's rate -- a gas strut's force F1 -- and free length, the damper's c, as the catalog
+gives them; [tolerance] for
 the other keys, e.g. the lid's mass), in the C kernel at every corner and on Monte Carlo
 samples. Rank: meets every constraint at every corner first, then yield, then worst-case
 J. The best --verify pairs are re-simulated at every corner by the adaptive reference.
@@ -33,9 +34,16 @@ free_length_m, preload_N, min_length_m, max_length_m (empty: no limit), rate_tol
 63 mm, ±1.3 mm up to 100 mm, ±1.5 % beyond); the lengths and rate may be given in mm and
 N/mm instead (free_length_mm, rate_N_per_mm, ...). Damper columns: part, kind (dashpot |
 rotary), c (N s/m, or N m s/rad for a rotary damper), pivot (rotary: O, B, A, C or lid),
-c_tolerance (relative). A gas strut is a compression spring whose preload is its force at
-full extension and whose rate is its progression. Rows that cannot be used are reported by
-line and column and left out.
+c_tolerance (relative), optional temperature_coeff_per_K (the damper's beta, 1/K: its
+design.damper_temperature_coeff, c(T) = c exp(beta (T - T_ref)); empty: the config's).
+
+A gas_strut row is a gas strut (the isothermal gas law, SPEC §12): free_length its extended
+length, preload its force F1 at full extension (> 0), min_length its compressed length
+(required: the stroke is free_length - min_length); optional columns progression (K = F at
+full compression / F1; empty: 1 + rate x stroke / F1 from the rate), friction_band_N (the
+datasheet's F3 - F1; the strut's friction is half of it, design.strut_friction) and
+force_tolerance (relative spread of F1, default 0.1; a strut's rate_tolerance does not
+apply). Rows that cannot be used are reported by line and column and left out.
 
 Optional coil columns of a compression or extension spring: wire_d_m (wire diameter d),
 coil_d_m (mean coil diameter D) -- or wire_d_mm, coil_d_mm -- active_coils (n) and material
@@ -60,11 +68,14 @@ def register(sub) -> None:
                    help="spring catalog (CSV: part, kind, rate_N_per_m, free_length_m, "
                         "preload_N, min_length_m, max_length_m, rate_tolerance"
                         "[, free_length_tolerance_m][, wire_d_m, coil_d_m, active_coils"
-                        "[, material]]: a spring whose coil is given is checked for static "
-                        "stress, fatigue and buckling at its working lengths)")
+                        "[, material]][, progression, friction_band_N, force_tolerance]: a "
+                        "spring whose coil is given is checked for static stress, fatigue "
+                        "and buckling at its working lengths; a gas_strut row is a gas "
+                        "strut, F1 its preload, its stroke free - min length)")
     p.add_argument("--dampers", metavar="FILE",
-                   help="damper catalog (CSV: part, kind, c, pivot, c_tolerance); without "
-                        "it the dashpot's c is chosen per spring within optimise.damper_c")
+                   help="damper catalog (CSV: part, kind, c, pivot, c_tolerance"
+                        "[, temperature_coeff_per_K]); without it the dashpot's c is chosen "
+                        "per spring within optimise.damper_c")
     add_out(p, what="write select.csv, select.json, select.png and the best pairs' configs "
                     "(pairs/*.toml) to this folder")
     p.add_argument("--samples", type=int, metavar="N", default=256,
@@ -131,9 +142,13 @@ def format_select(r, top: int = 15) -> str:
     b = r.best
     if b is not None:
         d = b["design"]
-        lines.append(f"  best: {_pair(b)}: {d['spring_kind']} spring, rate {d['spring_k']:.6g} "
-                     f"N/m, free length {1e3 * d['spring_rest_length']:.4g} mm, preload "
-                     f"{d['spring_preload']:.4g} N"
+        part = (f"gas strut, F1 {d['spring_preload']:.4g} N, extended length "
+                f"{1e3 * d['spring_rest_length']:.4g} mm, stroke {1e3 * d['strut_stroke']:.4g} "
+                f"mm, progression {d['strut_progression']:.4g}, friction band "
+                f"{2 * d['strut_friction']:.4g} N" if d["spring_kind"] == "gas_strut" else
+                f"{d['spring_kind']} spring, rate {d['spring_k']:.6g} N/m, free length "
+                f"{1e3 * d['spring_rest_length']:.4g} mm, preload {d['spring_preload']:.4g} N")
+        lines.append(f"  best: {_pair(b)}: {part}"
                      + (f"; nominal lid closes in {b['nominal']['closing_time']:.4g} s"
                         if b["nominal"].get("closing_time") == b["nominal"].get("closing_time")
                         else ""))
