@@ -346,6 +346,9 @@ def reason_text(box: PairBox, cols: dict, p: int, row: int, reason: str, spring,
         return f"{reason}: closes in {cols['closing_time'][r]:.4g} s {what}"
     if reason == "not held shut":
         return f"not held shut: holding moment {cols['holding_moment'][r]:.4g} N m {what}"
+    if reason == "not closed" and np.isfinite(cols["theta_min"][r]):
+        return (f"not closed: the lid stops at theta = {np.degrees(cols['theta_min'][r]):.3g} "
+                f"deg {what}")
     if reason == "too heavy to open":
         return f"too heavy to open: {cols['opening_force'][r]:.4g} N {what}"
     if reason == RANGE:

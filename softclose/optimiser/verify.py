@@ -250,12 +250,21 @@ def verify(cfg, design: dict, claims: dict | None = None,
     # no rebound: theta' <= 0 throughout (from the release: theta''(0) <= 0), and the lid
     # never passes the rim
     release = float(model.ode(ca.vertcat(st.theta0, 0.0), p)[1])
-    thd_max = chk.theta_dot_max(p, T if T is not None else st.t_max)
+    try:                            # (a lid friction holds where it is released: at rest)
+        held = not ref.closed and float(ref.theta_min) >= st.theta0 - 1e-12
+        thd_max = 0.0 if held else chk.theta_dot_max(p, T if T is not None else st.t_max)
+    except RuntimeError as exc:     # CVODES on the equation without its stick (a lid that
+        if ref.closed:              # friction holds where it is released chatters there)
+            return Verification(None, None, method=method, time=time.perf_counter() - t0,
+                                error=f"theta' on the fine grid: {str(exc).splitlines()[-1]}")
+        thd_max = None              # (it did not close: that fails it already)
     th_min = float(ref.theta_min)
-    cons["no_rebound"] = {"value": max(thd_max, min(release, 0.0)), "bound": 0.0,
-                          "unit": "rad/s", "theta_ddot_release": release, "theta_min": th_min,
-                          "ok": thd_max <= CONSTRAINT_TOL and release <= 0.0
-                          and th_min >= st.theta_closed - 1e-12}
+    if thd_max is not None:
+        cons["no_rebound"] = {"value": max(thd_max, min(release, 0.0)), "bound": 0.0,
+                              "unit": "rad/s", "theta_ddot_release": release,
+                              "theta_min": th_min,
+                              "ok": thd_max <= CONSTRAINT_TOL and release <= 0.0
+                              and th_min >= st.theta_closed - 1e-12}
     hm = ref.holding_moment
     cons["holding_moment_min"] = {"value": hm, "bound": o.holding_moment_min, "unit": "N m",
                                   "ok": hm >= o.holding_moment_min - CONSTRAINT_TOL}
