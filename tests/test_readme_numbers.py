@@ -123,11 +123,12 @@ def test_catalog(robust):
     cat = ROOT / "examples" / "catalogs"
     springs, dampers = read_springs(cat / "springs.csv"), read_dampers(cat / "dampers.csv")
     assert len(springs) * len(dampers) == 3445
-    s = [e for e in springs.parts if e.part == "GS-070-F010"]
+    s = [e for e in springs.parts if e.part == "GS-060-F010"]
     d = [e for e in dampers.parts if e.part == "DP-6000"]
     e = select(default_config(), s, d, verify=1).best
     assert e["feasible"] and e["verified"]
-    assert (s[0].preload, s[0].free_length, s[0].rate, d[0].c) == (10.0, 0.070, 150.0, 6000.0)
+    assert (s[0].spring_kind, s[0].preload, s[0].free_length, s[0].progression, d[0].c) == \
+        ("gas_strut", 10.0, 0.060, 1.2, 6000.0)
     ratio = e["worst_objective"] / robust.objective
     r = robust.design
     l0 = r["spring_rest_length"]
@@ -136,7 +137,7 @@ def test_catalog(robust):
     own = select(default_config(), [part], [DamperEntry("c", "dashpot", r["damper_c"], None,
                                                         0.2)], verify=0).best
     assert TABLE["catalog"][0] == (
-        f"{len(springs) * len(dampers):,} pairs; 10 N, 70 mm, 150 N/m, 6,000 N s/m; "
+        f"{len(springs) * len(dampers):,} pairs; 10 N, 60 mm, progression 1.2, 6,000 N s/m; "
         f"{100 * e['yield']:.0f} %, {e['worst_objective']:.3f}; {ratio:.2f}, "
         f"{robust.objective:.4f}; ±{1e3 * part.free_length_tolerance:.1f} mm, "
         f"{100 * own['yield']:.0f} %")

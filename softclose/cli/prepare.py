@@ -31,7 +31,7 @@ PREPARE = """\
 Compile (C, in the foreground: seconds; minutes for --robust) every NLP that `softclose
 optimise` with the same --config, --set, --free and --robust would use -- or, with --select
 SPRINGS, that `softclose select --springs SPRINGS` would use (the robust NLP re-solving the
-best springs' dashpot c; one NLP serves every spring) -- into the cache folder
+best springs' dashpot c; one NLP serves every coil spring, one every gas strut) -- into the cache folder
 (SOFTCLOSE_CACHE, default ~/.cache/softclose); later runs of that command load them and solve
 ~3x faster, with the same numbers. It runs that command once to find them: each NLP built is
 compiled, with a line on stderr saying what. NLPs compiled before are loaded, not compiled
