@@ -468,10 +468,10 @@ def read_springs(path) -> Catalog:
             else:
                 _check(0 <= flt < v["free_length"], line, h["free_length_tolerance"],
                        "must be >= 0 and below the free length")
+            coil = _coil_cells(row, coil_where, line, kind, v["rate"], v["rate_tolerance"])
             if strut:
                 parts.append(_strut(v, h, line, part, lo, hi, flt))
                 continue
-            coil = _coil_cells(row, coil_where, line, kind, v["rate"], v["rate_tolerance"])
             parts.append(SpringEntry(part, kind, v["rate"], v["free_length"], v["preload"],
                                      lo, hi, v["rate_tolerance"], flt, line, **coil))
         except _Bad as exc:
