@@ -185,3 +185,23 @@ def test_a_strut_and_its_damper_at_another_temperature(tmp_path):
         "design.spring_preload": 10 * tau, "design.damper_temperature_coeff": 0.0}))
     assert cold.closing_time == pytest.approx(byhand.closing_time, rel=1e-9)
     assert cold.closing_time > softclose.simulate(c).closing_time     # thicker oil
+
+
+def test_the_damper_column_is_its_temperature_coefficient_at_every_temperature(tmp_path):
+    """Screened at 0 and 23 °C, a damper whose row gives temperature_coeff_per_K = -0.005 is
+    judged as the same damper without the column in a config with
+    design.damper_temperature_coeff = -0.005, number for number; without a coefficient the
+    cold corners differ."""
+    from softclose.catalog import select
+    cfg = _cfg().update({"operating.temperatures_c": [0.0, 23.0]})
+    strut = _write(tmp_path, "s.csv", "\n".join(STRUTS.splitlines()[:2]) + "\n")
+    with_col = _write(tmp_path, "d.csv", DAMPERS)
+    plain = _write(tmp_path, "p.csv", "part,kind,c,pivot,c_tolerance\nDP-6000,dashpot,6000,,0.2\n")
+    a = select(cfg, strut, with_col, samples=16, verify=0).best
+    b = select(cfg.update({"design.damper_temperature_coeff": -0.005}), strut, plain,
+               samples=16, verify=0).best
+    c = select(cfg, strut, plain, samples=16, verify=0).best
+    for k in ("feasible", "yield", "worst_objective", "corners_feasible"):
+        assert a[k] == b[k], k
+    assert a["worst_objective"] != c["worst_objective"]
+    assert a["design"]["damper_temperature_coeff"] == -0.005
