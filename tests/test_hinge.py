@@ -268,3 +268,13 @@ def test_fit_recovers_the_toilet_seats_damper_from_a_recorded_stroke(tmp_path):
     p = json.loads(out)["parameters"]["design.rotary_damper_c"]
     lo, hi = p["ci95"]
     assert lo <= 2.5 <= hi and hi - lo < 0.02
+
+
+def test_pareto_defaults_follow_the_lids_closing_time_window():
+    """The default closing times scale with optimise.closing_time_max and start above
+    closing_time_min: the default lid's 0.3..3 s, the toilet seat's (5-8 s) 5.25..24 s."""
+    from softclose import default_config, load_config
+    from softclose.cli.optimise import PARETO_DEFAULT, default_closing_times
+    assert default_closing_times(default_config()) == PARETO_DEFAULT
+    assert default_closing_times(load_config(EXAMPLE.parent / "toilet_seat.toml")) == \
+        "5.25:24:10:log"

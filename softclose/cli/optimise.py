@@ -66,9 +66,11 @@ def register(sub) -> None:
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     add_common(q)
     add_out(q, what="write pareto.csv, pareto.png and designs/design_<i>.toml to this folder")
-    q.add_argument("--closing-times", default=PARETO_DEFAULT, metavar="START:STOP:COUNT[:log]",
-                   help=f"closing_time_max values in s (default {PARETO_DEFAULT}: "
-                        "10 log-spaced values)")
+    q.add_argument("--closing-times", default=None, metavar="START:STOP:COUNT[:log]",
+                   help=f"closing_time_max values in s (default {PARETO_DEFAULT}: 10 "
+                        "log-spaced values, times optimise.closing_time_max / 1 s and above "
+                        "optimise.closing_time_min: a toilet seat's 5-8 s window gives "
+                        "5.25:24:10:log)")
     q.set_defaults(run=run_pareto)
 
 
@@ -260,9 +262,20 @@ def parse_closing_times(text: str):
     return np.geomspace(a, b, n) if len(parts) == 4 else np.linspace(a, b, n)
 
 
+def default_closing_times(cfg) -> str:
+    """:data:`PARETO_DEFAULT` scaled to the config's closing-time window: its ends times
+    optimise.closing_time_max (in s), the first above 1.05 x closing_time_min (the
+    default config's: unchanged)."""
+    a, b, n, kind = PARETO_DEFAULT.split(":")
+    o = cfg.optimise
+    lo = max(float(a) * o.closing_time_max, 1.05 * o.closing_time_min)
+    hi = max(float(b) * o.closing_time_max, lo)
+    return f"{lo:.6g}:{hi:.6g}:{n if hi > lo else 1}:{kind}"
+
+
 def run_pareto(cfg, args) -> Outcome:
     out = prepare_out(args.out)
-    times = parse_closing_times(args.closing_times)
+    times = parse_closing_times(args.closing_times or default_closing_times(cfg))
     from ..optimiser import front
     fr = front(cfg, times, progress=interactive(args))
     payload = fr.to_json()
