@@ -30,6 +30,8 @@ Writes to studies/out/calibration/:
   calibrated.toml   the calibrated config with its [tolerance] proposal
   designs.json      the three designs and their strokes on the true lid
   comparison.csv    one row per design: closing time and impact speed on the true lid
+  report.html       the calibrated robust design signed off (softclose.report) on the
+                    calibrated lid
 
 Usage: python studies/calibration.py [--fast] [--json] [--out DIR]
 """
@@ -126,13 +128,21 @@ def main(argv=None) -> int:
                                           "peak_tip_speed"])
         w.writeheader()
         w.writerows(rows)
+    # the design the study ends with, signed off on the calibrated lid
+    final = results["robust, calibrated model"]
+    verdict = None
+    if final.design is not None:
+        signed = softclose.report(final.design_config(), optimiser=final.to_json(),
+                                  samples=200 if a.fast else None)
+        signed.save(a.out / "report.html")
+        verdict = signed.message
 
     summary = {"fit": {k: {"value": fit.values[k], "ci95": fit.ci95[k], "truth": TRUTH[k],
                            "inside": inside[k]} for k in FITTED},
                "identifiable": fit.identifiable,
                "with_damper": {"identifiable": fit3.identifiable,
                                  "collinear": list(fit3.collinear)},
-               "comparison": rows}
+               "comparison": rows, "report": verdict}
     if a.json:
         print(json.dumps(jsonable(summary)))
     else:
