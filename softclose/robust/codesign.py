@@ -33,8 +33,7 @@ import time
 import numpy as np
 
 from ..config import Config
-from ..optimiser.interval import END_ANGLE, END_C, free_layout, free_of, gas_nlp
-from .nlp import ROBUST_FREE, STRUT_FORCE
+from ..optimiser.interval import END_ANGLE, END_C, free_layout, free_of
 from ..optimiser.free_points import SLOTS, placed_config, placement_layout
 from ..problem import DESIGN_KEYS
 from ..config.free import config_value
@@ -59,8 +58,7 @@ def fixed_points(cfg: Config, points: dict) -> Config:
 def _layout(cfg: Config) -> list:
     """The first stage's variables, in the scenario NLP's order: the end damper's, then the
     points."""
-    return [k for k, _, _ in free_layout(cfg) if k in ROBUST_FREE
-            or k == STRUT_FORCE and gas_nlp(cfg)] + [k for k, _, _ in placement_layout(cfg)]
+    return [k for k, _, _ in free_layout(cfg)] + [k for k, _, _ in placement_layout(cfg)]
 
 
 def choose_points(cfg: Config, notes: list, bound: float | None = None) -> tuple[dict, dict]:

@@ -107,16 +107,10 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     check_batch(cfg, int(samples or cfg.tolerance.samples),
                 "--samples" if samples else "tolerance.samples")
     check_keys(cfg)
-    gas = "gas_strut" in cfg.optimise.spring_kinds
-    others = [k for k, _, _ in cfg.optimise.free or () if k not in SLOTS + (END_C, END_ANGLE)
-              and not (gas and k == "design.spring_preload")]
-    if others:
-        raise ConfigError(
-            "optimise.free: the robust design chooses k, l0, c, the attachment points "
-            "(geometry.*) and the end damper (design.end_damper_c, end_damper_angle_deg) "
-            f"only; fix {', '.join(others)} (e.g. at the nominal optimum's values: softclose "
-            "optimise --free ...) and run --robust without them")
-    placed = bool(cfg.optimise.free)
+    # the attachment points and the end damper are chosen first (robust/codesign.py); every
+    # other free design value (a rotary damper, a preload, a strut's F1) is a design
+    # variable of the scenario NLP beside k, l0 and c
+    placed = any(k in SLOTS + (END_C, END_ANGLE) for k, _, _ in cfg.optimise.free or ())
     if placed:
         toleranced = [k for k in cfg.tolerance.keys if any(
             s.startswith(k.split("[")[0]) for s in (k2 for k2, _, _ in cfg.optimise.free

@@ -56,9 +56,8 @@ from ..optimiser import compiled
 from ..optimiser.free_points import (length_bounds, placed_bounds, placement_layout, slot_values,
                                      spring_moment, strut_law)
 from ..model.elements.springs import strut_stroke
-from ..optimiser.interval import (ChebyshevFit, combine_function, END_ANGLE, END_C, free_layout,
-                                  gas_nlp,
-                                  free_of, interval_function, nlp_elements)
+from ..optimiser.interval import (ChebyshevFit, combine_function, END_C, free_layout, free_of,
+                                  gas_nlp, interval_function, nlp_elements)
 from ..model import elements
 from ..optimiser.nlp import check_linear_solver, PHASE_FLOOR
 from ..optimiser.cache import get_model, keep_out_of
@@ -319,12 +318,6 @@ class ScenarioStructure:
                 "J": self.J_fn.serialize().encode()}
 
 
-#: the free design variables (``optimise.free``) a scenario NLP carries: the end damper's, and
-#: a gas strut's force
-ROBUST_FREE = (END_C, END_ANGLE)
-STRUT_FORCE = "design.spring_preload"
-
-
 class ScenarioNLP:
     """The multiple-shooting NLP of S scenarios (see the module docstring): a
     :class:`ScenarioStructure` bound to the scenarios' models (their lid vectors).
@@ -348,8 +341,7 @@ class ScenarioNLP:
         self.robust_objective = robust_objective
         # the free end damper (optimise.free) and attachment points, shared by every scenario
         # (a gas strut's force F1 too: its design variable beside l0 and c)
-        self.free = tuple(x for x in free_layout(cfg) if x[0] in ROBUST_FREE
-                          or x[0] == STRUT_FORCE and gas_nlp(cfg))
+        self.free = free_layout(cfg)
         self.place = placement_layout(cfg)
         self.placed = bool(self.place)
         self.g0 = slot_values(cfg)

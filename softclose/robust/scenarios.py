@@ -136,7 +136,7 @@ def fractional_factorial(d: int) -> np.ndarray:
     return np.column_stack(cols)
 
 
-def design_dict(problem: "softclose.robust.solve.Problem", d) -> dict:
+def design_dict(problem, d) -> dict:
     """The design vector ``d`` of a solve by name: k, l0, c, then the NLP's free design
     variables (a gas strut's F1, the end damper's), as ``design`` keys."""
     names = DESIGN_KEYS + tuple(k.split(".", 1)[1] for k, _, _ in problem.nlp.free)
