@@ -70,6 +70,7 @@ from .nlp import T_FLOOR
 from .policy import (MAX_WIDEN, SLOW_YIELD_SAMPLES, WIDEN, YIELD_REFERENCE, check_keys,
                      max_corners)
 from .result import RobustResult, box_summary
+from .spring_box import made_to_order, spring_rounds
 from .scenarios import (all_corners, at_reference, corner_count, design_dict, initial_scenarios,
                         temperatures)
 from .solve import Problem, Run, solve_box, start_design
@@ -87,7 +88,8 @@ from ..problem import at_temperature
 
 
 def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None = None,
-                    seed: int = 0, verify: bool = True, report: bool = True) -> RobustResult:
+                    seed: int = 0, verify: bool = True, report: bool = True,
+                    own_box: bool = True) -> RobustResult:
     """The robust soft-close design over cfg's ``[tolerance]`` box, for each spring kind the
     optimiser may choose (``optimise.spring_kinds``; the free length bounded so that the
     spring stays valid over the stroke and its own tolerance:
@@ -98,8 +100,13 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
     ``verify`` re-simulates every scenario with the adaptive reference. ``report=False``
     (``softclose select``'s re-solves, which read the design, its worst-case objective and
     the verdict): the same design, objective, success and message, without what only the
-    report shows (:func:`optimise_robust_kind`).
+    report shows (:func:`optimise_robust_kind`). With a compression spring made to order
+    (``spring.material`` given) and ``own_box``, the answer holds for its spring's own EN 15800
+    box (:func:`softclose.robust.spring_box.spring_rounds`).
     """
+    if own_box and report and made_to_order(cfg):
+        return spring_rounds(cfg, lambda c: optimise_robust(
+            c, progress=progress, samples=samples, seed=seed, verify=verify, own_box=False))
     from dataclasses import replace
 
     t_start = time.perf_counter()

@@ -58,6 +58,9 @@ class RobustResult(Displayed):
     #: without a design or a box
     temperatures: tuple = ()
     limiting_temperature_c: float | None = None
+    #: a compression spring made to order: the EN 15800 box the answer holds for (grade, the
+    #: spreads used, their source, the spring d x D x n; :mod:`softclose.robust.spring_box`)
+    spring_tolerance: dict | None = None
     #: the config it was designed for
     config: object = field(default=None, repr=False, compare=False)
 
@@ -108,6 +111,8 @@ class RobustResult(Displayed):
             "times": self.times})
         if self.corner_check is not None:
             out["corner_check"] = self.corner_check
+        if self.spring_tolerance is not None:
+            out["spring_tolerance"] = self.spring_tolerance
         if self.infeasibility is not None:
             out["infeasibility"] = self.infeasibility
         if self.notes:
