@@ -23,6 +23,7 @@ from .diagnose import diagnose
 from .discretise import Discretisation, discretisation
 from .interval import END_C
 from .kinds import kind_config
+from .made_to_order import made_to_order, with_spring
 from .nlp import J_INDEX, Run, ShootingNLP, check_options
 from .polish import keep_clear, nlp_objective, refine, tighten
 from .result import Active, OptimiseResult
@@ -269,9 +270,21 @@ def optimise(cfg, *, starts: int | None = None, verify: bool = True,
     (:mod:`.kinds`); the best verified answer is kept, and says what spring to buy
     (``part``: kind, free length, rate, preload, working lengths, largest force, and the
     margins within which it must be made). A kind that cannot be valid, or finds no answer,
-    is listed in ``kinds`` with why.
+    is listed in ``kinds`` with why. With ``[spring]`` material given and its geometry not,
+    the answer's coil spring is designed and wound, and the problem solved again at its
+    rate (:mod:`.made_to_order`): the part names the spring.
     """
     check_reference_temperature(cfg, "the optimiser")
+    opts = dict(starts=starts, verify=verify, progress=progress, nodes=nodes,
+                substeps=substeps)
+    res = _optimise_kinds(cfg, **opts)
+    if made_to_order(cfg):
+        res = with_spring(cfg, res, lambda c: _optimise_kinds(c, **opts))
+    return res
+
+
+def _optimise_kinds(cfg, *, starts, verify, progress, nodes, substeps) -> OptimiseResult:
+    """:func:`optimise` without the spring made to order: every kind, the best kept."""
     t_start = time.perf_counter()
     rows, results, pending, todo = [], [], [], []
     for kind in cfg.optimise.spring_kinds:

@@ -41,6 +41,9 @@ class SpringPart:
     stroke: float | None = None
     progression: float | None = None
     friction: float | None = None
+    #: a coil spring made to order (:mod:`.made_to_order`): SPEC §14's ``spring`` object,
+    #: with ``ok`` and its ``checks``; None when none was designed
+    coil: dict | None = None
 
     def to_json(self) -> dict:
         out = {"kind": self.kind, "free_length": self.free_length, "rate": self.rate,
@@ -50,6 +53,8 @@ class SpringPart:
         if self.kind == "gas_strut":
             out.update(stroke=self.stroke, progression=self.progression,
                        friction=self.friction)
+        if self.coil is not None:
+            out["coil"] = self.coil
         return out
 
     def text(self) -> str:
@@ -63,6 +68,14 @@ class SpringPart:
         line = (f"{what}: free length {self.free_length * 1e3:.2f} mm, rate "
                 f"{self.rate:.6g} N/m, preload {self.preload:.4g} N; works between "
                 f"{lo * 1e3:.2f} and {hi * 1e3:.2f} mm, largest force {self.largest_force:.4g} N")
+        c = self.coil
+        if c is not None:
+            line += (f"\n  made to order: wire {c['wire_d'] * 1e3:.3g} mm, coil diameter "
+                     f"{c['coil_d'] * 1e3:.4g} mm (outer {c['outer_d'] * 1e3:.4g} mm), "
+                     f"{c['active_coils']:g} active coils, {c['material']}, "
+                     f"{c['mass'] * 1e3:.3g} g: "
+                     + ("every EN 13906 check met" if c["ok"] else "checks FAIL: " + ", ".join(
+                         x["name"] for x in c["checks"] if not x["ok"])))
         t = self.tolerance
         if t:
             fl, k = t.get("free_length", (0, 0)), t.get("rate", (0, 0))

@@ -31,6 +31,7 @@ from dataclasses import replace
 from ..coil_spring.order import spring_order
 from ..coil_spring.tolerances import quality_factor
 from ..errors import ConfigError
+from ..optimiser.made_to_order import made_to_order  # noqa: F401  (re-exported)
 
 #: the most robust solves with the spring's own box
 MAX_ROUNDS = 3
@@ -38,12 +39,6 @@ MAX_ROUNDS = 3
 RATE, FREE_LENGTH = "design.spring_k", "design.spring_rest_length"
 #: EN 15800's force tolerance: the relative part 1.5 % x Q
 FORCE_FRACTION = 0.015
-
-
-def made_to_order(cfg) -> bool:
-    """True when the config's ``[spring]`` names the wire (``spring.material`` given): the
-    compression spring is made to order, to EN 15800 at ``spring.grade``."""
-    return "material" in (cfg.raw.get("spring") or {})
 
 
 def en15800_spreads(spring_check, grade: int) -> dict:
@@ -165,6 +160,12 @@ def spring_rounds(cfg, solve, first=None):
                              f"; the spring's own EN 15800 spreads ({own}) do NOT all lie "
                              "within: narrow optimise.spring_k / spring_rest_length bounds or "
                              "give the space (spring.max_outer_d) and run again"))
+    if not holds:        # not a robust design of the spring one can order
+        return replace(res, success=False, message=(
+            f"the robust design does not hold for its own spring's EN 15800 box ({own}; "
+            f"solved for {txt}): narrow optimise.spring_k / spring_rest_length or give the "
+            "space (spring.max_outer_d)"), notes=res.notes + tuple(notes),
+            spring_tolerance=info)
     return replace(res, notes=res.notes + tuple(notes), spring_tolerance=info)
 
 
