@@ -5,6 +5,7 @@ again at the wound spring's own rate, and the reference verifies that answer."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import pytest
 
@@ -35,6 +36,11 @@ def test_the_optimum_comes_with_its_spring_every_check_met_and_verified(ordered)
     assert J_IDEAL <= res.objective <= 1.02 * J_IDEAL
     assert any(n.startswith("made to order:") for n in res.notes)
     assert "made to order: wire" in res.part.text()
+    # docs/parts.md quotes the part and the price in J
+    page = (Path(__file__).resolve().parents[1] / "docs" / "parts.md").read_text()
+    for line in res.part.text().splitlines()[:2]:
+        assert f"  to buy: {line}\n" in page or f"  {line}\n" in page, line
+    assert f"0.0228995 to {res.objective:.6g}" in page
 
 
 def test_no_spring_in_the_space_is_no_design_with_the_checks_that_fail(capsys):
