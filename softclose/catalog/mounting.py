@@ -19,6 +19,25 @@ from .nlp import spring_config
 from ..robust import optimise_robust
 
 
+#: the design values a pair's parts set: free in a config (an example lid's own problem), they
+#: are the parts' in ``select`` (:func:`parts_fix`)
+PART_KEYS = ("design.spring_k", "design.spring_rest_length", "design.spring_preload",
+             "design.damper_c", "design.rotary_damper_c", "design.strut_stroke",
+             "design.strut_progression", "design.strut_friction")
+
+
+def parts_fix(cfg: Config) -> tuple[Config, list[str]]:
+    """``cfg`` without the free design values the parts set (:data:`PART_KEYS`), and a
+    warning for each."""
+    free = [(k, lo, hi) for k, lo, hi in cfg.optimise.free or ()]
+    fixed = [k for k, _, _ in free if k in PART_KEYS]
+    if not fixed:
+        return cfg, []
+    rest = {k: [lo, hi] for k, lo, hi in free if k not in PART_KEYS}
+    return cfg.set("optimise.free", rest or None), [
+        f"optimise.free: {k} is set by each pair's parts, not chosen" for k in fixed]
+
+
 def placement_keys(cfg: Config) -> tuple[str, ...]:
     """The placement keys ``optimise.free`` names (refusing the others: the parts fix the
     spring's rate, free length and preload, the damper's c)."""
@@ -52,4 +71,4 @@ def place_pair(cfg: Config, spring, damper, samples: int) -> dict:
             "message": (r.message or "").splitlines()[0] if r.message else ""}
 
 
-__all__ = ["placement_keys", "place_pair"]
+__all__ = ["placement_keys", "place_pair", "parts_fix", "PART_KEYS"]

@@ -34,7 +34,7 @@ from .result import SelectResult, pair_entry
 from .screen import (RANGE, PairBox, pair_box, range_texts, reason_text, run_pairs,
                      summarise)
 from .nlp import NLP_SAMPLES, solve_c
-from .mounting import place_pair, placement_keys
+from .mounting import parts_fix, place_pair, placement_keys
 from . import coil, verify
 from ..robust.scenarios import at_reference
 from .screen import limiting_temperature
@@ -120,6 +120,7 @@ def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: 
         raise ConfigError(f"samples: expected a whole number 0..100000, got {samples!r}")
     if isinstance(verify, bool) or not isinstance(verify, (int, np.integer)) or verify < 0:
         raise ConfigError(f"verify: expected a whole number >= 0, got {verify!r}")
+    cfg, fixed = parts_fix(cfg)       # (a config's free part values: the parts')
     placed = placement_keys(cfg)      # (refuses free keys other than attachment points)
     spr: Catalog = as_catalog(springs, read_springs)
     dmp: Catalog | None = as_catalog(dampers, read_dampers)
@@ -128,7 +129,7 @@ def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: 
     check_batch(cfg, n_pairs * box.points + (0 if dmp is not None else
                                              len(spr) * (C_GRID + C_FINE + 1) * box.corners),
                 "select: the pairs' strokes")
-    warnings = list(spr.warnings) + (list(dmp.warnings) if dmp is not None else [])
+    warnings = fixed + list(spr.warnings) + (list(dmp.warnings) if dmp is not None else [])
     times = {}
     interrupted = False
     found: dict = {}            # pair index -> its ranking entry
