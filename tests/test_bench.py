@@ -327,3 +327,14 @@ def test_the_performance_pages_default_step_errors_are_the_benchs():
     e = bench.errors(sim.run(p), Reference(model, bench.TRUTH_TOL).simulate(p))
     assert (round(e["impact_theta_dot"], 7), round(e["closing_time"], 8),
             round(e["peak_tip_speed"], 7)) == (6.4e-6, 1.4e-7, 5.6e-6)
+
+
+def test_a_relative_error_against_a_truth_of_zero_is_absolute():
+    """A lid that never moves (no gravity) has no tip speed to be relative to: the error of
+    its peak tip speed is absolute (the fuzz suite found the division by zero)."""
+    from types import SimpleNamespace
+    from softclose.bench.precision import METRICS, errors
+    zero = SimpleNamespace(**{k: 0.0 for k in METRICS})
+    off = SimpleNamespace(**{k: 1e-9 for k in METRICS})
+    e = errors(off, zero)
+    assert all(v == pytest.approx(1e-9) for v in e.values())

@@ -88,14 +88,15 @@ def designs_for(cfg: Config, quick: bool = False) -> dict[str, np.ndarray]:
 def errors(res, truth) -> dict:
     """Error of each targeted metric of ``res`` against ``truth`` (both
     :class:`~softclose.simulation.stroke.StrokeResult`): absolute, or relative for
-    :data:`softclose.problem.RELATIVE`; None where either value is missing."""
+    :data:`softclose.problem.RELATIVE`, absolute where the truth is 0 (a lid that never
+    moves has no tip speed to be relative to); None where either value is missing."""
     out = {}
     for k in METRICS:
         a, b = getattr(res, k), getattr(truth, k)
         if a is None or b is None or not (math.isfinite(a) and math.isfinite(b)):
             out[k] = None
         else:
-            out[k] = abs(a - b) / (abs(b) if k in RELATIVE else 1.0)
+            out[k] = abs(a - b) / (abs(b) if k in RELATIVE and b != 0 else 1.0)
     return out
 
 
