@@ -19,11 +19,11 @@ import numpy as np
 
 from ..config import Config
 from ..errors import NumericalError
-from ..problem import DESIGN_KEYS, at_temperature
+from ..problem import at_temperature
 from .box import box_of
 from .evaluate import evaluate
 from .policy import MC_TOL
-from .scenarios import all_corners, corner_columns, initial_scenarios, temperatures
+from .scenarios import all_corners, corner_columns, design_dict, initial_scenarios, temperatures
 from .scenarios import label as scenario_label
 from .solve import Problem, Run, start_design
 from .stats import margins
@@ -93,9 +93,10 @@ def diagnose(cfg: Config, run: Run, problem: Problem, N: int, M: int, seed: int)
             hi = a
             capped += ra is not None and ra.r["status"] == "Maximum_Iterations_Exceeded"
     design = best if best is not None else run.design
-    box1 = box_of(cfg, dict(zip(DESIGN_KEYS, design)))
+    named = design_dict(run.problem, design)       # (with its free values: a strut's F1)
+    box1 = box_of(cfg, named)
     corners = box1.corners()
-    c = cfg.with_design(**dict(zip(DESIGN_KEYS, map(float, design))))
+    c = cfg.with_design(**named)
     temps = temperatures(cfg)
     parts = [evaluate(at_temperature(c, T), box1.keys, box1.values(corners)) for T in temps]
     cols = {k: np.concatenate([np.asarray(q[k]) for q in parts]) for k in parts[0]}
@@ -104,7 +105,7 @@ def diagnose(cfg: Config, run: Run, problem: Problem, N: int, M: int, seed: int)
     m = margins(cols, o)
     i = int(np.argmin(m))
     info = {"feasible_scale": lo if best is not None else 0.0,
-            "design_tried": dict(zip(DESIGN_KEYS, map(float, design)))}
+            "design_tried": named}
     parts = []
     if m[i] < 0:
         constraint, amount = _violation(cols, i, o)

@@ -8,7 +8,9 @@ import math
 
 from ..coil_spring import SpringCheck
 from ..errors import ConfigError
-from ..model.elements.springs import STROKE_FRACTION
+from ..model import elements
+from ..model.elements.springs import strut_stroke
+from ..problem import params_of
 from ..model.temperature import gas_factor
 
 
@@ -18,7 +20,7 @@ def _spring(cfg, stroke, temps) -> dict:
                "longest_length": None if stroke is None else stroke.max_spring_length}
     if d.spring_kind == "gas_strut":
         t_ref = cfg.operating.reference_temperature_c
-        stroke_s = d.strut_stroke or STROKE_FRACTION * d.spring_rest_length
+        stroke_s = float(strut_stroke(elements.params(params_of(cfg))))
         return {"kind": "gas_strut", "what": "gas strut (pushes only)",
                 "extended_length": d.spring_rest_length, "stroke": stroke_s,
                 "force_f1": d.spring_preload, "progression": d.strut_progression,
