@@ -83,6 +83,11 @@ class SpringDesign:
                 f"{self.best!r}, {len(self.candidates)} candidates)")
 
 
+#: how :func:`design` ranks the springs that meet every check
+RANKS = {"mass": lambda c: c.mass,
+         "tolerance": lambda c: (c.tolerance.free_length, c.mass)}
+
+
 def _coil_grid(lo: float, hi: float, step: float) -> list[float]:
     i0, i1 = math.ceil(lo / step - 1e-9), math.floor(hi / step + 1e-9)
     return [round(i * step, 10) for i in range(i0, i1 + 1)]
@@ -91,7 +96,7 @@ def _coil_grid(lo: float, hi: float, step: float) -> list[float]:
 def design(duty: Duty, material: str = DEFAULT_MATERIAL, *, ends: str = "closed_ground",
            max_outer_d: float | None = None, min_inner_d: float | None = None,
            grade: int = en15800.DEFAULT_GRADE, wires=PREFERRED_WIRE_D,
-           coil_step: float = COIL_STEP, coil_ds=None) -> SpringDesign:
+           coil_step: float = COIL_STEP, coil_ds=None, rank: str = "mass") -> SpringDesign:
     """Design the lightest compression spring (or extension spring, ``duty.kind``) of
     ``material`` for ``duty``.
 
@@ -121,6 +126,10 @@ def design(duty: Duty, material: str = DEFAULT_MATERIAL, *, ends: str = "closed_
         The grid of D (m).
     coil_ds : sequence of float, optional
         The mean coil diameters to try instead of the grid (m), e.g. one given D.
+    rank : str
+        ``"mass"`` (the lightest first) or ``"tolerance"``: the smallest EN 15800 free
+        length tolerance A_L0 first, then the lightest (a robust design's spring, whose
+        own tolerance box must lie within the box the design holds for).
 
     Returns
     -------
@@ -148,6 +157,9 @@ def design(duty: Duty, material: str = DEFAULT_MATERIAL, *, ends: str = "closed_
     if coil_ds is not None:
         coil_ds = [_positive("spring.coil_d", D, "m") for D in coil_ds]
     wires = [_positive("spring.wire_d", d, "m") for d in wires]
+    if rank not in RANKS:
+        raise ValueError(f"rank: one of {', '.join(RANKS)}, got {rank!r}")
+    order = RANKS[rank]
     lo_w, hi_w = en13906.INDEX_RANGE
     best_per_wire: dict[float, SpringCheck] = {}
     nearest: SpringCheck | None = None
@@ -175,7 +187,7 @@ def design(duty: Duty, material: str = DEFAULT_MATERIAL, *, ends: str = "closed_
             evaluated += 1
             if res.ok:
                 cur = best_per_wire.get(d)
-                if cur is None or res.mass < cur.mass:
+                if cur is None or order(res) < order(cur):
                     best_per_wire[d] = res
             else:
                 for name in res.failed:
@@ -183,7 +195,7 @@ def design(duty: Duty, material: str = DEFAULT_MATERIAL, *, ends: str = "closed_
                 if nearest is None or (res.worst_ratio, res.mass) < (nearest.worst_ratio,
                                                                       nearest.mass):
                     nearest = res
-    candidates = tuple(sorted(best_per_wire.values(), key=lambda c: c.mass))
+    candidates = tuple(sorted(best_per_wire.values(), key=order))
     if candidates:
         b = candidates[0]
         s = b.spring

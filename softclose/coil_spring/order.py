@@ -100,12 +100,13 @@ def _extension_duty(cfg) -> Duty:
                 initial_tension=d.spring_preload)
 
 
-def spring_order(cfg, duty: Duty | None = None):
+def spring_order(cfg, duty: Duty | None = None, rank: str = "mass"):
     """The ``[spring]`` of ``cfg`` checked against its duty (a
     :class:`~softclose.coil_spring.SpringCheck`, when ``wire_d``, ``coil_d`` and
     ``active_coils`` are all given), else designed (a
     :class:`~softclose.coil_spring.SpringDesign`: the given ``wire_d`` or ``coil_d`` held,
-    the rest chosen)."""
+    the rest chosen, ranked by ``rank``: ``"mass"`` or ``"tolerance"``, see
+    :func:`~softclose.coil_spring.designer.design`)."""
     duty = spring_duty(cfg) if duty is None else duty
     sp = cfg.spring
     space = dict(max_outer_d=sp.max_outer_d, min_inner_d=sp.min_inner_d, grade=sp.grade)
@@ -114,7 +115,7 @@ def spring_order(cfg, duty: Duty | None = None):
         return check(spring, duty, **space)
     wires = PREFERRED_WIRE_D if sp.wire_d is None else (sp.wire_d,)
     coils = None if sp.coil_d is None else (sp.coil_d,)
-    return design(duty, sp.material, ends=sp.ends, wires=wires, coil_ds=coils, **space)
+    return design(duty, sp.material, ends=sp.ends, wires=wires, coil_ds=coils, rank=rank, **space)
 
 
 __all__ = ["working_lengths", "spring_duty", "spring_order", "GRID"]

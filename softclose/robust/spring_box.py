@@ -9,19 +9,27 @@ wire d, coil diameter D and active coils n (:mod:`softclose.coil_spring.toleranc
     A_F  = (alpha_F k_F + 1.5 F / 100) Q      a force F at a given length (N)
          = R A_L0 + 0.015 Q F
 
-so a box of the free length ± A_L0 and of the rate ± 1.5 Q % (relative) moves the force at
+so a box of the rate ± 1.5 Q % (relative) and of the free length ± A_L0 moves the force at
 every working length L by at most R A_L0 + 0.015 Q R (L0 - L) = A_F (to first order): the
-standard's own force tolerance. These are the spreads :func:`spring_rounds` gives
-``design.spring_rest_length`` (absolute; with a preload the free length is
-``spring_rest_length + F0 / k`` and moves with it) and ``design.spring_k`` (relative) in place
-of the config's defaults; a spread of either key the user gave in ``[tolerance]`` wins.
+standard's own force tolerance. The free length's part enters the robust problem as what it
+does to the lid, a force: ``design.spring_preload`` ± R A_L0 = alpha_F k_F Q (absolute, N;
+the spring's force is F0 + k (l0 - L), so a free length l0 ± A_L0 at the rate R is a force
+± R A_L0 at every length), plus 1.5 Q % of a preload F0 the design has. A spread of the
+free length in millimetres would be another box for every rate: a softer spring errs less in
+force per millimetre, so the robust optimum runs to the softest spring, whose A_L0 (∝ 1/R)
+is then the largest, and the fixed point below never settles; in newtons the box is the
+spring maker's, whatever the rate. These are the spreads :func:`spring_rounds` gives
+``design.spring_k`` (relative) and ``design.spring_preload`` (absolute) in place of the
+config's; a spread of either key the user gave in ``[tolerance]`` wins.
 
 The spring depends on the design (its rate and lengths), the design on the box: an outer
-fixed point. Solve with the config's box; design the spring of the answer (the lightest that
-passes, :func:`softclose.coil_spring.order.spring_order`; or the ``[spring]`` given, checked);
-solve again with its EN 15800 spreads; design the spring of that answer, and while its spreads
-exceed those solved with, solve again with the larger of the two, at most :data:`MAX_ROUNDS`
-times. The result says which box the answer holds for (``spring_tolerance``).
+fixed point. Solve with the config's box; design the spring of the answer (of the springs that
+meet every check, the one with the smallest EN 15800 force tolerance alpha_F k_F, then the
+lightest: :func:`softclose.coil_spring.order.spring_order` with ``rank="tolerance"``; or the
+``[spring]`` given, checked); solve again with its EN 15800 spreads; design the spring of that
+answer, and while its spreads exceed those solved with, solve again with the larger of the
+two, at most :data:`MAX_ROUNDS` times. The result says which box the answer holds for
+(``spring_tolerance``: the spreads, and the free length's as millimetres at the spring's rate).
 """
 
 from __future__ import annotations
@@ -36,21 +44,26 @@ from ..optimiser.made_to_order import made_to_order  # noqa: F401  (re-exported)
 #: the most robust solves with the spring's own box
 MAX_ROUNDS = 3
 #: the keys EN 15800 gives a spread of
-RATE, FREE_LENGTH = "design.spring_k", "design.spring_rest_length"
+RATE, PRELOAD = "design.spring_k", "design.spring_preload"
+#: a free length spread given in ``[tolerance]`` (kept as it is, beside EN 15800's)
+FREE_LENGTH = "design.spring_rest_length"
 #: EN 15800's force tolerance: the relative part 1.5 % x Q
 FORCE_FRACTION = 0.015
 
 
-def en15800_spreads(spring_check, grade: int) -> dict:
+def en15800_spreads(spring_check, grade: int, preload: float = 0.0) -> dict:
     """The EN 15800 spreads of a checked spring (a
-    :class:`~softclose.coil_spring.SpringCheck`): ``{RATE: 0.015 Q (relative),
-    FREE_LENGTH: A_L0 (m, absolute)}``."""
-    return {RATE: FORCE_FRACTION * quality_factor(grade),
-            FREE_LENGTH: float(spring_check.tolerance.free_length)}
+    :class:`~softclose.coil_spring.SpringCheck`) of a design with preload ``preload`` (N):
+    ``{RATE: 0.015 Q (relative), PRELOAD: alpha_F k_F Q + 0.015 Q |F0| (N, absolute)}``:
+    the free length's A_L0 at the spring's rate R is R A_L0 = alpha_F k_F Q."""
+    q = quality_factor(grade)
+    t = spring_check.tolerance
+    return {RATE: FORCE_FRACTION * q,
+            PRELOAD: float(t.alpha_f * t.k_f * q + FORCE_FRACTION * q * abs(preload))}
 
 
 def with_spreads(cfg, spreads: dict):
-    """``cfg`` with ``[tolerance]`` spreads of the rate (relative) and the free length
+    """``cfg`` with ``[tolerance]`` spreads of the rate (relative) and the preload
     (absolute) set, and the compression spring the only kind."""
     values = {f"tolerance.{k}": (v if k == RATE else {"absolute": v})
               for k, v in spreads.items()}
@@ -66,7 +79,7 @@ def _spring_of(result):
         return None, (f"the design's spring is {'an' if result.kind == 'extension' else 'a'} "
                       f"{result.kind} spring; EN 15800 states compression springs' tolerances")
     try:
-        order = spring_order(result.design_config())
+        order = spring_order(result.design_config(), rank="tolerance")
     except ConfigError as e:
         return None, str(e)
     best = getattr(order, "best", order)      # a SpringDesign's best, or the SpringCheck
@@ -101,23 +114,26 @@ def spring_rounds(cfg, solve, first=None):
     used and where each comes from, the spring d x D x n, its own spreads, every round."""
     res = solve(cfg) if first is None else first
     grade = cfg.spring.grade
-    given = {k for k in (cfg.raw.get("tolerance") or {}) if k in (RATE, FREE_LENGTH)}
+    given = {k for k in (cfg.raw.get("tolerance") or {}) if k in (RATE, PRELOAD)}
+    # the config's spreads of the two keys: the rate's relative, the preload's in newtons (a
+    # relative one is of a nominal the design moves: not comparable)
     config_box = {s.key: s.value for s in cfg.tolerance.spreads
-                  if s.key in (RATE, FREE_LENGTH) and s.key not in given}
-    if config_box.get(FREE_LENGTH) is not None:      # (a relative one: not comparable)
-        config_box.pop(FREE_LENGTH)
+                  if s.key not in given and ((s.key == RATE and s.relative)
+                                             or (s.key == PRELOAD and not s.relative))}
     notes, rounds, used = [], [], None
     for i in range(MAX_ROUNDS + 1):
         spring, why = _spring_of(res)
         box = {k: (config_box.get(k, 0.0) if used is None else used[k])
-               for k in (RATE, FREE_LENGTH) if k not in given}
+               for k in (RATE, PRELOAD) if k not in given}
         if spring is None:
             notes.append(f"EN 15800 box, round {i + 1}: the answer "
                          + ("for the config's box" if used is None else
                             "for the spring's box of the round before") + f" has no spring ({why})")
             rounds.append({"result": res, "box": box, "spring": None, "holds": False})
             break
-        own = {k: v for k, v in en15800_spreads(spring, grade).items() if k not in given}
+        preload = float((res.design or {}).get("spring_preload", 0.0) or 0.0)
+        own = {k: v for k, v in en15800_spreads(spring, grade, preload).items()
+               if k not in given}
         holds = all(own[k] <= box[k] * (1 + 1e-9) for k in own)
         rounds.append({"result": res, "box": box, "spring": spring, "own": own,
                        "holds": holds})
@@ -134,39 +150,51 @@ def spring_rounds(cfg, solve, first=None):
     for s in cfg.tolerance.spreads:
         if s.key in given:
             spreads[s.key] = s.value
-    absolute = {k: not s.relative for s in cfg.tolerance.spreads for k in (s.key,)
-                if k in given}
+    absolute = {s.key: not s.relative for s in cfg.tolerance.spreads if s.key in given}
+    rate = float(spring.rate)
     info = {"grade": grade,
-            "spreads": {k: {("absolute" if absolute.get(k, k == FREE_LENGTH) else "relative"):
-                            spreads.get(k, 0.0)} for k in (RATE, FREE_LENGTH)},
+            "spreads": {k: {("absolute" if absolute.get(k, k == PRELOAD) else "relative"):
+                            spreads.get(k, 0.0)} for k in (RATE, PRELOAD)},
+            "free_length": (None if PRELOAD in given or not absolute.get(PRELOAD, True)
+                            else spreads.get(PRELOAD, 0.0) / rate),
             "source": {k: ("[tolerance]" if k in given else "EN 15800" if pick["box"] is not
-                           rounds[0]["box"] else "the config's box") for k in (RATE, FREE_LENGTH)},
+                           rounds[0]["box"] else "the config's box") for k in (RATE, PRELOAD)},
             "spring": _spring_json(spring), "own": pick.get("own"), "holds": holds,
             "round": rounds.index(pick) + 1,
             "rounds": [{"box": r["box"], "own": r.get("own"), "holds": r["holds"],
                         "spring": None if r["spring"] is None else _spring_json(r["spring"]),
                         "objective": r["result"].objective, "success": r["result"].success}
                        for r in rounds]}
-    txt = ", ".join(f"{k.removeprefix('design.')} ±" + (
-        f"{100 * spreads[k]:.3g} %" if k == RATE else f"{spreads[k] * 1e3:.4g} mm")
-        + (" ([tolerance]: wins over EN 15800)" if k in given else "")
-        for k in (RATE, FREE_LENGTH) if spreads.get(k) is not None)
-    own = ", ".join(f"{k.removeprefix('design.')} ±" + (
-        f"{100 * v:.3g} %" if k == RATE else f"{v * 1e3:.4g} mm")
-        for k, v in (pick.get("own") or {}).items())
+
+    def say(values: dict, mark_given: bool) -> str:
+        out = []
+        for k in (RATE, PRELOAD):
+            v = values.get(k)
+            if v is None:
+                continue
+            if k == RATE:
+                out.append(f"spring_k ±{100 * v:.3g} %")
+            else:
+                out.append(f"spring_preload ±{v:.4g} N (free length ±{v / rate * 1e3:.4g} mm "
+                           f"at {rate:.5g} N/m)")
+            if mark_given and k in given:
+                out[-1] += " ([tolerance]: wins over EN 15800)"
+        return ", ".join(out)
+
+    txt, own = say(spreads, True), say(pick.get("own") or {}, False)
     notes.append(f"EN 15800 grade {grade}: the spring made to order {_name(spring)} "
                  f"(round {rounds.index(pick) + 1} of {len(rounds)}); the answer holds for "
                  f"{txt}" + ("; the spring's own EN 15800 spreads lie within" if holds else
                              f"; the spring's own EN 15800 spreads ({own}) do NOT all lie "
-                             "within: narrow optimise.spring_k / spring_rest_length bounds or "
-                             "give the space (spring.max_outer_d) and run again"))
+                             "within: choose spring.grade = 1, a stiffer wire "
+                             "(spring.material) or give the space (spring.max_outer_d), and "
+                             "run again"))
     if not holds:        # not a robust design of the spring one can order
         return replace(res, success=False, message=(
             f"the robust design does not hold for its own spring's EN 15800 box ({own}; "
-            f"solved for {txt}): narrow optimise.spring_k / spring_rest_length or give the "
-            "space (spring.max_outer_d)"), notes=res.notes + tuple(notes),
+            f"solved for {txt}): choose spring.grade = 1 or give the space "
+            "(spring.max_outer_d)"), notes=res.notes + tuple(notes),
             spring_tolerance=info)
     return replace(res, notes=res.notes + tuple(notes), spring_tolerance=info)
 
-
-__all__ = ["made_to_order", "en15800_spreads", "with_spreads", "spring_rounds", "MAX_ROUNDS"]
+__all__ = ["made_to_order", "en15800_spreads", "RATE", "PRELOAD", "with_spreads", "spring_rounds", "MAX_ROUNDS"]
