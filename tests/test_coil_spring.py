@@ -505,8 +505,9 @@ def test_spring_command_checks(capsys):
      "spring.coil_d: the spring index w = D/d = 25 is outside EN 13906-1's 4 <= w <= 20 "
      "(d = 1 mm, D = 25 mm)"),
     (COMPRESSION + ["spring.active_coils=8"],
-     "spring.active_coils: given without spring.wire_d and spring.coil_d; give all three to "
-     "check a spring, or leave it out to design one"),
+     "spring.active_coils: given without spring.wire_d; give the wire too (with "
+     "spring.coil_d: a spring to check; without: its coil diameter designed), or leave it "
+     "out to design one"),
     (COMPRESSION + ["spring.active_coils=1.5", "spring.wire_d=0.002", "spring.coil_d=0.016"],
      "spring.active_coils: 1.5 coils is outside the admissible range 2..1000 coils"),
     (COMPRESSION + ["spring.wire_d=-0.002"], "spring.wire_d: must be positive, got -0.002"),

@@ -187,7 +187,8 @@ def test_cli_refuses_crank_key_on_hinge_in_one_line():
 def test_four_bar_default_unchanged():
     rc, out, err = _cli("optimise", "--json")
     assert rc == 0, err
-    assert json.loads(out)["objective"] == 0.02289949029239926
+    # to the last bits Ipopt's answer depends on the machine's floating point (BLAS, MUMPS)
+    assert json.loads(out)["objective"] == pytest.approx(0.02289949029239926, rel=1e-13)
 
 
 def test_newton_euler_hinge_reaction():

@@ -209,17 +209,17 @@ def _pivots(raw: dict[str, Any], values: dict[str, dict[str, Any]]) -> None:
 
 def _check_spring(sp: dict[str, Any]) -> None:
     """The [spring] keys against each other and the wire (SPEC §14): the material's wire
-    diameters, the spring index 4..20 of EN 13906-1, n only with d and D, the space."""
+    diameters, the spring index 4..20 of EN 13906-1, n only with d, the space."""
     from ..coil_spring import material, standard
     d, D = sp["wire_d"], sp["coil_d"]
     if d is not None:
         material(sp["material"]).check_wire(d)
     if d is not None and D is not None:
         standard.check_index(d, D)
-    if sp["active_coils"] is not None and (d is None or D is None):
-        raise ConfigError("spring.active_coils: given without spring.wire_d and "
-                          "spring.coil_d; give all three to check a spring, or leave it out "
-                          "to design one")
+    if sp["active_coils"] is not None and d is None:
+        raise ConfigError("spring.active_coils: given without spring.wire_d; give the wire "
+                          "too (with spring.coil_d: a spring to check; without: its coil "
+                          "diameter designed), or leave it out to design one")
     lo, hi = sp["min_inner_d"], sp["max_outer_d"]
     if lo is not None and hi is not None and lo >= hi:
         raise ConfigError(f"spring.min_inner_d: {lo:g} m leaves no room below "

@@ -62,10 +62,19 @@ def nlp_key(cfg, nodes: int | None = None, substeps: int | None = None,
         M2 = int(substeps2 or phase_two_substeps(cfg, N, M))
     fit = lid_fit(cfg)
     return (tuple(e.name for e in fit.elements), fit.names, padded_degree(fit.degree),
-            o.opening_force_max is not None, o.self_close_min_deg is not None,
+            o.opening_force_max is not None, o.self_close_min_deg is not None, coil_nlp(cfg),
             tuple((k, col) for k, col, _ in free_layout(cfg)),
             tuple((k, slot) for k, slot, _ in placement_layout(cfg)), keep_out_of(cfg), M2,
             N, M, o.hessian, o.linear_solver, o.max_iter)
+
+
+def coil_nlp(cfg) -> bool:
+    """Does cfg's NLP carry its compression spring made to order (``spring.material`` given,
+    the geometry not; the kind a compression spring; its points fixed)? Its wire, coil
+    diameter and coils are then variables of the NLP (:mod:`.coil_nlp`)."""
+    from .coil_nlp import made_to_order
+    return (made_to_order(cfg) and cfg.design.spring_kind == "compression"
+            and not placement_layout(cfg))
 
 
 def keep_out_of(cfg) -> tuple:
@@ -85,12 +94,12 @@ def has_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
 def build_structure(key: tuple, library=None, meta=None) -> ShootingStructure:
     """The ShootingStructure of a :func:`nlp_key`, built symbolically (or its compiled
     ``library`` loaded, with its ``meta``)."""
-    els, names, degree, opening, self_close, free, place, keep_out, M2, N, M, hess, lin, \
-        it = key
+    els, names, degree, opening, self_close, coil, free, place, keep_out, M2, N, M, hess, \
+        lin, it = key
     return ShootingStructure(tuple(elements.BY_NAME[e] for e in els), names, degree, N, M,
                              None if M2 is None else (N, M2), free, place, opening,
                              keep_out, hess, lin, it, library=library, meta=meta,
-                             self_close=self_close)
+                             self_close=self_close, coil=coil)
 
 
 def get_structure(key: tuple, what: str = "") -> ShootingStructure:
@@ -118,15 +127,19 @@ def build_nlp(cfg, nodes: int, substeps: int, substeps2: int | None = None) -> S
 
 
 def _bind(cfg, structure) -> ShootingNLP:
-    return ShootingNLP(get_model(cfg), structure, lid_fit(cfg), free=free_layout(cfg),
-                       placement=placement_layout(cfg))
+    nlp = ShootingNLP(get_model(cfg), structure, lid_fit(cfg), free=free_layout(cfg),
+                      placement=placement_layout(cfg))
+    if structure.coil:
+        nlp.coil_params(cfg)
+    return nlp
 
 
 def describe_nlp(cfg, N: int, M: int, M2: int | None) -> str:
     """The NLP's structure in words, for the line a compilation writes on stderr (one
     structure serves every lid and spring kind)."""
     free = [k for k, _, _ in free_layout(cfg) + placement_layout(cfg)]
-    return (f"of the optimiser ({', '.join(e.name for e in nlp_elements(cfg))}; "
+    return (f"of the optimiser ({', '.join(e.name for e in nlp_elements(cfg))}"
+            + ("; the spring's wire, coil diameter and coils" if coil_nlp(cfg) else "") + "; "
             f"{N} x {M} RK4 steps" + (f", phase 2 {N} x {M2}" if M2 else "")
             + (f"; free {', '.join(free)}" if free else "") + ")")
 

@@ -20,19 +20,16 @@ region allows at that rate; a design whose rate no spring can carry is reported 
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
+import numpy as np
+
 from ..errors import ConfigError
+from .coil_nlp import GEOMETRY, made_to_order
 
-#: the keys of a spring's geometry in ``[spring]``: all three given, the spring is checked
-GEOMETRY = ("wire_d", "coil_d", "active_coils")
-
-
-def made_to_order(cfg) -> bool:
-    """Does ``cfg`` ask for a coil spring made to order (``spring.material`` given, its
-    geometry not)?"""
-    raw = cfg.raw.get("spring", {}) if isinstance(cfg.raw, dict) else {}
-    return "material" in raw and not all(k in raw for k in GEOMETRY)
+#: the starts of each re-solve with a rounded spring (near the first answer: few suffice)
+ROUNDING_STARTS = 2
 
 
 def with_spring(cfg, res, solve):
@@ -46,6 +43,9 @@ def with_spring(cfg, res, solve):
     if res.kind not in ("compression", "extension") or not res.design.get("spring_k"):
         return replace(res, notes=res.notes + (
             f"[spring] material: no coil spring to make ({res.kind or 'no'} spring)",))
+    nlp_spring = _nlp_spring(cfg, res)
+    if nlp_spring is not None:
+        return _rounded(cfg, res, solve, nlp_spring)
     first = res.design_config()
     try:
         made = spring_order(first, spring_duty(first))
@@ -81,6 +81,93 @@ def with_spring(cfg, res, solve):
         f"the spring made to order fails {', '.join(check.failed)} at the re-solved design")
     return replace(again, success=ok, message=message, part=part,
                    notes=again.notes + notes)
+
+
+def _nlp_spring(cfg, res) -> dict | None:
+    """The NLP's own spring (d, D, n; SI) of ``res``, when its NLP carried one."""
+    from .cache import coil_nlp
+    from .coil_nlp import spring_of
+    if res.run is None or not coil_nlp(cfg.set("design.spring_kind", res.kind)):
+        return None
+    return spring_of(np.asarray(res.run.x, float)[-3:])
+
+
+def roundings(cfg, spring: dict, rate: float) -> list[tuple[float, float]]:
+    """(d, n) to try for the NLP's ``spring`` of ``rate``: the preferred wires on either side
+    of its d (those the material covers, or the ``spring.wire_d`` given), each with its
+    active coils at the spring's D rounded down and up to a quarter coil (n >= 2)."""
+    from ..coil_spring import PREFERRED_WIRE_D
+    from ..coil_spring import standard as en13906
+    from ..coil_spring.design import COIL_ROUNDING
+    from ..coil_spring.materials import material
+    sp = cfg.spring
+    m = material(sp.material)
+    d0, D0 = spring["wire_d"], spring["coil_d"]
+    if sp.wire_d is not None:
+        wires = [float(sp.wire_d)]
+    else:
+        ok = [d for d in PREFERRED_WIRE_D if m.d_min < d <= m.d_max]
+        below = [d for d in ok if d <= d0 * (1 + 1e-9)]
+        above = [d for d in ok if d > d0 * (1 + 1e-9)]
+        wires = below[-1:] + above[:1]
+    out = []
+    for d in wires:
+        if sp.active_coils is not None:
+            out.append((d, float(sp.active_coils)))
+            continue
+        n = en13906.active_coils_for_rate(m.G, d, D0, rate)
+        for nr in (math.floor(n / COIL_ROUNDING) * COIL_ROUNDING,
+                   math.ceil(n / COIL_ROUNDING) * COIL_ROUNDING):
+            if nr >= en13906.MIN_ACTIVE_COILS and (d, nr) not in out:
+                out.append((d, nr))
+    return out
+
+
+def _rounded(cfg, res, solve, spring: dict):
+    """The NLP's spring rounded to a preferred wire and a quarter coil: the problem solved
+    again with d and n held (D and the rest free, every check a constraint) for each
+    rounding of :func:`roundings`, the best verified answer kept, its spring checked."""
+    from ..coil_spring.order import spring_duty, spring_order
+    tried, best = [], None
+    for d, n in roundings(cfg, spring, res.design["spring_k"]):
+        again = solve(cfg.update({"optimise.spring_kinds": ["compression"],
+                                  "optimise.starts": ROUNDING_STARTS,
+                                  "spring.wire_d": d, "spring.active_coils": n}))
+        tried.append(f"d {d * 1e3:g} mm, n {n:g}: " + (
+            f"J = {again.objective:.8g}" if again.success else "no design"))
+        if again.success and again.design is not None and (
+                best is None or again.objective < best[0].objective):
+            best = (again, d, n)
+    if best is None:
+        return replace(res, success=False, message=(
+            f"no coil spring made to order of a preferred wire and a quarter coil realises "
+            f"the optimum (the NLP's spring: {_name_of(spring)}; tried " + "; ".join(tried)
+            + "): widen [spring] max_outer_d / min_inner_d, choose another material, or "
+            "lower spring.cycles"))
+    again, d, n = best
+    wound = _nlp_spring(cfg, again) or dict(spring, wire_d=d, active_coils=n)
+    final = again.design_config()
+    geometry = {"spring.wire_d": d, "spring.coil_d": round(wound["coil_d"], 9),
+                "spring.active_coils": n}
+    check = spring_order(final.update(geometry), spring_duty(final))
+    coil = dict(check.spring_json(), ok=bool(check.ok),
+                checks=[c.to_json() for c in check.checks])
+    part = None if again.part is None else replace(again.part, coil=coil)
+    notes = (f"made to order: the NLP's spring {_name_of(spring)} at J {res.objective:.8g}; "
+             f"wound as {_name_of(dict(wound, wire_d=d, active_coils=n))} "
+             f"({cfg.spring.material}), rate {again.design['spring_k']:.6g} N/m: J "
+             f"{again.objective:.8g} (the roundings tried: " + "; ".join(tried) + ")",)
+    ok = again.success and check.ok
+    message = again.message if check.ok else (
+        f"the spring made to order fails {', '.join(check.failed)} at the re-solved design")
+    return replace(again, success=ok, message=message, part=part,
+                   config=again.config.update(geometry) if again.config is not None else None,
+                   notes=again.notes + notes)
+
+
+def _name_of(spring: dict) -> str:
+    return (f"wire {spring['wire_d'] * 1e3:.4g} mm x coil {spring['coil_d'] * 1e3:.4g} mm x "
+            f"{spring['active_coils']:.4g} active coils")
 
 
 def _name(spring) -> str:

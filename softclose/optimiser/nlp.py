@@ -62,7 +62,6 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
@@ -77,49 +76,22 @@ from .lid import (OPENING_INTERVALS, SELF_CLOSE_INTERVALS, SELF_CLOSE_MARGIN, Li
                   SymbolicSeries, check_self_close, holding_moment, opening_angles,
                   opening_bound, self_close_bound, self_close_function)
 from .keep_out import keep_out_constraints
+from .coil_nlp import COIL_PARAMS, GROUPS as COIL_GROUPS, coil_params, spring_of, z_bounds, \
+    z_start
+from .coil_nlp import nlp_terms as coil_terms
 from .free_points import placed_bounds, placed_config, placed_constraints, slot_values
 from ..buildcache import text
+from .run import FIXED_PARAMS, J_INDEX, NLP_PARAMS, Run  # noqa: F401  (re-exported)
 from .ipopt import (COLD_OPTIONS, LINEAR_ALGEBRA, MUMPS_OPTIONS,  # noqa: F401  (re-exported)
                     WARM_OPTIONS, check_linear_solver, check_options)
 
 #: Ipopt return statuses that count as converged
 CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
-#: the parameters of p that are not design variables: NLP parameters
-FIXED_PARAMS = PARAM_KEYS[len(DESIGN_KEYS):]
-#: NLP parameters, in order (then the time grid: the fractions of T of the N intervals)
-NLP_PARAMS = ("theta0", "theta_closed", "weight_impact", "weight_peak_tip", "weight_time",
-              *FIXED_PARAMS, "J_ref")
-J_INDEX = NLP_PARAMS.index("J_ref")
 #: smallest closing time the NLP may take (s): T = 0 would make every step vanish
 T_FLOOR = 1e-3
 #: shortest phase of a two-phase stroke (s): the engagement time T1 and T - T1 (a phase of
 #: no duration would be a node on both sides of the switch)
 PHASE_FLOOR = 1e-4
-
-
-# -- one Ipopt run ---------------------------------------------------------------------------
-@dataclass(frozen=True, eq=False)
-class Run:
-    """One Ipopt solve: the primal-dual point, its status and cost, and the problem data
-    (parameters ``p`` and ``bounds`` = (lbx, ubx, lbg, ubg)) it was solved with."""
-
-    x: np.ndarray
-    f: float
-    g: np.ndarray
-    lam_x: np.ndarray | None
-    lam_g: np.ndarray | None
-    status: str
-    success: bool
-    iterations: int
-    time: float
-    p: np.ndarray
-    bounds: tuple
-    origin: str = ""
-    violations: dict = field(default_factory=dict)
-
-    @property
-    def J_ref(self) -> float:
-        return float(self.p[J_INDEX])
 
 
 class ShootingStructure:
@@ -140,7 +112,8 @@ class ShootingStructure:
                  phase2: tuple | None = None, free: tuple = (), place: tuple = (),
                  opening: bool = False, keep_out: tuple = (), hessian: str = "exact",
                  linear_solver: str = "mumps", max_iter: int = 500, tol: float = 1e-10,
-                 library=None, meta: dict | None = None, self_close: bool = False):
+                 library=None, meta: dict | None = None, self_close: bool = False,
+                 coil: bool = False):
         t0 = time.perf_counter()
         check_linear_solver(linear_solver)
         self.els = tuple(els)
@@ -156,6 +129,9 @@ class ShootingStructure:
         self.iT = self.nd
         self.iT1 = self.nd + 1 if self.two_phase else None
         self.iX = self.nd + (2 if self.two_phase else 1)
+        #: the compression spring made to order: z = (d, D, n) after s (:mod:`.coil_nlp`)
+        self.coil = bool(coil)
+        self.iS = self.iX + 2 * N
         self.series = SymbolicSeries(names, self.els, degree)
         #: the spring law of the structure: a gas strut's NLP carries its length's series
         self.spring = "gas" if "spring:l" in self.series.names else "coil"
@@ -163,6 +139,9 @@ class ShootingStructure:
                              OPENING_INTERVALS + 1 if opening else 0,
                              SELF_CLOSE_INTERVALS + 1 if self_close else 0)
         self.n_params = len(NLP_PARAMS) + N + self.lid.size
+        self.i_coil = self.n_params                 # the spring's block, after the lid's
+        if self.coil:
+            self.n_params += len(COIL_PARAMS)
         self.ipopt_options = {"print_time": False, "show_eval_warnings": False,
                               "calc_lam_p": False,
                               "ipopt.print_level": 0, "ipopt.sb": "yes",
@@ -255,16 +234,23 @@ class ShootingStructure:
         if self.two_phase:  # the node between the phases on theta_e; phase 2 lasts
             g_all["engagement"] = X[0, nodes - 1] - theta_e           # = 0
             g_all["phase_two"] = T - T1                               # >= PHASE_FLOOR
+        z, mass_term = [], 0.0
+        if self.coil:      # the spring's wire, coil diameter and coils, and its checks
+            zs = ca.MX.sym("z", 3)
+            checks, mass_term = coil_terms(zs, design, P[self.i_coil:])
+            g_all.update(checks)
+            z = [zs]
         self.g_names = list(g_all)
         self.g_sizes = [int(v.numel()) for v in g_all.values()]
         # softclose.problem.objective with the weights as NLP parameters (+ a time term that
         # only the infeasibility diagnosis uses: fastest / slowest stroke)
         J = wi * X[1, N - 1] ** 2 + wp * s ** 2 + wt * T
-        w = ca.vertcat(d, T, *([T1] if self.two_phase else []), ca.vec(X), s)
+        w = ca.vertcat(d, T, *([T1] if self.two_phase else []), ca.vec(X), s, *z)
         self.nw = int(w.numel())
         # the largest sub-step speed or Hermite maximum: the NLP's own peak tip speed
         self._peak = ca.Function("peak", [w, P], [ca.mmax(sp)])
-        nlp = {"x": w, "f": J / Jref, "g": ca.vertcat(*g_all.values()), "p": P}
+        f = J / Jref + mass_term if self.coil else J / Jref
+        nlp = {"x": w, "f": f, "g": ca.vertcat(*g_all.values()), "p": P}
         stop = ipopt_options(self.nw, sum(self.g_sizes), int(P.numel()))   # Ctrl-C
         self.solver = ca.nlpsol("softclose_ms", "ipopt", nlp,
                                 {**self.ipopt_options, **COLD_OPTIONS, **stop})
@@ -327,7 +313,8 @@ class ShootingNLP:
     def __init__(self, model, structure: ShootingStructure, fit: ChebyshevFit,
                  free: tuple = (), placement: tuple = ()):
         self.model, self.structure, self.fit = model, structure, fit
-        for k in ("two_phase", "nodes", "M", "N2", "M2", "N", "nd", "iT", "iT1", "iX",
+        for k in ("two_phase", "nodes", "M", "N2", "M2", "N", "nd", "iT", "iT1", "iX", "iS",
+                  "coil",
                   "placed", "g_names", "g_sizes", "nw", "solver", "warm_solver", "_peak",
                   "ipopt_options", "library", "build_time"):
             setattr(self, k, getattr(structure, k))
@@ -343,6 +330,7 @@ class ShootingNLP:
             opening_angles(model, OPENING_INTERVALS) if lay.opening_angles else None)
         self._self_close = {}       # the lid vector's self-close part, per angle
         self.key = None
+        self._coil_key, self._coil, self._zcfg = None, None, None   # the spring made to order
 
     def self_close_part(self, self_close_deg: float | None) -> np.ndarray:
         """The lid vector's self-close part at ``self_close_deg`` (the structure's
@@ -389,14 +377,20 @@ class ShootingNLP:
             d = np.r_[d[:len(DESIGN_KEYS)], [d[col] for _, col, _ in self.free],
                       [self.g0[slot] for _, slot, _ in self.place]]
         t1 = [] if not self.two_phase else [0.5 * T if T1 is None else T1]
-        return np.r_[d[:self.nd] / self.scales, T, t1, np.asarray(X, float).T.ravel(), s]
+        z = [] if not self.coil else (z_start(self._zcfg, d[0]) if self._zcfg is not None
+                                      else np.ones(3))
+        return np.r_[d[:self.nd] / self.scales, T, t1, np.asarray(X, float).T.ravel(), s, z]
 
     def unpack(self, w):
         """(design (k, l0, c, then the free variables), T, X (2, N), s) of a point ``w``."""
         w = np.asarray(w, float).ravel()
         N, i, j = self.N, self.iT, self.iX
         X = w[j:j + 2 * N].reshape(N, 2).T
-        return w[:i] * self.scales, float(w[i]), X, float(w[-1])
+        return w[:i] * self.scales, float(w[i]), X, float(w[self.iS])
+
+    def spring_of(self, w) -> dict | None:
+        """{wire_d, coil_d, active_coils} (SI) of the NLP's spring at ``w`` (None: none)."""
+        return spring_of(np.asarray(w, float)[self.iS + 1:]) if self.coil else None
 
     def engagement(self, w) -> tuple[float, float] | None:
         """(time, theta') of the node between the phases at ``w``: the NLP's own engagement
@@ -478,7 +472,9 @@ class ShootingNLP:
         lbx[j:j + 2 * N:2], ubx[j:j + 2 * N:2] = st.theta_closed, st.theta0
         ubx[j + 1:j + 1 + 2 * N:2] = 0.0
         lbx[j + 2 * (N - 1)] = ubx[j + 2 * (N - 1)] = st.theta_closed
-        lbx[-1] = 0.0
+        lbx[self.iS] = 0.0
+        if self.coil:
+            lbx[self.iS + 1:], ubx[self.iS + 1:] = z_bounds(cfg)
         lo = {"continuity": 0.0, "theta_above_closed": 0.0, "theta_dot_nonpositive": -np.inf,
               "peak_tip_speed": 0.0, "holding_moment": o.holding_moment_min,
               "release_downwards": -np.inf, "opening_force": -np.inf,
@@ -490,6 +486,8 @@ class ShootingNLP:
               "self_close": np.inf, "engagement": 0.0, "phase_two": np.inf}
         if self.placed:
             placed_bounds(cfg, lo, hi)
+        for k, (a, b) in COIL_GROUPS.items():
+            lo[k], hi[k] = a, b
         lbg = np.concatenate([np.full(n, lo[k]) for k, n in zip(self.g_names, self.g_sizes)])
         ubg = np.concatenate([np.full(n, hi[k]) for k, n in zip(self.g_names, self.g_sizes)])
         return lbx, ubx, lbg, ubg
@@ -513,9 +511,18 @@ class ShootingNLP:
         fixed = params_of(cfg)[len(DESIGN_KEYS):]
         if self.structure.lid.self_close_angles:
             check_self_close(cfg)
+        coil = [] if not self.coil else self.coil_params(cfg)
         return np.r_[st.theta0, st.theta_closed, wi, wp, weight_time, fixed, J_ref,
                      self.time_grid(), self.lid_vector,
-                     self.self_close_part(o.self_close_min_deg)]
+                     self.self_close_part(o.self_close_min_deg), coil]
+
+    def coil_params(self, cfg) -> np.ndarray:
+        """The spring block of ``cfg`` (kept per config); z's start follows its material."""
+        key = (cfg.spring, cfg.operating, cfg.stroke, self.model.lid)
+        if self._coil_key != key:
+            self._coil_key, self._coil = key, coil_params(cfg)
+        self._zcfg = cfg
+        return self._coil
 
     def time_grid(self) -> np.ndarray:
         """Fractions of T of the N intervals: uniform (two phases: each phase's N intervals
