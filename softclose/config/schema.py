@@ -170,8 +170,8 @@ SPRING: tuple[Key, ...] = (
         note="with `wire_d`: 4 ≤ D/d ≤ 20"),
     Key("spring", "active_coils", "pos", None, "coils",
         "active coils n; given with `wire_d` and `coil_d` the spring is checked, not "
-        "designed; none: designed (to a quarter coil for the rate)", lo=2.0, hi=1000.0,
-        note="only with `wire_d` and `coil_d`"),
+        "designed; with `wire_d` alone the coil diameter is designed; none: designed (to a "
+        "quarter coil for the rate)", lo=2.0, hi=1000.0, note="only with `wire_d`"),
     Key("spring", "ends", "str:closed_ground,closed", "closed_ground", "",
         "end coils: `closed_ground` (solid length n_t d) or `closed`, not ground "
         "((n_t + 1.5) d)"),
