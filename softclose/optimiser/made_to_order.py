@@ -30,6 +30,8 @@ from .coil_nlp import GEOMETRY, made_to_order
 
 #: the starts of each re-solve with a rounded spring (near the first answer: few suffice)
 ROUNDING_STARTS = 2
+#: a rounding whose J is within this fraction of the continuous optimum's ends the search
+ROUNDING_GAP = 1e-3
 
 
 def with_spring(cfg, res, solve):
@@ -125,11 +127,19 @@ def roundings(cfg, spring: dict, rate: float) -> list[tuple[float, float]]:
 
 def _rounded(cfg, res, solve, spring: dict):
     """The NLP's spring rounded to a preferred wire and a quarter coil: the problem solved
-    again with d and n held (D and the rest free, every check a constraint) for each
-    rounding of :func:`roundings`, the best verified answer kept, its spring checked."""
+    again with d and n held (D and the rest free, every check a constraint) for the
+    roundings of :func:`roundings`, nearest first, the best verified answer kept, its spring
+    checked. Holding d and n restricts the problem, so the continuous optimum's J bounds
+    every rounding's from below: a rounding within :data:`ROUNDING_GAP` of it ends the
+    search (no other can be better by more)."""
     from ..coil_spring.order import spring_duty, spring_order
     tried, best = [], None
-    for d, n in roundings(cfg, spring, res.design["spring_k"]):
+    d0, n0 = spring["wire_d"], spring["active_coils"]
+    for d, n in sorted(roundings(cfg, spring, res.design["spring_k"]),
+                       key=lambda dn: (abs(math.log(dn[0] / d0)), abs(dn[1] - n0))):
+        if best is not None and best[0].objective <= res.objective * (1 + ROUNDING_GAP):
+            tried.append(f"d {d * 1e3:g} mm, n {n:g}: not needed")
+            continue
         again = solve(cfg.update({"optimise.spring_kinds": ["compression"],
                                   "optimise.starts": ROUNDING_STARTS,
                                   "spring.wire_d": d, "spring.active_coils": n}))
