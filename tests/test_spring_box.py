@@ -132,3 +132,17 @@ def test_the_robust_page_quotes_this_answer(made):
     geometry = ("wire_d", "coil_d", "active_coils")
     assert [last["spring"][g] for g in geometry] == [s[g] for g in geometry]
     assert len(st["rounds"]) == 3
+
+
+@pytest.mark.slow
+def test_the_design_config_names_the_spring_whose_box_it_holds_for(made):
+    """design.toml holds the spring (d, D, n): ``softclose spring`` and the report check that
+    one, and it passes every check at the robust design."""
+    from softclose.coil_spring.order import spring_order
+    cfg = made.design_config()
+    s = made.to_json()["spring_tolerance"]["spring"]
+    assert (cfg.spring.wire_d, cfg.spring.coil_d, cfg.spring.active_coils) == (
+        s["wire_d"], s["coil_d"], s["active_coils"])
+    check = spring_order(cfg)
+    assert check.ok, check.failed
+    assert abs(check.rate / made.design["spring_k"] - 1) <= 0.015

@@ -195,6 +195,12 @@ def spring_rounds(cfg, solve, first=None):
             f"solved for {txt}): choose spring.grade = 1 or give the space "
             "(spring.max_outer_d)"), notes=res.notes + tuple(notes),
             spring_tolerance=info)
-    return replace(res, notes=res.notes + tuple(notes), spring_tolerance=info)
+    # the design's config names its spring (design.toml: softclose spring and the report
+    # check that one): its rate lies within the box's ±1.5 Q % of the design's
+    sp = spring.spring
+    config = None if res.config is None else res.config.update(
+        {"spring.wire_d": sp.wire_d, "spring.coil_d": sp.coil_d,
+         "spring.active_coils": sp.active_coils})
+    return replace(res, notes=res.notes + tuple(notes), spring_tolerance=info, config=config)
 
 __all__ = ["made_to_order", "en15800_spreads", "RATE", "PRELOAD", "with_spreads", "spring_rounds", "MAX_ROUNDS"]
