@@ -1,21 +1,23 @@
 """The optimum with a coil spring one can order (SPEC §14): ``[spring]`` names its wire
-(``spring.material``) and not its geometry.
+(``spring.material``) and not its whole geometry.
 
-The optimiser's rate and free length are not yet a part. The spring that realises them is
-designed as ``softclose spring`` designs one (:mod:`softclose.coil_spring`: preferred wires
-of EN 10270, coil diameters within the space, a quarter coil; every EN 13906 check met over
-the stroke's working lengths and at every sign-off temperature; the lightest), so its wire,
-coil diameter and coils are rounded to what a spring maker winds. Its own rate R = G d^4 /
-(8 D^3 n) then differs from the optimum's by up to a quarter coil's worth; the problem is
-solved again with the spring's rate and free length fixed (the damper and any other free
-value re-chosen) and that answer is verified by the reference and checked again. When no
-spring in the space meets every check at the optimum, the answer is no design, with the
-checks that fail.
+A compression spring whose points are fixed is designed inside the NLP
+(:mod:`.coil_nlp`): its wire d, coil diameter D and active coils n are variables tied to the
+rate, every EN 13906-1 check a constraint, so the optimum's rate and free length are those
+of a spring that exists. That spring is then rounded to what a spring maker winds
+(:func:`roundings`: the preferred wires of EN 10270 on either side of its d, the coils at its
+D rounded down and up to a quarter coil) and the problem solved again with d and n held (D,
+the free length, the damper and any free value re-chosen, every check still a constraint),
+nearest rounding first; the continuous optimum's J bounds every rounding's from below, so one
+within :data:`ROUNDING_GAP` of it ends the search. The best answer is verified by the
+reference and its spring checked by :mod:`softclose.coil_spring`; its config names the spring
+(``spring.wire_d``, ``coil_d``, ``active_coils``). When no rounding meets every check, the
+answer is no design, with the NLP's spring and the roundings tried.
 
-The wire, the coil diameter and the coils are chosen after the continuous optimum, not as
-variables of the NLP: the checks depend on the rate and the free length alone (the stroke's
-working lengths are the geometry's), so the spring found at the optimum is the one the NLP's
-region allows at that rate; a design whose rate no spring can carry is reported as such.
+An extension spring, or a spring whose points are free (its working lengths then move with
+them), is designed after the optimum instead, as ``softclose spring`` designs one: the
+lightest that meets every check at the optimum's rate and free length; the problem is solved
+again at that spring's own rate and free length and verified.
 """
 
 from __future__ import annotations
@@ -35,10 +37,11 @@ ROUNDING_GAP = 1e-3
 
 
 def with_spring(cfg, res, solve):
-    """``res`` (an optimiser's result) with the coil spring that realises it: the spring
-    designed at its rate and free length, the problem solved again at the spring's own rate
-    (``solve(cfg) -> result``), checked again. A result without a coil spring (no design, a
-    gas strut, no spring at all) is returned as it is, with a note."""
+    """``res`` (an optimiser's result) with the coil spring that realises it (module
+    docstring): the NLP's spring rounded and re-solved, or the spring designed at its rate and
+    free length and the problem re-solved at that spring's own rate (``solve(cfg) ->
+    result``), checked again. A result without a coil spring (no design, a gas strut, no
+    spring at all) is returned as it is, with a note."""
     from ..coil_spring.order import spring_duty, spring_order
     if res.design is None or not res.success:
         return res
