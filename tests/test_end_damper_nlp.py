@@ -234,3 +234,34 @@ def test_pareto_front_with_the_end_damper_is_verified():
         assert p.objective < p0.objective
         assert p.verification.agreement["engage_time"]["ok"]
         assert not math.isnan(p.metrics["engage_theta_dot"])
+
+
+def test_the_starts_end_damper_refined_on_its_own_finer_grid():
+    """Each start's end damper moves to the best point of its 9 x 9 grid by the sweep's own
+    measure (never worse than its sweep point), starts that become one are solved once, and
+    an extension spring's starts of no rate (the same stroke at any free length) are one."""
+    from softclose.optimiser.kinds import kind_config
+    from softclose.optimiser.starts import END_REFINE, _measure, sweep_starts, with_designs
+    base = default_config().set("optimise.free", FREE)
+    t = base.optimise.closing_time_max
+    for kind, most in (("compression", 6), ("extension", 1)):
+        cfg, why = kind_config(base, kind)
+        assert why is None
+        sim = stroke_simulator(cfg, 1.05 * t + 0.05)
+        starts, _ = sweep_starts(cfg, 6, t, sim)
+        assert 1 <= len(starts) <= most
+        assert len({tuple(r) for r in starts}) == len(starts)
+        for c_e, angle in starts[:, 3:5]:        # on the finer grid of each key's bounds
+            for v, (lo, hi) in ((c_e, FREE["design.end_damper_c"]),
+                                (angle, FREE["design.end_damper_angle_deg"])):
+                step = (hi - lo) / (END_REFINE - 1)
+                assert abs((v - lo) / step - round((v - lo) / step)) < 1e-9
+        P = with_designs(cfg, starts[:, :3])
+        P[:, PARAM_COLUMNS["design.end_damper_c"]] = starts[:, 3]
+        P[:, PARAM_COLUMNS["design.end_damper_angle_deg"]] = starts[:, 4]
+        viol, J = _measure(cfg, sim, P, t)
+        if kind == "compression":                # the feasible starts of the default lid
+            assert np.all(viol == 0) and np.all(np.isfinite(J))
+    # the answer is the one every start reached before (docs/optimise.md)
+    res = softclose.optimise(base)
+    assert res.objective == pytest.approx(0.0174136, rel=1e-6) and res.verification.ok

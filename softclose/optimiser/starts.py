@@ -139,7 +139,7 @@ def _refine_end_damper(cfg, sim, G: np.ndarray, keys: tuple, t_limit: float) -> 
     """The starts ``G`` (rows of k, l0, c, then the end damper's swept keys) with their end
     damper's keys moved to the best point of a finer grid (:data:`END_REFINE` levels of each
     over its bounds; k, l0, c held), by the sweep's own measure (the least violation, then
-    J); starts that become one are kept once. The sweep's three levels of the engagement
+    J); starts that become one, or whose strokes the kernel cannot tell apart, are kept once. The sweep's three levels of the engagement
     angle leave most starts far from where the angle ends (Ipopt took 100-190 iterations
     from the middle level against 14-21 from the best one)."""
     levels = [np.linspace(lo, hi, END_REFINE) for _, lo, hi in keys]
@@ -150,14 +150,21 @@ def _refine_end_damper(cfg, sim, G: np.ndarray, keys: tuple, t_limit: float) -> 
     for j, (k, _, _) in enumerate(keys):
         P[:, PARAM_COLUMNS[k]] = rows[:, 3 + j]
     viol, J = _measure(cfg, sim, P, t_limit)
-    out = []
+    out, seen = [], []
     for i in range(len(G)):
         sl = slice(i * len(mesh), (i + 1) * len(mesh))
         best = np.lexsort((np.where(np.isfinite(J[sl]), J[sl], np.inf), viol[sl]))[0]
-        row = rows[sl][best] if viol[sl][best] <= viol[sl][_index(mesh, G[i, 3:])] \
-            else G[i]
+        own = _index(mesh, G[i, 3:])
+        pick = best if viol[sl][best] <= viol[sl][own] else own
+        row = rows[sl][pick] if pick == best else G[i]
+        # one start per stroke: rows the kernel cannot tell apart (a spring of no rate at
+        # any free length: the same stroke to the last bit) are solved once
+        stroke = (float(viol[sl][pick]), float(J[sl][pick]))
+        if stroke[1] == stroke[1] and stroke in seen:
+            continue
         if not any(np.array_equal(row, r) for r in out):
             out.append(row)
+            seen.append(stroke)
     return np.array(out)
 
 
