@@ -8,6 +8,8 @@ own mass must be bit-identical to a row without the column, and bad masses are r
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 
@@ -171,3 +173,19 @@ def test_the_kernel_s_layout_is_checked_at_load():
         library.check_layout(Other(wrong))
     with pytest.raises(native.NumericalError, match="nrng"):
         library.check_layout(Other(native.LAYOUT.replace("nrng=18", "nrng=17")))
+
+
+def test_the_built_extension_is_known_by_its_sources_content_not_their_times(tmp_path,
+                                                                            monkeypatch):
+    """pip install's extension carries the tag of the source it was compiled from: it is used
+    whatever the files' times (an installed package's are the wheel's), and not once the
+    source beside it is another."""
+    if library._built_extension() is None:
+        pytest.skip("no extension built from this source (a checkout's kernel is compiled)")
+    src = tmp_path / "_kernel.c"
+    src.write_bytes(library.SOURCE.read_bytes())
+    os.utime(src, ns=(0, 4102444800 * 10**9))                  # newer than any build
+    monkeypatch.setattr(library, "SOURCE", src)
+    assert library._built_extension() is not None
+    src.write_bytes(src.read_bytes() + b"/* edited */\n")
+    assert library._built_extension() is None

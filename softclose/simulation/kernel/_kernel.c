@@ -2704,6 +2704,12 @@ void sc_leaves(long m, long G, const double *th, const double *q, const double *
 
 int sc_nout(void) { return NOUT; }
 int sc_abi(void) { return KERNEL_ABI; }
+/* the tag of the source this library was compiled from (setup.py defines it: BLAKE2b of
+ * _kernel.c and _layout.h); "" when compiled without one (the cache's copy) */
+#ifndef SC_SOURCE_TAG
+#define SC_SOURCE_TAG ""
+#endif
+const char *sc_source_tag(void) { return SC_SOURCE_TAG; }
 /* every layout constant shared with softclose/native.py, as one string (checked at load) */
 const char *sc_layout(void) { return LAYOUT; }
 

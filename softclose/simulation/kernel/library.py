@@ -26,6 +26,13 @@ def source_bytes() -> bytes:
     return SOURCE.read_bytes() + HEADER.read_bytes()
 
 
+def source_tag() -> str:
+    """The tag of this kernel's source (BLAKE2b of ``_kernel.c`` and its layout header, 8
+    bytes in hex): the one setup.py compiles into the extension (``sc_source_tag``)."""
+    from ...buildcache import _blake2b
+    return _blake2b(source_bytes(), digest_size=8).hexdigest()
+
+
 #: compiler flags of the kernel compiled in a source checkout (as setup.py's)
 KERNEL_CFLAGS = ("-O3", "-shared", "-fPIC")
 
@@ -111,19 +118,21 @@ def _load_fallback():
 
 
 def _built_extension() -> Path | None:
-    """The extension built by pip install, if it is current (same ABI, not older than the
-    source next to it: an edited ``_kernel.c`` in a checkout is compiled afresh)."""
+    """The extension built by pip install, if it is current: the same ABI, compiled from the
+    source beside it (its ``sc_source_tag`` is :func:`source_tag`: by content, never by file
+    times -- an installed package's files carry the wheel's times, and an edited
+    ``_kernel.c`` in a checkout is compiled afresh)."""
     try:
         from . import _kernel  # noqa: F401  (built by pip install)
     except ImportError:
         return None
     path = Path(_kernel.__file__)
-    if SOURCE.exists() and path.stat().st_mtime < max(SOURCE.stat().st_mtime,
-                                                        HEADER.stat().st_mtime):
-        return None
     try:
         lib = ctypes.CDLL(str(path))
         if lib.sc_abi() != KERNEL_ABI:
+            return None
+        lib.sc_source_tag.restype = ctypes.c_char_p
+        if SOURCE.exists() and lib.sc_source_tag().decode() != source_tag():
             return None
     except (OSError, AttributeError):
         return None
