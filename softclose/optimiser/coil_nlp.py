@@ -80,24 +80,24 @@ def coil_checks(z, R, L0, C) -> tuple[dict, ca.MX]:
     """({group: expression}, mass (kg)) of the spring z (scaled) of rate ``R`` (N/m) and
     free length ``L0`` (m) under the parameters ``C`` (:data:`COIL_PARAMS`, symbolic or
     numbers): each group's expressions lie within :data:`GROUPS`' bounds when the spring
-    meets the check."""
+    meets the check. EN 13906-1's formulas are :mod:`softclose.coil_spring.standard`'s own
+    (SI); the strength and the Goodman line, which that module takes with a min and a
+    clamp, are written here with each branch a row."""
     c = dict(zip(COIL_PARAMS, [C[i] for i in range(len(COIL_PARAMS))]))
-    d, D, n = z[0] * 1.0, z[1] * 10.0, z[2] * 10.0              # mm, mm, coils
-    Rmm = R * 1e-3                                              # N/mm
-    L0mm, L1mm, L2mm = L0 * 1e3, c["L1"] * 1e3, c["L2"] * 1e3
-    G = c["G"] * 1e-6                                           # N/mm^2
-    rate = G * d ** 4 / (8.0 * D ** 3 * n)
-    Lc = (n + en13906.DEAD_COILS) * d + c["ends_extra"] * d
-    Sa = 1.5 * n * (0.0015 * D ** 2 / d + 0.1 * d)
-    per_newton = 8.0 * D / (math.pi * d ** 3)                   # MPa per N
-    w = D / d
-    kw = (w + 0.5) / (w - 0.75)
-    ld = _log10(d)
+    d, D, n = z[0] * Z_SCALES[0], z[1] * Z_SCALES[1], z[2] * Z_SCALES[2]   # m, m, coils
+    L1, L2 = c["L1"], c["L2"]
+    rate = en13906.rate(c["G"], d, D, n)
+    Lc = en13906.solid_length(n, d) + c["ends_extra"] * d
+    Ln = Lc + en13906.min_gap_sum(n, d, D)
+    w = en13906.spring_index(d, D)
+    kw = en13906.stress_correction(w)
+    per_newton = en13906.shear_stress(1.0, d, D) * 1e-6         # MPa per N
+    ld = _log10(d * 1e3)                                        # the data's d in mm
     rm_line = c["rm_a"] - c["rm_b"] * ld
     Rm = ca.fmin(c["rm_max"], rm_line)
-    tau_c = per_newton * Rmm * (L0mm - Lc)
-    tau_k1 = kw * per_newton * Rmm * c["f_gov"] * (L0mm - L1mm)
-    tau_k2 = kw * per_newton * Rmm * c["f_gov"] * (L0mm - L2mm)
+    tau_c = per_newton * R * (L0 - Lc)
+    tau_k1 = kw * per_newton * R * c["f_gov"] * (L0 - L1)
+    tau_k2 = kw * per_newton * R * c["f_gov"] * (L0 - L2)
     t_o7 = c["g_a"] - c["g_b"] * ld
     t_omax = c["g_c"] - c["g_e"] * ld
     t_u7 = c["g_f"] - c["g_g"] * ld
@@ -106,23 +106,22 @@ def coil_checks(z, R, L0, C) -> tuple[dict, ca.MX]:
     t0 = ca.exp((1.0 - r) * ca.log(t_o3) + r * ca.log(t_o7))
     t_star = t_o7 / (1.0 - (t_omax - t_o7) / t_u7)
     ge = c["g_over_e"]
-    radicand = 1.0 - (1.0 - ge) / (0.5 + ge) * (math.pi * D / (c["nu"] * L0mm)) ** 2
-    q = 1.0 - 2.0 * (1.0 - ge) * (L0mm - L2mm) / L0mm
+    radicand = 1.0 - (1.0 - ge) / (0.5 + ge) * (math.pi * D / (c["nu"] * L0)) ** 2
+    q = 1.0 - 2.0 * (1.0 - ge) * (L0 - L2) / L0
     groups = {
-        "spring_rate": ca.log(rate) - ca.log(Rmm),
-        "spring_working_length": (Lc + Sa - L2mm) / L2mm,
+        "spring_rate": ca.log(rate) - ca.log(R),
+        "spring_working_length": (Ln - L2) / L2,
         "spring_static": ca.vertcat(tau_c / (en13906.STATIC_FACTOR * c["rm_max"]) - 1.0,
                                     tau_c / (en13906.STATIC_FACTOR * rm_line) - 1.0),
         "spring_fatigue": ca.vertcat(tau_k2 / t_omax - 1.0,
                                      tau_k2 / (t0 + (t_star - t0) / t_star * tau_k1) - 1.0),
         "spring_buckling": radicand - ca.fmax(q, 0.0) ** 2,
-        "spring_space": ca.vertcat((D + d) * 1e-3 / c["max_outer_d"] - 1.0,
-                                   (c["min_inner_d"] - (D - d) * 1e-3) / (D * 1e-3)),
+        "spring_space": ca.vertcat((D + d) / c["max_outer_d"] - 1.0,
+                                   (c["min_inner_d"] - (D - d)) / D),
         "spring_index": ca.vertcat(en13906.INDEX_RANGE[0] / w - 1.0,
                                    w / en13906.INDEX_RANGE[1] - 1.0),
     }
-    mass = c["rho"] * math.pi * (d * 1e-3) ** 2 / 4.0 * math.pi * (D * 1e-3) * (n + 2.0)
-    return groups, mass
+    return groups, en13906.mass(d, D, n, c["rho"])
 
 
 def nlp_terms(z, design, C) -> tuple[dict, ca.MX]:
@@ -165,7 +164,7 @@ def z_bounds(cfg) -> tuple[np.ndarray, np.ndarray]:
     D_hi = NO_SPACE[0] if sp.max_outer_d is None else sp.max_outer_d
     lo = np.array([d_lo, en13906.INDEX_RANGE[0] * d_lo, en13906.MIN_ACTIVE_COILS])
     hi = np.array([d_hi, D_hi, 1000.0])
-    for i, key in enumerate(("wire_d", "coil_d", "active_coils")):   # given: held
+    for i, key in enumerate(GEOMETRY):                                # given: held
         v = getattr(sp, key)
         if v is not None:
             lo[i] = hi[i] = float(v)
@@ -193,5 +192,5 @@ def spring_of(z) -> dict:
     return {"wire_d": float(d), "coil_d": float(D), "active_coils": float(n)}
 
 
-__all__ = ["made_to_order", "GEOMETRY", "COIL_PARAMS", "GROUPS", "Z_SCALES", "coil_checks", "nlp_terms", "coil_params",
-           "z_bounds", "z_start", "spring_of"]
+__all__ = ["made_to_order", "GEOMETRY", "COIL_PARAMS", "GROUPS", "Z_SCALES", "coil_checks",
+           "nlp_terms", "coil_params", "z_bounds", "z_start", "spring_of"]
