@@ -30,9 +30,10 @@ END_LEVELS = 3
 SWEEP_SHAPE_ENGAGING = (6, 5, 6)
 
 
-def _levels(key: str, lo: float, hi: float) -> np.ndarray:
-    """The sweep's values of a free end-damper key (:data:`END_LEVELS`)."""
-    v = np.linspace(lo, hi, END_LEVELS)
+def _levels(key: str, lo: float, hi: float, count: int = END_LEVELS) -> np.ndarray:
+    """The sweep's values of a free end-damper key (``count`` over its bounds, a
+    coefficient's 0 left out)."""
+    v = np.linspace(lo, hi, count)
     return v[1:] if key == END_C and lo == 0 and hi > 0 else v
 
 
@@ -62,8 +63,8 @@ def sweep_time(cfg, t_limit: float) -> float:
     return 1.05 * t_limit + 0.05
 
 
-def _measure(cfg, sim, P: np.ndarray, t_limit: float, times: bool = False):
-    """(violation, J[, closing time]) of the rows ``P`` by the kernel: the violation
+def _measure(cfg, sim, P: np.ndarray, t_limit: float):
+    """(violation, J, closing time) of the rows ``P`` by the kernel: the violation
     (relative, 0 when feasible) ranks the infeasible points too."""
     o, st = cfg.optimise, cfg.stroke
     r = sim.run_batch(P)
@@ -79,7 +80,7 @@ def _measure(cfg, sim, P: np.ndarray, t_limit: float, times: bool = False):
                 + np.maximum(release, 0) / max(abs(dVg0), 1e-6)
                 + np.maximum(r["theta_dot_max"], 0))
     viol = np.where(np.isfinite(viol), viol, 1e3)
-    return (viol, J, T) if times else (viol, J)
+    return viol, J, T
 
 
 def sweep_starts(cfg, count: int, t_limit: float, sim=None,
@@ -104,7 +105,7 @@ def sweep_starts(cfg, count: int, t_limit: float, sim=None,
     P = with_designs(cfg, G)
     for j, (k, _, _) in enumerate(keys):
         P[:, PARAM_COLUMNS[k]] = G[:, 3 + j]
-    viol, J, T = _measure(cfg, sim, P, t_limit, times=True)
+    viol, J, T = _measure(cfg, sim, P, t_limit)
     feasible = viol == 0
     order = np.lexsort((np.where(np.isfinite(J), J, np.inf), viol))
     lo = np.array([getattr(o, k)[0] for k in DESIGN_KEYS] + [a for _, a, _ in keys])
@@ -138,39 +139,31 @@ END_REFINE = 9
 def _refine_end_damper(cfg, sim, G: np.ndarray, keys: tuple, t_limit: float) -> np.ndarray:
     """The starts ``G`` (rows of k, l0, c, then the end damper's swept keys) with their end
     damper's keys moved to the best point of a finer grid (:data:`END_REFINE` levels of each
-    over its bounds; k, l0, c held), by the sweep's own measure (the least violation, then
-    J); starts that become one, or whose strokes the kernel cannot tell apart, are kept once. The sweep's three levels of the engagement
-    angle leave most starts far from where the angle ends (Ipopt took 100-190 iterations
-    from the middle level against 14-21 from the best one)."""
-    levels = [np.linspace(lo, hi, END_REFINE) for _, lo, hi in keys]
+    over its bounds, :func:`_levels`; k, l0, c held), by the sweep's own measure (the least
+    violation, then J: never worse than the start's own level, which the grid holds); starts
+    whose strokes the kernel cannot tell apart (the same row, or a spring of no rate at any
+    free length) are kept once. The sweep's three levels of the engagement angle leave most
+    starts far from where the angle ends (Ipopt took 100-190 iterations from the middle
+    level against 14-21 from the best one)."""
+    levels = [_levels(k, lo, hi, END_REFINE) for k, lo, hi in keys]
     mesh = np.array(np.meshgrid(*levels, indexing="ij")).reshape(len(keys), -1).T
     rows = np.repeat(G, len(mesh), axis=0)
     rows[:, 3:3 + len(keys)] = np.tile(mesh, (len(G), 1))
     P = with_designs(cfg, rows)
     for j, (k, _, _) in enumerate(keys):
         P[:, PARAM_COLUMNS[k]] = rows[:, 3 + j]
-    viol, J = _measure(cfg, sim, P, t_limit)
-    out, seen = [], []
+    viol, J, _ = _measure(cfg, sim, P, t_limit)
+    out, seen = [], set()
     for i in range(len(G)):
         sl = slice(i * len(mesh), (i + 1) * len(mesh))
-        best = np.lexsort((np.where(np.isfinite(J[sl]), J[sl], np.inf), viol[sl]))[0]
-        own = _index(mesh, G[i, 3:])
-        pick = best if viol[sl][best] <= viol[sl][own] else own
-        row = rows[sl][pick] if pick == best else G[i]
-        # one start per stroke: rows the kernel cannot tell apart (a spring of no rate at
-        # any free length: the same stroke to the last bit) are solved once
-        stroke = (float(viol[sl][pick]), float(J[sl][pick]))
-        if stroke[1] == stroke[1] and stroke in seen:
-            continue
-        if not any(np.array_equal(row, r) for r in out):
-            out.append(row)
-            seen.append(stroke)
+        best = i * len(mesh) + np.lexsort((np.where(np.isfinite(J[sl]), J[sl], np.inf),
+                                           viol[sl]))[0]
+        stroke = (float(viol[best]), float(J[best])) if np.isfinite(J[best]) else \
+            tuple(rows[best])
+        if stroke not in seen:
+            seen.add(stroke)
+            out.append(rows[best])
     return np.array(out)
-
-
-def _index(mesh: np.ndarray, values: np.ndarray) -> int:
-    """The row of ``mesh`` nearest ``values`` (the start's own point of the finer grid)."""
-    return int(np.argmin(np.abs(mesh - values).sum(axis=1)))
 
 
 def initial_guess(nlp: ShootingNLP, cfg, design, sim, p: np.ndarray,
