@@ -22,6 +22,7 @@ import numpy as np
 from ..errors import ConfigError
 from ..model.lid import shared_model
 from . import PREFERRED_WIRE_D, CoilSpring, Duty, check, design
+from . import standard
 from .materials import material
 from ..problem import resolve
 
@@ -106,7 +107,8 @@ def spring_order(cfg, duty: Duty | None = None, rank: str = "mass"):
     :class:`~softclose.coil_spring.SpringCheck`, when ``wire_d``, ``coil_d`` and
     ``active_coils`` are all given), else designed (a
     :class:`~softclose.coil_spring.SpringDesign`: the given ``wire_d`` or ``coil_d`` held
-    -- ``wire_d`` and ``active_coils`` given, D is the one of the rate --, the rest chosen, ranked by ``rank``: ``"mass"`` or ``"tolerance"``, see
+    -- ``wire_d`` and ``active_coils`` given, D is the one of the rate --, the rest chosen,
+    ranked by ``rank``: ``"mass"`` or ``"tolerance"``, see
     :func:`~softclose.coil_spring.designer.design`)."""
     duty = spring_duty(cfg) if duty is None else duty
     sp = cfg.spring
@@ -117,9 +119,10 @@ def spring_order(cfg, duty: Duty | None = None, rank: str = "mass"):
     wires = PREFERRED_WIRE_D if sp.wire_d is None else (sp.wire_d,)
     coils = None if sp.coil_d is None else (sp.coil_d,)
     if sp.active_coils is not None and coils is None:    # d and n held: D gives the rate
-        G = material(sp.material).G
-        coils = ((G * sp.wire_d ** 4 / (8.0 * sp.active_coils * duty.rate)) ** (1.0 / 3.0),)
-    return design(duty, sp.material, ends=sp.ends, wires=wires, coil_ds=coils, rank=rank, **space)
+        coils = (standard.coil_d_for_rate(material(sp.material).G, sp.wire_d,
+                                          sp.active_coils, duty.rate),)
+    return design(duty, sp.material, ends=sp.ends, wires=wires, coil_ds=coils, rank=rank,
+                  **space)
 
 
 __all__ = ["working_lengths", "spring_duty", "spring_order", "GRID"]

@@ -105,6 +105,12 @@ def active_coils_for_rate(G: float, d: float, D: float, R: float) -> float:
     return G * d ** 4 / (8.0 * D ** 3 * R)
 
 
+def coil_d_for_rate(G: float, d: float, n: float, R: float) -> float:
+    """The mean coil diameter ``D = (G d^4 / (8 n R))^(1/3)`` that gives rate ``R`` with
+    wire ``d`` and ``n`` active coils (m)."""
+    return (G * d ** 4 / (8.0 * n * R)) ** (1.0 / 3.0)
+
+
 def total_coils(n: float) -> float:
     """Total coils ``n_t = n + 2`` (one dead coil at each end)."""
     return n + DEAD_COILS

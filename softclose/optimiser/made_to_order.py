@@ -72,20 +72,27 @@ def with_spring(cfg, res, solve):
         return replace(again, success=False, message=(
             f"the spring made to order ({_name(spring)}) has no verified design: "
             f"{again.message}"))
-    final = again.design_config()
-    check = spring_order(final.update({f"spring.{g}": getattr(spring, g) for g in GEOMETRY}),
-                         spring_duty(final))
-    coil = dict(check.spring_json(), ok=bool(check.ok),
-                checks=[c.to_json() for c in check.checks])
-    part = None if again.part is None else replace(again.part, coil=coil)
+    checked = _checked(again, {f"spring.{g}": getattr(spring, g) for g in GEOMETRY})
     notes = (f"made to order: {_name(spring)} ({spring.material}), its rate {k:.6g} N/m "
              f"against the optimum's {res.design['spring_k']:.6g} N/m: J "
              f"{res.objective:.8g} -> {again.objective:.8g} once wound",)
-    ok = again.success and check.ok
-    message = again.message if check.ok else (
-        f"the spring made to order fails {', '.join(check.failed)} at the re-solved design")
-    return replace(again, success=ok, message=message, part=part,
-                   notes=again.notes + notes)
+    return replace(again, **checked, notes=again.notes + notes)
+
+
+def _checked(again, geometry: dict) -> dict:
+    """The spring ``geometry`` (``spring.*`` keys) checked at the re-solved answer
+    ``again``: ``success``, ``message`` (the failed checks) and ``part`` (naming the spring
+    and its checks), for :func:`dataclasses.replace`."""
+    from ..coil_spring.order import spring_duty, spring_order
+    final = again.design_config()
+    check = spring_order(final.update(geometry), spring_duty(final))
+    coil = dict(check.spring_json(), ok=bool(check.ok),
+                checks=[c.to_json() for c in check.checks])
+    return {"success": again.success and check.ok,
+            "message": again.message if check.ok else (
+                f"the spring made to order fails {', '.join(check.failed)} at the re-solved "
+                "design"),
+            "part": None if again.part is None else replace(again.part, coil=coil)}
 
 
 def _nlp_spring(cfg, res) -> dict | None:
@@ -135,7 +142,6 @@ def _rounded(cfg, res, solve, spring: dict):
     checked. Holding d and n restricts the problem, so the continuous optimum's J bounds
     every rounding's from below: a rounding within :data:`ROUNDING_GAP` of it ends the
     search (no other can be better by more)."""
-    from ..coil_spring.order import spring_duty, spring_order
     tried, best = [], None
     d0, n0 = spring["wire_d"], spring["active_coils"]
     for d, n in sorted(roundings(cfg, spring, res.design["spring_k"]),
@@ -159,23 +165,14 @@ def _rounded(cfg, res, solve, spring: dict):
             "lower spring.cycles"))
     again, d, n = best
     wound = _nlp_spring(cfg, again) or dict(spring, wire_d=d, active_coils=n)
-    final = again.design_config()
     geometry = {"spring.wire_d": d, "spring.coil_d": round(wound["coil_d"], 9),
                 "spring.active_coils": n}
-    check = spring_order(final.update(geometry), spring_duty(final))
-    coil = dict(check.spring_json(), ok=bool(check.ok),
-                checks=[c.to_json() for c in check.checks])
-    part = None if again.part is None else replace(again.part, coil=coil)
     notes = (f"made to order: the NLP's spring {_name_of(spring)} at J {res.objective:.8g}; "
              f"wound as {_name_of(dict(wound, wire_d=d, active_coils=n))} "
              f"({cfg.spring.material}), rate {again.design['spring_k']:.6g} N/m: J "
              f"{again.objective:.8g} (the roundings tried: " + "; ".join(tried) + ")",)
-    ok = again.success and check.ok
-    message = again.message if check.ok else (
-        f"the spring made to order fails {', '.join(check.failed)} at the re-solved design")
-    return replace(again, success=ok, message=message, part=part,
-                   config=again.config.update(geometry) if again.config is not None else None,
-                   notes=again.notes + notes)
+    return replace(again, **_checked(again, geometry), notes=again.notes + notes,
+                   config=again.config.update(geometry) if again.config is not None else None)
 
 
 def _name_of(spring: dict) -> str:
