@@ -24,7 +24,8 @@ config's; a spread of either key the user gave in ``[tolerance]`` wins.
 
 The spring depends on the design (its rate and lengths), the design on the box: an outer
 fixed point. Solve with the config's box; design the spring of the answer (of the springs that
-meet every check, the one with the smallest EN 15800 force tolerance alpha_F k_F, then the
+meet every check, the one with the smallest EN 15800 free-length tolerance A_L0 -- at the one
+rate they all realise, the smallest force tolerance R A_L0 = alpha_F k_F Q --, then the
 lightest: :func:`softclose.coil_spring.order.spring_order` with ``rank="tolerance"``; or the
 ``[spring]`` given, checked); solve again with its EN 15800 spreads; design the spring of that
 answer, and while its spreads exceed those solved with, solve again with the larger of the
@@ -45,8 +46,6 @@ from ..optimiser.made_to_order import made_to_order  # noqa: F401  (re-exported)
 MAX_ROUNDS = 3
 #: the keys EN 15800 gives a spread of
 RATE, PRELOAD = "design.spring_k", "design.spring_preload"
-#: a free length spread given in ``[tolerance]`` (kept as it is, beside EN 15800's)
-FREE_LENGTH = "design.spring_rest_length"
 #: EN 15800's force tolerance: the relative part 1.5 % x Q
 FORCE_FRACTION = 0.015
 
@@ -203,4 +202,6 @@ def spring_rounds(cfg, solve, first=None):
          "spring.active_coils": sp.active_coils})
     return replace(res, notes=res.notes + tuple(notes), spring_tolerance=info, config=config)
 
-__all__ = ["made_to_order", "en15800_spreads", "RATE", "PRELOAD", "with_spreads", "spring_rounds", "MAX_ROUNDS"]
+
+__all__ = ["made_to_order", "en15800_spreads", "RATE", "PRELOAD", "with_spreads",
+           "spring_rounds", "MAX_ROUNDS"]
