@@ -102,6 +102,14 @@ typedef long long v4l __attribute__((vector_size(VW * sizeof(long long))));
 typedef int v4i __attribute__((vector_size(VW * sizeof(int))));
 #define ALWAYS static inline __attribute__((always_inline))
 ALWAYS v4 ld4(const double *a) { v4 v; memcpy(&v, a, sizeof v); return v; }
+ALWAYS v4 abs4(v4 x)
+{
+    v4l mask = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL, 0x7fffffffffffffffLL,
+                0x7fffffffffffffffLL};
+    return (v4)((v4l)x & mask);
+}
+
+ALWAYS v4 sel4(v4l m, v4 x, v4 y) { return (v4)((m & (v4l)x) | (~m & (v4l)y)); } /* m ? x : y */
 #define MIN2(a, b) ((a) < (b) ? (a) : (b))
 #define MAX2(a, b) ((a) > (b) ? (a) : (b))
 #if defined(__GNUC__) && !defined(__clang__)
@@ -297,18 +305,15 @@ static inline v4 gas_psi4(v4 z)
     v4l e = ((bits >> 52) & 0x7ff) - 1023;
     v4 m = (v4)((bits & 0x000fffffffffffffLL) | 0x3ff0000000000000LL);
     v4l big = m > 1.4142135623730951;
-    m = (v4)((big & (v4l)(half * m)) | (~big & (v4l)m));
+    m = sel4(big, half * m, m);
     e -= big;                                     /* (true is -1 in a lane mask) */
     v4 s = (m - one) / (m + one), s2 = s * s, poly = s2 * 0.0 + PSI_C[PSI_TERMS - 1];
     for (int i = PSI_TERMS - 2; i >= 0; i--) poly = poly * s2 + PSI_C[i];
     v4 de = {(double)e[0], (double)e[1], (double)e[2], (double)e[3]};
     v4 lnw = de * LN2_HI + (de * LN2_LO + 2.0 * s * poly);
     v4 r = lnw / (w - one);
-    v4l small = ((v4l)z & 0x7fffffffffffffffLL) < (v4l)(one * 1e-8);   /* |z| < 1e-8 */
-    v4l bad = ~(w > 0.0) | ~(w < INFINITY);
-    v4 nan = one * NAN, lin = one - half * z;
-    r = (v4)((small & (v4l)lin) | (~small & (v4l)r));
-    return (v4)((bad & ~small & (v4l)nan) | (~(bad & ~small) & (v4l)r));
+    v4l small = abs4(z) < 1e-8, bad = ~small & (~(w > 0.0) | ~(w < INFINITY));
+    return sel4(small, one - half * z, sel4(bad, one * NAN, r));
 }
 static inline double law_gas_v(double G, double b, double u)
 {
@@ -318,13 +323,11 @@ static inline double law_gas_v(double G, double b, double u)
 static inline v4 law_gas_v4(v4 G, v4 b, v4 u)
 {
     v4 r = G * u * gas_psi4(b * u);
-    v4l none = G == 0.0;                          /* not a strut: 0, as law_gas_v */
-    return (v4)(~none & (v4l)r);
+    return sel4(G == 0.0, (v4){0.0, 0.0, 0.0, 0.0}, r);   /* not a strut: 0, as law_gas_v */
 }
-static inline v4 elem_abs4(v4 x) { return (v4)((v4l)x & ~(v4l){LLONG_MIN, LLONG_MIN, LLONG_MIN, LLONG_MIN}); }
 /* (numbers or lanes alike) */
 #define LAW_GAS_V(G, b, u) _Generic((G), v4: law_gas_v4, default: law_gas_v)(G, b, u)
-#define ELEM_ABS(x) _Generic((x), v4: elem_abs4, default: fabs)(x)
+#define ELEM_ABS(x) _Generic((x), v4: abs4, default: fabs)(x)
 /* the spring's tension T(l): its coil law and its gas law (one of them 0) */
 #define ELEM_SPRING_T(P, l) (LAW_PRELOADED_T((P)->k, (P)->l0, (P)->F, l) \
     + ((P)->anyg ? LAW_GAS_T((P)->G, (P)->gb, (l) - (P)->l0) : 0.0 * (l)))
@@ -1790,15 +1793,6 @@ ALWAYS void cells4(const Table *T, v4 th, const double **b, v4 *s, v4l *okm)
     *okm = ok;
     for (int q = 0; q < VW; q++) b[q] = T->cc + (size_t)ii[q] * 4 * NC;
 }
-
-ALWAYS v4 abs4(v4 x)
-{
-    v4l mask = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL, 0x7fffffffffffffffLL,
-                0x7fffffffffffffffLL};
-    return (v4)((v4l)x & mask);
-}
-
-ALWAYS v4 sel4(v4l m, v4 x, v4 y) { return (v4)((m & (v4l)x) | (~m & (v4l)y)); } /* m ? x : y */
 
 #if defined(__clang__) || (defined(__GNUC__) && __GNUC__ >= 12)
 #define SHUF(a, b, i, j, k, l) __builtin_shufflevector(a, b, i, j, k, l)
