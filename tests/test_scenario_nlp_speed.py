@@ -17,7 +17,7 @@ from softclose import buildcache
 from softclose.optimiser import compiled
 
 rnlp = importlib.import_module("softclose.robust.scenario_cache")
-rdisc = importlib.import_module("softclose.robust.discretisation")
+rdisc = importlib.import_module("softclose.optimiser.interval")    # the interval maps
 
 #: a small problem: 2 scenarios of the default box, 4 intervals of 2 sub-steps (the
 #: compiled library of it takes a few seconds; the co-design's takes ~100 s)
@@ -66,6 +66,7 @@ def test_using_a_scenario_nlp_compiles_nothing(cache, cfg, monkeypatch):
     """Built symbolically on use, twice (another process), and nothing compiled or started:
     compiling is only done when asked for."""
     import subprocess
+    compiled.toolchain(compiled.SCENARIO_CFLAGS)   # (the compiler's --version, asked once)
     started = []
     monkeypatch.setattr(subprocess, "Popen", lambda *a, **k: started.append(a))
     first, _ = _problem(cfg)
@@ -111,3 +112,27 @@ def test_the_compiled_scenario_nlp_gives_the_same_solve(cache, cfg, monkeypatch)
     assert problem.nlp.library is None
     assert compiled.compiled_nlp(key, compiled.SCENARIO_CFLAGS) is None
     assert np.array_equal(again.r["x"], vm.r["x"])
+
+
+def test_threads_give_the_same_nominal_solve(cache, monkeypatch):
+    """The optimiser's NLP in the virtual machine maps its intervals in threads
+    (optimiser.cache builds it so unless it is compiled): the two-phase end-damper NLP
+    solves to the same bits in the same iterations as with one thread."""
+    from softclose.config import default_config
+    from softclose.optimiser import cache as ocache
+    from softclose.optimiser.optimiser import solve
+    cfg = default_config().set("optimise.free", {"design.end_damper_c": [0, 2],
+                                                 "design.end_damper_angle_deg": [1, 10]})
+    runs = []
+    for k in (1, 3):
+        ocache.forget()
+        monkeypatch.setattr(ocache, "map_threads", lambda k=k: k)
+        r = solve(cfg, nodes=4, substeps=2)
+        st = next(iter(ocache._STRUCTURES.values()))
+        assert st.library is None and st.solver is not None
+        runs.append(r)
+    ocache.forget()
+    one, three = runs
+    assert one.success and three.success
+    assert three.iterations == one.iterations
+    assert three.objective == one.objective and three.design == one.design

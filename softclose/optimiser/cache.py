@@ -13,7 +13,8 @@ from ..model import elements
 from ..model.lid import model_key, shared_model
 from ..simulation.simulator import Simulator
 from .discretise import phase_two_substeps
-from .interval import ChebyshevFit, end_damper_mode, free_layout, gas_nlp, nlp_elements
+from .interval import (ChebyshevFit, end_damper_mode, free_layout, gas_nlp, map_threads,
+                       nlp_elements)
 from .lid import padded_degree
 from .nlp import ShootingNLP, ShootingStructure
 from .free_points import placement_layout, slot_values
@@ -91,15 +92,16 @@ def has_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
     return nlp_key(cfg, nodes, substeps, substeps2) in _STRUCTURES
 
 
-def build_structure(key: tuple, library=None, meta=None) -> ShootingStructure:
+def build_structure(key: tuple, library=None, meta=None, threads: int = 1
+                    ) -> ShootingStructure:
     """The ShootingStructure of a :func:`nlp_key`, built symbolically (or its compiled
-    ``library`` loaded, with its ``meta``)."""
+    ``library`` loaded, with its ``meta``); ``threads``: those of its interval maps."""
     els, names, degree, opening, self_close, coil, free, place, keep_out, M2, N, M, hess, \
         lin, it = key
     return ShootingStructure(tuple(elements.BY_NAME[e] for e in els), names, degree, N, M,
                              None if M2 is None else (N, M2), free, place, opening,
                              keep_out, hess, lin, it, library=library, meta=meta,
-                             self_close=self_close, coil=coil)
+                             self_close=self_close, coil=coil, threads=threads)
 
 
 def get_structure(key: tuple, what: str = "") -> ShootingStructure:
@@ -111,9 +113,12 @@ def get_structure(key: tuple, what: str = "") -> ShootingStructure:
     if key not in _STRUCTURES:
         disk = buildcache.key_of("nlp", key)
 
-        def make(library=None, meta=None):
+        def load(library, meta):
             return build_structure(key, library=library, meta=meta)
-        st = compiled.load_or_build(disk, make, make, what)
+
+        def build():    # threads for the virtual machine; C maps serially (interval.mapped)
+            return build_structure(key, threads=1 if compiled.will_compile() else map_threads())
+        st = compiled.load_or_build(disk, load, build, what)
         st.key = key
         _STRUCTURES[key] = st
     return _STRUCTURES[key]

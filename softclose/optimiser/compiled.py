@@ -95,6 +95,11 @@ def compiling():
         _compiling.pop()
 
 
+def will_compile() -> bool:
+    """Whether an NLP built now is compiled (inside :func:`compiling`, with a cache)."""
+    return bool(_compiling) and folder() is not None
+
+
 #: what this process did with NLPs, for ``softclose prepare``'s report: the libraries it
 #: compiled and loaded (paths), the NLPs it could not compile (their names)
 compiled: list = []
@@ -112,7 +117,7 @@ def load_or_build(disk: str, restore, build, what: str = "", flags: tuple = CFLA
     if nlp is not None:
         return nlp
     nlp = build()
-    if _compiling and folder() is not None:
+    if will_compile():
         store("nlpmeta", disk, nlp.meta())
         out = _restored(disk, compile_nlp(nlp.solver, disk, flags, what), restore, flags,
                         compiled)

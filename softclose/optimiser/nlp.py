@@ -71,7 +71,7 @@ from ..interrupt import ipopt_options, solving
 from ..problem import DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, SCALES, params_of
 from ..model import elements
 from .interval import (END_C, ChebyshevFit, bound_interval, combine_function, free_of,
-                       interval_function)
+                       interval_function, mapped)
 from .lid import (OPENING_INTERVALS, SELF_CLOSE_INTERVALS, SELF_CLOSE_MARGIN, LidLayout,
                   SymbolicSeries, check_self_close, holding_moment, opening_angles,
                   opening_bound, self_close_bound, self_close_function)
@@ -106,6 +106,8 @@ class ShootingStructure:
     Built symbolically (CasADi's virtual machine evaluates it), or -- ``library`` a compiled
     library of this structure (:mod:`softclose.buildcache`) and ``meta`` what :meth:`meta`
     stored -- loaded: nothing symbolic is built, the solves call the compiled functions.
+    ``threads``: the threads its interval maps run in (:func:`~.interval.mapped`; more than
+    one only for the virtual machine).
     """
 
     def __init__(self, els, names: tuple, degree: int, nodes: int, substeps: int,
@@ -113,7 +115,7 @@ class ShootingStructure:
                  opening: bool = False, keep_out: tuple = (), hessian: str = "exact",
                  linear_solver: str = "mumps", max_iter: int = 500, tol: float = 1e-10,
                  library=None, meta: dict | None = None, self_close: bool = False,
-                 coil: bool = False):
+                 coil: bool = False, threads: int = 1):
         t0 = time.perf_counter()
         check_linear_solver(linear_solver)
         self.els = tuple(els)
@@ -198,15 +200,16 @@ class ShootingStructure:
         self.combine = combine_function(self.series, self.placed)
         c = self.combine(design, *gin, L)
         if not self.two_phase:
-            xe, a, b, sp = self.interval.map(N)(Xs, ca.repmat(c, 1, N), T * grid.T / M)
+            xe, a, b, sp = mapped(self.interval, N, threads)(Xs, ca.repmat(c, 1, N),
+                                                             T * grid.T / M)
         else:   # phase 1 without the end damper (c_e = 0), phase 2 with it
             n1, n2 = nodes, self.N2
             off = list(entries)
             off[PARAM_COLUMNS[END_C]] = ca.MX(0.0)
             c1 = self.combine(ca.vertcat(*off), *gin, L)
-            o1 = self.interval.map(n1)(Xs[:, :n1], ca.repmat(c1, 1, n1),
+            o1 = mapped(self.interval, n1, threads)(Xs[:, :n1], ca.repmat(c1, 1, n1),
                                        T1 * grid[:n1].T / M)
-            o2 = self.interval2.map(n2)(Xs[:, n1:], ca.repmat(c, 1, n2),
+            o2 = mapped(self.interval2, n2, threads)(Xs[:, n1:], ca.repmat(c, 1, n2),
                                         (T - T1) * grid[n1:].T / substeps2)
             xe = ca.horzcat(o1[0], o2[0])
             a, b, sp = (ca.vertcat(ca.vec(o1[k]), ca.vec(o2[k])) for k in (1, 2, 3))

@@ -1,6 +1,6 @@
 """How the scenario NLP (:mod:`softclose.robust.nlp`) is discretised: its node grid (graded
-at the release), its phases (two with an end damper engaging inside the stroke), the
-closing-time limit, and the threads its interval maps run in."""
+at the release), its phases (two with an end damper engaging inside the stroke) and the
+closing-time limit."""
 
 from __future__ import annotations
 
@@ -10,32 +10,6 @@ import numpy as np
 from ..config import Config
 from ..optimiser.discretise import discretisation, phase_two_substeps
 from ..optimiser.interval import end_damper_mode
-from ..simulation.kernel.binding import cores
-
-
-def map_threads() -> int:
-    """Threads that evaluate the scenario NLP's shooting intervals: the cores this process
-    may use, at most :data:`MAX_MAP_THREADS`."""
-    return min(cores(), MAX_MAP_THREADS)
-
-
-#: at most this many threads per map (the intervals of 9 scenarios are ~90 calls)
-MAX_MAP_THREADS = 4
-
-
-def mapped(f: ca.Function, n: int) -> ca.Function:
-    """``f`` mapped over n shooting intervals, evaluated in :func:`map_threads` threads
-    (CasADi's "thread" map; its derivatives are thread maps too).
-
-    Why: an Ipopt iteration of the scenario NLP is mostly the Hessian of the Lagrangian
-    and the constraints' Jacobian, forward-over-reverse sweeps through these maps (9
-    scenarios with the points free: 0.15 s and 0.06 s of a 0.22 s iteration). The
-    intervals are independent, so on 2 cores the joint NLP of the robust co-design solves
-    in 11.9 s instead of 20.6 s, in the same 89 iterations to the same bits (each
-    interval's numbers are computed alone; the sums over them are the MX graph's, in the
-    same order)."""
-    k = map_threads()
-    return f.map(n, "thread", k) if k > 1 and n > 1 else f.map(n)
 
 
 #: the node grid is graded (:func:`time_grid`) from this many nodes on

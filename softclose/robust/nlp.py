@@ -51,13 +51,13 @@ from ..config import Config
 from ..errors import ConfigError
 from ..interrupt import ipopt_options, solving
 from ..problem import DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, params_of, resolve, SCALES
-from .discretisation import mapped, phase_grid, phase_two, t_limit, two_phase
+from .discretisation import phase_grid, phase_two, t_limit, two_phase
 from ..optimiser import compiled
 from ..optimiser.free_points import (length_bounds, placed_bounds, placement_layout, slot_values,
                                      spring_moment, strut_law)
 from ..model.elements.springs import strut_stroke
 from ..optimiser.interval import (ChebyshevFit, combine_function, END_C, free_layout, free_of,
-                                  gas_nlp, interval_function, nlp_elements)
+                                  gas_nlp, interval_function, mapped, nlp_elements)
 from ..model import elements
 from ..optimiser.nlp import check_linear_solver, PHASE_FLOOR
 from ..optimiser.cache import get_model, keep_out_of
