@@ -15,10 +15,21 @@ import atexit
 import math
 import os
 import shutil
+import sys
 import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
+
+# the tests run the package as it is installed (pip install ".[test]": the installed files,
+# the kernel pip built), not the checkout beside them: `python -m pytest` puts the working
+# directory first on sys.path, so it is taken off here, and every process the tests start
+# (xdist's workers, `python -m softclose` in the checkout) runs with PYTHONSAFEPATH (no
+# working directory on its path). An editable install is the checkout either way.
+_ROOT = Path(__file__).resolve().parents[1]
+sys.path[:] = [p for p in sys.path if Path(p or os.curdir).resolve() != _ROOT]
+os.environ["PYTHONSAFEPATH"] = "1"
 
 # the disk cache of built models and NLPs (softclose.buildcache): a folder of this test run
 # (every process it starts inherits it); NLPs are compiled only when asked for -- the tests
