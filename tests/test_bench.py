@@ -276,10 +276,13 @@ def test_a_fresh_interpreter_of_the_bench_imports_this_copy(tmp_path, monkeypatc
     monkeypatch.chdir(tmp_path)
     probe = "import softclose; print(softclose.__file__)"
 
-    def imported(cmd):
-        out = subprocess.run(cmd, env=fresh_env(), capture_output=True, text=True, check=True)
+    def imported(cmd, safe=True):
+        env = fresh_env()
+        if not safe:    # (the test suite's processes run with PYTHONSAFEPATH: conftest)
+            env.pop("PYTHONSAFEPATH", None)
+        out = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
         return Path(out.stdout.strip()).resolve()
-    assert imported([sys.executable, "-c", probe]) == \
+    assert imported([sys.executable, "-c", probe], safe=False) == \
         (tmp_path / "softclose" / "__init__.py").resolve()          # the trap
     assert imported(fresh_command("-c", probe)) == Path(softclose.__file__).resolve()
 

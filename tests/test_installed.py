@@ -33,7 +33,7 @@ def test_the_package_is_the_installed_one():
         assert here == ROOT / "softclose" / "__init__.py"
     else:
         assert here == _installed_init().resolve()
-        assert ROOT not in here.parents
+        assert here != ROOT / "softclose" / "__init__.py"     # (a venv may sit in the checkout)
 
 
 def test_a_process_started_in_the_checkout_imports_the_installed_package():
