@@ -268,14 +268,32 @@ def run_pairs(cfg: Config, box: PairBox, pairs: list) -> dict:
 
 def _evaluate(c: Config, box: PairBox, keys, X: np.ndarray, npairs: int) -> dict:
     """:func:`softclose.robust.evaluate.evaluate` of the rows X of ``npairs`` pairs, each
-    row at its temperature."""
-    if box.Ts is None:
-        return evaluate(c, keys, X, explain=False)
-    Trow = np.tile(box.Ts, npairs)
+    row at its temperature. The opening effort (statics over 241 angles a row, a fifth of
+    the screen's time) is computed at every row only where it is a constraint
+    (``optimise.opening_force_max``); else at each pair's nominal row, which reports it."""
+    Trow = None if box.Ts is None else np.tile(box.Ts, npairs)
+    if c.optimise.opening_force_max is not None:
+        return _at_temperatures(c, box, keys, X, Trow, True)
+    cols = _at_temperatures(c, box, keys, X, Trow, False)
+    nominal = np.arange(npairs) * box.points + box.corners
+    part = _at_temperatures(c, box, keys, X[nominal], None if Trow is None else Trow[nominal],
+                            True)
+    cols["opening_force"][nominal] = part["opening_force"]
+    return cols
+
+
+def _at_temperatures(c: Config, box: PairBox, keys, X: np.ndarray, Trow, opening: bool
+                     ) -> dict:
+    """:func:`softclose.robust.evaluate.evaluate` of the rows X, row i at the temperature
+    Trow[i] (None: the config's)."""
+    if Trow is None:
+        return evaluate(c, keys, X, explain=False, opening=opening)
     cols: dict = {}
     for T in box.temperatures:
         m = Trow == T
-        part = evaluate(at_temperature(c, T), keys, X[m], explain=False)
+        if not m.any():
+            continue
+        part = evaluate(at_temperature(c, T), keys, X[m], explain=False, opening=opening)
         for k, v in part.items():
             v = np.asarray(v)
             if k not in cols:

@@ -215,13 +215,14 @@ def _g(v) -> str:
 
 def verify(cfg, design: dict, claims: dict | None = None,
            claimed_objective: float | None = None, checker: Checker | None = None,
-           hand: bool = True) -> Verification:
+           hand: bool = True, opening: bool = True) -> Verification:
     """Re-simulate ``design`` with the adaptive reference and check it (module docstring).
 
     ``claims``: the optimiser's own §4 metrics; ``claimed_objective``: its J; ``checker``:
     the :class:`Checker` of cfg's model (default: the cached one of its geometry). Never
     raises for a design the reference cannot simulate: ``error`` says why. ``hand=False``:
-    no hand force and zones (``hand`` None) unless ``optimise.self_close_min_deg`` needs them.
+    no hand force and zones (``hand`` None) unless ``optimise.self_close_min_deg`` needs them;
+    ``opening=False``: no opening effort (None) unless ``optimise.opening_force_max`` bounds it.
     """
     o, st = cfg.optimise, cfg.stroke
     chk = checker or get_checker(cfg)
@@ -231,7 +232,8 @@ def verify(cfg, design: dict, claims: dict | None = None,
               f"{chk.reference.tol:g}")
     t0 = time.perf_counter()
     try:
-        ref = chk.reference.simulate(p, resolve(cfg))   # cfg's limits, not the cached model's
+        ref = chk.reference.simulate(p, resolve(cfg),   # cfg's limits, not the cached model's
+                                     opening or o.opening_force_max is not None)
     except NumericalError as exc:
         return Verification(None, None, method=method, time=time.perf_counter() - t0,
                             error=str(exc))

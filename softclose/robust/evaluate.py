@@ -100,15 +100,20 @@ def simulator(cfg: Config, t_end: float | None = None):
 
 
 def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
-             threads: int | None = None, explain: bool = True) -> dict:
+             threads: int | None = None, explain: bool = True, opening: bool = True) -> dict:
     """Metric columns of the strokes of ``cfg`` with the keys set to the rows of ``X``.
 
     ``keys`` are numeric config keys, ``X`` (n, len(keys)) their values (absolute).
     ``t_end`` cuts the strokes early (anything slower is infeasible anyway: the
     closing-time window ends before it); ``explain=False`` skips locating where a spring
-    leaves its valid range (:meth:`softclose.simulation.simulator.Simulator.run_batch`). Returns a dict
-    of arrays (see ``COLUMNS``).
+    leaves its valid range (:meth:`softclose.simulation.simulator.Simulator.run_batch`);
+    ``opening=False`` skips the opening effort (its column NaN; refused when
+    ``optimise.opening_force_max`` makes it a constraint). Returns a dict of arrays (see
+    ``COLUMNS``).
     """
+    if not opening and cfg.optimise.opening_force_max is not None:
+        raise ValueError("evaluate: the opening effort is a constraint "
+                         "(optimise.opening_force_max): opening=False is refused")
     keys = list(keys)
     X = np.atleast_2d(np.asarray(X, float)).reshape(-1, len(keys))
     n = len(X)
@@ -146,10 +151,12 @@ def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
         prow = None if pts is None else {k: v[rows] for k, v in pts.items()}
         out = sim.run_batch(P[rows], threads=threads,
                             lid_mass=None if masses is None else masses[rows],
-                            explain=explain, points=prow, opening=True)
+                            explain=explain, points=prow, opening=opening)
         status = np.asarray(out["status"], int)
         ok = (status == 0) | (status == 1)
         for k in METRIC_KEYS[1:] + ("theta_dot_max", "theta_min"):
+            if k not in out:        # (the opening effort, not asked for: NaN)
+                continue
             v = np.asarray(out[k], float).copy()
             if k not in ("holding_moment", "opening_force"):
                 v[~ok] = np.nan

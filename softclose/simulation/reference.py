@@ -152,7 +152,7 @@ class Reference:
             s *= 0.5
         return 0.0
 
-    def simulate(self, p=None, case=None) -> StrokeResult:
+    def simulate(self, p=None, case=None, opening: bool = True) -> StrokeResult:
         """The metrics of one stroke (plus ``theta_min``, ``theta_max``), adaptively.
 
         Returns the same :class:`~softclose.simulation.stroke.StrokeResult` as the fixed-step
@@ -165,7 +165,8 @@ class Reference:
         configs (the caches key models by their structure, not by these limits) is given the
         one judged. ``p`` is a design at the
         reference temperature (default the model's); the stroke runs at the case's
-        ``operating.temperature_c`` (:mod:`softclose.model.temperature`).
+        ``operating.temperature_c`` (:mod:`softclose.model.temperature`). ``opening=False``
+        leaves the opening effort out (None; its exact search is a fifth of a stroke's time).
         """
         m, st = self.model, self.model.stroke
         case = self.case if case is None else case
@@ -183,7 +184,7 @@ class Reference:
         # a spring outside its valid range at every angle from the rim to the release is an
         # invalid design whatever the stroke does: not integrated (such a lid may oscillate
         # wildly, every turn an event); the reason is the one its stroke would give
-        invalid = self._invalid_throughout(p, mounting, thc, st.theta0)
+        invalid = self._invalid_throughout(p, mounting, thc, st.theta0, opening)
         if invalid is not None:
             return invalid
         T_f = sum(float(e.coulomb(elements.params(p))) for e in elements.FRICTIONS)
@@ -300,12 +301,13 @@ class Reference:
         eng = {} if engage is None else {"engage_time": engage[0],
                                          "engage_theta_dot": engage[1]}
         lmin, lmax = self._l_extremes(th_min, th_max)
-        invalid = self._invalid(p, mounting, lmin, lmax, th_min, th_max, **eng)
+        invalid = self._invalid(p, mounting, lmin, lmax, th_min, th_max, opening, **eng)
         if invalid is not None:
             return invalid
         why = None if stuck is None else f"held by friction at theta = {math.degrees(stuck):.1f} deg"
         return StrokeResult(
-            opening_force=statics.opening_force_exact(m, p), reason=why, stop_theta=stuck,
+            opening_force=statics.opening_force_exact(m, p) if opening else None, reason=why,
+            stop_theta=stuck,
             closed=closed, closing_time=out.get("closing_time"),
             impact_theta_dot=out.get("impact_theta_dot"),
             impact_tip_speed=out.get("impact_tip_speed"), peak_tip_speed=float(peak),
@@ -315,7 +317,8 @@ class Reference:
             method="cvodes", tolerance=self.tol, theta_min=float(th_min),
             theta_max=float(th_max), **eng)
 
-    def _invalid(self, p, mounting, lmin, lmax, th_min, th_max, **eng) -> StrokeResult | None:
+    def _invalid(self, p, mounting, lmin, lmax, th_min, th_max, opening: bool = True,
+                 **eng) -> StrokeResult | None:
         """The result of a stroke over [th_min, th_max] whose spring lengths lmin..lmax leave
         an element's valid range (with ``mounting``'s limits): an invalid design (with the
         engagement ``eng`` of its end damper, if any); None if the stroke is valid."""
@@ -331,11 +334,13 @@ class Reference:
             closed=False, closing_time=None, impact_theta_dot=None, impact_tip_speed=None,
             peak_tip_speed=None, min_spring_length=float(lmin), max_spring_length=float(lmax),
             holding_moment=m.holding_moment(p), status=StrokeStatus.OUT_OF_RANGE,
-            method="cvodes", tolerance=self.tol, opening_force=statics.opening_force_exact(m, p),
+            method="cvodes", tolerance=self.tol,
+            opening_force=statics.opening_force_exact(m, p) if opening else None,
             message=f"invalid design: {why[0]}", reason=why[0], theta_min=float(th_min),
             theta_max=float(th_max), **eng)
 
-    def _invalid_throughout(self, p, mounting, a, b) -> StrokeResult | None:
+    def _invalid_throughout(self, p, mounting, a, b, opening: bool = True
+                            ) -> StrokeResult | None:
         """:meth:`_invalid` for a spring whose every length over theta in [a, b] lies outside
         its valid range (the lid cannot be anywhere there with a valid spring); else None."""
         lmin, lmax = self._l_extremes(a, b)
@@ -344,7 +349,7 @@ class Reference:
                   elements.BY_NAME["spring"].valid(P, mounting))
         if not (lmin > hi or lmax < lo):
             return None
-        return self._invalid(p, mounting, lmin, lmax, a, b)
+        return self._invalid(p, mounting, lmin, lmax, a, b, opening)
 
     def _rest(self, theta, p, T_f):
         """At rest at theta: (theta, None) if dry friction holds the lid there (|dV/dtheta| <=
