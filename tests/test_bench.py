@@ -341,3 +341,17 @@ def test_a_relative_error_against_a_truth_of_zero_is_absolute():
     off = SimpleNamespace(**{k: 1e-9 for k in METRICS})
     e = errors(off, zero)
     assert all(v == pytest.approx(1e-9) for v in e.values())
+
+
+def test_the_hinge_row_is_the_example_chest_lid():
+    """The bench's hinge row carries examples/lids/chest_lid.toml's lid (an installed package
+    has no examples/): the same geometry, mass and stroke."""
+    from softclose.bench.features import HINGE_LID
+    from softclose.config import default_config, load_config
+    mine = default_config().update(HINGE_LID)
+    example = load_config(ROOT / "examples" / "lids" / "chest_lid.toml")
+    for key in HINGE_LID:
+        section, name = key.split(".")
+        if section in ("geometry", "mass", "stroke"):
+            assert getattr(getattr(mine, section), name) == \
+                getattr(getattr(example, section), name), key
