@@ -241,7 +241,7 @@ def test_the_starts_end_damper_refined_on_its_own_finer_grid():
     measure (never worse than its sweep point), starts that become one are solved once, and
     an extension spring's starts of no rate (the same stroke at any free length) are one."""
     from softclose.optimiser.kinds import kind_config
-    from softclose.optimiser.starts import END_REFINE, _measure, sweep_starts, with_designs
+    from softclose.optimiser.starts import END_REFINE, _measure, sweep_starts
     base = default_config().set("optimise.free", FREE)
     t = base.optimise.closing_time_max
     for kind, most in (("compression", 6), ("extension", 1)):
@@ -256,10 +256,8 @@ def test_the_starts_end_damper_refined_on_its_own_finer_grid():
                                 (angle, FREE["design.end_damper_angle_deg"])):
                 step = (hi - lo) / (END_REFINE - 1)
                 assert abs((v - lo) / step - round((v - lo) / step)) < 1e-9
-        P = with_designs(cfg, starts[:, :3])
-        P[:, PARAM_COLUMNS["design.end_damper_c"]] = starts[:, 3]
-        P[:, PARAM_COLUMNS["design.end_damper_angle_deg"]] = starts[:, 4]
-        viol, J, _ = _measure(cfg, sim, P, t)
+        keys = (("design.end_damper_c", 0, 0), ("design.end_damper_angle_deg", 0, 0))
+        viol, J, _ = _measure(cfg, sim, starts, keys, t)     # (columns 3, 4: c_e, angle)
         if kind == "compression":                # the feasible starts of the default lid
             assert np.all(viol == 0) and np.all(np.isfinite(J))
     # the answer is the one every start reached before (docs/optimise.md)

@@ -63,10 +63,14 @@ def sweep_time(cfg, t_limit: float) -> float:
     return 1.05 * t_limit + 0.05
 
 
-def _measure(cfg, sim, P: np.ndarray, t_limit: float):
-    """(violation, J, closing time) of the rows ``P`` by the kernel: the violation
-    (relative, 0 when feasible) ranks the infeasible points too."""
+def _measure(cfg, sim, G: np.ndarray, keys: tuple, t_limit: float):
+    """(violation, J, closing time) by the kernel of the designs ``G`` (rows of k, l0, c,
+    then the values of the swept ``keys``): the violation (relative, 0 when feasible) ranks
+    the infeasible points too."""
     o, st = cfg.optimise, cfg.stroke
+    P = with_designs(cfg, G)
+    for j, (k, _, _) in enumerate(keys):
+        P[:, PARAM_COLUMNS[k]] = G[:, 3 + j]
     r = sim.run_batch(P)
     release = -statics.slopes(sim.table, st.theta0, P)         # M theta'' at release
     dVg0 = sim.table.evaluate([st.theta0])[0][COEFFS.index("dVg")]  # gravity's alone
@@ -102,10 +106,7 @@ def sweep_starts(cfg, count: int, t_limit: float, sim=None,
     axes = [np.linspace(*getattr(o, k), n) for k, n in zip(DESIGN_KEYS, shape)] + \
         [_levels(k, lo, hi) for k, lo, hi in keys]
     G = np.array(np.meshgrid(*axes, indexing="ij")).reshape(len(axes), -1).T
-    P = with_designs(cfg, G)
-    for j, (k, _, _) in enumerate(keys):
-        P[:, PARAM_COLUMNS[k]] = G[:, 3 + j]
-    viol, J, T = _measure(cfg, sim, P, t_limit)
+    viol, J, T = _measure(cfg, sim, G, keys, t_limit)
     feasible = viol == 0
     order = np.lexsort((np.where(np.isfinite(J), J, np.inf), viol))
     lo = np.array([getattr(o, k)[0] for k in DESIGN_KEYS] + [a for _, a, _ in keys])
@@ -149,10 +150,7 @@ def _refine_end_damper(cfg, sim, G: np.ndarray, keys: tuple, t_limit: float) -> 
     mesh = np.array(np.meshgrid(*levels, indexing="ij")).reshape(len(keys), -1).T
     rows = np.repeat(G, len(mesh), axis=0)
     rows[:, 3:3 + len(keys)] = np.tile(mesh, (len(G), 1))
-    P = with_designs(cfg, rows)
-    for j, (k, _, _) in enumerate(keys):
-        P[:, PARAM_COLUMNS[k]] = rows[:, 3 + j]
-    viol, J, _ = _measure(cfg, sim, P, t_limit)
+    viol, J, _ = _measure(cfg, sim, rows, keys, t_limit)
     out, seen = [], set()
     for i in range(len(G)):
         sl = slice(i * len(mesh), (i + 1) * len(mesh))
