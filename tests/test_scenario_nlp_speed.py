@@ -17,7 +17,7 @@ from softclose import buildcache
 from softclose.optimiser import compiled
 
 rnlp = importlib.import_module("softclose.robust.scenario_cache")
-rdisc = importlib.import_module("softclose.optimiser.interval")    # the interval maps
+maps = importlib.import_module("softclose.optimiser.interval")    # the interval maps
 
 #: a small problem: 2 scenarios of the default box, 4 intervals of 2 sub-steps (the
 #: compiled library of it takes a few seconds; the co-design's takes ~100 s)
@@ -49,12 +49,12 @@ def _solve(cfg):
 
 
 def test_threads_give_the_same_solve(cache, cfg, monkeypatch):
-    monkeypatch.setattr(rdisc, "MAX_MAP_THREADS", 1)
-    assert rdisc.map_threads() == 1
+    monkeypatch.setattr(maps, "MAX_MAP_THREADS", 1)
+    assert maps.map_threads() == 1
     _, one = _solve(cfg)
     rnlp.forget()
-    monkeypatch.setattr(rdisc, "MAX_MAP_THREADS", 4)
-    monkeypatch.setattr(rdisc, "map_threads", lambda: 3)     # threads even on one core
+    monkeypatch.setattr(maps, "MAX_MAP_THREADS", 4)
+    monkeypatch.setattr(maps, "map_threads", lambda: 3)     # threads even on one core
     _, three = _solve(cfg)
     assert one.success and three.success
     assert three.r["iterations"] == one.r["iterations"]
