@@ -28,7 +28,7 @@ from ..errors import NumericalError
 from ..interrupt import solving
 from ..model.temperature import at_temperature, parameter_factors
 from ..problem import REFERENCE_TOL, as_params
-from .roots import illinois
+from .roots import hermite_peak, hermite_root, illinois
 from .stroke import StrokeResult, StrokeStatus
 
 #: grid steps of the reference integrated in one CVODES run (then scanned for events)
@@ -37,6 +37,10 @@ CHUNK = 16
 #: one that runs past the rim towards a toggle position (where the closure has no solution
 #: and the equation is NaN) would otherwise grind on, shrinking its steps, for minutes
 CHUNK_MAX_STEPS = 4000
+#: a tip speed's maximum is located in time to this fraction of the steps searched
+PEAK_WIDTH = 1e-8
+#: points of each finer grid that refines a spring length's extreme (one call each)
+REFINE_POINTS = 33
 
 
 class Reference:
@@ -78,12 +82,24 @@ class Reference:
         speed = ca.norm_2(v_T)
         dspeed = ca.if_else(speed > 0, ca.dot(v_T, a_T) / speed, ca.norm_2(a_T))
         self._speed_fn = ca.Function("speed", [x, p, s, eg], [speed, dspeed])
+        # the speeds at a chunk's nodes in one call (a call from Python costs ~0.1 ms)
+        self._speed_chunk = self._speed_fn.map(CHUNK)
+        self._speeds: dict = {}     # (node, moving, engaged) -> (|v_T|, d|v_T|/dt)
+        self._length_maps = None    # the spring length on the coarse and the fine grids
         self._moving = -1.0
         self._engaged = np.zeros(len(elements.ENGAGING))
 
-    def _speed(self, x, p):
-        """(|v_T|, d|v_T|/dt) at the state x, moving the stroke's current way."""
-        return self._speed_fn(x, p, self._moving, self._engaged)
+    def _speed(self, x, p) -> tuple[float, float]:
+        """(|v_T|, d|v_T|/dt) at the state x, moving the stroke's current way (a node of the
+        current chunk: computed with it)."""
+        known = self._speeds.get(self._speed_key(x))
+        if known is not None:
+            return known
+        v, dv = self._speed_fn(x, p, self._moving, self._engaged)
+        return float(v), float(dv)
+
+    def _speed_key(self, x) -> tuple:
+        return (np.asarray(x, float).tobytes(), self._moving, self._engaged.tobytes())
 
     def flow(self, x0, p, tau):
         """State after integrating for ``tau`` seconds from ``x0`` (moving the way of the
@@ -126,17 +142,73 @@ class Reference:
             return self.flow(x0, p, h)
         self._ahead = [xs[:, i].copy() for i in range(1, CHUNK)]
         self._ahead_key, self._ahead_x = key, xs[:, 0].copy()
+        v, dv = (np.asarray(a).ravel() for a in
+                 self._speed_chunk(xs, p, self._moving, self._engaged))
+        self._speeds = {self._speed_key(xs[:, i]): (float(v[i]), float(dv[i]))
+                        for i in range(CHUNK)}
         return self._ahead_x
 
-    def _newton_time(self, x0, p, h, residual, lo=0.0, hi=None):
-        """Root in (lo, hi] of residual(x(tau)) (a sign change is bracketed)."""
+    def _newton_time(self, x0, p, h, residual, lo=0.0, hi=None, x_hi=None, guess=None,
+                     width=None):
+        """Root in (lo, hi] of residual(x(tau)) (a sign change is bracketed) to a bracket of
+        ``width`` (default 1e-14 s) or a residual below 1e-15; ``x_hi``: the state at hi when
+        known (a node), ``guess``: a first guess of the root (the cubic Hermite
+        interpolant's, :mod:`.roots`).
+
+        A search from the step's ends alone takes ~7 fresh CVODES runs of ~1 ms (each starts
+        with tiny steps at order one); from a guess good to O(h^4), and a second point just
+        past it on the far side, the bracket is that small at once and the search ends in
+        ~2 more."""
         hi = h if hi is None else hi
-        r_lo, r_hi = residual(self.flow(x0, p, lo)), residual(self.flow(x0, p, hi))
-        return illinois(lambda tau: residual(self.flow(x0, p, tau)), lo, hi, r_lo, r_hi,
-                        lambda a, b, tau, r: (r == 0 or b - a < 1e-14 * max(1.0, b)
+        at = lambda tau: residual(self.flow(x0, p, tau))   # noqa: E731
+        r_lo = at(lo)
+        r_hi = residual(x_hi) if x_hi is not None else at(hi)
+        if guess is not None and lo < guess < hi and (r_lo > 0) != (r_hi > 0):
+            slope = (r_hi - r_lo) / (hi - lo)
+            r_g = at(guess)
+            if r_g == 0:
+                return guess
+            # a second point past the guess, twice its residual's distance along the chord
+            step = 2.0 * abs(r_g / slope) + 1e-13 * max(1.0, hi)
+            if (r_g > 0) == (r_lo > 0):
+                lo, r_lo = guess, r_g
+                if guess + step < hi:
+                    r_s = at(guess + step)
+                    if (r_s > 0) == (r_g > 0):
+                        lo, r_lo = guess + step, r_s
+                    else:
+                        hi, r_hi = guess + step, r_s
+            else:
+                hi, r_hi = guess, r_g
+                if guess - step > lo:
+                    r_s = at(guess - step)
+                    if (r_s > 0) == (r_g > 0):
+                        hi, r_hi = guess - step, r_s
+                    else:
+                        lo, r_lo = guess - step, r_s
+        return illinois(at, lo, hi, r_lo, r_hi,
+                        lambda a, b, tau, r: (r == 0 or b - a < (width or 1e-14 * max(1.0, b))
                                               or abs(r) < 1e-15), 200)
 
-    def _cross_time(self, x0, p, h, angle, engaged):
+    def _peak_time(self, xa, p, H, xb) -> float:
+        """When in (0, H] the tip speed peaks between the state xa and xb = x(H), its time
+        derivative falling through zero there: from the maximum of the speed's cubic Hermite
+        interpolant (:func:`.roots.hermite_peak`). Only the speed there is used, and it is
+        flat in time: a time within :data:`PEAK_WIDTH` H of the maximum gives it to
+        ~|v''| (1e-8 H)^2 / 2, far below the integrator's tolerance (a search to 1e-14 s
+        took ~14 fresh CVODES runs, in the integrator's noise on d|v|/dt)."""
+        (ga, da), (gb, db) = self._speed(xa, p), self._speed(xb, p)
+        return self._newton_time(xa, p, H, lambda y: self._speed(y, p)[1], x_hi=xb,
+                                 guess=hermite_peak(H, ga, da, gb, db), width=PEAK_WIDTH * H)
+
+    def _angle_time(self, x0, p, h, angle, x1):
+        """When theta reaches ``angle`` in (0, h] from the node x0 (x1 = x(h) beyond it),
+        from the root of theta's cubic Hermite interpolant (:func:`.roots.hermite_root`)."""
+        f0, f1 = x0[0] - angle, x1[0] - angle
+        guess = hermite_root(h, f0, x0[1], f1, x1[1]) if (f0 > 0) != (f1 > 0) else None
+        return self._newton_time(x0, p, h, lambda y: y[0] - angle, x_hi=x1, guess=guess)
+
+    def _cross_time(self, x0, p, h, angle, engaged, x1=None):
         """When theta crosses an end damper's ``angle`` in (0, h] from the node x0, the damper
         ``engaged`` (theta < angle) or not (theta >= angle). A node on the angle itself (a
         release at theta0 = angle) is on the side of its state: it crosses at once (0) if
@@ -144,6 +216,8 @@ class Reference:
         flow is on its side)."""
         residual = lambda y: y[0] - angle  # noqa: E731
         if x0[0] != angle:
+            if x1 is not None:
+                return self._angle_time(x0, p, h, angle, x1)
             return self._newton_time(x0, p, h, residual)
         own, s = (-1.0 if engaged else 1.0), 0.5 * h
         while s > 1e-15 * h:
@@ -176,8 +250,8 @@ class Reference:
         thc, t_max, dt = st.theta_closed, st.t_max, self.grid_step
         x = np.array([st.theta0, 0.0])
         t, peak, th_min, th_max = 0.0, 0.0, st.theta0, st.theta0
-        speed = lambda y: float(self._speed(y, p)[0])  # noqa: E731
-        dspeed = lambda y: float(self._speed(y, p)[1])  # noqa: E731
+        speed = lambda y: self._speed(y, p)[0]  # noqa: E731
+        dspeed = lambda y: self._speed(y, p)[1]  # noqa: E731
         prev = None  # (t, x, g) of the previous node
         g_x = None   # the tip speed at x, when known (the previous step's g1)
         closed, out, stuck = False, {}, None
@@ -188,7 +262,7 @@ class Reference:
         if invalid is not None:
             return invalid
         T_f = sum(float(e.coulomb(elements.params(p))) for e in elements.FRICTIONS)
-        self._moving, self._ahead, self._chunk_off = -1.0, [], 0
+        self._moving, self._ahead, self._chunk_off, self._speeds = -1.0, [], 0, {}
         # the end dampers' engagement angles (none where a damper has no coefficient): a
         # crossing is an event; engaged where the lid is below the angle
         Pn = elements.params(p)
@@ -214,13 +288,13 @@ class Reference:
             cross = np.flatnonzero((angles > thc) & ((x1[0] < angles) != (self._engaged > 0)))
             if len(cross) and T_f > 0 and x1[1] * self._moving < 0:
                 # a rest in the same step: the event that comes first is taken
-                tr = self._newton_time(x, p, h, lambda y: y[1] * self._moving, lo=0.0)
-                te = min(self._cross_time(x, p, h, angles[j], self._engaged[j] > 0)
+                tr = self._newton_time(x, p, h, lambda y: y[1] * self._moving, x_hi=x1)
+                te = min(self._cross_time(x, p, h, angles[j], self._engaged[j] > 0, x1)
                          for j in cross)
                 if tr < te:
                     cross = cross[:0]
             if len(cross):
-                taus = [self._cross_time(x, p, h, angles[j], self._engaged[j] > 0)
+                taus = [self._cross_time(x, p, h, angles[j], self._engaged[j] > 0, x1)
                         for j in cross]
                 j, tau = cross[int(np.argmin(taus))], min(taus)
                 xe = self.flow(x, p, tau)
@@ -228,10 +302,10 @@ class Reference:
                 if prev is not None and g >= prev[2] and g > 0:
                     tp, xp, _ = prev
                     if dspeed(xp) > 0 > dspeed(xe):
-                        tm = self._newton_time(xp, p, t + tau - tp, dspeed)
+                        tm = self._peak_time(xp, p, t + tau - tp, xe)
                         peak = max(peak, speed(self.flow(xp, p, tm)))
                 elif dspeed(x) > 0 > dspeed(xe):
-                    tm = self._newton_time(x, p, tau, dspeed, 0.0, tau)
+                    tm = self._peak_time(x, p, tau, xe)
                     peak = max(peak, speed(self.flow(x, p, tm)))
                 peak = max(peak, g, ge)
                 th_min, th_max = min(th_min, float(xe[0])), max(th_max, float(xe[0]))
@@ -246,13 +320,13 @@ class Reference:
                 prev = (t, x, -math.inf)
                 continue
             if T_f > 0 and x1[1] * self._moving < 0:  # came to rest inside (t, t+h]
-                tau = self._newton_time(x, p, h, lambda y: y[1] * self._moving, lo=0.0)
+                tau = self._newton_time(x, p, h, lambda y: y[1] * self._moving, x_hi=x1)
                 xe = self.flow(x, p, tau)
                 if xe[0] > thc:  # (a closing event first is the branch below)
                     if prev is not None and g >= prev[2] and g > 0:
                         tp, xp, _ = prev
                         if dspeed(xp) > 0 > dspeed(xe):
-                            tm = self._newton_time(xp, p, t + tau - tp, dspeed)
+                            tm = self._peak_time(xp, p, t + tau - tp, xe)
                             peak = max(peak, speed(self.flow(xp, p, tm)))
                     peak = max(peak, g)
                     th_min, th_max = min(th_min, float(xe[0])), max(th_max, float(xe[0]))
@@ -263,17 +337,17 @@ class Reference:
                     self._moving = moving
                     continue
             if x1[0] <= thc:  # closing event inside (t, t+h]
-                tau = self._newton_time(x, p, h, lambda y: y[0] - thc)
+                tau = self._angle_time(x, p, h, thc, x1)
                 xe = self.flow(x, p, tau)
                 ge = speed(xe)
                 peak = max(peak, g, ge)
                 if dspeed(x) > 0 and dspeed(xe) < 0:
-                    tm = self._newton_time(x, p, tau, dspeed, 0.0, tau)
+                    tm = self._peak_time(x, p, tau, xe)
                     peak = max(peak, speed(self.flow(x, p, tm)))
                 elif prev is not None and g >= prev[2] and g > ge:
                     tp, xp, _ = prev
                     if dspeed(xp) > 0 > dspeed(xe):
-                        tm = self._newton_time(xp, p, t + tau - tp, dspeed)
+                        tm = self._peak_time(xp, p, t + tau - tp, xe)
                         peak = max(peak, speed(self.flow(xp, p, tm)))
                 t += tau
                 closed, th_min = True, thc
@@ -283,13 +357,13 @@ class Reference:
             if prev is not None and g >= prev[2] and g > g1:
                 tp, xp, _ = prev
                 if dspeed(xp) > 0 > dspeed(x1):
-                    tm = self._newton_time(xp, p, t + h - tp, dspeed)
+                    tm = self._peak_time(xp, p, t + h - tp, x1)
                     peak = max(peak, speed(self.flow(xp, p, tm)))
             if x[1] < 0 <= x1[1]:  # turned back: the lowest angle in this interval
-                tm = self._newton_time(x, p, h, lambda y: y[1])
+                tm = self._newton_time(x, p, h, lambda y: y[1], x_hi=x1)
                 th_min = min(th_min, float(self.flow(x, p, tm)[0]))
             if x[1] > 0 >= x1[1]:  # turned down: the highest angle in this interval
-                tm = self._newton_time(x, p, h, lambda y: -y[1])
+                tm = self._newton_time(x, p, h, lambda y: -y[1], x_hi=x1)
                 th_max = max(th_max, float(self.flow(x, p, tm)[0]))
             th_min = min(th_min, float(x1[0]))
             th_max = max(th_max, float(x1[0]))
@@ -362,27 +436,24 @@ class Reference:
 
     def _l_extremes(self, a, b):
         """min and max of the spring length over theta in [a, b]: the best of an 801-point
-        grid, refined by golden section on the two cells about it (to ~1e-13 rad)."""
-        grid = np.linspace(a, b, 801)
+        grid, refined on the two cells about it by finer grids of :data:`REFINE_POINTS`
+        (each one call) until the cell is ~1e-13 rad."""
         length = self.model.coordinate_fns["spring"]
-        lv = np.asarray(length.map(len(grid))(grid)[0]).ravel()
+        if self._length_maps is None:
+            self._length_maps = (length.map(801), length.map(REFINE_POINTS))
+        coarse, fine = self._length_maps
+        grid = np.linspace(a, b, 801)
+        lv = np.asarray(coarse(grid)[0]).ravel()
         out = []
         for sgn in (1, -1):
             i = int(np.argmin(sgn * lv))
+            best = sgn * lv[i]
             lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, len(grid) - 1)]
-            f = lambda th: sgn * float(length(th)[0])  # noqa: E731
-            gr = (math.sqrt(5) - 1) / 2  # golden section on the bracket
-            c, d = hi - gr * (hi - lo), lo + gr * (hi - lo)
-            fc, fd = f(c), f(d)
             while hi - lo > 1e-13 * max(1.0, abs(hi)):
-                if fc < fd:
-                    hi, d, fd = d, c, fc
-                    c = hi - gr * (hi - lo)
-                    fc = f(c)
-                else:
-                    lo, c, fc = c, d, fd
-                    d = lo + gr * (hi - lo)
-                    fd = f(d)
-            best = min(f(0.5 * (lo + hi)), sgn * lv[i])
+                th = np.linspace(lo, hi, REFINE_POINTS)
+                v = sgn * np.asarray(fine(th)[0]).ravel()
+                k = int(np.argmin(v))
+                best = min(best, v[k])
+                lo, hi = th[max(k - 1, 0)], th[min(k + 1, REFINE_POINTS - 1)]
             out.append(sgn * best)
         return out[0], out[1]
