@@ -6,7 +6,6 @@ a full evaluation does; the reference leaves it out when asked, its metrics unch
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from softclose.config import default_config
 from softclose.robust.evaluate import evaluate
@@ -32,10 +31,14 @@ def test_evaluate_without_the_opening_effort_is_the_same_otherwise():
             assert np.array_equal(np.asarray(v), np.asarray(part[k])), k
 
 
-def test_evaluate_refuses_to_leave_out_a_bounded_opening_effort():
+def test_a_bounded_opening_effort_is_never_left_out():
+    """Where ``optimise.opening_force_max`` bounds it, ``opening=False`` computes it anyway
+    (as ``verify`` does): the same bits as asking for it."""
     cfg = default_config().set("optimise.opening_force_max", 50.0)
-    with pytest.raises(ValueError, match="opening_force_max"):
-        evaluate(cfg, KEYS, _rows(cfg, 2), opening=False)
+    X = _rows(cfg, 2)
+    a, b = evaluate(cfg, KEYS, X), evaluate(cfg, KEYS, X, opening=False)
+    assert np.isfinite(b["opening_force"]).all()
+    assert np.array_equal(a["opening_force"], b["opening_force"])
 
 
 def test_a_screen_reports_the_nominal_opening_effort(tmp_path):

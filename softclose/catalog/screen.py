@@ -270,11 +270,12 @@ def _evaluate(c: Config, box: PairBox, keys, X: np.ndarray, npairs: int) -> dict
     """:func:`softclose.robust.evaluate.evaluate` of the rows X of ``npairs`` pairs, each
     row at its temperature. The opening effort (statics over 241 angles a row, a fifth of
     the screen's time) is computed at every row only where it is a constraint
-    (``optimise.opening_force_max``); else at each pair's nominal row, which reports it."""
+    (``optimise.opening_force_max``: ``evaluate`` computes it then); else at each pair's
+    nominal row, which reports it."""
     Trow = None if box.Ts is None else np.tile(box.Ts, npairs)
-    if c.optimise.opening_force_max is not None:
-        return _at_temperatures(c, box, keys, X, Trow, True)
     cols = _at_temperatures(c, box, keys, X, Trow, False)
+    if c.optimise.opening_force_max is not None:
+        return cols
     nominal = np.arange(npairs) * box.points + box.corners
     part = _at_temperatures(c, box, keys, X[nominal], None if Trow is None else Trow[nominal],
                             True)

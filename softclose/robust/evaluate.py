@@ -107,13 +107,12 @@ def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
     ``t_end`` cuts the strokes early (anything slower is infeasible anyway: the
     closing-time window ends before it); ``explain=False`` skips locating where a spring
     leaves its valid range (:meth:`softclose.simulation.simulator.Simulator.run_batch`);
-    ``opening=False`` skips the opening effort (its column NaN; refused when
-    ``optimise.opening_force_max`` makes it a constraint). Returns a dict of arrays (see
-    ``COLUMNS``).
+    ``opening=False`` skips the opening effort (its column NaN) unless
+    ``optimise.opening_force_max`` makes it a constraint (the rule of
+    :meth:`softclose.simulation.reference.Reference.simulate`'s callers too,
+    :func:`softclose.optimiser.verify.verify`). Returns a dict of arrays (see ``COLUMNS``).
     """
-    if not opening and cfg.optimise.opening_force_max is not None:
-        raise ValueError("evaluate: the opening effort is a constraint "
-                         "(optimise.opening_force_max): opening=False is refused")
+    opening = opening or cfg.optimise.opening_force_max is not None
     keys = list(keys)
     X = np.atleast_2d(np.asarray(X, float)).reshape(-1, len(keys))
     n = len(X)

@@ -380,7 +380,7 @@ class Reference:
             return invalid
         why = None if stuck is None else f"held by friction at theta = {math.degrees(stuck):.1f} deg"
         return StrokeResult(
-            opening_force=statics.opening_force_exact(m, p) if opening else None, reason=why,
+            opening_force=self._opening(p, opening), reason=why,
             stop_theta=stuck,
             closed=closed, closing_time=out.get("closing_time"),
             impact_theta_dot=out.get("impact_theta_dot"),
@@ -409,7 +409,7 @@ class Reference:
             peak_tip_speed=None, min_spring_length=float(lmin), max_spring_length=float(lmax),
             holding_moment=m.holding_moment(p), status=StrokeStatus.OUT_OF_RANGE,
             method="cvodes", tolerance=self.tol,
-            opening_force=statics.opening_force_exact(m, p) if opening else None,
+            opening_force=self._opening(p, opening),
             message=f"invalid design: {why[0]}", reason=why[0], theta_min=float(th_min),
             theta_max=float(th_max), **eng)
 
@@ -424,6 +424,11 @@ class Reference:
         if not (lmin > hi or lmax < lo):
             return None
         return self._invalid(p, mounting, lmin, lmax, a, b, opening)
+
+    def _opening(self, p, opening: bool) -> float | None:
+        """The opening effort of the lid at ``p`` (:func:`statics.opening_force_exact`), or
+        None when it is not asked for."""
+        return statics.opening_force_exact(self.model, p) if opening else None
 
     def _rest(self, theta, p, T_f):
         """At rest at theta: (theta, None) if dry friction holds the lid there (|dV/dtheta| <=
