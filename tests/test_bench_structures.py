@@ -54,3 +54,23 @@ def test_the_table_has_a_line_per_structure(rows):
     table = structures_markdown(rows).splitlines()
     assert len(table) == 2 + len(rows)
     assert f"{rows[0]['c_mb']:.2f} MB" in table[2] and f"`{rows[0]['command']}`" in table[2]
+
+
+def test_a_bench_run_writes_the_structures_record(tmp_path):
+    """`softclose bench --structures --out DIR` writes `structures.json` in the record's
+    form (docs/bench_structures.json is that file of a run), beside `structures.csv`
+    (:func:`softclose.cli.bench.write_files` calls ``write_structures``)."""
+    from softclose.bench.benchmark import BenchResult
+    from softclose.bench.precision import WorkPrecision
+    from softclose.cli.bench import structures_record, write_structures
+    wp = WorkPrecision((), {}, {}, {}, {}, {"method": "rk4", "step": 0.002, "confirmed": True,
+                                             "meets_targets": True, "failing_designs": []}, ())
+    res = BenchResult("AMD EPYC", "2026-12-06", "abc1234", True, wp, (), (), "", 3.0,
+                      load=(0.1, 0.2), structures=tuple(RECORD["rows"]))
+    files = write_structures(res, tmp_path)
+    written = json.loads((tmp_path / "structures.json").read_text())
+    assert tmp_path / "structures.json" in files and (tmp_path / "structures.csv").exists()
+    assert written == json.loads(json.dumps(structures_record(res)))
+    assert written["rows"] == RECORD["rows"] and written["machine"] == "AMD EPYC"
+    assert set(RECORD) <= set(written)
+    assert structures_markdown(written["rows"]) == structures_markdown(RECORD["rows"])

@@ -18,16 +18,18 @@ from ..robust import optimise_robust, scenario_cache as rn
 from ..optimiser import cache as oc, optimise
 from ..optimiser.compiled import CFLAGS, SCENARIO_CFLAGS
 
-#: the commands whose structures are measured: (name, optimise options, --free pairs)
+#: the attachment points the co-design frees (docs/codesign.md)
+POINTS = (("geometry.spring_anchor[0]", -0.09, -0.03), ("geometry.spring_anchor[1]", -0.01, 0.05),
+          ("geometry.lid_e[0]", -0.006, 0.044), ("geometry.lid_e[1]", 0.004, 0.024))
+
+#: the commands whose structures are measured: (name, robust, --free pairs)
 COMMANDS = (
     ("optimise", False, ()),
     ("optimise --robust", True, ()),
     ("end-damper co-design", False, (("design.end_damper_c", 0.0, 2.0),
                                      ("design.end_damper_angle_deg", 1.0, 10.0))),
-    ("points co-design", False, (("geometry.spring_anchor[0]", -0.09, -0.03),
-                                 ("geometry.spring_anchor[1]", -0.01, 0.05),
-                                 ("geometry.lid_e[0]", -0.006, 0.044),
-                                 ("geometry.lid_e[1]", 0.004, 0.024))),
+    ("points co-design", False, POINTS),
+    ("robust points co-design", True, POINTS),
 )
 
 

@@ -299,6 +299,22 @@ def speed_record(res) -> dict:
                      for r in res.speed}}
 
 
+def structures_record(res) -> dict:
+    """The NLP structures' rows of a run with the machine and load they were measured on."""
+    return {"machine": res.machine, "date": res.date, "commit": res.commit,
+            "load": list(res.load), "rows": [dict(r) for r in res.structures]}
+
+
+def write_structures(res, out: Path) -> list[Path]:
+    """The NLP structures' table (CSV) and record (JSON: the rows with where they were
+    measured, the record the performance page's table is held to: docs/bench_structures.json,
+    tests/test_bench_structures.py) into ``out``."""
+    from ..jsonio import dumps
+    path = Path(out) / "structures.json"
+    path.write_text(dumps(structures_record(res), indent=1))
+    return [write_csv(list(res.structures), Path(out) / "structures.csv"), path]
+
+
 def write_files(res, out: Path) -> list[Path]:
     """Tables, report, JSON and figures of one bench run into ``out`` (which exists)."""
     from .common import save_figure as save
@@ -315,7 +331,7 @@ def write_files(res, out: Path) -> list[Path]:
     if res.optimiser:
         files.append(write_csv(res.optimiser, out / "optimiser.csv"))
     if res.structures:
-        files.append(write_csv(list(res.structures), out / "structures.csv"))
+        files += write_structures(res, out)
     (out / "bench.md").write_text(report_markdown(res))
     files.append(out / "bench.md")
     files.append(save(plot_work_precision(res.work_precision), out / "work_precision.png"))
@@ -331,6 +347,7 @@ def write_files(res, out: Path) -> list[Path]:
     return files
 
 
-__all__ = ["register", "run", "write_files", "write_csv", "report_text", "report_markdown",
+__all__ = ["register", "run", "write_files", "write_structures", "structures_record", "write_csv",
+           "report_text", "report_markdown",
            "default_text", "work_precision_markdown", "speed_markdown", "optimiser_markdown",
            "structures_markdown"]

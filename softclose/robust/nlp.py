@@ -123,7 +123,7 @@ class ScenarioStructure:
                  M2: int | None, free: tuple, place: tuple, robust_objective: str,
                  opening: bool, keep_out: tuple, hessian: str, linear_solver: str,
                  max_iter: int, tol: float = 1e-10, library=None, meta=None,
-                 self_close: bool = False):
+                 self_close: bool = False, held: tuple = (False, False, False)):
         t0 = time.perf_counter()
         self.S, self.nodes, self.M, self.M2 = S, nodes, substeps, M2
         self.two_phase = M2 is not None
@@ -132,6 +132,10 @@ class ScenarioStructure:
         self.placed = bool(self.place)
         self.robust_objective = robust_objective
         self.nd = 3 + len(self.free) + len(self.place)
+        #: which of (k, l0, c) are held at a value (their bounds lo = hi): parameters, the
+        #: last three of P; their variables stay in w (bounded to the value) but nothing
+        #: depends on them, so the Hessian and the Jacobian need fewer directions
+        self.held = tuple(bool(h) for h in held)
         self.series = SymbolicSeries(names, els, degree)
         self.spring = "gas" if "spring:l" in self.series.names else "coil"
         if self.placed and self_close:
@@ -142,9 +146,10 @@ class ScenarioStructure:
                              SELF_CLOSE_INTERVALS + 1 if self_close else 0)
         n_sc = len(self.free) + len(self.place)
         self.n_params = len(PARAMS) + N + 2 * NP * S + n_sc + (8 if self.placed else 0) + \
-            S * self.lid.size
+            S * self.lid.size + (3 if any(self.held) else 0)
         check_linear_solver(linear_solver)
-        self.options = {"print_time": False, "show_eval_warnings": False, "calc_lam_p": False,
+        self.options = {"print_time": False, "show_eval_warnings": False,
+                        "calc_lam_p": any(self.held),
                         "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": tol,
                         "ipopt.max_iter": max_iter,
                         "ipopt.hessian_approximation": hessian,
@@ -181,7 +186,9 @@ class ScenarioStructure:
         T1 = [ca.MX.sym(f"T1_{s}") for s in range(S)] if self.two_phase else []
         X = [ca.MX.sym(f"X{s}", 2, N) for s in range(S)]
         pk = [ca.MX.sym(f"s{s}") for s in range(S)]
-        entries = [d[i] * SCALES[i] for i in range(3)] + [fixed[i] for i in range(len(FIXED))]
+        values = P[self.n_params - 3:] if any(self.held) else None
+        entries = [values[i] if self.held[i] else d[i] * SCALES[i] for i in range(3)] + \
+            [fixed[i] for i in range(len(FIXED))]
         for j, (_, col) in enumerate(self.free):
             entries[col] = d[3 + j] * scales[j]
         q = ca.vertcat(*entries)
@@ -366,13 +373,14 @@ class ScenarioNLP:
         self.scenario_models = [self.models[i] for i in self.model_index]
         self.fits = fits
         degree = padded_degree(max(f.degree for f in fits))
+        self.held = held_design(cfg)
         self.structure_key = (self.S, tuple(e.name for e in fits[0].elements), fits[0].names,
                               degree, nodes, substeps, self.M2,
                               tuple((k, col) for k, col, _ in self.free),
                               tuple((k, slot) for k, slot, _ in self.place),
                               robust_objective, o.opening_force_max is not None,
                               keep_out_of(cfg), o.hessian, o.linear_solver, o.max_iter, tol,
-                              o.self_close_min_deg is not None)
+                              o.self_close_min_deg is not None, self.held)
         st = structure or get_scenario_structure(self.structure_key)
         self.structure = st
         for k in ("g_sizes", "block", "nw", "peak_fn", "J_fn", "solver", "warm_solver",
@@ -449,9 +457,10 @@ class ScenarioNLP:
         o, st = cfg.optimise, cfg.stroke
         A = np.concatenate([np.asarray(a, float) for a, _ in maps])
         B = np.concatenate([np.asarray(b, float) for _, b in maps])
+        held = [getattr(o, k)[0] for k in DESIGN_KEYS] if any(self.held) else []
         return np.r_[st.theta0, st.theta_closed, o.weight_impact, o.weight_peak_tip,
                      params_of(cfg)[len(DESIGN_KEYS):], J_ref,
-                     phase_grid(self.nodes, self.two_phase), A, B, self.lid_vector]
+                     phase_grid(self.nodes, self.two_phase), A, B, self.lid_vector, held]
 
     def bounds(self, cfg: Config, t_hi: list[float] | None = None,
                t_lo: list[float] | None = None, design_lb=None):
@@ -540,11 +549,22 @@ class ScenarioNLP:
             return {"x": x0, "g": np.full(len(lbg), np.nan), "lam_x": None, "lam_g": None,
                     "status": f"Error: {str(exc).splitlines()[0]}", "success": False,
                     "iterations": 0, "time": time.perf_counter() - t0, "f": math.nan}
+        lam_x = np.asarray(sol["lam_x"]).ravel()
+        for i in np.flatnonzero(self.held):     # a held value's multiplier: from P's
+            lam_x[i] = float(np.asarray(sol["lam_p"]).ravel()[len(p) - 3 + i]) * SCALES[i]
         return {"x": np.asarray(sol["x"]).ravel(), "f": float(sol["f"]),
-                "g": np.asarray(sol["g"]).ravel(), "lam_x": np.asarray(sol["lam_x"]).ravel(),
+                "g": np.asarray(sol["g"]).ravel(), "lam_x": lam_x,
                 "lam_g": np.asarray(sol["lam_g"]).ravel(), "status": status,
                 "success": ok and status in CONVERGED, "iterations": its,
                 "time": time.perf_counter() - t0}
+
+
+def held_design(cfg: Config) -> tuple:
+    """Which of the design variables (k, l0, c) ``cfg`` holds at one value (its bounds
+    ``optimise.spring_k`` ... with lo = hi, as ``softclose select`` holds a catalog spring's
+    rate and free length): the scenario NLP takes them as parameters."""
+    o = cfg.optimise
+    return tuple(bool(getattr(o, k)[0] == getattr(o, k)[1]) for k in DESIGN_KEYS)
 
 
 #: the structures built in this process, by :attr:`ScenarioNLP.structure_key`
@@ -558,13 +578,14 @@ def get_scenario_structure(key: tuple) -> ScenarioStructure:
         from .. import buildcache
         disk = buildcache.key_of("scenario-nlp", key)
         (S, els, names, degree, nodes, substeps, M2, free, place, objective, opening,
-         keep_out, hessian, linear_solver, max_iter, tol, self_close) = key
+         keep_out, hessian, linear_solver, max_iter, tol, self_close, held) = key
 
         def make(library=None, meta=None):
             return ScenarioStructure(S, tuple(elements.BY_NAME[e] for e in els), names,
                                      degree, nodes, substeps, M2, free, place, objective,
                                      opening, keep_out, hessian, linear_solver, max_iter,
-                                     tol, library=library, meta=meta, self_close=self_close)
+                                     tol, library=library, meta=meta, self_close=self_close,
+                                     held=held)
         what = (f"of the robust optimiser ({S} scenarios, {nodes} x {substeps} RK4 steps, "
                 f"{objective} case)")
         st = compiled.load_or_build(disk, make, make, what, compiled.SCENARIO_CFLAGS)

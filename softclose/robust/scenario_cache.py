@@ -12,6 +12,7 @@ from ..optimiser import compiled
 from ..optimiser.free_points import placement_layout, slot_values
 from ..optimiser.interval import free_layout
 from .discretisation import phase_two, two_phase
+from .nlp import held_design
 from .nlp import _STRUCTURES, ScenarioNLP, _model_key  # noqa: F401  (_STRUCTURES: the
 #                                                              structures, kept in .nlp)
 
@@ -35,7 +36,7 @@ def get_scenario_nlp(cfg: Config, model_cfgs: list[Config], nodes: int, substeps
                  for c in model_cfgs), nodes, substeps, M2, robust_objective, o.hessian,
            o.linear_solver, o.max_iter, o.opening_force_max is not None,
            o.self_close_min_deg,
-           placement_layout(cfg), free_layout(cfg), tuple(slot_values(cfg)))
+           placement_layout(cfg), free_layout(cfg), tuple(slot_values(cfg)), held_design(cfg))
     if key in _NLPS:
         return _NLPS[key], True
     if len(_NLPS) > 16:
