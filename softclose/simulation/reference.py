@@ -168,38 +168,34 @@ class Reference:
             r_g = at(guess)
             if r_g == 0:
                 return guess
-            # a second point past the guess, twice its residual's distance along the chord
+            # the guess ends the bracket on its side; a second point past it, twice its
+            # residual's distance along the chord, towards the other end
             step = 2.0 * abs(r_g / slope) + 1e-13 * max(1.0, hi)
             if (r_g > 0) == (r_lo > 0):
-                lo, r_lo = guess, r_g
-                if guess + step < hi:
-                    r_s = at(guess + step)
-                    if (r_s > 0) == (r_g > 0):
-                        lo, r_lo = guess + step, r_s
-                    else:
-                        hi, r_hi = guess + step, r_s
+                lo, r_lo, probe = guess, r_g, guess + step
             else:
-                hi, r_hi = guess, r_g
-                if guess - step > lo:
-                    r_s = at(guess - step)
-                    if (r_s > 0) == (r_g > 0):
-                        hi, r_hi = guess - step, r_s
-                    else:
-                        lo, r_lo = guess - step, r_s
+                hi, r_hi, probe = guess, r_g, guess - step
+            if lo < probe < hi:
+                r_s = at(probe)
+                if (r_s > 0) == (r_lo > 0):
+                    lo, r_lo = probe, r_s
+                else:
+                    hi, r_hi = probe, r_s
         return illinois(at, lo, hi, r_lo, r_hi,
                         lambda a, b, tau, r: (r == 0 or b - a < (width or 1e-14 * max(1.0, b))
                                               or abs(r) < 1e-15), 200)
 
-    def _peak_time(self, xa, p, H, xb) -> float:
-        """When in (0, H] the tip speed peaks between the state xa and xb = x(H), its time
-        derivative falling through zero there: from the maximum of the speed's cubic Hermite
-        interpolant (:func:`.roots.hermite_peak`). Only the speed there is used, and it is
-        flat in time: a time within :data:`PEAK_WIDTH` H of the maximum gives it to
+    def _peak_speed(self, xa, p, H, xb) -> float:
+        """The tip speed's maximum in (0, H] between the state xa and xb = x(H), its time
+        derivative falling through zero there: searched from the maximum of the speed's
+        cubic Hermite interpolant (:func:`.roots.hermite_peak`). Only the speed is used, and
+        it is flat in time: a time within :data:`PEAK_WIDTH` H of the maximum gives it to
         ~|v''| (1e-8 H)^2 / 2, far below the integrator's tolerance (a search to 1e-14 s
         took ~14 fresh CVODES runs, in the integrator's noise on d|v|/dt)."""
         (ga, da), (gb, db) = self._speed(xa, p), self._speed(xb, p)
-        return self._newton_time(xa, p, H, lambda y: self._speed(y, p)[1], x_hi=xb,
-                                 guess=hermite_peak(H, ga, da, gb, db), width=PEAK_WIDTH * H)
+        tm = self._newton_time(xa, p, H, lambda y: self._speed(y, p)[1], x_hi=xb,
+                               guess=hermite_peak(H, ga, da, gb, db), width=PEAK_WIDTH * H)
+        return self._speed(self.flow(xa, p, tm), p)[0]
 
     def _angle_time(self, x0, p, h, angle, x1):
         """When theta reaches ``angle`` in (0, h] from the node x0 (x1 = x(h) beyond it),
@@ -302,11 +298,9 @@ class Reference:
                 if prev is not None and g >= prev[2] and g > 0:
                     tp, xp, _ = prev
                     if dspeed(xp) > 0 > dspeed(xe):
-                        tm = self._peak_time(xp, p, t + tau - tp, xe)
-                        peak = max(peak, speed(self.flow(xp, p, tm)))
+                        peak = max(peak, self._peak_speed(xp, p, t + tau - tp, xe))
                 elif dspeed(x) > 0 > dspeed(xe):
-                    tm = self._peak_time(x, p, tau, xe)
-                    peak = max(peak, speed(self.flow(x, p, tm)))
+                    peak = max(peak, self._peak_speed(x, p, tau, xe))
                 peak = max(peak, g, ge)
                 th_min, th_max = min(th_min, float(xe[0])), max(th_max, float(xe[0]))
                 down = self._engaged[j] == 0
@@ -326,8 +320,7 @@ class Reference:
                     if prev is not None and g >= prev[2] and g > 0:
                         tp, xp, _ = prev
                         if dspeed(xp) > 0 > dspeed(xe):
-                            tm = self._peak_time(xp, p, t + tau - tp, xe)
-                            peak = max(peak, speed(self.flow(xp, p, tm)))
+                            peak = max(peak, self._peak_speed(xp, p, t + tau - tp, xe))
                     peak = max(peak, g)
                     th_min, th_max = min(th_min, float(xe[0])), max(th_max, float(xe[0]))
                     t, x, prev, g_x = t + tau, np.array([xe[0], 0.0]), None, None
@@ -342,13 +335,11 @@ class Reference:
                 ge = speed(xe)
                 peak = max(peak, g, ge)
                 if dspeed(x) > 0 and dspeed(xe) < 0:
-                    tm = self._peak_time(x, p, tau, xe)
-                    peak = max(peak, speed(self.flow(x, p, tm)))
+                    peak = max(peak, self._peak_speed(x, p, tau, xe))
                 elif prev is not None and g >= prev[2] and g > ge:
                     tp, xp, _ = prev
                     if dspeed(xp) > 0 > dspeed(xe):
-                        tm = self._peak_time(xp, p, t + tau - tp, xe)
-                        peak = max(peak, speed(self.flow(xp, p, tm)))
+                        peak = max(peak, self._peak_speed(xp, p, t + tau - tp, xe))
                 t += tau
                 closed, th_min = True, thc
                 out = {"closing_time": t, "impact_theta_dot": float(xe[1]),
@@ -357,8 +348,7 @@ class Reference:
             if prev is not None and g >= prev[2] and g > g1:
                 tp, xp, _ = prev
                 if dspeed(xp) > 0 > dspeed(x1):
-                    tm = self._peak_time(xp, p, t + h - tp, x1)
-                    peak = max(peak, speed(self.flow(xp, p, tm)))
+                    peak = max(peak, self._peak_speed(xp, p, t + h - tp, x1))
             if x[1] < 0 <= x1[1]:  # turned back: the lowest angle in this interval
                 tm = self._newton_time(x, p, h, lambda y: y[1], x_hi=x1)
                 th_min = min(th_min, float(self.flow(x, p, tm)[0]))
