@@ -322,6 +322,14 @@ def feasible(opt, closed, closing_time, holding_moment, theta_dot_max,
                          opening_force) == ""
 
 
+def opening_wanted(opt, asked: bool) -> bool:
+    """Is the opening effort computed? When ``asked``, and always where
+    ``optimise.opening_force_max`` (``opt``) makes it a constraint: the one rule of
+    :func:`softclose.robust.evaluate.evaluate` and :func:`softclose.optimiser.verify.verify`
+    (its statics over 241 angles are a fifth of a stroke's time)."""
+    return asked or opt.opening_force_max is not None
+
+
 def target(key: str, value: float) -> float:
     """The accuracy target of one metric value (absolute units of the metric)."""
     return TARGETS[key] * (abs(value) if key in RELATIVE else 1.0)

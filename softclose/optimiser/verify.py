@@ -23,7 +23,7 @@ import numpy as np
 
 from ..errors import ConfigError, NumericalError
 from ..interrupt import solving
-from ..problem import (CONSTRAINT_TOL, ENGAGE_KEYS, METRIC_KEYS, UNITS,
+from ..problem import (CONSTRAINT_TOL, ENGAGE_KEYS, METRIC_KEYS, UNITS, opening_wanted,
                        VERIFY_RTOL, PARAM_KEYS, REFERENCE_TOL, agreement_tolerance, objective,
                        params_of, resolve)
 from ..simulation.stroke import StrokeResult, StrokeStatus
@@ -233,7 +233,7 @@ def verify(cfg, design: dict, claims: dict | None = None,
     t0 = time.perf_counter()
     try:
         ref = chk.reference.simulate(p, resolve(cfg),   # cfg's limits, not the cached model's
-                                     opening or o.opening_force_max is not None)
+                                     opening_wanted(o, opening))
     except NumericalError as exc:
         return Verification(None, None, method=method, time=time.perf_counter() - t0,
                             error=str(exc))

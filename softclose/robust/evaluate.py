@@ -32,7 +32,7 @@ from ..model import elements
 from ..model.lid import model_key
 from ..model.temperature import parameter_factors
 from ..simulation.simulator import Simulator
-from ..problem import resolve
+from ..problem import opening_wanted, resolve
 
 #: the kernel's output columns kept per sample
 COLUMNS = METRIC_KEYS + ("theta_dot_max", "theta_min", "status", "objective", "reason", "feasible")
@@ -108,11 +108,10 @@ def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
     closing-time window ends before it); ``explain=False`` skips locating where a spring
     leaves its valid range (:meth:`softclose.simulation.simulator.Simulator.run_batch`);
     ``opening=False`` skips the opening effort (its column NaN) unless
-    ``optimise.opening_force_max`` makes it a constraint (the rule of
-    :meth:`softclose.simulation.reference.Reference.simulate`'s callers too,
-    :func:`softclose.optimiser.verify.verify`). Returns a dict of arrays (see ``COLUMNS``).
+    ``optimise.opening_force_max`` makes it a constraint (:func:`softclose.problem.opening_wanted`).
+    Returns a dict of arrays (see ``COLUMNS``).
     """
-    opening = opening or cfg.optimise.opening_force_max is not None
+    opening = opening_wanted(cfg.optimise, opening)
     keys = list(keys)
     X = np.atleast_2d(np.asarray(X, float)).reshape(-1, len(keys))
     n = len(X)
