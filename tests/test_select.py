@@ -431,6 +431,34 @@ def test_ctrl_c_on_the_command_line_writes_what_was_ranked(tmp_path, monkeypatch
     assert "interrupted: 12 of 36 pairs screened" in out
 
 
+def test_a_real_ctrl_c_prints_what_was_ranked(tmp_path, monkeypatch):
+    """SIGINT itself (the command line's handler notes it, then raises): with --json and no
+    --out the pairs screened before it are still printed, ranked, and the exit code is
+    130."""
+    import signal
+    import softclose.catalog.ranking as S
+    calls = {"n": 0}
+    real = S.screen_chunk
+
+    def chunk(*a, **k):
+        calls["n"] += 1
+        if calls["n"] == 2:
+            signal.raise_signal(signal.SIGINT)
+        return real(*a, **k)
+    monkeypatch.setattr(S, "screen_chunk", chunk)
+    monkeypatch.setattr(S, "CHUNK_ROWS", 12 * 25)      # 12 pairs a chunk
+    s = _write(tmp_path, "s.csv", SPRINGS)
+    dm = _write(tmp_path, "d.csv", DAMPERS)
+    cfgfile = _write(tmp_path, "cfg.toml", "[tolerance]\n\"mass.lid\" = 0.0\n")
+    code, out = _run("select", "--springs", str(s), "--dampers", str(dm), "--config",
+                     str(cfgfile), "--samples", "16", "--json")
+    assert code == 130
+    payload = json.loads(out)
+    assert payload["interrupted"] is True
+    assert len(payload["ranking"]) == 12
+    assert all(e["verified"] is None for e in payload["ranking"])
+
+
 @pytest.mark.slow
 def test_free_points_are_re_optimised_per_part(capsys):
     """``select --free``: a pair's attachment points by the robust co-design with the parts

@@ -151,7 +151,9 @@ def _main(argv: list[str]) -> int:
         if interrupt.interrupted():
             return _interrupted()
         raise
-    if interrupt.interrupted():       # swallowed by a solver, and the command ran to its end
+    # a command that kept what was finished (select, sweep: exit 130) shows it; else a Ctrl-C
+    # swallowed by a solver while the command ran to its end
+    if interrupt.interrupted() and outcome.exit_code != 130:
         return _interrupted()
     from ..jsonio import dumps
     try:
