@@ -307,6 +307,31 @@ def test_tolerance_on_a_placement_key():
     assert 0.0 < r.yield_ <= 1.0
 
 
+def test_analyses_take_a_co_designs_points_with_its_design():
+    """``design=`` as a co-design's result gives it (the points named as the optimiser names
+    them, an end damper's keys): the yield and the Sobol indices are those of the config at
+    that design and those points, not of the config's own points."""
+    cfg = default_config()
+    design = {"spring_k": 1900.0, "spring_rest_length": 0.08, "damper_c": 2100.0,
+              "lid_e[0]": 0.010, "spring_anchor[1]": 0.015, "end_damper_c": 0.5,
+              "end_damper_angle_deg": 5.0}
+    at = cfg.update({"geometry.lid_e[0]": 0.010, "geometry.spring_anchor[1]": 0.015,
+                     "design.end_damper_c": 0.5, "design.end_damper_angle_deg": 5.0}
+                    ).with_design(spring_k=1900.0, spring_rest_length=0.08, damper_c=2100.0)
+    a = softclose.tolerance_analysis(cfg, samples=64, reference=0, design=design)
+    b = softclose.tolerance_analysis(at, samples=64, reference=0)
+    assert a.yield_ == b.yield_
+    np.testing.assert_array_equal(a.data["cols"]["objective"], b.data["cols"]["objective"])
+    mine = softclose.tolerance_analysis(cfg.with_design(spring_k=1900.0, spring_rest_length=0.08,
+                                                        damper_c=2100.0),
+                                        samples=64, reference=0)
+    assert not np.array_equal(mine.data["cols"]["objective"], a.data["cols"]["objective"])
+    s = softclose.sensitivity(cfg, samples=8, design=design)
+    t = softclose.sensitivity(at, samples=8)
+    cols = ["output", "key", "S1", "ST"]         # (the _conf columns: SALib's bootstrap)
+    assert s.to_frame()[cols].equals(t.to_frame()[cols])
+
+
 def _point_on_path(sim, theta):
     """E's world position at the lid angle theta (default points)."""
     import casadi as ca

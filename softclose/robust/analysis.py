@@ -31,7 +31,7 @@ import numpy as np
 
 from ..config import Config, check_batch
 from ..present.display import Display, Displayed, Table, interval, num, percent, unit_of, with_unit
-from ..problem import (BARE_LID, DESIGN_KEYS, LID_MASS, METRIC_KEYS, bare_lid, design_of,
+from ..problem import (BARE_LID, LID_MASS, METRIC_KEYS, bare_lid, design_of,
                        params_of)
 from .box import Box, box_of
 from .evaluate import evaluate
@@ -293,7 +293,9 @@ def yield_by_temperature(cfg: Config, *, samples: int | None = None, seed: int =
 def tolerance_analysis(cfg: Config, *, samples: int | None = None, seed: int = 0,
                        design: dict | None = None, reference: int = 3,
                        progress: bool = False) -> YieldResult:
-    """Monte Carlo yield of cfg's design (or ``design``) over the ``[tolerance]`` box.
+    """Monte Carlo yield of cfg's design (or ``design``: {name: value} as a result's
+    ``design`` gives it, a co-design's attachment points and end damper included) over the
+    ``[tolerance]`` box.
 
     ``samples`` defaults to ``[tolerance] samples``; ``seed`` fixes the draw; ``reference``
     samples (the worst one and those nearest the feasibility boundary) are re-simulated by
@@ -301,7 +303,7 @@ def tolerance_analysis(cfg: Config, *, samples: int | None = None, seed: int = 0
     """
     t0 = time.perf_counter()
     if design:
-        cfg = cfg.with_design(**{k: design[k] for k in DESIGN_KEYS if k in design})
+        cfg = cfg.with_design(**design)     # (a co-design's points and end damper too)
     box = box_of(cfg)
     n = int(samples or cfg.tolerance.samples)
     check_batch(cfg, n, "--samples" if samples else "tolerance.samples")

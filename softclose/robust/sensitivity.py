@@ -24,7 +24,7 @@ import numpy as np
 from ..config import Config, check_batch
 from ..present.display import Display, Displayed, Table, num, with_unit
 from ..errors import ConfigError
-from ..problem import BARE_LID, DESIGN_KEYS, design_of, params_of, UNITS
+from ..problem import BARE_LID, design_of, params_of, UNITS
 from .box import box_of
 from .evaluate import evaluate
 from .analysis import nominal_stroke
@@ -122,7 +122,9 @@ def _sub_box(box, idx):
 
 def sensitivity(cfg: Config, *, samples: int = 1024, seed: int = 0,
                 design: dict | None = None) -> SensitivityResult:
-    """Sobol indices of closing time and impact theta' over cfg's tolerance box.
+    """Sobol indices of closing time and impact theta' over cfg's tolerance box, at cfg's
+    design (or ``design``: {name: value} as a result's ``design`` gives it, a co-design's
+    attachment points and end damper included).
 
     ``samples`` is SALib's base sample count N (a power of 2); N (D + 2) strokes are run.
     """
@@ -134,7 +136,7 @@ def sensitivity(cfg: Config, *, samples: int = 1024, seed: int = 0,
         raise ConfigError(f"--samples {samples}: the Sobol base sample count must be a power "
                           "of 2 (e.g. 1024)")
     if design:
-        cfg = cfg.with_design(**{k: design[k] for k in DESIGN_KEYS if k in design})
+        cfg = cfg.with_design(**design)     # (a co-design's points and end damper too)
     full = box_of(cfg)
     # a key varies only if its interval is wider than the value's floating-point resolution
     # (a spread of 1e-98 leaves lo == hi, which SALib rightly refuses)
