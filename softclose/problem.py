@@ -330,6 +330,14 @@ def opening_wanted(opt, asked: bool) -> bool:
     return asked or opt.opening_force_max is not None
 
 
+def held_design(cfg) -> tuple:
+    """Which of the design variables (k, l0, c) ``cfg`` holds at one value (its bounds
+    ``optimise.spring_k`` ... with lo = hi, as ``softclose select`` holds a catalog spring's
+    rate and free length): the robust scenario NLP takes them as parameters."""
+    o = cfg.optimise
+    return tuple(bool(getattr(o, k)[0] == getattr(o, k)[1]) for k in DESIGN_KEYS)
+
+
 def target(key: str, value: float) -> float:
     """The accuracy target of one metric value (absolute units of the metric)."""
     return TARGETS[key] * (abs(value) if key in RELATIVE else 1.0)

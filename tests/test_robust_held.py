@@ -1,13 +1,13 @@
 """A design variable held at one value (its bounds lo = hi, as ``softclose select`` holds a
 catalog spring's rate and free length) is a parameter of the scenario NLP, not a variable
-its derivatives carry (:func:`softclose.robust.nlp.held_design`)."""
+its derivatives carry (:func:`softclose.problem.held_design`)."""
 
 import numpy as np
 import pytest
 
 import softclose
 from softclose.robust import optimise_robust
-from softclose.robust.nlp import held_design
+from softclose.problem import held_design
 
 
 def _cfg(width: float = 0.0):

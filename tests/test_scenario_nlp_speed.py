@@ -76,6 +76,24 @@ def test_using_a_scenario_nlp_compiles_nothing(cache, cfg, monkeypatch):
     assert not list(cache.glob("*/nlp-*.so")) and not list(cache.glob("*/seen-*"))
 
 
+def test_the_co_designs_first_stage_is_never_compiled(cache, cfg, monkeypatch):
+    """A scenario NLP with free attachment points (the co-design's first stage) stays in
+    CasADi's virtual machine even when compiling is asked for (``softclose prepare``): its C
+    evaluates the derivatives more slowly (docs/bench_structures.json measures both). The
+    scenario NLP of the same box without free points is one ``prepare`` compiles."""
+    placed = cfg.set("optimise.free", {"geometry.spring_anchor[0]": [-0.09, -0.03]})
+    monkeypatch.setattr(compiled, "compile_nlp",
+                        lambda *a, **k: pytest.fail("a placed scenario NLP was compiled"))
+    problem, _ = _problem(placed)
+    assert problem.nlp.placed and not problem.nlp.structure.prepared
+    lib = rnlp.prepare(placed, problem.model_cfgs, NODES, SUBSTEPS,
+                       placed.tolerance.robust_objective, problem.M2)
+    assert lib is None and not list(cache.glob("*/nlp-*.so"))
+    rnlp.forget()
+    plain, _ = _problem(cfg)
+    assert plain.nlp.structure.prepared
+
+
 @pytest.mark.slow
 def test_the_compiled_scenario_nlp_gives_the_same_solve(cache, cfg, monkeypatch):
     if shutil.which(os.environ.get("CC", "cc")) is None:

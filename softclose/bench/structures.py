@@ -70,7 +70,38 @@ def measure(structure, compile_flags: tuple | None = CFLAGS) -> dict:
                             "-lm"], check=True, capture_output=True, stdin=subprocess.DEVNULL)
             row["compile_s"] = time.perf_counter() - t
             row["flags"] = next((f for f in compile_flags if f.startswith("-O")), "")
+            row["derivatives_vm_ms"], row["derivatives_c_ms"] = derivative_times(
+                solver, path.with_suffix(".so"))
+    row["prepared"] = structure.prepared
     return row
+
+
+#: the derivatives an Ipopt iteration evaluates once each
+DERIVATIVES = ("nlp_hess_l", "nlp_jac_g")
+
+
+def derivative_times(solver, library: Path, repeats: int = 5) -> tuple[float, float]:
+    """One Hessian of the Lagrangian and one constraint Jacobian of ``solver`` (ms, the
+    median of ``repeats``): in CasADi's virtual machine, and from the compiled ``library``
+    -- what decides whether ``softclose prepare`` compiles a structure."""
+    import casadi as ca
+    import numpy as np
+
+    def timed(fns) -> float:
+        args = [[np.full(f.size_in(i), 0.5) for i in range(f.n_in())] for f in fns]
+        for f, a in zip(fns, args):
+            f(*a)
+        runs = []
+        for _ in range(repeats):
+            t = time.perf_counter()
+            for f, a in zip(fns, args):
+                f(*a)
+            runs.append(time.perf_counter() - t)
+        return 1e3 * float(np.median(runs))
+
+    vm = [solver.get_function(n) for n in DERIVATIVES]
+    c = [ca.external(n, str(library)) for n in DERIVATIVES]
+    return timed(vm), timed(c)
 
 
 def structure_rows(cfg, compile: bool = True, log=None) -> list[dict]:

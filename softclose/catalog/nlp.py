@@ -12,7 +12,7 @@ with the reference; nor is the rest of the robust design's report made
 The NLP is the robust scenario NLP (:class:`softclose.robust.nlp.ScenarioStructure`), keyed
 by its structure alone -- the scenarios (1 + 2^d of the box's d axes), the discretisation, the
 elements, the solver -- and never by a part's numbers: the spring's rate and free length are
-held (the design's bounds lo = hi: NLP parameters, :func:`softclose.robust.nlp.held_design`),
+held (the design's bounds lo = hi: NLP parameters, :func:`softclose.problem.held_design`),
 its preload and kind NLP parameters, its tolerances the scenario maps (parameters too). So one NLP serves every coil spring of a catalog (and one every gas strut: its
 own structure, F1 a variable bounded to the part's), built once (in
 CasADi's virtual machine) or loaded compiled (``softclose prepare --select FILE``).

@@ -205,16 +205,23 @@ def speed_markdown(rows) -> str:
 
 
 def structures_markdown(rows) -> str:
-    """The NLP structures' table: one row per structure of the README's commands."""
+    """The NLP structures' table: one row per structure of the README's commands, with one
+    Hessian of the Lagrangian and one constraint Jacobian timed in CasADi's virtual machine
+    and compiled, and whether ``softclose prepare`` compiles the structure."""
     head = ("| command | NLP | variables | constraints | parameters | build | C | generate "
-            "| compile |\n|---|---|---:|---:|---:|---:|---:|---:|---:|")
+            "| compile | Hessian + Jacobian: VM / C | prepared |\n"
+            "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|:-:|")
     lines = [head]
     for r in rows:
         comp = (f"{r['compile_s']:.1f} s ({r['flags']})" if r.get("compile_s") is not None
                 else "—")
+        deriv = (f"{r['derivatives_vm_ms']:.1f} / {r['derivatives_c_ms']:.1f} ms"
+                 if r.get("derivatives_c_ms") is not None else "—")
+        prepared = {True: "yes", False: "no"}.get(r.get("prepared"), "—")
         lines.append(f"| `{r['command']}` | {r['nlp']} | {r['variables']} | "
                      f"{r['constraints']} | {r['parameters']} | {_fmt(r['build_s'], '.2f')} s | "
-                     f"{r['c_mb']:.2f} MB | {r['generate_s']:.1f} s | {comp} |")
+                     f"{r['c_mb']:.2f} MB | {r['generate_s']:.1f} s | {comp} | {deriv} | "
+                     f"{prepared} |")
     return "\n".join(lines)
 
 

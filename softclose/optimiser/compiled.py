@@ -18,10 +18,12 @@ from ..buildcache import (_prune, _remove, _touch, folder, key_of, load, store,
 #: compiler flags of the NLP: -O1 compiles the default NLP in ~10 s and solves 2.3x faster
 #: than the virtual machine (-O2: 50 s to compile, 3.4x; -O0: 4 s, 1.5x)
 CFLAGS = ("-O1", "-shared", "-fPIC")
-#: compiler flags of the robust optimiser's scenario NLPs: their C is ~20 times the
-#: optimiser's (9 scenarios of 3 models, the points free: 39 MB), which -O1 compiles in
-#: ~7 min; -O0 in ~100 s, and their solves still run ~2x faster than the virtual machine
-#: (the co-design's joint NLP: 6.0 s against 11.9 s, the same 89 iterations and bits)
+#: compiler flags of the robust optimiser's scenario NLPs: their C is several times the
+#: optimiser's, which -O1 compiles in minutes; at -O0 (12 s for `optimise --robust`'s 9 MB)
+#: their solves run ~1.3-2x faster than the virtual machine. The co-design's first stage
+#: (the points free in every scenario: 62 MB) is the exception and is never compiled: its
+#: C evaluates the derivatives ~2x more slowly than the virtual machine's thread maps
+#: (:attr:`softclose.robust.nlp.ScenarioStructure.prepared`)
 SCENARIO_CFLAGS = ("-O0", "-shared", "-fPIC", "-pthread")
 
 

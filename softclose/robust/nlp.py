@@ -23,13 +23,12 @@ nothing pins it in a scenario that is not the worst either. So a scenario's own 
 speed is never read from s_s but from its sub-step speeds and their Hermite maxima at the
 solution (:meth:`ScenarioNLP.peaks`, as :meth:`ShootingNLP.peak` in the nominal optimiser),
 and every J_s reported or compared (:meth:`ScenarioNLP.objectives`) uses that peak. Each
-scenario's shooting
-interval is the nominal optimiser's (``ShootingNLP.interval``: M RK4 sub-steps on the
-Chebyshev series of its model, with the Hermite peak bound), so the robust and the nominal
-problem share their discretisation (N, M); only the node grid differs (:func:`~softclose.robust.discretisation.time_grid`:
-the first two intervals are half as long, for the release transient of the stiffly damped
-scenarios). The NLP is built for a given list of scenario models
-(:func:`softclose.robust.scenario_cache.get_scenario_nlp` caches it); the a_s, b_s are parameters.
+scenario's shooting interval is the nominal optimiser's (``ShootingNLP.interval``: M RK4
+sub-steps on the Chebyshev series of its model, with the Hermite peak bound): the robust and
+the nominal problem share N and M; only the node grid differs
+(:func:`~softclose.robust.discretisation.time_grid`: the first two intervals are half as
+long, for the release transient of stiffly damped scenarios). The a_s, b_s are parameters
+(:func:`softclose.robust.scenario_cache.get_scenario_nlp` caches the NLP of a scenario list).
 
 With an end damper that engages inside the stroke every scenario is two-phase as in the
 nominal NLP (:mod:`softclose.optimiser.nlp`): its own engagement time T1_s, the node
@@ -41,6 +40,7 @@ stage, :mod:`softclose.robust.codesign`), after (k, l0, c) and before the points
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 
@@ -50,15 +50,16 @@ import numpy as np
 from ..config import Config
 from ..errors import ConfigError
 from ..interrupt import ipopt_options, solving
-from ..problem import DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, params_of, resolve, SCALES
+from ..problem import (DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, held_design, params_of, resolve,
+                       SCALES)
 from .discretisation import phase_grid, phase_two, t_limit, two_phase
-from ..optimiser import compiled
 from ..optimiser.free_points import (length_bounds, placed_bounds, placement_layout, slot_values,
                                      spring_moment, strut_law)
 from ..model.elements.springs import strut_stroke
 from ..optimiser.interval import (ChebyshevFit, combine_function, END_C, free_layout, free_of,
                                   gas_nlp, interval_function, mapped, nlp_elements)
 from ..model import elements
+from ..optimiser import compiled
 from ..optimiser.nlp import check_linear_solver, PHASE_FLOOR
 from ..optimiser.cache import get_model, keep_out_of
 from ..config.free import config_value
@@ -136,6 +137,9 @@ class ScenarioStructure:
         #: last three of P; their variables stay in w (bounded to the value) but nothing
         #: depends on them, so the Hessian and the Jacobian need fewer directions
         self.held = tuple(bool(h) for h in held)
+        #: does ``softclose prepare`` compile it? Not with free points (a co-design's first
+        #: stage): its C is slower than the VM (docs/bench_structures.json)
+        self.prepared = not self.place
         self.series = SymbolicSeries(names, els, degree)
         self.spring = "gas" if "spring:l" in self.series.names else "coil"
         if self.placed and self_close:
@@ -291,13 +295,22 @@ class ScenarioStructure:
         stop = ipopt_options(self.nw, int(nlp["g"].numel()), int(P.numel()))   # Ctrl-C
         self.solver = ca.nlpsol("softclose_robust", "ipopt", nlp,
                                 {**self.options, "ipopt.mu_strategy": "adaptive", **stop})
-        oracle = self.solver.oracle()
-        wx, wp_ = ca.MX.sym("x", self.nw), ca.MX.sym("p", P.numel())
-        fo, go = oracle(wx, wp_)
-        self.warm_solver = ca.nlpsol("softclose_robust_warm", "ipopt",
-                                     {"x": wx, "p": wp_, "f": fo, "g": go},
-                                     {**self.options, **WARM_OPTIONS, **stop})
         self.build_time = time.perf_counter() - t0
+
+    @functools.cached_property
+    def warm_solver(self) -> ca.Function:
+        """The warm starts' solver, on the cold one's oracle: built on first use (a
+        co-design's first stage never needs it: 1.1 s of construction for 9 scenarios)."""
+        stop = ipopt_options(self.nw, sum(map(sum, self.g_sizes)), self.n_params)
+        if self.library is not None:
+            return ca.nlpsol("softclose_robust_warm", "ipopt", str(self.library),
+                             {**self.options, **WARM_OPTIONS, **stop})
+        oracle = self.solver.oracle()
+        wx, wp_ = ca.MX.sym("x", self.nw), ca.MX.sym("p", self.n_params)
+        fo, go = oracle(wx, wp_)
+        return ca.nlpsol("softclose_robust_warm", "ipopt",
+                         {"x": wx, "p": wp_, "f": fo, "g": go},
+                         {**self.options, **WARM_OPTIONS, **stop})
 
     def _load(self, library, meta: dict) -> None:
         """The solvers from a compiled library (:mod:`softclose.buildcache`) and the numbers
@@ -310,8 +323,6 @@ class ScenarioStructure:
         stop = ipopt_options(self.nw, sum(map(sum, self.g_sizes)), self.n_params)
         self.solver = ca.nlpsol("softclose_robust", "ipopt", lib,
                                 {**self.options, "ipopt.mu_strategy": "adaptive", **stop})
-        self.warm_solver = ca.nlpsol("softclose_robust_warm", "ipopt", lib,
-                                     {**self.options, **WARM_OPTIONS, **stop})
         if (len(self.g_sizes), self.solver.size1_in(0), self.solver.size1_in(1),
                 self.solver.size1_in(5)) != (self.S, self.nw, self.n_params,
                                              sum(map(sum, self.g_sizes))):
@@ -383,8 +394,8 @@ class ScenarioNLP:
                               o.self_close_min_deg is not None, self.held)
         st = structure or get_scenario_structure(self.structure_key)
         self.structure = st
-        for k in ("g_sizes", "block", "nw", "peak_fn", "J_fn", "solver", "warm_solver",
-                  "library", "options"):
+        for k in ("g_sizes", "block", "nw", "peak_fn", "J_fn", "solver", "library",
+                  "options"):
             setattr(self, k, getattr(st, k))
         lay = st.lid
         if lay.self_close_angles:
@@ -534,7 +545,7 @@ class ScenarioNLP:
     def solve(self, x0, p, lbx, ubx, lbg, ubg, lam_x0=None, lam_g0=None,
               warm: bool = False) -> dict:
         """One Ipopt run; never raises (an evaluation error is a failed status)."""
-        solver = self.warm_solver if warm else self.solver
+        solver = self.structure.warm_solver if warm else self.solver
         x0 = np.clip(np.asarray(x0, float), lbx, ubx)
         args = dict(x0=x0, p=p, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
         if lam_x0 is not None:
@@ -559,14 +570,6 @@ class ScenarioNLP:
                 "time": time.perf_counter() - t0}
 
 
-def held_design(cfg: Config) -> tuple:
-    """Which of the design variables (k, l0, c) ``cfg`` holds at one value (its bounds
-    ``optimise.spring_k`` ... with lo = hi, as ``softclose select`` holds a catalog spring's
-    rate and free length): the scenario NLP takes them as parameters."""
-    o = cfg.optimise
-    return tuple(bool(getattr(o, k)[0] == getattr(o, k)[1]) for k in DESIGN_KEYS)
-
-
 #: the structures built in this process, by :attr:`ScenarioNLP.structure_key`
 _STRUCTURES: dict = {}
 
@@ -588,7 +591,8 @@ def get_scenario_structure(key: tuple) -> ScenarioStructure:
                                      held=held)
         what = (f"of the robust optimiser ({S} scenarios, {nodes} x {substeps} RK4 steps, "
                 f"{objective} case)")
-        st = compiled.load_or_build(disk, make, make, what, compiled.SCENARIO_CFLAGS)
+        st = compiled.load_or_build(disk, make, make, what, compiled.SCENARIO_CFLAGS) \
+            if not place else make()        # (ScenarioStructure.prepared)
         st.key = disk
         _STRUCTURES[key] = st
     return _STRUCTURES[key]

@@ -12,7 +12,7 @@ from ..optimiser import compiled
 from ..optimiser.free_points import placement_layout, slot_values
 from ..optimiser.interval import free_layout
 from .discretisation import phase_two, two_phase
-from .nlp import held_design
+from ..problem import held_design
 from .nlp import _STRUCTURES, ScenarioNLP, _model_key  # noqa: F401  (_STRUCTURES: the
 #                                                              structures, kept in .nlp)
 
