@@ -20,8 +20,9 @@ loads them instead of building them:
   symbolically (CasADi's virtual machine) on use, and its compiled library loaded when the
   cache holds one. Nothing runs in the background. The robust optimiser's scenario NLPs
   (:mod:`softclose.robust.nlp`) are kept the same way, compiled with
-  :data:`~softclose.optimiser.compiled.SCENARIO_CFLAGS` (the robust co-design's joint NLP: ~100 s and ~3 GB of compiler
-  memory, once; its solve then takes 6 s instead of 12 s).
+  :data:`~softclose.optimiser.compiled.SCENARIO_CFLAGS`, all but the robust co-design's
+  first-stage NLP, whose C is slower than the virtual machine
+  (:attr:`softclose.robust.nlp.ScenarioStructure.prepared`).
 
 Every entry is keyed by the config's part that it depends on and by a fingerprint of the
 software that built it (CasADi's and numpy's versions, Python, the package's version and a

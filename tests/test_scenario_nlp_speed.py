@@ -20,7 +20,7 @@ rnlp = importlib.import_module("softclose.robust.scenario_cache")
 maps = importlib.import_module("softclose.optimiser.interval")    # the interval maps
 
 #: a small problem: 2 scenarios of the default box, 4 intervals of 2 sub-steps (the
-#: compiled library of it takes a few seconds; the co-design's takes ~100 s)
+#: compiled library of it takes a few seconds)
 NODES, SUBSTEPS = 4, 2
 
 

@@ -317,8 +317,9 @@ def _made_to_order_row(cfg: Config, rows: list, quick: bool = False, log=None) -
 
 def _settle(argv: list[str], log) -> None:
     """Compile the NLPs of ``softclose ARGV`` before it is timed: ``softclose prepare`` with
-    its options, in the foreground (the robust co-design's joint scenario NLP takes ~100 s),
-    so that the timed run loads them, as a user's runs after a prepare do."""
+    its options, in the foreground (minutes for the robust co-design's nominal NLPs; its
+    first stage's scenario NLP stays in the virtual machine), so that the timed run loads
+    them, as a user's runs after a prepare do."""
     t = cli_time(["prepare", *[a for a in argv[1:] if a != "--json"]], 1)
     log(f"  (`softclose prepare {' '.join(argv[1:3])} ...`: {t:.0f} s)")
 
