@@ -86,9 +86,12 @@ def test_the_co_designs_first_stage_is_never_compiled(cache, cfg, monkeypatch):
                         lambda *a, **k: pytest.fail("a placed scenario NLP was compiled"))
     problem, _ = _problem(placed)
     assert problem.nlp.placed and not problem.nlp.structure.prepared
+    before = len(compiled.interpreted)
     lib = rnlp.prepare(placed, problem.model_cfgs, NODES, SUBSTEPS,
                        placed.tolerance.robust_objective, problem.M2)
     assert lib is None and not list(cache.glob("*/nlp-*.so"))
+    # (what `softclose prepare` reports as left to the virtual machine)
+    assert [w.endswith(", the points free)") for w in compiled.interpreted[before:]] == [True]
     rnlp.forget()
     plain, _ = _problem(cfg)
     assert plain.nlp.structure.prepared

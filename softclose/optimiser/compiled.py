@@ -107,6 +107,19 @@ def will_compile() -> bool:
 compiled: list = []
 loaded: list = []
 failed: list = []
+#: ... and the NLPs it left to CasADi's virtual machine, whose C is slower (their names)
+interpreted: list = []
+
+
+def build_interpreted(build, what: str = ""):
+    """``build()``: an NLP that is never compiled, as its C evaluates more slowly than
+    CasADi's virtual machine (measured per structure: ``softclose bench --structures``);
+    inside :func:`compiling` it is noted in :data:`interpreted` for ``softclose prepare``
+    to say so."""
+    nlp = build()
+    if will_compile():
+        interpreted.append(what)
+    return nlp
 
 
 def load_or_build(disk: str, restore, build, what: str = "", flags: tuple = CFLAGS):

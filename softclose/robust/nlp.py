@@ -590,9 +590,9 @@ def get_scenario_structure(key: tuple) -> ScenarioStructure:
                                      tol, library=library, meta=meta, self_close=self_close,
                                      held=held)
         what = (f"of the robust optimiser ({S} scenarios, {nodes} x {substeps} RK4 steps, "
-                f"{objective} case)")
+                f"{objective} case{', the points free' if place else ''})")
         st = compiled.load_or_build(disk, make, make, what, compiled.SCENARIO_CFLAGS) \
-            if not place else make()        # (ScenarioStructure.prepared)
+            if not place else compiled.build_interpreted(make, what)   # (.prepared)
         st.key = disk
         _STRUCTURES[key] = st
     return _STRUCTURES[key]
