@@ -406,8 +406,9 @@ def test_the_reference_verdict_stands_where_it_differs(tmp_path, monkeypatch):
     assert r.success and r.verified_count == 3
 
 
-def test_ctrl_c_on_the_command_line_writes_what_was_ranked(tmp_path, monkeypatch):
-    """Exit 130, and --out holds the pairs screened before the interruption, ranked."""
+def _interrupted_select(tmp_path, monkeypatch, interrupt, *options) -> tuple[int, str]:
+    """``softclose select`` on SPRINGS x DAMPERS (12 pairs a chunk), ``interrupt()`` called
+    as the second chunk starts: (exit code, stdout)."""
     import softclose.catalog.ranking as S
     calls = {"n": 0}
     real = S.screen_chunk
@@ -415,15 +416,23 @@ def test_ctrl_c_on_the_command_line_writes_what_was_ranked(tmp_path, monkeypatch
     def chunk(*a, **k):
         calls["n"] += 1
         if calls["n"] == 2:
-            raise KeyboardInterrupt
+            interrupt()
         return real(*a, **k)
     monkeypatch.setattr(S, "screen_chunk", chunk)
     monkeypatch.setattr(S, "CHUNK_ROWS", 12 * 25)      # 12 pairs a chunk
     s = _write(tmp_path, "s.csv", SPRINGS)
     dm = _write(tmp_path, "d.csv", DAMPERS)
     cfgfile = _write(tmp_path, "cfg.toml", "[tolerance]\n\"mass.lid\" = 0.0\n")
-    code, out = _run("select", "--springs", str(s), "--dampers", str(dm), "--config",
-                     str(cfgfile), "--samples", "16", "--out", str(tmp_path / "o"))
+    return _run("select", "--springs", str(s), "--dampers", str(dm), "--config",
+                str(cfgfile), "--samples", "16", *options)
+
+
+def test_ctrl_c_on_the_command_line_writes_what_was_ranked(tmp_path, monkeypatch):
+    """Exit 130, and --out holds the pairs screened before the interruption, ranked."""
+    def interrupt():
+        raise KeyboardInterrupt
+    code, out = _interrupted_select(tmp_path, monkeypatch, interrupt,
+                                    "--out", str(tmp_path / "o"))
     assert code == 130
     import pandas as pd
     df = pd.read_csv(tmp_path / "o" / "select.csv")
@@ -436,22 +445,8 @@ def test_a_real_ctrl_c_prints_what_was_ranked(tmp_path, monkeypatch):
     --out the pairs screened before it are still printed, ranked, and the exit code is
     130."""
     import signal
-    import softclose.catalog.ranking as S
-    calls = {"n": 0}
-    real = S.screen_chunk
-
-    def chunk(*a, **k):
-        calls["n"] += 1
-        if calls["n"] == 2:
-            signal.raise_signal(signal.SIGINT)
-        return real(*a, **k)
-    monkeypatch.setattr(S, "screen_chunk", chunk)
-    monkeypatch.setattr(S, "CHUNK_ROWS", 12 * 25)      # 12 pairs a chunk
-    s = _write(tmp_path, "s.csv", SPRINGS)
-    dm = _write(tmp_path, "d.csv", DAMPERS)
-    cfgfile = _write(tmp_path, "cfg.toml", "[tolerance]\n\"mass.lid\" = 0.0\n")
-    code, out = _run("select", "--springs", str(s), "--dampers", str(dm), "--config",
-                     str(cfgfile), "--samples", "16", "--json")
+    code, out = _interrupted_select(tmp_path, monkeypatch,
+                                    lambda: signal.raise_signal(signal.SIGINT), "--json")
     assert code == 130
     payload = json.loads(out)
     assert payload["interrupted"] is True

@@ -4,6 +4,7 @@ checks that an asked-for linear solver can be loaded and that Ipopt took the opt
 from __future__ import annotations
 
 from ..errors import ConfigError
+from ..interrupt import ipopt_options
 
 #: Ipopt options of the cold solver and of the warm re-solve (same NLP functions)
 COLD_OPTIONS = {"ipopt.mu_strategy": "adaptive"}
@@ -16,6 +17,21 @@ MUMPS_OPTIONS = {"ipopt.mumps_permuting_scaling": 0, "ipopt.mumps_scaling": 0}
 WARM_OPTIONS = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-8,
                 "ipopt.warm_start_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9,
                 "ipopt.warm_start_slack_bound_push": 1e-9}
+
+
+def warm_solver(name: str, cold, library, options: dict):
+    """The solver of warm starts beside the cold solver ``cold`` (the nominal and the
+    scenario NLPs build it on first use): loaded from the compiled ``library`` when there is
+    one, else on ``cold``'s oracle, sharing its cached derivatives. ``options``: nlpsol's,
+    to which the Ctrl-C iteration callback is added."""
+    import casadi as ca
+    nx, np_, ng = cold.size1_in(0), cold.size1_in(1), cold.size1_in(5)
+    opts = {**options, **ipopt_options(nx, ng, np_)}
+    if library is not None:
+        return ca.nlpsol(name, "ipopt", str(library), opts)
+    x, p = ca.MX.sym("x", nx), ca.MX.sym("p", np_)
+    f, g = cold.oracle()(x, p)
+    return ca.nlpsol(name, "ipopt", {"x": x, "p": p, "f": f, "g": g}, opts)
 
 
 def check_linear_solver(name: str) -> None:

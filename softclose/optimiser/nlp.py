@@ -84,7 +84,7 @@ from .free_points import placed_bounds, placed_config, placed_constraints, slot_
 from ..buildcache import text
 from .run import FIXED_PARAMS, J_INDEX, NLP_PARAMS, Run  # noqa: F401  (re-exported)
 from .ipopt import (COLD_OPTIONS, LINEAR_ALGEBRA, MUMPS_OPTIONS,  # noqa: F401  (re-exported)
-                    WARM_OPTIONS, check_linear_solver, check_options)
+                    WARM_OPTIONS, check_linear_solver, check_options, warm_solver)
 
 #: Ipopt return statuses that count as converged
 CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
@@ -267,17 +267,9 @@ class ShootingStructure:
     @functools.cached_property
     def warm_solver(self) -> ca.Function:
         """The solver of warm starts (refinement, a changed parameter), built on first use
-        on the cold solver's oracle (sharing its cached derivatives)."""
-        stop = ipopt_options(self.nw, sum(self.g_sizes), self.n_params)
-        if self.library is not None:
-            return ca.nlpsol("softclose_ms_warm", "ipopt", str(self.library),
-                             {**self.ipopt_options, **WARM_OPTIONS, **stop})
-        oracle = self.solver.oracle()
-        wx, wpar = ca.MX.sym("x", self.nw), ca.MX.sym("p", self.n_params)
-        fo, go = oracle(wx, wpar)
-        return ca.nlpsol("softclose_ms_warm", "ipopt",
-                         {"x": wx, "p": wpar, "f": fo, "g": go},
-                         {**self.ipopt_options, **WARM_OPTIONS, **stop})
+        (:func:`.ipopt.warm_solver`)."""
+        return warm_solver("softclose_ms_warm", self.solver, self.library,
+                           {**self.ipopt_options, **WARM_OPTIONS})
 
     def _load(self, library, meta: dict) -> None:
         """The solvers from a compiled library and the numbers :meth:`meta` kept."""

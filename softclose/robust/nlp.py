@@ -61,6 +61,7 @@ from ..optimiser.interval import (ChebyshevFit, combine_function, END_C, free_la
 from ..model import elements
 from ..optimiser import compiled
 from ..optimiser.nlp import check_linear_solver, PHASE_FLOOR
+from ..optimiser.ipopt import warm_solver
 from ..optimiser.cache import get_model, keep_out_of
 from ..config.free import config_value
 from ..optimiser.lid import (holding_moment, LidLayout, opening_angles, opening_bound,
@@ -299,18 +300,10 @@ class ScenarioStructure:
 
     @functools.cached_property
     def warm_solver(self) -> ca.Function:
-        """The warm starts' solver, on the cold one's oracle: built on first use (a
-        co-design's first stage never needs it: 1.1 s of construction for 9 scenarios)."""
-        stop = ipopt_options(self.nw, sum(map(sum, self.g_sizes)), self.n_params)
-        if self.library is not None:
-            return ca.nlpsol("softclose_robust_warm", "ipopt", str(self.library),
-                             {**self.options, **WARM_OPTIONS, **stop})
-        oracle = self.solver.oracle()
-        wx, wp_ = ca.MX.sym("x", self.nw), ca.MX.sym("p", self.n_params)
-        fo, go = oracle(wx, wp_)
-        return ca.nlpsol("softclose_robust_warm", "ipopt",
-                         {"x": wx, "p": wp_, "f": fo, "g": go},
-                         {**self.options, **WARM_OPTIONS, **stop})
+        """The warm starts' solver, built on first use (:func:`softclose.optimiser.ipopt.
+        warm_solver`; a co-design's first stage never needs it: 1.1 s for 9 scenarios)."""
+        return warm_solver("softclose_robust_warm", self.solver, self.library,
+                           {**self.options, **WARM_OPTIONS})
 
     def _load(self, library, meta: dict) -> None:
         """The solvers from a compiled library (:mod:`softclose.buildcache`) and the numbers
