@@ -19,18 +19,18 @@ import numpy as np
 _SCALAR_RUN = """
 import json, sys
 import numpy as np
-from softclose.simulation.kernel import binding as native
+from softclose.simulation.kernel import binding
 from softclose.config import default_config
 from softclose.simulation.simulator import Simulator
 sim = Simulator.from_config(default_config()); st = sim.stroke
 D = np.array(json.loads(sys.stdin.read()), dtype=float)
-out = native.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0, st.theta_closed, D)
+out = binding.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0, st.theta_closed, D)
 sys.stdout.write(json.dumps([out.tobytes().hex(), out.shape[1]]))
 """
 
 
 def scalar_strokes(D: np.ndarray) -> np.ndarray:
-    """native.run_strokes of the default config's simulator on rows ``D`` (NaN allowed),
+    """binding.run_strokes of the default config's simulator on rows ``D`` (NaN allowed),
     lane by lane (SC_SCALAR=1, a fresh interpreter)."""
     env = dict(os.environ, SC_SCALAR="1")
     rows = np.where(np.isnan(D), None, D).tolist()

@@ -20,11 +20,11 @@ ROOT = Path(__file__).resolve().parents[1]
 #: library it loaded, or "extension" when the package's built extension is used
 PROBE = r"""
 import sys
-from softclose.simulation.kernel import binding as native, library
+from softclose.simulation.kernel import binding, library
 from softclose.config import default_config
 from softclose.simulation.simulator import Simulator
 ext = library._built_extension()
-native.load()
+binding.load()
 r = Simulator.from_config(default_config(), cached=True).run()
 assert r.closed, r
 print("extension" if ext is not None else library._fallback_name())

@@ -16,7 +16,7 @@ import math
 import numpy as np
 import pytest
 
-from softclose.simulation.kernel import binding as native
+from softclose.simulation.kernel import binding
 from softclose.simulation.reference import Reference
 from softclose.problem import as_params
 from softclose.simulation.simulator import Simulator
@@ -28,16 +28,16 @@ from kernel_checks import energy_rise_ratio, scalar_strokes
 FINAL = ("status", "closing_time", "impact_theta_dot", "impact_tip_speed", "peak_tip_speed",
          "min_spring_length", "max_spring_length", "theta_min", "theta_max", "theta_dot_max",
          "energy_rise", "stop_reason")
-COL = {name: i for i, name in enumerate(native.OUT_FIELDS)}
+COL = {name: i for i, name in enumerate(binding.OUT_FIELDS)}
 
 
 def designs_of(sim, P):
-    return np.column_stack([native.kernel_rows(P), sim.energy_tol(P)])
+    return np.column_stack([binding.kernel_rows(P), sim.energy_tol(P)])
 
 
 def strokes(sim, D, early=True):
     st = sim.stroke
-    return native.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
+    return binding.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
                               st.theta_closed, D, early_exit=early)
 
 
@@ -114,7 +114,7 @@ def test_energy_margin_holds_after_every_exit(cfg, model, integrator, step):
     assert len(rows) > 30
     worst = 0.0
     for i in rows:
-        _, tr = native.run_stroke_trajectory(sim.table, sim.method, step, st.t_max, st.theta0,
+        _, tr = binding.run_stroke_trajectory(sim.table, sim.method, step, st.t_max, st.theta0,
                                              st.theta_closed, D[i], early_exit=False)
         E = energies(sim, P[i], tr)
         n = int(on[i, COL["steps"]])                  # the exit node
@@ -202,10 +202,10 @@ def test_held_open_at_the_equilibrium(sim, model):
     eps = 1e-4
     assert float(model.dV(th - eps, p)) < 0 < float(model.dV(th + eps, p))
     # where the lid settles when integrated to the end (no early exit)
-    _, tr = native.run_stroke_trajectory(sim.table, sim.method, sim.step, st.t_max, st.theta0,
+    _, tr = binding.run_stroke_trajectory(sim.table, sim.method, sim.step, st.t_max, st.theta0,
                                          st.theta_closed, D[0], early_exit=False)
     assert tr[-1, 1] == pytest.approx(th, abs=1e-7)   # (still creeping in by ~1e-9)
-    text = native.not_closed_reasons(on)[0]
+    text = binding.not_closed_reasons(on)[0]
     assert text == f"held open at theta = {math.degrees(th):.1f} deg"
 
 
@@ -227,22 +227,22 @@ def test_barrier_between_the_lid_and_the_rim(cfg):
         scale = max(abs(dV(x)) for x in np.linspace(st.theta_closed, st.theta0, 19))
         assert abs(dV(th)) < 1e-8 * scale
         assert dV(th - 1e-4) > 0 > dV(th + 1e-4)
-        assert native.not_closed_reasons(out)[0] == (
+        assert binding.not_closed_reasons(out)[0] == (
             f"cannot reach the rim: energy below the barrier at theta = {math.degrees(th):.1f} deg")
         assert (out[COL["stop_time"]] < 0.5) == (c > 0)   # damped: stops early
 
 
 def test_not_closed_reasons_text():
-    out = np.full((5, len(native.OUT_FIELDS)), np.nan)
+    out = np.full((5, len(binding.OUT_FIELDS)), np.nan)
     out[:, COL["status"]] = [0, 1, 1, 1, 3]
     out[:, COL["stop_reason"]] = [0, 2, 1, 0, 0]
     out[:, COL["stop_theta"]] = [np.nan, math.radians(7.34), math.radians(12.06), np.nan, np.nan]
-    text = native.not_closed_reasons(out)
+    text = binding.not_closed_reasons(out)
     assert list(text) == ["", "held open at theta = 7.3 deg",
                           "cannot reach the rim: energy below the barrier at theta = 12.1 deg",
                           "still moving towards the rim at t_max (too slow to close in time)", ""]
     cols = {k: out[:, COL[k]] for k in ("status", "stop_reason", "stop_theta")}
-    assert list(native.not_closed_reasons(cols)) == list(text)
+    assert list(binding.not_closed_reasons(cols)) == list(text)
 
 
 def test_scalar_and_simd_paths_agree_bit_for_bit(sim, grid):

@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 
 import softclose
-from softclose.simulation.kernel import binding as native
+from softclose.simulation.kernel import binding
 from softclose.config import default_config
 from softclose.simulation.integrators import get_method
 from softclose.model.lid import LidModel
@@ -35,7 +35,7 @@ from softclose.validation.textbook.lid_absolute import compute_theta_ddot, read_
 
 from kernel_checks import energy_rise_ratio, scalar_strokes
 
-COL = {name: i for i, name in enumerate(native.OUT_FIELDS)}
+COL = {name: i for i, name in enumerate(binding.OUT_FIELDS)}
 SPRING = {"design.spring_k": 800.0, "design.spring_rest_length": 0.08}
 #: a spring that holds the lid open in a well near 11.7 deg (test_friction's WELL)
 WELL = {"design.spring_k": 3000.0, "design.spring_rest_length": 0.0792571}
@@ -142,12 +142,12 @@ def test_never_acting_damper_leaves_the_rows_unchanged(sim):
     P = np.tile(sim.model.params(), (n, 1))
     P[:, 0], P[:, 1] = rng.uniform(0, 9500, n), rng.uniform(0.04, 0.1, n)
     P[:, 2] = rng.uniform(0, 4000, n) * (rng.random(n) < 0.6)
-    D = np.column_stack([native.kernel_rows(as_params(P)), sim.energy_tol(P)])
-    run = lambda X: native.run_strokes(sim.table, sim.method, sim.step, st.t_max,  # noqa: E731
+    D = np.column_stack([binding.kernel_rows(as_params(P)), sim.energy_tol(P)])
+    run = lambda X: binding.run_strokes(sim.table, sim.method, sim.step, st.t_max,  # noqa: E731
                                        st.theta0, st.theta_closed, X)
     plain = run(D)
-    jc, ja = native.DESIGN_COLUMNS.index("end_damper_c"), \
-        native.DESIGN_COLUMNS.index("end_damper_angle")
+    jc, ja = binding.DESIGN_COLUMNS.index("end_damper_c"), \
+        binding.DESIGN_COLUMNS.index("end_damper_angle")
     for angle in (st.theta_closed, st.theta_closed - 0.05):
         E = D.copy()
         E[:, jc], E[:, ja] = 1.5, angle
@@ -347,11 +347,11 @@ def test_kernel_step_takes_the_state_of_its_start(sim):
     s = Simulator.from_config(cfg)
     p = s.model.params()
     p0 = s.model.params()
-    p0[list(native.DESIGN_COLUMNS).index("end_damper_c")] = 0.0
+    p0[list(binding.DESIGN_COLUMNS).index("end_damper_c")] = 0.0
     for th, acts in ((math.radians(9.0), True), (math.radians(11.0), False)):
         x0 = np.array([th, -2.0])
-        a = native.kernel_step(s.table, s.method, p, 1e-3, x0)
-        b = native.kernel_step(s.table, s.method, p0, 1e-3, x0)
+        a = binding.kernel_step(s.table, s.method, p, 1e-3, x0)
+        b = binding.kernel_step(s.table, s.method, p0, 1e-3, x0)
         assert bool(abs(a[1] - b[1]) > 1e-3) == acts
 
 
@@ -362,7 +362,7 @@ def grid_rows(sim):
     ce, ang = np.array([0.02, 0.3, 2.0]), np.array([3.0, 10.0, 16.0])
     K, L, C, A = (g.ravel() for g in np.meshgrid(k, l0, ce, ang, indexing="ij"))
     P = np.tile(sim.model.params(), (2 * len(K), 1))
-    cols = list(native.DESIGN_COLUMNS)
+    cols = list(binding.DESIGN_COLUMNS)
     for half, dashpot in ((slice(0, len(K)), 0.0), (slice(len(K), None), 100.0)):
         P[half, 0], P[half, 1], P[half, 2] = K, L, dashpot
         P[half, cols.index("end_damper_c")] = C
@@ -372,7 +372,7 @@ def grid_rows(sim):
 
 def strokes(sim, D, early=True):
     st = sim.stroke
-    return native.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
+    return binding.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
                               st.theta_closed, D, early_exit=early)
 
 
@@ -391,7 +391,7 @@ def test_early_exit_on_end_damper_rows(cfg, model, integrator, step):
     sim = Simulator.from_config(cfg, model, integrator=integrator, step=step)
     st = cfg.stroke
     P = grid_rows(sim)
-    D = np.column_stack([native.kernel_rows(P), sim.energy_tol(P)])
+    D = np.column_stack([binding.kernel_rows(P), sim.energy_tol(P)])
     on, off = strokes(sim, D), strokes(sim, D, False)
     for key in FINAL:
         assert np.array_equal(on[:, COL[key]], off[:, COL[key]], equal_nan=True), key
@@ -406,7 +406,7 @@ def test_early_exit_on_end_damper_rows(cfg, model, integrator, step):
     rows = np.flatnonzero(ex)[:: 3 if integrator == "rk4" else 6]
     worst = 0.0
     for i in rows:
-        _, tr = native.run_stroke_trajectory(sim.table, sim.method, step, st.t_max, st.theta0,
+        _, tr = binding.run_stroke_trajectory(sim.table, sim.method, step, st.t_max, st.theta0,
                                              st.theta_closed, D[i], early_exit=False)
         c = sim.table.evaluate(tr[:, 1])
         E = 0.5 * c[:, 0] * tr[:, 2] ** 2 + c[:, 2] + 0.5 * P[i, 0] * (c[:, 4] - P[i, 1]) ** 2
@@ -423,11 +423,11 @@ def test_scalar_and_simd_paths_agree_bit_for_bit(sim):
     (mixed with rows without one, one-way and friction rows among them)."""
     P = grid_rows(sim)
     rng = np.random.default_rng(2)
-    cols = list(native.DESIGN_COLUMNS)
+    cols = list(binding.DESIGN_COLUMNS)
     P[rng.random(len(P)) < 0.3, cols.index("end_damper_c")] = 0.0
     P[rng.random(len(P)) < 0.3, cols.index("damper_one_way")] = 1.0
     P[rng.random(len(P)) < 0.2, cols.index("friction_torque")] = 0.03
-    D = np.column_stack([native.kernel_rows(P), sim.energy_tol(P)])
+    D = np.column_stack([binding.kernel_rows(P), sim.energy_tol(P)])
     vec = strokes(sim, D)
     assert np.isfinite(vec[:, COL["engage_time"]]).sum() > 100
     assert np.array_equal(scalar_strokes(D), vec, equal_nan=True)

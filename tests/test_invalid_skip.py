@@ -19,7 +19,7 @@ import pytest
 
 import softclose
 from softclose.model import elements
-from softclose.simulation.kernel import binding as native
+from softclose.simulation.kernel import binding
 from softclose.simulation import statics
 from softclose.config import default_config
 from softclose.model.lid import LidModel
@@ -142,7 +142,7 @@ def leaves_numpy(theta, q, bound, short):
 
 def test_the_kernels_leaves_are_the_numpy_arithmetic_bit_for_bit():
     th, q, bound, short = _cases()
-    e1, w1 = native.leaves(th, q, bound, short)
+    e1, w1 = binding.leaves(th, q, bound, short)
     e0, w0 = leaves_numpy(th, q, bound, short)
     assert np.array_equal(e1, e0, equal_nan=True)
     assert np.array_equal(w1, w0, equal_nan=True)
@@ -154,7 +154,7 @@ def test_a_spring_leaving_its_range_is_located_where_it_crosses():
     """An analytic case: q = theta on [0, 1] leaves bound 0.3 (above) at 0.3 and is worst
     at 1 (the end); below bound 0.3 (short) it leaves at 0.3 and is worst at 0."""
     th = np.tile(np.linspace(0.0, 1.0, statics.LEAVE_GRID), (2, 1))
-    e, w = native.leaves(th, th.copy(), [0.3, 0.3], [False, True])
+    e, w = binding.leaves(th, th.copy(), [0.3, 0.3], [False, True])
     assert e == pytest.approx([0.3, 0.3], abs=1e-15)
     assert list(w) == [1.0, 0.0]
 

@@ -13,7 +13,7 @@ import os
 import numpy as np
 import pytest
 
-from softclose.simulation.kernel import binding as native
+from softclose.simulation.kernel import binding
 from softclose.simulation.kernel import library
 from softclose.simulation import statics
 from softclose.errors import ConfigError
@@ -21,13 +21,13 @@ from softclose.model.lid import LidModel
 from softclose.simulation.simulator import Simulator
 from softclose.problem import as_params
 
-COL = {name: i for i, name in enumerate(native.OUT_FIELDS)}
+COL = {name: i for i, name in enumerate(binding.OUT_FIELDS)}
 
 
 def designs(cfg, sim_at_mass, P, mass):
     """Kernel rows (the parameter vector, energy_tol, lid_mass); energy_tol as the simulator
     at that mass sets it (the unstable-stroke threshold depends on the mass too)."""
-    return np.column_stack([native.kernel_rows(P), sim_at_mass.energy_tol(P),
+    return np.column_stack([binding.kernel_rows(P), sim_at_mass.energy_tol(P),
                             np.full(len(P), mass)])
 
 
@@ -54,7 +54,7 @@ def test_lid_mass_column_matches_a_model_at_that_mass(cfg, mass, inertia):
     assert other.table.ncell == sim.table.ncell
     P = sample_designs(cfg)
     st = cfg.stroke
-    out = native.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
+    out = binding.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
                              st.theta_closed, designs(cfg, other, P, mass))
     ref = other.run_batch(P)
     assert np.array_equal(out[:, COL["status"]], ref["status"])
@@ -89,8 +89,8 @@ def test_mass_derivative_is_exact(cfg, sim):
 def test_row_at_table_mass_is_bit_identical(cfg, sim):
     st = cfg.stroke
     P = sample_designs(cfg, 40, seed=3)
-    D = np.column_stack([native.kernel_rows(P), sim.energy_tol(P)])
-    run = lambda X: native.run_strokes(sim.table, sim.method, sim.step, st.t_max,  # noqa: E731
+    D = np.column_stack([binding.kernel_rows(P), sim.energy_tol(P)])
+    run = lambda X: binding.run_strokes(sim.table, sim.method, sim.step, st.t_max,  # noqa: E731
                                        st.theta0, st.theta_closed, X)
     plain = run(D)
     same = np.column_stack([D, np.full(len(P), cfg.mass.lid)])
@@ -110,10 +110,10 @@ def test_kernel_step_with_a_lid_mass(cfg, sim):
     other = Simulator.from_config(cfg.replace(mass={"lid": m}))
     p = as_params([1500.0, 0.07, 900.0, 0.002])
     x0 = np.array([0.2, -1.5])
-    a = native.kernel_step(sim.table, sim.method, p, 2e-3, x0, lid_mass=m)
-    b = native.kernel_step(other.table, other.method, p, 2e-3, x0)
+    a = binding.kernel_step(sim.table, sim.method, p, 2e-3, x0, lid_mass=m)
+    b = binding.kernel_step(other.table, other.method, p, 2e-3, x0)
     assert np.allclose(a, b, rtol=1e-13, atol=1e-15)
-    assert not np.allclose(a, native.kernel_step(sim.table, sim.method, p, 2e-3, x0),
+    assert not np.allclose(a, binding.kernel_step(sim.table, sim.method, p, 2e-3, x0),
                            rtol=1e-9, atol=0)
 
 
@@ -122,16 +122,16 @@ def test_bad_lid_mass_is_refused(cfg, sim, bad):
     st = cfg.stroke
     D = np.array([[1000.0, 0.07, 500.0, 0.0, 0.0, 0.0, 1e-3, bad]])
     with pytest.raises(ConfigError, match="lid_mass"):
-        native.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
+        binding.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
                            st.theta_closed, D)
 
 
 def test_design_rows_need_their_columns(cfg, sim):
     st = cfg.stroke
-    n = len(native.DESIGN_COLUMNS)          # (the last NPT: the optional point columns)
-    with pytest.raises(ConfigError, match=f"expected {n - native.NPT - 1}, {n - native.NPT} "
+    n = len(binding.DESIGN_COLUMNS)          # (the last NPT: the optional point columns)
+    with pytest.raises(ConfigError, match=f"expected {n - binding.NPT - 1}, {n - binding.NPT} "
                                           f"or {n} columns"):
-        native.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
+        binding.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
                            st.theta_closed, np.ones((2, 4)))
 
 
@@ -159,20 +159,20 @@ def test_one_angle_looked_up_once_gives_each_row_s_own_numbers(cfg, sim):
 def test_the_kernel_s_layout_is_checked_at_load():
     """Every layout constant shared with the C side (columns, rows, outputs, range columns)
     is compared when the kernel is loaded: a mismatch is a one-line error naming it."""
-    lib = native.load()
+    lib = binding.load()
     library.check_layout(lib)                                  # the built kernel agrees
 
     class Other:                                              # a kernel of another layout
         def __init__(self, layout):
             self.sc_layout = lambda: layout.encode()
-            self.sc_nout = lambda: len(native.OUT_FIELDS)
-            self.sc_abi = lambda: native.KERNEL_ABI
+            self.sc_nout = lambda: len(binding.OUT_FIELDS)
+            self.sc_abi = lambda: binding.KERNEL_ABI
 
-    wrong = native.LAYOUT.replace("row=spring_k,", "row=k,")
-    with pytest.raises(native.NumericalError, match="row: the kernel has 'k,spring_rest"):
+    wrong = binding.LAYOUT.replace("row=spring_k,", "row=k,")
+    with pytest.raises(binding.NumericalError, match="row: the kernel has 'k,spring_rest"):
         library.check_layout(Other(wrong))
-    with pytest.raises(native.NumericalError, match="nrng"):
-        library.check_layout(Other(native.LAYOUT.replace("nrng=18", "nrng=17")))
+    with pytest.raises(binding.NumericalError, match="nrng"):
+        library.check_layout(Other(binding.LAYOUT.replace("nrng=18", "nrng=17")))
 
 
 def test_the_built_extension_is_known_by_its_sources_content_not_their_times(tmp_path,

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 import softclose
-from softclose.simulation.kernel import binding as native
+from softclose.simulation.kernel import binding
 from softclose.config import default_config
 from softclose.config.free import PLACEMENT_KEYS
 from softclose.errors import ConfigError
@@ -48,7 +48,7 @@ KEYS = ("closing_time", "impact_theta_dot", "impact_tip_speed", "peak_tip_speed"
         "theta_min", "theta_max", "theta_dot_max", "stop_theta", "energy_rise", "engage_time",
         "engage_theta_dot")
 RTOL = 1e-9
-COL = {name: i for i, name in enumerate(native.OUT_FIELDS)}
+COL = {name: i for i, name in enumerate(binding.OUT_FIELDS)}
 
 
 def draw(box: dict, n: int, seed: int) -> dict:
@@ -165,7 +165,7 @@ def test_rows_without_points_bit_identical(sim):
     for points in (np.full(8, np.nan), own, {"geometry.lid_e[0]": own[2]}, mixed):
         res = sim.run_batch(P, points=points)
         rows = slice(None) if points is not mixed else slice(1, None, 2)
-        for k in native.OUT_FIELDS + ("holding_moment",):
+        for k in binding.OUT_FIELDS + ("holding_moment",):
             assert np.array_equal(res[k][rows], base[k][rows], equal_nan=True), k
         assert list(res["reason"][rows]) == list(base["reason"][rows])
     assert np.array_equal(sim.opening_forces(P, points=mixed)[1::2],
@@ -181,15 +181,15 @@ def _point_designs(sim, n=96, seed=5):
     P[:, 1] = rng.uniform(0.05, 0.09, n)
     P[:, 2] = rng.uniform(100, 4000, n)
     pts = draw(BOX, n, seed)
-    X = native.point_rows(sim.table, pts, n)
-    D = np.column_stack([native.kernel_rows(P), sim.energy_tol(P, None, X), np.full(n, np.nan),
+    X = binding.point_rows(sim.table, pts, n)
+    D = np.column_stack([binding.kernel_rows(P), sim.energy_tol(P, None, X), np.full(n, np.nan),
                          X])
     return P, X, D
 
 
 def _strokes(sim, D, early=True):
     st = sim.stroke
-    return native.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
+    return binding.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
                               st.theta_closed, D, early_exit=early)
 
 
@@ -215,10 +215,10 @@ def test_early_exit_with_points(cfg, model, integrator, step):
     assert len(ex) >= 8
     worst = 0.0
     for i in ex[:12]:
-        _, tr = native.run_stroke_trajectory(sim.table, sim.method, step, st.t_max, st.theta0,
+        _, tr = binding.run_stroke_trajectory(sim.table, sim.method, step, st.t_max, st.theta0,
                                              st.theta_closed, D[i], early_exit=False)
         c = sim.table.evaluate(tr[:, 1])
-        l = native.point_lengths(sim.table, tr[:, 1], np.tile(X[i], (len(tr), 1)))["l"]
+        l = binding.point_lengths(sim.table, tr[:, 1], np.tile(X[i], (len(tr), 1)))["l"]
         E = 0.5 * c[:, 0] * tr[:, 2] ** 2 + c[:, 2] + 0.5 * P[i, 0] * (l - P[i, 1]) ** 2
         scale = abs(c[0, 2]) + 0.5 * P[i, 0] * (l[0] - P[i, 1]) ** 2 + abs(E[0])
         worst = max(worst, energy_rise_ratio(E, tr[:, 0], int(on[i, COL["steps"]]), st.t_max,
@@ -231,8 +231,8 @@ def test_scalar_and_simd_agree_on_point_rows(sim):
     rows without points and with a lid-mass column; and one row at a time the same too."""
     P, X, D = _point_designs(sim, 96, 11)
     D[::3, -8:] = np.nan                                   # some rows without points
-    D[::5, native._NP + 1] = 0.55                          # some at another lid mass
-    ec = native.DESIGN_COLUMNS.index("end_damper_c")       # some with an end damper
+    D[::5, binding._NP + 1] = 0.55                          # some at another lid mass
+    ec = binding.DESIGN_COLUMNS.index("end_damper_c")       # some with an end damper
     D[1::4, ec], D[1::4, ec + 1] = 0.3, math.radians(7.0)
     on = _strokes(sim, D)
     assert np.array_equal(scalar_strokes(D), on, equal_nan=True)

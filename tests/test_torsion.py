@@ -15,7 +15,7 @@ import pytest
 
 import softclose
 from conftest import np_closure
-from softclose.simulation.kernel import binding as native
+from softclose.simulation.kernel import binding
 from softclose.simulation import statics
 from softclose.config import default_config
 from softclose.simulation.integrators import casadi_step, get_method
@@ -175,7 +175,7 @@ def test_kernel_step_matches_the_casadi_step(case):
         F = casadi_step(m, model.ode)
         for th, thd in _states(model, 4, seed=6):
             a = np.asarray(F([th, thd], p, 2e-3)).ravel()
-            b = native.kernel_step(sim.table, m, p, 2e-3, np.array([th, thd]))
+            b = binding.kernel_step(sim.table, m, p, 2e-3, np.array([th, thd]))
             assert np.allclose(a, b, rtol=1e-9, atol=1e-10)
 
 

@@ -12,7 +12,7 @@ import subprocess
 
 import numpy as np
 
-from ..simulation.kernel import binding as native
+from ..simulation.kernel import binding
 from ..config import Config, default_config
 from ..model.lid import LidModel
 from ..simulation.reference import Reference
@@ -54,8 +54,8 @@ def speed(cfg: Config, quick: bool = False, cli: bool = True, features: bool = T
                   median_time(lambda: sim.run(p), n // 3, warmup=3), n // 3))
     st = cfg.stroke
     d1 = np.r_[p, sim.energy_tol(p[None, :])][None, :]
-    add(speed_row("kernel_call", "raw kernel call native.run_strokes (1 design, 1 thread)",
-                  median_time(lambda: native.run_strokes(sim.table, sim.method, sim.step,
+    add(speed_row("kernel_call", "raw kernel call binding.run_strokes (1 design, 1 thread)",
+                  median_time(lambda: binding.run_strokes(sim.table, sim.method, sim.step,
                                                          st.t_max, st.theta0,
                                                          st.theta_closed, d1, threads=1),
                               n, warmup=5), n))

@@ -49,27 +49,27 @@ def fit_entries(rows: list, timed, repeats: int) -> None:
         write_csv(angle_track(truth, seed=2), three[0])
         write_csv(gyroscope_track(truth.set("stroke.theta0_deg", 14.0), seed=3), three[1])
         write_csv(angle_track(truth.set("stroke.theta0_deg", 10.0), seed=4), three[2])
-        for key, what, files, keys, first in (
+        for key, what, files, keys, start in (
                 ("fit_cli_2x1", "softclose fit: damper and lid inertia from one 1.1 s stroke "
                  "at 120 Hz, fresh interpreter, end to end", [one], KEYS_2, {}),
                 ("fit_cli_5x3", "softclose fit: damper, inertia, spring rate, preload and "
                  "friction from 3 strokes (video 18°, gyroscope 14°, video 10°), fresh "
                  "interpreter, end to end", three, KEYS_5,
                  {"design.spring_preload": 0.5, "friction.torque": 0.01})):
-            last = {}
+            reply = {}
 
-            def call(files=files, keys=keys, first=first, last=last):
+            def call(files=files, keys=keys, start=start, reply=reply):
                 argv = [*fresh_command("-m", "softclose"), "fit", *map(str, files),
                         *[a for k in keys for a in ("--free", k)],
                         *_sets({k: v for k, v in PROTOTYPE.items() if k not in keys}),
-                        *_sets(first), "--json"]
+                        *_sets(start), "--json"]
                 r = subprocess.run(argv, capture_output=True, text=True, env=fresh_env())
                 if r.returncode not in (0, 3):
                     raise RuntimeError(f"exit {r.returncode}: {r.stderr.strip()[-300:]}")
-                last["out"] = json.loads(r.stdout)
-            if timed(key, what, call, repeats) is None and not last:
+                reply["out"] = json.loads(r.stdout)
+            if timed(key, what, call, repeats) is None and not reply:
                 continue
-            d = last["out"]
+            d = reply["out"]
             rows[-1]["note"] = (
                 f"{d['iterations']} Ipopt iterations, {d['samples_used']} samples; "
                 f"identifiable: {d['identifiable']}"

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from ..simulation.kernel import binding as native
+from ..simulation.kernel import binding
 from ..config import Config
 from ..simulation.integrators import SEED
 from ..simulation.reference import Reference
@@ -32,7 +32,7 @@ def seed_reading(sim: Simulator) -> dict:
     # the kernel stops at the located event; the sample the seed reads is one full step on
     # from the last node before it
     t, th, thd = tr["t"][-2], tr["theta"][-2], tr["theta_dot"][-2]
-    x1 = native.kernel_step(sim.table, sim.method, sim.model.params(), sim.step,
+    x1 = binding.kernel_step(sim.table, sim.method, sim.model.params(), sim.step,
                             np.array([th, thd]))
     v_T = np.asarray(sim.model.kin(np.array([x1[0], x1[1]]))[4]).ravel()
     return {"closing_time": t + sim.step, "impact_theta_dot": float(x1[1]),

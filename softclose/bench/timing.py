@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..simulation.kernel import binding as native
+from ..simulation.kernel import binding
 from ..problem import as_params
 from ..simulation.simulator import Simulator
 
@@ -81,11 +81,11 @@ def kernel_times(sim: Simulator, p: np.ndarray, repeats: int = 5,
     by the batch size.
     """
     st = sim.stroke
-    row = np.r_[native.kernel_rows(as_params(p)), sim.energy_tol(p[None, :])]
+    row = np.r_[binding.kernel_rows(as_params(p)), sim.energy_tol(p[None, :])]
 
     def call(n):
         d = np.repeat(row[None, :], n, axis=0)
-        return lambda: native.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
+        return lambda: binding.run_strokes(sim.table, sim.method, sim.step, st.t_max, st.theta0,
                                           st.theta_closed, d, threads=1)
     t1 = time_stats(call(1), 3)[1]
     n = int(min(max(1, target / max(t1, 1e-7)), 4000))

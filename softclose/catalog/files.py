@@ -312,9 +312,9 @@ def _check(cond, line, header, what):
 
 def _finish(path, parts, warnings, what) -> Catalog:
     if not parts:
-        first = f" ({warnings[0]}" + (f"; {len(warnings) - 1} more" if len(warnings) > 1
+        hint = f" ({warnings[0]}" + (f"; {len(warnings) - 1} more" if len(warnings) > 1
                                        else "") + ")" if warnings else ""
-        raise ConfigError(f"{path}: no usable {what} in the file{first}")
+        raise ConfigError(f"{path}: no usable {what} in the file{hint}")
     names = {}
     for p in parts:
         if p.part in names:

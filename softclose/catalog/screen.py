@@ -42,6 +42,7 @@ from ..robust.evaluate import evaluate, point_values, simulator, slow_keys
 from ..problem import LID_MASS, at_temperature, param_rows, resolve
 from ..robust.scenarios import temperatures as sign_off
 from ..robust.stats import margins
+from ..simulation.stroke import NUMERICAL_FAILURES, StrokeStatus
 
 #: the [tolerance] keys a catalog's own tolerances replace
 OWNED = ("design.spring_k", "design.spring_rest_length", "design.damper_c",
@@ -256,8 +257,8 @@ def run_pairs(cfg: Config, box: PairBox, pairs: list) -> dict:
     hi = np.repeat([np.nan if s.max_length is None else s.max_length for s, _ in pairs], n)
     with np.errstate(invalid="ignore"):
         bad = (out["min_spring_length"] < lo * (1 - LIMIT_RTOL)) \
-            | (out["max_spring_length"] > hi * (1 + LIMIT_RTOL)) | (out["status"] == 6)
-    numerical = np.isin(out["status"], (2, 3, 4, 5))
+            | (out["max_spring_length"] > hi * (1 + LIMIT_RTOL)) | (out["status"] == StrokeStatus.OUT_OF_RANGE)
+    numerical = np.isin(out["status"], NUMERICAL_FAILURES)
     out["reason"] = np.asarray(out["reason"], dtype=object)
     out["reason"][bad] = RANGE
     out["reason"][numerical] = "not integrated"
@@ -338,11 +339,11 @@ def summarise(box: PairBox, cols: dict, npairs: int) -> dict:
             why.append("")
             at.append(-1)
             continue
-        first = fail[fail < nc] if (fail < nc).any() else fail
-        reasons, counts = np.unique(R[p, first].astype(str), return_counts=True)
+        deciding = fail[fail < nc] if (fail < nc).any() else fail   # corners, else samples
+        reasons, counts = np.unique(R[p, deciding].astype(str), return_counts=True)
         r = reasons[np.argmax(counts)]
         why.append(str(r))
-        at.append(int(first[R[p, first] == r][0]))
+        at.append(int(deciding[R[p, deciding] == r][0]))
     nominal = {k: cols[k].reshape(npairs, n)[:, nc] for k in
                ("closing_time", "impact_tip_speed", "peak_tip_speed", "holding_moment",
                 "opening_force", "min_spring_length", "max_spring_length", "objective")}

@@ -39,8 +39,9 @@ INERTIA = ("M", "dM")
 TIP = ("tau",)
 #: the kernel's fixed table: the inertia, the seed's elements' columns, the tip
 COEFFS = INERTIA + tuple(c for e in ELEMENTS if e.table == "base" for c, _ in e.columns) + TIP
-#: the table of element columns added since the seed, tabulated when a stroke needs it
-EXTRA_COEFFS = tuple(c for e in ELEMENTS if e.table == "extra" for c, _ in e.columns)
+#: the coordinate table: the columns of the elements whose coordinate is an angle at a pivot
+#: (the torsion spring, the rotary damper), tabulated when a stroke needs it
+COORDINATE_COEFFS = tuple(c for e in ELEMENTS if e.table == "coordinates" for c, _ in e.columns)
 #: the parameter vector p, in order (design keys without the section)
 PARAMS = elements.PARAM_NAMES
 
@@ -81,7 +82,7 @@ def coordinates_of_columns(columns: dict, mounting, theta=None) -> dict:
     columns (``columns[name]``: numbers or arrays): what the element declares it
     tabulates (its q, q' or q'^2); an element on the lid's own angle has q' = 1 (and q =
     ``theta``, the angle of the columns, when given). An element whose columns are not
-    in ``columns`` (the extra table, not read) is left out."""
+    in ``columns`` (the coordinate table, not read) is left out."""
     out = {}
     for e in ELEMENTS:
         if not e.columns or e.unit_rate(mounting):
@@ -93,9 +94,9 @@ def coordinates_of_columns(columns: dict, mounting, theta=None) -> dict:
 
 def coefficients(theta, lid, sigma) -> dict:
     """The coefficients of theta as CasADi expressions: M (kg m^2), dM = M', tau = |dT/dtheta|
-    (m), every element's columns (:data:`COEFFS`, :data:`EXTRA_COEFFS`: gravity's Vg (J) and
+    (m), every element's columns (:data:`COEFFS`, :data:`COORDINATE_COEFFS`: gravity's Vg (J) and
     dVg (N m), the spring's l (m) and dl, the dashpot's dd = (e_OC . dC/dtheta)^2 (m^2), and
-    those of the elements added since the seed), and ``"coords"``: {element: :class:`Coord`}."""
+    those of the coordinate table), and ``"coords"``: {element: :class:`Coord`}."""
     geo, mass = lid.geometry, lid.mass
     ps = pose(theta, geo, mass, sigma)
     p = ps.points
@@ -301,7 +302,7 @@ def velocity_of(pts, A, phi_d, theta_d, P):
     return phi_d * perp(A) + theta_d * perp(P - A)
 
 
-__all__ = ["COEFFS", "EXTRA_COEFFS", "PARAMS", "Coord", "friction", "direction", "coefficients", "coordinates",
+__all__ = ["COEFFS", "COORDINATE_COEFFS", "PARAMS", "Coord", "friction", "direction", "coefficients", "coordinates",
            "coordinates_of_columns", "theta_ddot",
            "energy", "damper_power", "slope", "damping", "potential", "newton_euler_system",
            "pose"]

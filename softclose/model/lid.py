@@ -13,8 +13,8 @@ visits, and builds the CasADi functions the rest of softclose calls:
   angle (discontinuous there); ``ode_moving(x, p, moving, engaged)`` the smooth flow between
   two events, with dry friction's direction and each end damper's engagement given;
 - ``coeffs(theta) -> (M, dM, Vg, dVg, l, dl, dd, tau)`` and their theta-derivatives, which the
-  fast kernels tabulate, and ``xcoeffs`` the same for the columns of the elements added
-  since the seed (:data:`softclose.model.dynamics.EXTRA_COEFFS`);
+  fast kernels tabulate, and ``xcoeffs`` the same for the columns of the coordinate table
+  (:data:`softclose.model.dynamics.COORDINATE_COEFFS`);
 - kinematics, energy and (built only on first use) the Newton-Euler reactions.
 """
 
@@ -317,7 +317,7 @@ class LidModel:
         vec = ca.vertcat(*[cf[k] for k in dyn.COEFFS])
         self.coeffs = ca.Function("coeffs", [th], [vec, ca.jacobian(vec, th)],
                                   ["theta"], ["c", "dc"])
-        xvec = ca.vertcat(*[cf[k] for k in dyn.EXTRA_COEFFS])
+        xvec = ca.vertcat(*[cf[k] for k in dyn.COORDINATE_COEFFS])
         self.xcoeffs = ca.Function("xcoeffs", [th], [xvec, ca.jacobian(xvec, th)],
                                    ["theta"], ["c", "dc"])
         self.energy_fn = ca.Function("energy", [x, p], [dyn.energy(cf, thd, p)])

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..simulation.kernel import binding as native
+from ..simulation.kernel import binding
 from ..config import Config
 from ..problem import DESIGN_KEYS, feasible, objective, params_of, resolve
 from ..simulation.simulator import Simulator
@@ -66,14 +66,14 @@ class Explorer:
                   "damper_c": damper_c}
         p = params_of(self.cfg, design)
         m = float(lid_mass)
-        row = np.r_[native.kernel_rows(p), sim.energy_tol(p[None, :], m), m]
-        out, traj = native.run_stroke_trajectory(sim.table, sim.method, sim.step, st.t_max,
+        row = np.r_[binding.kernel_rows(p), sim.energy_tol(p[None, :], m), m]
+        out, traj = binding.run_stroke_trajectory(sim.table, sim.method, sim.step, st.t_max,
                                                  st.theta0, st.theta_closed, row)
         status = StrokeStatus(int(out[0]))
         tr = sim.derive_trajectory(traj, p, ("tip_speed", "spring_length")) if status.ok \
             else {"t": traj[:, 0], "theta": traj[:, 1], "tip_speed": np.zeros(len(traj)),
                   "spring_length": np.zeros(len(traj))}
-        col = dict(zip(native.OUT_FIELDS, out))
+        col = dict(zip(binding.OUT_FIELDS, out))
         closed = status is StrokeStatus.CLOSED
         hm = float(sim.holding_moments(p[None, :], m)[0])
         J = objective(self.cfg.optimise, col["impact_theta_dot"], col["peak_tip_speed"]) \

@@ -23,7 +23,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..model import elements
-from .kernel import binding as native
+from .kernel import binding
 from . import statics
 from ..errors import ConfigError, NumericalError
 from .integrators import Method, amplification, get_method, spectral_radius
@@ -207,8 +207,8 @@ class Simulator:
         st = self.stroke
         m = None if lid_mass is None else \
             np.broadcast_to(np.asarray(lid_mass, float), (len(P),)).copy()
-        X = native.point_rows(self.table, points, len(P))
-        cols = [native.kernel_rows(P), self.energy_tol(P, m, X)]
+        X = binding.point_rows(self.table, points, len(P))
+        cols = [binding.kernel_rows(P), self.energy_tol(P, m, X)]
         if m is not None or X is not None:
             cols.append(np.full(len(P), np.nan) if m is None else m)
         if X is not None:
@@ -217,15 +217,15 @@ class Simulator:
         n = len(P)
 
         def kernel(a, b):
-            return native.run_strokes(self.table, self.method, self.step, st.t_max, st.theta0,
+            return binding.run_strokes(self.table, self.method, self.step, st.t_max, st.theta0,
                                       st.theta_closed, D[a:b], threads, early_exit=early_exit)
 
         def statics_of(a, b, out):
             r = slice(a, b)
             Xr, mr = None if X is None else X[r], None if m is None else m[r]
-            res = {name: out[:, i] for i, name in enumerate(native.OUT_FIELDS)}
+            res = {name: out[:, i] for i, name in enumerate(binding.OUT_FIELDS)}
             res["status"] = out[:, 0].astype(int)
-            res["reason"] = native.not_closed_reasons(out)
+            res["reason"] = binding.not_closed_reasons(out)
             if Xr is not None:
                 self._check_lengths(Xr, res)
             self._check_ranges(P[r], res, explain, Xr)
@@ -277,7 +277,7 @@ class Simulator:
                                          np.asarray(points)[idx])
         _, why = statics.out_of_range(coord, self.case.lid.mounting, P[idx],
                                       {k: np.asarray(v)[idx] for k, v in res.items()
-                                       if k in native.OUT_FIELDS}, explain)
+                                       if k in binding.OUT_FIELDS}, explain)
         bad = why != ""
         if bad.any():
             res["status"][idx[bad]] = StrokeStatus.OUT_OF_RANGE
@@ -289,26 +289,26 @@ class Simulator:
         ``points`` as :meth:`run_batch` takes them."""
         P = as_params(np.atleast_2d(np.asarray(P, float)))
         return statics.opening_forces(self.table, self.stroke, P, lid_mass,
-                                      native.point_rows(self.table, points, len(P)))
+                                      binding.point_rows(self.table, points, len(P)))
 
     def holding_moments(self, P: np.ndarray, lid_mass=None, points=None) -> np.ndarray:
         """dV/dtheta at theta_closed (N m) for rows of P (``points`` as :meth:`run_batch`)."""
         P = as_params(np.atleast_2d(np.asarray(P, float)))
         return statics.holding_moments(self.table, self.stroke.theta_closed, P, lid_mass,
-                                       native.point_rows(self.table, points, len(P)))
+                                       binding.point_rows(self.table, points, len(P)))
 
     # -- one stroke ------------------------------------------------------------------
     def run(self, p=None, trajectory: bool = False, estimate_error: bool = True) -> StrokeResult:
         p = at_temperature(self.model.params() if p is None else as_params(p),
                            self.temperature_factors)
         st = self.stroke
-        design = np.r_[native.kernel_rows(p), self.energy_tol(p[None, :])]
+        design = np.r_[binding.kernel_rows(p), self.energy_tol(p[None, :])]
         if trajectory:
             self._check_trajectory_size(design)
-            out, traj = native.run_stroke_trajectory(self.table, self.method, self.step,
+            out, traj = binding.run_stroke_trajectory(self.table, self.method, self.step,
                                                      st.t_max, st.theta0, st.theta_closed, design)
         else:
-            out = native.run_strokes(self.table, self.method, self.step, st.t_max, st.theta0,
+            out = binding.run_strokes(self.table, self.method, self.step, st.t_max, st.theta0,
                                      st.theta_closed, design[None, :], threads=1)[0]
         res = self._result(out, p)
         if res.ok:
@@ -333,10 +333,10 @@ class Simulator:
         st = self.stroke
         if st.t_max / self.step + 2 <= TRAJECTORY_BUDGET:
             return
-        out = native.run_strokes(self.table, self.method, self.step, st.t_max, st.theta0,
+        out = binding.run_strokes(self.table, self.method, self.step, st.t_max, st.theta0,
                                  st.theta_closed, design[None, :], threads=1)[0]
         closed = StrokeStatus(int(out[0])) is StrokeStatus.CLOSED
-        steps = int(out[native.OUT_FIELDS.index("steps")]) if closed else \
+        steps = int(out[binding.OUT_FIELDS.index("steps")]) if closed else \
             int(math.ceil(st.t_max / self.step))
         rows = steps + 2                       # the release, each step, the closing or t_max
         if rows > TRAJECTORY_BUDGET:
@@ -352,11 +352,11 @@ class Simulator:
     def _result(self, out, p) -> StrokeResult:
         status = StrokeStatus(int(out[0]))
         closed = status is StrokeStatus.CLOSED
-        col = {name: none_if_nan(out[i]) for i, name in enumerate(native.OUT_FIELDS)}
+        col = {name: none_if_nan(out[i]) for i, name in enumerate(binding.OUT_FIELDS)}
         ok = status.ok
         reason = None
         if status is StrokeStatus.NOT_CLOSED:
-            reason = str(native.not_closed_reasons(np.asarray(out)[None, :])[0]) or None
+            reason = str(binding.not_closed_reasons(np.asarray(out)[None, :])[0]) or None
         return StrokeResult(
             closed=closed,
             closing_time=col["closing_time"] if closed else None,
@@ -439,7 +439,7 @@ class Simulator:
         ``lid_mass``, kg; None: the table's own; ``points``: the design's own, as
         :meth:`run_batch` takes them)."""
         th = np.linspace(self.stroke.theta_closed, self.stroke.theta0, 41)
-        X = native.point_rows(self.table, points, 1)
+        X = binding.point_rows(self.table, points, 1)
         return statics.rest_jacobian(self.table, th, p, lid_mass, None if X is None else X[0])
 
     def max_rate(self, p, lid_mass=None, points=None) -> float:
@@ -461,7 +461,7 @@ class Simulator:
         p = as_params(p)
         if lid_mass == self.table.lid_mass:
             lid_mass = None
-        X = native.point_rows(self.table, points, 1)
+        X = binding.point_rows(self.table, points, 1)
         if status is StrokeStatus.NON_FINITE and X is not None:
             why = self.vanishing_length(X[0])
             if why:

@@ -23,7 +23,7 @@ import numpy as np
 from ..errors import ConfigError
 
 from ..model import elements
-from ..model.dynamics import COEFFS, EXTRA_COEFFS, coordinates_of_columns, damping, potential, slope
+from ..model.dynamics import COEFFS, COORDINATE_COEFFS, coordinates_of_columns, damping, potential, slope
 from ..problem import as_params
 from .roots import illinois
 from .kernel.binding import leaves, point_grid, point_lengths, point_opening
@@ -51,22 +51,22 @@ def with_points(table, theta, points, cols: dict) -> dict:
     return out
 
 
-def columns(table, theta, n: int, lid_mass=None, extra: bool = False, points=None) -> dict:
+def columns(table, theta, n: int, lid_mass=None, coordinates: bool = False, points=None) -> dict:
     """The named columns at ``theta`` (scalar or one per row) for ``n`` rows at ``lid_mass``,
-    with the element columns of the extra table when ``extra``, and the rows' own points'
-    lengths (``points``)."""
+    with the element columns of the coordinate table when ``coordinates``, and the rows'
+    own points' lengths (``points``)."""
     c = table.rows(theta, n, lid_mass)
     out = {name: c[:, j] for j, name in enumerate(COEFFS)}
-    if extra:
-        x = table.rows_extra(theta, n)
-        out.update({name: x[:, j] for j, name in enumerate(EXTRA_COEFFS)})
+    if coordinates:
+        x = table.rows_coordinates(theta, n)
+        out.update({name: x[:, j] for j, name in enumerate(COORDINATE_COEFFS)})
     return with_points(table, theta, points, out)
 
 
 def _at(table, theta, P, lid_mass, points=None):
     P = as_params(np.atleast_2d(np.asarray(P, float)))
     mounting = table.model.mounting
-    cols = columns(table, theta, len(P), lid_mass, elements.needs_extra(P, mounting), points)
+    cols = columns(table, theta, len(P), lid_mass, elements.needs_coordinates(P, mounting), points)
     return cols, coordinates_of_columns(cols, mounting, theta), elements.params(P)
 
 
@@ -281,12 +281,12 @@ def opening_forces(table, stroke, P, lid_mass=None, points=None) -> np.ndarray:
 def _opening_slopes(table, P, lid_mass, th, skip: str | None = None):
     """(dV/dtheta + friction of rows of P over the angles th, (len(P), len(th)); the tip's
     lever tau there), leaving out the element ``skip``."""
-    extra = elements.needs_extra(P, table.model.mounting)
+    coordinates = elements.needs_coordinates(P, table.model.mounting)
     c = table.evaluate(th)
     cols = {name: c[:, j] for j, name in enumerate(COEFFS)}
-    if extra:
-        x = table.rows_extra(th, len(th))
-        cols.update({name: x[:, j] for j, name in enumerate(EXTRA_COEFFS)})
+    if coordinates:
+        x = table.rows_coordinates(th, len(th))
+        cols.update({name: x[:, j] for j, name in enumerate(COORDINATE_COEFFS)})
     co = coordinates_of_columns(cols, table.model.mounting)
     Pn = elements.params(P)
     slope = np.zeros((len(P), len(th)))

@@ -19,7 +19,8 @@ from ..jsonio import jsonable
 
 
 class StrokeStatus(IntEnum):
-    """How a stroke ended (values: the stroke kernel's status codes)."""
+    """How a stroke ended (values: the stroke kernel's status codes, 0 to 5; 6 is set in
+    Python). The one table of the codes and their text."""
 
     CLOSED = 0
     NOT_CLOSED = 1
@@ -49,6 +50,9 @@ _TEXT = {StrokeStatus.CLOSED: "closed", StrokeStatus.NOT_CLOSED: "not closed",
          StrokeStatus.NON_FINITE: "non-finite",
          StrokeStatus.IMPLICIT_FAILED: "implicit solve failed",
          StrokeStatus.OUT_OF_RANGE: "invalid design"}
+#: the statuses of a stroke the method could not integrate (a numerical failure)
+NUMERICAL_FAILURES = (StrokeStatus.UNSTABLE, StrokeStatus.LEFT_RANGE, StrokeStatus.NON_FINITE,
+                      StrokeStatus.IMPLICIT_FAILED)
 
 
 @dataclass(frozen=True, repr=False)

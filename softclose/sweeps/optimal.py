@@ -350,11 +350,11 @@ class OptimalGridResult(Displayed):
             done = self.points - int(np.sum(self.columns["message"] == "not computed"))
             return f"{self.lost}; the {done} finished points of {self.points} are kept"
         bad = np.nonzero(~self.columns["success"])[0]
-        first = int(bad[0])
-        where = ", ".join(f"{k} = {self.columns[k][first]:.6g}" for k in self.keys)
+        i = int(bad[0])
+        where = ", ".join(f"{k} = {self.columns[k][i]:.6g}" for k in self.keys)
         more = f" (and {len(bad) - 1} more)" if len(bad) > 1 else ""
         return (f"{len(bad)} of {self.points} points have no verified optimum; first at "
-                f"{where}: {self.columns['message'][first]}{more}")
+                f"{where}: {self.columns['message'][i]}{more}")
 
     def row(self, i: int) -> dict:
         """The row of grid point ``i`` (plain values; NaN as None)."""

@@ -41,7 +41,7 @@ Mapper = Callable[[dict, list, Iterable, "int | None"], Iterator[tuple[int, dict
 def local_map(cfg_dict: dict, keys: list[str], tasks, threads: int | None = None):
     """Evaluate the chunks here, several at once, each in a thread of its own; yields them
     in task order. ``threads``: the kernel threads in all (default: one per core, at most
-    ``native.MAX_THREADS``).
+    ``softclose.simulation.kernel.binding.MAX_THREADS``).
 
     A chunk spends about two thirds of its CPU time in the kernel, which releases the GIL,
     and the rest in Python (the statics, the reasons, the columns). One chunk at a time with

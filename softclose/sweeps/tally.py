@@ -150,11 +150,11 @@ class Bins:
                 continue
             f = np.nonzero(feas)[0]
             order = f[np.lexsort((ids[f], J[f], cell[f]))]
-            first = order[np.unique(cell[order], return_index=True)[1]]
-            cf = cell[first]
-            better = (J[first] < c["objective"][cf]) | \
-                ((J[first] == c["objective"][cf]) & (ids[first] < c["id"][cf]))
-            sel, cs = first[better], cf[better]
+            best = order[np.unique(cell[order], return_index=True)[1]]
+            cf = cell[best]
+            better = (J[best] < c["objective"][cf]) | \
+                ((J[best] == c["objective"][cf]) & (ids[best] < c["id"][cf]))
+            sel, cs = best[better], cf[better]
             c["objective"][cs] = J[sel]
             c["id"][cs] = ids[sel]
             for q in MAPPED:

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 import softclose
-from softclose.simulation.kernel import binding as native
+from softclose.simulation.kernel import binding
 from softclose.config import default_config, from_dict
 from softclose.model.lid import LidModel
 from softclose.optimiser.interval import ChebyshevFit, nlp_elements
@@ -23,7 +23,7 @@ from softclose.simulation.simulator import Simulator
 OUT = Path(__file__).with_name("golden.npz")
 #: the kernel's output columns the file holds (those of b33652c: the columns added since, the
 #: end damper's engagement, are NaN on these rows, which have none)
-GOLDEN_FIELDS = tuple(k for k in native.OUT_FIELDS if k not in ("engage_time",
+GOLDEN_FIELDS = tuple(k for k in binding.OUT_FIELDS if k not in ("engage_time",
                                                                  "engage_theta_dot"))
 #: a second geometry (the test suite's cfg2, its assembly angles as computed there)
 GEOMETRY2 = {"crank_oa": 0.05, "crank_bc": 0.09, "pivot_b": [0.065, 0.02],

@@ -65,8 +65,9 @@ def structure(mounting) -> tuple:
     return tuple(x for e in ELEMENTS for x in e.structure(mounting))
 
 
-#: the elements in the kernel's table of element columns (tabulated when a stroke needs it)
-EXTRA = tuple(e for e in ELEMENTS if e.table == "extra")
+#: the elements whose coordinate the kernel reads from the coordinate table (tabulated when a
+#: stroke needs it)
+TABULATED = tuple(e for e in ELEMENTS if e.table == "coordinates")
 
 
 def acting(p, extra_values: dict | None = None) -> tuple[Element, ...]:
@@ -78,13 +79,13 @@ def acting(p, extra_values: dict | None = None) -> tuple[Element, ...]:
     return tuple(e for e in ELEMENTS if bool(e.acts(values)))
 
 
-def needs_extra(P, mounting) -> bool:
+def needs_coordinates(P, mounting) -> bool:
     """Does any row of P (parameter vectors) have an element acting that reads the table of
     element columns with ``mounting`` (a torsion spring, a rotary damper at a pivot)?"""
     import numpy as np
     P = np.atleast_2d(np.asarray(P, float))
     values = {q.name: P[:, i] for i, q in enumerate(PARAMS)}
-    return any(bool(np.any(e.acts(values))) for e in EXTRA if e.in_extra(mounting))
+    return any(bool(np.any(e.acts(values))) for e in TABULATED if e.in_coordinate_table(mounting))
 
 
 #: the flags of a table the kernel reads (after ncell, lo, h, m0): its structural element
@@ -94,7 +95,7 @@ KERNEL_META = ("rotary_at_pivot",)
 
 def kernel_meta(mounting) -> tuple[float, ...]:
     """The values of :data:`KERNEL_META` with ``mounting``."""
-    return (float(BY_NAME["rotary"].in_extra(mounting)),)
+    return (float(BY_NAME["rotary"].in_coordinate_table(mounting)),)
 
 
 def one_way(P, theta_d):
@@ -108,5 +109,5 @@ def one_way(P, theta_d):
     return 1 - ow * (np.asarray(theta_d) > 0)
 
 
-__all__ = ["ELEMENTS", "BY_NAME", "ENGAGING", "FRICTIONS", "EXTRA", "needs_extra", "one_way", "PARAMS", "PARAM_NAMES", "KEYS", "SPRINGS", "DAMPERS",
+__all__ = ["ELEMENTS", "BY_NAME", "ENGAGING", "FRICTIONS", "TABULATED", "needs_coordinates", "one_way", "PARAMS", "PARAM_NAMES", "KEYS", "SPRINGS", "DAMPERS",
            "Element", "Param", "Params", "params", "structure", "acting"]

@@ -112,9 +112,9 @@ class Element:
     #: the kernel's tabulated functions of theta it reads: names of its q ("q"), q' ("dq")
     #: or q'^2 ("dq2"), as (column name, what)
     columns: tuple[tuple[str, str], ...] = ()
-    #: "base": in the kernel's fixed table (always tabulated); "extra": in the table of
-    #: element columns, tabulated when a stroke needs it; another element's name: it reads
-    #: that element's columns (the same coordinate), tabulated for it
+    #: "base": in the kernel's fixed table (always tabulated); "coordinates": in the
+    #: coordinate table of element columns, tabulated when a stroke needs it; another
+    #: element's name: it reads that element's columns (the same coordinate), tabulated for it
     table: str = "base"
     #: one of the seed's elements (gravity, the spring, the dashpot, the rotary damper)
     seed: bool = False
@@ -181,9 +181,9 @@ class Element:
         1: no column is read for it)."""
         return False
 
-    def in_extra(self, mounting) -> bool:
+    def in_coordinate_table(self, mounting) -> bool:
         """Does the element read the table of element columns with ``mounting``?"""
-        return self.table == "extra" and not self.unit_rate(mounting)
+        return self.table == "coordinates" and not self.unit_rate(mounting)
 
     # -- what it changes in the model ---------------------------------------------------------
     def structure(self, mounting) -> tuple:

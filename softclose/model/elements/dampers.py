@@ -63,7 +63,7 @@ class RotaryDamper(Element):
                 "C (theta - gamma), or H (a hinge lid's hinge: theta)"))
     params = (Param("rotary_damper_c"),)
     columns = (("dpr2", "dq2"),)
-    table = "extra"
+    table = "coordinates"
 
     def coordinate(self, lid):
         return PivotAngle(lid.mounting.rotary_damper_pivot)

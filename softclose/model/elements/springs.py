@@ -329,7 +329,7 @@ class TorsionSpring(_Linear):
     )
     params = (Param("torsion_k"), Param("torsion_free_angle_deg", math.pi / 180))
     columns = (("psi", "q"), ("dpsi", "dq"))
-    table = "extra"
+    table = "coordinates"
 
     def coordinate(self, lid):
         return PivotAngle(lid.mounting.torsion_pivot)

@@ -50,8 +50,9 @@
 
 #include "_layout.h" /* the layout: generated from the element registry */
 
-/* the table of element columns added since the seed (tabulated when a row needs them): a
- * row of NX values per power; which element's column is which: THE MACHINE ELEMENTS */
+/* the coordinate table (the element columns of the torsion spring and the rotary damper at
+ * their pivots, tabulated when a row needs them): a row of NX values per power; which
+ * element's column is which: THE MACHINE ELEMENTS */
 #define SMAX 4
 
 /* the outputs per design: their enum (O_*) is in _layout.h; O_STOP_REASON is why a lid
@@ -162,9 +163,9 @@ typedef struct {
  *
  * Everything the kernel knows of the elements is in this section: the design row's columns
  * (D_*), the parameters of a row (Par) and of a group of lanes (Par4), how a row is read
- * (ELEM_READ) and copied into its lane (ELEM_LANE), which element columns the extra table
+ * (ELEM_READ) and copied into its lane (ELEM_LANE), which element columns the coordinate table
  * holds (X_*), and the laws. The elements of the seed's table (gravity, spring, dashpot,
- * rotary damper) are summed by ELEM_SLOPE ...; those of the extra table (the torsion spring)
+ * rotary damper) are summed by ELEM_SLOPE ...; those of the coordinate table (the torsion spring)
  * by ELEM_SLOPE_X ..., added where a row has them (Par.x; Par4.anyx for a group). */
 
 /* the design-row columns (D_*, NDESIGN): _layout.h, in the registry's order */
@@ -172,7 +173,7 @@ typedef struct {
  * spring's anchor D (world) and lid point E (lid frame, from A), the dashpot's anchor F
  * (world) and lid point H (lid frame), x and y each; NaN: the table's own */
 enum { D_PT = NDESIGN, NPT = 8 };
-/* the extra table's columns: the torsion spring's psi and dpsi at its pivot, the rotary
+/* the coordinate table's columns: the torsion spring's psi and dpsi at its pivot, the rotary
  * damper's psi'^2 at its pivot */
 /* (X_PSI, X_DPSI, X_DPR2: _layout.h) */
 
@@ -180,7 +181,7 @@ enum { D_PT = NDESIGN, NPT = 8 };
  * rotary damper at the lid / at a pivot (the table says which: rotary_at_pivot); ow: the
  * dampers are one-way; Tf: dry friction, fs: the way the lid moves (its state: set at the
  * release and at every turning point); dm = m_lid - m0: 0 for a row at the table's mass; x:
- * the row has an element of the extra table; the end damper: ce (c_e), the (theta_e), e: it
+ * the row has an element of the coordinate table; the end damper: ce (c_e), the (theta_e), e: it
  * can engage on this stroke (ce != 0, theta_e above theta_closed: ELEM_ENGAGE_START), eg: the
  * lane is engaged (its state, switched at each crossing of theta_e), cen = eg ? ce : 0 (the
  * damping it adds now); ps, pd: the row has its own spring / dashpot points */
@@ -427,7 +428,7 @@ static inline void law_preloaded_bounds(double k, double q0, double F, double ql
 
 static void cubic_range(const double *q, double s0, double s1, double *lo, double *hi);
 
-/* the extra table's conservative elements over cell i, s in [s0, s1]: their least potential
+/* the coordinate table's conservative elements over cell i, s in [s0, s1]: their least potential
  * and slope range (from the ranges of their columns' cubic pieces), added to V1 and [slo, shi] */
 static void elem_bounds_x(const double *xcc, const Par *p, int i, double s0, double s1,
                           double *V1, double *slo, double *shi)

@@ -15,7 +15,7 @@ enum { D_SPRING_K, D_SPRING_REST_LENGTH, D_DAMPER_C, D_ROTARY_DAMPER_C, D_SPRING
 #define NC 8
 #define NMASS 4
 enum { C_M, C_DM, C_VG, C_DVG, C_L, C_DL, C_DD, C_TAU };
-/* the extra table's element columns (NX per power) */
+/* the coordinate table's element columns (NX per power) */
 #define NX 4
 enum { X_PSI, X_DPSI, X_DPR2 };
 /* the pose table's columns (NPOSE per power) */

@@ -90,10 +90,11 @@ from ...model import elements
 from ...errors import ConfigError, NumericalError
 from ..integrators import Method
 from .layout import (DESIGN_COLUMNS, KERNEL_ABI, LAYOUT, NPT, OUT_FIELDS, POINT_COLUMNS,  # noqa: F401
-                     STATUS, STOP_REASONS, SI)
+                     STOP_REASONS, SI)
 from .library import load
 from .table import POINT_NAMES, CoefficientTable
 from ...problem import RANGES, as_params
+from ..stroke import StrokeStatus
 
 _COL = {name: i for i, name in enumerate(OUT_FIELDS)}
 
@@ -132,10 +133,11 @@ def _ptr(a: np.ndarray | None):
 _NP = len(elements.PARAMS)
 
 
-def _extra(designs: np.ndarray, table: CoefficientTable) -> np.ndarray | None:
-    """The extra table in the kernel's layout if any row has an element of it, else None."""
-    return table.extra_kernel if elements.needs_extra(designs[:, :_NP], table.model.mounting) \
-        else None
+def _coordinates(designs: np.ndarray, table: CoefficientTable) -> np.ndarray | None:
+    """The coordinate table in the kernel's layout if any row has an element of it, else None."""
+    if elements.needs_coordinates(designs[:, :_NP], table.model.mounting):
+        return table.coordinates_kernel
+    return None
 
 
 def _lid_masses(designs: np.ndarray, table: CoefficientTable) -> np.ndarray | None:
@@ -316,7 +318,7 @@ def run_strokes(table: CoefficientTable, method: Method, step: float, t_max: flo
     lib = load()
     designs = np.ascontiguousarray(np.atleast_2d(designs), float)
     dcc = _lid_masses(designs, table)
-    xcc = _extra(designs, table)
+    xcc = _coordinates(designs, table)
     pcc = _pose(designs, table)
     cc, ranges = table.cc_kernel, table.cell_ranges      # held here while C reads them
     n, ncol = designs.shape
@@ -378,7 +380,7 @@ def run_stroke_trajectory(table, method, step, t_max, theta0, theta_closed, desi
     lib = load()
     design = np.ascontiguousarray(np.atleast_1d(design), float)
     dcc = _lid_masses(design[None, :], table)
-    xcc = _extra(design[None, :], table)
+    xcc = _coordinates(design[None, :], table)
     pcc = _pose(design[None, :], table)
     cc, ranges = table.cc_kernel, table.cell_ranges
     cap = int(math.ceil(t_max / step)) + 3
@@ -403,13 +405,14 @@ def kernel_step(table, method, p, h, x0, lid_mass=None, points=None) -> np.ndarr
     pts = np.full(NPT, np.nan) if pts is None else pts[0]
     d = np.ascontiguousarray(np.r_[kernel_rows(as_params(p)), 0.0, mass, pts], float)
     dcc = _lid_masses(d[None, :], table)
-    xcc = _extra(d[None, :], table)
+    xcc = _coordinates(d[None, :], table)
     pcc = _pose(d[None, :], table)
     cc, tab, x0 = table.cc_kernel, method.packed(), np.ascontiguousarray(x0, float)
     st = lib.sc_step(_ptr(table.meta), _ptr(cc), _ptr(dcc), _ptr(xcc), _ptr(pcc), _ptr(tab),
                      _ptr(d), h, _ptr(x0), _ptr(x1))
     if st:
-        raise NumericalError(f"kernel step failed: {STATUS.get(st, st)}")
+        what = StrokeStatus(st).text if 0 <= st < len(StrokeStatus) else st
+        raise NumericalError(f"kernel step failed: {what}")
     return x1
 
 
@@ -443,7 +446,7 @@ def not_closed_reasons(out) -> np.ndarray:
         a = np.atleast_2d(np.asarray(out, float))
         status, reason, theta = (a[:, _COL[k]] for k in ("status", "stop_reason", "stop_theta"))
     text = np.full(status.shape, "", dtype=object)
-    open_ = status == 1
+    open_ = status == StrokeStatus.NOT_CLOSED
     for code, head in ((1, "cannot reach the rim: energy below the barrier at theta = "),
                        (2, "held open at theta = "), (3, "held by friction at theta = ")):
         m = np.nonzero(open_ & (reason == code))[0]

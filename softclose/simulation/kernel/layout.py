@@ -1,5 +1,5 @@
 """The kernel's contract with Python: the columns of its design rows and of its output, its
-status and stop-reason codes, and the layout string (:data:`LAYOUT`) that ``sc_layout()`` of
+stop-reason codes (its status codes: :class:`softclose.simulation.stroke.StrokeStatus`), and the layout string (:data:`LAYOUT`) that ``sc_layout()`` of
 ``_kernel.c`` must return -- the element registry's parameters, the coefficient table's columns,
 the pose and range widths -- so that a kernel built from other sources is refused, never read
 wrongly."""
@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...model import elements
-from ...model.dynamics import COEFFS, EXTRA_COEFFS
+from ...model.dynamics import COEFFS, COORDINATE_COEFFS
 from .table import NPOSE, NX, POINT_NAMES, POSE
 
 #: output columns of the kernel, in order
@@ -17,8 +17,6 @@ OUT_FIELDS = ("status", "closing_time", "impact_theta_dot", "impact_tip_speed",
               "peak_tip_speed", "min_spring_length", "max_spring_length", "steps",
               "energy_rise", "theta_min", "theta_dot_max", "theta_max",
               "stop_reason", "stop_theta", "stop_time", "engage_time", "engage_theta_dot")
-STATUS = {0: "closed", 1: "not closed", 2: "unstable", 3: "left the tabulated range",
-          4: "non-finite", 5: "implicit solve failed"}
 #: ``stop_reason`` codes: why a stroke does not close (0: it closed, failed, or is undecided)
 STOP_REASONS = {0: "", 1: "energy below the barrier", 2: "held open", 3: "held by friction"}
 #: the optional point columns after lid_mass (a row's own attachment points, m; NaN: the
@@ -36,7 +34,7 @@ KERNEL_ABI = 6
 #: every layout constant this module shares with the kernel (``sc_layout()`` must equal it)
 LAYOUT = (f"abi={KERNEL_ABI};meta=ncell,lo,h,m0,{','.join(elements.KERNEL_META)};"
           f"cc={','.join(COEFFS)};mass={','.join(COEFFS[:4])};"
-          f"xcc={','.join(EXTRA_COEFFS + ('-',) * (NX - len(EXTRA_COEFFS)))};"
+          f"xcc={','.join(COORDINATE_COEFFS + ('-',) * (NX - len(COORDINATE_COEFFS)))};"
           f"pose={','.join(POSE + ('-',) * (NPOSE - len(POSE)))};"
           f"row={','.join(DESIGN_COLUMNS)};out={','.join(OUT_FIELDS)};nrng=18")
 
@@ -95,9 +93,9 @@ def header() -> str:
         f"#define NC {len(COEFFS)}",
         f"#define NMASS {len(COEFFS[:4])}",
         enum("C", COEFFS),
-        "/* the extra table's element columns (NX per power) */",
+        "/* the coordinate table's element columns (NX per power) */",
         f"#define NX {NX}",
-        enum("X", EXTRA_COEFFS),
+        enum("X", COORDINATE_COEFFS),
         "/* the pose table's columns (NPOSE per power) */",
         f"#define NPOSE {NPOSE}",
         enum("P", POSE, "P_USED"),

@@ -2,8 +2,9 @@
 
 "Skip what a scene doesn't need": with the geometry fixed, the equation of motion
 depends on theta only through coefficients (:data:`softclose.model.dynamics.COEFFS`: the inertia,
-the seed's elements' columns, the tip's lever; and, when a stroke has one of the elements
-added since, their columns :data:`softclose.model.dynamics.EXTRA_COEFFS` in a second table), so
+the seed's elements' columns, the tip's lever; and, when a stroke has an element at a
+pivot, its columns :data:`softclose.model.dynamics.COORDINATE_COEFFS` in a second table, the
+coordinate table), so
 no closure is solved per step. :class:`CoefficientTable` evaluates them and their exact
 theta-derivatives (CasADi AD) on a uniform grid once, as cubic Hermite pieces; the
 interpolation error is measured at every cell midpoint and kept in ``max_rel_error``. The
@@ -19,12 +20,12 @@ from functools import cached_property
 import numpy as np
 
 from ...model import elements
-from ...model.dynamics import COEFFS, EXTRA_COEFFS, pose
+from ...model.dynamics import COEFFS, COORDINATE_COEFFS, pose
 from ...errors import NumericalError
 from ...model.lid import LidModel
 from ...model.resolved import LidCase
 
-#: element columns per row of the extra table (the kernel's NX: its columns, then zeros)
+#: element columns per row of the coordinate table (the kernel's NX: its columns, then zeros)
 NX = 4
 #: the pose table's columns (per-row attachment points: :meth:`CoefficientTable.pose`), and
 #: its width in the kernel (NPOSE: those columns, then zeros)
@@ -244,28 +245,29 @@ class CoefficientTable:
         return dm if np.any(dm != 0) else None
 
     @cached_property
-    def extra(self) -> np.ndarray:
-        """The element columns of the extra table (:data:`softclose.model.dynamics.EXTRA_COEFFS`,
-        those of the elements added since the seed) as cubic pieces on the same cells,
-        (ncell, len(EXTRA_COEFFS), 4): built on first use, when a stroke has such an element
-        (their interpolation error is measured like the table's, ``max_rel_error_extra``)."""
+    def coordinates(self) -> np.ndarray:
+        """The element columns of the coordinate table
+        (:data:`softclose.model.dynamics.COORDINATE_COEFFS`, the torsion spring's and the
+        rotary damper's at their pivots) as cubic pieces on the same cells,
+        (ncell, len(COORDINATE_COEFFS), 4): built on first use, when a stroke has such an element
+        (their interpolation error is measured like the table's, ``max_rel_error_coordinates``)."""
         nodes = np.linspace(self.lo, self.hi, self.ncell + 1)
         xc, v = _pieces(self.model, nodes, self.h, self.model.xcoeffs)
         mid = 0.5 * (nodes[:-1] + nodes[1:])
         exact = np.asarray(self.model.xcoeffs.map(self.ncell)(mid)[0])
         interp = (xc[:, :, 0] + 0.5 * xc[:, :, 1] + 0.25 * xc[:, :, 2] + 0.125 * xc[:, :, 3]).T
         scale = np.maximum(np.abs(v).max(axis=1, keepdims=True), 1e-300)
-        self.max_rel_error_extra = float((np.abs(interp - exact) / scale).max())
+        self.max_rel_error_coordinates = float((np.abs(interp - exact) / scale).max())
         if not np.all(np.isfinite(xc)):
             raise NumericalError("an element's tabulated coordinate is not finite on the "
                                  "stroke range; the geometry is at or near a toggle position")
         return xc
 
     @cached_property
-    def extra_kernel(self) -> np.ndarray:
-        """:attr:`extra` in the kernel's layout (ncell, 4, NX), zero-padded to NX columns."""
+    def coordinates_kernel(self) -> np.ndarray:
+        """:attr:`coordinates` in the kernel's layout (ncell, 4, NX), zero-padded to NX columns."""
         x = np.zeros((self.ncell, NX, 4))
-        x[:, :len(EXTRA_COEFFS)] = self.extra
+        x[:, :len(COORDINATE_COEFFS)] = self.coordinates
         return _kernel_layout(x)
 
     def rows(self, theta, n: int, lid_mass=None) -> np.ndarray:
@@ -327,11 +329,12 @@ class CoefficientTable:
         a = q[..., 0] + s * (q[..., 1] + s * (q[..., 2] + s * q[..., 3]))
         return a.reshape(th.shape + (len(POSE),))
 
-    def rows_extra(self, theta, n: int) -> np.ndarray:
-        """The element columns of the extra table at ``theta`` (scalar or one per row), n rows."""
+    def rows_coordinates(self, theta, n: int) -> np.ndarray:
+        """The element columns of the coordinate table at ``theta`` (scalar or one per row),
+        n rows."""
         th = np.broadcast_to(np.atleast_1d(np.asarray(theta, float)), (n,))
         i, s = self._cell(th)
-        q = self.extra[i]
+        q = self.coordinates[i]
         return q[..., 0] + s * (q[..., 1] + s * (q[..., 2] + s * q[..., 3]))
 
     def _mass_slope(self, i: np.ndarray, s: np.ndarray) -> np.ndarray:
