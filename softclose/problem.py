@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from .errors import ConfigError
+from .config.free import config_value
 from .config.load import STEP_BUDGET, TRAJECTORY_BUDGET
 from .config.schema import KEYS, RANGES
 from .model import elements
@@ -154,18 +155,11 @@ VERIFY_RTOL = 1e-3
 CONSTRAINT_TOL = 1e-7
 
 
-def config_value(q, cfg):
-    """The value of the parameter ``q`` (a :class:`~softclose.model.elements.Param`) in
-    ``cfg``, as the config holds it (a word for a coded parameter)."""
-    section, attr = q.key.split(".")
-    return getattr(getattr(cfg, section), attr)
-
-
 def params_of(cfg, design: dict | None = None) -> np.ndarray:
     """The parameter vector p (:data:`PARAM_KEYS`) of ``cfg``'s design, with ``design`` (a
     dict of some of its keys) taking precedence."""
     d = dict(design or {})
-    return np.array([q.number(d[q.name] if q.name in d else config_value(q, cfg))
+    return np.array([q.number(d[q.name] if q.name in d else config_value(cfg, q.key, number=False))
                      for q in PARAMS])
 
 

@@ -9,7 +9,7 @@ import pytest
 
 from softclose.model import elements
 from softclose.config import KEYS, RANGES, SCHEMA, TOLERANCE_KEYS, default_config, docs
-from softclose.problem import config_value
+from softclose.config.free import config_value
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -45,4 +45,4 @@ def test_element_keys_are_in_the_config_and_its_tables():
                 assert RANGES[k.full] == k.range
     # every parameter of p is a config key with its default
     for q in elements.PARAMS:
-        assert config_value(q, cfg) == next(k.default for k in KEYS if k.full == q.key)
+        assert config_value(cfg, q.key, number=False) == next(k.default for k in KEYS if k.full == q.key)

@@ -67,14 +67,17 @@ def point_refusals(cfg, points: dict | None, n: int):
     return out
 
 
-def config_value(cfg, key: str) -> float:
-    """The value of a numeric key (``section.name`` or ``section.name[i]``) in ``cfg``."""
+def config_value(cfg, key: str, number: bool = True):
+    """The value of a key (``section.name`` or ``section.name[i]``) in ``cfg``: a float, or
+    as the config holds it (a word for a coded key) when not ``number``. The one reader of a
+    config value by its key."""
     section, name = key.split(".", 1)
     i = None
     if name.endswith("]"):
         name, i = name[:-1].split("[")
     v = getattr(getattr(cfg, section), name)
-    return float(v if i is None else v[int(i)])
+    v = v if i is None else v[int(i)]
+    return float(v) if number else v
 
 
 def _flat(table: dict, prefix: str = "") -> dict:

@@ -23,17 +23,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..config import Config, Tolerance, to_dict
+from ..config import Config, Tolerance
+from ..config.free import config_value
 from ..errors import ConfigError
 from ..problem import DESIGN_KEYS
-
-
-def config_value(cfg: Config, key: str) -> float:
-    """The value of a numeric config key (``section.key`` or ``section.key[i]``)."""
-    section, rest = key.split(".", 1)
-    name, _, idx = rest.partition("[")
-    v = to_dict(cfg)[section][name]
-    return float(v[int(idx[:-1])] if idx else v)
 
 
 @dataclass(frozen=True)
