@@ -125,7 +125,6 @@ HAND_METRICS = (
            "none)"),
     Metric("hold_open", "deg", "the [lo, hi] ranges where the lid stays where it is left"),
 )
-HAND_KEYS = tuple(m.key for m in HAND_METRICS)
 
 #: units of the metrics, the objective and the design values (by name and by full config key)
 UNITS: dict[str, str] = {

@@ -276,6 +276,26 @@ def test_metric_only_runs_keep_no_trajectory(sim):
     assert r2.metrics() == r.metrics()
 
 
+def test_trajectory_frame_is_the_time_histories():
+    """simulate(cfg, trajectory=True).trajectory_frame(): one row per step, from the release
+    (theta0, at rest) to the rim at the closing time; without a trajectory it says how to get
+    one."""
+    import softclose
+    cfg = softclose.default_config()
+    r = softclose.simulate(cfg, trajectory=True)
+    f = r.trajectory_frame()
+    assert list(f.columns) == ["t", "theta", "theta_dot", "theta_ddot", "phi", "gamma",
+                               "tip_speed", "spring_length", "energy"]
+    assert len(f) == r.steps + 1
+    assert f["t"].iloc[0] == 0.0 and f["theta_dot"].iloc[0] == 0.0
+    assert f["theta"].iloc[0] == pytest.approx(math.radians(cfg.stroke.theta0_deg), rel=1e-15)
+    assert f["t"].iloc[-1] == pytest.approx(r.closing_time, abs=1e-15)
+    assert f["theta_dot"].iloc[-1] == pytest.approx(r.impact_theta_dot, rel=1e-14)
+    assert f["spring_length"].min() == pytest.approx(r.min_spring_length, abs=1e-9)
+    with pytest.raises(ValueError, match="trajectory=True"):
+        softclose.simulate(cfg).trajectory_frame()
+
+
 def test_batch_equals_single_runs(sim):
     """run_batch (threads, lanes) gives the single-stroke numbers for every design."""
     rng = np.random.default_rng(21)

@@ -138,10 +138,4 @@ def apply(entry: dict, checks: dict | None) -> dict:
     return entry
 
 
-def spring_failed(entry: dict) -> bool:
-    """The pair's coil spring fails a deciding check."""
-    c = entry.get("spring_checks")
-    return c is not None and not c["ok"]
-
-
-__all__ = ["DECIDING", "duty", "spring_checks", "apply", "spring_failed", "working_lengths"]
+__all__ = ["DECIDING", "duty", "spring_checks", "apply", "working_lengths"]

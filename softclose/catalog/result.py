@@ -8,8 +8,6 @@ from dataclasses import dataclass, field
 from ..present.display import Display, Displayed, Table, num, percent
 from ..jsonio import jsonable
 
-#: the keys of one ranked pair as SPEC §10 gives them (``--json``), then the details
-SPEC_KEYS = ("spring", "damper", "feasible", "yield", "worst_objective", "design", "verified")
 
 
 def pair_entry(spring, damper, feasible: bool, yld: float, worst: float, reason: str,

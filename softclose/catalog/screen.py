@@ -47,10 +47,6 @@ from ..simulation.stroke import NUMERICAL_FAILURES, StrokeStatus
 #: the [tolerance] keys a catalog's own tolerances replace
 OWNED = ("design.spring_k", "design.spring_rest_length", "design.damper_c",
          "design.rotary_damper_c")
-#: the design keys a pair sets in every row (before the other toleranced keys)
-PAIR_KEYS = ("design.spring_k", "design.spring_rest_length", "design.spring_kind",
-             "design.spring_preload", "design.damper_c", "design.rotary_damper_c",
-             "design.strut_stroke", "design.strut_progression", "design.strut_friction")
 PRELOAD = "design.spring_preload"
 #: a gas strut's own values in a row (besides F1 and its extended length)
 STRUT_KEYS = ("design.strut_stroke", "design.strut_progression", "design.strut_friction")

@@ -36,11 +36,6 @@ PLACEMENT_KEYS: tuple[str, ...] = tuple(
 FREE_KEYS = FREE_KEYS + PLACEMENT_KEYS
 
 
-def is_placement(key: str) -> bool:
-    """Is ``key`` an attachment point's component (not an element's parameter)?"""
-    return key in PLACEMENT_KEYS
-
-
 def point_refusals(cfg, points: dict | None, n: int):
     """Why ``cfg`` refuses each row's attachment points (its one-line message, as
     ``cfg.update`` words it; "" where accepted), without a config per value: a component
@@ -154,4 +149,4 @@ def parse_free_option(text: str) -> tuple[str, list]:
     return key.strip().strip("'\""), vals
 
 
-__all__ = ["FREE_KEYS", "PLACEMENT_KEYS", "is_placement", "config_value", "read_free", "why_not_free", "free_table", "parse_free_option"]
+__all__ = ["FREE_KEYS", "PLACEMENT_KEYS", "config_value", "read_free", "why_not_free", "free_table", "parse_free_option"]

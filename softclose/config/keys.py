@@ -18,8 +18,6 @@ from __future__ import annotations
 
 from typing import Any, Callable, NamedTuple
 
-#: kinds whose value is one number (sweepable, may carry a tolerance)
-SCALAR_KINDS = ("pos", "nonneg", "real")
 #: kinds whose value is a list of numbers: their length
 VECTOR_KINDS = {"vec2": 2, "vec3": 3, "bounds": 2}
 
@@ -57,11 +55,6 @@ class Key(NamedTuple):
     def size(self) -> int:
         """Number of components: 1 for a scalar or a word, 2 or 3 for a vector."""
         return VECTOR_KINDS.get(self.kind, 1)
-
-    @property
-    def numeric(self) -> bool:
-        """A number or a vector of numbers that a sweep may vary (per component)."""
-        return self.kind in SCALAR_KINDS or self.kind in ("vec2", "vec3")
 
     @property
     def choices(self) -> tuple[str, ...]:

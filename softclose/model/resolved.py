@@ -86,11 +86,6 @@ class StrokeEnds(NamedTuple):
         """The closed angle, the rim (rad)."""
         return math.radians(self.theta_closed_deg)
 
-    @property
-    def theta_open(self) -> float:
-        """The fully open angle (rad): the end of the hand-force curve."""
-        return math.radians(self.theta_open_deg)
-
 
 class SolverSettings(NamedTuple):
     """How a stroke is integrated: the fixed-step method and step, the reference's tolerance."""

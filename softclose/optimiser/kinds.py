@@ -35,14 +35,6 @@ def spring_range(cfg: Config) -> tuple[float, float]:
     return get_checker(cfg).spring_extremes(st.theta_closed, st.theta0)
 
 
-def free_length_spread(cfg: Config, l0: float) -> float:
-    """The half-width of the free length's tolerance at ``l0`` (m; 0 without one)."""
-    for s in cfg.tolerance.spreads:
-        if s.key == "design.spring_rest_length":
-            return s.half_width(l0)
-    return 0.0
-
-
 def strut_force_bound(cfg: Config) -> float:
     """A gas strut's largest F1 by default (N): five times the force whose moment along the
     strut's best lever over the stroke equals gravity's largest moment, rounded up to 1, 2 or
@@ -153,14 +145,6 @@ def _strut_variables(cfg) -> Config:
     return cfg.update({"design.spring_kind": "gas_strut", "design.spring_k": 0.0,
                        "optimise.spring_k": [0.0, 0.0],
                        "optimise.free": {k: [float(a), float(b)] for k, (a, b) in free.items()}})
-
-
-def describe_range(cfg: Config) -> str:
-    """One line: the spring's length over the stroke and what each kind needs."""
-    lmin, lmax = spring_range(cfg)
-    return (f"the spring's length runs {lmin * 1e3:.2f}..{lmax * 1e3:.2f} mm over the stroke: "
-            f"a compression spring needs a free length >= {lmax * 1e3:.2f} mm, an extension "
-            f"spring <= {lmin * 1e3:.2f} mm")
 
 
 def finite(x) -> bool:

@@ -132,8 +132,3 @@ def box_of(cfg: Config, design: dict | None = None, tolerance: Tolerance | None 
             z_min.append(-math.inf)
     return Box(tuple(keys), np.array(nominal), np.array(half), np.array(z_min), tuple(rel),
                tuple(spreads), tol.distribution)
-
-
-def design_keys_in(box: Box) -> list[str]:
-    """The toleranced keys that are design variables of the optimiser."""
-    return [k for k in box.keys if k.removeprefix("design.") in DESIGN_KEYS]

@@ -29,8 +29,6 @@ from .statics import _parabola_max, opening_force_exact
 
 #: angles of the hand-force grid (sign changes on it are then refined to the root)
 HAND_GRID = 2001
-#: the zones, as named in the result
-ZONES = ("self_close", "hold_open", "self_rise")
 
 
 @dataclass(frozen=True)
@@ -175,4 +173,4 @@ def hand_force(model, p=None, case=None, grid: int = HAND_GRID) -> HandForce:
                      zones, opening, closing, self_close, self_rise, hold)
 
 
-__all__ = ["HandForce", "hand_force", "HAND_GRID", "ZONES"]
+__all__ = ["HandForce", "hand_force", "HAND_GRID"]

@@ -135,7 +135,10 @@ class StrokeResult(Displayed):
         return pd.DataFrame([row])
 
     def trajectory_frame(self):
-        """The trajectory (one row per step) as a DataFrame; columns carry their units."""
+        """The time histories (one row per step, from the release to the rim) as a pandas
+        DataFrame, in SI: t (s), theta, phi, gamma (rad), theta_dot (rad/s), theta_ddot
+        (rad/s^2), tip_speed (m/s), spring_length (m), energy (J). A result without a
+        trajectory (``simulate(cfg)`` without ``trajectory=True``) raises ValueError."""
         import pandas as pd
         if self.trajectory is None:
             raise ValueError("this result has no trajectory: simulate(cfg, trajectory=True)")

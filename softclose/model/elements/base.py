@@ -118,8 +118,6 @@ class Element:
     table: str = "base"
     #: one of the seed's elements (gravity, the spring, the dashpot, the rotary damper)
     seed: bool = False
-    #: the column of the lid mass's derivative table it needs (gravity's depend on the mass)
-    mass_dependent: bool = False
     #: for an element with a valid range: the stroke metrics that hold its coordinate's
     #: extremes over the stroke (checked against :meth:`valid`)
     extremes: tuple[str, str] | None = None

@@ -15,7 +15,6 @@ class Gravity(Element):
     doc = "weights of the lid and the cranks at their centres of mass"
     keys = (Key("mass", "gravity", "nonneg", 9.81, "m/s^2", "g (>= 0)", lo=0.0, hi=100.0),)
     columns = (("Vg", "q"), ("dVg", "dq"))
-    mass_dependent = True
 
     def coordinate(self, lid):
         return Weights()

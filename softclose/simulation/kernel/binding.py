@@ -90,7 +90,7 @@ from ...model import elements
 from ...errors import ConfigError, NumericalError
 from ..integrators import Method
 from .layout import (DESIGN_COLUMNS, KERNEL_ABI, LAYOUT, NPT, OUT_FIELDS, POINT_COLUMNS,  # noqa: F401
-                     STOP_REASONS, SI)
+                     SI)
 from .library import load
 from .table import POINT_NAMES, CoefficientTable
 from ...problem import RANGES, as_params

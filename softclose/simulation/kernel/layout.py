@@ -1,6 +1,6 @@
 """The kernel's contract with Python: the columns of its design rows and of its output, its
-stop-reason codes (its status codes: :class:`softclose.simulation.stroke.StrokeStatus`), and the layout string (:data:`LAYOUT`) that ``sc_layout()`` of
-``_kernel.c`` must return -- the element registry's parameters, the coefficient table's columns,
+status codes (:class:`softclose.simulation.stroke.StrokeStatus`), and the layout string
+(:data:`LAYOUT`) that ``sc_layout()`` of ``_kernel.c`` must return -- the element registry's parameters, the coefficient table's columns,
 the pose and range widths -- so that a kernel built from other sources is refused, never read
 wrongly."""
 
@@ -17,8 +17,6 @@ OUT_FIELDS = ("status", "closing_time", "impact_theta_dot", "impact_tip_speed",
               "peak_tip_speed", "min_spring_length", "max_spring_length", "steps",
               "energy_rise", "theta_min", "theta_dot_max", "theta_max",
               "stop_reason", "stop_theta", "stop_time", "engage_time", "engage_theta_dot")
-#: ``stop_reason`` codes: why a stroke does not close (0: it closed, failed, or is undecided)
-STOP_REASONS = {0: "", 1: "energy below the barrier", 2: "held open", 3: "held by friction"}
 #: the optional point columns after lid_mass (a row's own attachment points, m; NaN: the
 #: table's): D, E, F, H of :data:`softclose.simulation.kernel.table.POINT_NAMES`, x and y each
 POINT_COLUMNS = tuple(f"{name}_{xy}" for name in POINT_NAMES for xy in "xy")
