@@ -6,10 +6,10 @@
  * with V the potential of gravity and of every spring element and the damping of every
  * viscous element; each element's law is stated once, in THE MACHINE ELEMENTS below, on the
  * columns of a table of cubic Hermite pieces (the closure's coefficients M, dM, Vg, dVg,
- * l, dl, dd, tau and the elements' extra columns) built in Python from the CasADi model and
- * its exact derivatives (softclose/simulation/kernel/table.py). One fixed-step method per
- * call, given by a Butcher tableau: kind 0 explicit Runge-Kutta, kind 1 implicit
- * Runge-Kutta (Newton), kind 2 symplectic Euler (velocity first).
+ * l, dl, dd, tau, and the coordinate table's element columns) built in Python from the
+ * CasADi model and its exact derivatives (softclose/simulation/kernel/table.py). One
+ * fixed-step method per call, given by a Butcher tableau: kind 0 explicit Runge-Kutta,
+ * kind 1 implicit Runge-Kutta (Newton), kind 2 symplectic Euler (velocity first).
  *
  * Events -- the closing, a turning point, the peak tip speed, a rest of dry friction, a
  * crossing of the end damper's angle -- are located by a last step of solved length (Newton
@@ -123,8 +123,8 @@ typedef struct {
 } Method;
 
 /* ===== THE MACHINE ELEMENTS: every force law of the kernel, stated once ====================
- * The laws of softclose/elements (the registry), on the tabulated columns of each element's
- * coordinate q(theta) (its q, q' = dq/dtheta, or q'^2). A conservative element has a
+ * The laws of softclose/model/elements (the registry), on the tabulated columns of each
+ * element's coordinate q(theta) (its q, q' = dq/dtheta, or q'^2). A conservative element has a
  * potential V(q) and a tension T(q) = dV/dq, and adds T q' to the slope dV/dtheta; a damper
  * has a viscous coefficient B and adds B q'^2 to the damping on theta'. With them
  *     M th'' = -(slope) - 1/2 M' th'^2 - (damping) th',     E = M th'^2 / 2 + V,
@@ -163,10 +163,11 @@ typedef struct {
  *
  * Everything the kernel knows of the elements is in this section: the design row's columns
  * (D_*), the parameters of a row (Par) and of a group of lanes (Par4), how a row is read
- * (ELEM_READ) and copied into its lane (ELEM_LANE), which element columns the coordinate table
- * holds (X_*), and the laws. The elements of the seed's table (gravity, spring, dashpot,
- * rotary damper) are summed by ELEM_SLOPE ...; those of the coordinate table (the torsion spring)
- * by ELEM_SLOPE_X ..., added where a row has them (Par.x; Par4.anyx for a group). */
+ * (ELEM_READ) and copied into its lane (ELEM_LANE), which element columns the coordinate
+ * table holds (X_*), and the laws. The elements of the fixed table (gravity, spring,
+ * dashpot, rotary damper at the lid) are summed by ELEM_SLOPE ...; those of the coordinate
+ * table (the torsion spring, the rotary damper at a pivot) by ELEM_SLOPE_X ..., added where a
+ * row has them (Par.x; Par4.anyx for a group). */
 
 /* the design-row columns (D_*, NDESIGN): _layout.h, in the registry's order */
 /* then, optionally, the row's own attachment points (PER-ROW ATTACHMENT POINTS, below): the
@@ -454,23 +455,35 @@ static inline int cell_index(const Table *T, double th, double *s)
     return i;
 }
 
-#define CUB(q, j, s) ((q)[j] + (s) * ((q)[NC + (j)] + (s) * ((q)[2 * NC + (j)] \
-                      + (s) * (q)[3 * NC + (j)])))
-#define DCUB(q, j, s, ih) (((q)[NC + (j)] + (s) * (2.0 * (q)[2 * NC + (j)] \
-                           + (s) * 3.0 * (q)[3 * NC + (j)])) * (ih))
+/* ---- CUBIC PIECES: the one Horner evaluation of the kernel ---------------------------------
+ * Every tabulated function is a cubic q0 + q1 s + q2 s^2 + q3 s^3 in the local variable s of
+ * its cell (s in [0, 1]); its four coefficients lie `stride` doubles apart (the tables are
+ * power-major: stride NC, NX or NPOSE from the column's first coefficient; a lone cubic: 1).
+ * cubic() is its value, dcubic() its theta-derivative (ih = 1/h), cubic4() four neighbouring
+ * columns at once (a v4, for the lanes). Every evaluation of a piece is one of these, in this
+ * order of operations, so the scalar and the SIMD paths agree bit for bit. */
+ALWAYS double cubic(const double *q, int stride, double s)
+{
+    return q[0] + s * (q[stride] + s * (q[2 * stride] + s * q[3 * stride]));
+}
 
-#define XCUB(q, j, s) ((q)[j] + (s) * ((q)[NX + (j)] + (s) * ((q)[2 * NX + (j)] \
-                       + (s) * (q)[3 * NX + (j)])))
-#define XDCUB(q, j, s, ih) (((q)[NX + (j)] + (s) * (2.0 * (q)[2 * NX + (j)] \
-                            + (s) * 3.0 * (q)[3 * NX + (j)])) * (ih))
+ALWAYS double dcubic(const double *q, int stride, double s, double ih)
+{
+    return (q[stride] + s * (2.0 * q[2 * stride] + s * 3.0 * q[3 * stride])) * ih;
+}
+
+ALWAYS v4 cubic4(const double *q, int stride, double s)
+{
+    return ld4(q) + s * (ld4(q + stride) + s * (ld4(q + 2 * stride) + s * ld4(q + 3 * stride)));
+}
 
 /* the element columns x[NX] (and their theta-derivatives dx, may be NULL) in cell i at s */
 static inline void xtab_eval(const Table *T, int i, double s, double *x, double *dx)
 {
     const double *q = T->xcc + (size_t)i * 4 * NX;
     for (int j = 0; j < NX; j++) {
-        x[j] = XCUB(q, j, s);
-        if (dx) dx[j] = XDCUB(q, j, s, T->inv_h);
+        x[j] = cubic(q + j, NX, s);
+        if (dx) dx[j] = dcubic(q + j, NX, s, T->inv_h);
     }
 }
 
@@ -493,7 +506,7 @@ static inline void xtab_eval(const Table *T, int i, double s, double *x, double 
  * the same numbers as node by node, pt_nodes_any): a stroke visits a few hundred of the
  * table's cells, and a lid creeping towards an equilibrium stays in one for many steps. They
  * are laid out as the table's cells (power-major, with the table's tau beside them), so the
- * kernel reads them wherever it reads l, dl, dd: the scalar code from the row's piece (CUB),
+ * kernel reads them wherever it reads l, dl, dd: the scalar code from the row's piece (cubic),
  * the SIMD lanes from it as their second vector (coef4_pts, in rhs4_pts / node4_pts: a group
  * with points runs its own copy, the others keep theirs) -- the same operations as for the
  * table's columns, so the scalar and SIMD paths agree bit for bit and a row's numbers do
@@ -512,11 +525,6 @@ static inline void xtab_eval(const Table *T, int i, double s, double *x, double 
         (rx) = (a)[P_AX] + qx_ - (gx); (ry) = (a)[P_AY] + qy_ - (gy); \
         (ux) = (a)[P_DAX] - qy_; (uy) = (a)[P_DAY] + qx_; \
     } while (0)
-
-#define PCUB(q, j, s) ((q)[j] + (s) * ((q)[NPOSE + (j)] + (s) * ((q)[2 * NPOSE + (j)] \
-                       + (s) * (q)[3 * NPOSE + (j)])))
-#define PDCUB(q, j, s, ih) (((q)[NPOSE + (j)] + (s) * (2.0 * (q)[2 * NPOSE + (j)] \
-                            + (s) * 3.0 * (q)[3 * NPOSE + (j)])) * (ih))
 
 /* set the row's own points pt[NPT] (NaN: the table's) into p, its cache emptied */
 static inline void pts_set(Par *p, const double *pt)
@@ -563,8 +571,8 @@ static inline void pose_node(const Table *T, int j, double *a, double *da)
     } else {
         const double *q = T->pcc + (size_t)(T->ncell - 1) * 4 * NPOSE;
         for (int k = 0; k < P_USED; k++) {
-            a[k] = PCUB(q, k, 1.0);
-            da[k] = PDCUB(q, k, 1.0, T->inv_h);
+            a[k] = cubic(q + k, NPOSE, 1.0);
+            da[k] = dcubic(q + k, NPOSE, 1.0, T->inv_h);
         }
     }
 }
@@ -679,8 +687,8 @@ static inline void pts_eval(const Table *T, const Par *p, int i, double s, doubl
     const double *q = pt_piece(T, p, i);
     for (int j = C_L; j <= C_DD; j++) {
         if (j == C_DD ? !p->pd : !p->ps) continue;
-        v[j] = CUB(q, j, s);
-        if (dv) dv[j] = DCUB(q, j, s, T->inv_h);
+        v[j] = cubic(q + j, NC, s);
+        if (dv) dv[j] = dcubic(q + j, NC, s, T->inv_h);
     }
 }
 
@@ -724,7 +732,7 @@ static void pts_scan(const Table *T, const Par *p, int j0, int j1, double a, dou
         if (i >= 0) { /* (l, l' from the pose interpolated at xm: a bound, no pieces built) */
             const double *q = T->pcc + (size_t)i * 4 * NPOSE;
             double a[P_USED];
-            for (int j = 0; j < P_USED; j++) a[j] = PCUB(q, j, s);
+            for (int j = 0; j < P_USED; j++) a[j] = cubic(q + j, NPOSE, s);
             pt_length(a, NULL, p->pt, 0, v, NULL);
             double e = hypot(p->pt[2], p->pt[3]), R1 = T->pA1 + e, R2 = T->pA2 + e;
             double lower = v[C_L] - R1 * hw;
@@ -775,16 +783,16 @@ static inline int tab_eval_x(const Table *T, const Par *p, double th, double *v,
     if (i < 0) return 1;
     const double *q = T->cc + (size_t)i * 4 * NC;
     for (int j = 0; j < NC; j++) {
-        v[j] = CUB(q, j, s);
-        if (dv) dv[j] = DCUB(q, j, s, T->inv_h);
+        v[j] = cubic(q + j, NC, s);
+        if (dv) dv[j] = dcubic(q + j, NC, s, T->inv_h);
     }
     if (x && p && p->x) xtab_eval(T, i, s, x, dx);
     if (p && (p->ps | p->pd)) pts_eval(T, p, i, s, v, dv);
     if (p && p->dm != 0.0) {
         const double *r = T->dcc + (size_t)i * 4 * NC;
         for (int j = 0; j < NMASS; j++) {
-            v[j] += p->dm * CUB(r, j, s);
-            if (dv) dv[j] += p->dm * DCUB(r, j, s, T->inv_h);
+            v[j] += p->dm * cubic(r + j, NC, s);
+            if (dv) dv[j] += p->dm * dcubic(r + j, NC, s, T->inv_h);
         }
     }
     return 0;
@@ -825,13 +833,13 @@ static inline void potential_at(const Table *T, const Par *p, int i, double s, d
 {
     const double *q = T->cc + (size_t)i * 4 * NC;
     double c[NC], x[NX] = {0};
-    c[C_VG] = CUB(q, C_VG, s); c[C_L] = CUB(q, C_L, s);
-    c[C_DVG] = dV ? CUB(q, C_DVG, s) : 0.0; c[C_DL] = dV ? CUB(q, C_DL, s) : 0.0;
+    c[C_VG] = cubic(q + C_VG, NC, s); c[C_L] = cubic(q + C_L, NC, s);
+    c[C_DVG] = dV ? cubic(q + C_DVG, NC, s) : 0.0; c[C_DL] = dV ? cubic(q + C_DL, NC, s) : 0.0;
     if (p->ps) pts_eval(T, p, i, s, c, NULL); /* (its l and l'; its dd is not read) */
     if (p->dm != 0.0) {
         const double *r = T->dcc + (size_t)i * 4 * NC;
-        c[C_VG] += p->dm * CUB(r, C_VG, s);
-        if (dV) c[C_DVG] += p->dm * CUB(r, C_DVG, s);
+        c[C_VG] += p->dm * cubic(r + C_VG, NC, s);
+        if (dV) c[C_DVG] += p->dm * cubic(r + C_DVG, NC, s);
     }
     *V = ELEM_POTENTIAL(p, c);
     if (dV) *dV = ELEM_SLOPE(p, c);
@@ -1059,7 +1067,7 @@ static void cubic_extremes(const double *q, int i, const Table *T, double a, dou
     for (int j = 0; j < nr; j++) {
         double th = T->lo + (i + r[j]) * T->h;
         if (r[j] < 0 || r[j] > 1 || th < a || th > b) continue;
-        double l = q[0] + r[j] * (q[1] + r[j] * (q[2] + r[j] * q[3]));
+        double l = cubic(q, 1, r[j]);
         if (l < *lmin) *lmin = l;
         if (l > *lmax) *lmax = l;
     }
@@ -1070,14 +1078,14 @@ static void cubic_extremes(const double *q, int i, const Table *T, double a, dou
 /* range of the cubic q0 + q1 s + q2 s^2 + q3 s^3 over [s0, s1] (ends and interior extrema) */
 static void cubic_range(const double *q, double s0, double s1, double *lo, double *hi)
 {
-    double a = q[0] + s0 * (q[1] + s0 * (q[2] + s0 * q[3]));
-    double b = q[0] + s1 * (q[1] + s1 * (q[2] + s1 * q[3]));
+    double a = cubic(q, 1, s0);
+    double b = cubic(q, 1, s1);
     *lo = a < b ? a : b; *hi = a < b ? b : a;
     double r[2];
     int nr = cubic_crit(q, r);
     for (int j = 0; j < nr; j++) {
         if (!(r[j] > s0 && r[j] < s1)) continue;
-        double v = q[0] + r[j] * (q[1] + r[j] * (q[2] + r[j] * q[3]));
+        double v = cubic(q, 1, r[j]);
         if (v < *lo) *lo = v;
         if (v > *hi) *hi = v;
     }
@@ -1330,15 +1338,16 @@ static inline int node_eval(const Table *T, const Par *p, double th, double thd,
     int i = cell_index(T, th, &s);
     if (i < 0) return 1;
     const double *q = T->cc + (size_t)i * 4 * NC;
-    double M = CUB(q, C_M, s), dM = CUB(q, C_DM, s), Vg = CUB(q, C_VG, s),
-           dVg = CUB(q, C_DVG, s), l = CUB(q, C_L, s), dl = CUB(q, C_DL, s),
-           dd = CUB(q, C_DD, s), tau = CUB(q, C_TAU, s);
+    double M = cubic(q + C_M, NC, s), dM = cubic(q + C_DM, NC, s),
+           Vg = cubic(q + C_VG, NC, s), dVg = cubic(q + C_DVG, NC, s),
+           l = cubic(q + C_L, NC, s), dl = cubic(q + C_DL, NC, s),
+           dd = cubic(q + C_DD, NC, s), tau = cubic(q + C_TAU, NC, s);
     if (p->dm != 0.0) {
         const double *r = T->dcc + (size_t)i * 4 * NC;
-        M += p->dm * CUB(r, C_M, s); dM += p->dm * CUB(r, C_DM, s);
-        Vg += p->dm * CUB(r, C_VG, s); dVg += p->dm * CUB(r, C_DVG, s);
+        M += p->dm * cubic(r + C_M, NC, s); dM += p->dm * cubic(r + C_DM, NC, s);
+        Vg += p->dm * cubic(r + C_VG, NC, s); dVg += p->dm * cubic(r + C_DVG, NC, s);
     }
-    double dtau = DCUB(q, C_TAU, s, T->inv_h);
+    double dtau = dcubic(q + C_TAU, NC, s, T->inv_h);
     double c[NC], x[NX];
     c[C_VG] = Vg; c[C_DVG] = dVg; c[C_L] = l; c[C_DL] = dl; c[C_DD] = dd;
     if (p->ps | p->pd) pts_eval(T, p, i, s, c, NULL);
@@ -1827,19 +1836,17 @@ ALWAYS void coef4_pts(const Table *T, const Par4 *P, const double *const *b, con
                                                            : pt_build(T, P->lp[q], i);
         }
         double sq = (*s)[q];
-        lo[q] = ld4(r) + sq * (ld4(r + NC) + sq * (ld4(r + 2 * NC) + sq * ld4(r + 3 * NC)));
-        hi[q] = ld4(rh + 4) + sq * (ld4(rh + NC + 4) + sq * (ld4(rh + 2 * NC + 4)
-                                                            + sq * ld4(rh + 3 * NC + 4)));
+        lo[q] = cubic4(r, NC, sq);
+        hi[q] = cubic4(rh + 4, NC, sq);
         if (P->any && P->dm[q] != 0.0) { /* M, dM, Vg, dVg only */
             const double *rm = T->dcc + (r - T->cc);
-            lo[q] += P->dm[q] * (ld4(rm) + sq * (ld4(rm + NC) + sq * (ld4(rm + 2 * NC)
-                                                                     + sq * ld4(rm + 3 * NC))));
+            lo[q] += P->dm[q] * cubic4(rm, NC, sq);
         }
     }
 }
 
 /* the NC coefficients of the lanes at th as columns c[j] (four lanes each): each lane's
- * cubic pieces are evaluated as rows (Horner in s, as CUB), mass-corrected where dm != 0,
+ * cubic pieces are evaluated as rows (cubic4: Horner in s, as cubic), mass-corrected where dm != 0,
  * then transposed; okm as cells4's */
 ALWAYS void coef4(const Table *T, const Par4 *P, v4 th, v4 *c, const double **b, v4 *s,
                   v4l *okm, const int pts)
@@ -1852,13 +1859,11 @@ ALWAYS void coef4(const Table *T, const Par4 *P, v4 th, v4 *c, const double **b,
         for (int q = 0; q < VW; q++) {
             const double *r = b[q];
             double sq = (*s)[q];
-            lo[q] = ld4(r) + sq * (ld4(r + NC) + sq * (ld4(r + 2 * NC) + sq * ld4(r + 3 * NC)));
-            hi[q] = ld4(r + 4) + sq * (ld4(r + NC + 4) + sq * (ld4(r + 2 * NC + 4)
-                                                              + sq * ld4(r + 3 * NC + 4)));
+            lo[q] = cubic4(r, NC, sq);
+            hi[q] = cubic4(r + 4, NC, sq);
             if (P->any && P->dm[q] != 0.0) { /* M, dM, Vg, dVg only */
                 const double *rm = T->dcc + (r - T->cc);
-                lo[q] += P->dm[q] * (ld4(rm) + sq * (ld4(rm + NC) + sq * (ld4(rm + 2 * NC)
-                                                                         + sq * ld4(rm + 3 * NC))));
+                lo[q] += P->dm[q] * cubic4(rm, NC, sq);
             }
         }
     }
@@ -1880,7 +1885,7 @@ ALWAYS void xcoef4(const Table *T, const double *const *b, v4 s, v4 *x)
     for (int q = 0; q < VW; q++) {
         const double *xr = T->xcc + (size_t)((b[q] - T->cc) / NC) * NX;
         double sq = s[q];
-        r[q] = ld4(xr) + sq * (ld4(xr + NX) + sq * (ld4(xr + 2 * NX) + sq * ld4(xr + 3 * NX)));
+        r[q] = cubic4(xr, NX, sq);
     }
     transpose4(r, x);
 }
@@ -1953,7 +1958,7 @@ ALWAYS void node4_impl(const Table *T, const Par4 *P, v4 th, v4 thd, v4 *a, v4 *
     v4 acc = N / M;
     *Ev = En;
     *Vv = Vn;
-    /* d tau / d theta (DCUB) from each lane's cubic of tau */
+    /* d tau / d theta (as dcubic) from each lane's cubic of tau */
     v4 q1 = {b[0][NC + C_TAU], b[1][NC + C_TAU], b[2][NC + C_TAU], b[3][NC + C_TAU]};
     v4 q2 = {b[0][2 * NC + C_TAU], b[1][2 * NC + C_TAU], b[2][2 * NC + C_TAU],
              b[3][2 * NC + C_TAU]};
@@ -1988,12 +1993,13 @@ ALWAYS int rhs_fast(const Table *T, const Par *p, double th, double thd, double 
     int i = cell_index(T, th, &s);
     if (i < 0) return 1;
     const double *q = T->cc + (size_t)i * 4 * NC;
-    double M = CUB(q, C_M, s), dM = CUB(q, C_DM, s), dVg = CUB(q, C_DVG, s),
-           l = CUB(q, C_L, s), dl = CUB(q, C_DL, s), dd = CUB(q, C_DD, s);
+    double M = cubic(q + C_M, NC, s), dM = cubic(q + C_DM, NC, s),
+           dVg = cubic(q + C_DVG, NC, s), l = cubic(q + C_L, NC, s),
+           dl = cubic(q + C_DL, NC, s), dd = cubic(q + C_DD, NC, s);
     if (p->dm != 0.0) {
         const double *r = T->dcc + (size_t)i * 4 * NC;
-        M += p->dm * CUB(r, C_M, s); dM += p->dm * CUB(r, C_DM, s);
-        dVg += p->dm * CUB(r, C_DVG, s);
+        M += p->dm * cubic(r + C_M, NC, s); dM += p->dm * cubic(r + C_DM, NC, s);
+        dVg += p->dm * cubic(r + C_DVG, NC, s);
     }
     double c[NC];
     c[C_DVG] = dVg; c[C_L] = l; c[C_DL] = dl; c[C_DD] = dd;
@@ -2232,8 +2238,9 @@ ALWAYS void after_steps_vec(const Table *T, const Method *m, Lane *lanes, Soa *S
     }
 }
 
-/* n strokes (rows of design, ncol = 5 or 6 columns: k, l0, c, c_rot, e_tol[, m_lid]) into
- * out (n x NOUT); early: stop a stroke as soon as nothing can change (see the top); with
+/* n strokes (rows of design, ncol columns: NDESIGN - 1, the element parameters (D_*) and
+ * e_tol; NDESIGN, then m_lid; or NDESIGN + NPT, then the row's own points) into out
+ * (n x NOUT); early: stop a stroke as soon as nothing can change (see the top); with
  * traj (n must be 1) the rows (t, th, thd) of every node */
 ALWAYS void strokes(const Table *T, const Method *m, double dt, double t_max, double th0,
                    double thc, long n, int ncol, const double *design, int early, double *out,
@@ -2424,8 +2431,8 @@ static void make(const double *tab_meta, const double *cc, const double *dcc,
     }
 }
 
-/* strokes for n designs (rows of `design`, ncol columns: k, l0, c, c_rot, e_tol[, m_lid]);
- * out: n x NOUT */
+/* strokes for n designs (rows of `design`, ncol columns: the element parameters, e_tol[,
+ * m_lid[, the NPT point columns]], as strokes()); out: n x NOUT */
 /* the list of cells where l' may vanish (T->crit), from the cell ranges; NULL (all cells
  * are searched) without them or if memory is short. The caller frees it. */
 static int *critical_cells(Table *T)
@@ -2593,7 +2600,7 @@ void sc_point_grid(const double *tab_meta, const double *pcc, long n, const doub
         if (i >= ncell) i = ncell - 1;
         double s = x - i;
         const double *q = pcc + (size_t)i * 4 * NPOSE;
-        for (int j = 0; j < P_USED; j++) pose_g[j * G4 + k] = PCUB(q, j, s);
+        for (int j = 0; j < P_USED; j++) pose_g[j * G4 + k] = cubic(q + j, NPOSE, s);
     }
     for (long k = G; k < G4; k++) pose_g[4 * G4 + k] = 1.0; /* (a harmless padding) */
     if (per_row)
@@ -2628,7 +2635,7 @@ void sc_point_opening(const double *tab_meta, const double *pcc, long n, const d
         if (i >= ncell) i = ncell - 1;
         double s = x - i;
         const double *q = pcc + (size_t)i * 4 * NPOSE;
-        for (int j = 0; j < P_USED; j++) pose_g[j * G4 + k] = PCUB(q, j, s);
+        for (int j = 0; j < P_USED; j++) pose_g[j * G4 + k] = cubic(q + j, NPOSE, s);
     }
     for (long k = G; k < G4; k++) pose_g[4 * G4 + k] = 1.0;
     for (long r = 0; r < n; r++) {
@@ -2705,7 +2712,8 @@ int sc_abi(void) { return KERNEL_ABI; }
 #define SC_SOURCE_TAG ""
 #endif
 const char *sc_source_tag(void) { return SC_SOURCE_TAG; }
-/* every layout constant shared with softclose/native.py, as one string (checked at load) */
+/* every layout constant shared with softclose/simulation/kernel/layout.py, as one string
+ * (checked at load) */
 const char *sc_layout(void) { return LAYOUT; }
 
 static struct PyModuleDef moddef = {PyModuleDef_HEAD_INIT, "_kernel",
