@@ -5,6 +5,7 @@ units and accuracies, the limits, the yield with its interval and failures in pl
 from __future__ import annotations
 
 import html as html_module
+import math
 import re
 
 import numpy as np
@@ -31,6 +32,17 @@ def test_formatting_helpers():
     assert pm(None, 1e-3, "s") == "—"
     assert percent(0.432) == "43.2 %" and percent(0.9996) == "99.96 %"
     assert interval((0.4221, 0.4423)) == "42.2–44.2 %" and interval((0.9996, 1.0)) == "99.96–100 %"
+
+
+def test_num_with_a_format_spec():
+    """num(v, spec=...): the column format of the bench's and the stress survey's tables and
+    the sweep maps' titles -- the number as the spec gives it (an integer too, no thousands
+    separator), a word as it is, "—" for no value and for any value that is not finite."""
+    assert num(2.345678, spec=".2f") == "2.35" and num(3, spec=".2f") == "3.00"
+    assert num(12000, spec=".4g") == "1.2e+04" and num(np.float64(0.000123), spec=".1e") == "1.2e-04"
+    assert num(True, spec=".4g") == "1" and num("coil", spec=".4g") == "coil"
+    assert [num(v, spec=".2f") for v in (None, float("nan"), math.inf, -math.inf)] == ["—"] * 4
+    assert num(math.inf) == "∞"           # (without a spec: an infinity is shown as one)
 
 
 def test_html_escapes_text_and_cuts_long_tables():

@@ -47,11 +47,17 @@ class Display:
 
 
 # -- numbers as text ---------------------------------------------------------------------------
-def num(v, digits: int = 6) -> str:
+def num(v, digits: int = 6, spec: str | None = None) -> str:
     """A value as text: "—" for None/NaN, yes/no for booleans, ``digits`` significant
-    digits for numbers."""
+    digits for numbers. With a format ``spec`` (".2f", ".1e": a column of measurements), a
+    number is ``format(v, spec)`` as it is (an integer too), a word itself, and any value
+    that is not finite "—"."""
     if v is None:
         return "—"
+    if spec is not None:
+        if isinstance(v, str):
+            return v
+        return format(v, spec) if not isinstance(v, float) or math.isfinite(v) else "—"
     if type(v).__name__ in ("bool", "bool_"):          # Python's and numpy's
         return "yes" if v else "no"
     if isinstance(v, (int,)) or type(v).__name__.startswith("int"):

@@ -34,6 +34,7 @@ from ..problem import RELATIVE, TARGETS, resolve
 from ..simulation.reference import Reference
 from ..simulation.simulator import Simulator
 from ..model.kinematics import branch_of, closure
+from ..present.display import num
 
 #: outcomes that are findings (a defect of softclose), not answers or reports
 FAILURES = ("MISMATCH", "NaN", "EXCEPTION")
@@ -313,10 +314,6 @@ def findings(rows: list[dict]) -> list[dict]:
     return [r for r in rows if r["outcome"] in FAILURES]
 
 
-def _fmt(v, spec):
-    return "—" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, spec)
-
-
 def stress_markdown(rows: list[dict]) -> str:
     """The survey as a Markdown table (one row per case)."""
     out = ["| case | what | expected | outcome | status | energy drift (rel.) | "
@@ -326,8 +323,8 @@ def stress_markdown(rows: list[dict]) -> str:
         msg = r["message"] + (f" — re-run {r['rerun']}" if r.get("rerun") else "")
         msg = msg.replace("|", "\\|")
         out.append(f"| {r['name']} | {r['what']} | {r['expect']} | **{r['outcome']}** | "
-                   f"{r['status']} | {_fmt(r.get('energy_drift_rel'), '.1e')} | "
-                   f"{_fmt(r.get('max_err_ratio'), '.2g')} | {_fmt(r['time_s'], '.2f')} | "
+                   f"{r['status']} | {num(r.get('energy_drift_rel'), spec='.1e')} | "
+                   f"{num(r.get('max_err_ratio'), spec='.2g')} | {num(r['time_s'], spec='.2f')} | "
                    f"{msg} |")
     return "\n".join(out)
 

@@ -18,6 +18,7 @@ import numpy as np
 
 from ...simulation.integrators import METHODS, SEED
 from ...problem import RELATIVE, TARGETS
+from ..display import num
 from . import plt
 
 _COLORS = {"rk4": "C0", "euler_cromer": "C3", "gauss4": "C2", "radau5": "C1",
@@ -29,10 +30,6 @@ _LABEL = {"closing_time": "|Δ closing_time| (s)", "impact_theta_dot":
 FIG_METRICS = ("closing_time", "impact_theta_dot", "peak_tip_speed")
 #: errors below this are drawn at it (log axes)
 BOTTOM = 1e-14
-
-
-def _fmt(v, spec):
-    return "—" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, spec)
 
 
 def default_label(default: dict) -> str:
@@ -163,7 +160,7 @@ def plot_error_vs_step(wp, metric: str = "impact_theta_dot"):
             rs = wp.rows_of(dname, m)
             ok = [r for r in rs if r[f"err_{metric}"] is not None]
             bad = [r for r in rs if r["status"] not in ("closed", "not closed")]
-            orders.append(f"{short.get(m, m)} {_fmt(wp.orders.get((dname, m, metric)), '.2f')}")
+            orders.append(f"{short.get(m, m)} {num(wp.orders.get((dname, m, metric)), spec='.2f')}")
             if ok:
                 lab = f"{m} (stated order {METHODS[m].order})"
                 h, = ax.loglog([r["step"] for r in ok],

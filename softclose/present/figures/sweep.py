@@ -25,6 +25,7 @@ import numpy as np
 from ...problem import CATEGORIES, categorise, word_code, WORD_PARAMS, word_text
 from . import current_style, DPI, plt, save
 from ...config.schema import BY_NAME
+from ..display import num
 
 #: the quantities of a map, their labels and units
 QUANTITIES = {
@@ -86,7 +87,7 @@ def stem(key: str) -> str:
 def _fmt(v, key: str | None = None) -> str:
     if key in WORD_PARAMS and not isinstance(v, str):
         return word_text(key, v)
-    return v if isinstance(v, str) else f"{v:.4g}"
+    return num(v, spec=".4g")
 
 
 def _number(key: str, v) -> float:
