@@ -54,8 +54,9 @@ def nlp_key(cfg, nodes: int | None = None, substeps: int | None = None,
     """The NLP's structure, and nothing of the lid's numbers: the elements it carries and
     the series' padded degree, the free variables and points (which), the opening bound,
     the self-close constraint (whether; its angle is a parameter), the keep-out regions, the
-    discretisation (with an end damper engaging inside the stroke: two phases, phase 2's
-    sub-steps ``substeps_engaged``, by default :func:`~softclose.optimiser.discretisation.engaged_substeps`), the solver."""
+    discretisation (with an end damper engaging inside the stroke: two phases, the engaged
+    phase's sub-steps ``substeps_engaged``, by default
+    :func:`~softclose.optimiser.discretisation.engaged_substeps`), the solver."""
     o = cfg.optimise
     N, M = nodes or o.nodes, substeps or o.substeps
     M_engaged = None

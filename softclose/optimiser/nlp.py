@@ -48,7 +48,8 @@ are the closing time T and the engagement time T1 (phase 2 lasts T - T1 >=
 phase 2's with it; every constraint of the one-phase NLP holds at every sub-step of both
 (the tip speed, which typically peaks at the engagement, is a node value of both phases, and
 each phase's Hermite maxima use that phase's own equation). Phase 2's sub-steps M_engaged are M
-doubled until RK4 is as stable on the end damper as on the dashpot (:func:`~softclose.optimiser.discretisation.engaged_substeps`).
+doubled until RK4 is as stable on the end damper as on the dashpot
+(:func:`~softclose.optimiser.discretisation.engaged_substeps`).
 w = (d, T, T1, X (2N nodes), s).
 
 Attachment points freed in ``optimise.free`` (``geometry.spring_anchor[i]``, ``lid_e[i]``,
@@ -140,7 +141,8 @@ class ShootingStructure:
         self.els = tuple(els)
         self.two_phase = engaged is not None
         self.nodes, self.M = nodes, substeps
-        self.N_engaged, self.M_engaged = (int(engaged[0]), int(engaged[1])) if self.two_phase else (0, None)
+        self.N_engaged, self.M_engaged = (int(engaged[0]), int(engaged[1])) if self.two_phase \
+            else (0, None)
         self.N = N = nodes + self.N_engaged
         M, substeps_engaged = substeps, self.M_engaged
         # free: (key, column of p) of the free design variables; place: (key, slot in g)
@@ -183,8 +185,8 @@ class ShootingStructure:
         self.interval, self.f = interval_function(self.series, substeps, with_ode=True,
                                                   placement=self.placed)
         if self.two_phase:
-            self.interval_engaged = self.interval if substeps_engaged == substeps else interval_function(
-                self.series, substeps_engaged, placement=self.placed)
+            self.interval_engaged = self.interval if substeps_engaged == substeps else \
+                interval_function(self.series, substeps_engaged, placement=self.placed)
         # the NLP: MX graph over the SX interval, mapped over the N intervals
         d, T = ca.MX.sym("d", self.nd), ca.MX.sym("T")
         T1 = ca.MX.sym("T1") if self.two_phase else None
@@ -293,7 +295,8 @@ class ShootingStructure:
     def __getattr__(self, name):
         """``interval``, ``f`` and ``interval_engaged`` of a structure loaded from its compiled
         library: built on first use (tests and reports ask for them; the solves do not)."""
-        if name in ("interval", "f", "interval_engaged") and self.__dict__.get("library") is not None:
+        if name in ("interval", "f", "interval_engaged") and \
+                self.__dict__.get("library") is not None:
             self.interval, self.f = interval_function(self.series, self.M, with_ode=True,
                                                       placement=self.placed)
             if self.two_phase:
@@ -324,7 +327,8 @@ class ShootingNLP(NLP):
     def __init__(self, model, structure: ShootingStructure, fit: ChebyshevFit,
                  free: tuple = (), placement: tuple = ()):
         self.model, self.structure, self.fit = model, structure, fit
-        for k in ("two_phase", "nodes", "M", "N_engaged", "M_engaged", "N", "nd", "iT", "iT1", "iX", "iS",
+        for k in ("two_phase", "nodes", "M", "N_engaged", "M_engaged", "N", "nd", "iT", "iT1",
+                  "iX", "iS",
                   "coil",
                   "placed", "g_names", "g_sizes", "nw", "solver", "_peak",
                   "ipopt_options", "library", "build_time"):
@@ -374,7 +378,8 @@ class ShootingNLP(NLP):
                                  degree=self.structure.series.degree)
             self.interval, self.f = fns
             if self.two_phase:
-                self.interval_engaged = bound_interval(self.fit, self.M_engaged, placement=self.placed,
+                self.interval_engaged = bound_interval(self.fit, self.M_engaged,
+                                                       placement=self.placed,
                                                 degree=self.structure.series.degree)
             return getattr(self, name)
         raise AttributeError(name)
@@ -538,7 +543,8 @@ class ShootingNLP(NLP):
         """
         if not self.two_phase:
             return np.full(self.N, 1.0 / self.N)
-        return np.r_[np.full(self.nodes, 1.0 / self.nodes), np.full(self.N_engaged, 1.0 / self.N_engaged)]
+        return np.r_[np.full(self.nodes, 1.0 / self.nodes),
+                     np.full(self.N_engaged, 1.0 / self.N_engaged)]
 
     def grid_of(self, p) -> np.ndarray:
         """The time grid in the parameters ``p`` of this NLP."""

@@ -530,7 +530,8 @@ def solve(cfg, nodes: int | None = None, substeps: int | None = None,
         res = OptimiseResult(
             False, f"Ipopt stopped with status {r.status} after {r.iterations} iterations; "
             "use optimise() (several starts) or raise optimise.max_iter", r.status, None, None,
-            nodes=nlp.nodes, substeps=nlp.M, substeps_engaged=nlp.M_engaged, hessian=cfg.optimise.hessian,
+            nodes=nlp.nodes, substeps=nlp.M, substeps_engaged=nlp.M_engaged,
+            hessian=cfg.optimise.hessian,
             iterations=r.iterations,
             solve_time=r.time, problem=describe(cfg), config=cfg, run=r, nlp_key=nlp.key,
             notes=disc.notes, **base)

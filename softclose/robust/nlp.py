@@ -342,7 +342,8 @@ class ScenarioNLP(NLP):
         t0 = time.perf_counter()
         o = cfg.optimise
         self.two_phase = two_phase(cfg)
-        self.M_engaged = (substeps_engaged or phase_substeps(cfg, nodes, substeps)) if self.two_phase else None
+        self.M_engaged = (substeps_engaged or phase_substeps(cfg, nodes, substeps)) \
+            if self.two_phase else None
         self.nodes, self.M, self.S = nodes, substeps, len(model_cfgs)
         self.N = 2 * nodes if self.two_phase else nodes
         self.robust_objective = robust_objective

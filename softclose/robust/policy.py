@@ -26,9 +26,10 @@ MAX_CORNERS = 16
 def max_corners(cfg: Config) -> int:
     """The corners that enter the scenario NLP all together: :data:`MAX_CORNERS` one-phase
     scenarios' worth of RK4 steps. A two-phase scenario (an end damper engaging inside the
-    stroke) costs N (M + M_engaged) steps instead of N M, so fewer of its corners enter together
-    (16 M / (M + M_engaged): 5 at M_engaged = 2M, with a fourth toleranced key's 16 corners the worst-corner
-    start of d > 4); the corner check still simulates all 2^d after every solve."""
+    stroke) costs N (M + M_e) steps instead of N M (M_e: the engaged phase's sub-steps), so
+    fewer of its corners enter together (16 M / (M + M_e): 5 at M_e = 2M, with a fourth
+    toleranced key's 16 corners the worst-corner start of d > 4); the corner check still
+    simulates all 2^d after every solve."""
     disc = discretisation(cfg)
     M, Me = disc.substeps, disc.substeps_engaged
     return MAX_CORNERS if Me is None else int(MAX_CORNERS * M / (M + Me))

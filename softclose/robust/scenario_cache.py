@@ -29,9 +29,11 @@ def get_scenario_nlp(cfg: Config, model_cfgs: list[Config], nodes: int, substeps
                      robust_objective: str, substeps_engaged: int | None = None
                      ) -> tuple[ScenarioNLP, bool]:
     """The ScenarioNLP of these scenario models (cached); (nlp, was it cached).
-    ``substeps_engaged``: phase 2's sub-steps of a two-phase stroke (default :func:`~softclose.optimiser.discretisation.phase_substeps`)."""
+    ``substeps_engaged``: the engaged phase's sub-steps of a two-phase stroke (default
+    :func:`~softclose.optimiser.discretisation.phase_substeps`)."""
     o = cfg.optimise
-    M_engaged = (substeps_engaged or phase_substeps(cfg, nodes, substeps)) if two_phase(cfg) else None
+    M_engaged = (substeps_engaged or phase_substeps(cfg, nodes, substeps)) \
+        if two_phase(cfg) else None
     key = (tuple(_model_key(c)
                  for c in model_cfgs), nodes, substeps, M_engaged, robust_objective, o.hessian,
            o.linear_solver, o.max_iter, o.opening_force_max is not None,
@@ -41,7 +43,8 @@ def get_scenario_nlp(cfg: Config, model_cfgs: list[Config], nodes: int, substeps
         return _NLPS[key], True
     if len(_NLPS) > 16:
         _NLPS.clear()
-    nlp = ScenarioNLP(cfg, model_cfgs, nodes, substeps, robust_objective, substeps_engaged=M_engaged)
+    nlp = ScenarioNLP(cfg, model_cfgs, nodes, substeps, robust_objective,
+                      substeps_engaged=M_engaged)
     nlp.key = nlp.structure.key
     _NLPS[key] = nlp
     return nlp, False
