@@ -31,10 +31,10 @@ COMPRESSION = default_config().set("optimise.spring_kinds", ["compression"])
 ENGAGE = ("closing_time", "impact_theta_dot", "engage_time", "engage_theta_dot")
 
 
-def _states(cfg, nodes, substeps, substeps2=None):
+def _states(cfg, nodes, substeps, substeps_engaged=None):
     """The two-phase NLP of cfg with its design fixed (bounds lo = hi): Ipopt solves its
     shooting equations alone; (nlp, run, p)."""
-    nlp = get_nlp(cfg, nodes, substeps, substeps2)
+    nlp = get_nlp(cfg, nodes, substeps, substeps_engaged)
     assert nlp.two_phase
     sim = stroke_simulator(cfg)
     p = nlp.params(cfg)
@@ -95,7 +95,7 @@ def test_two_phase_derivatives_match_finite_differences_of_the_reference():
 
 def test_two_phase_discretisation_error_is_fourth_order():
     """The design fixed, the NLP's closing time, impact speed, engagement time and speed
-    against the reference's as the intervals double (M = 4, M2 = 8 per interval): RK4's
+    against the reference's as the intervals double (M = 4, M_engaged = 8 per interval): RK4's
     error falls ~16 times per doubling in both phases (the switch is a node, so no step
     straddles it); at the default N = 10 every number is far inside its agreement
     tolerance."""
@@ -124,7 +124,7 @@ def test_two_phase_without_end_damper_is_todays_optimum():
     r1 = softclose.optimise(c)
     r2 = softclose.optimise(c.set("optimise.free", {"design.end_damper_c": [0.0, 0.0]}))
     assert r1.success and r2.success, (r1.message, r2.message)
-    assert r1.substeps2 is None and r2.substeps2 == 4
+    assert r1.substeps_engaged is None and r2.substeps_engaged == 4
     assert r1.objective == pytest.approx(0.0228995, rel=2e-6)
     assert r2.objective == pytest.approx(0.0228995, rel=2e-5)     # its own discretisation
     assert r2.verified_objective == pytest.approx(r1.verified_objective, rel=1e-6)
@@ -143,7 +143,7 @@ def test_end_damper_co_design_is_verified_where_it_engages(tmp_path):
     from softclose.cli.optimise import format_result, write_optimum
     r = softclose.optimise(COMPRESSION.set("optimise.free", FREE).set("optimise.starts", 4))
     assert r.success, r.message
-    assert r.substeps2 is not None and r.verification.ok
+    assert r.substeps_engaged is not None and r.verification.ok
     assert r.objective < 0.0228995 * 0.85           # measured 0.017414 (-24 %)
     for k, (lo, hi) in FREE.items():
         assert lo - 1e-9 <= r.design[k.split(".")[1]] <= hi + 1e-9
@@ -155,7 +155,7 @@ def test_end_damper_co_design_is_verified_where_it_engages(tmp_path):
         assert r.metrics[k] == a["reference"] == getattr(ver.stroke, k)
     j = r.to_json()
     assert j["engage_time"] == r.metrics["engage_time"] and j["engage_theta_dot"] < 0
-    assert j["solver"]["phases"][1]["substeps"] == r.substeps2
+    assert j["solver"]["phases"][1]["substeps"] == r.substeps_engaged
     assert "engage_time" in format_result(r) and "end damper engages" in r._repr_html_()
     write_optimum(r, tmp_path)
     c = load_config(tmp_path / "design.toml")

@@ -529,7 +529,7 @@ def _refinement_seconds(o) -> float:
     with its simulation it re-solves with the sub-steps doubled, up to MAX_REFINE times and
     within MAX_STEPS steps (softclose.optimiser.polish.refine). A degenerate geometry (a
     lid 0.1 mm long) takes all of them: 70-80 s at 10 nodes x 4 sub-steps, bounded."""
-    from softclose.optimiser.discretise import MAX_STEPS
+    from softclose.optimiser.discretisation import MAX_STEPS
     from softclose.optimiser.polish import MAX_REFINE
     seconds, m = 0.0, o.substeps
     for _ in range(MAX_REFINE):
@@ -543,7 +543,7 @@ def _refinement_seconds(o) -> float:
 def _nlp_steps(cfg) -> int:
     """RK4 steps of cfg's NLP: nodes x substeps, and with an end damper engaging inside the
     stroke phase 2's too (its sub-steps raised for RK4's stability on the end damper)."""
-    from softclose.optimiser.discretise import discretisation
+    from softclose.optimiser.discretisation import discretisation
     try:
         return max(discretisation(cfg).steps, cfg.optimise.nodes * cfg.optimise.substeps)
     except Exception:                # refused when the run starts (exit 2, at once)

@@ -21,7 +21,7 @@ from softclose.robust import optimise_robust, tolerance_analysis
 from softclose.robust import policy, scenarios, solve
 from softclose.robust.box import box_of
 from softclose.robust.evaluate import evaluate
-from softclose.robust.discretisation import discretise
+from softclose.optimiser.discretisation import discretisation
 
 SPREADS = {"design.spring_k": 0.10, "design.damper_c": 0.20, "mass.lid": 0.05}
 
@@ -111,7 +111,8 @@ def test_interior_search_recovers_a_missing_worst_case():
     box = box_of(cfg)
     missing = (1.0, 1.0, -1.0)          # spring +10 %, damper +20 %, lid -5 %: slowest
     scen = [s for s in scenarios.initial_scenarios(box) if s.z != missing]
-    N, M, _, _ = discretise(cfg)
+    disc = discretisation(cfg)
+    N, M = disc.nodes, disc.substeps
     start, _ = solve.start_design(cfg, box, np.array([s.z for s in scen]))
     rounds: list = []
     prob, run = solve.solve_box(cfg, 1.0, scen, N, M, start, 0, [], rounds, _Quiet())
@@ -313,7 +314,8 @@ def test_corner_check_adds_the_corners_a_subset_misses():
     binding corners until every one of the 32 holds; the NLP never gets all of them."""
     cfg = _many_config()
     box = box_of(cfg)
-    N, M, _, _ = discretise(cfg)
+    disc = discretisation(cfg)
+    N, M = disc.nodes, disc.substeps
     nominal = [scenarios.Scenario(tuple([0.0] * box.dim), "nominal")]
     start, _ = solve.start_design(cfg, box, np.array([s.z for s in scenarios.initial_scenarios(
         box, cfg, [[1914.7, 0.079257, 2087.75]])]))

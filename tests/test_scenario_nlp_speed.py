@@ -57,8 +57,8 @@ def test_threads_give_the_same_solve(cache, cfg, monkeypatch):
     monkeypatch.setattr(maps, "map_threads", lambda: 3)     # threads even on one core
     _, three = _solve(cfg)
     assert one.success and three.success
-    assert three.r["iterations"] == one.r["iterations"]
-    assert np.array_equal(three.r["x"], one.r["x"])
+    assert three.r.iterations == one.r.iterations
+    assert np.array_equal(three.r.x, one.r.x)
     assert np.array_equal(three.J, one.J) and np.array_equal(three.peaks, one.peaks)
 
 
@@ -88,7 +88,7 @@ def test_the_co_designs_first_stage_is_never_compiled(cache, cfg, monkeypatch):
     assert problem.nlp.placed and not problem.nlp.structure.prepared
     before = len(compiled.interpreted)
     lib = rnlp.prepare(placed, problem.model_cfgs, NODES, SUBSTEPS,
-                       placed.tolerance.robust_objective, problem.M2)
+                       placed.tolerance.robust_objective, problem.M_engaged)
     assert lib is None and not list(cache.glob("*/nlp-*.so"))
     # (what `softclose prepare` reports as left to the virtual machine)
     assert [w.endswith(", the points free)") for w in compiled.interpreted[before:]] == [True]
@@ -105,22 +105,22 @@ def test_the_compiled_scenario_nlp_gives_the_same_solve(cache, cfg, monkeypatch)
     assert vm_problem.nlp.library is None and vm.success
     key = vm_problem.nlp.key
     lib = rnlp.prepare(cfg, vm_problem.model_cfgs, NODES, SUBSTEPS,
-                       cfg.tolerance.robust_objective, vm_problem.M2)
+                       cfg.tolerance.robust_objective, vm_problem.M_engaged)
     assert lib is not None and lib == compiled.compiled_nlp(key, compiled.SCENARIO_CFLAGS)
     rnlp.forget()
     problem, fast = _solve(cfg)
     assert problem.nlp.library is not None and problem.nlp.build_time < 0.5
-    assert fast.r["iterations"] == vm.r["iterations"]
-    np.testing.assert_allclose(fast.r["x"], vm.r["x"], rtol=1e-12, atol=1e-14)
+    assert fast.r.iterations == vm.r.iterations
+    np.testing.assert_allclose(fast.r.x, vm.r.x, rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(fast.J, vm.J, rtol=1e-12)
     np.testing.assert_allclose(fast.peaks, vm.peaks, rtol=1e-12)
     assert problem.nlp.g_sizes == vm_problem.nlp.g_sizes
     # the warm solver of the library: a warm start at the answer stays there (the design
     # and every scenario's objective; an epigraph variable nothing pins may move)
-    warm = problem.solve(fast.r["x"], fast.J_ref, (fast.r["lam_x"], fast.r["lam_g"]))
+    warm = problem.solve(fast.r.x, fast.J_ref, (fast.r.lam_x, fast.r.lam_g))
     # (Ipopt's path to the same point takes 2..7 iterations depending on the machine's
     # floating point: a warm start is far fewer than the cold solve's)
-    assert warm.success and warm.r["iterations"] <= max(8, fast.r["iterations"] // 2)
+    assert warm.success and warm.r.iterations <= max(8, fast.r.iterations // 2)
     np.testing.assert_allclose(warm.design, fast.design, rtol=1e-7)
     np.testing.assert_allclose(warm.J, fast.J, rtol=1e-7)
     # a library of another NLP (its numbers say other dimensions) is dropped and the NLP
@@ -132,7 +132,7 @@ def test_the_compiled_scenario_nlp_gives_the_same_solve(cache, cfg, monkeypatch)
     problem, again = _solve(cfg)
     assert problem.nlp.library is None
     assert compiled.compiled_nlp(key, compiled.SCENARIO_CFLAGS) is None
-    assert np.array_equal(again.r["x"], vm.r["x"])
+    assert np.array_equal(again.r.x, vm.r.x)
 
 
 def test_threads_give_the_same_nominal_solve(cache, monkeypatch):

@@ -23,7 +23,7 @@ from softclose import load_config
 from softclose.config import default_config
 from softclose.optimiser import optimise
 from softclose.optimiser.cache import get_nlp
-from softclose.optimiser.lid import SELF_CLOSE_INTERVALS
+from softclose.optimiser.parameters import SELF_CLOSE_INTERVALS
 from softclose.optimiser.cache import get_model
 from softclose.problem import params_of, resolve, with_designs
 from softclose.simulation.handforce import _parts, hand_force

@@ -34,13 +34,13 @@ from ..model.lid import LidModel
 from .data import locate, record_of
 from .equation import bounds_of, check_keys, fit_ode, value_of
 from .nlp import DEFECT_MAX, get_nlp, substeps
+from ..optimiser.ipopt import CONVERGED
 from .result import UNDETERMINED, VIF_MAX  # noqa: F401  (the verdict's thresholds)
 from ..present.progress import Progress
 from ..interrupt import check
 from .result import FitResult, StrokeFit
 from ..problem import resolve
 
-CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
 
 def t_quantile(nu: float, z: float = 1.959963984540054) -> float:
@@ -228,7 +228,8 @@ def solve(cfg, data, free, *, axis=None, starts: int = 1, seed: int = 0, prepare
         w = w0.copy()
         w[:nk] = np.clip(u_init * factor / scale, lbw[:nk], ubw[:nk])
         nlp = get_nlp(model, cfg, keys, shapes, n_move, n_rel)
-        ws, f, status, it = nlp.solve(w, P, lbw, ubw)
+        run = nlp.fit(w, P, lbw, ubw)
+        ws, f, status, it = run.x, run.f, run.status, run.iterations
         ok = status in CONVERGED and np.isfinite(f)
         if best is None or (ok, -f) > (best[3], -best[1]):
             best = (ws, f, status, ok, it)
@@ -240,7 +241,8 @@ def solve(cfg, data, free, *, axis=None, starts: int = 1, seed: int = 0, prepare
     while ok and defect > DEFECT_MAX and n_move < 256:
         n_move, n_rel = 2 * n_move, 2 * n_rel
         nlp = get_nlp(model, cfg, keys, shapes, n_move, n_rel)
-        ws2, f2, status2, it2 = nlp.solve(ws, P, lbw, ubw)
+        run = nlp.fit(ws, P, lbw, ubw)
+        ws2, f2, status2, it2 = run.x, run.f, run.status, run.iterations
         ok = status2 in CONVERGED and np.isfinite(f2)
         ws, f, status, iters = ws2, f2, status2, iters + it2
         defect = float(nlp.defect(ws, P))

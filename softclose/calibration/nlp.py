@@ -25,10 +25,11 @@ from __future__ import annotations
 import math
 
 import casadi as ca
-import numpy as np
 
 from ..simulation.integrators import casadi_step, get_method
-from ..interrupt import ipopt_options, solving
+from ..optimiser.base import NLP
+from ..optimiser.ipopt import nlpsol
+from ..optimiser.run import Run
 from .equation import fit_ode
 
 #: Ipopt options of a fit
@@ -64,9 +65,13 @@ def _flow(model, cfg, keys, n: int):
     return ca.Function("flow", [x0, u, h], [x]).expand()
 
 
-class FitNLP:
+class FitNLP(NLP):
     """The NLP of one shape: ``shapes`` a tuple per stroke of (kind, rest, window, moving)
-    sample counts."""
+    sample counts. Its constraints are one group, the continuity of every stroke
+    (lbg = ubg = 0)."""
+
+    #: a re-solve with halved sub-steps starts from the previous answer as Ipopt left it
+    clip_start = False
 
     def __init__(self, model, cfg, keys, shapes, n_move: int, n_release: int):
         self.keys, self.shapes = tuple(keys), tuple(shapes)
@@ -136,9 +141,8 @@ class FitNLP:
                            [lam_f * ca.triu(ca.mtimes(J.T, J))],
                            ["x", "p", "lam_f", "lam_g"], ["hess_gamma_x_x"])
         nlp = {"x": self.w, "p": self.P, "f": 0.5 * ca.sumsqr(self.r), "g": self.g}
-        self.solver = ca.nlpsol("fit", "ipopt", nlp, {**IPOPT, "hess_lag": hess,
-                                                      **ipopt_options(self.nw, self.ng,
-                                                                      self.P.numel())})
+        self.solver = nlpsol("fit", nlp, {**IPOPT, "hess_lag": hess}, self.nw, self.ng,
+                             self.P.numel())
         self.jac = ca.Function("fit_jac", [self.w, self.P],
                                [self.r, J, ca.jacobian(self.g, self.w)])
         #: the largest change of a fitted sample when the sub-steps are halved (in units of
@@ -147,12 +151,12 @@ class FitNLP:
                                   [ca.mmax(ca.fabs(ca.vertcat(*defects)))])
         self.n_move, self.n_release = n_move, n_release
 
-    def solve(self, w0, p, lbw, ubw):
-        with solving():          # Ctrl-C: Ipopt stops, KeyboardInterrupt raised after it
-            sol = self.solver(x0=w0, p=p, lbx=lbw, ubx=ubw, lbg=0, ubg=0)
-        status = self.solver.stats()["return_status"]
-        return np.asarray(sol["x"]).ravel(), float(sol["f"]), status, \
-            int(self.solver.stats().get("iter_count", 0))
+    def blocks(self) -> list[list[tuple[str, int]]]:
+        return [[("continuity", int(self.ng))]]
+
+    def fit(self, w0, p, lbw, ubw) -> Run:
+        """One Ipopt run from ``w0`` within [lbw, ubw], every continuity constraint = 0."""
+        return self.solve(w0, p, lbw, ubw, 0, 0)
 
 
 def get_nlp(model, cfg, keys, shapes, n_move, n_release) -> FitNLP:

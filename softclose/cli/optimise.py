@@ -230,10 +230,10 @@ def format_result(res) -> str:
     for n in res.notes:
         lines.append(f"  note: {n}")
     grid = (f"{res.nodes} shooting intervals x {res.substeps} RK4 sub-steps" if not
-            getattr(res, "substeps2", None) else
+            getattr(res, "substeps_engaged", None) else
             f"two phases switched at the end damper's engagement: {res.nodes} shooting "
             f"intervals x {res.substeps} RK4 sub-steps before it, {res.nodes} x "
-            f"{res.substeps2} after it")
+            f"{res.substeps_engaged} after it")
     lines.append(f"  ({grid}, {res.hessian} Hessian; total {res.total_time:.2f} s)")
     return "\n".join(lines)
 

@@ -20,7 +20,7 @@ See docs/optimise.md.
 
 from ..problem import DESIGN_KEYS, METRIC_KEYS, SCALES
 from .cache import get_model, get_nlp
-from .discretise import H_MAX, MAX_STEPS, Discretisation, discretisation
+from .discretisation import H_MAX, MAX_STEPS, Discretisation, discretisation
 from .interval import ChebyshevFit, hermite_max, interval_function
 from .nlp import CONVERGED, Run, ShootingNLP
 from .optimiser import active_set, claims, optimise, solve

@@ -12,10 +12,10 @@ from __future__ import annotations
 from ..model import elements
 from ..model.lid import model_key, shared_model
 from ..simulation.simulator import Simulator
-from .discretise import phase_two_substeps
+from .discretisation import engaged_substeps
 from .interval import (ChebyshevFit, end_damper_mode, free_layout, gas_nlp, map_threads,
                        nlp_elements)
-from .lid import padded_degree
+from .parameters import padded_degree
 from .nlp import ShootingNLP, ShootingStructure
 from .free_points import placement_layout, slot_values
 from . import compiled
@@ -50,22 +50,23 @@ def lid_fit(cfg) -> ChebyshevFit:
 
 
 def nlp_key(cfg, nodes: int | None = None, substeps: int | None = None,
-            substeps2: int | None = None) -> tuple:
+            substeps_engaged: int | None = None) -> tuple:
     """The NLP's structure, and nothing of the lid's numbers: the elements it carries and
     the series' padded degree, the free variables and points (which), the opening bound,
     the self-close constraint (whether; its angle is a parameter), the keep-out regions, the
-    discretisation (with an end damper engaging inside the stroke: two phases, phase 2's
-    sub-steps ``substeps2``, by default :func:`.nlp.phase_two_substeps`), the solver."""
+    discretisation (with an end damper engaging inside the stroke: two phases, the engaged
+    phase's sub-steps ``substeps_engaged``, by default
+    :func:`~softclose.optimiser.discretisation.engaged_substeps`), the solver."""
     o = cfg.optimise
     N, M = nodes or o.nodes, substeps or o.substeps
-    M2 = None
+    M_engaged = None
     if end_damper_mode(cfg) == "two-phase":
-        M2 = int(substeps2 or phase_two_substeps(cfg, N, M))
+        M_engaged = int(substeps_engaged or engaged_substeps(cfg, N, M))
     fit = lid_fit(cfg)
     return (tuple(e.name for e in fit.elements), fit.names, padded_degree(fit.degree),
             o.opening_force_max is not None, o.self_close_min_deg is not None, coil_nlp(cfg),
             tuple((k, col) for k, col, _ in free_layout(cfg)),
-            tuple((k, slot) for k, slot, _ in placement_layout(cfg)), keep_out_of(cfg), M2,
+            tuple((k, slot) for k, slot, _ in placement_layout(cfg)), keep_out_of(cfg), M_engaged,
             N, M, o.hessian, o.linear_solver, o.max_iter)
 
 
@@ -88,18 +89,18 @@ def keep_out_of(cfg) -> tuple:
 
 
 def has_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
-            substeps2: int | None = None) -> bool:
-    return nlp_key(cfg, nodes, substeps, substeps2) in _STRUCTURES
+            substeps_engaged: int | None = None) -> bool:
+    return nlp_key(cfg, nodes, substeps, substeps_engaged) in _STRUCTURES
 
 
 def build_structure(key: tuple, library=None, meta=None, threads: int = 1
                     ) -> ShootingStructure:
     """The ShootingStructure of a :func:`nlp_key`, built symbolically (or its compiled
     ``library`` loaded, with its ``meta``); ``threads``: those of its interval maps."""
-    els, names, degree, opening, self_close, coil, free, place, keep_out, M2, N, M, hess, \
+    els, names, degree, opening, self_close, coil, free, place, keep_out, M_engaged, N, M, hess, \
         lin, it = key
     return ShootingStructure(tuple(elements.BY_NAME[e] for e in els), names, degree, N, M,
-                             None if M2 is None else (N, M2), free, place, opening,
+                             None if M_engaged is None else (N, M_engaged), free, place, opening,
                              keep_out, hess, lin, it, library=library, meta=meta,
                              self_close=self_close, coil=coil, threads=threads)
 
@@ -124,10 +125,10 @@ def get_structure(key: tuple, what: str = "") -> ShootingStructure:
     return _STRUCTURES[key]
 
 
-def build_nlp(cfg, nodes: int, substeps: int, substeps2: int | None = None) -> ShootingNLP:
+def build_nlp(cfg, nodes: int, substeps: int, substeps_engaged: int | None = None) -> ShootingNLP:
     """The ShootingNLP of cfg's lid and discretisation, its structure built symbolically
     now (not the shared one)."""
-    key = nlp_key(cfg, nodes, substeps, substeps2)
+    key = nlp_key(cfg, nodes, substeps, substeps_engaged)
     return _bind(cfg, build_structure(key))
 
 
@@ -139,21 +140,21 @@ def _bind(cfg, structure) -> ShootingNLP:
     return nlp
 
 
-def describe_nlp(cfg, N: int, M: int, M2: int | None) -> str:
+def describe_nlp(cfg, N: int, M: int, M_engaged: int | None) -> str:
     """The NLP's structure in words, for the line a compilation writes on stderr (one
     structure serves every lid and spring kind)."""
     free = [k for k, _, _ in free_layout(cfg) + placement_layout(cfg)]
     return (f"of the optimiser ({', '.join(e.name for e in nlp_elements(cfg))}"
             + ("; the spring's wire, coil diameter and coils" if coil_nlp(cfg) else "") + "; "
-            f"{N} x {M} RK4 steps" + (f", phase 2 {N} x {M2}" if M2 else "")
+            f"{N} x {M} RK4 steps" + (f", phase 2 {N} x {M_engaged}" if M_engaged else "")
             + (f"; free {', '.join(free)}" if free else "") + ")")
 
 
 def get_nlp(cfg, nodes: int | None = None, substeps: int | None = None,
-            substeps2: int | None = None) -> ShootingNLP:
+            substeps_engaged: int | None = None) -> ShootingNLP:
     """The ShootingNLP of cfg's lid and discretisation: the structure's NLP (built once per
     structure, :func:`get_structure`) bound to the lid's numbers (kept per lid)."""
-    key = nlp_key(cfg, nodes, substeps, substeps2)
+    key = nlp_key(cfg, nodes, substeps, substeps_engaged)
     lid = (key, model_key(resolve(cfg)), free_layout(cfg), placement_layout(cfg),
            tuple(slot_values(cfg)))
     if lid not in _NLPS:

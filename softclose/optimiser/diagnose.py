@@ -92,8 +92,8 @@ def diagnose(cfg, nlp: ShootingNLP, runs: list[Run]) -> tuple[str, dict]:
                     f"stroke within the bounds closes in {T_sim:.4g} s ({ds}); lower "
                     "closing_time_min or widen the damper bounds", info)
     # 3. nothing obvious: Ipopt's verdict and the worst violated constraint group
-    r = min(runs, key=lambda r: sum(r.violations.values()) or math.inf)
-    viol = r.violations
+    r = min(runs, key=lambda r: r.total_violation or math.inf)
+    viol = r.violations[0] if r.violations else {}     # the nominal NLP: one block
     worst = max(viol, key=viol.get) if viol else None
     info["violations"] = viol
     if worst == "self_close" and viol[worst] > 0:

@@ -34,7 +34,7 @@ import numpy as np
 
 from ..config.free import PLACEMENT_KEYS, config_value
 from .hermite import hermite_max
-from .lid import holding_moment
+from .parameters import holding_moment
 from ..problem import PARAM_COLUMNS
 from ..model import elements
 from ..model.dynamics import pose
@@ -98,7 +98,7 @@ def lengths(fit, theta, B, g):
 
 def length_function(fit):
     """``spring_length(theta, g, L) -> (l, dl/dtheta)`` on the fitted closure (``fit``:
-    symbolic series, :class:`softclose.optimiser.lid.SymbolicSeries`; L their numbers)."""
+    symbolic series, :class:`softclose.optimiser.parameters.SymbolicSeries`; L their numbers)."""
     th, g = ca.SX.sym("theta"), ca.SX.sym("g", len(SLOTS))
     l, ldl, _, _ = lengths(fit, th, fit.basis(th), g)
     return ca.Function("spring_length", [th, g, fit.sym], [l, ldl / l])
@@ -147,7 +147,7 @@ def strut_law(nlp, design):
 def placed_constraints(nlp, design, g, theta0, thc, closed, L, c) -> dict:
     """The constraint groups of a placed NLP beside the shooting ones: the holding moment
     (every element's at theta_closed -- ``closed``: their coordinates there
-    (:func:`softclose.optimiser.lid.holding_moment`) --, the spring's at the points g), the
+    (:func:`softclose.optimiser.parameters.holding_moment`) --, the spring's at the points g), the
     release downwards, the spring's length over the stroke against its kind
     (``spring_long``: l0 - l >= 0 for a compression spring or gas strut; ``spring_short``:
     l - l0 >= 0 for an extension spring, l - (l0 - s) >= 0 for a gas strut of stroke s) and

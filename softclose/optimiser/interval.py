@@ -28,7 +28,7 @@ from ..errors import ConfigError
 from ..problem import PARAM_COLUMNS, PARAM_KEYS, params_of
 from .free_points import POSE_SERIES, SLOTS, lengths, pose_functions
 from .hermite import hermite_max
-from .lid import SymbolicSeries, chebyshev_basis, padded_degree
+from .parameters import SymbolicSeries, chebyshev_basis, padded_degree
 from ..simulation.kernel.binding import cores
 
 #: margin (deg) beyond the stroke over which the Chebyshev series are fitted
@@ -350,7 +350,7 @@ def interval_function(series, substeps: int, with_ode: bool = False,
                       placement: bool = False):
     """One shooting interval of ``substeps`` RK4 sub-steps on the equation of motion whose
     geometric functions are the symbolic Chebyshev ``series``
-    (:class:`softclose.optimiser.lid.SymbolicSeries`): ``interval(x0, c, h) -> (x1, theta,
+    (:class:`softclose.optimiser.parameters.SymbolicSeries`): ``interval(x0, c, h) -> (x1, theta,
     theta_dot, speed)``, ``c`` the coefficients of :func:`combine_function` (the design and
     the lid's series), ``h`` the sub-step; ``theta``/``theta_dot`` are the states after
     sub-steps 1..M-1, ``speed`` the tip speeds after each sub-step followed by the Hermite
@@ -446,7 +446,7 @@ def bound_interval(fit, substeps: int, with_ode: bool = False, placement: bool =
     """:func:`interval_function` on a lid's numeric ``fit``: ``interval(x0, q, h[, g])``
     (and ``f(x, q[, g])``), the design's parameters q, the series' numbers bound (reports
     and tests evaluate it); ``degree`` the padded degree (by default
-    :func:`softclose.optimiser.lid.padded_degree`)."""
+    :func:`softclose.optimiser.parameters.padded_degree`)."""
     sym = SymbolicSeries(fit.names, fit.elements, degree or padded_degree(fit.degree))
     Lv = ca.DM(sym.values(fit))
     combine = combine_function(sym, placement)

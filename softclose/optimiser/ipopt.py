@@ -1,10 +1,18 @@
-"""How the optimisers call Ipopt: the options of a cold solve and of a warm re-solve, and the
-checks that an asked-for linear solver can be loaded and that Ipopt took the options."""
+"""The one place softclose calls Ipopt: :func:`nlpsol` makes every solver (the nominal, the
+scenario and the calibration NLP's, cold and warm), :func:`run` solves once and returns a
+:class:`~.run.Run`; the options of a cold solve and of a warm re-solve, and the checks that
+an asked-for linear solver can be loaded and that Ipopt took the options."""
 
 from __future__ import annotations
 
+import math
+import time
+
+import numpy as np
+
 from ..errors import ConfigError
-from ..interrupt import ipopt_options
+from ..interrupt import ipopt_options, solving
+from .run import Run
 
 #: Ipopt options of the cold solver and of the warm re-solve (same NLP functions)
 COLD_OPTIONS = {"ipopt.mu_strategy": "adaptive"}
@@ -19,6 +27,63 @@ WARM_OPTIONS = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-8,
                 "ipopt.warm_start_slack_bound_push": 1e-9}
 
 
+def shooting_options(tol: float, max_iter: int, hessian: str, linear_solver: str,
+                     calc_lam_p: bool = False) -> dict:
+    """The nlpsol options of a shooting NLP (the nominal and the scenario NLP): silent, the
+    config's tolerance, iterations, Hessian and linear solver, and constraints that hold
+    exactly at the answer (no bound relaxation), not to 1e-8."""
+    return {"print_time": False, "show_eval_warnings": False, "calc_lam_p": calc_lam_p,
+            "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": tol,
+            "ipopt.max_iter": max_iter, "ipopt.hessian_approximation": hessian,
+            "ipopt.linear_solver": linear_solver, "ipopt.bound_relax_factor": 0.0}
+
+
+#: Ipopt return statuses that count as converged
+CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+
+
+def nlpsol(name: str, problem, options: dict, nx: int, ng: int, np_: int):
+    """An Ipopt solver of ``problem``: a dict {x, p, f, g} of CasADi expressions (CasADi's
+    virtual machine evaluates it) or the path of its compiled library
+    (:mod:`softclose.buildcache`). ``options``: nlpsol's, to which the Ctrl-C iteration
+    callback of an NLP of ``nx`` variables, ``ng`` constraints and ``np_`` parameters is
+    added (:func:`softclose.interrupt.ipopt_options`)."""
+    import casadi as ca
+    return ca.nlpsol(name, "ipopt", problem if isinstance(problem, dict) else str(problem),
+                     {**options, **ipopt_options(nx, ng, np_)})
+
+
+def run(solver, x0, p, lbx, ubx, lbg, ubg, lam_x0=None, lam_g0=None, origin: str = "",
+        violations=None) -> Run:
+    """One Ipopt run of ``solver`` from ``x0`` (and the multipliers ``lam_x0``, ``lam_g0``
+    of a warm start); never raises (an evaluation error is a failed status, f NaN, g NaN).
+    ``violations(g, lbg, ubg)`` gives the run's :attr:`Run.violations`."""
+    args = dict(x0=x0, p=p, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+    if lam_x0 is not None:
+        args.update(lam_x0=lam_x0, lam_g0=lam_g0)
+    bounds = (lbx, ubx, lbg, ubg)
+    p = np.asarray(p, float)
+    t0 = time.perf_counter()
+    try:
+        with solving():      # Ctrl-C: Ipopt stops, KeyboardInterrupt raised after it
+            sol = solver(**args)
+        st = solver.stats()
+        status, ok, its = st["return_status"], bool(st["success"]), int(st["iter_count"])
+    except RuntimeError as exc:  # an evaluation error before Ipopt could report
+        g = np.full(np.size(lbg) if np.ndim(lbg) else solver.size1_in(5), np.nan)
+        return Run(np.asarray(x0, float), math.nan, g, None, None,
+                   f"Error: {str(exc).splitlines()[0]}", False, 0, time.perf_counter() - t0,
+                   p, bounds, origin, [] if violations is None else violations(g, lbg, ubg))
+    if status.startswith("Invalid") or its < 0:
+        its = 0                       # Ipopt stopped before its first iteration
+    g = np.asarray(sol["g"]).ravel()
+    return Run(np.asarray(sol["x"]).ravel(), float(sol["f"]), g,
+               np.asarray(sol["lam_x"]).ravel(), np.asarray(sol["lam_g"]).ravel(),
+               status, ok and status in CONVERGED, its, time.perf_counter() - t0, p, bounds,
+               origin, [] if violations is None else violations(g, lbg, ubg),
+               np.asarray(sol["lam_p"]).ravel())
+
+
 def warm_solver(name: str, cold, library, options: dict):
     """The solver of warm starts beside the cold solver ``cold`` (the nominal and the
     scenario NLPs build it on first use): loaded from the compiled ``library`` when there is
@@ -26,12 +91,11 @@ def warm_solver(name: str, cold, library, options: dict):
     to which the Ctrl-C iteration callback is added."""
     import casadi as ca
     nx, np_, ng = cold.size1_in(0), cold.size1_in(1), cold.size1_in(5)
-    opts = {**options, **ipopt_options(nx, ng, np_)}
     if library is not None:
-        return ca.nlpsol(name, "ipopt", str(library), opts)
+        return nlpsol(name, library, options, nx, ng, np_)
     x, p = ca.MX.sym("x", nx), ca.MX.sym("p", np_)
     f, g = cold.oracle()(x, p)
-    return ca.nlpsol(name, "ipopt", {"x": x, "p": p, "f": f, "g": g}, opts)
+    return nlpsol(name, {"x": x, "p": p, "f": f, "g": g}, options, nx, ng, np_)
 
 
 def check_linear_solver(name: str) -> None:

@@ -47,8 +47,9 @@ are the closing time T and the engagement time T1 (phase 2 lasts T - T1 >=
 ``design.end_damper_angle_deg`` is free). Phase 1's intervals see the design with c_e = 0,
 phase 2's with it; every constraint of the one-phase NLP holds at every sub-step of both
 (the tip speed, which typically peaks at the engagement, is a node value of both phases, and
-each phase's Hermite maxima use that phase's own equation). Phase 2's sub-steps M2 are M
-doubled until RK4 is as stable on the end damper as on the dashpot (:func:`phase_two_substeps`).
+each phase's Hermite maxima use that phase's own equation). Phase 2's sub-steps M_engaged are M
+doubled until RK4 is as stable on the end damper as on the dashpot
+(:func:`~softclose.optimiser.discretisation.engaged_substeps`).
 w = (d, T, T1, X (2N nodes), s).
 
 Attachment points freed in ``optimise.free`` (``geometry.spring_anchor[i]``, ``lid_e[i]``,
@@ -61,38 +62,52 @@ answer is verified at a config with the points set (:meth:`ShootingNLP.placed_co
 from __future__ import annotations
 
 import functools
-import math
 import time
 
 import casadi as ca
 import numpy as np
 
 from ..errors import ConfigError
-from ..interrupt import ipopt_options, solving
 from ..problem import DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, SCALES, params_of
 from ..model import elements
 from .interval import (END_C, ChebyshevFit, bound_interval, combine_function, free_of,
                        interval_function, mapped)
-from .lid import (OPENING_INTERVALS, SELF_CLOSE_INTERVALS, SELF_CLOSE_MARGIN, LidLayout,
-                  SymbolicSeries, check_self_close, holding_moment, opening_angles,
-                  opening_bound, self_close_bound, self_close_function)
+from .parameters import (FIXED_PARAMS, J_INDEX, NLP_PARAMS,  # noqa: F401  (re-exported)
+                         OPENING_INTERVALS, SELF_CLOSE_INTERVALS, SELF_CLOSE_MARGIN, LidLayout,
+                         SymbolicSeries, check_self_close, holding_moment, opening_angles,
+                         opening_bound, self_close_bound, self_close_function)
 from .keep_out import keep_out_constraints
 from .coil_nlp import COIL_PARAMS, GROUPS as COIL_GROUPS, coil_params, spring_of, z_bounds, \
     z_start
 from .coil_nlp import nlp_terms as coil_terms
 from .free_points import placed_bounds, placed_config, placed_constraints, slot_values
 from ..buildcache import text
-from .run import FIXED_PARAMS, J_INDEX, NLP_PARAMS, Run  # noqa: F401  (re-exported)
-from .ipopt import (COLD_OPTIONS, LINEAR_ALGEBRA, MUMPS_OPTIONS,  # noqa: F401  (re-exported)
-                    WARM_OPTIONS, check_linear_solver, check_options, warm_solver)
-
-#: Ipopt return statuses that count as converged
-CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+from .base import NLP
+from .run import Run  # noqa: F401  (re-exported)
+from .ipopt import (COLD_OPTIONS, CONVERGED, LINEAR_ALGEBRA,  # noqa: F401  (re-exported)
+                    MUMPS_OPTIONS, WARM_OPTIONS, check_linear_solver, check_options, nlpsol,
+                    shooting_options, warm_solver)
 #: smallest closing time the NLP may take (s): T = 0 would make every step vanish
 T_FLOOR = 1e-3
 #: shortest phase of a two-phase stroke (s): the engagement time T1 and T - T1 (a phase of
 #: no duration would be a node on both sides of the switch)
 PHASE_FLOOR = 1e-4
+
+
+def group_bounds(o) -> tuple[dict, dict]:
+    """(lower, upper) bound of each constraint group the shooting NLPs (the nominal and the
+    scenario NLP) share, by group name, of the config's [optimise] ``o``. (The group
+    ``phase_two``: the engaged phase's duration T - T1.)"""
+    lo = {"continuity": 0.0, "theta_above_closed": 0.0, "theta_dot_nonpositive": -np.inf,
+          "peak_tip_speed": 0.0, "holding_moment": o.holding_moment_min,
+          "release_downwards": -np.inf, "opening_force": -np.inf,
+          "self_close": SELF_CLOSE_MARGIN, "engagement": 0.0,
+          "phase_two": PHASE_FLOOR}
+    hi = {"continuity": 0.0, "theta_above_closed": np.inf, "theta_dot_nonpositive": 0.0,
+          "peak_tip_speed": np.inf, "holding_moment": np.inf, "release_downwards": 0.0,
+          "opening_force": np.inf if o.opening_force_max is None else o.opening_force_max,
+          "self_close": np.inf, "engagement": 0.0, "phase_two": np.inf}
+    return lo, hi
 
 
 class ShootingStructure:
@@ -101,7 +116,7 @@ class ShootingStructure:
     discretisation, the opening bound, the self-close constraint and the keep-out regions. It
     holds no number of a lid (nor the self-close angle):
     those are the lid vector L at the end of the NLP's parameters
-    (:mod:`softclose.optimiser.lid`), so one structure serves every lid
+    (:mod:`softclose.optimiser.parameters`), so one structure serves every lid
     (:class:`ShootingNLP` binds one).
 
     Built symbolically (CasADi's virtual machine evaluates it), or -- ``library`` a compiled
@@ -116,7 +131,7 @@ class ShootingStructure:
     prepared = True
 
     def __init__(self, els, names: tuple, degree: int, nodes: int, substeps: int,
-                 phase2: tuple | None = None, free: tuple = (), place: tuple = (),
+                 engaged: tuple | None = None, free: tuple = (), place: tuple = (),
                  opening: bool = False, keep_out: tuple = (), hessian: str = "exact",
                  linear_solver: str = "mumps", max_iter: int = 500, tol: float = 1e-10,
                  library=None, meta: dict | None = None, self_close: bool = False,
@@ -124,11 +139,12 @@ class ShootingStructure:
         t0 = time.perf_counter()
         check_linear_solver(linear_solver)
         self.els = tuple(els)
-        self.two_phase = phase2 is not None
+        self.two_phase = engaged is not None
         self.nodes, self.M = nodes, substeps
-        self.N2, self.M2 = (int(phase2[0]), int(phase2[1])) if self.two_phase else (0, None)
-        self.N = N = nodes + self.N2
-        M, substeps2 = substeps, self.M2
+        self.N_engaged, self.M_engaged = (int(engaged[0]), int(engaged[1])) if self.two_phase \
+            else (0, None)
+        self.N = N = nodes + self.N_engaged
+        M, substeps_engaged = substeps, self.M_engaged
         # free: (key, column of p) of the free design variables; place: (key, slot in g)
         self.free, self.place = tuple(free), tuple(place)
         self.placed = bool(self.place)
@@ -149,14 +165,8 @@ class ShootingStructure:
         self.i_coil = self.n_params                 # the spring's block, after the lid's
         if self.coil:
             self.n_params += len(COIL_PARAMS)
-        self.ipopt_options = {"print_time": False, "show_eval_warnings": False,
-                              "calc_lam_p": False,
-                              "ipopt.print_level": 0, "ipopt.sb": "yes",
-                              "ipopt.tol": tol, "ipopt.max_iter": max_iter,
-                              "ipopt.hessian_approximation": hessian,
-                              "ipopt.linear_solver": linear_solver,
-                              # constraints hold exactly at the answer, not to 1e-8
-                              "ipopt.bound_relax_factor": 0.0, **LINEAR_ALGEBRA}
+        self.ipopt_options = {**shooting_options(tol, max_iter, hessian, linear_solver),
+                              **LINEAR_ALGEBRA}
         if linear_solver == "mumps":
             self.ipopt_options.update(MUMPS_OPTIONS)
         self.library = library
@@ -175,8 +185,8 @@ class ShootingStructure:
         self.interval, self.f = interval_function(self.series, substeps, with_ode=True,
                                                   placement=self.placed)
         if self.two_phase:
-            self.interval2 = self.interval if substeps2 == substeps else interval_function(
-                self.series, substeps2, placement=self.placed)
+            self.interval_engaged = self.interval if substeps_engaged == substeps else \
+                interval_function(self.series, substeps_engaged, placement=self.placed)
         # the NLP: MX graph over the SX interval, mapped over the N intervals
         d, T = ca.MX.sym("d", self.nd), ca.MX.sym("T")
         T1 = ca.MX.sym("T1") if self.two_phase else None
@@ -208,14 +218,14 @@ class ShootingStructure:
             xe, a, b, sp = mapped(self.interval, N, threads)(Xs, ca.repmat(c, 1, N),
                                                              T * grid.T / M)
         else:   # phase 1 without the end damper (c_e = 0), phase 2 with it
-            n1, n2 = nodes, self.N2
+            n1, n2 = nodes, self.N_engaged
             off = list(entries)
             off[PARAM_COLUMNS[END_C]] = ca.MX(0.0)
             c1 = self.combine(ca.vertcat(*off), *gin, L)
             o1 = mapped(self.interval, n1, threads)(Xs[:, :n1], ca.repmat(c1, 1, n1),
                                        T1 * grid[:n1].T / M)
-            o2 = mapped(self.interval2, n2, threads)(Xs[:, n1:], ca.repmat(c, 1, n2),
-                                        (T - T1) * grid[n1:].T / substeps2)
+            o2 = mapped(self.interval_engaged, n2, threads)(Xs[:, n1:], ca.repmat(c, 1, n2),
+                                        (T - T1) * grid[n1:].T / substeps_engaged)
             xe = ca.horzcat(o1[0], o2[0])
             a, b, sp = (ca.vertcat(ca.vec(o1[k]), ca.vec(o2[k])) for k in (1, 2, 3))
             theta_e = elements.params(design)["end_damper_angle_deg"]
@@ -259,9 +269,8 @@ class ShootingStructure:
         self._peak = ca.Function("peak", [w, P], [ca.mmax(sp)])
         f = J / Jref + mass_term if self.coil else J / Jref
         nlp = {"x": w, "f": f, "g": ca.vertcat(*g_all.values()), "p": P}
-        stop = ipopt_options(self.nw, sum(self.g_sizes), int(P.numel()))   # Ctrl-C
-        self.solver = ca.nlpsol("softclose_ms", "ipopt", nlp,
-                                {**self.ipopt_options, **COLD_OPTIONS, **stop})
+        self.solver = nlpsol("softclose_ms", nlp, {**self.ipopt_options, **COLD_OPTIONS},
+                             self.nw, sum(self.g_sizes), int(P.numel()))
         self.build_time = time.perf_counter() - t0
 
     @functools.cached_property
@@ -277,22 +286,21 @@ class ShootingStructure:
         self.g_sizes = [int(n) for n in meta["g_sizes"]]
         self.nw = int(meta["nw"][0])
         self._peak = ca.Function.deserialize(text(meta["peak"]))
-        lib = str(library)
-        stop = ipopt_options(self.nw, sum(self.g_sizes), self.n_params)
-        self.solver = ca.nlpsol("softclose_ms", "ipopt", lib,
-                                {**self.ipopt_options, **COLD_OPTIONS, **stop})
+        self.solver = nlpsol("softclose_ms", library, {**self.ipopt_options, **COLD_OPTIONS},
+                             self.nw, sum(self.g_sizes), self.n_params)
         if (self.solver.size1_in(0), self.solver.size1_in(1),
                 self.solver.size1_in(5)) != (self.nw, self.n_params, sum(self.g_sizes)):
             raise ValueError("the compiled NLP has other dimensions")
 
     def __getattr__(self, name):
-        """``interval``, ``f`` and ``interval2`` of a structure loaded from its compiled
+        """``interval``, ``f`` and ``interval_engaged`` of a structure loaded from its compiled
         library: built on first use (tests and reports ask for them; the solves do not)."""
-        if name in ("interval", "f", "interval2") and self.__dict__.get("library") is not None:
+        if name in ("interval", "f", "interval_engaged") and \
+                self.__dict__.get("library") is not None:
             self.interval, self.f = interval_function(self.series, self.M, with_ode=True,
                                                       placement=self.placed)
             if self.two_phase:
-                self.interval2 = interval_function(self.series, self.M2,
+                self.interval_engaged = interval_function(self.series, self.M_engaged,
                                                    placement=self.placed)
             return getattr(self, name)
         raise AttributeError(name)
@@ -305,7 +313,7 @@ class ShootingStructure:
                 "nw": np.array([self.nw]), "peak": self._peak.serialize().encode()}
 
 
-class ShootingNLP:
+class ShootingNLP(NLP):
     """The multiple-shooting NLP of one lid: a :class:`ShootingStructure` and the lid's
     numbers that fill it (its model, its Chebyshev fit, the scales of its free variables,
     its attachment points: the lid vector of :meth:`params`).
@@ -319,7 +327,8 @@ class ShootingNLP:
     def __init__(self, model, structure: ShootingStructure, fit: ChebyshevFit,
                  free: tuple = (), placement: tuple = ()):
         self.model, self.structure, self.fit = model, structure, fit
-        for k in ("two_phase", "nodes", "M", "N2", "M2", "N", "nd", "iT", "iT1", "iX", "iS",
+        for k in ("two_phase", "nodes", "M", "N_engaged", "M_engaged", "N", "nd", "iT", "iT1",
+                  "iX", "iS",
                   "coil",
                   "placed", "g_names", "g_sizes", "nw", "solver", "_peak",
                   "ipopt_options", "library", "build_time"):
@@ -362,14 +371,15 @@ class ShootingNLP:
                              self.model.stroke.theta_closed)).ravel()
 
     def __getattr__(self, name):
-        """``interval``, ``f``, ``interval2``: the structure's with this lid's series bound
+        """``interval``, ``f``, ``interval_engaged``: the structure's with this lid's series bound
         (built on first use)."""
-        if name in ("interval", "f", "interval2"):
+        if name in ("interval", "f", "interval_engaged"):
             fns = bound_interval(self.fit, self.M, with_ode=True, placement=self.placed,
                                  degree=self.structure.series.degree)
             self.interval, self.f = fns
             if self.two_phase:
-                self.interval2 = bound_interval(self.fit, self.M2, placement=self.placed,
+                self.interval_engaged = bound_interval(self.fit, self.M_engaged,
+                                                       placement=self.placed,
                                                 degree=self.structure.series.degree)
             return getattr(self, name)
         raise AttributeError(name)
@@ -481,15 +491,7 @@ class ShootingNLP:
         lbx[self.iS] = 0.0
         if self.coil:
             lbx[self.iS + 1:], ubx[self.iS + 1:] = z_bounds(cfg)
-        lo = {"continuity": 0.0, "theta_above_closed": 0.0, "theta_dot_nonpositive": -np.inf,
-              "peak_tip_speed": 0.0, "holding_moment": o.holding_moment_min,
-              "release_downwards": -np.inf, "opening_force": -np.inf,
-              "self_close": SELF_CLOSE_MARGIN, "engagement": 0.0,
-              "phase_two": PHASE_FLOOR}
-        hi = {"continuity": 0.0, "theta_above_closed": np.inf, "theta_dot_nonpositive": 0.0,
-              "peak_tip_speed": np.inf, "holding_moment": np.inf, "release_downwards": 0.0,
-              "opening_force": np.inf if o.opening_force_max is None else o.opening_force_max,
-              "self_close": np.inf, "engagement": 0.0, "phase_two": np.inf}
+        lo, hi = group_bounds(o)
         if self.placed:
             placed_bounds(cfg, lo, hi)
         for k, (a, b) in COIL_GROUPS.items():
@@ -541,11 +543,21 @@ class ShootingNLP:
         """
         if not self.two_phase:
             return np.full(self.N, 1.0 / self.N)
-        return np.r_[np.full(self.nodes, 1.0 / self.nodes), np.full(self.N2, 1.0 / self.N2)]
+        return np.r_[np.full(self.nodes, 1.0 / self.nodes),
+                     np.full(self.N_engaged, 1.0 / self.N_engaged)]
 
     def grid_of(self, p) -> np.ndarray:
         """The time grid in the parameters ``p`` of this NLP."""
         return np.asarray(p, float)[len(NLP_PARAMS):len(NLP_PARAMS) + self.N]
+
+    @property
+    def warm_solver(self):
+        """The structure's solver of warm starts."""
+        return self.structure.warm_solver
+
+    def blocks(self) -> list[list[tuple[str, int]]]:
+        """One block: the constraint groups of g (:meth:`groups`)."""
+        return [list(zip(self.g_names, self.g_sizes))]
 
     def groups(self):
         """(name, slice of g) of each constraint group."""
@@ -553,40 +565,3 @@ class ShootingNLP:
         for name, n in zip(self.g_names, self.g_sizes):
             yield name, slice(i, i + n)
             i += n
-
-    def violations(self, g, lbg, ubg) -> dict:
-        """The largest violation of each constraint group at a point (0 if satisfied)."""
-        out = {}
-        for name, sl in self.groups():
-            gi, lo, hi = g[sl], lbg[sl], ubg[sl]
-            v = np.maximum(np.maximum(lo - gi, gi - hi), 0.0)
-            out[name] = float(np.nan_to_num(v, nan=np.inf).max()) if len(gi) else 0.0
-        return out
-
-    def solve(self, x0, p, lbx, ubx, lbg, ubg, lam_x0=None, lam_g0=None, warm=False,
-              origin: str = "") -> Run:
-        """One Ipopt run; never raises (an evaluation error is a failed status)."""
-        solver = self.structure.warm_solver if warm else self.solver
-        x0 = np.clip(np.asarray(x0, float), lbx, ubx)
-        args = dict(x0=x0, p=p, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
-        if lam_x0 is not None:
-            args.update(lam_x0=lam_x0, lam_g0=lam_g0)
-        bounds = (lbx, ubx, lbg, ubg)
-        t0 = time.perf_counter()
-        try:
-            with solving():      # Ctrl-C: Ipopt stops, KeyboardInterrupt raised after it
-                sol = solver(**args)
-            st = solver.stats()
-            status, ok, its = st["return_status"], bool(st["success"]), int(st["iter_count"])
-        except RuntimeError as exc:  # an evaluation error before Ipopt could report
-            g = np.full(len(lbg), np.nan)
-            return Run(x0, math.nan, g, None, None, f"Error: {str(exc).splitlines()[0]}",
-                       False, 0, time.perf_counter() - t0, np.asarray(p, float), bounds,
-                       origin, self.violations(g, lbg, ubg))
-        if status.startswith("Invalid") or its < 0:
-            its = 0                       # Ipopt stopped before its first iteration
-        g = np.asarray(sol["g"]).ravel()
-        return Run(np.asarray(sol["x"]).ravel(), float(sol["f"]), g,
-                   np.asarray(sol["lam_x"]).ravel(), np.asarray(sol["lam_g"]).ravel(),
-                   status, ok and status in CONVERGED, its, time.perf_counter() - t0,
-                   np.asarray(p, float), bounds, origin, self.violations(g, lbg, ubg))

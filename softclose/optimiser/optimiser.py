@@ -20,7 +20,7 @@ from ..present.progress import Progress
 from .cache import get_model, get_nlp, has_nlp, stroke_simulator
 from .spring_part import spring_part
 from .diagnose import diagnose
-from .discretise import Discretisation, discretisation
+from .discretisation import Discretisation, discretisation
 from .interval import END_C
 from .kinds import kind_config
 from .made_to_order import made_to_order, with_spring
@@ -106,7 +106,7 @@ def active_set(nlp: ShootingNLP, cfg, run: Run, t_limit: float) -> tuple[Active,
     if run.lam_x is None:
         return ()
     o, st = cfg.optimise, cfg.stroke
-    Jr, lam_x, lam_g = run.J_ref, run.lam_x, run.lam_g
+    Jr, lam_x, lam_g = float(run.p[J_INDEX]), run.lam_x, run.lam_g
     out = []
     names = list(nlp.design_dict(cfg, nlp.unpack(run.x)[0]))
     for i, ((lo, hi), key) in enumerate(zip(nlp.design_bounds(cfg), names)):
@@ -209,7 +209,7 @@ def finish(cfg, nlp: ShootingNLP, run: Run, disc: Discretisation, *, verify: boo
     # the closing-time bounds the NLP was solved with: closing_time_min raised to the NLP's
     # floor, the limit moved by the discretisation error (tighten)
     problem["closing_time_solved"] = [float(run.bounds[0][nlp.iT]), float(run.bounds[1][nlp.iT])]
-    common = dict(nodes=nlp.nodes, substeps=nlp.M, substeps2=nlp.M2,
+    common = dict(nodes=nlp.nodes, substeps=nlp.M, substeps_engaged=nlp.M_engaged,
                   hessian=cfg.optimise.hessian,
                   iterations=base.pop("iterations", run.iterations),
                   solve_time=base.pop("solve_time", run.time), problem=problem,
@@ -451,11 +451,11 @@ def optimise_kind(cfg, *, starts: int | None = None, verify: bool = True,
         ok = [i for i, r in enumerate(runs) if r.success]
         if not ok:
             msg, inf = diagnose(cfg, nlp, runs)
-            best = min(runs, key=lambda r: sum(r.violations.values()))
-            inf = dict(inf or {}, least_violation=float(sum(best.violations.values())))
+            best = min(runs, key=lambda r: r.total_violation)
+            inf = dict(inf or {}, least_violation=float(best.total_violation))
             failed = OptimiseResult(
                 False, msg, best.status, None, None, nodes=nlp.nodes, substeps=nlp.M,
-                substeps2=nlp.M2,
+                substeps_engaged=nlp.M_engaged,
                 hessian=o.hessian, iterations=sum(r.iterations for r in runs),
                 solve_time=sum(r.time for r in runs), problem=describe(cfg),
                 infeasibility=inf, notes=tuple(notes), config=cfg,
@@ -509,7 +509,7 @@ def solve(cfg, nodes: int | None = None, substeps: int | None = None,
     rows, info = [], None
     if warm is not None and warm.run is not None and warm.nlp_key == nlp.key:
         prev: Run = warm.run
-        p = nlp.params(cfg, J_ref=prev.J_ref)
+        p = nlp.params(cfg, J_ref=float(prev.p[J_INDEX]))
         same = all(np.array_equal(a, b) for a, b in zip(prev.bounds, bounds)) \
             and np.array_equal(p, prev.p)
         if same:
@@ -530,7 +530,8 @@ def solve(cfg, nodes: int | None = None, substeps: int | None = None,
         res = OptimiseResult(
             False, f"Ipopt stopped with status {r.status} after {r.iterations} iterations; "
             "use optimise() (several starts) or raise optimise.max_iter", r.status, None, None,
-            nodes=nlp.nodes, substeps=nlp.M, substeps2=nlp.M2, hessian=cfg.optimise.hessian,
+            nodes=nlp.nodes, substeps=nlp.M, substeps_engaged=nlp.M_engaged,
+            hessian=cfg.optimise.hessian,
             iterations=r.iterations,
             solve_time=r.time, problem=describe(cfg), config=cfg, run=r, nlp_key=nlp.key,
             notes=disc.notes, **base)

@@ -20,7 +20,7 @@ from ..problem import check_reference_temperature, describe
 from ..present.progress import Progress
 from .spring_part import spring_part
 from .cache import get_nlp, stroke_simulator
-from .discretise import discretisation
+from .discretisation import discretisation
 from .kinds import kind_config
 from .nlp import J_INDEX
 from .optimiser import check_problem, finish, guarded, optimise, start_row
@@ -136,7 +136,7 @@ def _continue(cfg, prev: OptimiseResult) -> OptimiseResult:
         return OptimiseResult(False, f"Ipopt did not converge ({runs[0].status}) from the "
                               "previous optimum or the best sweep point; solve this point "
                               "alone with optimise()", runs[0].status, None, None,
-                              nodes=nlp.nodes, substeps=nlp.M, substeps2=nlp.M2,
+                              nodes=nlp.nodes, substeps=nlp.M, substeps_engaged=nlp.M_engaged,
                               hessian=o.hessian,
                               problem=describe(cfg), config=cfg, notes=tuple(notes), **base)
     best = runs[min(ok, key=lambda i: rows[i]["objective"])]

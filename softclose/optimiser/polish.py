@@ -17,7 +17,7 @@ import numpy as np
 
 from ..problem import ERROR_KEYS, agreement_tolerance, objective
 from .cache import get_nlp, stroke_simulator
-from .discretise import MAX_STEPS
+from .discretisation import MAX_STEPS
 from .nlp import T_FLOOR, Run, ShootingNLP
 from .keep_out import clearance, free_lines
 
@@ -96,17 +96,17 @@ def refine(cfg, nlp: ShootingNLP, run: Run, sim, notes: list) -> tuple[ShootingN
         why = off(cfg, nlp, run, rs)
         if not why:
             return nlp, run
-        if 2 * nlp.nodes * (nlp.M + (nlp.M2 or 0)) > MAX_STEPS:
+        if 2 * nlp.nodes * (nlp.M + (nlp.M_engaged or 0)) > MAX_STEPS:
             notes.append(f"{why}, but doubling the sub-steps would exceed {MAX_STEPS} RK4 "
                          "steps: not refined")
             return nlp, run
         # (two phases: both phases' sub-steps doubled)
-        fine = get_nlp(cfg, nlp.nodes, 2 * nlp.M, 2 * nlp.M2 if nlp.M2 else None)
+        fine = get_nlp(cfg, nlp.nodes, 2 * nlp.M, 2 * nlp.M_engaged if nlp.M_engaged else None)
         r = fine.solve(run.x, run.p, *fine.bounds(cfg, *_time_bounds(nlp, run)))
         if not r.success:
             return nlp, run
         notes.append(f"{why}: sub-steps doubled to {fine.M}"
-                     + (f" (phase 2: {fine.M2})" if fine.M2 else "")
+                     + (f" (phase 2: {fine.M_engaged})" if fine.M_engaged else "")
                      + f" ({r.iterations} iterations)")
         nlp, run = fine, _merge(r, run)
     return nlp, run

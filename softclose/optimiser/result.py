@@ -80,7 +80,7 @@ class OptimiseResult(Displayed):
     substeps: int = 0
     #: a two-phase stroke (an end damper engaging inside it): phase 2's sub-steps (each
     #: phase has ``nodes`` intervals); None for one phase
-    substeps2: int | None = None
+    substeps_engaged: int | None = None
     hessian: str = ""
     iterations: int = 0
     solve_time: float = 0.0
@@ -130,11 +130,11 @@ class OptimiseResult(Displayed):
         out["sweep"] = self.sweep
         out["solver"] = {"method": "direct multiple shooting, RK4, Ipopt" + (
                              ", two phases (switched at the end damper's engagement angle, "
-                             "its time free)" if self.substeps2 else ""),
+                             "its time free)" if self.substeps_engaged else ""),
                          "nodes": self.nodes, "substeps": self.substeps,
                          **({"phases": [{"nodes": self.nodes, "substeps": self.substeps},
-                                        {"nodes": self.nodes, "substeps": self.substeps2}]}
-                            if self.substeps2 else {}),
+                                        {"nodes": self.nodes, "substeps": self.substeps_engaged}]}
+                            if self.substeps_engaged else {}),
                          "hessian": self.hessian, "iterations": self.iterations,
                          "solve_time": self.solve_time, "build_time": self.build_time,
                          "total_time": self.total_time}

@@ -1,5 +1,5 @@
-"""One Ipopt run of the multiple-shooting NLP (:class:`Run`), and the order of the NLP's
-parameters it is read with."""
+"""One Ipopt run of any NLP of softclose (:class:`Run`): what :func:`.ipopt.run` returns and
+:meth:`softclose.optimiser.base.NLP.solve` gives back."""
 
 from __future__ import annotations
 
@@ -7,20 +7,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..problem import DESIGN_KEYS, PARAM_KEYS
-
-#: the parameters of p that are not design variables: NLP parameters
-FIXED_PARAMS = PARAM_KEYS[len(DESIGN_KEYS):]
-#: NLP parameters, in order (then the time grid: the fractions of T of the N intervals)
-NLP_PARAMS = ("theta0", "theta_closed", "weight_impact", "weight_peak_tip", "weight_time",
-              *FIXED_PARAMS, "J_ref")
-J_INDEX = NLP_PARAMS.index("J_ref")
-
 
 @dataclass(frozen=True, eq=False)
 class Run:
     """One Ipopt solve: the primal-dual point, its status and cost, and the problem data
-    (parameters ``p`` and ``bounds`` = (lbx, ubx, lbg, ubg)) it was solved with."""
+    (parameters ``p`` and ``bounds`` = (lbx, ubx, lbg, ubg)) it was solved with.
+
+    ``violations``: per block of the NLP's constraints (one block for the nominal and the
+    calibration NLP, one per scenario for the scenario NLP), the largest violation of each
+    constraint group, {group: value} (0 where it holds; :meth:`.base.NLP.violations`).
+    ``lam_p``: the parameters' multipliers (meaningful where the solver computes them)."""
 
     x: np.ndarray
     f: float
@@ -34,11 +30,13 @@ class Run:
     p: np.ndarray
     bounds: tuple
     origin: str = ""
-    violations: dict = field(default_factory=dict)
+    violations: list = field(default_factory=list)
+    lam_p: np.ndarray | None = None
 
     @property
-    def J_ref(self) -> float:
-        return float(self.p[J_INDEX])
+    def total_violation(self) -> float:
+        """The sum of every block's largest violations."""
+        return sum(sum(block.values()) for block in self.violations)
 
 
-__all__ = ["Run", "NLP_PARAMS", "FIXED_PARAMS", "J_INDEX"]
+__all__ = ["Run"]

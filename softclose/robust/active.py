@@ -28,13 +28,13 @@ def active_set(run, labels) -> tuple[Active, ...]:
     :class:`softclose.robust.solve.Run`), with dJ per unit relaxation and, for a
     constraint, the scenarios (by ``labels``, one per scenario) where it holds."""
     r = run.r
-    if r.get("lam_x") is None or r.get("lam_g") is None:
+    if r.lam_x is None or r.lam_g is None:
         return ()
     problem = run.problem
     nlp, cfg = problem.nlp, problem.cfg
     o, st = cfg.optimise, cfg.stroke
     Jr = float(run.J_ref)
-    lam_x, lam_g, x = np.asarray(r["lam_x"]), np.asarray(r["lam_g"]), np.asarray(r["x"])
+    lam_x, lam_g, x = np.asarray(r.lam_x), np.asarray(r.lam_g), np.asarray(r.x)
     lbx, ubx = run.bounds[0], run.bounds[1]
     out: list[Active] = []
     for i, key in enumerate(DESIGN_KEYS):

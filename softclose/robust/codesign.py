@@ -39,7 +39,7 @@ from ..problem import DESIGN_KEYS
 from ..config.free import config_value
 from .solve import Problem, start_design
 from .scenarios import initial_scenarios
-from .discretisation import discretise
+from ..optimiser.discretisation import discretisation
 from .box import box_of
 from ..optimiser.optimiser import optimise_kind
 
@@ -82,11 +82,11 @@ def choose_points(cfg: Config, notes: list, bound: float | None = None) -> tuple
     for origin, pts in (("the nominal co-design's points", points),
                         ("the config's own points", own)):
         run, c_s, scen = _joint(_at(cfg, pts), nominal)
-        info.setdefault("attempts", []).append({"from": origin, "status": run.r["status"],
-                                                "iterations": run.r["iterations"]})
+        info.setdefault("attempts", []).append({"from": origin, "status": run.r.status,
+                                                "iterations": run.r.iterations})
         if run.success:
             break
-    info.update(scenarios=len(scen), status=run.r["status"], time=time.perf_counter() - t0)
+    info.update(scenarios=len(scen), status=run.r.status, time=time.perf_counter() - t0)
     if run.success:
         points = {k: float(v) for k, v in zip(layout, run.design[3:])}
         info.update(worst_objective=float(np.max(run.J)), points=dict(points))
@@ -96,7 +96,7 @@ def choose_points(cfg: Config, notes: list, bound: float | None = None) -> tuple
     else:
         points = own
         notes.append(f"the scenario NLP with free {_what(layout)} stopped "
-                     f"({run.r['status']}) from the nominal co-design's and from the "
+                     f"({run.r.status}) from the nominal co-design's and from the "
                      "config's own: the config's (clipped into their bounds) are used")
     return points, info
 
@@ -114,7 +114,8 @@ JOINT_MAX_ITER = 200
 def _joint(c: Config, nominal):
     """The scenario NLP with the points free, from the points of ``c``: (run, c, scenarios)."""
     c = c.set("optimise.max_iter", min(c.optimise.max_iter, JOINT_MAX_ITER))
-    N, M, _, _ = discretise(c)
+    disc = discretisation(c)
+    N, M = disc.nodes, disc.substeps
     box = box_of(c)
     ref = ([nominal.design[k] for k in DESIGN_KEYS] if nominal.design else
            [getattr(c.design, k) for k in DESIGN_KEYS])

@@ -65,7 +65,7 @@ from .analysis import YieldResult, analyse_samples
 from .box import box_of
 from .evaluate import slow_keys
 from .infeasible import diagnose
-from .discretisation import discretise, t_limit
+from ..optimiser.discretisation import discretisation, t_limit
 from .nlp import T_FLOOR
 from .policy import (MAX_WIDEN, SLOW_YIELD_SAMPLES, WIDEN, YIELD_REFERENCE, check_keys,
                      max_corners)
@@ -277,7 +277,8 @@ def optimise_robust_kind(cfg: Config, *, progress: bool = False, samples: int | 
         log.times["nominal_optimise"] = time.perf_counter() - t0
     else:           # every corner is a scenario: the nominal optimum chooses none of them
         nominal = dict(NOT_SOLVED)
-    N, M, _, disc_notes = discretise(cfg)
+    disc = discretisation(cfg)
+    N, M, disc_notes = disc.nodes, disc.substeps, list(disc.notes)
     log.notes += disc_notes
     z_yield = _yield_samples(cfg, samples, seed, log.notes)
     problem, run, yres, scale = _solve_widening(cfg, nominal, N, M, z_yield, seed, log)
@@ -297,7 +298,7 @@ def optimise_robust_kind(cfg: Config, *, progress: bool = False, samples: int | 
     if not report or defer:
         corner_check = _corner_guarantee(cfg, scale, problem, run, log)
         msgs = _failures(None, [], corner_check, yres, tol.required_yield, scale)
-        lean = RobustResult(not msgs, "; ".join(msgs), run.r["status"], design, J_obj,
+        lean = RobustResult(not msgs, "; ".join(msgs), run.r.status, design, J_obj,
                             metrics=None, scenarios=[], verification=None, yield_result=yres,
                             nominal=_nominal_json(nominal, None), nominal_yield=None,
                             notes=tuple(log.notes), times=dict(log.times),
@@ -336,7 +337,7 @@ def _report(cfg, nominal, problem, run, yres, scale, z_yield, seed, verify, log,
     active = active_set(run, [s["label"] for s in scen])
     log.bar.update(10, "done")
     log.finish()
-    return RobustResult(not msgs, "; ".join(msgs), run.r["status"], design, J_obj,
+    return RobustResult(not msgs, "; ".join(msgs), run.r.status, design, J_obj,
                         metrics=_reported_metrics(scen[0]), scenarios=scen,
                         verification=verification, yield_result=yres,
                         nominal=_nominal_json(nominal, nyield), nominal_yield=nyield,
@@ -455,7 +456,7 @@ def _no_design(cfg: Config, problem: Problem, run: Run, nominal: dict, N: int, M
     log.times["diagnosis"] = time.perf_counter() - t0
     nominal_json = {**nominal, "yield": None, "yield_ci": None}
     log.finish()
-    return RobustResult(False, msg, run.r["status"], None, None, metrics=None, scenarios=[],
+    return RobustResult(False, msg, run.r.status, None, None, metrics=None, scenarios=[],
                         verification=None, yield_result=None, nominal=nominal_json,
                         nominal_yield=None, infeasibility=info, notes=tuple(log.notes),
                         times=log.times, config=cfg, **base)

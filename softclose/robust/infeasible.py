@@ -91,7 +91,7 @@ def diagnose(cfg: Config, run: Run, problem: Problem, N: int, M: int, seed: int)
             lo, best = a, ra.design
         else:
             hi = a
-            capped += ra is not None and ra.r["status"] == "Maximum_Iterations_Exceeded"
+            capped += ra is not None and ra.r.status == "Maximum_Iterations_Exceeded"
     design = best if best is not None else run.design
     named = design_dict(run.problem, design)       # (with its free values: a strut's F1)
     box1 = box_of(cfg, named)
@@ -117,7 +117,7 @@ def diagnose(cfg: Config, run: Run, problem: Problem, N: int, M: int, seed: int)
         if run.violations:
             info["nlp_violations"] = max(run.violations,
                                          key=lambda v: max(v.values(), default=0.0))
-        parts.append(f"Ipopt stopped with {run.r['status']}")
+        parts.append(f"Ipopt stopped with {run.r.status}")
     if best is not None:
         spreads = ", ".join(f"{s.key} ±{s.value * lo * (100 if s.relative else 1):.3g}"
                             f"{' %' if s.relative else ''}" for s in cfg.tolerance.spreads)

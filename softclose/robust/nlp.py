@@ -26,22 +26,22 @@ and every J_s reported or compared (:meth:`ScenarioNLP.objectives`) uses that pe
 scenario's shooting interval is the nominal optimiser's (``ShootingNLP.interval``: M RK4
 sub-steps on the Chebyshev series of its model, with the Hermite peak bound): the robust and
 the nominal problem share N and M; only the node grid differs
-(:func:`~softclose.robust.discretisation.time_grid`: the first two intervals are half as
+(:func:`~softclose.optimiser.discretisation.graded_grid`: the first two intervals are half as
 long, for the release transient of stiffly damped scenarios). The a_s, b_s are parameters
 (:func:`softclose.robust.scenario_cache.get_scenario_nlp` caches the NLP of a scenario list).
 
 With an end damper that engages inside the stroke every scenario is two-phase as in the
 nominal NLP (:mod:`softclose.optimiser.nlp`): its own engagement time T1_s, the node
 between its phases on its own engagement angle, phase 1 without the end damper (graded
-grid), phase 2 with it (uniform grid, sub-steps M2). The end damper's coefficient and
+grid), phase 2 with it (uniform grid, sub-steps M_engaged). The end damper's coefficient and
 angle may be shared design variables (``optimise.free``; the robust optimiser's first
 stage, :mod:`softclose.robust.codesign`), after (k, l0, c) and before the points.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
-import math
 import time
 
 import casadi as ca
@@ -49,10 +49,9 @@ import numpy as np
 
 from ..config import Config
 from ..errors import ConfigError
-from ..interrupt import ipopt_options, solving
 from ..problem import (DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, held_design, params_of, resolve,
                        SCALES)
-from .discretisation import phase_grid, phase_two, t_limit, two_phase
+from ..optimiser.discretisation import phase_substeps, scenario_grid, t_limit, two_phase
 from ..optimiser.free_points import (length_bounds, placed_bounds, placement_layout, slot_values,
                                      spring_moment, strut_law)
 from ..model.elements.springs import strut_stroke
@@ -60,14 +59,16 @@ from ..optimiser.interval import (ChebyshevFit, combine_function, END_C, free_la
                                   gas_nlp, interval_function, mapped, nlp_elements)
 from ..model import elements
 from ..optimiser import compiled
-from ..optimiser.nlp import check_linear_solver, PHASE_FLOOR
-from ..optimiser.ipopt import warm_solver
+from ..optimiser.nlp import check_linear_solver, group_bounds, PHASE_FLOOR
+from ..optimiser.base import NLP
+from ..optimiser.ipopt import nlpsol, shooting_options, warm_solver
+from ..optimiser.run import Run
 from ..optimiser.cache import get_model, keep_out_of
 from ..config.free import config_value
-from ..optimiser.lid import (holding_moment, LidLayout, opening_angles, opening_bound,
-                             OPENING_INTERVALS, padded_degree, SELF_CLOSE_INTERVALS,
-                             SELF_CLOSE_MARGIN, check_self_close, self_close_bound,
-                             self_close_function, SymbolicSeries)
+from ..optimiser.parameters import (holding_moment, LidLayout, opening_angles, opening_bound,
+                                    OPENING_INTERVALS, padded_degree, SELF_CLOSE_INTERVALS,
+                                    check_self_close, self_close_bound, self_close_function,
+                                    SymbolicSeries)
 from ..buildcache import text
 from ..optimiser.keep_out import keep_out_constraints
 from ..model.lid import model_key
@@ -86,7 +87,8 @@ GROUPS = ("continuity", "theta_above_closed", "theta_dot_nonpositive", "peak_tip
           "holding_moment", "release_downwards", "epigraph", "opening_force", "self_close",
           "spring_long", "spring_short", "spring_length", "keep_out", "engagement",
           "phase_two")
-CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+#: the warm re-solve's options (the nominal NLP's, :data:`~softclose.optimiser.ipopt.
+#: WARM_OPTIONS`, with a larger barrier parameter)
 WARM_OPTIONS = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
                 "ipopt.warm_start_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9,
                 "ipopt.warm_start_slack_bound_push": 1e-9}
@@ -118,17 +120,17 @@ class ScenarioStructure:
     (every scenario closes by itself up to optimise.self_close_min_deg) and keep-out regions.
     No number of a lid or a scenario is in it: the scenario maps (a_s, b_s), the free
     variables' scales, the attachment points and every scenario's lid vector
-    (:mod:`softclose.optimiser.lid`, with the self-close angle) are parameters
+    (:mod:`softclose.optimiser.parameters`, with the self-close angle) are parameters
     (:meth:`ScenarioNLP.params`)."""
 
     def __init__(self, S: int, els, names, degree: int, nodes: int, substeps: int,
-                 M2: int | None, free: tuple, place: tuple, robust_objective: str,
+                 M_engaged: int | None, free: tuple, place: tuple, robust_objective: str,
                  opening: bool, keep_out: tuple, hessian: str, linear_solver: str,
                  max_iter: int, tol: float = 1e-10, library=None, meta=None,
                  self_close: bool = False, held: tuple = (False, False, False)):
         t0 = time.perf_counter()
-        self.S, self.nodes, self.M, self.M2 = S, nodes, substeps, M2
-        self.two_phase = M2 is not None
+        self.S, self.nodes, self.M, self.M_engaged = S, nodes, substeps, M_engaged
+        self.two_phase = M_engaged is not None
         self.N = N = 2 * nodes if self.two_phase else nodes
         self.free, self.place = tuple(free), tuple(place)
         self.placed = bool(self.place)
@@ -153,13 +155,8 @@ class ScenarioStructure:
         self.n_params = len(PARAMS) + N + 2 * NP * S + n_sc + (8 if self.placed else 0) + \
             S * self.lid.size + (3 if any(self.held) else 0)
         check_linear_solver(linear_solver)
-        self.options = {"print_time": False, "show_eval_warnings": False,
-                        "calc_lam_p": any(self.held),
-                        "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": tol,
-                        "ipopt.max_iter": max_iter,
-                        "ipopt.hessian_approximation": hessian,
-                        "ipopt.linear_solver": linear_solver,
-                        "ipopt.bound_relax_factor": 0.0}
+        self.options = shooting_options(tol, max_iter, hessian, linear_solver,
+                                        calc_lam_p=any(self.held))
         self.library = library
         if library is not None:
             self._load(library, meta)
@@ -167,8 +164,8 @@ class ScenarioStructure:
             return
         n1, M = nodes, substeps
         f, ode = interval_function(self.series, M, with_ode=True, placement=self.placed)
-        f2 = None if M2 is None else f if M2 == M else interval_function(
-            self.series, M2, placement=self.placed)
+        f2 = None if M_engaged is None else f if M_engaged == M else interval_function(
+            self.series, M_engaged, placement=self.placed)
         combine = combine_function(self.series, self.placed)
         npar = len(PARAMS)
         P = ca.MX.sym("P", self.n_params)
@@ -225,7 +222,7 @@ class ScenarioStructure:
             H1 = ca.horzcat(*[T1[s] * grid[:n1].T / M for s in range(S)])
             r1 = mapped(f, n1 * S)(ca.horzcat(*[x[:, :n1] for x in X0]), C1, H1)
             C2 = ca.horzcat(*[ca.repmat(cs[s], 1, n1) for s in range(S)])
-            H2 = ca.horzcat(*[(T[s] - T1[s]) * grid[n1:].T / M2 for s in range(S)])
+            H2 = ca.horzcat(*[(T[s] - T1[s]) * grid[n1:].T / M_engaged for s in range(S)])
             r2 = mapped(f2, n1 * S)(ca.horzcat(*[x[:, n1:] for x in X0]), C2, H2)
             for s in range(S):
                 cols = slice(s * n1, (s + 1) * n1)
@@ -293,9 +290,9 @@ class ScenarioStructure:
         self.peak_fn = ca.Function("peaks", [w, P], [pv])
         self.J_fn = ca.Function("J", [w, P], [wi * thd ** 2 + wp * pv ** 2])
         nlp = {"x": w, "f": f_obj, "g": ca.vertcat(*g), "p": P}
-        stop = ipopt_options(self.nw, int(nlp["g"].numel()), int(P.numel()))   # Ctrl-C
-        self.solver = ca.nlpsol("softclose_robust", "ipopt", nlp,
-                                {**self.options, "ipopt.mu_strategy": "adaptive", **stop})
+        self.solver = nlpsol("softclose_robust", nlp,
+                             {**self.options, "ipopt.mu_strategy": "adaptive"},
+                             self.nw, int(nlp["g"].numel()), int(P.numel()))
         self.build_time = time.perf_counter() - t0
 
     @functools.cached_property
@@ -312,10 +309,9 @@ class ScenarioStructure:
         self.block, self.nw = sum(self.g_sizes[0]), int(meta["nw"][0])
         self.peak_fn = ca.Function.deserialize(text(meta["peak"]))
         self.J_fn = ca.Function.deserialize(text(meta["J"]))
-        lib = str(library)
-        stop = ipopt_options(self.nw, sum(map(sum, self.g_sizes)), self.n_params)
-        self.solver = ca.nlpsol("softclose_robust", "ipopt", lib,
-                                {**self.options, "ipopt.mu_strategy": "adaptive", **stop})
+        self.solver = nlpsol("softclose_robust", library,
+                             {**self.options, "ipopt.mu_strategy": "adaptive"},
+                             self.nw, sum(map(sum, self.g_sizes)), self.n_params)
         if (len(self.g_sizes), self.solver.size1_in(0), self.solver.size1_in(1),
                 self.solver.size1_in(5)) != (self.S, self.nw, self.n_params,
                                              sum(map(sum, self.g_sizes))):
@@ -329,24 +325,25 @@ class ScenarioStructure:
                 "J": self.J_fn.serialize().encode()}
 
 
-class ScenarioNLP:
+class ScenarioNLP(NLP):
     """The multiple-shooting NLP of S scenarios (see the module docstring): a
     :class:`ScenarioStructure` bound to the scenarios' models (their lid vectors).
 
     ``model_cfgs`` lists the scenarios' model configs (equal configs share a model and its
     fit). Variables: w = (d, t, then per scenario T_s, [T1_s], X_s (2N_all), s_s); d = (k,
     l0, c, the free end damper's c_e and angle, the free points), scaled. ``nodes``:
-    intervals (per phase); ``substeps2``: phase 2's sub-steps (two phases: by default
-    :func:`phase_two` of ``cfg``).
+    intervals (per phase); ``substeps_engaged``: phase 2's sub-steps (two phases: by default
+    :func:`~softclose.optimiser.discretisation.phase_substeps` of ``cfg``).
     """
 
     def __init__(self, cfg: Config, model_cfgs: list[Config], nodes: int, substeps: int,
                  robust_objective: str = "worst", tol: float = 1e-10,
-                 substeps2: int | None = None, structure: ScenarioStructure | None = None):
+                 substeps_engaged: int | None = None, structure: ScenarioStructure | None = None):
         t0 = time.perf_counter()
         o = cfg.optimise
         self.two_phase = two_phase(cfg)
-        self.M2 = (substeps2 or phase_two(cfg, nodes, substeps)) if self.two_phase else None
+        self.M_engaged = (substeps_engaged or phase_substeps(cfg, nodes, substeps)) \
+            if self.two_phase else None
         self.nodes, self.M, self.S = nodes, substeps, len(model_cfgs)
         self.N = 2 * nodes if self.two_phase else nodes
         self.robust_objective = robust_objective
@@ -379,7 +376,7 @@ class ScenarioNLP:
         degree = padded_degree(max(f.degree for f in fits))
         self.held = held_design(cfg)
         self.structure_key = (self.S, tuple(e.name for e in fits[0].elements), fits[0].names,
-                              degree, nodes, substeps, self.M2,
+                              degree, nodes, substeps, self.M_engaged,
                               tuple((k, col) for k, col, _ in self.free),
                               tuple((k, slot) for k, slot, _ in self.place),
                               robust_objective, o.opening_force_max is not None,
@@ -464,7 +461,7 @@ class ScenarioNLP:
         held = [getattr(o, k)[0] for k in DESIGN_KEYS] if any(self.held) else []
         return np.r_[st.theta0, st.theta_closed, o.weight_impact, o.weight_peak_tip,
                      params_of(cfg)[len(DESIGN_KEYS):], J_ref,
-                     phase_grid(self.nodes, self.two_phase), A, B, self.lid_vector, held]
+                     scenario_grid(self.nodes, self.two_phase), A, B, self.lid_vector, held]
 
     def bounds(self, cfg: Config, t_hi: list[float] | None = None,
                t_lo: list[float] | None = None, design_lb=None):
@@ -495,17 +492,9 @@ class ScenarioNLP:
             ubx[thd] = 0.0
             lbx[j + 2 * (N - 1)] = ubx[j + 2 * (N - 1)] = st.theta_closed
             lbx[j + 2 * N] = 0.0
-        lo = {"continuity": 0.0, "theta_above_closed": 0.0, "theta_dot_nonpositive": -np.inf,
-              "peak_tip_speed": 0.0, "holding_moment": o.holding_moment_min,
-              "release_downwards": -np.inf,
-              "epigraph": 0.0 if self.robust_objective == "worst" else -np.inf,
-              "opening_force": -np.inf, "self_close": SELF_CLOSE_MARGIN, "engagement": 0.0,
-              "phase_two": PHASE_FLOOR}
-        hi = {"continuity": 0.0, "theta_above_closed": np.inf, "theta_dot_nonpositive": 0.0,
-              "peak_tip_speed": np.inf, "holding_moment": np.inf, "release_downwards": 0.0,
-              "epigraph": np.inf,
-              "opening_force": np.inf if o.opening_force_max is None else o.opening_force_max,
-              "self_close": np.inf, "engagement": 0.0, "phase_two": np.inf}
+        lo, hi = group_bounds(o)
+        lo["epigraph"] = 0.0 if self.robust_objective == "worst" else -np.inf
+        hi["epigraph"] = np.inf
         placed_bounds(cfg, lo, hi)
         lbg = np.concatenate([np.full(n, lo[k]) for sizes in self.g_sizes
                               for k, n in zip(GROUPS, sizes)])
@@ -513,17 +502,14 @@ class ScenarioNLP:
                               for k, n in zip(GROUPS, sizes)])
         return lbx, ubx, lbg, ubg
 
-    def violations(self, g, lbg, ubg) -> list[dict]:
-        """Per scenario, the largest violation of each constraint group."""
-        out, i = [], 0
-        for sizes in self.g_sizes:
-            row = {}
-            for k, n in zip(GROUPS, sizes):
-                gi, lo, hi = g[i:i + n], lbg[i:i + n], ubg[i:i + n]
-                row[k] = float(np.max(np.maximum(np.maximum(lo - gi, gi - hi), 0.0))) if n else 0.0
-                i += n
-            out.append(row)
-        return out
+    def blocks(self) -> list[list[tuple[str, int]]]:
+        """Per scenario, its constraint groups (:data:`GROUPS`) and their sizes."""
+        return [list(zip(GROUPS, sizes)) for sizes in self.g_sizes]
+
+    @property
+    def warm_solver(self):
+        """The structure's solver of warm starts."""
+        return self.structure.warm_solver
 
     def peaks(self, w, p) -> np.ndarray:
         """Each scenario's own peak tip speed at w: its largest sub-step speed or Hermite
@@ -535,32 +521,17 @@ class ScenarioNLP:
         """J_s of every scenario at w (unscaled), with its own peak (:meth:`peaks`)."""
         return np.asarray(self.J_fn(w, p)).ravel() * 1.0
 
-    def solve(self, x0, p, lbx, ubx, lbg, ubg, lam_x0=None, lam_g0=None,
-              warm: bool = False) -> dict:
-        """One Ipopt run; never raises (an evaluation error is a failed status)."""
-        solver = self.structure.warm_solver if warm else self.solver
-        x0 = np.clip(np.asarray(x0, float), lbx, ubx)
-        args = dict(x0=x0, p=p, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
-        if lam_x0 is not None:
-            args.update(lam_x0=lam_x0, lam_g0=lam_g0)
-        t0 = time.perf_counter()
-        try:
-            with solving():      # Ctrl-C: Ipopt stops, KeyboardInterrupt raised after it
-                sol = solver(**args)
-            st = solver.stats()
-            status, ok, its = st["return_status"], bool(st["success"]), int(st["iter_count"])
-        except RuntimeError as exc:
-            return {"x": x0, "g": np.full(len(lbg), np.nan), "lam_x": None, "lam_g": None,
-                    "status": f"Error: {str(exc).splitlines()[0]}", "success": False,
-                    "iterations": 0, "time": time.perf_counter() - t0, "f": math.nan}
-        lam_x = np.asarray(sol["lam_x"]).ravel()
-        for i in np.flatnonzero(self.held):     # a held value's multiplier: from P's
-            lam_x[i] = float(np.asarray(sol["lam_p"]).ravel()[len(p) - 3 + i]) * SCALES[i]
-        return {"x": np.asarray(sol["x"]).ravel(), "f": float(sol["f"]),
-                "g": np.asarray(sol["g"]).ravel(), "lam_x": lam_x,
-                "lam_g": np.asarray(sol["lam_g"]).ravel(), "status": status,
-                "success": ok and status in CONVERGED, "iterations": its,
-                "time": time.perf_counter() - t0}
+    def solve(self, x0, p, lbx, ubx, lbg, ubg, lam_x0=None, lam_g0=None, warm: bool = False,
+              origin: str = "") -> Run:
+        """One Ipopt run (:meth:`~softclose.optimiser.base.NLP.solve`); a held design
+        value's multiplier is its parameter's, in the place of its variable's."""
+        run = super().solve(x0, p, lbx, ubx, lbg, ubg, lam_x0, lam_g0, warm, origin)
+        if run.lam_x is None or not any(self.held):
+            return run
+        lam_x = run.lam_x.copy()
+        for i in np.flatnonzero(self.held):
+            lam_x[i] = float(run.lam_p[len(p) - 3 + i]) * SCALES[i]
+        return dataclasses.replace(run, lam_x=lam_x)
 
 
 #: the structures built in this process, by :attr:`ScenarioNLP.structure_key`
@@ -573,12 +544,12 @@ def get_scenario_structure(key: tuple) -> ScenarioStructure:
     if key not in _STRUCTURES:
         from .. import buildcache
         disk = buildcache.key_of("scenario-nlp", key)
-        (S, els, names, degree, nodes, substeps, M2, free, place, objective, opening,
+        (S, els, names, degree, nodes, substeps, M_engaged, free, place, objective, opening,
          keep_out, hessian, linear_solver, max_iter, tol, self_close, held) = key
 
         def make(library=None, meta=None):
             return ScenarioStructure(S, tuple(elements.BY_NAME[e] for e in els), names,
-                                     degree, nodes, substeps, M2, free, place, objective,
+                                     degree, nodes, substeps, M_engaged, free, place, objective,
                                      opening, keep_out, hessian, linear_solver, max_iter,
                                      tol, library=library, meta=meta, self_close=self_close,
                                      held=held)

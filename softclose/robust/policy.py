@@ -10,7 +10,7 @@ from ..config import Config
 from ..errors import ConfigError
 from ..problem import VERIFY_RTOL
 from .evaluate import slow_keys
-from .discretisation import discretise, phase_two, t_limit
+from ..optimiser.discretisation import discretisation, t_limit
 
 #: most corners of the box that enter the scenario NLP all together (d <= 4 keys). Each
 #: scenario adds 2N + 2 variables and a copy of every constraint to the NLP, and one
@@ -26,12 +26,13 @@ MAX_CORNERS = 16
 def max_corners(cfg: Config) -> int:
     """The corners that enter the scenario NLP all together: :data:`MAX_CORNERS` one-phase
     scenarios' worth of RK4 steps. A two-phase scenario (an end damper engaging inside the
-    stroke) costs N (M + M2) steps instead of N M, so fewer of its corners enter together
-    (16 M / (M + M2): 5 at M2 = 2M, with a fourth toleranced key's 16 corners the worst-corner
-    start of d > 4); the corner check still simulates all 2^d after every solve."""
-    N, M, _, _ = discretise(cfg)
-    M2 = phase_two(cfg, N, M)
-    return MAX_CORNERS if M2 is None else int(MAX_CORNERS * M / (M + M2))
+    stroke) costs N (M + M_e) steps instead of N M (M_e: the engaged phase's sub-steps), so
+    fewer of its corners enter together (16 M / (M + M_e): 5 at M_e = 2M, with a fourth
+    toleranced key's 16 corners the worst-corner start of d > 4); the corner check still
+    simulates all 2^d after every solve."""
+    disc = discretisation(cfg)
+    M, Me = disc.substeps, disc.substeps_engaged
+    return MAX_CORNERS if Me is None else int(MAX_CORNERS * M / (M + Me))
 #: most toleranced keys that need a model per value (geometry, crank masses, stroke
 #: angles): each corner check builds 2^s models (~0.04 s each; 2^8: ~10 s). With the five
 #: kernel-column keys (design, rotary damper, lid mass) that bounds d by 13 (8192 corners,

@@ -24,7 +24,7 @@ from ..config import Config
 from ..problem import DESIGN_KEYS, objective, PARAM_COLUMNS, with_designs
 from .box import Box, box_of
 from .evaluate import evaluate, simulator, slow_keys
-from .discretisation import node_times, t_limit
+from ..optimiser.discretisation import scenario_node_times, t_limit
 from .nlp import T_FLOOR, ScenarioNLP, model_config
 from .scenario_cache import get_scenario_nlp
 from .policy import (AGREE_RTOL, CHECK_SAMPLES, MAX_REFINE, MAX_ROUNDS, REFINE_RTOL,
@@ -90,7 +90,7 @@ def _guess(cfg_m: Config, p: np.ndarray, N: int, t_lo: float, t_hi: float,
                 t0, t1, a, b = tr["t"][i - 1], tr["t"][i], tr["theta"][i - 1], tr["theta"][i]
                 T1 = float(t0 + (t1 - t0) * (a - th_e) / (a - b)) if a != b else float(t1)
             T1 = float(np.clip(T1, PHASE_FLOOR, T - PHASE_FLOOR))
-        tn = node_times(N, two_phase, T, T1)
+        tn = scenario_node_times(N, two_phase, T, T1)
         X = np.vstack([np.interp(tn, tr["t"], tr["theta"]),
                        np.minimum(np.interp(tn, tr["t"], tr["theta_dot"]), 0.0)])
         peak = float(np.max(tr["tip_speed"][tr["t"] <= T + 1e-12]))
@@ -98,7 +98,7 @@ def _guess(cfg_m: Config, p: np.ndarray, N: int, t_lo: float, t_hi: float,
         T = t_hi
         if two_phase:
             T1 = T * (st.theta0 - th_e) / (st.theta0 - st.theta_closed)
-        tn = node_times(N, two_phase, T, T1)
+        tn = scenario_node_times(N, two_phase, T, T1)
         X = np.vstack([st.theta0 + tn / T * (st.theta_closed - st.theta0),
                        np.full(len(tn), (st.theta_closed - st.theta0) / T)])
         peak = 1.0
@@ -113,7 +113,7 @@ class Problem:
     """The scenario set of one box and the solves over it (state carried between rounds)."""
 
     def __init__(self, cfg: Config, scale: float, scenarios: list[Scenario], N: int, M: int,
-                 M2: int | None = None):
+                 M_engaged: int | None = None):
         self.cfg, self.scale, self.scenarios, self.N, self.M = cfg, scale, scenarios, N, M
         self.box = box = box_of(cfg, scale=scale)
         # a scenario at temperature T: p = f (a p_design + b) (SPEC §12)
@@ -121,9 +121,9 @@ class Problem:
                      for s in scenarios]
         self.model_cfgs = [model_config(cfg, v) for _, _, v in self.maps]
         self.nlp, cached = get_scenario_nlp(cfg, self.model_cfgs, N, M,
-                                            cfg.tolerance.robust_objective, M2)
+                                            cfg.tolerance.robust_objective, M_engaged)
         #: phase 2's sub-steps (two phases), None for one phase
-        self.M2 = self.nlp.M2
+        self.M_engaged = self.nlp.M_engaged
         self.build_time = 0.0 if cached else self.nlp.build_time
         o = cfg.optimise
         self.t_hi = [t_limit(cfg)] * len(scenarios)
@@ -184,35 +184,36 @@ class Problem:
 
 
 class Run:
-    """One solve of a Problem."""
+    """One solve of a Problem: the NLP's run ``r`` (:class:`softclose.optimiser.run.Run`)
+    read as a design and each scenario's stroke."""
 
-    def __init__(self, problem: Problem, r: dict, p, J_ref, bounds):
+    def __init__(self, problem: Problem, r, p, J_ref, bounds):
         self.problem, self.r, self.p, self.J_ref, self.bounds = problem, r, p, J_ref, bounds
-        self.success = r["success"]
-        self.design, self.t, self.states = problem.nlp.unpack(r["x"])
+        self.success = r.success
+        self.design, self.t, self.states = problem.nlp.unpack(r.x)
         #: per scenario (engagement time, theta' there) with two phases, else None
-        self.engage = problem.nlp.engagements(r["x"])
+        self.engage = problem.nlp.engagements(r.x)
         # each scenario's own peak tip speed and objective (sub-step speeds and Hermite
         # maxima, not the epigraph variables: see softclose.robust.nlp)
-        self.peaks = problem.nlp.peaks(r["x"], p)
-        self.J = problem.nlp.objectives(r["x"], p)
-        self.violations = problem.nlp.violations(r["g"], bounds[2], bounds[3]) \
-            if np.all(np.isfinite(r["g"])) else None
+        self.peaks = problem.nlp.peaks(r.x, p)
+        self.J = problem.nlp.objectives(r.x, p)
+        #: per scenario, the largest violation of each constraint group (None: no g)
+        self.violations = r.violations if np.all(np.isfinite(r.g)) else None
 
     def summary(self) -> dict:
         """This solve as an entry of the result's ``rounds``."""
-        return {"scenarios": len(self.problem.scenarios), "status": self.r["status"],
-                "iterations": self.r["iterations"], "solve_time": self.r["time"],
+        return {"scenarios": len(self.problem.scenarios), "status": self.r.status,
+                "iterations": self.r.iterations, "solve_time": self.r.time,
                 "build_time": self.problem.build_time}
 
     def extended_lam(self, nlp: ScenarioNLP):
         """The multipliers, with zeros for the scenarios a bigger NLP adds."""
-        if self.r["lam_x"] is None:
+        if self.r.lam_x is None:
             return None
         old = self.problem.nlp
         extra = nlp.S - old.S
-        lam_x = np.r_[self.r["lam_x"], np.zeros(extra * nlp.per)]
-        lam_g = np.r_[self.r["lam_g"], np.zeros(extra * nlp.block)]
+        lam_x = np.r_[self.r.lam_x, np.zeros(extra * nlp.per)]
+        lam_g = np.r_[self.r.lam_g, np.zeros(extra * nlp.block)]
         return lam_x, lam_g
 
 
@@ -259,9 +260,9 @@ def _polish(problem: Problem, run: Run, notes: list) -> tuple[Problem, Run]:
         if why is None:
             break
         finer = Problem(problem.cfg, problem.scale, problem.scenarios, problem.N,
-                        2 * problem.M, 2 * problem.M2 if problem.M2 else None)
+                        2 * problem.M, 2 * problem.M_engaged if problem.M_engaged else None)
         finer.t_hi, finer.t_lo = list(problem.t_hi), list(problem.t_lo)
-        r2 = finer.solve(run.r["x"], run.J_ref)
+        r2 = finer.solve(run.r.x, run.J_ref)
         if not r2.success:
             break
         notes.append(f"{why}: sub-steps doubled to {finer.M}")
@@ -286,9 +287,9 @@ def _polish(problem: Problem, run: Run, notes: list) -> tuple[Problem, Run]:
         # from the previous primal point (Ipopt's warm-start mode with the multipliers took
         # 54 iterations and 10.7 s against 11 and 1.8 s with five keys tolerance; 6 against
         # 10 iterations, the same time, on the default problem)
-        r2 = problem.solve(run.r["x"], run.J_ref)
+        r2 = problem.solve(run.r.x, run.J_ref)
         if not r2.success:
-            r2 = problem.solve(run.r["x"], run.J_ref, (run.r["lam_x"], run.r["lam_g"]))
+            r2 = problem.solve(run.r.x, run.J_ref, (run.r.lam_x, run.r.lam_g))
             if not r2.success:
                 break
         run = r2
@@ -321,7 +322,7 @@ def solve_box(cfg: Config, scale: float, scenarios: list, N: int, M: int, start,
             + [Scenario(z, f"Monte Carlo, round {k + 1}", T) for z, T in new] \
             + [Scenario(z, f"corner check, round {k + 1}", T) for z, T in corners]
         n_new = len(new) + len(corners)
-        bigger = Problem(cfg, scale, scen, problem.N, problem.M, problem.M2)
+        bigger = Problem(cfg, scale, scen, problem.N, problem.M, problem.M_engaged)
         bigger.t_hi = problem.t_hi + [t_limit(cfg)] * n_new
         bigger.t_lo = problem.t_lo + [max(cfg.optimise.closing_time_min, T_FLOOR)] * n_new
         x0, _ = bigger.initial(run.design, run)

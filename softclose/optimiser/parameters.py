@@ -1,4 +1,5 @@
-"""The lid's numbers as NLP parameters: an NLP is built from its structure, a lid fills it.
+"""The NLP's parameters: their order (:data:`NLP_PARAMS`) and the lid's numbers in them (an
+NLP is built from its structure, a lid fills it).
 
 An NLP's CasADi graph holds no number of the lid. What the equation of motion and the
 constraints read of the mechanism -- the Chebyshev series of the geometric functions
@@ -25,7 +26,16 @@ import numpy as np
 from ..errors import ConfigError
 from ..model import elements
 from ..model.dynamics import COEFFS, friction, slope
+from ..problem import DESIGN_KEYS, PARAM_KEYS
 from .hermite import hermite_max
+
+#: the parameters of p that are not design variables: NLP parameters
+FIXED_PARAMS = PARAM_KEYS[len(DESIGN_KEYS):]
+#: the nominal NLP's parameters, in order (then the time grid: the fractions of T of the N
+#: intervals, then the lid vector of :class:`LidLayout`)
+NLP_PARAMS = ("theta0", "theta_closed", "weight_impact", "weight_peak_tip", "weight_time",
+              *FIXED_PARAMS, "J_ref")
+J_INDEX = NLP_PARAMS.index("J_ref")
 
 #: the degrees a series is padded to (part of an NLP's structure)
 DEGREES = (16, 24, 32, 48, 64)
@@ -233,7 +243,7 @@ def opening_bound(layout, values, theta0, thc, design, spring: str = "coil"):
     """The opening effort at the nodes of a grid of [theta_closed, theta0] and the maxima of
     its cubic Hermite interpolant in every interval (error O(h^4)): every value <= the bound
     bounds the largest effort over the stroke. ``values``: the lid vector's opening part
-    (the geometry at the grid's angles, :func:`softclose.optimiser.lid.opening_values`);
+    (the geometry at the grid's angles, :func:`softclose.optimiser.parameters.opening_values`);
     ``spring``: the NLP's spring law ("coil" or "gas")."""
     n = OPENING_INTERVALS
     names = layout.opening_elements
