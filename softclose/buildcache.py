@@ -483,9 +483,14 @@ def run_compiler(argv: list, where: Path) -> tuple[int, str]:
 
 def end_group(proc) -> None:
     """End the process group led by ``proc``: SIGTERM (its supervisor kills the group),
-    then, after :data:`END_WITHIN` s, SIGKILL; reaped."""
+    then, after :data:`END_WITHIN` s, SIGKILL; reaped. (Without process groups -- not a
+    POSIX system -- the supervisor alone.)"""
     import signal
     import subprocess
+    if not hasattr(os, "killpg"):
+        proc.kill()
+        proc.wait()
+        return
     for sig, wait in ((signal.SIGTERM, END_WITHIN), (signal.SIGKILL, None)):
         try:
             os.killpg(proc.pid, sig)

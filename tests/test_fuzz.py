@@ -25,7 +25,11 @@ counts go to ``fuzz-counts.json`` in pytest's base temp folder (and to the path 
 environment variable ``SOFTCLOSE_FUZZ_COUNTS`` if set; with ``-n``, one file per test process,
 the worker's name before the suffix: ``counts-gw0.json``). The issue's three inputs are explicit
 examples, and a sample runs as real ``python -m softclose`` processes to check stderr for
-tracebacks.
+tracebacks. The long profile also draws config files of random bytes and encodings, ``--out``
+paths colliding with files and folders, and SIGINT or SIGTERM at random moments of
+``prepare``, ``optimise --robust`` and ``sweep`` on an empty cache (exit 0, 2, 3 or 130, at
+most one error line, no traceback, no process of the command alive a second later, no
+temporary file left in the cache or the temporary folder).
 """
 
 from __future__ import annotations
@@ -1203,6 +1207,18 @@ def _marked_processes(mark: str) -> list[str]:
     return found
 
 
+def _guarded(pid: int) -> bool:
+    """Whether the process ``pid`` handles SIGTERM (its command runs under
+    :func:`softclose.interrupt.guard`; before, in the interpreter's start-up, a signal has
+    the system's default effect)."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return True
+    caught = next(int(x.split()[1], 16) for x in status.splitlines() if x.startswith("SigCgt:"))
+    return bool(caught & (1 << (signal.SIGTERM - 1)))
+
+
 #: the commands interrupted at random moments, and the latest moment drawn (s after start;
 #: on an empty cache prepare builds its model ~3 s, then compiles ~10 s)
 SIGNALLED = {
@@ -1221,8 +1237,8 @@ SIGNALLED = {
 @given(fraction=st.floats(0.0, 1.0), sig=st.sampled_from([signal.SIGINT, signal.SIGTERM]))
 def test_fuzz_signals(name, fraction, sig, tmp_path_factory):
     """SIGINT or SIGTERM to the softclose process alone (as a supervisor sends it) at a random
-    moment, on an empty cache: exit 0, 2, 3 or 130, at most one error line starting a line,
-    no traceback; one second after it returns no process of the command is alive, and no
+    moment once the command runs (its handler installed), on an empty cache: exit 0, 2, 3 or
+    130, at most one error line starting a line, no traceback; one second after it returns no process of the command is alive, and no
     temporary file is left in the cache or the temporary folder."""
     import uuid
     argv, latest = SIGNALLED[name]
@@ -1236,6 +1252,9 @@ def test_fuzz_signals(name, fraction, sig, tmp_path_factory):
     argv = [a.replace("{out}", str(case / "out")) for a in argv]
     proc = subprocess.Popen([sys.executable, "-m", "softclose", *argv], cwd=case, env=env,
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not _guarded(proc.pid) and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.01)
     delay = fraction * latest
     try:
         proc.wait(timeout=delay)

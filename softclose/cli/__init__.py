@@ -7,7 +7,8 @@ it. Each command family is one module with ``register(subparsers)``; a command's
 
 Exit codes: 0 success; 2 invalid input (one line naming the culprit); 3 a numerical or
 optimiser failure that was detected and reported (with what to change); 130 interrupted
-(Ctrl-C: what was finished is kept). Every error line starts ``softclose: error:``.
+(Ctrl-C, or SIGTERM sent to the process: what was finished is kept). Every error line
+starts ``softclose: error:``.
 """
 
 from __future__ import annotations

@@ -13,7 +13,8 @@ import math
 
 from ..errors import ConfigError
 from ..files import write_text
-from .common import (DESIGN_FILE, figures, stroke_files, Outcome, add_common, add_out, add_slow_motion, interactive,
+from .common import (DESIGN_FILE, figures, stroke_files, Outcome, add_common, add_out,
+                     add_slow_motion, interactive,
                      metrics_line, prepare_out, slow_motion, write_design, write_outputs,
                      wrote)
 from .text import closing_time_text, design_text, hand_limits_text, objective_text

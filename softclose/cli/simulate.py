@@ -62,7 +62,8 @@ def _hand_forces(cfg, sim) -> list:
 def run(cfg, args) -> Outcome:
     from ..simulation.simulator import Simulator
     factor = slow_motion(args)
-    out = prepare_out(args.out, [*stroke_files("stroke"), *figures("hand_force", "hand_force_temperatures")])
+    out = prepare_out(args.out, [*stroke_files("stroke"),
+                                 *figures("hand_force", "hand_force_temperatures")])
     sim = Simulator(resolve(cfg), cached=True)
     res = sim.run(trajectory=out is not None)
     payload = res.to_json()

@@ -199,7 +199,8 @@ def run(cfg, args) -> Outcome:
             write_with(out / "spring_checks.csv", lambda p: best.to_frame().to_csv(p, index=False))
             files.append(out / "spring_checks.csv")
         if not isinstance(res, SpringCheck):
-            write_with(out / "spring_candidates.csv", lambda p: res.to_frame().to_csv(p, index=False))
+            write_with(out / "spring_candidates.csv",
+                       lambda p: res.to_frame().to_csv(p, index=False))
             files.append(out / "spring_candidates.csv")
         if best is not None:
             from .common import save_figure
