@@ -1,9 +1,11 @@
-"""Ctrl-C that ends a command wherever it lands: one line, exit code 130.
+"""Ctrl-C (or SIGTERM) that ends a command wherever it lands: one line, exit code 130.
 
 Python turns SIGINT into :class:`KeyboardInterrupt` between bytecodes. Raised inside a
 CasADi call (a compiled solver that checks for signals, or Python code CasADi calls back),
 CasADi catches it and carries on or reports an error of its own. So the command line runs
-every command inside :func:`guard`, whose SIGINT handler
+every command inside :func:`guard`, whose handler of SIGINT and SIGTERM (a supervisor's or
+a job scheduler's request to stop, sent to the process alone: handled as Ctrl-C is, so that
+what the command started -- a C compiler -- is ended and its files removed)
 
 - notes that Ctrl-C was pressed (:func:`interrupted`, a flag), so that an error raised
   because of it is reported as the interruption it is;
@@ -14,7 +16,8 @@ every command inside :func:`guard`, whose SIGINT handler
   the flag is set; the solve ends with ``User_Requested_Stop``), a CVODES call ends its few
   milliseconds, and the KeyboardInterrupt is raised when the call returns;
 - while an interrupt is pending, drops what is written to ``sys.stderr``, so that the only
-  line left is the command line's own.
+  line left is the command line's own; and notes whether the last line written there is
+  unfinished (a progress line: :func:`line_open`), so that line starts on a new line.
 
 :func:`check` lets a long loop stop at a safe point (between solves, between chunks);
 :func:`sigint_handler` swaps the SIGINT handler for a block (the sweep wants Python's plain
@@ -31,6 +34,19 @@ import threading
 _pending = threading.Event()     # Ctrl-C was pressed under the current guard
 _quiet = threading.Event()       # the guarded command has ended
 _depth = [0]                     # solver calls the main thread is in (:func:`solving`)
+_signal = ["Ctrl-C"]             # what interrupted the command
+_tail = ["\n"]                   # the last character written to stderr under the guard
+
+
+def signal_name() -> str:
+    """What interrupted the last guarded command: "Ctrl-C" (SIGINT) or "SIGTERM"."""
+    return _signal[0]
+
+
+def line_open() -> bool:
+    """Whether the last line written to stderr under the last :func:`guard` is unfinished
+    (a progress line, ``building the NLP ... ``): a message then starts on a new line."""
+    return _tail[0] != "\n"
 
 
 def interrupted() -> bool:
@@ -135,6 +151,8 @@ class _QuietStderr:
     def write(self, s):
         if _pending.is_set():
             return len(s)
+        if s:
+            _tail[0] = s[-1]
         return self._stream.write(s)
 
     def __getattr__(self, name):
@@ -162,6 +180,8 @@ def sigint_handler(handler):
 def _handler(signum, frame):
     if _quiet.is_set():                    # the command has ended
         return
+    if not _pending.is_set():
+        _signal[0] = "SIGTERM" if signum == signal.SIGTERM else "Ctrl-C"
     _pending.set()
     if _depth[0] == 0:                     # plain Python: at once, as Python's own handler
         raise KeyboardInterrupt
@@ -181,7 +201,9 @@ def guard():
     _pending.clear()
     _quiet.clear()
     _depth[0] = 0
+    _signal[0], _tail[0] = "Ctrl-C", "\n"
     previous = signal.signal(signal.SIGINT, _handler)
+    previous_term = signal.signal(signal.SIGTERM, _handler)
     stderr = sys.stderr
     sys.stderr = _QuietStderr(stderr)
     try:
@@ -189,9 +211,10 @@ def guard():
     finally:
         _quiet.set()
         signal.signal(signal.SIGINT, previous)
+        signal.signal(signal.SIGTERM, previous_term)
         if isinstance(sys.stderr, _QuietStderr):
             sys.stderr = stderr
 
 
 __all__ = ["guard", "interrupted", "check", "solving", "ipopt_options", "stop_requested",
-           "sigint_handler"]
+           "sigint_handler", "signal_name", "line_open"]

@@ -1,7 +1,8 @@
 """One cache folder, robust: the stroke kernel of a source checkout and the built models and
 NLPs share it (SOFTCLOSE_CACHE); with one that cannot be written a command works uncached
 with one note on stderr; a corrupt entry is rebuilt; what a killed build leaves behind is
-never read and is cleaned up; two processes at once sharing the folder both succeed.
+never read and is cleaned up; two processes at once sharing the folder both succeed, and
+compile an NLP once (the second waits for the first's build).
 
 Each case runs in fresh interpreters (the kernel is loaded once per process)."""
 
@@ -154,3 +155,23 @@ def test_two_processes_at_once_share_the_cache(tmp_path):
     assert len(list(version.glob("model-*.bin"))) == 1
     r = _probe(env)                    # and a third process loads what they kept
     assert r.returncode == 0 and not r.stderr.strip(), r.stderr[-3000:]
+
+
+@pytest.mark.slow        # two compiles of the default NLP at once (~15 s on an idle machine)
+def test_two_prepares_at_once_compile_each_nlp_once(tmp_path):
+    """Two ``softclose prepare`` on one empty cache: the second waits for the first's build
+    (its line says so) and loads the library, instead of compiling the same NLP again."""
+    import time
+    env = _env(SOFTCLOSE_CACHE=str(tmp_path / "cache"))
+    t0 = time.perf_counter()
+    procs = [subprocess.Popen([sys.executable, "-m", "softclose", "prepare"], env=env,
+                              cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                              text=True) for _ in range(2)]
+    errs = [p.communicate(timeout=900)[1] for p in procs]
+    assert [p.returncode for p in procs] == [0, 0], errs
+    built = [e for e in errs if "building the NLP" in e]
+    waited = [e for e in errs if "waiting for another build of the NLP" in e]
+    assert len(built) == 1 and len(waited) == 1, errs
+    assert len(list((tmp_path / "cache").glob("*/nlp-*.so"))) == 1
+    assert "Traceback" not in "".join(errs)
+    assert time.perf_counter() - t0 < 900

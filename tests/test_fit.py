@@ -248,7 +248,7 @@ def test_bad_options(argv, pattern, capsys):
 
 def test_missing_file(capsys):
     rc = main(["fit", "/nonexistent/stroke.csv", "--free", "design.damper_c"])
-    assert rc == 2 and "no such data file" in capsys.readouterr().err
+    assert rc == 2 and "no such file" in capsys.readouterr().err
 
 
 def test_other_columns_and_separators(prototype, exact, tmp_path):

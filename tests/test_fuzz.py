@@ -25,7 +25,11 @@ counts go to ``fuzz-counts.json`` in pytest's base temp folder (and to the path 
 environment variable ``SOFTCLOSE_FUZZ_COUNTS`` if set; with ``-n``, one file per test process,
 the worker's name before the suffix: ``counts-gw0.json``). The issue's three inputs are explicit
 examples, and a sample runs as real ``python -m softclose`` processes to check stderr for
-tracebacks.
+tracebacks. The long profile also draws config files of random bytes and encodings, ``--out``
+paths colliding with files and folders, and SIGINT or SIGTERM at random moments of
+``prepare``, ``optimise --robust`` and ``sweep`` on an empty cache (exit 0, 2, 3 or 130, at
+most one error line, no traceback, no process of the command alive a second later, no
+temporary file left in the cache or the temporary folder).
 """
 
 from __future__ import annotations
@@ -1093,3 +1097,184 @@ def test_trajectory_budget(sets, rows, tmp_path):
     r = sim.run(estimate_error=False)
     steps = r.steps if r.closed else math.ceil(cfg.stroke.t_max / step)
     assert steps + 2 <= TRAJECTORY_BUDGET
+
+
+# -- files and signals (the long profile) -----------------------------------------------------
+#: encodings a config may come in from an editor
+ENCODINGS = ("utf-8", "utf-8-sig", "latin-1", "cp1252", "utf-16", "shift_jis")
+
+
+@st.composite
+def config_bytes(draw) -> bytes:
+    """Random bytes, or a config's text (a comment of any characters, then a valid key) in
+    one of :data:`ENCODINGS`."""
+    if draw(st.booleans()):
+        return draw(st.binary(max_size=400))
+    comment = draw(st.text(max_size=60)).replace("\r", " ").replace("\n", " ")
+    text = f"# {comment}\n[mass]\nlid = 0.5\n"
+    return text.encode(draw(st.sampled_from(ENCODINGS)), errors="replace")
+
+
+@pytest.mark.fuzz
+@settings(max_examples=60, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(data=config_bytes())
+def test_fuzz_config_files(data, out_root):
+    """A config of random bytes or in another encoding: read (exit 0, the same config as its
+    UTF-8 text) or refused in one line naming the file (exit 2); never a traceback."""
+    path = out_root / "random.toml"
+    path.write_bytes(data)
+    argv = ["state", "--theta-deg", "30", "--config", str(path)]
+    rc, out, err, _ = run_inprocess(argv, 30.0, f"config bytes {data[:40]!r}")
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert rc in (0, 2), err
+    if rc == 2:
+        assert len(lines) == 1 and lines[0].startswith("softclose: error: "), err
+    else:
+        assert out.strip()
+        text = data.decode("utf-8-sig")          # (read: so it is UTF-8, BOM or not)
+        assert "\0" not in text
+
+
+#: what each command writes in --out (a name that may collide), and a cheap command line
+COLLIDING = {
+    "simulate": (["simulate", "--set", "stroke.t_max=0.3"],
+                 ["stroke_trajectory.csv", "stroke_time.png", "stroke_animation.gif",
+                  "hand_force.png"]),
+    "optimise": (["optimise"], ["design.toml", "optimise.json", "optimum.png",
+                                "optimum_trajectory.csv", "optimum_animation.gif"]),
+    "yield": (["yield", "--samples", "50", "--set", "tolerance.design.spring_k=0.05"],
+              ["yield_samples.csv", "yield_histograms.png"]),
+    "sweep": (["sweep", "--grid", "design.spring_k=0:400:3"], ["sweep.csv", "manifest.json"]),
+}
+
+
+@pytest.mark.fuzz
+@settings(max_examples=30, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(command=st.sampled_from(sorted(COLLIDING)), what=st.sampled_from(
+    ["folder at a file", "out is a file", "out under a file", "nothing"]), pick=st.integers(0, 9))
+def test_fuzz_output_collisions(command, what, pick, out_root):
+    """An --out folder or a file in it colliding with a file or a folder: exit 2 with one
+    line naming it before any work (nothing written), or -- nothing in the way -- exit 0;
+    never a traceback, never a temporary file left."""
+    import shutil
+    import uuid
+    argv, names = COLLIDING[command]
+    case = out_root / f"collide-{uuid.uuid4().hex[:8]}"
+    case.mkdir()
+    out = case / "out"
+    name = names[pick % len(names)]
+    if what == "nothing" and command == "optimise":
+        what = "folder at a file"                   # (an optimiser run is not drawn: 10 s)
+    if what == "folder at a file":
+        (out / name).mkdir(parents=True)
+        culprit = name
+    elif what == "out is a file":
+        out.write_text("a file")
+        culprit = str(out)
+    elif what == "out under a file":
+        case.joinpath("file").write_text("a file")
+        out = case / "file" / "out"
+        culprit = str(out)
+    before = sorted(p.relative_to(case) for p in case.rglob("*"))
+    rc, _, err, _ = run_inprocess([*argv, "--out", str(out)], 60.0, f"{command} {what}")
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    if what == "nothing":
+        assert rc == 0, err
+        assert not [p for p in out.iterdir() if p.name.startswith(".")]
+    else:
+        assert rc == 2 and len(lines) == 1 and culprit in lines[0], err
+        assert sorted(p.relative_to(case) for p in case.rglob("*")) == before
+    shutil.rmtree(case)
+
+
+def _marked_processes(mark: str) -> list[str]:
+    """Live processes (not zombies) carrying ``mark`` in their environment."""
+    found = []
+    for d in Path("/proc").iterdir():
+        if not d.name.isdigit() or int(d.name) == os.getpid():
+            continue
+        try:
+            if mark.encode() not in (d / "environ").read_bytes():
+                continue
+            state = (d / "stat").read_text().rsplit(")", 1)[1].split()[0]
+            cmd = (d / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+        except OSError:
+            continue
+        if state != "Z":
+            found.append(f"{d.name}: {cmd[:120]}")
+    return found
+
+
+def _guarded(pid: int) -> bool:
+    """Whether the process ``pid`` handles SIGTERM (its command runs under
+    :func:`softclose.interrupt.guard`; before, in the interpreter's start-up, a signal has
+    the system's default effect)."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return True
+    caught = next(int(x.split()[1], 16) for x in status.splitlines() if x.startswith("SigCgt:"))
+    return bool(caught & (1 << (signal.SIGTERM - 1)))
+
+
+#: the commands interrupted at random moments, and the latest moment drawn (s after start;
+#: on an empty cache prepare builds its model ~3 s, then compiles ~10 s)
+SIGNALLED = {
+    "prepare": (["prepare"], 12.0),
+    "optimise --robust": (["optimise", "--robust"], 10.0),
+    "sweep": (["sweep", "--grid", "design.spring_k=0:5000:300", "--grid",
+               "design.damper_c=0:5000:300", "--out", "{out}"], 6.0),
+}
+
+
+@pytest.mark.fuzz
+@pytest.mark.skipif(not Path("/proc/self/environ").exists(), reason="scans /proc (Linux)")
+@pytest.mark.parametrize("name", list(SIGNALLED))
+@settings(max_examples=3, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(fraction=st.floats(0.0, 1.0), sig=st.sampled_from([signal.SIGINT, signal.SIGTERM]))
+def test_fuzz_signals(name, fraction, sig, tmp_path_factory):
+    """SIGINT or SIGTERM to the softclose process alone (as a supervisor sends it) at a random
+    moment once the command runs (its handler installed), on an empty cache: exit 0, 2, 3 or
+    130, at most one error line starting a line, no traceback; one second after it returns no process of the command is alive, and no
+    temporary file is left in the cache or the temporary folder."""
+    import uuid
+    argv, latest = SIGNALLED[name]
+    case = tmp_path_factory.mktemp("signal")
+    cache, tmp = case / "cache", case / "tmp"
+    tmp.mkdir()
+    mark = f"softclose-signal-{uuid.uuid4().hex}"
+    env = {**os.environ, "SOFTCLOSE_CACHE": str(cache), "TMPDIR": str(tmp),
+           "SOFTCLOSE_TEST_MARK": mark,
+           "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    argv = [a.replace("{out}", str(case / "out")) for a in argv]
+    proc = subprocess.Popen([sys.executable, "-m", "softclose", *argv], cwd=case, env=env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not _guarded(proc.pid) and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.01)
+    delay = fraction * latest
+    try:
+        proc.wait(timeout=delay)
+    except subprocess.TimeoutExpired:
+        proc.send_signal(sig)
+    try:
+        err = proc.communicate(timeout=60)[1]
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        pytest.fail(f"softclose {name}: still running 60 s after {sig.name}")
+    shown = f"softclose {name}, {sig.name} after {delay:.2f} s"
+    assert proc.returncode in (0, 2, 3, 130), f"{shown}: exit {proc.returncode}: {err[-2000:]}"
+    assert "Traceback" not in err, f"{shown}: {err[-3000:]}"
+    errors = [ln for ln in err.splitlines() if "softclose: error:" in ln
+              or "softclose: interrupted" in ln]
+    assert len(errors) <= 1 and all(ln.startswith("softclose: ") for ln in errors), \
+        f"{shown}: {err[-2000:]}"
+    time.sleep(1.0)
+    left = _marked_processes(mark)
+    assert not left, f"{shown}: processes left running: {left}"
+    temporaries = [str(p) for p in cache.rglob(".*") if ".tmp" in p.name or
+                   p.name.startswith(".build-")] + [str(p) for p in tmp.iterdir()]
+    assert not temporaries, f"{shown}: temporary files left: {temporaries}"

@@ -3,7 +3,7 @@ goes to the same layer or a lower one, the modules' imports form no circle, the 
 root keeps at most 8 modules, and no module exceeds 600 lines.
 
 The layers, lowest first, as module prefixes (the longest prefix names a module's layer):
-the foundations (errors, the version, JSON, Ctrl-C, the build cache, the config's key
+the foundations (errors, the version, JSON, the files read and written, Ctrl-C, the build cache, the config's key
 records, progress lines); the integrators, a root finder and the coil spring's standards (EN 13906-1, EN 10270, EN 15800); the mechanism and its elements,
 and what a config resolves to (the lid, the stroke, the solver settings, the temperatures:
 :mod:`softclose.model.resolved`); the config; the design problem (which resolves a config); what is shown (tables, figures); the CasADi model of a lid;
@@ -26,6 +26,7 @@ ROOT = Path(__file__).resolve().parents[1] / "softclose"
 
 LAYERS = [
     ["softclose.errors", "softclose.version", "softclose.jsonio", "softclose.interrupt",
+     "softclose.files",
      "softclose.buildcache", "softclose.config.keys", "softclose.present.progress"],
     ["softclose.simulation.integrators", "softclose.simulation.roots", "softclose.coil_spring"],
     ["softclose.model.kinematics", "softclose.model.elements", "softclose.model.resolved"],

@@ -4,7 +4,9 @@ Each command runs as a subprocess in a fresh cache folder with a mark of this te
 environment (every process it could start inherits the environment, also one started in a
 session of its own); one second after it returns, no process carrying the mark, or whose
 command line names softclose and that folder, may be alive. ``optimise`` runs twice: the
-second use of an NLP is when a compilation used to start in the background.
+second use of an NLP is when a compilation used to start in the background. A signal to the
+command alone while its C compiler runs ends the compiler and what it started, and leaves
+none of their temporary files.
 """
 
 from __future__ import annotations
@@ -75,3 +77,48 @@ def test_no_process_outlives_a_command(tmp_path):
         assert not left, f"softclose {' '.join(argv)} left processes running: {left}"
     # and the only compiled NLP is the one prepare built, in the foreground
     assert len(list(cache.glob("*/nlp-*.so"))) == 1
+
+
+def _compiling(cache: Path, mark: str, pid: int) -> bool:
+    """Whether the command ``pid`` compiles: a build folder in the cache and a process of
+    the command besides itself."""
+    return bool(list(cache.glob("*/.build-*"))) and any(
+        not p.startswith(f"{pid}:") for p in _marked(mark, "/nonexistent"))
+
+
+@pytest.mark.slow      # builds a model, then compiles until interrupted (~5-10 s each)
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM", "SIGKILL"])
+def test_an_interrupted_compile_leaves_nothing(tmp_path, sig):
+    """A signal to ``softclose prepare`` alone (as a supervisor sends it, not Ctrl-C to the
+    terminal's group) while the C compiler runs: exit 130 (SIGINT, SIGTERM) with one line,
+    the compiler and what it started are gone one second later (also after SIGKILL: on
+    Linux the compiler dies with its parent), and its temporary files with them."""
+    import signal as signals
+    cache, tmp = tmp_path / "cache", tmp_path / "tmp"
+    tmp.mkdir()
+    mark = f"softclose-test-{uuid.uuid4().hex}"
+    env = {**os.environ, "SOFTCLOSE_CACHE": str(cache), "SOFTCLOSE_TEST_MARK": mark,
+           "TMPDIR": str(tmp),
+           "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    proc = subprocess.Popen([sys.executable, "-m", "softclose", "prepare"], env=env,
+                            cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            text=True)
+    deadline = time.monotonic() + 300
+    while not _compiling(cache, mark, proc.pid) and time.monotonic() < deadline:
+        assert proc.poll() is None, proc.stderr.read()
+        time.sleep(0.1)
+    time.sleep(1.0)                       # (well inside the compile: ~10 s at -O1)
+    assert proc.poll() is None, "the compile ended before the signal"
+    proc.send_signal(getattr(signals, sig))
+    err = proc.communicate(timeout=60)[1]
+    time.sleep(1.0)
+    left = _marked(mark, str(cache))
+    assert not left, f"{sig}: processes left running: {left}"
+    assert list(tmp.iterdir()) == [], "the compiler's temporary files were left"
+    if sig == "SIGKILL":
+        assert proc.returncode == -9
+        return
+    assert proc.returncode == 130, err
+    assert err.endswith(f"...\nsoftclose: interrupted ({'Ctrl-C' if sig == 'SIGINT' else sig}); "
+                        "what was finished is kept\n"), err
+    assert not list(cache.glob("*/.build-*")), "the build folder was left"

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError
+from ..files import read_text
 
 TIME_COLUMNS = ("time_s", "Time (s)")
 ANGLE_COLUMNS = {"theta_deg": math.pi / 180.0, "theta_rad": 1.0}
@@ -56,15 +57,7 @@ def _sniff(header: str) -> str:
 
 def read(path, axis: str | None = None) -> Record:
     """Read one data file (see the module docstring); ``axis`` picks a gyroscope's axis."""
-    p = Path(path)
-    if p.is_dir():
-        raise ConfigError(f"{path}: is a folder, not a data file")
-    try:
-        text = p.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise ConfigError(f"{path}: no such data file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"{path}: cannot read the data file ({type(exc).__name__})") from None
+    text = read_text(path, kind="a data file, CSV")
     return parse(text, str(path), axis)
 
 

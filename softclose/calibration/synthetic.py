@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from ..errors import NumericalError
+from ..files import replacing
 from ..simulation.reference import Reference
 from ..model.lid import LidModel
 from ..problem import resolve
@@ -76,7 +77,7 @@ def write_csv(table: dict, path) -> None:
     """A table of columns as CSV (the header quoted as a phone app writes it)."""
     names = list(table)
     cols = [np.asarray(table[k], float) for k in names]
-    with open(path, "w") as f:
+    with replacing(path) as tmp, open(tmp, "w") as f:
         f.write(",".join(f'"{k}"' if " " in k else k for k in names) + "\n")
         for row in zip(*cols):
             f.write(",".join(f"{v:.9g}" for v in row) + "\n")

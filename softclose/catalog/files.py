@@ -57,6 +57,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import ConfigError
+from ..files import read_text
 
 #: catalog kinds of spring -> design.spring_kind
 SPRING_KINDS = {"extension": "extension", "compression": "compression",
@@ -230,18 +231,7 @@ class Catalog:
 
 def _lines(path) -> list[tuple[int, list[str]]]:
     """(line number, fields) of every non-blank, non-comment line."""
-    p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise ConfigError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise ConfigError(f"{path}: is a folder, expected a CSV file") from None
-    except UnicodeDecodeError:
-        raise ConfigError(f"{path}: not a text file (expected CSV, UTF-8)") from None
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read ({exc.strerror or type(exc).__name__})") \
-            from None
+    text = read_text(path, kind="a CSV file")
     out = []
     for i, line in enumerate(text.splitlines(), 1):
         if not line.strip() or line.lstrip().startswith("#"):

@@ -26,6 +26,7 @@ import sys
 from pathlib import Path
 
 from .files import DamperEntry, SpringEntry, standard_free_length_tolerance
+from ..files import write_text
 
 HEADER = """\
 # ILLUSTRATIVE CATALOG -- NOT REAL PARTS. Made up for softclose's examples, benchmark and study:
@@ -124,11 +125,11 @@ def write(folder) -> tuple[Path, Path]:
         if e.is_strut:
             cells += [None] * 4 + [e.progression, 2 * e.friction, e.force_tolerance]
         lines.append(",".join(_cell(x) for x in cells))
-    s.write_text(HEADER + "\n".join(lines) + "\n")
+    write_text(s, HEADER + "\n".join(lines) + "\n")
     d = folder / "dampers.csv"
     lines = ["part,kind,c,pivot,c_tolerance"] + [",".join(_cell(x) for x in (
         e.part, e.kind, e.c, e.pivot, e.c_tolerance)) for e in dampers()]
-    d.write_text(HEADER + "\n".join(lines) + "\n")
+    write_text(d, HEADER + "\n".join(lines) + "\n")
     return s, d
 
 

@@ -7,7 +7,8 @@ it. Each command family is one module with ``register(subparsers)``; a command's
 
 Exit codes: 0 success; 2 invalid input (one line naming the culprit); 3 a numerical or
 optimiser failure that was detected and reported (with what to change); 130 interrupted
-(Ctrl-C: what was finished is kept). Every error line starts ``softclose: error:``.
+(Ctrl-C, or SIGTERM sent to the process: what was finished is kept). Every error line
+starts ``softclose: error:``.
 """
 
 from __future__ import annotations
@@ -101,16 +102,24 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+def _new_line() -> str:
+    """A newline when a progress line on stderr is unfinished, so a message starts a line."""
+    from ..interrupt import line_open
+    return "\n" if line_open() else ""
+
+
 def _error(msg: str, code: int, as_json: bool) -> int:
     from ..jsonio import dumps
     if as_json:
         print(dumps({"error": msg, "exit_code": code}))
-    print(f"softclose: error: {msg}", file=sys.stderr)
+    print(f"{_new_line()}softclose: error: {msg}", file=sys.stderr)
     return code
 
 
 def _interrupted() -> int:
-    print("softclose: interrupted (Ctrl-C); what was finished is kept", file=sys.stderr)
+    from ..interrupt import signal_name
+    print(f"{_new_line()}softclose: interrupted ({signal_name()}); what was finished is kept",
+          file=sys.stderr)
     return 130
 
 
@@ -166,7 +175,7 @@ def _main(argv: list[str]) -> int:
         import os
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
     if outcome.error:
-        print(f"softclose: error: {outcome.error.splitlines()[0]}", file=sys.stderr)
+        print(f"{_new_line()}softclose: error: {outcome.error.splitlines()[0]}", file=sys.stderr)
     return outcome.exit_code
 
 

@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 from .common import Outcome, add_common, add_out, interactive, prepare_out, wrote
+from ..files import replacing, write_text
 
 
 def register(sub) -> None:
@@ -287,7 +288,7 @@ def write_csv(rows, path: Path) -> Path:
     keys = []
     for r in rows:
         keys += [k for k in r if k not in keys]
-    with open(path, "w", newline="") as f:
+    with replacing(path) as tmp, open(tmp, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=keys)
         w.writeheader()
         for r in rows:
@@ -318,7 +319,7 @@ def write_structures(res, out: Path) -> list[Path]:
     tests/test_bench_structures.py) into ``out``."""
     from ..jsonio import dumps
     path = Path(out) / "structures.json"
-    path.write_text(dumps(structures_record(res), indent=1))
+    write_text(path, dumps(structures_record(res), indent=1))
     return [write_csv(list(res.structures), Path(out) / "structures.csv"), path]
 
 
@@ -333,13 +334,13 @@ def write_files(res, out: Path) -> list[Path]:
              write_csv(speed_rows, out / "speed.csv")]
     # the speed rows alone, with the run's machine, date, commit and load: the record the
     # README's timings are held to (docs/bench_speed.json, tests/test_readme_numbers.py)
-    (out / "speed.json").write_text(dumps(speed_record(res), indent=1))
+    write_text(out / "speed.json", dumps(speed_record(res), indent=1))
     files.append(out / "speed.json")
     if res.optimiser:
         files.append(write_csv(res.optimiser, out / "optimiser.csv"))
     if res.structures:
         files += write_structures(res, out)
-    (out / "bench.md").write_text(report_markdown(res))
+    write_text(out / "bench.md", report_markdown(res))
     files.append(out / "bench.md")
     files.append(save(plot_work_precision(res.work_precision), out / "work_precision.png"))
     files.append(save(plot_error_vs_step(res.work_precision), out / "error_vs_step.png"))
@@ -349,7 +350,7 @@ def write_files(res, out: Path) -> list[Path]:
         files.append(save(fig, out / "optimiser.png"))
     payload = res.to_json()
     payload["files"] = [str(f) for f in files + [out / "bench.json"]]
-    (out / "bench.json").write_text(dumps(payload, indent=1))
+    write_text(out / "bench.json", dumps(payload, indent=1))
     files.append(out / "bench.json")
     return files
 

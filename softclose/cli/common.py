@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import ConfigError
+from ..files import check_targets, write_text, write_with
 
 
 @dataclass(frozen=True)
@@ -81,6 +82,16 @@ def save_figure(fig, path) -> Path:
     return save(fig, figure_path(path), style=FIGURES["style"])
 
 
+#: the file an optimiser's --out writes its design to
+DESIGN_FILE = "design.toml"
+
+
+def stroke_files(stem: str) -> list[str]:
+    """The files :func:`softclose.cli.files.write_stroke_outputs` writes for ``stem``."""
+    return [f"{stem}_trajectory.csv", f"{stem}_animation.gif",
+            *figures(f"{stem}_time", f"{stem}_linkage")]
+
+
 #: the admissible --slow-motion factors of a stroke's animation
 SLOW_MOTION_RANGE = (1.0, 1000.0)
 
@@ -111,11 +122,18 @@ def slow_motion(args) -> float | None:
     return x
 
 
-def prepare_out(path: str | os.PathLike | None) -> Path | None:
+def figures(*stems: str) -> list[str]:
+    """The names of figures ``stems`` in this command's figure format."""
+    return [figure_path(s).name for s in stems]
+
+
+def prepare_out(path: str | os.PathLike | None, files=()) -> Path | None:
     """Check and create the output folder before any work is done.
 
     A path that names an existing file, lies under a file, or cannot be created or written
-    is refused with one line naming it (exit 2), so that no result is computed and then lost.
+    is refused with one line naming it (exit 2), so that no result is computed and then lost;
+    so is a name in ``files`` (the files the command writes there; ``NAME/``: a folder) that
+    is a folder or cannot be replaced (:func:`softclose.files.check_targets`).
     """
     if path is None:
         return None
@@ -134,6 +152,7 @@ def prepare_out(path: str | os.PathLike | None) -> Path | None:
     except OSError as exc:
         raise ConfigError(f"--out {path}: cannot write in the folder "
                           f"({exc.strerror or type(exc).__name__})") from None
+    check_targets(p, files)
     return p
 
 
@@ -182,12 +201,10 @@ def write_outputs(out: Path, csv_name: str, frame, fig_name: str, plot) -> list[
     matplotlib draws still leaves the numbers.
     """
     table = Path(out) / csv_name
-    frame.to_csv(table, index=False)
+    write_with(table, lambda p: frame.to_csv(p, index=False))
     return [table, save_figure(plot(), Path(out) / fig_name)]
 
 
-#: the file an optimiser's --out writes its design to
-DESIGN_FILE = "design.toml"
 
 
 def metrics_line(m: dict | None, J: float | None) -> str:
@@ -222,8 +239,7 @@ def write_design(path, cfg, what: str, lines=()) -> Path:
             f"{path.name} (add --set KEY=VALUE to change a key).",
             "The whole config follows, each key with its unit; a derived key left as a "
             "comment keeps following the keys it derives from."]
-    path.write_text(to_toml(cfg, "\n".join(head)))
-    return path
+    return write_text(path, to_toml(cfg, "\n".join(head)))
 
 
 def wrote(files) -> str:

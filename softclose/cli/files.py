@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..files import write_with
+
 #: trajectory columns: (name in the result, CSV header with unit, scale)
 TRAJECTORY_COLUMNS = (("t", "t [s]", 1.0), ("theta", "theta [rad]", 1.0),
                       ("theta", "theta [deg]", 180.0 / np.pi),
@@ -20,9 +22,8 @@ def write_trajectory_csv(traj: dict, path: Path) -> Path:
     theta also in degrees)."""
     cols = [(h, np.asarray(traj[k], float) * s) for k, h, s in TRAJECTORY_COLUMNS if k in traj]
     data = np.column_stack([c for _, c in cols])
-    np.savetxt(path, data, delimiter=",", fmt="%.12g", header=",".join(h for h, _ in cols),
-               comments="")
-    return path
+    return write_with(path, lambda p: np.savetxt(p, data, delimiter=",", fmt="%.12g",
+                      header=",".join(h for h, _ in cols), comments=""))
 
 
 def write_stroke_outputs(model, res, out: Path, stem: str = "stroke",

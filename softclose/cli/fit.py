@@ -9,7 +9,9 @@ import argparse
 from pathlib import Path
 
 from ..errors import ConfigError
-from .common import Outcome, add_common, add_out, interactive, prepare_out, save_figure, wrote
+from ..files import write_text, write_with
+from .common import (Outcome, add_common, add_out, figures, interactive, prepare_out,
+                     save_figure, wrote)
 
 DESCRIPTION = """\
 Fit config keys of the lid's dynamics (masses, inertias, the dampers, friction, a spring's
@@ -112,10 +114,10 @@ def write_fit(res, out: Path, data) -> list:
     if not res.identifiable:
         head.insert(1, "WARNING: not identifiable: " + res.message)
     path = out / "calibrated.toml"
-    path.write_text(to_toml(cfg, "\n".join(head)))
+    write_text(path, to_toml(cfg, "\n".join(head)))
     files.append(path)
     table = out / "fit.csv"
-    res.to_frame().to_csv(table, index=False)
+    write_with(table, lambda p: res.to_frame().to_csv(p, index=False))
     files.append(table)
     rows = []
     for s in res.strokes:
@@ -123,7 +125,7 @@ def write_fit(res, out: Path, data) -> list:
                                   "model": s.model, "residual": s.y - s.model,
                                   "unit": s.unit, "fitted": np.isfinite(s.model)}))
     samples = out / "samples.csv"
-    pd.concat(rows).to_csv(samples, index=False)
+    write_with(samples, lambda p: pd.concat(rows).to_csv(p, index=False))
     files.append(samples)
     files.append(save_figure(res.plot(), out / "fit"))
     return files
@@ -134,7 +136,7 @@ def run(cfg, args) -> Outcome:
     from ..calibration.equation import check_keys
     keys = check_keys(args.fit_free)
     starts = _starts(args.starts)
-    out = prepare_out(args.out)
+    out = prepare_out(args.out, ["calibrated.toml", "fit.csv", "samples.csv", *figures("fit")])
     res = fit(cfg, args.data, keys, axis=args.axis, starts=starts, progress=interactive(args))
     payload = res.to_json()
     files = []

@@ -12,7 +12,9 @@ import argparse
 import math
 
 from ..errors import ConfigError
-from .common import (DESIGN_FILE, Outcome, add_common, add_out, add_slow_motion, interactive,
+from ..files import write_text
+from .common import (DESIGN_FILE, figures, stroke_files, Outcome, add_common, add_out,
+                     add_slow_motion, interactive,
                      metrics_line, prepare_out, slow_motion, write_design, write_outputs,
                      wrote)
 from .text import closing_time_text, design_text, hand_limits_text, objective_text
@@ -75,9 +77,20 @@ def register(sub) -> None:
 
 
 # -- optimise ------------------------------------------------------------------------------
+def optimise_files() -> list[str]:
+    """The files ``optimise --out`` writes."""
+    return [DESIGN_FILE, "optimise.json", *figures("optimum", "attachments"),
+            *stroke_files("optimum")]
+
+
+def robust_files() -> list[str]:
+    """The files ``optimise --robust --out`` writes."""
+    return [DESIGN_FILE, "robust.json", *figures("robust_histograms", "attachments")]
+
+
 def run_optimise(cfg, args) -> Outcome:
     factor = slow_motion(args)
-    out = prepare_out(args.out)
+    out = prepare_out(args.out, robust_files() if args.robust else optimise_files())
     if args.robust:
         return _run_robust(cfg, args, out)
     from ..optimiser import optimise
@@ -113,7 +126,7 @@ def _run_robust(cfg, args, out) -> Outcome:
     files = []
     if out is not None:
         path = out / "robust.json"
-        path.write_text(dumps(payload, indent=1))
+        write_text(path, dumps(payload, indent=1))
         files.append(path)
         payload["files"] = [str(path)]
     ok = bool(getattr(res, "success", False))
@@ -137,7 +150,7 @@ def write_optimum(res, out, slow_motion=None) -> list:
     sim = Simulator(resolve(res.design_config()))   # its model carries the design
     stroke = sim.run(trajectory=True)
     files.append(out / "optimise.json")
-    files[-1].write_text(dumps(res.to_json(), indent=1))
+    write_text(files[-1], dumps(res.to_json(), indent=1))
     files.append(save(res.plot(), out / "optimum.png"))
     cfg = res.design_config()
     if any("[" in k for k in res.design) or cfg.optimise.keep_out:   # where it attaches
@@ -274,7 +287,7 @@ def default_closing_times(cfg) -> str:
 
 
 def run_pareto(cfg, args) -> Outcome:
-    out = prepare_out(args.out)
+    out = prepare_out(args.out, ["pareto.csv", *figures("pareto"), "designs/"])
     times = parse_closing_times(args.closing_times or default_closing_times(cfg))
     from ..optimiser import front
     fr = front(cfg, times, progress=interactive(args))

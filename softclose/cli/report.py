@@ -90,7 +90,9 @@ def run(cfg, args) -> Outcome:
     from ..signoff import report
     if args.samples is not None and args.samples < 1:
         raise ConfigError(f"--samples {args.samples}: expected a whole number >= 1")
-    out = prepare_out(args.out if args.out is not None else ".")
+    out = prepare_out(args.out if args.out is not None else ".",
+                      [f"report.{k}" for k in (("html", "pdf") if args.format == "both"
+                                                else (args.format,))])
     res = report(cfg, optimiser=optimiser_json(args.config, cfg), samples=args.samples)
     payload = res.to_json()
     import time

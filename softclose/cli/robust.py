@@ -11,7 +11,9 @@ from __future__ import annotations
 import argparse
 import math
 
-from .common import Outcome, add_common, add_out, prepare_out, write_outputs, wrote
+from .common import (Outcome, add_common, add_out, figures, prepare_out, write_outputs,
+                     wrote)
+from ..files import write_text
 from .text import closing_time_text, design_text, hand_limits_text, objective_text
 
 
@@ -161,7 +163,7 @@ def run_yield(cfg, args) -> Outcome:
     from ..problem import sign_off_temperatures
     _check_samples(args.samples)
     seed = _seed(args)
-    out = prepare_out(args.out)
+    out = prepare_out(args.out, ["yield_samples.csv", *figures("yield_histograms")])
     if not cfg.tolerance.spreads:
         from ..errors import ConfigError
         raise ConfigError("tolerance: no key has a spread; give at least one "
@@ -223,7 +225,7 @@ def run_sensitivity(cfg, args) -> Outcome:
     from ..robust import sensitivity
     _check_samples(args.samples)
     seed = _seed(args)
-    out = prepare_out(args.out)
+    out = prepare_out(args.out, ["sobol.csv", *figures("sobol")])
     r = sensitivity(cfg, samples=args.samples, seed=seed)
     payload = r.to_json()
     lines = [f"softclose sensitivity: Sobol indices over the tolerance box "
@@ -364,7 +366,7 @@ def robust_outcome(cfg, args) -> Outcome:
                  f"{100 * y.yield_ci[1]:.2f} %) over {y.samples} samples"
                  if y is not None else ""]))
         path = out / "robust.json"
-        path.write_text(json.dumps(jsonable(payload), indent=1, allow_nan=False))
+        write_text(path, json.dumps(jsonable(payload), indent=1, allow_nan=False))
         files.append(path)
         if res.yield_result is not None:
             files.append(save(res.plot(), out / "robust_histograms.png"))

@@ -16,7 +16,9 @@ from __future__ import annotations
 import argparse
 import json
 
-from .common import Outcome, add_common, add_out, interactive, prepare_out, save_figure, wrote
+from .common import (Outcome, add_common, add_out, figures, interactive, prepare_out,
+                     save_figure, wrote)
+from ..files import write_text, write_with
 
 DESCRIPTION = """\
 Rank the springs one can buy (extension, compression, gas strut) -- with every damper of
@@ -202,7 +204,7 @@ def _pair_configs(cfg, res, out) -> list:
     for rank, e in enumerate(res.ranking[:PAIR_CONFIGS], 1):
         name = re.sub(r"[^\w.-]+", "-", f"{rank:02d}_{e['spring']}_{e['damper']}")
         path = folder / f"{name}.toml"
-        path.write_text(to_toml(pair_config(cfg, e), header=(
+        write_text(path, to_toml(pair_config(cfg, e), header=(
             f"softclose select: pair {rank}, {e['spring']} + {e['damper']}: its parts and "
             "their own tolerances")))
         files.append(path)
@@ -212,7 +214,7 @@ def _pair_configs(cfg, res, out) -> list:
 def run(cfg, args) -> Outcome:
     from ..catalog import read_dampers, read_springs, select
     _check(args)
-    out = prepare_out(args.out)
+    out = prepare_out(args.out, ["select.csv", "select.json", *figures("select"), "pairs/"])
     springs = read_springs(args.springs)
     dampers = read_dampers(args.dampers) if args.dampers else None
     if args.dask:
@@ -229,10 +231,10 @@ def run(cfg, args) -> Outcome:
     if out is not None:
         from ..jsonio import jsonable
         path = out / "select.csv"
-        res.to_frame().to_csv(path, index=False)
+        write_with(path, lambda p: res.to_frame().to_csv(p, index=False))
         files.append(path)
         path = out / "select.json"
-        path.write_text(json.dumps(jsonable(payload), indent=1, allow_nan=False))
+        write_text(path, json.dumps(jsonable(payload), indent=1, allow_nan=False))
         files.append(path)
         if res.ranking and not res.interrupted:
             files.append(save_figure(res.plot(), out / "select.png"))

@@ -6,7 +6,7 @@ import argparse
 import math
 
 from .common import (Outcome, add_common, add_out, add_slow_motion, format_metrics,
-                     prepare_out, slow_motion, wrote)
+                     prepare_out, slow_motion, wrote, figures, stroke_files)
 from ..problem import at_temperature, resolve, sign_off_temperatures
 
 DESCRIPTION = """\
@@ -62,7 +62,8 @@ def _hand_forces(cfg, sim) -> list:
 def run(cfg, args) -> Outcome:
     from ..simulation.simulator import Simulator
     factor = slow_motion(args)
-    out = prepare_out(args.out)
+    out = prepare_out(args.out, [*stroke_files("stroke"),
+                                 *figures("hand_force", "hand_force_temperatures")])
     sim = Simulator(resolve(cfg), cached=True)
     res = sim.run(trajectory=out is not None)
     payload = res.to_json()

@@ -6,7 +6,8 @@ from __future__ import annotations
 import argparse
 import json
 
-from .common import Outcome, add_common, add_out, prepare_out, wrote
+from .common import Outcome, add_common, add_out, figures, prepare_out, wrote
+from ..files import write_text, write_with
 
 DESCRIPTION = """\
 The design's compression spring (design.spring_kind = "compression", EN 13906-1) or extension
@@ -163,7 +164,8 @@ def run(cfg, args) -> Outcome:
     from ..coil_spring import SpringCheck
     from ..jsonio import jsonable
     from ..coil_spring.order import spring_duty, spring_order
-    out = prepare_out(args.out)
+    out = prepare_out(args.out, ["spring.json", "spring_checks.csv", "spring_candidates.csv",
+                                 *figures("spring")])
     duty = spring_duty(cfg)
     res = spring_order(cfg, duty)
     if isinstance(res, SpringCheck):
@@ -190,14 +192,15 @@ def run(cfg, args) -> Outcome:
     files = []
     if out is not None:
         path = out / "spring.json"
-        path.write_text(json.dumps(payload, indent=1, allow_nan=False) + "\n")
+        write_text(path, json.dumps(payload, indent=1, allow_nan=False) + "\n")
         files.append(path)
         best = res if isinstance(res, SpringCheck) else res.best
         if best is not None:
-            best.to_frame().to_csv(out / "spring_checks.csv", index=False)
+            write_with(out / "spring_checks.csv", lambda p: best.to_frame().to_csv(p, index=False))
             files.append(out / "spring_checks.csv")
         if not isinstance(res, SpringCheck):
-            res.to_frame().to_csv(out / "spring_candidates.csv", index=False)
+            write_with(out / "spring_candidates.csv",
+                       lambda p: res.to_frame().to_csv(p, index=False))
             files.append(out / "spring_candidates.csv")
         if best is not None:
             from .common import save_figure

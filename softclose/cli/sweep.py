@@ -155,7 +155,8 @@ def run(cfg, args) -> Outcome:
             check_budget(cfg, space, "--sample" if space.kind == "sample" else "--grid")
         fmt, chunk = args.format or "csv", args.chunk or CHUNK
         fresh = not Path(args.out).exists()
-        out = prepare_out(args.out)
+        out = prepare_out(args.out, [store.MANIFEST,
+                                     store.CSV if fmt == "csv" else store.DATASET + "/"])
         old = store.read_manifest(out)
         if old is not None and not old.get("complete"):
             raise ConfigError(f"--out {args.out}: holds an unfinished sweep; finish it with "

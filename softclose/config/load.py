@@ -365,11 +365,8 @@ def _derived_default(raw: dict[str, Any], section: str, key: str) -> list[float]
 def read_toml(path: str | Path) -> dict[str, Any]:
     """Parse a TOML config file; unreadable or malformed files raise ConfigError."""
     import tomllib
-    p = Path(path)
-    try:
-        text = p.read_text()
-    except OSError as exc:
-        raise ConfigError(f"--config {path}: cannot read the file ({exc.strerror})") from None
+    from ..files import read_text
+    text = read_text(path, f"--config {path}", "a TOML config file")
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -12,7 +12,7 @@ import sys
 from functools import lru_cache
 from pathlib import Path
 
-from ..buildcache import (_prune, _remove, _touch, folder, key_of, load, store,
+from ..buildcache import (_prune, _remove, _touch, folder, key_of, load, run_compiler, store,
                           sweep_temporaries, whole_library)
 
 #: compiler flags of the NLP: -O1 compiles the default NLP in ~10 s and solves 2.3x faster
@@ -131,8 +131,13 @@ def load_or_build(disk: str, restore, build, what: str = "", flags: tuple = CFLA
     nlp = _restored(disk, compiled_nlp(disk, flags), restore, flags, loaded)
     if nlp is not None:
         return nlp
-    nlp = build()
-    if will_compile():
+    if not will_compile():
+        return build()
+    with build_lock(disk, flags, what):     # (another process may be building it: wait)
+        nlp = _restored(disk, compiled_nlp(disk, flags), restore, flags, loaded)
+        if nlp is not None:
+            return nlp
+        nlp = build()
         store("nlpmeta", disk, nlp.meta())
         out = _restored(disk, compile_nlp(nlp.solver, disk, flags, what), restore, flags,
                         compiled)
@@ -140,6 +145,40 @@ def load_or_build(disk: str, restore, build, what: str = "", flags: tuple = CFLA
             return out
         failed.append(what or disk)
     return nlp
+
+
+@contextlib.contextmanager
+def build_lock(key: str, flags: tuple = CFLAGS, what: str = ""):
+    """Hold the lock of the NLP ``key``'s build (with ``flags``) in the cache for the block:
+    a second process that would compile the same NLP waits here (a line on stderr says it
+    waits for another build, and how long it waited), then loads what the first built. A
+    file lock (``filelock``: the system's lock on the file, released when the holder exits
+    or dies); without a cache, or where the lock file cannot be made, no lock."""
+    from filelock import FileLock, Timeout
+    where = folder()
+    lock = None
+    if where is not None:
+        try:
+            (where / "locks").mkdir(exist_ok=True)
+            lock = FileLock(str(where / "locks" / f"nlp-{key}-{key_of(flags)[:8]}.lock"))
+            try:
+                lock.acquire(timeout=0)
+            except Timeout:
+                import time
+                level = next((f for f in flags if f.startswith("-O")), "")
+                print(f"softclose: waiting for another build of the NLP"
+                      f"{' ' + what if what else ''} (C, {level}) ...", end="",
+                      file=sys.stderr, flush=True)
+                t0 = time.perf_counter()
+                lock.acquire()
+                print(f" {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
+        except OSError:          # (a lock file that cannot be made: build without one)
+            lock = None
+    try:
+        yield
+    finally:
+        if lock is not None:
+            lock.release()
 
 
 def _restored(disk: str, lib, restore, flags: tuple, into: list):
@@ -163,7 +202,6 @@ def compile_nlp(solver, key: str, flags: tuple = CFLAGS, what: str = "") -> Path
     stderr: ``building the NLP WHAT (C, -O1) ... 12.3 s``). None when there is no cache or
     no compiler (said on that line)."""
     import shutil
-    import subprocess
     import time
     where = folder()
     if where is None:
@@ -190,13 +228,13 @@ def compile_nlp(solver, key: str, flags: tuple = CFLAGS, what: str = "") -> Path
             os.chdir(old)
         src, out = tmp / f"nlp_{key}.c", tmp / path.name
         try:
-            subprocess.run([cc, *flags, str(src), "-o", str(out), "-lm"], check=True,
-                           capture_output=True, stdin=subprocess.DEVNULL)
-        except (OSError, subprocess.CalledProcessError) as exc:
-            why = getattr(exc, "stderr", b"") or b""
-            why = why.decode(errors="replace").strip().splitlines()
-            print(f" failed ({why[-1] if why else exc}): not compiled", file=sys.stderr,
-                  flush=True)
+            code, said = run_compiler([cc, *flags, src, "-o", out, "-lm"], tmp)
+        except OSError as exc:
+            code, said = -1, str(exc)
+        if code != 0:
+            why = said.strip().splitlines()
+            print(f" failed ({why[-1] if why else f'exit code {code}'}): not compiled",
+                  file=sys.stderr, flush=True)
             return None
         os.replace(out, path)
     except OSError as exc:

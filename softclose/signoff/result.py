@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import ConfigError
+from ..files import write_text, write_with
 from .text import SECTIONS
 #: the report's file formats (by a path's suffix)
 FORMATS = ("html", "pdf")
@@ -78,10 +79,10 @@ class ReportResult:
             raise ConfigError(f"{path}: a report is written as .html or .pdf, not "
                               f"'{path.suffix or 'no suffix'}'")
         if kind == "html":
-            path.write_text(self.html(figures), encoding="utf-8")
+            write_text(path, self.html(figures))
         else:
             from .pdf import write_pdf
-            write_pdf(self, path, figures)
+            write_with(path, lambda p: write_pdf(self, p, figures))
         return path
 
 

@@ -23,6 +23,7 @@ from typing import Iterator
 import numpy as np
 
 from ..errors import ConfigError
+from ..files import write_text
 from .chunks import columns
 from ..problem import METRIC_KEYS, word_code, WORD_PARAMS, word_text
 from ..jsonio import jsonable
@@ -56,10 +57,7 @@ def manifest(cfg, space, chunk: int, fmt: str) -> dict:
 
 def write_manifest(out: Path, m: dict, complete: bool) -> Path:
     path = Path(out) / MANIFEST
-    tmp = path.with_name(f".{MANIFEST}.tmp")
-    tmp.write_text(json.dumps({**m, "complete": bool(complete)}, indent=1))
-    os.replace(tmp, path)
-    return path
+    return write_text(path, json.dumps({**m, "complete": bool(complete)}, indent=1))
 
 
 def read_manifest(out: Path) -> dict | None:

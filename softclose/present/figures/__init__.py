@@ -17,6 +17,7 @@ import numpy as np
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from ...errors import ConfigError
+from ...files import write_with
 
 plt.rcParams.update({"font.size": 10, "axes.grid": True, "grid.alpha": 0.3,
                      "figure.dpi": 110, "savefig.bbox": "tight"})
@@ -227,7 +228,8 @@ def save(fig, path, style: str | None = None) -> Path:
     restyle(fig, style)
     rc = {"pdf.fonttype": 42, "svg.fonttype": "none"}
     with matplotlib.rc_context(rc):
-        fig.savefig(path, dpi=DPI if fmt == "png" else VECTOR_DPI, format=fmt)
+        write_with(path, lambda p: fig.savefig(p, dpi=DPI if fmt == "png" else VECTOR_DPI,
+                                               format=fmt))
     plt.close(fig)
     return path
 

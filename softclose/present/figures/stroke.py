@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from . import place_label, plt
+from ...files import write_with
 
 
 def plot_time_histories(res, title: str = "Closing stroke"):
@@ -247,6 +248,6 @@ def write_animation(model, traj: dict, path: Path, fps: int = FPS,
         frames.append(rgb.quantize(colors=255, method=Image.Quantize.MEDIANCUT) if not frames
                       else rgb.quantize(palette=frames[0], dither=Image.Dither.NONE))
     plt.close(fig)
-    frames[0].save(path, save_all=True, append_images=frames[1:],
-                   duration=int(round(1000 / fps)), loop=0, optimize=False)
+    write_with(path, lambda p: frames[0].save(p, save_all=True, append_images=frames[1:],
+               duration=int(round(1000 / fps)), loop=0, optimize=False))
     return Path(path)

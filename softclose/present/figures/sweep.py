@@ -24,6 +24,7 @@ import numpy as np
 
 from ...problem import CATEGORIES, categorise, word_code, WORD_PARAMS, word_text
 from . import current_style, DPI, plt, save
+from ...files import write_with
 from ...config.schema import BY_NAME
 from ..display import num
 
@@ -435,7 +436,7 @@ def save_maps(figs: dict, out, fmt: str = "png", style: str | None = None) -> li
     with matplotlib.rc_context({"savefig.bbox": "standard"}):
         for name, fig in figs.items():
             path = Path(out) / f"{name}.png"
-            fig.savefig(path, dpi=DPI, pil_kwargs={"compress_level": 1})
+            write_with(path, lambda p: fig.savefig(p, dpi=DPI, pil_kwargs={"compress_level": 1}))
             plt.close(fig)
             paths.append(path)
     return paths
