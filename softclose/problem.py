@@ -32,7 +32,7 @@ from .errors import ConfigError
 from .config.load import STEP_BUDGET, TRAJECTORY_BUDGET
 from .config.schema import KEYS, RANGES
 from .model import elements
-from .model.elements import ELEMENTS, PARAM_NAMES, PARAMS
+from .model.elements import ELEMENTS, PARAM_DEFAULTS, PARAM_NAMES, PARAMS, as_params
 from .model.resolved import (Lid, LidCase, Mounting, SolverSettings, StrokeEnds,
                              Temperatures)
 
@@ -200,26 +200,6 @@ def resolve(cfg) -> LidCase:
                    tuple(float(v) for v in params_of(cfg)),
                    SolverSettings(sim.integrator, sim.step, sim.reference_tol),
                    resolve_temperatures(cfg))
-
-
-#: the parameters' defaults (the elements added since the seed: absent)
-PARAM_DEFAULTS = np.array([q.number(next(k.default for k in KEYS if k.full == q.key))
-                           for q in PARAMS])
-
-
-def as_params(p) -> np.ndarray:
-    """A parameter vector (or rows of them) as a float array of every parameter: a shorter
-    vector -- the seed's four (k, l0, c, c_rot), say -- gets the others from their defaults,
-    which leave the elements added since absent."""
-    p = np.asarray(p, float)
-    n = p.shape[-1] if p.ndim else 0
-    if n == len(PARAM_KEYS):
-        return p
-    if not 0 < n < len(PARAM_KEYS):
-        raise ValueError(f"a parameter vector has {len(PARAM_KEYS)} values "
-                         f"({', '.join(PARAM_KEYS)}), got {n}")
-    rest = np.broadcast_to(PARAM_DEFAULTS[n:], p.shape[:-1] + (len(PARAM_KEYS) - n,))
-    return np.concatenate([p, rest], axis=-1)
 
 
 def with_designs(cfg, D) -> np.ndarray:

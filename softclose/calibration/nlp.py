@@ -27,7 +27,7 @@ import math
 import casadi as ca
 import numpy as np
 
-from ..simulation.integrators import casadi_step, get_method
+from ..numerics.integrators import casadi_step, get_method
 from ..interrupt import ipopt_options, solving
 from .equation import fit_ode
 

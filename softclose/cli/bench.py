@@ -96,7 +96,7 @@ def default_text(default: dict) -> str:
 def work_precision_markdown(wp) -> str:
     """The work-precision table (one block per design) and the fitted orders, as Markdown."""
     from ..bench import METRICS, TRUTH_TOL
-    from ..simulation.integrators import METHODS
+    from ..numerics.integrators import METHODS
     d = wp.default
     c = d["cheapest"]
     out = []

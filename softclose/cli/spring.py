@@ -162,7 +162,7 @@ def _format_rest(payload: dict, lines: list[str]) -> str:
 def run(cfg, args) -> Outcome:
     from ..coil_spring import SpringCheck
     from ..jsonio import jsonable
-    from ..coil_spring.order import spring_duty, spring_order
+    from ..optimiser.spring_order import spring_duty, spring_order
     out = prepare_out(args.out)
     duty = spring_duty(cfg)
     res = spring_order(cfg, duty)

@@ -27,9 +27,9 @@ import casadi as ca
 import numpy as np
 
 from . import dynamics as dyn, elements
+from .elements import as_params
 from ..errors import ConfigError
 from .kinematics import branch_of, closure, points, velocity_loop
-from ..problem import as_params
 from .resolved import LidCase
 from ..buildcache import text
 
