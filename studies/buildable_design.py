@@ -23,7 +23,6 @@ Usage: python studies/buildable_design.py [--fast] [--json] [--out DIR]
 
 from __future__ import annotations
 
-import argparse
 import csv
 import json
 import math
@@ -34,8 +33,8 @@ import softclose
 from softclose.present.figures import save
 from softclose.jsonio import jsonable
 from softclose.robust import optimise_robust
+from softclose.present.study import parse, study_options
 
-OUT = Path(__file__).resolve().parent / "out" / "buildable_design"
 KINDS = {"idealised": ["linear"], "buildable": ["compression", "extension"]}
 
 
@@ -122,13 +121,9 @@ def draw_price(rows, path: Path) -> Path:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--fast", action="store_true",
-                    help="2,000 Monte Carlo samples for the robust designs' yields")
-    ap.add_argument("--json", action="store_true", help="print one JSON object")
-    ap.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
-    a = ap.parse_args(argv)
-    a.out.mkdir(parents=True, exist_ok=True)
+    ap = study_options(__doc__, __file__,
+                       fast="2,000 Monte Carlo samples for the robust designs' yields")
+    a = parse(ap, argv)
     cfg = softclose.default_config()
     answers = solve(cfg, a.fast)
     rows, designs = [], {}

@@ -35,7 +35,6 @@ Usage: python studies/co_design.py [--fast] [--json] [--out DIR]
 
 from __future__ import annotations
 
-import argparse
 import csv
 import json
 import sys
@@ -45,8 +44,8 @@ from pathlib import Path
 import softclose
 from softclose.present.figures import save
 from softclose.jsonio import jsonable
+from softclose.present.study import parse, study_options
 
-OUT = Path(__file__).resolve().parent / "out" / "co_design"
 SPRING = {"geometry.spring_anchor[0]": [-0.09, -0.03], "geometry.spring_anchor[1]": [-0.01, 0.05],
           "geometry.lid_e[0]": [-0.006, 0.044], "geometry.lid_e[1]": [0.004, 0.024]}
 DASHPOT = {"geometry.dashpot_anchor[0]": [-0.03, 0.03],
@@ -100,14 +99,9 @@ def draw_gains(rows, path: Path) -> Path:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--fast", action="store_true",
-                    help="no `both` lever, robust only for today's points, "
-                         "2,000 samples")
-    ap.add_argument("--json", action="store_true", help="print one JSON object")
-    ap.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
-    a = ap.parse_args(argv)
-    a.out.mkdir(parents=True, exist_ok=True)
+    ap = study_options(__doc__, __file__,
+                       fast="no `both` lever, robust only for today's points, 2,000 samples")
+    a = parse(ap, argv)
     cfg = softclose.default_config().set("optimise.spring_kinds", ["compression"])
     answers = solve(cfg, a.fast)
     rows = []

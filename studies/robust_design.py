@@ -20,27 +20,20 @@ Usage: python studies/robust_design.py [--fast] [--json] [--out DIR]
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
-from pathlib import Path
 
 import softclose
 from softclose.present.figures import save
 from softclose.jsonio import jsonable
 from softclose.robust import optimise_robust, sensitivity
-
-OUT = Path(__file__).resolve().parent / "out" / "robust_design"
+from softclose.present.study import parse, study_options
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--fast", action="store_true",
-                    help="2,000 Monte Carlo samples and Sobol N = 256 (default 10,000 and 1024)")
-    ap.add_argument("--json", action="store_true", help="print one JSON object")
-    ap.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
-    a = ap.parse_args(argv)
-    a.out.mkdir(parents=True, exist_ok=True)
+    ap = study_options(__doc__, __file__,
+                       fast="2,000 Monte Carlo samples and Sobol N = 256 (default 10,000 and 1024)")
+    a = parse(ap, argv)
     cfg = softclose.default_config()
     samples = 2000 if a.fast else cfg.tolerance.samples
     n_sobol = 256 if a.fast else 1024
