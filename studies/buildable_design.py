@@ -33,7 +33,7 @@ import softclose
 from softclose.present.figures import save
 from softclose.jsonio import jsonable
 from softclose.robust import optimise_robust
-from softclose.present.study import parse, study_options
+from softclose.present.study import parse, print_json, study_options
 
 KINDS = {"idealised": ["linear"], "buildable": ["compression", "extension"]}
 
@@ -164,7 +164,7 @@ def main(argv=None) -> int:
     files.append(path)
     summary["files"] = [str(f) for f in files]
     if a.json:
-        print(json.dumps(jsonable(summary), allow_nan=False))
+        print_json(summary)
     else:
         for key, d in designs.items():
             part = d["part"]

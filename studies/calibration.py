@@ -46,7 +46,7 @@ from softclose.calibration.synthetic import angle_track, gyroscope_track, write_
 from softclose.config import to_toml
 from softclose.present.figures import save
 from softclose.jsonio import jsonable
-from softclose.present.study import parse, study_options
+from softclose.present.study import parse, print_json, study_options
 
 #: the README's optimum, built with a compression spring
 PROTOTYPE = {"design.spring_kind": "compression", "design.spring_k": 1914.709,
@@ -138,7 +138,7 @@ def main(argv=None) -> int:
                                  "collinear": list(fit3.collinear)},
                "comparison": rows, "report": verdict}
     if a.json:
-        print(json.dumps(jsonable(summary)))
+        print_json(summary)
     else:
         for k in FITTED:
             print(f"{k}: {fit.values[k]:.6g} ± {fit.std[k]:.2g} (95 %: {fit.ci95[k][0]:.6g} .. "

@@ -33,7 +33,7 @@ from softclose.catalog import (DamperEntry, SpringEntry, read_dampers, read_spri
                                standard_free_length_tolerance)
 from softclose.present.figures import save
 from softclose.jsonio import jsonable
-from softclose.present.study import parse, study_options
+from softclose.present.study import parse, print_json, study_options
 
 ROOT = Path(__file__).resolve().parents[1]
 CATALOG = ROOT / "examples" / "catalogs"
@@ -135,7 +135,7 @@ def main(argv=None) -> int:
     files.append(path)
     out["files"] = [str(f) for f in files]
     if a.json:
-        print(json.dumps(jsonable(out)))
+        print_json(out)
     else:
         r = out["robust_optimum"]
         print(f"robust optimum ({r['kind']}): worst-case J {r['worst_objective_own_box']:.5g} "

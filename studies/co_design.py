@@ -44,7 +44,7 @@ from pathlib import Path
 import softclose
 from softclose.present.figures import save
 from softclose.jsonio import jsonable
-from softclose.present.study import parse, study_options
+from softclose.present.study import parse, print_json, study_options
 
 SPRING = {"geometry.spring_anchor[0]": [-0.09, -0.03], "geometry.spring_anchor[1]": [-0.01, 0.05],
           "geometry.lid_e[0]": [-0.006, 0.044], "geometry.lid_e[1]": [0.004, 0.024]}
@@ -151,7 +151,7 @@ def main(argv=None) -> int:
     files.append(path)
     summary["files"] = [str(f) for f in files]
     if a.json:
-        print(json.dumps(jsonable(summary), allow_nan=False))
+        print_json(summary)
     else:
         for r in rows:
             print(f"{r['problem']:<8} {r['lever']:<8} J = "

@@ -11,7 +11,6 @@ Writes to studies/out/driven_fourbar/:
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
@@ -20,7 +19,7 @@ import numpy as np
 from softclose.validation.textbook.driven_fourbar import (DrivenFourBar, assemble_driven_fourbar,
                                                build_driven_fourbar, evaluate_constraints,
                                                locate_joints, track_motion)
-from softclose.present.study import parse, study_options
+from softclose.present.study import parse, print_json, study_options
 
 
 
@@ -95,7 +94,7 @@ def main(argv=None) -> int:
         grid = np.linspace(0.0, 10.0, 101 if args.fast else 1001)
         report["figures"] = draw(p, grid, *track_motion(system, q0, grid), args.out)
     if args.json:
-        print(json.dumps(report))
+        print_json(report)
     else:
         np.set_printoptions(precision=5, suppress=True, linewidth=140)
         print("order: x1, y1, phi1, x2, y2, phi2, x3, y3, phi3")

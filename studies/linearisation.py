@@ -12,7 +12,6 @@ Writes to studies/out/linearisation/:
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
@@ -21,7 +20,7 @@ import numpy as np
 from softclose.validation.textbook.linearisation import (LeverFourBar, compare_linearisation,
                                               compute_loop_residual, solve_error_limit,
                                               solve_output_angle)
-from softclose.present.study import parse, study_options
+from softclose.present.study import parse, print_json, study_options
 
 
 
@@ -105,7 +104,7 @@ def main(argv=None) -> int:
     if not args.no_plots:
         report["figures"] = [draw(link, r, limit, limit_seed, args.out)]
     if args.json:
-        print(json.dumps(report))
+        print_json(report)
     else:
         for k in range(0, len(phi), max(1, int(round(5 / step)))):
             print(f"phi = {report['phi_deg'][k]:5.1f} deg   theta_B = {report['theta_b_deg'][k]:8.3f}   "

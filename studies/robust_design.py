@@ -27,7 +27,7 @@ import softclose
 from softclose.present.figures import save
 from softclose.jsonio import jsonable
 from softclose.robust import optimise_robust, sensitivity
-from softclose.present.study import parse, study_options
+from softclose.present.study import parse, print_json, study_options
 
 
 def main(argv=None) -> int:
@@ -76,7 +76,7 @@ def main(argv=None) -> int:
     files.append(path)
     summary["files"] = [str(f) for f in files]
     if a.json:
-        print(json.dumps(jsonable(summary), allow_nan=False))
+        print_json(summary)
     else:
         d, n = res.design, nominal
         print(f"nominal optimum: k = {n['spring_k']:.1f} N/m, l0 = {n['spring_rest_length']:.5f} m,"

@@ -13,7 +13,6 @@ Writes to studies/out/synthesis/:
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
@@ -22,7 +21,7 @@ import numpy as np
 from softclose.validation.textbook.synthesis import (PIVOT_A, PROBLEM7_POINTS, classify_solutions,
                                           locate_poses, make_design, solve_precision_points,
                                           trace_circuit)
-from softclose.present.study import parse, study_options
+from softclose.present.study import parse, print_json, study_options
 
 
 
@@ -112,7 +111,7 @@ def main(argv=None) -> int:
         if not args.no_plots:
             report["figures"] = [draw(r7, z, args.out)]
     if args.json:
-        print(json.dumps(report))
+        print_json(report)
     else:
         for name in ("random", "problem7"):
             s = report[name]

@@ -15,7 +15,6 @@ from ..errors import ConfigError
 from .common import (DESIGN_FILE, Outcome, add_common, add_out, add_slow_motion, interactive,
                      metrics_line, prepare_out, slow_motion, write_design, write_outputs,
                      wrote)
-from .text import closing_time_text, design_text, hand_limits_text, objective_text
 from ..problem import resolve
 
 #: the default closing times of ``pareto`` (s)
@@ -87,38 +86,15 @@ def run_optimise(cfg, args) -> Outcome:
     if out is not None and res.design is not None:
         files = write_optimum(res, out, factor)
         payload["files"] = [str(f) for f in files]
-    text = format_result(res) + wrote(files)
+    text = res.text() + wrote(files)
     return Outcome(payload, text, 0 if res.success else 3, tuple(files),
                    None if res.success else (res.message or f"no optimum ({res.status})"))
 
 
 def _run_robust(cfg, args, out) -> Outcome:
-    """``optimise --robust``: the robust command's own outcome (text, files) when it is
-    installed; else the robust result printed as JSON."""
-    try:
-        from .robust import robust_outcome
-    except ImportError:
-        robust_outcome = None
-    if robust_outcome is not None:
-        return robust_outcome(cfg, args)
-    from ..jsonio import dumps
-    from ..robust import optimise_robust
-    res = optimise_robust(cfg, progress=interactive(args))
-    payload = res.to_json()
-    try:
-        from .robust import format_robust
-        text = format_robust(res)
-    except ImportError:
-        text = dumps(payload, indent=1)
-    files = []
-    if out is not None:
-        path = out / "robust.json"
-        path.write_text(dumps(payload, indent=1))
-        files.append(path)
-        payload["files"] = [str(path)]
-    ok = bool(getattr(res, "success", False))
-    return Outcome(payload, text + wrote(files), 0 if ok else 3, tuple(files),
-                   None if ok else (getattr(res, "message", "") or "no robust design"))
+    """``optimise --robust``: the robust command's outcome (text, files)."""
+    from .robust import robust_outcome
+    return robust_outcome(cfg, args)
 
 
 def write_optimum(res, out, slow_motion=None) -> list:
@@ -147,95 +123,6 @@ def write_optimum(res, out, slow_motion=None) -> list:
     files += write_stroke_outputs(sim.model, stroke, out, stem="optimum",
                                   slow_motion=slow_motion)
     return files
-
-
-def _v(x, fmt=".9g") -> str:
-    if x is None:
-        return "—"
-    if isinstance(x, bool):
-        return "yes" if x else "no"
-    return format(x, fmt)
-
-
-def format_result(res) -> str:
-    """The optimisation as text: verdict, problem, design, objective, the verified metrics
-    beside the optimiser's own, constraints, active limits, starts, notes."""
-    from ..problem import ENGAGE_KEYS, METRIC_KEYS, UNITS, VERIFY_RTOL
-    head = ("optimum found and verified" if res.success else
-            "optimum found, NOT verified" if res.verification is None and res.design else
-            "NO verified optimum")
-    lines = [f"softclose optimise: {head} (Ipopt: {res.status})"]
-    if res.message:
-        lines.append(f"  {res.message}")
-    pr = res.problem
-    if pr:
-        lines.append(f"  problem: {objective_text(pr)}, {closing_time_text(pr)}, holding "
-                     f"moment >= {pr['holding_moment_min']:g} N m{hand_limits_text(pr)}")
-    if res.design:
-        lines.append("  design: " + design_text(res.design)
-                     + (f" ({res.kind} spring)" if getattr(res, "kind", None) else ""))
-        part = getattr(res, "part", None)
-        if part is not None:
-            lines.append("  to buy: " + part.text().replace("\n", "\n  "))
-    ver = res.verification
-    if res.objective is not None:
-        s = (f"  objective J = {res.objective:.8g} (the optimiser's: its own discretisation "
-             "of the stroke, at the design above)")
-        if ver is not None and ver.objective is not None:
-            rel = ((res.objective - ver.objective) / abs(ver.objective) if ver.objective
-                   else math.inf)
-            s += (f"; the reference's J = {ver.objective:.8g} (relative difference {rel:.1e}, "
-                  f"allowed {VERIFY_RTOL:g})")
-        lines.append(s)
-    if res.optimiser:
-        agr = ver.agreement if ver is not None else {}
-        lines.append(f"  {'metric':<19} {'verified':>15} {'optimiser':>15} {'difference':>11} "
-                     f"{'allowed':>9}  unit   (verified = adaptive reference, CVODES)")
-        engage = tuple(k for k in ENGAGE_KEYS if res.optimiser.get(k) is not None
-                       or (res.metrics or {}).get(k) is not None)
-        for k in METRIC_KEYS + engage:
-            a = agr.get(k, {})
-            vv = res.metrics.get(k) if res.metrics else None
-            diff = a.get("difference")
-            flag = "" if a.get("ok", True) else "  <-- DISAGREES"
-            lines.append(f"  {k:<19} {_v(vv):>15} {_v(res.optimiser.get(k)):>15} "
-                         f"{_v(diff, '.2e') if diff is not None else '':>11} "
-                         f"{_v(a.get('tolerance'), '.1e') if a.get('tolerance') else '':>9}  "
-                         f"{UNITS[k]}{flag}")
-    if ver is not None and ver.constraints:
-        bad = [k for k, c in ver.constraints.items() if not c["ok"]]
-        lines.append("  constraints in the reference simulation: " +
-                     ("all hold" if not bad else "VIOLATED: " + ", ".join(bad)))
-    if res.active:
-        lines.append("  what limits the design (dJ: change of J per unit relaxation, from "
-                     "Ipopt's multipliers):")
-        for a in res.active:
-            lines.append(f"    {a.describe(res.objective)}")
-    elif res.design:
-        lines.append("  no bound or constraint is active: an interior optimum")
-    if res.starts:
-        Js = [st["objective"] for st in res.starts if st.get("objective") is not None]
-        moved = res.objective is not None and Js and \
-            abs(min(Js) - res.objective) > 1e-9 * abs(res.objective)
-        lines.append(f"  starts ({len(res.starts)}, from a coarse sweep of the design box"
-                     + ("; each J as its solve ended, before the best answer was refined and "
-                        "its closing-time bound corrected (notes), which moves J to the "
-                        "objective above" if moved else "") + "):")
-        for i, s in enumerate(res.starts, 1):
-            st = s["start"]
-            J = f"{s['objective']:.8g}" if s.get("objective") is not None else "—"
-            lines.append(f"    {i}. from k={st['spring_k']:.4g}, "
-                         f"l0={st['spring_rest_length']:.4g}, c={st['damper_c']:.4g}: "
-                         f"{s['status']}, {s['iterations']} it, {s['solve_time']:.3f} s, J = {J}")
-    for n in res.notes:
-        lines.append(f"  note: {n}")
-    grid = (f"{res.nodes} shooting intervals x {res.substeps} RK4 sub-steps" if not
-            getattr(res, "substeps2", None) else
-            f"two phases switched at the end damper's engagement: {res.nodes} shooting "
-            f"intervals x {res.substeps} RK4 sub-steps before it, {res.nodes} x "
-            f"{res.substeps2} after it")
-    lines.append(f"  ({grid}, {res.hessian} Hessian; total {res.total_time:.2f} s)")
-    return "\n".join(lines)
 
 
 # -- pareto --------------------------------------------------------------------------------
@@ -290,7 +177,7 @@ def run_pareto(cfg, args) -> Outcome:
         payload["files"] = [str(f) for f in files]
         for i, pt in enumerate(payload["points"]):
             pt["design_file"] = str(designs[i]) if i in designs else None
-    text = format_front(fr) + wrote(files)
+    text = fr.text() + wrote(files)
     return Outcome(payload, text, 0 if fr.success else 3, tuple(files),
                    None if fr.success else fr.message)
 
@@ -314,26 +201,3 @@ def write_front_designs(fr, out) -> dict:
     return paths
 
 
-def format_front(fr) -> str:
-    head = "every point verified" if fr.success else "NOT every point verified"
-    lines = [f"softclose pareto: {len(fr.points)} points, {head} ({fr.total_time:.2f} s)",
-             f"  {'T_max [s]':>9} {'k [N/m]':>9} {'l0 [m]':>8} {'c [N s/m]':>9} {'J':>10} "
-             f"{'impact [m/s]':>12} {'peak [m/s]':>10} {'verified':>8}  active"]
-    for t, p in zip(fr.closing_times, fr.points):
-        if p.design is None:
-            lines.append(f"  {t:9.4g}  no optimum: {p.message}")
-            continue
-        m = p.metrics or {}
-        act = ", ".join(f"{a.name} ({a.bound})" for a in p.active)
-        lines.append(f"  {t:9.4g} {p.design['spring_k']:9.1f} "
-                     f"{p.design['spring_rest_length']:8.5f} {p.design['damper_c']:9.1f} "
-                     f"{p.objective:10.6g} {_v(m.get('impact_tip_speed'), '12.5f'):>12} "
-                     f"{_v(m.get('peak_tip_speed'), '10.5f'):>10} "
-                     f"{'yes' if p.success else 'NO':>8}  {act}")
-    lines.append("  (speeds: the adaptive reference's simulation of each optimum; "
-                 "J: the optimiser's, agreeing with the reference's to 1e-3; designs rounded "
-                 "for the table: --out DIR writes each with every digit as "
-                 "DIR/designs/design_<i>.toml)")
-    if fr.message:
-        lines.append(f"  {fr.message}")
-    return "\n".join(lines)

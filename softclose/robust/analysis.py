@@ -84,6 +84,11 @@ class YieldResult(Displayed):
         damper (:data:`softclose.problem.BARE_LID`)."""
         return (BARE_LID,) if self.nominal.get("bare") else ()
 
+    def text(self, source: str = "design") -> str:
+        """What ``softclose yield`` prints (``source``: where the design comes from)."""
+        from .text import yield_text
+        return yield_text(self, source)
+
     def to_json(self) -> dict:
         return jsonable({
             "success": self.success, "message": self.message, "design": self.design,
@@ -262,6 +267,11 @@ class TemperatureYield:
     def limiting(self) -> float:
         """The temperature with the lowest yield."""
         return min(zip(self.results, self.temperatures), key=lambda x: x[0].yield_)[1]
+
+    def text(self, source: str = "design") -> str:
+        """What ``softclose yield`` prints at several sign-off temperatures."""
+        from .text import yield_by_temperature_text
+        return yield_by_temperature_text(self, source)
 
     def to_json(self) -> dict:
         """The joint yield's keys, and ``temperatures``: each temperature's yield."""
