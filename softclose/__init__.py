@@ -54,7 +54,7 @@ _LAZY = {
     "report": "signoff", "ReportResult": "signoff",
 }
 
-__all__ = ["simulate", "optimise", "front", "sweep", "sample", "tolerance_analysis",
+__all__ = ["simulate", "state", "optimise", "front", "sweep", "sample", "tolerance_analysis",
            "sensitivity", "fit", "FitResult", "load_config", "default_config", "Config", "StrokeResult",
            "StrokeStatus", "OptimiseResult", "FrontResult", "SweepResult", "RobustResult",
            "YieldResult", "SensitivityResult", "select", "SelectResult", "ConfigError",
@@ -92,6 +92,19 @@ def simulate(cfg: Config, trajectory: bool = False, hand_force: bool = False) ->
                    hand_forces=by_temperature,
                    end_damper=end_damper_note(res, d.end_damper_c, d.end_damper_angle_deg,
                                               st.theta0_deg, st.theta_closed_deg))
+
+
+def state(cfg: Config, theta_deg: float, theta_dot: float = 0.0):
+    """The linkage of ``cfg`` at the lid angle ``theta_deg`` (degrees) and rate ``theta_dot``
+    (rad/s), on the branch followed from the release: the crank angles and rates (none for a
+    hinge lid), theta'' from the equation of motion, the tip velocity and the pin reactions
+    (Newton-Euler; a hinge lid's one reaction is the hinge's, ``H``). Returns a
+    :class:`~softclose.simulation.state.LinkageState` (``.to_json()``, ``.text()``)."""
+    import math
+
+    from .simulation.state import linkage_state
+    model = LidModel(resolve(cfg))
+    return linkage_state(model, cfg.stroke.theta0, math.radians(theta_deg), theta_dot)
 
 
 def _model_from_config(cls, cfg: Config, cached: bool = False) -> LidModel:
