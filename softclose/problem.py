@@ -41,6 +41,11 @@ DESIGN_KEYS = ("spring_k", "spring_rest_length", "damper_c")
 #: the stroke kernels' parameter vector p, in order (the element registry's)
 PARAM_KEYS = PARAM_NAMES
 assert PARAM_KEYS[:len(DESIGN_KEYS)] == DESIGN_KEYS
+#: the default closing times of a Pareto front (``softclose pareto``): START:STOP:COUNT[:log],
+#: the ends as multiples of optimise.closing_time_max
+#: (:func:`softclose.optimiser.pareto.default_closing_times`)
+PARETO_DEFAULT = "0.3:3:10:log"
+
 #: config keys of the parameter vector p = (k, l0, c, c_rot), by column
 PARAM_COLUMNS = {q.key: i for i, q in enumerate(PARAMS)}
 #: the parameters whose config value is a word (a spring's kind, a one-way flag), by config

@@ -277,7 +277,7 @@ def test_pareto_defaults_follow_the_lids_closing_time_window():
     """The default closing times scale with optimise.closing_time_max and start above
     closing_time_min: the default lid's 0.3..3 s, the toilet seat's (5-8 s) 5.25..24 s."""
     from softclose import default_config, load_config
-    from softclose.cli.optimise import PARETO_DEFAULT, default_closing_times
+    from softclose.optimiser.pareto import PARETO_DEFAULT, default_closing_times
     assert default_closing_times(default_config()) == PARETO_DEFAULT
     assert default_closing_times(load_config(EXAMPLE.parent / "toilet_seat.toml")) == \
         "5.25:24:10:log"

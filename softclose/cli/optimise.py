@@ -9,16 +9,11 @@ objective against closing_time_max (exit 3 when a point is not verified).
 from __future__ import annotations
 
 import argparse
-import math
 
-from ..errors import ConfigError
 from .common import (DESIGN_FILE, Outcome, add_common, add_out, add_slow_motion, interactive,
                      metrics_line, prepare_out, slow_motion, write_design, write_outputs,
                      wrote)
-from ..problem import resolve
-
-#: the default closing times of ``pareto`` (s)
-PARETO_DEFAULT = "0.3:3:10:log"
+from ..problem import PARETO_DEFAULT, resolve
 
 
 OPTIMISE = """\
@@ -126,44 +121,11 @@ def write_optimum(res, out, slow_motion=None) -> list:
 
 
 # -- pareto --------------------------------------------------------------------------------
-def parse_closing_times(text: str):
-    """``START:STOP:COUNT`` (linear) or ``START:STOP:COUNT:log`` -> array of closing times."""
-    import numpy as np
-    from ..optimiser.pareto import MAX_POINTS
-    parts = str(text).split(":")
-    bad = f"--closing-times {text}: "
-    if len(parts) not in (3, 4) or (len(parts) == 4 and parts[3] != "log"):
-        raise ConfigError(bad + "expected START:STOP:COUNT or START:STOP:COUNT:log")
-    try:
-        a, b = float(parts[0]), float(parts[1])
-        n = int(parts[2])
-    except ValueError:
-        raise ConfigError(bad + "START and STOP must be numbers (s), COUNT a whole number") \
-            from None
-    if not (math.isfinite(a) and math.isfinite(b) and 0 < a <= b):
-        raise ConfigError(bad + "expected 0 < START <= STOP (finite, in s)")
-    if not 1 <= n <= MAX_POINTS:
-        raise ConfigError(bad + f"COUNT must lie in 1..{MAX_POINTS}, got {n}")
-    if a == b and n > 1:
-        raise ConfigError(bad + "START equals STOP: use COUNT 1")
-    return np.geomspace(a, b, n) if len(parts) == 4 else np.linspace(a, b, n)
-
-
-def default_closing_times(cfg) -> str:
-    """:data:`PARETO_DEFAULT` scaled to the config's closing-time window: its ends times
-    optimise.closing_time_max (in s), the first above 1.05 x closing_time_min (the
-    default config's: unchanged)."""
-    a, b, n, kind = PARETO_DEFAULT.split(":")
-    o = cfg.optimise
-    lo = max(float(a) * o.closing_time_max, 1.05 * o.closing_time_min)
-    hi = max(float(b) * o.closing_time_max, lo)
-    return f"{lo:.6g}:{hi:.6g}:{n if hi > lo else 1}:{kind}"
-
-
 def run_pareto(cfg, args) -> Outcome:
     out = prepare_out(args.out)
-    times = parse_closing_times(args.closing_times or default_closing_times(cfg))
     from ..optimiser import front
+    from ..optimiser.pareto import closing_times
+    times = closing_times(cfg, args.closing_times)
     fr = front(cfg, times, progress=interactive(args))
     payload = fr.to_json()
     files = []
