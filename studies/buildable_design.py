@@ -24,16 +24,14 @@ Usage: python studies/buildable_design.py [--fast] [--json] [--out DIR]
 from __future__ import annotations
 
 import csv
-import json
 import math
 import sys
 from pathlib import Path
 
 import softclose
 from softclose.present.figures import save
-from softclose.jsonio import jsonable
 from softclose.robust import optimise_robust
-from softclose.present.study import parse, print_json, study_options
+from softclose.present.study import parse, print_json, save_summary, study_options
 
 KINDS = {"idealised": ["linear"], "buildable": ["compression", "extension"]}
 
@@ -159,10 +157,7 @@ def main(argv=None) -> int:
                                     samples=2000 if a.fast else None)
         files.append(sign_off.save(a.out / "report.html"))
         summary["report"] = sign_off.message
-    path = a.out / "designs.json"
-    path.write_text(json.dumps(jsonable(summary), indent=1, allow_nan=False))
-    files.append(path)
-    summary["files"] = [str(f) for f in files]
+    save_summary(summary, a.out / "designs.json", files)
     if a.json:
         print_json(summary)
     else:

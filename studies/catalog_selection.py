@@ -24,7 +24,6 @@ Usage: python studies/catalog_selection.py [--fast] [--json] [--out DIR]
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
@@ -32,8 +31,7 @@ import softclose
 from softclose.catalog import (DamperEntry, SpringEntry, read_dampers, read_springs,
                                standard_free_length_tolerance)
 from softclose.present.figures import save
-from softclose.jsonio import jsonable
-from softclose.present.study import parse, print_json, study_options
+from softclose.present.study import parse, print_json, save_summary, study_options
 
 ROOT = Path(__file__).resolve().parents[1]
 CATALOG = ROOT / "examples" / "catalogs"
@@ -130,10 +128,7 @@ def main(argv=None) -> int:
         sign_off = softclose.report(pair_config(cfg, best), samples=samples)
         files.append(sign_off.save(a.out / "report.html"))
         out["report"] = sign_off.message
-    path = a.out / "comparison.json"
-    path.write_text(json.dumps(jsonable(out), indent=1, allow_nan=False))
-    files.append(path)
-    out["files"] = [str(f) for f in files]
+    save_summary(out, a.out / "comparison.json", files)
     if a.json:
         print_json(out)
     else:

@@ -43,8 +43,7 @@ from pathlib import Path
 
 import softclose
 from softclose.present.figures import save
-from softclose.jsonio import jsonable
-from softclose.present.study import parse, print_json, study_options
+from softclose.present.study import parse, print_json, save_summary, study_options
 
 SPRING = {"geometry.spring_anchor[0]": [-0.09, -0.03], "geometry.spring_anchor[1]": [-0.01, 0.05],
           "geometry.lid_e[0]": [-0.006, 0.044], "geometry.lid_e[1]": [0.004, 0.024]}
@@ -146,10 +145,7 @@ def main(argv=None) -> int:
                                 samples=2000 if a.fast else None)
     files.append(sign_off.save(a.out / "report.html"))
     summary["report"] = sign_off.message
-    path = a.out / "levers.json"
-    path.write_text(json.dumps(jsonable(summary), indent=1, allow_nan=False))
-    files.append(path)
-    summary["files"] = [str(f) for f in files]
+    save_summary(summary, a.out / "levers.json", files)
     if a.json:
         print_json(summary)
     else:

@@ -20,14 +20,12 @@ Usage: python studies/robust_design.py [--fast] [--json] [--out DIR]
 
 from __future__ import annotations
 
-import json
 import sys
 
 import softclose
 from softclose.present.figures import save
-from softclose.jsonio import jsonable
 from softclose.robust import optimise_robust, sensitivity
-from softclose.present.study import parse, print_json, study_options
+from softclose.present.study import parse, print_json, save_summary, study_options
 
 
 def main(argv=None) -> int:
@@ -71,10 +69,7 @@ def main(argv=None) -> int:
     sign_off = softclose.report(res.design_config(), optimiser=res.to_json(), samples=samples)
     files.append(sign_off.save(a.out / "report.html"))
     summary["report"] = sign_off.message
-    path = a.out / "designs.json"
-    path.write_text(json.dumps(jsonable(summary), indent=1, allow_nan=False))
-    files.append(path)
-    summary["files"] = [str(f) for f in files]
+    save_summary(summary, a.out / "designs.json", files)
     if a.json:
         print_json(summary)
     else:

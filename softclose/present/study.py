@@ -48,9 +48,19 @@ def parse(parser: argparse.ArgumentParser, argv=None) -> argparse.Namespace:
     return args
 
 
+def save_summary(summary: dict, path, files: list) -> Path:
+    """Write ``summary`` to ``path`` as strict JSON, add ``path`` to ``files`` and list them
+    all in ``summary["files"]`` (for :func:`print_json`). Returns ``path``."""
+    path = Path(path)
+    files.append(path)
+    path.write_text(json.dumps(jsonable(summary), indent=1, allow_nan=False))
+    summary["files"] = [str(f) for f in files]
+    return path
+
+
 def print_json(summary) -> None:
     """``summary`` as one strict JSON object on stdout (no NaN: missing values are null)."""
     print(json.dumps(jsonable(summary), allow_nan=False))
 
 
-__all__ = ["study_options", "parse", "print_json", "default_out"]
+__all__ = ["study_options", "parse", "print_json", "save_summary", "default_out"]
