@@ -90,3 +90,20 @@ def test_fit_prints_the_api_result(capsys):
     same(payload, res.to_json(), volatile=("seconds", "times", "solve_time"))
     assert code == 0
     assert cli_text(capsys, "fit", data, "--free", "design.damper_c") == res.text()
+
+
+def test_yield_at_several_temperatures_prints_the_api_result(capsys):
+    from softclose.robust import yield_by_temperature
+    sets = ["--set", "operating.temperatures_c=[-10, 20, 50]"]
+    cfg = softclose.load_config(None, [sets[1]])
+    res = yield_by_temperature(cfg, samples=200)
+    code, payload = cli_json(capsys, "yield", "--samples", "200", *sets)
+    api = res.to_json()
+    assert set(payload) <= set(api), sorted(set(payload) - set(api))
+    assert {k: payload[k] for k in ("design", "box", "yield", "success", "message",
+                                    "limiting_temperature_c")} == \
+        {k: api[k] for k in ("design", "box", "yield", "success", "message",
+                             "limiting_temperature_c")}
+    assert code == (0 if res.meets_required else 3)
+    assert cli_text(capsys, "yield", "--samples", "200", *sets) == \
+        res.text("design (the defaults)")

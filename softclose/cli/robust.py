@@ -104,22 +104,15 @@ def _yield_by_temperature(cfg, args, seed, out) -> Outcome:
     each temperature's yield (the same samples) and the joint one."""
     from ..robust import yield_by_temperature
     t = yield_by_temperature(cfg, samples=args.samples, seed=seed)
-    first = t.results[0]
     payload = t.to_json()
-    payload.update(design=first.design, box=first.box, distribution=first.distribution,
-                   seed=first.seed)
     files = []
     if out is not None:
         for T, r in zip(t.temperatures, t.results):
             files += write_outputs(out, f"yield_samples_{T:g}C.csv", r.to_frame(),
                                    f"yield_histograms_{T:g}C.png", r.plot)
         payload["files"] = [str(f) for f in files]
-    message = (f"the yield at every temperature is {100 * t.yield_:.2f} %, below the "
-               f"required {100 * t.required_yield:g} % (lowest at {t.limiting:g} °C)")
-    payload["success"] = t.meets_required
-    payload["message"] = "" if t.meets_required else message
     return Outcome(payload, t.text(_source(args)) + wrote(files), 0 if t.meets_required else 3,
-                   tuple(files), error=None if t.meets_required else message)
+                   tuple(files), error=t.message or None)
 
 
 def run_sensitivity(cfg, args) -> Outcome:
