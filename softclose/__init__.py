@@ -54,7 +54,7 @@ _LAZY = {
     "report": "signoff", "ReportResult": "signoff",
 }
 
-__all__ = ["simulate", "optimise", "front", "sweep", "sample", "tolerance_analysis",
+__all__ = ["simulate", "state", "optimise", "front", "sweep", "sample", "tolerance_analysis",
            "sensitivity", "fit", "FitResult", "load_config", "default_config", "Config", "StrokeResult",
            "StrokeStatus", "OptimiseResult", "FrontResult", "SweepResult", "RobustResult",
            "YieldResult", "SensitivityResult", "select", "SelectResult", "ConfigError",
@@ -62,16 +62,49 @@ __all__ = ["simulate", "optimise", "front", "sweep", "sample", "tolerance_analys
            "report", "ReportResult", "resolve"]
 
 
-def simulate(cfg: Config, trajectory: bool = False) -> StrokeResult:
+def simulate(cfg: Config, trajectory: bool = False, hand_force: bool = False) -> StrokeResult:
     """One closing stroke of ``cfg``'s design with ``cfg``'s integrator and step.
 
     Returns a :class:`~softclose.simulation.stroke.StrokeResult`: the metrics, each fixed-step
     one with its estimated distance from the converged answer (``accuracy``), and with
-    ``trajectory=True`` the time histories (``.plot()``, ``.trajectory_frame()``). A stroke
-    the method cannot integrate is reported (``ok`` False, ``message`` says what to change),
+    ``trajectory=True`` the time histories (``.plot()``, ``.trajectory_frame()``). With
+    ``hand_force=True`` also what ``softclose simulate`` reports beside them: the hand force
+    and the lid's zones (``.hand_force``), at each sign-off temperature of
+    ``operating.temperatures_c`` when it lists several (``.hand_forces``), and what the end
+    damper did when it does not engage on the way down (``.end_damper``). A stroke the
+    method cannot integrate is reported (``ok`` False, ``message`` says what to change),
     never raised.
     """
-    return Simulator(resolve(cfg), cached=True).run(trajectory=trajectory)
+    sim = Simulator(resolve(cfg), cached=True)
+    res = sim.run(trajectory=trajectory)
+    if not (hand_force and res.ok):
+        return res
+    from dataclasses import replace
+
+    from .problem import at_temperature, sign_off_temperatures
+    from .simulation.handforce import hand_force as hand_force_of
+    from .simulation.stroke import end_damper_note
+    temps = sign_off_temperatures(cfg)
+    by_temperature = tuple((T, hand_force_of(sim.model, case=resolve(at_temperature(cfg, T))))
+                           for T in temps) if len(temps) > 1 else ()
+    d, st = cfg.design, cfg.stroke
+    return replace(res, hand_force=hand_force_of(sim.model, case=sim.case),
+                   hand_forces=by_temperature,
+                   end_damper=end_damper_note(res, d.end_damper_c, d.end_damper_angle_deg,
+                                              st.theta0_deg, st.theta_closed_deg))
+
+
+def state(cfg: Config, theta_deg: float, theta_dot: float = 0.0):
+    """The linkage of ``cfg`` at the lid angle ``theta_deg`` (degrees) and rate ``theta_dot``
+    (rad/s), on the branch followed from the release: the crank angles and rates (none for a
+    hinge lid), theta'' from the equation of motion, the tip velocity and the pin reactions
+    (Newton-Euler; a hinge lid's one reaction is the hinge's, ``H``). Returns a
+    :class:`~softclose.simulation.state.LinkageState` (``.to_json()``, ``.text()``)."""
+    import math
+
+    from .simulation.state import linkage_state
+    model = LidModel(resolve(cfg))
+    return linkage_state(model, cfg.stroke.theta0, math.radians(theta_deg), theta_dot)
 
 
 def _model_from_config(cls, cfg: Config, cached: bool = False) -> LidModel:

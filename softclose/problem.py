@@ -33,7 +33,7 @@ from .config.free import config_value
 from .config.load import STEP_BUDGET, TRAJECTORY_BUDGET
 from .config.schema import KEYS, RANGES
 from .model import elements
-from .model.elements import ELEMENTS, PARAM_NAMES, PARAMS
+from .model.elements import ELEMENTS, PARAM_DEFAULTS, PARAM_NAMES, PARAMS, as_params
 from .model.resolved import (Lid, LidCase, Mounting, SolverSettings, StrokeEnds,
                              Temperatures)
 
@@ -42,6 +42,11 @@ DESIGN_KEYS = ("spring_k", "spring_rest_length", "damper_c")
 #: the stroke kernels' parameter vector p, in order (the element registry's)
 PARAM_KEYS = PARAM_NAMES
 assert PARAM_KEYS[:len(DESIGN_KEYS)] == DESIGN_KEYS
+#: the default closing times of a Pareto front (``softclose pareto``): START:STOP:COUNT[:log],
+#: the ends as multiples of optimise.closing_time_max
+#: (:func:`softclose.optimiser.pareto.default_closing_times`)
+PARETO_DEFAULT = "0.3:3:10:log"
+
 #: config keys of the parameter vector p = (k, l0, c, c_rot), by column
 PARAM_COLUMNS = {q.key: i for i, q in enumerate(PARAMS)}
 #: the parameters whose config value is a word (a spring's kind, a one-way flag), by config
@@ -193,26 +198,6 @@ def resolve(cfg) -> LidCase:
                    tuple(float(v) for v in params_of(cfg)),
                    SolverSettings(sim.integrator, sim.step, sim.reference_tol),
                    resolve_temperatures(cfg))
-
-
-#: the parameters' defaults (the elements added since the seed: absent)
-PARAM_DEFAULTS = np.array([q.number(next(k.default for k in KEYS if k.full == q.key))
-                           for q in PARAMS])
-
-
-def as_params(p) -> np.ndarray:
-    """A parameter vector (or rows of them) as a float array of every parameter: a shorter
-    vector -- the seed's four (k, l0, c, c_rot), say -- gets the others from their defaults,
-    which leave the elements added since absent."""
-    p = np.asarray(p, float)
-    n = p.shape[-1] if p.ndim else 0
-    if n == len(PARAM_KEYS):
-        return p
-    if not 0 < n < len(PARAM_KEYS):
-        raise ValueError(f"a parameter vector has {len(PARAM_KEYS)} values "
-                         f"({', '.join(PARAM_KEYS)}), got {n}")
-    rest = np.broadcast_to(PARAM_DEFAULTS[n:], p.shape[:-1] + (len(PARAM_KEYS) - n,))
-    return np.concatenate([p, rest], axis=-1)
 
 
 def with_designs(cfg, D) -> np.ndarray:

@@ -23,19 +23,16 @@ Usage: python studies/buildable_design.py [--fast] [--json] [--out DIR]
 
 from __future__ import annotations
 
-import argparse
 import csv
-import json
 import math
 import sys
 from pathlib import Path
 
 import softclose
 from softclose.present.figures import save
-from softclose.jsonio import jsonable
 from softclose.robust import optimise_robust
+from softclose.present.study import parse, print_json, save_summary, study_options
 
-OUT = Path(__file__).resolve().parent / "out" / "buildable_design"
 KINDS = {"idealised": ["linear"], "buildable": ["compression", "extension"]}
 
 
@@ -122,13 +119,9 @@ def draw_price(rows, path: Path) -> Path:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--fast", action="store_true",
-                    help="2,000 Monte Carlo samples for the robust designs' yields")
-    ap.add_argument("--json", action="store_true", help="print one JSON object")
-    ap.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
-    a = ap.parse_args(argv)
-    a.out.mkdir(parents=True, exist_ok=True)
+    ap = study_options(__doc__, __file__,
+                       fast="2,000 Monte Carlo samples for the robust designs' yields")
+    a = parse(ap, argv)
     cfg = softclose.default_config()
     answers = solve(cfg, a.fast)
     rows, designs = [], {}
@@ -164,12 +157,9 @@ def main(argv=None) -> int:
                                     samples=2000 if a.fast else None)
         files.append(sign_off.save(a.out / "report.html"))
         summary["report"] = sign_off.message
-    path = a.out / "designs.json"
-    path.write_text(json.dumps(jsonable(summary), indent=1, allow_nan=False))
-    files.append(path)
-    summary["files"] = [str(f) for f in files]
+    save_summary(summary, a.out / "designs.json", files)
     if a.json:
-        print(json.dumps(jsonable(summary), allow_nan=False))
+        print_json(summary)
     else:
         for key, d in designs.items():
             part = d["part"]

@@ -38,18 +38,16 @@ Usage: python studies/calibration.py [--fast] [--json] [--out DIR]
 
 from __future__ import annotations
 
-import argparse
 import csv
 import json
-from pathlib import Path
 
 import softclose
 from softclose.calibration.synthetic import angle_track, gyroscope_track, write_csv
 from softclose.config import to_toml
 from softclose.present.figures import save
 from softclose.jsonio import jsonable
+from softclose.present.study import parse, print_json, study_options
 
-OUT = Path(__file__).resolve().parent / "out" / "calibration"
 #: the README's optimum, built with a compression spring
 PROTOTYPE = {"design.spring_kind": "compression", "design.spring_k": 1914.709,
              "design.spring_rest_length": 0.07925707, "design.damper_c": 2087.754}
@@ -68,13 +66,9 @@ def on_true_lid(truth_cfg, design: dict) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--fast", action="store_true",
-                    help="2,000 Monte Carlo samples for the robust designs' yields")
-    ap.add_argument("--json", action="store_true", help="print one JSON object")
-    ap.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
-    a = ap.parse_args(argv)
-    a.out.mkdir(parents=True, exist_ok=True)
+    ap = study_options(__doc__, __file__,
+                       fast="2,000 Monte Carlo samples for the robust designs' yields")
+    a = parse(ap, argv)
     nominal = softclose.default_config().update(PROTOTYPE)
     truth = nominal.update(TRUTH)
     if a.fast:
@@ -144,7 +138,7 @@ def main(argv=None) -> int:
                                  "collinear": list(fit3.collinear)},
                "comparison": rows, "report": verdict}
     if a.json:
-        print(json.dumps(jsonable(summary)))
+        print_json(summary)
     else:
         for k in FITTED:
             print(f"{k}: {fit.values[k]:.6g} ± {fit.std[k]:.2g} (95 %: {fit.ci95[k][0]:.6g} .. "

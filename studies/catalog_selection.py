@@ -24,8 +24,6 @@ Usage: python studies/catalog_selection.py [--fast] [--json] [--out DIR]
 
 from __future__ import annotations
 
-import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -33,10 +31,9 @@ import softclose
 from softclose.catalog import (DamperEntry, SpringEntry, read_dampers, read_springs,
                                standard_free_length_tolerance)
 from softclose.present.figures import save
-from softclose.jsonio import jsonable
+from softclose.present.study import parse, print_json, save_summary, study_options
 
 ROOT = Path(__file__).resolve().parents[1]
-OUT = ROOT / "studies" / "out" / "catalog_selection"
 CATALOG = ROOT / "examples" / "catalogs"
 
 
@@ -75,14 +72,10 @@ def draw(sel, own, path: Path) -> Path:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--fast", action="store_true",
-                    help="every 4th spring, 64 samples a pair, the best 3 verified, c from "
-                         "the kernel's grid only (no NLP)")
-    ap.add_argument("--json", action="store_true", help="print one JSON object")
-    ap.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
-    a = ap.parse_args(argv)
-    a.out.mkdir(parents=True, exist_ok=True)
+    ap = study_options(__doc__, __file__,
+                       fast="every 4th spring, 64 samples a pair, the best 3 verified, c from "
+                            "the kernel's grid only (no NLP)")
+    a = parse(ap, argv)
     cfg = softclose.default_config()
     samples, verify = (64, 3) if a.fast else (256, 10)
     springs = read_springs(CATALOG / "springs.csv")
@@ -135,12 +128,9 @@ def main(argv=None) -> int:
         sign_off = softclose.report(pair_config(cfg, best), samples=samples)
         files.append(sign_off.save(a.out / "report.html"))
         out["report"] = sign_off.message
-    path = a.out / "comparison.json"
-    path.write_text(json.dumps(jsonable(out), indent=1, allow_nan=False))
-    files.append(path)
-    out["files"] = [str(f) for f in files]
+    save_summary(out, a.out / "comparison.json", files)
     if a.json:
-        print(json.dumps(jsonable(out)))
+        print_json(out)
     else:
         r = out["robust_optimum"]
         print(f"robust optimum ({r['kind']}): worst-case J {r['worst_objective_own_box']:.5g} "

@@ -35,7 +35,6 @@ Usage: python studies/co_design.py [--fast] [--json] [--out DIR]
 
 from __future__ import annotations
 
-import argparse
 import csv
 import json
 import sys
@@ -44,9 +43,8 @@ from pathlib import Path
 
 import softclose
 from softclose.present.figures import save
-from softclose.jsonio import jsonable
+from softclose.present.study import parse, print_json, save_summary, study_options
 
-OUT = Path(__file__).resolve().parent / "out" / "co_design"
 SPRING = {"geometry.spring_anchor[0]": [-0.09, -0.03], "geometry.spring_anchor[1]": [-0.01, 0.05],
           "geometry.lid_e[0]": [-0.006, 0.044], "geometry.lid_e[1]": [0.004, 0.024]}
 DASHPOT = {"geometry.dashpot_anchor[0]": [-0.03, 0.03],
@@ -100,14 +98,9 @@ def draw_gains(rows, path: Path) -> Path:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--fast", action="store_true",
-                    help="no `both` lever, robust only for today's points, "
-                         "2,000 samples")
-    ap.add_argument("--json", action="store_true", help="print one JSON object")
-    ap.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
-    a = ap.parse_args(argv)
-    a.out.mkdir(parents=True, exist_ok=True)
+    ap = study_options(__doc__, __file__,
+                       fast="no `both` lever, robust only for today's points, 2,000 samples")
+    a = parse(ap, argv)
     cfg = softclose.default_config().set("optimise.spring_kinds", ["compression"])
     answers = solve(cfg, a.fast)
     rows = []
@@ -152,12 +145,9 @@ def main(argv=None) -> int:
                                 samples=2000 if a.fast else None)
     files.append(sign_off.save(a.out / "report.html"))
     summary["report"] = sign_off.message
-    path = a.out / "levers.json"
-    path.write_text(json.dumps(jsonable(summary), indent=1, allow_nan=False))
-    files.append(path)
-    summary["files"] = [str(f) for f in files]
+    save_summary(summary, a.out / "levers.json", files)
     if a.json:
-        print(json.dumps(jsonable(summary), allow_nan=False))
+        print_json(summary)
     else:
         for r in rows:
             print(f"{r['problem']:<8} {r['lever']:<8} J = "

@@ -11,8 +11,6 @@ Writes to studies/out/driven_fourbar/:
 
 from __future__ import annotations
 
-import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -21,8 +19,8 @@ import numpy as np
 from softclose.validation.textbook.driven_fourbar import (DrivenFourBar, assemble_driven_fourbar,
                                                build_driven_fourbar, evaluate_constraints,
                                                locate_joints, track_motion)
+from softclose.present.study import parse, print_json, study_options
 
-OUT = Path(__file__).resolve().parent / "out" / "driven_fourbar"
 
 
 def parse_times(text: str) -> list[float]:
@@ -79,12 +77,10 @@ def draw(p, t, Q, QD, QDD, out: Path) -> list[str]:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = study_options(__doc__, __file__, fast="smoke test: coarse plot grid")
     ap.add_argument("--times", default="0,1,2.5,5,10", help="comma-separated times in s")
-    ap.add_argument("--json", action="store_true", help="print one JSON object")
-    ap.add_argument("--fast", action="store_true", help="smoke test: coarse plot grid")
     ap.add_argument("--no-plots", action="store_true")
-    args = ap.parse_args(argv)
+    args = parse(ap, argv)
 
     p = DrivenFourBar()
     system = build_driven_fourbar(p)
@@ -96,9 +92,9 @@ def main(argv=None) -> int:
               "max_constraint_residual": residual}
     if not args.no_plots:
         grid = np.linspace(0.0, 10.0, 101 if args.fast else 1001)
-        report["figures"] = draw(p, grid, *track_motion(system, q0, grid), OUT)
+        report["figures"] = draw(p, grid, *track_motion(system, q0, grid), args.out)
     if args.json:
-        print(json.dumps(report))
+        print_json(report)
     else:
         np.set_printoptions(precision=5, suppress=True, linewidth=140)
         print("order: x1, y1, phi1, x2, y2, phi2, x3, y3, phi3")

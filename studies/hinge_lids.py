@@ -17,7 +17,6 @@ Usage: python studies/hinge_lids.py [--fast] [--out DIR]
 
 from __future__ import annotations
 
-import argparse
 import csv
 import json
 import sys
@@ -25,10 +24,10 @@ from pathlib import Path
 
 import softclose
 from softclose.config import to_toml
+from softclose.present.study import parse, study_options
 
 ROOT = Path(__file__).resolve().parents[1]
 LIDS = ROOT / "examples" / "lids"
-OUT = Path(__file__).resolve().parent / "out" / "hinge_lids"
 
 
 def study(name: str, fast: bool) -> tuple[dict, object]:
@@ -54,13 +53,10 @@ def study(name: str, fast: bool) -> tuple[dict, object]:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--fast", action="store_true",
-                    help="sign off the configs' own designs (no optimisation), 200 yield "
-                         "samples")
-    ap.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
-    a = ap.parse_args(argv)
-    a.out.mkdir(parents=True, exist_ok=True)
+    ap = study_options(__doc__, __file__, json_option=False,
+                       fast="sign off the configs' own designs (no optimisation), 200 yield "
+                            "samples")
+    a = parse(ap, argv)
     rows, files = [], []
     for path in sorted(LIDS.glob("*.toml")):
         row, design_cfg = study(path.stem, a.fast)

@@ -12,8 +12,6 @@ Writes to studies/out/linearisation/:
 
 from __future__ import annotations
 
-import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -22,8 +20,8 @@ import numpy as np
 from softclose.validation.textbook.linearisation import (LeverFourBar, compare_linearisation,
                                               compute_loop_residual, solve_error_limit,
                                               solve_output_angle)
+from softclose.present.study import parse, print_json, study_options
 
-OUT = Path(__file__).resolve().parent / "out" / "linearisation"
 
 
 def draw(link, r, limit, limit_seed, out: Path) -> str:
@@ -80,12 +78,10 @@ def draw(link, r, limit, limit_seed, out: Path) -> str:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--json", action="store_true", help="print one JSON object")
-    ap.add_argument("--fast", action="store_true", help="smoke test: coarse grid")
+    ap = study_options(__doc__, __file__, fast="smoke test: coarse grid")
     ap.add_argument("--step-deg", type=float, default=0.1, help="grid step of phi (deg)")
     ap.add_argument("--no-plots", action="store_true")
-    args = ap.parse_args(argv)
+    args = parse(ap, argv)
 
     step = 1.0 if args.fast else args.step_deg
     link = LeverFourBar()
@@ -106,9 +102,9 @@ def main(argv=None) -> int:
         "max_loop_residual": float(np.max(compute_loop_residual(link.theta_ref + phi, r["theta_b"], link))),
     }
     if not args.no_plots:
-        report["figures"] = [draw(link, r, limit, limit_seed, OUT)]
+        report["figures"] = [draw(link, r, limit, limit_seed, args.out)]
     if args.json:
-        print(json.dumps(report))
+        print_json(report)
     else:
         for k in range(0, len(phi), max(1, int(round(5 / step)))):
             print(f"phi = {report['phi_deg'][k]:5.1f} deg   theta_B = {report['theta_b_deg'][k]:8.3f}   "

@@ -22,32 +22,26 @@ Options: --fast (4 points, a smoke test), --points N, --json (print the JSON), -
 
 from __future__ import annotations
 
-import argparse
 import sys
-from pathlib import Path
 
 import numpy as np
 
 import softclose
 from softclose.present.figures import save
 from softclose.jsonio import dumps
-
-OUT = Path(__file__).resolve().parent / "out" / "pareto_closing_time"
+from softclose.present.study import parse, study_options
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--fast", action="store_true", help="smoke test: 4 points")
+    ap = study_options(__doc__, __file__, fast="smoke test: 4 points")
     ap.add_argument("--points", type=int, default=10, help="number of closing_time_max values")
-    ap.add_argument("--json", action="store_true", help="print the front as one JSON object")
-    ap.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
     ap.add_argument("--config", help="TOML config file")
     ap.add_argument("--set", dest="overrides", action="append", default=[],
                     metavar="SECTION.KEY=VALUE", help="config override (repeatable)")
     args = ap.parse_args(argv)
     try:
         cfg = softclose.load_config(args.config, args.overrides)
-        args.out.mkdir(parents=True, exist_ok=True)
+        args = parse(ap, argv)
         times = np.geomspace(0.3, 3.0, 4 if args.fast else args.points)
         fr = softclose.front(cfg, times, progress=not args.json)
     except softclose.SoftcloseError as exc:

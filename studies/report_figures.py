@@ -44,7 +44,8 @@ def studies() -> list[str]:
 
 def takes_out(script: Path) -> bool:
     """The study accepts ``--out DIR``."""
-    return '"--out"' in script.read_text()
+    text = script.read_text()
+    return '"--out"' in text or "study_options(" in text
 
 
 def main(argv=None) -> int:

@@ -20,27 +20,18 @@ Usage: python studies/robust_design.py [--fast] [--json] [--out DIR]
 
 from __future__ import annotations
 
-import argparse
-import json
 import sys
-from pathlib import Path
 
 import softclose
 from softclose.present.figures import save
-from softclose.jsonio import jsonable
 from softclose.robust import optimise_robust, sensitivity
-
-OUT = Path(__file__).resolve().parent / "out" / "robust_design"
+from softclose.present.study import parse, print_json, save_summary, study_options
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--fast", action="store_true",
-                    help="2,000 Monte Carlo samples and Sobol N = 256 (default 10,000 and 1024)")
-    ap.add_argument("--json", action="store_true", help="print one JSON object")
-    ap.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
-    a = ap.parse_args(argv)
-    a.out.mkdir(parents=True, exist_ok=True)
+    ap = study_options(__doc__, __file__,
+                       fast="2,000 Monte Carlo samples and Sobol N = 256 (default 10,000 and 1024)")
+    a = parse(ap, argv)
     cfg = softclose.default_config()
     samples = 2000 if a.fast else cfg.tolerance.samples
     n_sobol = 256 if a.fast else 1024
@@ -78,12 +69,9 @@ def main(argv=None) -> int:
     sign_off = softclose.report(res.design_config(), optimiser=res.to_json(), samples=samples)
     files.append(sign_off.save(a.out / "report.html"))
     summary["report"] = sign_off.message
-    path = a.out / "designs.json"
-    path.write_text(json.dumps(jsonable(summary), indent=1, allow_nan=False))
-    files.append(path)
-    summary["files"] = [str(f) for f in files]
+    save_summary(summary, a.out / "designs.json", files)
     if a.json:
-        print(json.dumps(jsonable(summary), allow_nan=False))
+        print_json(summary)
     else:
         d, n = res.design, nominal
         print(f"nominal optimum: k = {n['spring_k']:.1f} N/m, l0 = {n['spring_rest_length']:.5f} m,"

@@ -20,26 +20,19 @@ Usage: python studies/seed_reproduction.py [--fast] [--json] [--out DIR]
 
 from __future__ import annotations
 
-import argparse
 import sys
-from pathlib import Path
 
 import softclose
 from softclose.bench import SEED_KEYS, seed_reproduction
 from softclose.present.figures import save
 from softclose.present.figures.bench import plot_seed_reproduction
 from softclose.jsonio import dumps
-
-OUT = Path(__file__).resolve().parent / "out" / "seed_reproduction"
+from softclose.present.study import parse, study_options
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--fast", action="store_true", help="fewer steps in the convergence study")
-    ap.add_argument("--json", action="store_true", help="print one JSON object")
-    ap.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
-    a = ap.parse_args(argv)
-    a.out.mkdir(parents=True, exist_ok=True)
+    ap = study_options(__doc__, __file__, fast="fewer steps in the convergence study")
+    a = parse(ap, argv)
     rep = seed_reproduction(softclose.default_config(), fast=a.fast)  # SPEC §8: gravity only
     fig = save(plot_seed_reproduction(rep), a.out / "seed_reproduction.png")
     numbers = {k: v for k, v in rep.items() if k != "trajectories"}

@@ -18,7 +18,6 @@ Usage: python studies/spring_damper_maps.py [--fast] [--json] [--out DIR]
 
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
@@ -29,8 +28,8 @@ from softclose.present.figures import save
 from softclose.jsonio import dumps
 from softclose.optimiser import optimise
 from softclose.sweeps import sweep
+from softclose.present.study import parse, study_options
 
-OUT = Path(__file__).resolve().parent / "out" / "spring_damper_maps"
 #: the swept config keys and the optimiser's design key of each
 KEYS = {"design.spring_k": "spring_k", "design.damper_c": "damper_c",
         "design.spring_rest_length": "spring_rest_length"}
@@ -51,11 +50,8 @@ def write(res, out: Path) -> list[Path]:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--fast", action="store_true", help="coarse grids, no optimiser")
-    ap.add_argument("--json", action="store_true", help="print one JSON object")
-    ap.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
-    a = ap.parse_args(argv)
+    ap = study_options(__doc__, __file__, fast="coarse grids, no optimiser")
+    a = parse(ap, argv)
     cfg = softclose.default_config()
     n = 9 if a.fast else 41
     coarse = sweep(cfg, {k: np.linspace(lo, hi, n if k != "design.spring_rest_length"

@@ -19,15 +19,12 @@ Usage: python studies/stress_survey.py [--fast] [--out DIR]
 
 from __future__ import annotations
 
-import argparse
 import sys
-from pathlib import Path
 
 from softclose.validation import stress
-from softclose.cli.bench import write_csv
+from softclose.bench.report import write_csv
 from softclose.jsonio import dumps
-
-OUT = Path(__file__).resolve().parent / "out" / "stress_survey"
+from softclose.present.study import parse, study_options
 
 
 def show(r: dict) -> None:
@@ -36,11 +33,9 @@ def show(r: dict) -> None:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--fast", action="store_true", help="the representative subset the tests use")
-    ap.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
-    a = ap.parse_args(argv)
-    a.out.mkdir(parents=True, exist_ok=True)
+    ap = study_options(__doc__, __file__, json_option=False,
+                       fast="the representative subset the tests use")
+    a = parse(ap, argv)
     rows = stress.run_survey(fast=a.fast, log=show)
     (a.out / "stress.md").write_text(stress.stress_markdown(rows) + "\n")
     write_csv(rows, a.out / "stress.csv")

@@ -13,8 +13,6 @@ Writes to studies/out/synthesis/:
 
 from __future__ import annotations
 
-import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -23,8 +21,8 @@ import numpy as np
 from softclose.validation.textbook.synthesis import (PIVOT_A, PROBLEM7_POINTS, classify_solutions,
                                           locate_poses, make_design, solve_precision_points,
                                           trace_circuit)
+from softclose.present.study import parse, print_json, study_options
 
-OUT = Path(__file__).resolve().parent / "out" / "synthesis"
 
 
 def summarise(result, flags) -> dict:
@@ -86,12 +84,10 @@ def draw(result, z, out: Path) -> str:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--json", action="store_true", help="print one JSON object")
-    ap.add_argument("--fast", action="store_true", help="smoke test: Problem 7 only")
+    ap = study_options(__doc__, __file__, fast="smoke test: Problem 7 only")
     ap.add_argument("--seed", type=int, default=0, help="seed of the random points")
     ap.add_argument("--no-plots", action="store_true")
-    args = ap.parse_args(argv)
+    args = parse(ap, argv)
 
     try:
         import bertini  # noqa: F401
@@ -113,9 +109,9 @@ def main(argv=None) -> int:
                                         "coupler_angles": np.arctan2(z[1:8:2], z[0:8:2]).tolist(),
                                         **make_design(z, r7.points, r7.pivot_a).lengths}
         if not args.no_plots:
-            report["figures"] = [draw(r7, z, OUT)]
+            report["figures"] = [draw(r7, z, args.out)]
     if args.json:
-        print(json.dumps(report))
+        print_json(report)
     else:
         for name in ("random", "problem7"):
             s = report[name]

@@ -25,7 +25,6 @@ Usage: python studies/temperature_signoff.py [--fast] [--out DIR]
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from pathlib import Path
@@ -35,8 +34,8 @@ import numpy as np
 import softclose
 from softclose.jsonio import jsonable
 from softclose.present.figures import plt, save
+from softclose.present.study import parse, study_options
 
-OUT = Path(__file__).resolve().parent / "out" / "temperature_signoff"
 #: the silicone-oil damper's temperature coefficient (1/K) and the sign-off temperatures
 BETA = -0.005
 SIGN_OFF = [-10.0, 23.0, 50.0]
@@ -71,12 +70,9 @@ def draw(temps, rows: dict, cfg, path: Path) -> Path:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--fast", action="store_true",
-                    help="2,000 samples in the robust design and 200 in the reports' yields")
-    ap.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
-    a = ap.parse_args(argv)
-    a.out.mkdir(parents=True, exist_ok=True)
+    ap = study_options(__doc__, __file__, json_option=False,
+                       fast="2,000 samples in the robust design and 200 in the reports' yields")
+    a = parse(ap, argv)
     cfg = softclose.default_config().update({"design.damper_temperature_coeff": BETA})
     nominal = softclose.optimise(cfg)
     robust = softclose.optimise(cfg.update({"tolerance.samples": 2000}) if a.fast else cfg,

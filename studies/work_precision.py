@@ -10,7 +10,7 @@ and the cheapest setting that meets them is reported next to it. Also: the speed
 one stroke, the raw kernel, the reference and the CLI end to end (with the speed targets), and N
 and sub-steps of the optimiser against the error of the optimal objective and the solve time.
 The measuring is ``softclose.bench.run``; the tables and figures are what ``softclose bench
---out DIR`` writes (``softclose.cli.bench.write_files``). This script only chooses the folder.
+--out DIR`` writes (``BenchResult.save``). This script only chooses the folder.
 
 Writes to studies/out/work_precision/:
   work_precision.png  error against run time per stroke, one line per method, rows = designs
@@ -27,30 +27,25 @@ Usage: python studies/work_precision.py [--fast] [--no-optimiser] [--no-features
 
 from __future__ import annotations
 
-import argparse
 import sys
-from pathlib import Path
 
 import softclose
 from softclose import bench
-from softclose.cli.bench import default_text, write_files
-
-OUT = Path(__file__).resolve().parent / "out" / "work_precision"
+from softclose.bench.report import default_text
+from softclose.present.study import parse, study_options
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--fast", action="store_true", help="fewer steps, designs and repeats")
+    ap = study_options(__doc__, __file__, json_option=False,
+                       fast="fewer steps, designs and repeats")
     ap.add_argument("--no-optimiser", action="store_true", help="skip the optimiser section")
     ap.add_argument("--no-features", action="store_true",
                     help="skip the sweep / robust / yield / Sobol speed entries")
-    ap.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
-    a = ap.parse_args(argv)
-    a.out.mkdir(parents=True, exist_ok=True)
+    a = parse(ap, argv)
     log = lambda *m: print(*m, flush=True)  # noqa: E731
     res = bench.run(softclose.default_config(), quick=a.fast, log=log,
                     optimiser=not a.no_optimiser, features=not a.no_features)
-    files = write_files(res, a.out)
+    files = res.save(a.out)
     print(default_text(res.default))
     if res.optimiser_note:
         print(res.optimiser_note)

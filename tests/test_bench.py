@@ -18,7 +18,7 @@ import pytest
 from softclose import bench
 from softclose.bench import features as later
 from softclose.cli import main
-from softclose.cli.bench import default_text, work_precision_markdown
+from softclose.bench.report import default_text, work_precision_markdown
 from softclose.config import default_config
 from softclose.model.lid import LidModel
 from softclose.problem import TARGETS

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from softclose.bench.structures import COMMANDS, measure, structures_of
-from softclose.cli.bench import structures_markdown
+from softclose.bench.report import structures_markdown
 from softclose.config import default_config
 from softclose.optimiser import cache as oc
 from softclose.optimiser.nlp import NLP_PARAMS
@@ -75,10 +75,10 @@ def test_the_table_has_a_line_per_structure(rows):
 def test_a_bench_run_writes_the_structures_record(tmp_path):
     """`softclose bench --structures --out DIR` writes `structures.json` in the record's
     form (docs/bench_structures.json is that file of a run), beside `structures.csv`
-    (:func:`softclose.cli.bench.write_files` calls ``write_structures``)."""
+    (:func:`softclose.bench.report.write_files` calls ``write_structures``)."""
     from softclose.bench.benchmark import BenchResult
     from softclose.bench.precision import WorkPrecision
-    from softclose.cli.bench import structures_record, write_structures
+    from softclose.bench.report import structures_record, write_structures
     wp = WorkPrecision((), {}, {}, {}, {}, {"method": "rk4", "step": 0.002, "confirmed": True,
                                              "meets_targets": True, "failing_designs": []}, ())
     res = BenchResult("AMD EPYC", "2026-12-06", "abc1234", True, wp, (), (), "", 3.0,

@@ -398,7 +398,7 @@ def test_working_lengths_are_the_stroke_extremes():
     from conftest import np_closure
 
     from softclose.config import load_config
-    from softclose.coil_spring.order import spring_duty, working_lengths
+    from softclose.optimiser.spring_order import spring_duty, working_lengths
     cfg = load_config(None, COMPRESSION)
     g = cfg.geometry
     near = math.radians(g.assembly[1])

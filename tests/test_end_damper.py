@@ -26,7 +26,7 @@ import pytest
 import softclose
 from softclose.simulation.kernel import binding
 from softclose.config import default_config
-from softclose.simulation.integrators import get_method
+from softclose.numerics.integrators import get_method
 from softclose.model.lid import LidModel
 from softclose.problem import METRIC_KEYS, TARGETS, as_params
 from softclose.simulation.reference import Reference

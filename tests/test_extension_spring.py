@@ -191,7 +191,7 @@ def _sets(*overrides):
 
 def test_spring_command_designs_an_extension_spring(capsys, tmp_path):
     from softclose.cli import main
-    from softclose.coil_spring.order import working_lengths
+    from softclose.optimiser.spring_order import working_lengths
     from softclose.config import load_config
     rc = main(["spring", "--json", "--out", str(tmp_path), *_sets()])
     out = json.loads(capsys.readouterr().out)
@@ -259,7 +259,7 @@ def test_the_report_buys_the_extension_spring_of_softclose_spring():
     and the hooks named as not covered."""
     from types import SimpleNamespace
 
-    from softclose.coil_spring.order import spring_order
+    from softclose.optimiser.spring_order import spring_order
     from softclose.config import load_config
     from softclose.signoff.parts import parts
     from softclose.signoff.text import spring_rows

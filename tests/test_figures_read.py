@@ -146,7 +146,7 @@ def test_simulate_slow_motion_option(tmp_path, capsys):
 
 
 def test_bench_says_why_an_order_is_missing_and_under_which_load():
-    from softclose.cli.bench import ORDER_DASH, met_text, speed_markdown
+    from softclose.bench.report import ORDER_DASH, met_text, speed_markdown
     from softclose.bench.timing import speed_row
     row = speed_row("cli_simulate", "cli", 0.31, 3)
     assert row["met"] is False and "load" in row

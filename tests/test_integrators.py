@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from softclose.simulation.kernel import binding
-from softclose.simulation.integrators import METHODS, casadi_step, get_method
+from softclose.numerics.integrators import METHODS, casadi_step, get_method
 from softclose.simulation.reference import Reference
-from softclose.simulation.integrators import amplification
+from softclose.numerics.integrators import amplification
 from softclose.simulation.simulator import Simulator
 from softclose.problem import as_params
 

@@ -61,7 +61,7 @@ def test_where_the_space_binds_the_nlp_moves_the_design_to_a_spring_that_fits():
     """With 20 mm of outer diameter the plain optimum's rate and free length have no spring
     (every candidate buckles or is overstressed); the NLP with the spring's geometry finds
     the rate that has one, and the wound spring passes every check."""
-    from softclose.coil_spring.order import spring_order
+    from softclose.optimiser.spring_order import spring_order
     cfg = default_config().update({"spring.material": "EN10270-1-SH",
                                    "spring.max_outer_d": 0.02})
     plain = softclose.optimise(default_config().update({"optimise.spring_kinds":

@@ -59,7 +59,7 @@ def test_notebook_runs(path, tmp_path):
 
 @pytest.fixture(scope="module")
 def explorer(cfg):
-    from softclose.present.explorer import Explorer
+    from softclose.notebook.explorer import Explorer
     return Explorer(cfg.with_design(spring_k=1914.7, spring_rest_length=0.07926,
                                     damper_c=2087.8), n=9)
 

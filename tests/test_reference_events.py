@@ -1,4 +1,4 @@
-"""The reference's event search: the cubic Hermite guesses (:mod:`softclose.simulation.roots`)
+"""The reference's event search: the cubic Hermite guesses (:mod:`softclose.numerics.roots`)
 and what they buy -- the same events from fewer fresh CVODES runs."""
 
 import math
@@ -9,7 +9,7 @@ import pytest
 import softclose
 from softclose.simulation import reference as ref_mod
 from softclose.simulation.reference import Reference
-from softclose.simulation.roots import hermite_peak, hermite_root
+from softclose.numerics.roots import hermite_peak, hermite_root
 
 
 def _hermite(h, f0, d0, f1, d1):

@@ -22,7 +22,7 @@ import pytest
 from softclose.catalog import DamperEntry, read_springs, select
 from softclose.coil_spring import CoilSpring, Duty, check
 from softclose.coil_spring import standard as en13906
-from softclose.coil_spring.order import working_lengths
+from softclose.optimiser.spring_order import working_lengths
 from softclose.config import default_config
 from softclose.errors import ConfigError
 

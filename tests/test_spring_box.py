@@ -138,7 +138,7 @@ def test_the_robust_page_quotes_this_answer(made):
 def test_the_design_config_names_the_spring_whose_box_it_holds_for(made):
     """design.toml holds the spring (d, D, n): ``softclose spring`` and the report check that
     one, and it passes every check at the robust design."""
-    from softclose.coil_spring.order import spring_order
+    from softclose.optimiser.spring_order import spring_order
     cfg = made.design_config()
     s = made.to_json()["spring_tolerance"]["spring"]
     assert (cfg.spring.wire_d, cfg.spring.coil_d, cfg.spring.active_coils) == (

@@ -45,7 +45,8 @@ def promised(script: Path) -> tuple[str, list[str]]:
 
 
 def takes_out(script: Path) -> bool:
-    return '"--out"' in script.read_text()
+    text = script.read_text()
+    return '"--out"' in text or "study_options(" in text
 
 
 def run(script: Path, *args: str, timeout: float = 900) -> subprocess.CompletedProcess:
@@ -94,6 +95,31 @@ def test_study_docstring(script):
         assert states_a_question(script), f"{script.name}: the first paragraph asks no question"
     if script.stem not in SYS_PATH_PENDING:
         assert "sys.path" not in script.read_text(), f"{script.name} changes sys.path"
+
+
+@pytest.mark.parametrize("script", SCRIPTS, ids=lambda p: p.stem)
+def test_study_uses_the_public_api_and_the_shared_options(script):
+    """No study imports the command line; each (but the runner) takes its options from
+    :func:`softclose.present.study.study_options` instead of a parser of its own."""
+    text = script.read_text()
+    assert "softclose.cli" not in text
+    if script.stem != "report_figures":
+        assert "study_options(" in text and "argparse" not in text
+
+
+def test_the_study_options(tmp_path):
+    from softclose.present.study import default_out, parse, study_options
+    script = tmp_path / "lid_study.py"
+    ap = study_options("What does a lid do?\n\nMore.", script, fast="small")
+    a = parse(ap, [])
+    assert a.out == default_out(script) == tmp_path / "out" / "lid_study"
+    assert a.out.is_dir() and (a.fast, a.json) == (False, False)
+    a = parse(ap, ["--fast", "--json", "--out", str(tmp_path / "x")])
+    assert (a.fast, a.json, a.out) == (True, True, tmp_path / "x") and a.out.is_dir()
+    assert ap.description == "What does a lid do?"
+    quiet = study_options("Q?", script, fast="small", json_option=False)
+    with pytest.raises(SystemExit):
+        quiet.parse_args(["--json"])
 
 
 @pytest.mark.slow

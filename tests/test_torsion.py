@@ -18,7 +18,7 @@ from conftest import np_closure
 from softclose.simulation.kernel import binding
 from softclose.simulation import statics
 from softclose.config import default_config
-from softclose.simulation.integrators import casadi_step, get_method
+from softclose.numerics.integrators import casadi_step, get_method
 from softclose.model.lid import LidModel
 from softclose.problem import PARAM_KEYS, TARGETS, as_params
 from softclose.simulation.reference import Reference

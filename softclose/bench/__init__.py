@@ -30,7 +30,7 @@ optimiser entries), :mod:`.seed` (the seed's drop), :mod:`.timing` (how things a
 speed row), :mod:`.benchmark` (:func:`run` and its result, machine and commit).
 """
 
-from ..simulation.integrators import SEED
+from ..numerics.integrators import SEED
 from .benchmark import BenchResult, commit, machine, run
 from .features import (FEATURE_BUDGET_S, OPT_NODES, OPT_SUBSTEPS, SWEEP_GRID, feature_entries,
                     optimiser_study, sweep_axes)

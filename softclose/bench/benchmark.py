@@ -109,6 +109,25 @@ class BenchResult(Displayed):
         return Display("BenchResult: run time against error, speeds and start-up", None, msg,
                        tuple(facts), tables, short=1)
 
+    def text(self) -> str:
+        """What ``softclose bench`` prints: the default step, the tables, the fitted orders."""
+        from .report import report_text
+        return report_text(self)
+
+    def markdown(self) -> str:
+        """The run as a Markdown page (``bench.md``)."""
+        from .report import report_markdown
+        return report_markdown(self)
+
+    def save(self, folder, figure_format: str = "png", figure_style: str | None = None
+             ) -> list[Path]:
+        """The run's tables (CSV), page (Markdown), JSON records and figures in ``folder``
+        (created if missing): what ``softclose bench --out DIR`` writes. Returns the files."""
+        from .report import write_files
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        return write_files(self, folder, figure_format, figure_style)
+
     def to_json(self) -> dict:
         return jsonable({"machine": self.machine, "date": self.date, "commit": self.commit,
                          "quick": self.quick, "targets": dict(TARGETS),

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..config import Config
-from ..simulation.integrators import METHODS, SEED
+from ..numerics.integrators import METHODS, SEED
 from ..model.lid import LidModel
 from ..problem import as_params, PARAM_DEFAULTS, params_of, RELATIVE, resolve, TARGETS
 from ..simulation.reference import Reference

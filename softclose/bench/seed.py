@@ -11,7 +11,7 @@ import numpy as np
 
 from ..simulation.kernel import binding
 from ..config import Config
-from ..simulation.integrators import SEED
+from ..numerics.integrators import SEED
 from ..simulation.reference import Reference
 from ..simulation.simulator import Simulator
 from ..problem import resolve

@@ -26,7 +26,7 @@ import math
 
 import casadi as ca
 
-from ..simulation.integrators import casadi_step, get_method
+from ..numerics.integrators import casadi_step, get_method
 from ..optimiser.base import NLP
 from ..optimiser.ipopt import nlpsol
 from ..optimiser.run import Run

@@ -161,6 +161,12 @@ class FitResult(Displayed):
     def samples_used(self) -> int:
         return sum(s.samples_used for s in self.strokes)
 
+    def text(self) -> str:
+        """What ``softclose fit`` prints: the estimates, correlations, identifiability, the
+        strokes' releases and residuals."""
+        from .text import fit_text
+        return fit_text(self)
+
     def to_json(self) -> dict:
         one = len(self.strokes) == 1
         rel = [s.release_time for s in self.strokes]

@@ -11,7 +11,7 @@ the duty the lid asks of it:
   spring to order; extension: ``free_length - free_length_tolerance``), the initial tension
   the row's preload (extension);
 - the working lengths: the longest and shortest |D - E| over the stroke
-  (:func:`softclose.coil_spring.order.working_lengths`, the pair's own attachment points);
+  (:func:`softclose.optimiser.spring_order.working_lengths`, the pair's own attachment points);
 - ``spring.cycles``, ``spring.seating``, the sign-off temperatures of ``[operating]``.
 
 A pair is not feasible when its spring fails one of :data:`DECIDING`: ``static`` (it would be
@@ -40,7 +40,7 @@ WORDS = {"static": "overstressed", "fatigue": "fails fatigue", "buckling": "buck
 def working_lengths(cfg) -> tuple[float, float]:
     """(longest, shortest) spring length over the stroke of ``cfg`` (m), cached per
     geometry and stroke."""
-    from ..coil_spring.order import working_lengths as lengths
+    from ..optimiser.spring_order import working_lengths as lengths
     from ..model.lid import model_key
     from ..problem import resolve
     key = (model_key(resolve(cfg)), cfg.stroke.theta_closed, cfg.stroke.theta0)

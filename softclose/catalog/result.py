@@ -80,6 +80,11 @@ class SelectResult(Displayed):
     def best(self) -> dict | None:
         return self.ranking[0] if self.ranking else None
 
+    def text(self, top: int = 15) -> str:
+        """What ``softclose select`` prints (the ``top`` pairs of the ranking)."""
+        from .text import select_text
+        return select_text(self, top)
+
     def to_json(self) -> dict:
         return jsonable({
             "ranking": [dict(e) for e in self.ranking], "evaluated": self.evaluated,

@@ -161,36 +161,6 @@ def interactive(args) -> bool:
     return (not getattr(args, "json", False)) and sys.stderr.isatty()
 
 
-def format_metrics(m: dict) -> str:
-    """The stroke metrics as an aligned table (with accuracy where known)."""
-    from ..problem import METRIC_KEYS, UNITS
-    acc = m.get("accuracy") or {}
-    out = []
-    for key in METRIC_KEYS:
-        v = m.get(key)
-        if key == "closed":
-            out.append(f"  {key:<19} {'yes' if v else 'no'}")
-        elif v is None:
-            out.append(f"  {key:<19} —")
-        else:
-            e = acc.get(key)
-            err = f"  (± {e:.1e})" if e is not None else ""
-            out.append(f"  {key:<19} {v:.7g} {UNITS[key]}{err}")
-    # the end damper's first engagement, where the lid reaches it (StrokeResult.engage_time)
-    for key, unit in (("engage_time", "s"), ("engage_theta_dot", "rad/s")):
-        if m.get(key) is not None:
-            e = acc.get(key)
-            err = f"  (± {e:.1e})" if e is not None else ""
-            out.append(f"  {key:<19} {m[key]:.7g} {unit}{err}")
-    if m.get("reason"):
-        why = "invalid design" if m.get("status") == "invalid design" else "why not closed"
-        out.append(f"  {why}: {m['reason']}")
-    if "method" in m and m.get("step") is not None:
-        out.append(f"  ({m['method']}, step {m['step']:g} s, {m['steps']} steps; "
-                   "± = estimated distance from the converged answer)")
-    return "\n".join(out)
-
-
 def write_outputs(out: Path, csv_name: str, frame, fig_name: str, plot) -> list[Path]:
     """Write a result's table and figure in ``out``: ``frame`` (a pandas DataFrame, e.g.
     the result's ``to_frame()``) as ``out/csv_name`` without the index, then the figure

@@ -9,19 +9,13 @@ objective against closing_time_max (exit 3 when a point is not verified).
 from __future__ import annotations
 
 import argparse
-import math
 
-from ..errors import ConfigError
 from ..files import write_text
 from .common import (DESIGN_FILE, figures, stroke_files, Outcome, add_common, add_out,
                      add_slow_motion, interactive,
                      metrics_line, prepare_out, slow_motion, write_design, write_outputs,
                      wrote)
-from .text import closing_time_text, design_text, hand_limits_text, objective_text
-from ..problem import resolve
-
-#: the default closing times of ``pareto`` (s)
-PARETO_DEFAULT = "0.3:3:10:log"
+from ..problem import PARETO_DEFAULT, resolve
 
 
 OPTIMISE = """\
@@ -100,38 +94,15 @@ def run_optimise(cfg, args) -> Outcome:
     if out is not None and res.design is not None:
         files = write_optimum(res, out, factor)
         payload["files"] = [str(f) for f in files]
-    text = format_result(res) + wrote(files)
+    text = res.text() + wrote(files)
     return Outcome(payload, text, 0 if res.success else 3, tuple(files),
                    None if res.success else (res.message or f"no optimum ({res.status})"))
 
 
 def _run_robust(cfg, args, out) -> Outcome:
-    """``optimise --robust``: the robust command's own outcome (text, files) when it is
-    installed; else the robust result printed as JSON."""
-    try:
-        from .robust import robust_outcome
-    except ImportError:
-        robust_outcome = None
-    if robust_outcome is not None:
-        return robust_outcome(cfg, args)
-    from ..jsonio import dumps
-    from ..robust import optimise_robust
-    res = optimise_robust(cfg, progress=interactive(args))
-    payload = res.to_json()
-    try:
-        from .robust import format_robust
-        text = format_robust(res)
-    except ImportError:
-        text = dumps(payload, indent=1)
-    files = []
-    if out is not None:
-        path = out / "robust.json"
-        write_text(path, dumps(payload, indent=1))
-        files.append(path)
-        payload["files"] = [str(path)]
-    ok = bool(getattr(res, "success", False))
-    return Outcome(payload, text + wrote(files), 0 if ok else 3, tuple(files),
-                   None if ok else (getattr(res, "message", "") or "no robust design"))
+    """``optimise --robust``: the robust command's outcome (text, files)."""
+    from .robust import robust_outcome
+    return robust_outcome(cfg, args)
 
 
 def write_optimum(res, out, slow_motion=None) -> list:
@@ -162,134 +133,12 @@ def write_optimum(res, out, slow_motion=None) -> list:
     return files
 
 
-def _v(x, fmt=".9g") -> str:
-    if x is None:
-        return "—"
-    if isinstance(x, bool):
-        return "yes" if x else "no"
-    return format(x, fmt)
-
-
-def format_result(res) -> str:
-    """The optimisation as text: verdict, problem, design, objective, the verified metrics
-    beside the optimiser's own, constraints, active limits, starts, notes."""
-    from ..problem import ENGAGE_KEYS, METRIC_KEYS, UNITS, VERIFY_RTOL
-    head = ("optimum found and verified" if res.success else
-            "optimum found, NOT verified" if res.verification is None and res.design else
-            "NO verified optimum")
-    lines = [f"softclose optimise: {head} (Ipopt: {res.status})"]
-    if res.message:
-        lines.append(f"  {res.message}")
-    pr = res.problem
-    if pr:
-        lines.append(f"  problem: {objective_text(pr)}, {closing_time_text(pr)}, holding "
-                     f"moment >= {pr['holding_moment_min']:g} N m{hand_limits_text(pr)}")
-    if res.design:
-        lines.append("  design: " + design_text(res.design)
-                     + (f" ({res.kind} spring)" if getattr(res, "kind", None) else ""))
-        part = getattr(res, "part", None)
-        if part is not None:
-            lines.append("  to buy: " + part.text().replace("\n", "\n  "))
-    ver = res.verification
-    if res.objective is not None:
-        s = (f"  objective J = {res.objective:.8g} (the optimiser's: its own discretisation "
-             "of the stroke, at the design above)")
-        if ver is not None and ver.objective is not None:
-            rel = ((res.objective - ver.objective) / abs(ver.objective) if ver.objective
-                   else math.inf)
-            s += (f"; the reference's J = {ver.objective:.8g} (relative difference {rel:.1e}, "
-                  f"allowed {VERIFY_RTOL:g})")
-        lines.append(s)
-    if res.optimiser:
-        agr = ver.agreement if ver is not None else {}
-        lines.append(f"  {'metric':<19} {'verified':>15} {'optimiser':>15} {'difference':>11} "
-                     f"{'allowed':>9}  unit   (verified = adaptive reference, CVODES)")
-        engage = tuple(k for k in ENGAGE_KEYS if res.optimiser.get(k) is not None
-                       or (res.metrics or {}).get(k) is not None)
-        for k in METRIC_KEYS + engage:
-            a = agr.get(k, {})
-            vv = res.metrics.get(k) if res.metrics else None
-            diff = a.get("difference")
-            flag = "" if a.get("ok", True) else "  <-- DISAGREES"
-            lines.append(f"  {k:<19} {_v(vv):>15} {_v(res.optimiser.get(k)):>15} "
-                         f"{_v(diff, '.2e') if diff is not None else '':>11} "
-                         f"{_v(a.get('tolerance'), '.1e') if a.get('tolerance') else '':>9}  "
-                         f"{UNITS[k]}{flag}")
-    if ver is not None and ver.constraints:
-        bad = [k for k, c in ver.constraints.items() if not c["ok"]]
-        lines.append("  constraints in the reference simulation: " +
-                     ("all hold" if not bad else "VIOLATED: " + ", ".join(bad)))
-    if res.active:
-        lines.append("  what limits the design (dJ: change of J per unit relaxation, from "
-                     "Ipopt's multipliers):")
-        for a in res.active:
-            lines.append(f"    {a.describe(res.objective)}")
-    elif res.design:
-        lines.append("  no bound or constraint is active: an interior optimum")
-    if res.starts:
-        Js = [st["objective"] for st in res.starts if st.get("objective") is not None]
-        moved = res.objective is not None and Js and \
-            abs(min(Js) - res.objective) > 1e-9 * abs(res.objective)
-        lines.append(f"  starts ({len(res.starts)}, from a coarse sweep of the design box"
-                     + ("; each J as its solve ended, before the best answer was refined and "
-                        "its closing-time bound corrected (notes), which moves J to the "
-                        "objective above" if moved else "") + "):")
-        for i, s in enumerate(res.starts, 1):
-            st = s["start"]
-            J = f"{s['objective']:.8g}" if s.get("objective") is not None else "—"
-            lines.append(f"    {i}. from k={st['spring_k']:.4g}, "
-                         f"l0={st['spring_rest_length']:.4g}, c={st['damper_c']:.4g}: "
-                         f"{s['status']}, {s['iterations']} it, {s['solve_time']:.3f} s, J = {J}")
-    for n in res.notes:
-        lines.append(f"  note: {n}")
-    grid = (f"{res.nodes} shooting intervals x {res.substeps} RK4 sub-steps" if not
-            getattr(res, "substeps_engaged", None) else
-            f"two phases switched at the end damper's engagement: {res.nodes} shooting "
-            f"intervals x {res.substeps} RK4 sub-steps before it, {res.nodes} x "
-            f"{res.substeps_engaged} after it")
-    lines.append(f"  ({grid}, {res.hessian} Hessian; total {res.total_time:.2f} s)")
-    return "\n".join(lines)
-
-
 # -- pareto --------------------------------------------------------------------------------
-def parse_closing_times(text: str):
-    """``START:STOP:COUNT`` (linear) or ``START:STOP:COUNT:log`` -> array of closing times."""
-    import numpy as np
-    from ..optimiser.pareto import MAX_POINTS
-    parts = str(text).split(":")
-    bad = f"--closing-times {text}: "
-    if len(parts) not in (3, 4) or (len(parts) == 4 and parts[3] != "log"):
-        raise ConfigError(bad + "expected START:STOP:COUNT or START:STOP:COUNT:log")
-    try:
-        a, b = float(parts[0]), float(parts[1])
-        n = int(parts[2])
-    except ValueError:
-        raise ConfigError(bad + "START and STOP must be numbers (s), COUNT a whole number") \
-            from None
-    if not (math.isfinite(a) and math.isfinite(b) and 0 < a <= b):
-        raise ConfigError(bad + "expected 0 < START <= STOP (finite, in s)")
-    if not 1 <= n <= MAX_POINTS:
-        raise ConfigError(bad + f"COUNT must lie in 1..{MAX_POINTS}, got {n}")
-    if a == b and n > 1:
-        raise ConfigError(bad + "START equals STOP: use COUNT 1")
-    return np.geomspace(a, b, n) if len(parts) == 4 else np.linspace(a, b, n)
-
-
-def default_closing_times(cfg) -> str:
-    """:data:`PARETO_DEFAULT` scaled to the config's closing-time window: its ends times
-    optimise.closing_time_max (in s), the first above 1.05 x closing_time_min (the
-    default config's: unchanged)."""
-    a, b, n, kind = PARETO_DEFAULT.split(":")
-    o = cfg.optimise
-    lo = max(float(a) * o.closing_time_max, 1.05 * o.closing_time_min)
-    hi = max(float(b) * o.closing_time_max, lo)
-    return f"{lo:.6g}:{hi:.6g}:{n if hi > lo else 1}:{kind}"
-
-
 def run_pareto(cfg, args) -> Outcome:
     out = prepare_out(args.out, ["pareto.csv", *figures("pareto"), "designs/"])
-    times = parse_closing_times(args.closing_times or default_closing_times(cfg))
     from ..optimiser import front
+    from ..optimiser.pareto import closing_times
+    times = closing_times(cfg, args.closing_times)
     fr = front(cfg, times, progress=interactive(args))
     payload = fr.to_json()
     files = []
@@ -303,7 +152,7 @@ def run_pareto(cfg, args) -> Outcome:
         payload["files"] = [str(f) for f in files]
         for i, pt in enumerate(payload["points"]):
             pt["design_file"] = str(designs[i]) if i in designs else None
-    text = format_front(fr) + wrote(files)
+    text = fr.text() + wrote(files)
     return Outcome(payload, text, 0 if fr.success else 3, tuple(files),
                    None if fr.success else fr.message)
 
@@ -327,26 +176,3 @@ def write_front_designs(fr, out) -> dict:
     return paths
 
 
-def format_front(fr) -> str:
-    head = "every point verified" if fr.success else "NOT every point verified"
-    lines = [f"softclose pareto: {len(fr.points)} points, {head} ({fr.total_time:.2f} s)",
-             f"  {'T_max [s]':>9} {'k [N/m]':>9} {'l0 [m]':>8} {'c [N s/m]':>9} {'J':>10} "
-             f"{'impact [m/s]':>12} {'peak [m/s]':>10} {'verified':>8}  active"]
-    for t, p in zip(fr.closing_times, fr.points):
-        if p.design is None:
-            lines.append(f"  {t:9.4g}  no optimum: {p.message}")
-            continue
-        m = p.metrics or {}
-        act = ", ".join(f"{a.name} ({a.bound})" for a in p.active)
-        lines.append(f"  {t:9.4g} {p.design['spring_k']:9.1f} "
-                     f"{p.design['spring_rest_length']:8.5f} {p.design['damper_c']:9.1f} "
-                     f"{p.objective:10.6g} {_v(m.get('impact_tip_speed'), '12.5f'):>12} "
-                     f"{_v(m.get('peak_tip_speed'), '10.5f'):>10} "
-                     f"{'yes' if p.success else 'NO':>8}  {act}")
-    lines.append("  (speeds: the adaptive reference's simulation of each optimum; "
-                 "J: the optimiser's, agreeing with the reference's to 1e-3; designs rounded "
-                 "for the table: --out DIR writes each with every digit as "
-                 "DIR/designs/design_<i>.toml)")
-    if fr.message:
-        lines.append(f"  {fr.message}")
-    return "\n".join(lines)

@@ -163,7 +163,7 @@ def _format_rest(payload: dict, lines: list[str]) -> str:
 def run(cfg, args) -> Outcome:
     from ..coil_spring import SpringCheck
     from ..jsonio import jsonable
-    from ..coil_spring.order import spring_duty, spring_order
+    from ..optimiser.spring_order import spring_duty, spring_order
     out = prepare_out(args.out, ["spring.json", "spring_checks.csv", "spring_candidates.csv",
                                  *figures("spring")])
     duty = spring_duty(cfg)

@@ -12,7 +12,7 @@ import re
 import sys
 from pathlib import Path
 
-from .keys import Key
+from ..model.keys import Key
 from .schema import DEFAULT_SPREADS, KEYS, SECTIONS, TOLERANCE_KEYS
 
 BEGIN, END = "<!-- keys:begin -->", "<!-- keys:end -->"

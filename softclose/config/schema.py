@@ -1,4 +1,4 @@
-"""Every config key, one record each (:class:`softclose.config.keys.Key`), and the views read from them.
+"""Every config key, one record each (:class:`softclose.model.keys.Key`), and the views read from them.
 
 The linkage's own keys (lengths, masses, the stroke, the integrator, the optimiser's settings
 and the ``[tolerance]`` options) are recorded here; each machine element records its keys in
@@ -17,7 +17,7 @@ from typing import Any
 
 from ..coil_spring.materials import DEFAULT_MATERIAL, MATERIALS
 from ..model import elements
-from .keys import Key
+from ..model.keys import Key
 
 INTEGRATORS = ("rk4", "euler_cromer", "gauss4", "radau5")
 HESSIANS = ("exact", "limited-memory")

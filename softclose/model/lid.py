@@ -27,9 +27,9 @@ import casadi as ca
 import numpy as np
 
 from . import dynamics as dyn, elements
+from .elements import as_params
 from ..errors import ConfigError
 from .kinematics import branch_of, closure, points, velocity_loop
-from ..problem import as_params
 from .resolved import LidCase
 from ..buildcache import text
 
@@ -377,21 +377,25 @@ class LidModel:
         return float(self.dV(self.stroke.theta_closed, p))
 
     def state(self, theta: float, theta_dot: float, p=None) -> dict:
-        """Every quantity of SPEC §7 ``state`` at one state (SI units, radians)."""
+        """Every quantity of SPEC §7 ``state`` at one state (SI units, radians). A hinge lid
+        has no cranks: its crank angles and rates are None and its one reaction is the
+        hinge's, ``H``. A zero is +0.0 (at rest the rates are zero, not -0)."""
         p = self.params() if p is None else as_params(p)
         x = ca.vertcat(theta, theta_dot)
         k = self.kin(x)
-        z = np.asarray(self.newton_euler(theta, theta_dot, p)).ravel()
+        z = np.asarray(self.newton_euler(theta, theta_dot, p)).ravel() + 0.0
+        tip = [float(v) + 0.0 for v in np.asarray(k[4]).ravel()]
+        out = {"theta": theta + 0.0, "theta_dot": theta_dot + 0.0,
+               "theta_ddot": self.theta_ddot(theta, theta_dot, p) + 0.0}
+        if self.lid.mechanism == "hinge":
+            return {**out, "phi": None, "gamma": None, "phi_dot": None, "gamma_dot": None,
+                    "tip_velocity": tip, "reactions": {"H": z[2:4].tolist()}}
         phi, gamma = float(k[0]), float(k[1])
         ref_phi, ref_gamma = math.radians(self.geo.assembly[1]), math.radians(self.geo.assembly[2])
         phi = ref_phi + _wrap(phi - ref_phi)
         gamma = ref_gamma + _wrap(gamma - ref_gamma)
-        return {
-            "theta": theta, "theta_dot": theta_dot,
-            "theta_ddot": self.theta_ddot(theta, theta_dot, p),
-            "phi": phi, "gamma": gamma,
-            "phi_dot": float(k[2]), "gamma_dot": float(k[3]),
-            "tip_velocity": [float(v) for v in np.asarray(k[4]).ravel()],
-            "reactions": {"O": z[0:2].tolist(), "A": z[2:4].tolist(),
-                          "B": z[4:6].tolist(), "C": z[6:8].tolist()},
-        }
+        return {**out, "phi": phi + 0.0, "gamma": gamma + 0.0,
+                "phi_dot": float(k[2]) + 0.0, "gamma_dot": float(k[3]) + 0.0,
+                "tip_velocity": tip,
+                "reactions": {"O": z[0:2].tolist(), "A": z[2:4].tolist(),
+                              "B": z[4:6].tolist(), "C": z[6:8].tolist()}}

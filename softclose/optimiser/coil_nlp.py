@@ -136,7 +136,7 @@ def coil_params(cfg) -> np.ndarray:
     """The spring block's numbers (:data:`COIL_PARAMS`) of ``cfg``: its material, the
     operating temperatures' largest G factor, the seating, the working lengths over the
     stroke, the ends, the cycles and the space."""
-    from ..coil_spring.order import working_lengths
+    from .spring_order import working_lengths
     sp = cfg.spring
     m = material(sp.material)
     op = cfg.operating

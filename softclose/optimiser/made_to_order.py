@@ -42,7 +42,7 @@ def with_spring(cfg, res, solve):
     free length and the problem re-solved at that spring's own rate (``solve(cfg) ->
     result``), checked again. A result without a coil spring (no design, a gas strut, no
     spring at all) is returned as it is, with a note."""
-    from ..coil_spring.order import spring_duty, spring_order
+    from .spring_order import spring_duty, spring_order
     if res.design is None or not res.success:
         return res
     if res.kind not in ("compression", "extension") or not res.design.get("spring_k"):
@@ -83,7 +83,7 @@ def _checked(again, geometry: dict) -> dict:
     """The spring ``geometry`` (``spring.*`` keys) checked at the re-solved answer
     ``again``: ``success``, ``message`` (the failed checks) and ``part`` (naming the spring
     and its checks), for :func:`dataclasses.replace`."""
-    from ..coil_spring.order import spring_duty, spring_order
+    from .spring_order import spring_duty, spring_order
     final = again.design_config()
     check = spring_order(final.update(geometry), spring_duty(final))
     coil = dict(check.spring_json(), ok=bool(check.ok),

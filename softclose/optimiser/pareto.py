@@ -16,7 +16,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..errors import ConfigError
-from ..problem import check_reference_temperature, describe
+from ..problem import PARETO_DEFAULT, check_reference_temperature, describe
 from ..present.progress import Progress
 from .spring_part import spring_part
 from .cache import get_nlp, stroke_simulator
@@ -142,4 +142,39 @@ def _continue(cfg, prev: OptimiseResult) -> OptimiseResult:
     best = runs[min(ok, key=lambda i: rows[i]["objective"])]
     return finish(cfg, nlp, best, disc, verify=True, polish=True, notes=notes, **base)
 
+def parse_closing_times(text: str) -> np.ndarray:
+    """``START:STOP:COUNT`` (linear) or ``START:STOP:COUNT:log`` -> array of closing times."""
+    parts = str(text).split(":")
+    bad = f"--closing-times {text}: "
+    if len(parts) not in (3, 4) or (len(parts) == 4 and parts[3] != "log"):
+        raise ConfigError(bad + "expected START:STOP:COUNT or START:STOP:COUNT:log")
+    try:
+        a, b = float(parts[0]), float(parts[1])
+        n = int(parts[2])
+    except ValueError:
+        raise ConfigError(bad + "START and STOP must be numbers (s), COUNT a whole number") \
+            from None
+    if not (math.isfinite(a) and math.isfinite(b) and 0 < a <= b):
+        raise ConfigError(bad + "expected 0 < START <= STOP (finite, in s)")
+    if not 1 <= n <= MAX_POINTS:
+        raise ConfigError(bad + f"COUNT must lie in 1..{MAX_POINTS}, got {n}")
+    if a == b and n > 1:
+        raise ConfigError(bad + "START equals STOP: use COUNT 1")
+    return np.geomspace(a, b, n) if len(parts) == 4 else np.linspace(a, b, n)
 
+
+def default_closing_times(cfg) -> str:
+    """:data:`PARETO_DEFAULT` scaled to the config's closing-time window: its ends times
+    optimise.closing_time_max (in s), the first above 1.05 x closing_time_min (the
+    default config's: unchanged)."""
+    a, b, n, kind = PARETO_DEFAULT.split(":")
+    o = cfg.optimise
+    lo = max(float(a) * o.closing_time_max, 1.05 * o.closing_time_min)
+    hi = max(float(b) * o.closing_time_max, lo)
+    return f"{lo:.6g}:{hi:.6g}:{n if hi > lo else 1}:{kind}"
+
+
+def closing_times(cfg, text: str | None = None) -> np.ndarray:
+    """The closing_time_max values of a front: ``text`` (``START:STOP:COUNT[:log]``, s) or,
+    without it, :data:`PARETO_DEFAULT` scaled to ``cfg``'s closing-time window."""
+    return parse_closing_times(text or default_closing_times(cfg))

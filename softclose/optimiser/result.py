@@ -181,6 +181,12 @@ class OptimiseResult(Displayed):
         return Simulator(resolve(self.config.with_design(**self.design)),
                          cached=True).run(trajectory=trajectory)
 
+    def text(self) -> str:
+        """What ``softclose optimise`` prints: the verdict, the problem, the design, J, the
+        verified metrics beside the optimiser's own, the limits, the starts, the notes."""
+        from .text import optimum_text
+        return optimum_text(self)
+
     def _display(self) -> Display:
         bounds = self.problem.get("bounds", {})
         facts = [(k, with_unit((self.design or {}).get(k), UNITS[k])) for k in DESIGN_KEYS
@@ -289,6 +295,11 @@ class FrontResult(Displayed):
         import pandas as pd
         return pd.DataFrame([{"closing_time_max": t, **p.row()}
                              for t, p in zip(self.closing_times, self.points)])
+
+    def text(self) -> str:
+        """What ``softclose pareto`` prints: one row per closing_time_max."""
+        from .text import front_text
+        return front_text(self)
 
     def _display(self) -> Display:
         ok = sum(1 for p in self.points if p.success)

@@ -84,6 +84,11 @@ class YieldResult(Displayed):
         damper (:data:`softclose.problem.BARE_LID`)."""
         return (BARE_LID,) if self.nominal.get("bare") else ()
 
+    def text(self, source: str = "design") -> str:
+        """What ``softclose yield`` prints (``source``: where the design comes from)."""
+        from .text import yield_text
+        return yield_text(self, source)
+
     def to_json(self) -> dict:
         return jsonable({
             "success": self.success, "message": self.message, "design": self.design,
@@ -263,9 +268,27 @@ class TemperatureYield:
         """The temperature with the lowest yield."""
         return min(zip(self.results, self.temperatures), key=lambda x: x[0].yield_)[1]
 
+    def text(self, source: str = "design") -> str:
+        """What ``softclose yield`` prints at several sign-off temperatures."""
+        from .text import yield_by_temperature_text
+        return yield_by_temperature_text(self, source)
+
+    @property
+    def message(self) -> str:
+        """Why the joint yield falls short ("" when it meets the required yield)."""
+        if self.meets_required:
+            return ""
+        return (f"the yield at every temperature is {100 * self.yield_:.2f} %, below the "
+                f"required {100 * self.required_yield:g} % (lowest at {self.limiting:g} °C)")
+
     def to_json(self) -> dict:
-        """The joint yield's keys, and ``temperatures``: each temperature's yield."""
+        """The joint yield's keys, the design and its box (the same at each temperature),
+        ``success`` (the joint yield meets the required one) and ``temperatures``: each
+        temperature's yield."""
+        first = self.results[0]
         return jsonable({
+            "design": first.design, "box": first.box, "distribution": first.distribution,
+            "seed": first.seed, "success": self.meets_required, "message": self.message,
             "yield": self.yield_, "yield_ci": list(self.yield_ci), "ci_method": CI_METHOD,
             "samples": self.samples, "required_yield": self.required_yield,
             "meets_required": self.meets_required, "limiting_temperature_c": self.limiting,

@@ -80,6 +80,12 @@ class RobustResult(Displayed):
     def yield_ci(self) -> tuple | None:
         return None if self.yield_result is None else self.yield_result.yield_ci
 
+    def text(self) -> str:
+        """What ``softclose optimise --robust`` prints: the verdict, the problem, the box,
+        the design, its scenarios, what limits it, the temperatures, the yields."""
+        from .text import robust_text
+        return robust_text(self)
+
     def to_json(self) -> dict:
         out = {"success": self.success, "status": self.status, "message": self.message,
                "design": self.design, "objective": self.objective,

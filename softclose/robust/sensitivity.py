@@ -62,6 +62,11 @@ class SensitivityResult(Displayed):
         """The design has no spring and no damper (:data:`softclose.problem.BARE_LID`)."""
         return (BARE_LID,) if self.nominal.get("bare") else ()
 
+    def text(self, source: str = "design") -> str:
+        """What ``softclose sensitivity`` prints (``source``: where the design comes from)."""
+        from .text import sensitivity_text
+        return sensitivity_text(self, source)
+
     def to_json(self) -> dict:
         out = {"success": self.success, "message": self.message, "design": self.design,
                "nominal": self.nominal, "warnings": list(self.warnings),

@@ -26,7 +26,7 @@ The spring depends on the design (its rate and lengths), the design on the box: 
 fixed point. Solve with the config's box; design the spring of the answer (of the springs that
 meet every check, the one with the smallest EN 15800 free-length tolerance A_L0 -- at the one
 rate they all realise, the smallest force tolerance R A_L0 = alpha_F k_F Q --, then the
-lightest: :func:`softclose.coil_spring.order.spring_order` with ``rank="tolerance"``; or the
+lightest: :func:`softclose.optimiser.spring_order.spring_order` with ``rank="tolerance"``; or the
 ``[spring]`` given, checked); solve again with its EN 15800 spreads; design the spring of that
 answer, and while its spreads exceed those solved with, solve again with the larger of the
 two, at most :data:`MAX_ROUNDS` times. The result says which box the answer holds for
@@ -37,7 +37,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from ..coil_spring.order import spring_order
+from ..optimiser.spring_order import spring_order
 from ..coil_spring.tolerances import quality_factor
 from ..errors import ConfigError
 from ..optimiser.made_to_order import made_to_order  # noqa: F401  (re-exported)

@@ -37,7 +37,7 @@ def _spring(cfg, stroke, temps) -> dict:
         out["note"] = ("the EN 13906-1/-2 checks apply to a compression or extension spring "
                        "made to order; this spring is given by its rate and rest length")
         return out
-    from ..coil_spring.order import spring_duty, spring_order
+    from ..optimiser.spring_order import spring_duty, spring_order
     try:
         duty = spring_duty(cfg)
         res = spring_order(cfg, duty)

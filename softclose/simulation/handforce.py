@@ -8,7 +8,7 @@ the potential (gravity and every spring), T_fr the friction moment on the lid's 
   it slowly), ``F_close = (dV/dtheta - T_fr) / tau`` (< 0: it must be pushed down);
 - zones: self-close where dV/dtheta > T_fr, self-rise where dV/dtheta < -T_fr, hold-open
   where |dV/dtheta| <= T_fr; their edges are roots of dV/dtheta -+ T_fr, located by the
-  bracketed root finder (:func:`softclose.simulation.roots.illinois`), not to the grid.
+  bracketed root finder (:func:`softclose.numerics.roots.illinois`), not to the grid.
 
 The opening force is :func:`softclose.simulation.statics.opening_force_exact` (§9) when the
 lid opens to the release angle (the default), else the same search over the wider range.
@@ -24,7 +24,7 @@ import numpy as np
 from ..errors import ConfigError
 from ..model.dynamics import COEFFS
 from ..model.temperature import at_temperature, parameter_factors
-from .roots import illinois
+from ..numerics.roots import illinois
 from .statics import _parabola_max, opening_force_exact
 
 #: angles of the hand-force grid (sign changes on it are then refined to the root)

@@ -28,7 +28,7 @@ from ..errors import NumericalError
 from ..interrupt import solving
 from ..model.temperature import at_temperature, parameter_factors
 from ..problem import REFERENCE_TOL, as_params
-from .roots import hermite_peak, hermite_root, illinois
+from ..numerics.roots import hermite_peak, hermite_root, illinois
 from .stroke import StrokeResult, StrokeStatus
 
 #: grid steps of the reference integrated in one CVODES run (then scanned for events)

@@ -25,7 +25,7 @@ from ..errors import ConfigError
 from ..model import elements
 from ..model.dynamics import COEFFS, COORDINATE_COEFFS, coordinates_of_columns, damping, potential, slope
 from ..problem import as_params
-from .roots import illinois
+from ..numerics.roots import illinois
 from .kernel.binding import leaves, point_grid, point_lengths, point_opening
 
 

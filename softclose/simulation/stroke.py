@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from enum import IntEnum
 
 from ..present.display import Display, Displayed, Table, pm, with_unit
-from ..problem import METRIC_KEYS, METRICS
+from ..problem import METRIC_KEYS, METRICS, UNITS
 from ..jsonio import jsonable
 
 
@@ -95,6 +95,13 @@ class StrokeResult(Displayed):
     engage_time: float | None = None
     engage_theta_dot: float | None = None
     trajectory: dict | None = field(default=None, repr=False, compare=False)
+    #: with ``hand_force=True`` (:func:`softclose.simulate`): the hand force and the lid's
+    #: zones (:class:`softclose.simulation.handforce.HandForce`), at each sign-off
+    #: temperature too when there are several (``((T, HandForce), ...)``), and what the end
+    #: damper did when that is not a crossing on the way down
+    hand_force: object | None = field(default=None, repr=False, compare=False)
+    hand_forces: tuple = field(default=(), repr=False, compare=False)
+    end_damper: str | None = None
 
     @property
     def ok(self) -> bool:
@@ -121,7 +128,35 @@ class StrokeResult(Displayed):
         for k in ("tolerance", "message", "reason", "engage_time", "engage_theta_dot"):
             if getattr(self, k) is not None:
                 out[k] = getattr(self, k)
+        out["integrator"] = self.method
+        if self.hand_force is not None:     # the hand force and the zones (SPEC §13)
+            out.update({k: v for k, v in self.hand_force.metrics().items()
+                        if k != "opening_force"})
+        if self.hand_forces:                # at each sign-off temperature (SPEC §12, §13)
+            out["temperatures"] = [dict(h.metrics(), temperature_c=T)
+                                   for T, h in self.hand_forces]
+        if not self.ok:
+            out["error"] = self.message
+        else:
+            if self.end_damper:
+                out["end_damper"] = self.end_damper
+            if self.message:
+                out["warning"] = self.message
         return jsonable(out)
+
+    def text(self) -> str:
+        """What ``softclose simulate`` prints: the metrics with their accuracy, the hand
+        force and what the end damper did (when asked for), a warning."""
+        lines = [metrics_text(self.to_json())]
+        if not self.ok:
+            return lines[0]
+        if self.hand_force is not None:
+            lines.append(f"  hand force: {self.hand_force.describe()}")
+        if self.end_damper:
+            lines.append(f"  end damper: {self.end_damper}")
+        if self.message:
+            lines.append(f"  {self.message}")
+        return "\n".join(lines)
 
     def to_frame(self):
         """One row (pandas DataFrame): the metrics and the status. With a trajectory, use
@@ -171,6 +206,58 @@ class StrokeResult(Displayed):
         if self.trajectory is None:
             raise ValueError("this result has no trajectory: simulate(cfg, trajectory=True)")
         return plot_time_histories(self)
+
+
+def metrics_text(m: dict) -> str:
+    """A stroke's metrics (its JSON) as an aligned table, each with its accuracy where
+    known, the end damper's engagement, why it did not close, how it was integrated."""
+    acc = m.get("accuracy") or {}
+    out = []
+    for key in METRIC_KEYS:
+        v = m.get(key)
+        if key == "closed":
+            out.append(f"  {key:<19} {'yes' if v else 'no'}")
+        elif v is None:
+            out.append(f"  {key:<19} —")
+        else:
+            e = acc.get(key)
+            err = f"  (± {e:.1e})" if e is not None else ""
+            out.append(f"  {key:<19} {v:.7g} {UNITS[key]}{err}")
+    # the end damper's first engagement, where the lid reaches it (StrokeResult.engage_time)
+    for key, unit in (("engage_time", "s"), ("engage_theta_dot", "rad/s")):
+        if m.get(key) is not None:
+            e = acc.get(key)
+            err = f"  (± {e:.1e})" if e is not None else ""
+            out.append(f"  {key:<19} {m[key]:.7g} {unit}{err}")
+    if m.get("reason"):
+        why = "invalid design" if m.get("status") == "invalid design" else "why not closed"
+        out.append(f"  {why}: {m['reason']}")
+    if "method" in m and m.get("step") is not None:
+        out.append(f"  ({m['method']}, step {m['step']:g} s, {m['steps']} steps; "
+                   "± = estimated distance from the converged answer)")
+    return "\n".join(out)
+
+
+def end_damper_note(res: StrokeResult, end_damper_c: float, angle_deg: float,
+                    theta0_deg: float, theta_closed_deg: float) -> str | None:
+    """What the end damper did when that is not a crossing on the way down (None without
+    one): engaged from the release (its angle at or above theta0), never (at or below the
+    rim), or not reached (the lid stays above it). An angle outside the stroke is not an
+    error: it says where the damper acts."""
+    if not end_damper_c:
+        return None
+    at = f"end_damper_angle_deg = {angle_deg:g}"
+    if angle_deg <= theta_closed_deg:
+        return (f"never acts: {at} is not above the rim (stroke.theta_closed_deg = "
+                f"{theta_closed_deg:g})")
+    if (res.engage_time is not None and res.engage_time < 1e-12
+            and angle_deg >= theta0_deg):
+        return (f"acts from the release: {at} is not below stroke.theta0_deg = "
+                f"{theta0_deg:g}")
+    if res.engage_time is None and res.theta_min is not None:
+        return (f"never engaged: the lid stays above {at} (lowest angle "
+                f"{math.degrees(res.theta_min):.2f} deg)")
+    return None
 
 
 def none_if_nan(x) -> float | None:

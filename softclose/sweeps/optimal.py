@@ -385,6 +385,12 @@ class OptimalGridResult(Displayed):
         names = self.column_names(self.keys, self.robust)[1:]
         return pd.DataFrame({k: self.columns[k] for k in names})
 
+    def text(self) -> str:
+        """What ``softclose sweep --optimise`` prints: a line per point (up to 40), else
+        the ranges of the design and J."""
+        from .text import optimal_grid_text
+        return optimal_grid_text(self)
+
     def to_json(self) -> dict:
         return jsonable({
             "success": self.success, "message": self.message, "keys": list(self.keys),

@@ -18,7 +18,9 @@ test it.
 
 from __future__ import annotations
 
-from ...config.keys import Key
+import numpy as np
+
+from ..keys import Key
 from .base import Element, Param, Params
 from .dampers import Dashpot, EndDamper, RotaryDamper
 from .friction import Friction, StrutFriction
@@ -56,6 +58,26 @@ def params(p, spring: str | None = None) -> Params:
     ``spring`` = "coil" or "gas": the spring law symbolic expressions serve (default: the
     kind in p decides; :class:`Params`)."""
     return Params(p, PARAMS, spring)
+
+
+#: the parameters' defaults (their keys' defaults: the elements added since the seed absent)
+PARAM_DEFAULTS = np.array([q.number(next(k.default for k in KEYS if k.full == q.key))
+                           for q in PARAMS])
+
+
+def as_params(p) -> np.ndarray:
+    """A parameter vector (or rows of them) as a float array of every parameter: a shorter
+    vector -- the seed's four (k, l0, c, c_rot), say -- gets the others from their defaults,
+    which leave the elements added since absent."""
+    p = np.asarray(p, float)
+    n = p.shape[-1] if p.ndim else 0
+    if n == len(PARAMS):
+        return p
+    if not 0 < n < len(PARAMS):
+        raise ValueError(f"a parameter vector has {len(PARAMS)} values "
+                         f"({', '.join(PARAM_NAMES)}), got {n}")
+    rest = np.broadcast_to(PARAM_DEFAULTS[n:], p.shape[:-1] + (len(PARAMS) - n,))
+    return np.concatenate([p, rest], axis=-1)
 
 
 def structure(mounting) -> tuple:

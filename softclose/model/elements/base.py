@@ -25,7 +25,7 @@ An element states, once:
 - the **kernel columns** it needs (``columns``: its q, q' or q'^2 tabulated over theta) and
   the name of its law in ``_kernel.c``'s element section, which also states what the law
   contributes to the early exit's energy bound;
-- its **config keys** (:class:`softclose.config.keys.Key`: kind, default, range, unit, spread, doc).
+- its **config keys** (:class:`softclose.model.keys.Key`: kind, default, range, unit, spread, doc).
 
 A law is arithmetic on its arguments only, so one definition serves CasADi expressions (the
 model, the NLP), numpy arrays (statics over the coefficient table) and floats alike.
@@ -45,7 +45,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ...config.keys import Key
+from ..keys import Key
 
 
 class Param(NamedTuple):

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 
-from ...config.keys import Key
+from ..keys import Key
 from .base import Element, Param
 from .coordinates import PIVOTS, Length, PivotAngle
 

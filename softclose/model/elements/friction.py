@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...config.keys import Key
+from ..keys import Key
 from .base import Element, Param
 from .coordinates import Length, PivotAngle
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...config.keys import Key
+from ..keys import Key
 from .base import Element
 from .coordinates import Weights
 

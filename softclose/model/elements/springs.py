@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from ...config.keys import Key
+from ..keys import Key
 from .base import Element, Param
 from .coordinates import PIVOTS, Length, PivotAngle
 

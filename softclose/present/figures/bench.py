@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from ...simulation.integrators import METHODS, SEED
+from ...numerics.integrators import METHODS, SEED
 from ...problem import RELATIVE, TARGETS
 from ..display import num
 from . import plt

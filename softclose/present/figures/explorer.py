@@ -1,4 +1,4 @@
-"""The explorer's figure (:mod:`softclose.present.explorer`): the stroke, the tip speed and the
+"""The explorer's figure (:mod:`softclose.notebook.explorer`): the stroke, the tip speed and the
 spring's length against time, and the objective over the neighbourhood of springs and
 dampers with the current design marked; redrawn in place as a slider moves."""
 
@@ -18,7 +18,7 @@ class ExplorerFigure:
         self.colorbar = None
 
     def draw(self, data: dict, values: dict):
-        """Draw the explorer's ``data`` (:meth:`softclose.present.explorer.Explorer.update`) for the
+        """Draw the explorer's ``data`` (:meth:`softclose.notebook.explorer.Explorer.update`) for the
         slider ``values``; returns the Figure."""
         a_th, a_v, a_l, a_map = self.ax
         for a in self.ax:

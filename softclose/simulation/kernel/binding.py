@@ -88,7 +88,7 @@ import numpy as np
 
 from ...model import elements
 from ...errors import ConfigError, NumericalError
-from ..integrators import Method
+from ...numerics.integrators import Method
 from .layout import (DESIGN_COLUMNS, KERNEL_ABI, LAYOUT, NPT, OUT_FIELDS, POINT_COLUMNS,  # noqa: F401
                      SI)
 from .library import load

@@ -116,7 +116,7 @@ class Explorer:
         slider calls :meth:`update` and redraws. Returns the widget box."""
         import ipywidgets as w
 
-        from .figures.explorer import ExplorerFigure
+        from ..present.figures.explorer import ExplorerFigure
         b, start = self.bounds(), self.start()
         sliders = {}
         for key, label, unit in SLIDERS:

@@ -21,9 +21,9 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..model.lid import shared_model
-from . import PREFERRED_WIRE_D, CoilSpring, Duty, check, design
-from . import standard
-from .materials import material
+from ..coil_spring import PREFERRED_WIRE_D, CoilSpring, Duty, check, design
+from ..coil_spring import standard
+from ..coil_spring.materials import material
 from ..problem import resolve
 
 #: angles of the grid on which the spring's extremes over the stroke are bracketed

@@ -1,0 +1,1 @@
+"""What a notebook user drives by hand: the explorer whose sliders redraw a stroke."""
