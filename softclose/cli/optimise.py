@@ -13,8 +13,9 @@ import argparse
 from ..files import write_text
 from .common import (DESIGN_FILE, figures, stroke_files, Outcome, add_common, add_out,
                      add_slow_motion, interactive,
-                     metrics_line, prepare_out, slow_motion, write_design, write_outputs,
+                     metrics_line, prepare_out, slow_motion, write_outputs,
                      wrote)
+from ..config.write import write_design
 from ..problem import PARETO_DEFAULT, resolve
 
 

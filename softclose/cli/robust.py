@@ -145,7 +145,8 @@ def robust_outcome(cfg, args) -> Outcome:
     if out is not None:
         from .common import save_figure as save
         from ..jsonio import jsonable
-        from .common import DESIGN_FILE, metrics_line, write_design
+        from .common import DESIGN_FILE, metrics_line
+        from ..config.write import write_design
         if res.design is not None:
             y = res.yield_result
             files.append(write_design(

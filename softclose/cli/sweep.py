@@ -22,14 +22,10 @@ threads)`` (see :mod:`softclose.sweeps.run`); ``--optimise`` calls
 from __future__ import annotations
 
 import contextlib
-import shlex
 import signal
-import threading
-import time
 from pathlib import Path
 
 from .common import Outcome, add_common, add_figures, interactive, prepare_out, wrote
-from .maps import write_maps
 
 
 def register(sub) -> None:
@@ -98,32 +94,13 @@ def _space(cfg, args):
 
 def _resume_spec(cfg, args):
     """The sweep to finish: the folder's manifest, checked against what was asked."""
-    from ..config import from_dict
     from ..errors import ConfigError
-    from ..sweeps import store
-    from ..sweeps.space import space_from_spec
-    folder = Path(args.resume)
-    if args.out is not None and Path(args.out).resolve() != folder.resolve():
+    from ..sweeps.store import resume_spec
+    if args.out is not None and Path(args.out).resolve() != Path(args.resume).resolve():
         raise ConfigError(f"--out {args.out} and --resume {args.resume}: a sweep is resumed "
                           "in its own folder; give only --resume DIR")
-    if not folder.is_dir():
-        raise ConfigError(f"--resume {args.resume}: no such folder")
-    old = store.read_manifest(folder)
-    if old is None:
-        raise ConfigError(f"--resume {args.resume}: no sweep there ({store.MANIFEST} missing)")
-    asked = _space(cfg, args)
-    space = asked if asked is not None else space_from_spec(old["space"])
-    if not (args.config or args.overrides):
-        cfg = from_dict(old["raw"])      # the folder's config unless one is given
-    fmt = args.format or old["format"]
-    chunk = args.chunk or old["chunk"]
-    new = store.manifest(cfg, space, chunk, fmt)
-    diff = store.differences(old, new)
-    if diff:
-        more = f" (and {len(diff) - 2} more)" if len(diff) > 2 else ""
-        raise ConfigError(f"--resume {args.resume}: the folder holds a different sweep: "
-                          f"{'; '.join(diff[:2])}{more}")
-    return cfg, space, fmt, chunk, folder, old
+    return resume_spec(args.resume, cfg, _space(cfg, args), bool(args.config or args.overrides),
+                       args.format, args.chunk)
 
 
 def run(cfg, args) -> Outcome:
@@ -186,118 +163,16 @@ def _plain_ctrl_c():
 
 def _sweep(cfg, args, space, fmt, chunk, out: Path, m: dict, dask,
            replace: bool = False) -> Outcome:
+    from .common import FIGURES
+    from ..sweeps.folder import sweep_to_folder
     with _plain_ctrl_c():
-        return _sweep_run(cfg, args, space, fmt, chunk, out, m, dask, replace)
-
-
-def _sweep_run(cfg, args, space, fmt, chunk, out: Path, m: dict, dask,
-               replace: bool = False) -> Outcome:
-    from ..sweeps import store
-    from ..sweeps.run import _no_interrupt
-    from ..sweeps.run import run as run_sweep
-    t0 = time.perf_counter()
-    parquet = fmt == "parquet"
-    keys = list(space.keys)
-    if args.resume:
-        if parquet:
-            done = store.parquet_chunks(out, keys, space.n, chunk)
-        elif (out / store.CSV).exists():
-            done = store.chunks_of(store.read_csv(out / store.CSV, keys), space.n, chunk)
-        else:
-            done = ()
-    else:
-        done = ()
-    # the table's library and matplotlib are imported while the kernel runs (its threads
-    # leave the interpreter free); the maps are drawn here once the table is written
-    prefetch = threading.Thread(target=_import_outputs, args=(parquet, True),
-                                name="softclose-imports", daemon=True)
-    prefetch.start()
-    ctx = dask.mapper(args.dask, args.threads) if dask is not None else \
-        contextlib.nullcontext(None)
-    try:
-        with ctx as mapper:              # connected: only now is the folder written
-            if replace:
-                store.clear(out)         # a finished earlier sweep is replaced
-            store.write_manifest(out, m, complete=False)
-            sink = store.ParquetSink(out, keys) if parquet else None
-            res = run_sweep(cfg, space, progress=interactive(args), threads=args.threads,
-                            chunk=chunk, keep=not parquet, sink=sink, done=done,
-                            mapper=mapper,
-                            dataset=str(out / store.DATASET) if parquet else None)
-    finally:
-        prefetch.join()                  # no import half done
-    stages = dict(res.stages)
-    files: list[Path] = []
-    interrupted = res.interrupted
-    maps = not interrupted and res.computed > 0
-    try:
-        if parquet:
-            files.append(out / store.DATASET)
-        else:
-            tw = time.perf_counter()
-            # the finished chunks are written whatever happens (a second Ctrl-C waits)
-            with _no_interrupt(reraise=not interrupted):
-                files.append(store.write_csv(res.columns, keys, out / store.CSV))
-            stages["csv"] = time.perf_counter() - tw
-        if not interrupted:
-            tm = time.perf_counter()
-            if maps:
-                files += write_maps(res, out)
-            store.write_manifest(out, m, complete=True)
-            stages["maps"] = time.perf_counter() - tm
-    except KeyboardInterrupt:            # the table is whole; resuming draws the maps
-        interrupted = True
-    resume = f"softclose sweep --resume {shlex.quote(str(out))}" if interrupted else None
-    stages["total"] = time.perf_counter() - t0
-    files.append(out / store.MANIFEST)
-    payload = res.to_json()
-    payload.update(stages=stages, format=fmt, out=str(out), resume=resume,
-                   files=[str(f) for f in files])
-    payload["interrupted"] = interrupted
-    from ..sweeps.text import sweep_text
-    text = sweep_text(res, payload, files, resume)
-    lost = getattr(mapper, "lost", None)     # the Dask cluster stopped working mid-sweep
-    if lost is not None:
-        error = f"{lost}; the finished chunks are kept, resume with: {resume}"
-        payload["error"] = error
-        return Outcome(payload, text, lost.exit_code, tuple(files), error=error)
-    return Outcome(payload, text, 130 if interrupted else 0, tuple(files))
-
-
-def _import_outputs(parquet: bool, plotting: bool) -> None:
-    with contextlib.suppress(Exception):
-        if parquet:
-            import pyarrow.parquet  # noqa: F401
-        else:
-            import pyarrow.csv  # noqa: F401
-        if plotting:
-            from ..present.figures import sweep  # noqa: F401  (matplotlib)
-
-
-def write_grid_designs(res, out) -> list:
-    """Each grid point with a design as ``out/designs/design_<id>.toml``: its config (the grid
-    keys set) with its optimum (robust design) as [design]."""
-    import math
-
-    from .common import write_design
-    c = res.columns
-    folder = Path(out) / "designs"
-    paths = []
-    for i in range(res.points):
-        if not all(math.isfinite(c[k][i]) for k in ("spring_k", "spring_rest_length",
-                                                     "damper_c")):
-            continue
-        folder.mkdir(exist_ok=True)
-        where = ", ".join(f"{k} = {c[k][i]:.7g}" for k in res.keys)
-        kind = "robust design" if res.robust else "optimum"
-        J = c["verified_objective"][i]
-        paths.append(write_design(
-            folder / f"design_{i}.toml", res.design_config(i),
-            f"row {i} of `softclose sweep --optimise`: the {kind} at {where}"
-            + ("" if c["success"][i] else " (NOT verified)"),
-            [f"J = {c['objective'][i]:.7g} (the optimiser's)"
-             + (f", {J:.7g} (the adaptive reference's)" if math.isfinite(J) else "")]))
-    return paths
+        s = sweep_to_folder(cfg, space, out, fmt, chunk, m, resume=bool(args.resume),
+                            replace=replace, threads=args.threads, progress=interactive(args),
+                            mapper_context=(dask.mapper(args.dask, args.threads)
+                                            if dask is not None else None),
+                            figure_format=FIGURES["format"], figure_style=FIGURES["style"])
+    code = s.lost.exit_code if s.lost is not None else 130 if s.interrupted else 0
+    return Outcome(s.to_json(), s.text(), code, s.files, error=s.error)
 
 
 def _optimal_grid(cfg, args, space, out):
@@ -318,7 +193,7 @@ def _optimal_grid(cfg, args, space, out):
     res = optimise_grid(cfg, space, dask=getattr(args, "dask", None), robust=robust,
                         progress=interactive(args))
     files = [write_table(res, out, getattr(args, "format", None) or "csv")]
-    designs = write_grid_designs(res, out)
+    designs = res.save_designs(out)
     if not res.interrupted and res.verified:
         from .common import save_figure as save
         files.append(save(res.plot(), Path(out) / FIGURE))

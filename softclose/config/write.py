@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 from typing import Any
 
 from .free import free_table
@@ -94,4 +95,26 @@ def _plain(v):
     return list(v) if isinstance(v, tuple) else v
 
 
-__all__ = ["to_toml", "toml_value"]
+def write_design(path, cfg, what: str, lines=()) -> Path:
+    """Write ``cfg`` (a config whose [design] is the design handed on) as a TOML config
+    file every command takes with ``--config`` (:func:`softclose.config.to_toml`: the whole
+    config, read back to the same config), with a header saying what it is."""
+    from ..version import __version__
+    from ..files import write_text
+    path = Path(path)
+    d = cfg.design
+    head = [f"softclose {__version__}: {what}",
+            f"design: spring_k = {d.spring_k!r} N/m, spring_rest_length = "
+            f"{d.spring_rest_length!r} m, damper_c = {d.damper_c!r} N s/m"
+            + (f", end_damper_c = {d.end_damper_c!r} N m s/rad below end_damper_angle_deg = "
+               f"{d.end_damper_angle_deg!r} deg" if d.end_damper_c else ""),
+            *[x for x in lines if x],
+            f"Every command takes this file: softclose yield --config {path.name}, "
+            f"softclose sensitivity --config {path.name}, softclose simulate --config "
+            f"{path.name} (add --set KEY=VALUE to change a key).",
+            "The whole config follows, each key with its unit; a derived key left as a "
+            "comment keeps following the keys it derives from."]
+    return write_text(path, to_toml(cfg, "\n".join(head)))
+
+
+__all__ = ["to_toml", "toml_value", "write_design"]

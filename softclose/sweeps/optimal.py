@@ -391,6 +391,11 @@ class OptimalGridResult(Displayed):
         from .text import optimal_grid_text
         return optimal_grid_text(self)
 
+    def save_designs(self, folder) -> list:
+        """Each point with a design as ``folder/designs/design_<id>.toml`` (what ``softclose
+        sweep --optimise --out`` writes): its config with the optimum as [design]."""
+        return write_grid_designs(self, folder)
+
     def to_json(self) -> dict:
         return jsonable({
             "success": self.success, "message": self.message, "keys": list(self.keys),
@@ -427,6 +432,32 @@ class OptimalGridResult(Displayed):
 # -- files and the command line ------------------------------------------------------------
 TABLE = "optimal"
 FIGURE = "optimal.png"
+
+
+def write_grid_designs(res, out) -> list:
+    """Each grid point with a design as ``out/designs/design_<id>.toml``: its config (the grid
+    keys set) with its optimum (robust design) as [design]."""
+    import math
+
+    from ..config.write import write_design
+    c = res.columns
+    folder = Path(out) / "designs"
+    paths = []
+    for i in range(res.points):
+        if not all(math.isfinite(c[k][i]) for k in ("spring_k", "spring_rest_length",
+                                                     "damper_c")):
+            continue
+        folder.mkdir(exist_ok=True)
+        where = ", ".join(f"{k} = {c[k][i]:.7g}" for k in res.keys)
+        kind = "robust design" if res.robust else "optimum"
+        J = c["verified_objective"][i]
+        paths.append(write_design(
+            folder / f"design_{i}.toml", res.design_config(i),
+            f"row {i} of `softclose sweep --optimise`: the {kind} at {where}"
+            + ("" if c["success"][i] else " (NOT verified)"),
+            [f"J = {c['objective'][i]:.7g} (the optimiser's)"
+             + (f", {J:.7g} (the adaptive reference's)" if math.isfinite(J) else "")]))
+    return paths
 
 
 def write_table(res: OptimalGridResult, out, fmt: str = "csv") -> Path:

@@ -331,6 +331,33 @@ def clear(out: Path) -> None:
             p.unlink()
 
 
+def resume_spec(folder, cfg, asked=None, config_given: bool = False, fmt: str | None = None,
+                chunk: int | None = None):
+    """The sweep to finish in ``folder`` (``softclose sweep --resume``): its config (the
+    folder's own unless ``config_given``), its space (``asked``, a space, or the folder's),
+    format and chunk, checked against the folder's manifest: a folder of another sweep is
+    refused naming what differs. Returns (cfg, space, fmt, chunk, folder, manifest)."""
+    from ..config import from_dict
+    from .space import space_from_spec
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise ConfigError(f"--resume {folder}: no such folder")
+    old = read_manifest(folder)
+    if old is None:
+        raise ConfigError(f"--resume {folder}: no sweep there ({MANIFEST} missing)")
+    space = asked if asked is not None else space_from_spec(old["space"])
+    if not config_given:
+        cfg = from_dict(old["raw"])      # the folder's config unless one is given
+    fmt = fmt or old["format"]
+    chunk = chunk or old["chunk"]
+    diff = differences(old, manifest(cfg, space, chunk, fmt))
+    if diff:
+        more = f" (and {len(diff) - 2} more)" if len(diff) > 2 else ""
+        raise ConfigError(f"--resume {folder}: the folder holds a different sweep: "
+                          f"{'; '.join(diff[:2])}{more}")
+    return cfg, space, fmt, chunk, folder, old
+
+
 __all__ = ["MANIFEST", "CSV", "DATASET", "FORMATS", "manifest", "write_manifest",
-           "read_manifest", "differences", "write_csv", "read_csv", "chunks_of",
+           "read_manifest", "resume_spec", "differences", "write_csv", "read_csv", "chunks_of",
            "ParquetSink", "parquet_chunks", "clear", "arrow_table"]
