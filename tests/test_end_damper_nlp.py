@@ -140,7 +140,6 @@ def test_end_damper_co_design_is_verified_where_it_engages(tmp_path):
     (time and theta') equal to the reference's located event within the agreement
     tolerance, reported in the JSON, the text and the table, and handed on in design.toml:
     the file's config, re-simulated by the reference, gives the verified J."""
-    from softclose.cli.optimise import write_optimum
     r = softclose.optimise(COMPRESSION.set("optimise.free", FREE).set("optimise.starts", 4))
     assert r.success, r.message
     assert r.substeps_engaged is not None and r.verification.ok
@@ -157,7 +156,7 @@ def test_end_damper_co_design_is_verified_where_it_engages(tmp_path):
     assert j["engage_time"] == r.metrics["engage_time"] and j["engage_theta_dot"] < 0
     assert j["solver"]["phases"][1]["substeps"] == r.substeps_engaged
     assert "engage_time" in r.text() and "end damper engages" in r._repr_html_()
-    write_optimum(r, tmp_path)
+    r.save(tmp_path)
     c = load_config(tmp_path / "design.toml")
     assert c.design.end_damper_c == r.design["end_damper_c"]
     assert c.design.end_damper_angle_deg == r.design["end_damper_angle_deg"]

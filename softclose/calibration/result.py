@@ -167,6 +167,13 @@ class FitResult(Displayed):
         from .text import fit_text
         return fit_text(self)
 
+    def save(self, folder, data=None, figure_format: str = "png",
+             figure_style: str | None = None) -> list:
+        """The hand-over in ``folder`` (what ``softclose fit --out`` writes): calibrated.toml,
+        fit.csv, samples.csv and the figure; the paths."""
+        from .folder import save_fit
+        return save_fit(self, folder, data, figure_format, figure_style)
+
     def to_json(self) -> dict:
         one = len(self.strokes) == 1
         rel = [s.release_time for s in self.strokes]

@@ -82,12 +82,8 @@ def save_figure(fig, path) -> Path:
     return save(fig, figure_path(path), style=FIGURES["style"])
 
 
-#: the file an optimiser's --out writes its design to
-DESIGN_FILE = "design.toml"
-
-
 def stroke_files(stem: str) -> list[str]:
-    """The files :func:`softclose.cli.files.write_stroke_outputs` writes for ``stem``."""
+    """The files :func:`softclose.simulation.folder.write_stroke_outputs` writes for ``stem``."""
     return [f"{stem}_trajectory.csv", f"{stem}_animation.gif",
             *figures(f"{stem}_time", f"{stem}_linkage")]
 
@@ -173,21 +169,6 @@ def write_outputs(out: Path, csv_name: str, frame, fig_name: str, plot) -> list[
     table = Path(out) / csv_name
     write_with(table, lambda p: frame.to_csv(p, index=False))
     return [table, save_figure(plot(), Path(out) / fig_name)]
-
-
-
-
-def metrics_line(m: dict | None, J: float | None) -> str:
-    """The metrics a design file's header quotes (one line)."""
-    if not m or not m.get("closed"):
-        return "does not close" if m else ""
-    return (f"closes in {m['closing_time']:.7g} s, impact tip speed "
-            f"{m['impact_tip_speed']:.4g} m/s, peak tip speed {m['peak_tip_speed']:.4g} m/s, "
-            f"holding moment {m['holding_moment']:.7g} N m"
-            + (f", the end damper engages at {m['engage_time']:.7g} s at theta' = "
-               f"{m['engage_theta_dot']:.5g} rad/s" if m.get("engage_time") is not None
-               else "")
-            + (f"; J = {J:.7g}" if J is not None else ""))
 
 
 def wrote(files) -> str:

@@ -5,12 +5,10 @@ from __future__ import annotations
 
 
 import argparse
-from pathlib import Path
 
 from ..errors import ConfigError
-from ..files import write_text, write_with
-from .common import (Outcome, add_common, add_out, figures, interactive, prepare_out,
-                     save_figure, wrote)
+from .common import (FIGURES, Outcome, add_common, add_out, figures, interactive,
+                     prepare_out, wrote)
 
 DESCRIPTION = """\
 Fit config keys of the lid's dynamics (masses, inertias, the dampers, friction, a spring's
@@ -61,47 +59,6 @@ def _starts(text: str) -> int:
     return n
 
 
-def write_fit(res, out: Path, data) -> list:
-    """The hand-over: calibrated.toml, fit.csv, samples.csv, the figure."""
-    import numpy as np
-    import pandas as pd
-    from ..config import to_toml
-    from ..version import __version__
-    files = []
-    cfg = res.calibrated_config()
-    tol = res.tolerance()
-    head = [f"softclose {__version__}: the config calibrated to measured strokes",
-            "data: " + ", ".join(str(d) for d in data),
-            "fitted: " + ", ".join(f"{k} = {res.values[k]!r} ± {res.std[k]:.3g} (95 %: "
-                                   f"{res.ci95[k][0]:.6g} .. {res.ci95[k][1]:.6g})"
-                                   for k in res.keys),
-            ("[tolerance] proposal from the 95 % intervals (the lid's keys; the design "
-             "variables keep the spreads of the parts to buy): " + ", ".join(
-                 f"{k} = {v}" for k, v in tol.items())) if tol else
-            "no [tolerance] proposal (no key of the lid determined; the design variables "
-            "keep the spreads of the parts to buy)",
-            "design for what is known of the lid: softclose optimise --robust --config "
-            "calibrated.toml"]
-    if not res.identifiable:
-        head.insert(1, "WARNING: not identifiable: " + res.message)
-    path = out / "calibrated.toml"
-    write_text(path, to_toml(cfg, "\n".join(head)))
-    files.append(path)
-    table = out / "fit.csv"
-    write_with(table, lambda p: res.to_frame().to_csv(p, index=False))
-    files.append(table)
-    rows = []
-    for s in res.strokes:
-        rows.append(pd.DataFrame({"file": s.path, "time_s": s.t, "measured": s.y,
-                                  "model": s.model, "residual": s.y - s.model,
-                                  "unit": s.unit, "fitted": np.isfinite(s.model)}))
-    samples = out / "samples.csv"
-    write_with(samples, lambda p: pd.concat(rows).to_csv(p, index=False))
-    files.append(samples)
-    files.append(save_figure(res.plot(), out / "fit"))
-    return files
-
-
 def run(cfg, args) -> Outcome:
     from ..calibration import fit
     from ..calibration.equation import check_keys
@@ -112,7 +69,7 @@ def run(cfg, args) -> Outcome:
     payload = res.to_json()
     files = []
     if out is not None and res.success:
-        files = write_fit(res, out, args.data)
+        files = res.save(out, args.data, FIGURES["format"], FIGURES["style"])
         payload["files"] = [str(f) for f in files]
     text = res.text() + wrote(files)
     if not res.success:

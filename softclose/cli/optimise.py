@@ -10,13 +10,11 @@ from __future__ import annotations
 
 import argparse
 
-from ..files import write_text
-from .common import (DESIGN_FILE, figures, stroke_files, Outcome, add_common, add_out,
-                     add_slow_motion, interactive,
-                     metrics_line, prepare_out, slow_motion, write_outputs,
-                     wrote)
-from ..config.write import write_design
-from ..problem import PARETO_DEFAULT, resolve
+from .common import (FIGURES, Outcome, add_common, add_out, add_slow_motion,
+                     figures, interactive, prepare_out, slow_motion, stroke_files,
+                     write_outputs, wrote)
+from ..config.write import DESIGN_FILE
+from ..problem import PARETO_DEFAULT
 
 
 OPTIMISE = """\
@@ -93,7 +91,7 @@ def run_optimise(cfg, args) -> Outcome:
     payload = res.to_json()
     files = []
     if out is not None and res.design is not None:
-        files = write_optimum(res, out, factor)
+        files = res.save(out, factor, FIGURES["format"], FIGURES["style"])
         payload["files"] = [str(f) for f in files]
     text = res.text() + wrote(files)
     return Outcome(payload, text, 0 if res.success else 3, tuple(files),
@@ -106,34 +104,6 @@ def _run_robust(cfg, args, out) -> Outcome:
     return robust_outcome(cfg, args)
 
 
-def write_optimum(res, out, slow_motion=None) -> list:
-    """The optimum as a config file (``design.toml``), ``optimise.json``, its figure and its
-    stroke (trajectory CSV, figures, animation)."""
-    from .common import save_figure as save
-    from ..jsonio import dumps
-    from ..simulation.simulator import Simulator
-    from .files import write_stroke_outputs
-    files = [write_design(out / DESIGN_FILE, res.design_config(),
-                          "the optimum of `softclose optimise`"
-                          + ("" if res.success else " (NOT verified: see optimise.json)"),
-                          [f"verified by the adaptive reference: "
-                           f"{metrics_line(res.metrics, res.verified_objective)}"
-                           if res.verification is not None else ""])]
-    sim = Simulator(resolve(res.design_config()))   # its model carries the design
-    stroke = sim.run(trajectory=True)
-    files.append(out / "optimise.json")
-    write_text(files[-1], dumps(res.to_json(), indent=1))
-    files.append(save(res.plot(), out / "optimum.png"))
-    cfg = res.design_config()
-    if any("[" in k for k in res.design) or cfg.optimise.keep_out:   # where it attaches
-        from ..optimiser.cache import get_model
-        from ..present.figures.attachment import plot_attachments
-        files.append(save(plot_attachments(get_model(cfg), cfg), out / "attachments.png"))
-    files += write_stroke_outputs(sim.model, stroke, out, stem="optimum",
-                                  slow_motion=slow_motion)
-    return files
-
-
 # -- pareto --------------------------------------------------------------------------------
 def run_pareto(cfg, args) -> Outcome:
     out = prepare_out(args.out, ["pareto.csv", *figures("pareto"), "designs/"])
@@ -144,7 +114,7 @@ def run_pareto(cfg, args) -> Outcome:
     payload = fr.to_json()
     files = []
     if out is not None:
-        designs = write_front_designs(fr, out)
+        designs = fr.save_designs(out)
         frame = fr.to_frame()
         frame["design_file"] = [str(designs[i].relative_to(out)) if i in designs else ""
                                 for i in range(len(fr.points))]
@@ -156,24 +126,3 @@ def run_pareto(cfg, args) -> Outcome:
     text = fr.text() + wrote(files)
     return Outcome(payload, text, 0 if fr.success else 3, tuple(files),
                    None if fr.success else fr.message)
-
-
-def write_front_designs(fr, out) -> dict:
-    """Each point of the front with a design as ``out/designs/design_<i>.toml`` (its config:
-    closing_time_max the point's); {point index: path}."""
-    folder = out / "designs"
-    paths = {}
-    for i, (t, p) in enumerate(zip(fr.closing_times, fr.points)):
-        if p.design is None or p.config is None:
-            continue
-        folder.mkdir(exist_ok=True)
-        paths[i] = write_design(
-            folder / f"design_{i:02d}.toml", p.design_config(),
-            f"point {i} of `softclose pareto`: the optimum for closing_time_max = {t:g} s"
-            + ("" if p.success else " (NOT verified)"),
-            [f"verified by the adaptive reference: "
-             f"{metrics_line(p.metrics, p.verified_objective)}"
-             if p.verification is not None else ""])
-    return paths
-
-

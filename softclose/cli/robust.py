@@ -12,7 +12,6 @@ import argparse
 
 from .common import (Outcome, add_common, add_out, figures, prepare_out, write_outputs,
                      wrote)
-from ..files import write_text
 
 
 YIELD = """\
@@ -134,8 +133,6 @@ def run_sensitivity(cfg, args) -> Outcome:
 def robust_outcome(cfg, args) -> Outcome:
     """``softclose optimise --robust [--json] [--out DIR]``: 0 verified robust design meeting
     the required yield, 3 otherwise (the reason on stderr)."""
-    import json
-
     from ..robust import optimise_robust
     out = prepare_out(getattr(args, "out", None))
     from .common import interactive
@@ -143,33 +140,8 @@ def robust_outcome(cfg, args) -> Outcome:
     payload = res.to_json()
     files = []
     if out is not None:
-        from .common import save_figure as save
-        from ..jsonio import jsonable
-        from .common import DESIGN_FILE, metrics_line
-        from ..config.write import write_design
-        if res.design is not None:
-            y = res.yield_result
-            files.append(write_design(
-                out / DESIGN_FILE, res.design_config(),
-                "the robust design of `softclose optimise --robust`"
-                + ("" if res.success else " (NOT verified: see robust.json)"),
-                [f"nominal lid, verified by the adaptive reference: "
-                 f"{metrics_line(res.metrics, None)}",
-                 f"{res.robust_objective}-case J over the tolerance box = {res.objective:.7g}",
-                 f"yield {100 * y.yield_:.2f} % (95 % interval {100 * y.yield_ci[0]:.2f} – "
-                 f"{100 * y.yield_ci[1]:.2f} %) over {y.samples} samples"
-                 if y is not None else ""]))
-        path = out / "robust.json"
-        write_text(path, json.dumps(jsonable(payload), indent=1, allow_nan=False))
-        files.append(path)
-        if res.yield_result is not None:
-            files.append(save(res.plot(), out / "robust_histograms.png"))
-        if res.design and any("[" in k for k in res.design):   # the chosen attachment points
-            from ..optimiser.cache import get_model
-            from ..present.figures.attachment import plot_attachments
-            files.append(save(plot_attachments(get_model(res.design_config()),
-                                               res.design_config()),
-                              out / "attachments.png"))
+        from .common import FIGURES
+        files = res.save(out, FIGURES["format"], FIGURES["style"])
         payload["files"] = [str(f) for f in files]
     return Outcome(payload, res.text() + wrote(files), 0 if res.success else 3,
                    tuple(files), error=None if res.success else res.message)

@@ -39,11 +39,12 @@ def run(cfg, args) -> Outcome:
         return Outcome(payload, res.text(), code, error=res.message)
     files = []
     if out is not None:
-        from .files import write_stroke_outputs
+        from ..simulation.folder import write_stroke_outputs
         from ..model.lid import LidModel
+        from .common import FIGURES, save_figure
         files = write_stroke_outputs(LidModel.cached(resolve(cfg)), res, out,
-                                     slow_motion=factor)
-        from .common import save_figure
+                                     slow_motion=factor, figure_format=FIGURES["format"],
+                                     figure_style=FIGURES["style"])
         from ..present.figures.handforce import plot_hand_force, plot_hand_force_by_temperature
         files.append(save_figure(plot_hand_force(res.hand_force), out / "hand_force.png"))
         if res.hand_forces:

@@ -95,6 +95,10 @@ def _plain(v):
     return list(v) if isinstance(v, tuple) else v
 
 
+#: the file a design is handed on in (``optimise --out``, ``optimise --robust --out``)
+DESIGN_FILE = "design.toml"
+
+
 def write_design(path, cfg, what: str, lines=()) -> Path:
     """Write ``cfg`` (a config whose [design] is the design handed on) as a TOML config
     file every command takes with ``--config`` (:func:`softclose.config.to_toml`: the whole
@@ -117,4 +121,4 @@ def write_design(path, cfg, what: str, lines=()) -> Path:
     return write_text(path, to_toml(cfg, "\n".join(head)))
 
 
-__all__ = ["to_toml", "toml_value", "write_design"]
+__all__ = ["to_toml", "toml_value", "write_design", "DESIGN_FILE"]

@@ -107,6 +107,13 @@ class OptimiseResult(Displayed):
         """J of the verified metrics (the reference's)."""
         return None if self.verification is None else self.verification.objective
 
+    def save(self, folder, slow_motion: float | None = None, figure_format: str = "png",
+             figure_style: str | None = None) -> list:
+        """The optimum in ``folder`` (what ``softclose optimise --out`` writes): design.toml,
+        optimise.json, its figures and its stroke; the paths."""
+        from .folder import save_optimum
+        return save_optimum(self, folder, slow_motion, figure_format, figure_style)
+
     def to_json(self) -> dict:
         """success, design, objective, the verified §4 metrics, the optimiser's own numbers,
         verification, active limits, problem, starts, the coarse sweep, solver, notes."""
@@ -274,6 +281,11 @@ class FrontResult(Displayed):
             return ""
         return (f"{len(bad)} of {len(self.points)} points have no verified optimum: "
                 + "; ".join(bad))
+
+    def save_designs(self, folder) -> dict:
+        """Each point with a design as ``folder/designs/design_<i>.toml``; {index: path}."""
+        from .folder import save_front_designs
+        return save_front_designs(self, folder)
 
     def to_json(self) -> dict:
         """{"success", "message", "points": [{closing_time_max, success, design, objective,

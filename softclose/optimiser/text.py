@@ -173,5 +173,18 @@ def front_text(fr) -> str:
     return "\n".join(lines)
 
 
+def metrics_line(m: dict | None, J: float | None) -> str:
+    """The metrics a design file's header quotes (one line)."""
+    if not m or not m.get("closed"):
+        return "does not close" if m else ""
+    return (f"closes in {m['closing_time']:.7g} s, impact tip speed "
+            f"{m['impact_tip_speed']:.4g} m/s, peak tip speed {m['peak_tip_speed']:.4g} m/s, "
+            f"holding moment {m['holding_moment']:.7g} N m"
+            + (f", the end damper engages at {m['engage_time']:.7g} s at theta' = "
+               f"{m['engage_theta_dot']:.5g} rad/s" if m.get("engage_time") is not None
+               else "")
+            + (f"; J = {J:.7g}" if J is not None else ""))
+
+
 __all__ = ["design_text", "objective_text", "hand_limits_text", "closing_time_text",
-           "optimum_text", "front_text"]
+           "optimum_text", "front_text", "metrics_line"]

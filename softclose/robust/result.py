@@ -86,6 +86,13 @@ class RobustResult(Displayed):
         from .text import robust_text
         return robust_text(self)
 
+    def save(self, folder, figure_format: str = "png", figure_style: str | None = None
+             ) -> list:
+        """The robust design in ``folder`` (what ``softclose optimise --robust --out``
+        writes): design.toml, robust.json, the histograms, where it attaches; the paths."""
+        from .folder import save_robust
+        return save_robust(self, folder, figure_format, figure_style)
+
     def to_json(self) -> dict:
         out = {"success": self.success, "status": self.status, "message": self.message,
                "design": self.design, "objective": self.objective,

@@ -1,4 +1,5 @@
-"""Files the commands write: stroke trajectories (CSV with units) and stroke figures."""
+"""A stroke written to a folder: its trajectory (CSV with units), time histories, linkage
+drawing and animation (what ``softclose simulate --out`` and ``optimise --out`` write)."""
 
 from __future__ import annotations
 
@@ -27,11 +28,18 @@ def write_trajectory_csv(traj: dict, path: Path) -> Path:
 
 
 def write_stroke_outputs(model, res, out: Path, stem: str = "stroke",
-                         slow_motion: float | None = None) -> list[Path]:
+                         slow_motion: float | None = None, figure_format: str = "png",
+                         figure_style: str | None = None) -> list[Path]:
     """Trajectory CSV, time histories, linkage drawing and animation of one stroke
-    (``slow_motion``: the GIF's factor; None: enough for at least 60 frames)."""
-    from .common import save_figure as save
+    (``slow_motion``: the GIF's factor; None: enough for at least 60 frames), the figures
+    as ``figure_format`` in ``figure_style``."""
+    from ..present.figures import save as save_as
     from ..present.figures.stroke import plot_linkage, plot_time_histories, write_animation
+    out = Path(out)
+
+    def save(fig, path):
+        return save_as(fig, Path(path).with_suffix("." + figure_format), figure_style)
+
     tr = res.trajectory
     files = [write_trajectory_csv(tr, out / f"{stem}_trajectory.csv"),
              save(plot_time_histories(res), out / f"{stem}_time.png")]
@@ -44,3 +52,6 @@ def write_stroke_outputs(model, res, out: Path, stem: str = "stroke",
     if gif:
         files.append(gif)
     return files
+
+
+__all__ = ["write_stroke_outputs", "write_trajectory_csv", "TRAJECTORY_COLUMNS"]
