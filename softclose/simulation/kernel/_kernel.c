@@ -1338,9 +1338,8 @@ static inline int node_eval(const Table *T, const Par *p, double th, double thd,
     int i = cell_index(T, th, &s);
     if (i < 0) return 1;
     const double *q = T->cc + (size_t)i * 4 * NC;
-    double M = cubic(q + C_M, NC, s), dM = cubic(q + C_DM, NC, s),
-           Vg = cubic(q + C_VG, NC, s), dVg = cubic(q + C_DVG, NC, s),
-           l = cubic(q + C_L, NC, s), dl = cubic(q + C_DL, NC, s),
+    double M = cubic(q + C_M, NC, s), dM = cubic(q + C_DM, NC, s), Vg = cubic(q + C_VG, NC, s),
+           dVg = cubic(q + C_DVG, NC, s), l = cubic(q + C_L, NC, s), dl = cubic(q + C_DL, NC, s),
            dd = cubic(q + C_DD, NC, s), tau = cubic(q + C_TAU, NC, s);
     if (p->dm != 0.0) {
         const double *r = T->dcc + (size_t)i * 4 * NC;
@@ -1569,6 +1568,47 @@ __attribute__((noinline)) static int lane_friction_rest(const Table *T, const Me
     return 0;
 }
 
+/* the peak tip speed of a step of length h from (th, thd) that ends at an event, where the
+ * tip speed is gi and its rate dgi: the node's, a peak between the previous node and the
+ * event (refined), the event's */
+ALWAYS void peak_to_event(const Table *T, const Method *m, Lane *L, double th, double thd,
+                          double h, double gi, double dgi)
+{
+    const Par *p = &L->p;
+    double g = L->g, dg = L->dg;
+    if (g > L->peak) L->peak = g;
+    if (L->n > 1 && g >= L->gp && g > gi)
+        refine_extremum(T, m, p, 0, L->thp, L->thdp, L->hp + h, &L->peak);
+    else if (dg > 0 && dgi < 0)
+        refine_extremum(T, m, p, 0, th, thd, h, &L->peak);
+    if (gi > L->peak) L->peak = gi;
+}
+
+/* the turning points inside a step of length h from (th, thd) to (th1, thd1): the lowest
+ * angle where the lane turned back, the highest where it turned down (refined), into its
+ * visited range with their potential */
+ALWAYS void step_turns(const Table *T, const Method *m, Lane *L, double th, double thd,
+                       double th1, double thd1, double h)
+{
+    const Par *p = &L->p;
+    if (thd < 0 && thd1 >= 0) { /* turned back: lowest angle inside this step */
+        double lowest = th1 < th ? th1 : th;
+        refine_extremum(T, m, p, 1, th, thd, h, &lowest);
+        if (lowest < L->th_min) {
+            L->th_min = lowest;
+            if (potential(T, p, lowest, &L->Vlo, NULL)) L->Vlo = -INFINITY;
+        }
+    }
+    if (thd > 0 && thd1 <= 0) { /* turned down: highest angle inside this step */
+        double neg = -(th1 > th ? th1 : th);
+        refine_extremum(T, m, p, 2, th, thd, h, &neg);
+        if (-neg > L->th_max) {
+            L->th_max = -neg;
+            if (potential(T, p, -neg, &L->Vhi, NULL)) L->Vhi = -INFINITY;
+        }
+    }
+}
+
 /* THE END DAMPER'S ENGAGEMENT (an event, as the friction rest and the closing event).
  * The lane's step of length h from (th, thd) to (th1, thd1) crossed theta_e against its
  * state (ELEM_CROSSED: moving down into the damper, or up out of it). Its law changes
@@ -1629,30 +1669,9 @@ __attribute__((noinline)) static int lane_engage(const Table *T, const Method *m
      * the previous node and the crossing (as at the closing event) */
     double gi, dgi;
     if (quantity(T, p, 0, the, y1, &gi, &dgi)) { L->status = S_RANGE; return 1; }
-    double g = L->g, dg = L->dg;
-    if (g > L->peak) L->peak = g;
-    if (L->n > 1 && g >= L->gp && g > gi)
-        refine_extremum(T, m, p, 0, L->thp, L->thdp, L->hp + tau, &L->peak);
-    else if (dg > 0 && dgi < 0)
-        refine_extremum(T, m, p, 0, th, thd, tau, &L->peak);
-    if (gi > L->peak) L->peak = gi;
+    peak_to_event(T, m, L, th, thd, tau, gi, dgi);
     /* a turning point inside the shorter step (as after a full step) */
-    if (thd < 0 && y1 >= 0) {
-        double lowest = the < th ? the : th;
-        refine_extremum(T, m, p, 1, th, thd, tau, &lowest);
-        if (lowest < L->th_min) {
-            L->th_min = lowest;
-            if (potential(T, p, lowest, &L->Vlo, NULL)) L->Vlo = -INFINITY;
-        }
-    }
-    if (thd > 0 && y1 <= 0) {
-        double neg = -(the > th ? the : th);
-        refine_extremum(T, m, p, 2, th, thd, tau, &neg);
-        if (-neg > L->th_max) {
-            L->th_max = -neg;
-            if (potential(T, p, -neg, &L->Vhi, NULL)) L->Vhi = -INFINITY;
-        }
-    }
+    step_turns(T, m, L, th, thd, the, y1, tau);
     /* the switch: engaged moving into the damper, released moving out */
     int down = !p->eg;
     ELEM_ENGAGE_SWITCH(p);
@@ -1719,13 +1738,7 @@ ALWAYS int lane_after_step(const Table *T, const Method *m, Lane *L, double h, d
         double gi, dgi;
         quantity(T, p, 0, thc, y1, &gi, &dgi);
         /* a peak between the previous node and the event? */
-        double g = L->g, dg = L->dg;
-        if (g > L->peak) L->peak = g;
-        if (L->n > 1 && g >= L->gp && g > gi)
-            refine_extremum(T, m, p, 0, L->thp, L->thdp, L->hp + tau, &L->peak);
-        else if (dg > 0 && dgi < 0)
-            refine_extremum(T, m, p, 0, th, thd, tau, &L->peak);
-        if (gi > L->peak) L->peak = gi;
+        peak_to_event(T, m, L, th, thd, tau, gi, dgi);
         if (y1 > L->thd_max) L->thd_max = y1;
         L->t += tau; L->th = thc; L->thd = y1; L->th_min = thc; L->status = S_CLOSED;
         L->out[O_CLOSING_TIME] = L->t; L->out[O_IMPACT_THETA_DOT] = y1; L->out[O_IMPACT_TIP_SPEED] = gi;
@@ -1746,22 +1759,7 @@ ALWAYS int lane_after_step(const Table *T, const Method *m, Lane *L, double h, d
     if (L->n > 1 && L->g >= L->gp && L->g > g1)
         refine_extremum(T, m, p, 0, L->thp, L->thdp, L->hp + h, &L->peak);
     if (g1 > L->peak) L->peak = g1;
-    if (thd < 0 && thd1 >= 0) { /* turned back: lowest angle inside this step */
-        double lowest = th1 < th ? th1 : th;
-        refine_extremum(T, m, p, 1, th, thd, h, &lowest);
-        if (lowest < L->th_min) {
-            L->th_min = lowest;
-            if (potential(T, p, lowest, &L->Vlo, NULL)) L->Vlo = -INFINITY;
-        }
-    }
-    if (thd > 0 && thd1 <= 0) { /* turned down: highest angle inside this step */
-        double neg = -(th1 > th ? th1 : th);
-        refine_extremum(T, m, p, 2, th, thd, h, &neg);
-        if (-neg > L->th_max) {
-            L->th_max = -neg;
-            if (potential(T, p, -neg, &L->Vhi, NULL)) L->Vhi = -INFINITY;
-        }
-    }
+    step_turns(T, m, L, th, thd, th1, thd1, h);
     if (th1 < L->th_min) { L->th_min = th1; L->Vlo = V1; }
     if (th1 > L->th_max) { L->th_max = th1; L->Vhi = V1; }
     if (thd1 > L->thd_max) L->thd_max = thd1;
@@ -1821,6 +1819,20 @@ ALWAYS void transpose4(const v4 *r, v4 *c)
 
 
 
+/* lane q's coefficients at its local variable sq as rows (coef4): lo (M, dM, Vg, dVg, from
+ * its cell r, mass-corrected where dm != 0) and hi (l, dl, dd, tau, from rh: the cell's, or
+ * the row's own pieces) */
+ALWAYS void lane_rows(const Table *T, const Par4 *P, int q, const double *r, const double *rh,
+                      double sq, v4 *lo, v4 *hi)
+{
+    lo[q] = cubic4(r, NC, sq);
+    hi[q] = cubic4(rh + 4, NC, sq);
+    if (P->any && P->dm[q] != 0.0) { /* M, dM, Vg, dVg only */
+        const double *rm = T->dcc + (r - T->cc);
+        lo[q] += P->dm[q] * cubic4(rm, NC, sq);
+    }
+}
+
 /* coef4's rows of a group with a lane that has its own points: the same operations, with a
  * lane's l, dl, dd, tau read from its row's own pieces (PER-ROW ATTACHMENT POINTS) -- a loop
  * of its own: inside coef4's loop the lookup slowed the lanes without points by 6 % */
@@ -1835,19 +1847,13 @@ ALWAYS void coef4_pts(const Table *T, const Par4 *P, const double *const *b, con
             rh = (unsigned)(i - c->base) < (unsigned)c->nb ? c->blk[i - c->base]
                                                            : pt_build(T, P->lp[q], i);
         }
-        double sq = (*s)[q];
-        lo[q] = cubic4(r, NC, sq);
-        hi[q] = cubic4(rh + 4, NC, sq);
-        if (P->any && P->dm[q] != 0.0) { /* M, dM, Vg, dVg only */
-            const double *rm = T->dcc + (r - T->cc);
-            lo[q] += P->dm[q] * cubic4(rm, NC, sq);
-        }
+        lane_rows(T, P, q, r, rh, (*s)[q], lo, hi);
     }
 }
 
 /* the NC coefficients of the lanes at th as columns c[j] (four lanes each): each lane's
- * cubic pieces are evaluated as rows (cubic4: Horner in s, as cubic), mass-corrected where dm != 0,
- * then transposed; okm as cells4's */
+ * cubic pieces are evaluated as rows (lane_rows: Horner in s, as cubic, mass-corrected where
+ * dm != 0), then transposed; okm as cells4's */
 ALWAYS void coef4(const Table *T, const Par4 *P, v4 th, v4 *c, const double **b, v4 *s,
                   v4l *okm, const int pts)
 { /* (pts: the group has a lane with its own points -- a literal: see rhs4, node4) */
@@ -1856,16 +1862,7 @@ ALWAYS void coef4(const Table *T, const Par4 *P, v4 th, v4 *c, const double **b,
     if (pts) {
         coef4_pts(T, P, b, s, lo, hi);
     } else {
-        for (int q = 0; q < VW; q++) {
-            const double *r = b[q];
-            double sq = (*s)[q];
-            lo[q] = cubic4(r, NC, sq);
-            hi[q] = cubic4(r + 4, NC, sq);
-            if (P->any && P->dm[q] != 0.0) { /* M, dM, Vg, dVg only */
-                const double *rm = T->dcc + (r - T->cc);
-                lo[q] += P->dm[q] * cubic4(rm, NC, sq);
-            }
-        }
+        for (int q = 0; q < VW; q++) lane_rows(T, P, q, b[q], b[q], (*s)[q], lo, hi);
     }
     transpose4(lo, c);
     transpose4(hi, c + 4);
@@ -1993,9 +1990,8 @@ ALWAYS int rhs_fast(const Table *T, const Par *p, double th, double thd, double 
     int i = cell_index(T, th, &s);
     if (i < 0) return 1;
     const double *q = T->cc + (size_t)i * 4 * NC;
-    double M = cubic(q + C_M, NC, s), dM = cubic(q + C_DM, NC, s),
-           dVg = cubic(q + C_DVG, NC, s), l = cubic(q + C_L, NC, s),
-           dl = cubic(q + C_DL, NC, s), dd = cubic(q + C_DD, NC, s);
+    double M = cubic(q + C_M, NC, s), dM = cubic(q + C_DM, NC, s), dVg = cubic(q + C_DVG, NC, s),
+           l = cubic(q + C_L, NC, s), dl = cubic(q + C_DL, NC, s), dd = cubic(q + C_DD, NC, s);
     if (p->dm != 0.0) {
         const double *r = T->dcc + (size_t)i * 4 * NC;
         M += p->dm * cubic(r + C_M, NC, s); dM += p->dm * cubic(r + C_DM, NC, s);
@@ -2576,6 +2572,26 @@ static void point_grid_rows(const double *pose_g, long G4, long G, long n, const
     }
 }
 
+/* the pose (P_USED columns, G4 apart) at the G angles th, from the pose pieces pcc of the
+ * table tab_meta, into pose_g; the padding to whole vectors (G..G4) a harmless cos = 1 */
+static void pose_at_angles(const double *tab_meta, const double *pcc, const double *th, long G,
+                           long G4, double *pose_g)
+{
+    int ncell = (int)tab_meta[0];
+    double lo = tab_meta[1], h = tab_meta[2];
+    for (long k = 0; k < G; k++) {
+        double x = (th[k] - lo) / h;
+        if (x < 0) x = 0;
+        if (x > ncell) x = ncell;
+        int i = (int)x;
+        if (i >= ncell) i = ncell - 1;
+        double s = x - i;
+        const double *q = pcc + (size_t)i * 4 * NPOSE;
+        for (int j = 0; j < P_USED; j++) pose_g[j * G4 + k] = cubic(q + j, NPOSE, s);
+    }
+    for (long k = G; k < G4; k++) pose_g[P_COS * G4 + k] = 1.0;
+}
+
 void sc_point_grid(const double *tab_meta, const double *pcc, long n, const double *pts,
                    long G, const double *th, long per_row, long mode, const double *ab,
                    double *out)
@@ -2586,26 +2602,15 @@ void sc_point_grid(const double *tab_meta, const double *pcc, long n, const doub
         for (size_t k = 0; k < (size_t)n * G * (mode ? 1 : 3); k++) out[k] = NAN;
         return;
     }
-    int ncell = (int)tab_meta[0];
-    double lo = tab_meta[1], h = tab_meta[2];
     for (long r = 0; r < (per_row ? n : 1); r++) {
-    /* (a row on the previous row's angles -- rows over the same stroke -- keeps its pose) */
-    int same = r > 0 && !memcmp(th + (size_t)r * G, th + (size_t)(r - 1) * G,
-                                sizeof(double) * (size_t)G);
-    for (long k = 0; k < G && !same; k++) {
-        double x = (th[(size_t)r * G * (per_row != 0) + k] - lo) / h;
-        if (x < 0) x = 0;
-        if (x > ncell) x = ncell;
-        int i = (int)x;
-        if (i >= ncell) i = ncell - 1;
-        double s = x - i;
-        const double *q = pcc + (size_t)i * 4 * NPOSE;
-        for (int j = 0; j < P_USED; j++) pose_g[j * G4 + k] = cubic(q + j, NPOSE, s);
-    }
-    for (long k = G; k < G4; k++) pose_g[4 * G4 + k] = 1.0; /* (a harmless padding) */
-    if (per_row)
-        point_grid_rows(pose_g, G4, G, 1, pts + (size_t)r * NPT, (int)mode,
-                        ab ? ab + 2 * r : NULL, out + (size_t)r * G * (mode ? 1 : 3));
+        /* (a row on the previous row's angles -- rows over the same stroke -- keeps its pose) */
+        int same = r > 0 && !memcmp(th + (size_t)r * G, th + (size_t)(r - 1) * G,
+                                    sizeof(double) * (size_t)G);
+        if (!same) pose_at_angles(tab_meta, pcc, th + (size_t)r * G * (per_row != 0), G, G4,
+                                  pose_g);
+        if (per_row)
+            point_grid_rows(pose_g, G4, G, 1, pts + (size_t)r * NPT, (int)mode,
+                            ab ? ab + 2 * r : NULL, out + (size_t)r * G * (mode ? 1 : 3));
     }
     if (!per_row) point_grid_rows(pose_g, G4, G, n, pts, (int)mode, ab, out);
     free(pose_g);
@@ -2625,19 +2630,7 @@ void sc_point_opening(const double *tab_meta, const double *pcc, long n, const d
     long G4 = (G + VW - 1) / VW * VW;
     double *pose_g = calloc((size_t)(G4 > 0 ? G4 : 1) * P_USED, sizeof(double));
     if (!pose_g) { free(buf); for (long r = 0; r < n; r++) out[r] = NAN; return; }
-    int ncell = (int)tab_meta[0];
-    double lo = tab_meta[1], h = tab_meta[2];
-    for (long k = 0; k < G; k++) {
-        double x = (th[k] - lo) / h;
-        if (x < 0) x = 0;
-        if (x > ncell) x = ncell;
-        int i = (int)x;
-        if (i >= ncell) i = ncell - 1;
-        double s = x - i;
-        const double *q = pcc + (size_t)i * 4 * NPOSE;
-        for (int j = 0; j < P_USED; j++) pose_g[j * G4 + k] = cubic(q + j, NPOSE, s);
-    }
-    for (long k = G; k < G4; k++) pose_g[4 * G4 + k] = 1.0;
+    pose_at_angles(tab_meta, pcc, th, G, G4, pose_g);
     for (long r = 0; r < n; r++) {
         point_grid_rows(pose_g, G4, G, 1, pts + (size_t)r * NPT, 2, ab + 2 * r, buf);
         const double *bs = base + (size_t)idx[r] * G;

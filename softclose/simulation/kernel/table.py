@@ -20,7 +20,7 @@ from functools import cached_property
 import numpy as np
 
 from ...model import elements
-from ...model.dynamics import COEFFS, COORDINATE_COEFFS, pose
+from ...model.dynamics import COEFFS, pose
 from ...errors import NumericalError
 from ...model.lid import LidModel
 from ...model.resolved import LidCase
@@ -37,14 +37,27 @@ NPOSE = 8
 POINT_NAMES = ("spring_anchor", "lid_e", "dashpot_anchor", "dashpot_lid")
 
 
-def _kernel_layout(cc: np.ndarray) -> np.ndarray:
-    """(ncell, NC, 4) pieces -> the kernel's power-major (ncell, 4, NC), 64-byte aligned."""
+def _kernel_layout(cc: np.ndarray, width: int | None = None) -> np.ndarray:
+    """(ncell, NC, 4) pieces -> the kernel's power-major (ncell, 4, NC), 64-byte aligned;
+    with ``width``, the columns zero-padded to that many (the kernel's NX, NPOSE)."""
+    if width is not None:
+        padded = np.zeros((cc.shape[0], width, 4))
+        padded[:, :cc.shape[1]] = cc
+        cc = padded
     t = cc.transpose(0, 2, 1)
     buf = np.empty(t.size + 8)
     off = (-buf.ctypes.data % 64) // 8
     out = buf[off:off + t.size].reshape(t.shape)
     out[...] = t
     return out
+
+
+def _finite(pieces: np.ndarray, what: str) -> np.ndarray:
+    """``pieces``, or NumericalError (one line, naming ``what``) where one is not finite."""
+    if not np.all(np.isfinite(pieces)):
+        raise NumericalError(f"{what} is not finite on the stroke range; the geometry is at or "
+                             "near a toggle position")
+    return pieces
 
 
 def _cubic_ranges(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -143,10 +156,8 @@ class CoefficientTable:
                   + 0.125 * self.cc[:, :, 3]).T
         scale = np.maximum(np.abs(v).max(axis=1, keepdims=True), 1e-300)
         self.max_rel_error = float((np.abs(interp - exact) / scale).max())
-        if not np.all(np.isfinite(self.cc)):
-            bad = COEFFS[int(np.nonzero(~np.isfinite(self.cc).all(axis=(0, 2)))[0][0])]
-            raise NumericalError(f"the coefficient {bad} is not finite on the stroke range; "
-                                 "the geometry is at or near a toggle position")
+        for j, name in enumerate(COEFFS):
+            _finite(self.cc[:, j], f"the coefficient {name}")
 
     def state(self) -> dict:
         """The arrays a table is restored from (:meth:`restore`; the disk cache keeps them)."""
@@ -258,17 +269,12 @@ class CoefficientTable:
         interp = (xc[:, :, 0] + 0.5 * xc[:, :, 1] + 0.25 * xc[:, :, 2] + 0.125 * xc[:, :, 3]).T
         scale = np.maximum(np.abs(v).max(axis=1, keepdims=True), 1e-300)
         self.max_rel_error_coordinates = float((np.abs(interp - exact) / scale).max())
-        if not np.all(np.isfinite(xc)):
-            raise NumericalError("an element's tabulated coordinate is not finite on the "
-                                 "stroke range; the geometry is at or near a toggle position")
-        return xc
+        return _finite(xc, "an element's tabulated coordinate")
 
     @cached_property
     def coordinates_kernel(self) -> np.ndarray:
         """:attr:`coordinates` in the kernel's layout (ncell, 4, NX), zero-padded to NX columns."""
-        x = np.zeros((self.ncell, NX, 4))
-        x[:, :len(COORDINATE_COEFFS)] = self.coordinates
-        return _kernel_layout(x)
+        return _kernel_layout(self.coordinates, NX)
 
     def rows(self, theta, n: int, lid_mass=None) -> np.ndarray:
         """:meth:`evaluate` for ``n`` rows at ``theta`` (scalar or one per row). At one angle
@@ -302,17 +308,12 @@ class CoefficientTable:
         fn = ca.Function("pose", [th], [vec, ca.jacobian(vec, th)])
         nodes = np.linspace(self.lo, self.hi, self.ncell + 1)
         pc, _ = _pieces(m, nodes, self.h, fn)
-        if not np.all(np.isfinite(pc)):
-            raise NumericalError("the crank pin's position is not finite on the stroke range; "
-                                 "the geometry is at or near a toggle position")
-        return pc
+        return _finite(pc, "the crank pin's position")
 
     @cached_property
     def pose_kernel(self) -> np.ndarray:
         """:attr:`pose` in the kernel's layout (ncell, 4, NPOSE), zero-padded."""
-        x = np.zeros((self.ncell, NPOSE, 4))
-        x[:, :len(POSE)] = self.pose
-        return _kernel_layout(x)
+        return _kernel_layout(self.pose, NPOSE)
 
     @cached_property
     def own_points(self) -> np.ndarray:
