@@ -239,6 +239,19 @@ def opening_angles(model, n: int) -> np.ndarray:
 OPENING_INTERVALS = 32
 
 
+def _on_grid(quantity, values, P, names, n: int):
+    """(values (1, n + 1), their slopes (1, n + 1), the entries per angle) of ``quantity``
+    (:func:`opening_effort` or :func:`self_close_moment`) at the n + 1 angles of a grid
+    whose geometry ``values`` holds, angle after angle."""
+    k = 3 * len(names) + 2
+    F, dF = [], []
+    for i in range(n + 1):
+        f, df = quantity(values[i * k:(i + 1) * k], P, names)
+        F.append(f)
+        dF.append(df)
+    return ca.vertcat(*F).T, ca.vertcat(*dF).T, k
+
+
 def opening_bound(layout, values, theta0, thc, design, spring: str = "coil"):
     """The opening effort at the nodes of a grid of [theta_closed, theta0] and the maxima of
     its cubic Hermite interpolant in every interval (error O(h^4)): every value <= the bound
@@ -246,15 +259,8 @@ def opening_bound(layout, values, theta0, thc, design, spring: str = "coil"):
     (the geometry at the grid's angles, :func:`softclose.optimiser.parameters.opening_values`);
     ``spring``: the NLP's spring law ("coil" or "gas")."""
     n = OPENING_INTERVALS
-    names = layout.opening_elements
-    k = 3 * len(names) + 2
-    P = elements.params(design, spring)
-    F, dF = [], []
-    for i in range(n + 1):
-        f, df = opening_effort(values[i * k:(i + 1) * k], P, names)
-        F.append(f)
-        dF.append(df)
-    F, dF = ca.vertcat(*F).T, ca.vertcat(*dF).T
+    F, dF, _ = _on_grid(opening_effort, values, elements.params(design, spring),
+                        layout.opening_elements, n)
     h = (theta0 - thc) / n
     va, vb, ma, mb = F[:n], F[1:], dF[:n] * h, dF[1:] * h
     return ca.vertcat(F.T, hermite_max(va.T, ma.T, vb.T, mb.T))
@@ -294,15 +300,8 @@ def self_close_bound(layout, values, thc, design, spring: str = "coil"):
     (the geometry at the grid's angles, then theta_sc); ``spring``: the NLP's spring law
     ("coil" or "gas")."""
     n = layout.self_close_angles - 1
-    names = layout.opening_elements
-    k = 3 * len(names) + 2
-    P = elements.params(design, spring)
-    m, dm = [], []
-    for i in range(n + 1):
-        f, df = self_close_moment(values[i * k:(i + 1) * k], P, names)
-        m.append(f)
-        dm.append(df)
-    m, dm = ca.vertcat(*m).T, ca.vertcat(*dm).T
+    m, dm, k = _on_grid(self_close_moment, values, elements.params(design, spring),
+                        layout.opening_elements, n)
     theta_sc = values[(n + 1) * k]
     h = (ca.fmax(theta_sc, thc) - thc) / n
     va, vb, ma, mb = m[:n], m[1:], dm[:n] * h, dm[1:] * h

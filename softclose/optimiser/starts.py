@@ -164,22 +164,22 @@ def _refine_end_damper(cfg, sim, G: np.ndarray, keys: tuple, t_limit: float) -> 
     return np.array(out)
 
 
-def initial_guess(nlp: ShootingNLP, cfg, design, sim, p: np.ndarray,
-                  t_max: float) -> tuple[np.ndarray, float]:
-    """Primal start from the simulated stroke of ``design`` on the time grid of ``p``
-    (closing time clipped into [closing_time_min, t_max]): (w0, the stroke's objective)."""
-    o, st = cfg.optimise, cfg.stroke
-    q = nlp.param_vector(cfg, design)
-    r = sim.run(q, trajectory=("tip_speed",), estimate_error=False)
-    N = nlp.N
-    J0 = T1 = None
-    # a two-phase stroke: the node between the phases on the engagement angle
-    th_e = float(elements.params(q)["end_damper_angle_deg"]) if nlp.two_phase else None
+def stroke_states(r, stroke, th_e: float | None, t_lo: float, t_hi: float, node_times,
+                  nodes: int):
+    """(T, X (2, N), peak tip speed, T1, simulated) of a shooting NLP's primal start from
+    the simulated stroke ``r`` (a :class:`~softclose.simulation.stroke.StrokeResult` with
+    its trajectory): the closing time clipped into [t_lo, t_hi], the states at
+    ``node_times(T, T1)``; with two phases (``th_e`` the engagement angle, else None) T1
+    where the stroke first reaches th_e and the node ``nodes`` - 1 between the phases on
+    it. A stroke that could not be integrated (``simulated`` False): a straight line in
+    theta over t_hi. The nominal and the scenario NLP start from it."""
+    st = stroke
+    T1 = None
     if r.ok and r.trajectory is not None:
         tr = r.trajectory
         T = r.closing_time if r.closed else tr["t"][-1]
-        T = float(np.clip(T, max(o.closing_time_min, T_FLOOR), t_max))
-        if nlp.two_phase:       # where the simulated stroke first crosses theta_e
+        T = float(np.clip(T, t_lo, t_hi))
+        if th_e is not None:    # where the simulated stroke first crosses theta_e
             below = np.flatnonzero(tr["theta"] <= th_e)
             T1 = T * (st.theta0 - th_e) / (st.theta0 - st.theta_closed)
             if len(below) and below[0] > 0:
@@ -187,21 +187,38 @@ def initial_guess(nlp: ShootingNLP, cfg, design, sim, p: np.ndarray,
                 t0, t1, a, b = tr["t"][i - 1], tr["t"][i], tr["theta"][i - 1], tr["theta"][i]
                 T1 = float(t0 + (t1 - t0) * (a - th_e) / (a - b)) if a != b else float(t1)
             T1 = float(np.clip(T1, PHASE_FLOOR, T - PHASE_FLOOR))
-        tn = nlp.node_times(p, T, T1)
+        tn = node_times(T, T1)
         X = np.vstack([np.interp(tn, tr["t"], tr["theta"]),
                        np.minimum(np.interp(tn, tr["t"], tr["theta_dot"]), 0.0)])
         peak = float(np.max(tr["tip_speed"][tr["t"] <= T + 1e-12]))
-        J0 = objective(o, float(X[1, -1]), peak)
+        simulated = True
     else:  # not integrable at this step: a straight line in theta
-        T = t_max
-        if nlp.two_phase:
+        T = t_hi
+        if th_e is not None:
             T1 = T * (st.theta0 - th_e) / (st.theta0 - st.theta_closed)
-        tn = nlp.node_times(p, T, T1)
+        tn = node_times(T, T1)
         X = np.vstack([st.theta0 + tn / T * (st.theta_closed - st.theta0),
-                       np.full(N, (st.theta_closed - st.theta0) / T)])
+                       np.full(len(tn), (st.theta_closed - st.theta0) / T)])
         peak = 1.0
-    if nlp.two_phase:           # the node between the phases exactly on theta_e
-        X[0, nlp.nodes - 1] = th_e
+        simulated = False
+    if th_e is not None:        # the node between the phases exactly on theta_e
+        X[0, nodes - 1] = th_e
     X[0, -1] = st.theta_closed
+    return T, X, peak, T1, simulated
+
+
+def initial_guess(nlp: ShootingNLP, cfg, design, sim, p: np.ndarray,
+                  t_max: float) -> tuple[np.ndarray, float]:
+    """Primal start from the simulated stroke of ``design`` on the time grid of ``p``
+    (closing time clipped into [closing_time_min, t_max]): (w0, the stroke's objective)."""
+    o, st = cfg.optimise, cfg.stroke
+    q = nlp.param_vector(cfg, design)
+    r = sim.run(q, trajectory=("tip_speed",), estimate_error=False)
+    # a two-phase stroke: the node between the phases on the engagement angle
+    th_e = float(elements.params(q)["end_damper_angle_deg"]) if nlp.two_phase else None
+    T, X, peak, T1, simulated = stroke_states(
+        r, st, th_e, max(o.closing_time_min, T_FLOOR), t_max,
+        lambda T, T1: nlp.node_times(p, T, T1), nlp.nodes)
+    J0 = objective(o, float(X[1, -1]), peak) if simulated else None
     J0 = J0 if J0 is not None and np.isfinite(J0) else 1.0
     return nlp.pack(q, T, X, peak, T1), float(J0)

@@ -32,7 +32,7 @@ from .policy import (AGREE_RTOL, CHECK_SAMPLES, MAX_REFINE, MAX_ROUNDS, REFINE_R
 from .scenarios import Scenario, factors, maps, scenario_rows
 from .stats import margins
 from .worst_cases import check_corners, search
-from ..optimiser.nlp import PHASE_FLOOR
+from ..optimiser.starts import stroke_states
 from ..model import elements
 
 
@@ -72,39 +72,14 @@ def _guess(cfg_m: Config, p: np.ndarray, N: int, t_lo: float, t_hi: float,
     """(T, X (2, N), peak, J, T1) of a scenario from its simulated stroke at parameters p
     (N intervals per phase; with ``two_phase`` T1 is where the stroke first reaches the
     end damper's angle, else None)."""
-    st, o = cfg_m.stroke, cfg_m.optimise
+    o = cfg_m.optimise
     sim = simulator(cfg_m)
     r = sim.run(p, trajectory=True, estimate_error=False)
     th_e = float(elements.params(np.asarray(p, float))["end_damper_angle_deg"]) \
         if two_phase else None
-    T1 = None
-    if r.ok and r.trajectory is not None:
-        tr = r.trajectory
-        T = r.closing_time if r.closed else tr["t"][-1]
-        T = float(np.clip(T, t_lo, t_hi))
-        if two_phase:
-            T1 = T * (st.theta0 - th_e) / (st.theta0 - st.theta_closed)
-            below = np.flatnonzero(tr["theta"] <= th_e)
-            if len(below) and below[0] > 0:
-                i = below[0]
-                t0, t1, a, b = tr["t"][i - 1], tr["t"][i], tr["theta"][i - 1], tr["theta"][i]
-                T1 = float(t0 + (t1 - t0) * (a - th_e) / (a - b)) if a != b else float(t1)
-            T1 = float(np.clip(T1, PHASE_FLOOR, T - PHASE_FLOOR))
-        tn = scenario_node_times(N, two_phase, T, T1)
-        X = np.vstack([np.interp(tn, tr["t"], tr["theta"]),
-                       np.minimum(np.interp(tn, tr["t"], tr["theta_dot"]), 0.0)])
-        peak = float(np.max(tr["tip_speed"][tr["t"] <= T + 1e-12]))
-    else:
-        T = t_hi
-        if two_phase:
-            T1 = T * (st.theta0 - th_e) / (st.theta0 - st.theta_closed)
-        tn = scenario_node_times(N, two_phase, T, T1)
-        X = np.vstack([st.theta0 + tn / T * (st.theta_closed - st.theta0),
-                       np.full(len(tn), (st.theta_closed - st.theta0) / T)])
-        peak = 1.0
-    if two_phase:
-        X[0, N - 1] = th_e
-    X[0, -1] = st.theta_closed
+    T, X, peak, T1, _ = stroke_states(
+        r, cfg_m.stroke, th_e, t_lo, t_hi,
+        lambda T, T1: scenario_node_times(N, two_phase, T, T1), N)
     J = objective(o, float(X[1, -1]), peak)
     return T, X, peak, (J if J is not None and math.isfinite(J) else 1.0), T1
 
