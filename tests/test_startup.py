@@ -147,22 +147,21 @@ def test_using_an_nlp_compiles_nothing_and_starts_no_process(cache, cfg, monkeyp
 def test_prepare_compiles_in_the_foreground_saying_what(cache, cfg, monkeypatch, capfd):
     """optimiser.cache.prepare compiles here and now (one line on stderr naming the NLP and
     the seconds), nothing is left in the cache folder but the library and its numbers, and
-    the next use loads it. Compiling stubbed: the compiler's argument list is checked."""
+    the next use loads it (and its build's lock). Compiling stubbed: the compiler's argument
+    list is checked."""
     import shutil
-    import subprocess
     if shutil.which(os.environ.get("CC", "cc")) is None:
         pytest.skip("no C compiler")
     from softclose.optimiser.cache import get_nlp, nlp_key, prepare
     runs = []
-    real = subprocess.run
+    real = compiled.run_compiler
 
-    def fake(cmd, **kw):
-        if "--version" in cmd:
-            return real(cmd, **kw)
+    def fake(cmd, where):
+        cmd = [str(c) for c in cmd]
         runs.append(cmd)             # a library, but not of the NLP: an empty one
         return real([cmd[0], "-shared", "-fPIC", "-x", "c", os.devnull, "-o",
-                     cmd[cmd.index("-o") + 1]], **kw)
-    monkeypatch.setattr(subprocess, "run", fake)
+                     cmd[cmd.index("-o") + 1]], where)
+    monkeypatch.setattr(compiled, "run_compiler", fake)
     lib = prepare(cfg)
     err = capfd.readouterr().err
     assert lib is not None and lib.exists() and len(runs) == 1
@@ -170,7 +169,7 @@ def test_prepare_compiles_in_the_foreground_saying_what(cache, cfg, monkeypatch,
     assert err.startswith("softclose: building the NLP of the optimiser (")
     assert "(C, -O1) ..." in err and err.rstrip().endswith(" s")
     left = {p.name.split("-")[0] for p in lib.parent.iterdir()}
-    assert {"nlp", "nlpmeta"} <= left <= {"model", "table", "nlp", "nlpmeta"}, left
+    assert {"nlp", "nlpmeta"} <= left <= {"model", "table", "nlp", "nlpmeta", "locks"}, left
     assert prepare(cfg) == lib and len(runs) == 1         # compiled already
     key = buildcache.key_of("nlp", nlp_key(cfg))
     assert compiled.compiled_nlp(key) == lib
