@@ -1,5 +1,5 @@
 """The sign-off report as an immutable result: its numbers (``to_json``), its HTML
-(``html``, ``_repr_html_``) and its files (``save``)."""
+(``html``, ``_repr_html_``), its PDF (``pdf``) and its files (``save``)."""
 
 from __future__ import annotations
 
@@ -69,8 +69,18 @@ class ReportResult:
     def __repr__(self) -> str:
         return f"ReportResult({self.message})"
 
-    def save(self, path, figures: dict | None = None) -> Path:
-        """Write the report as ``path``: HTML (``.html``) or PDF (``.pdf``); ``figures``:
+    def pdf(self, figures: dict | None = None, *, paper: str = "a4",
+            name: str | None = None) -> bytes:
+        """The report as a printable PDF document (its bytes): ``paper`` ``"a4"`` or
+        ``"letter"``; ``name``: the design's name on its title block and in its running
+        footer (default: what the design is); ``figures``: :meth:`figures` already drawn."""
+        from .pdf import write_pdf
+        return write_pdf(self, figures, paper=paper, name=name)
+
+    def save(self, path, figures: dict | None = None, *, paper: str = "a4",
+             name: str | None = None) -> Path:
+        """Write the report as ``path``: HTML (``.html``) or PDF (``.pdf``, on ``paper``
+        ``"a4"`` or ``"letter"``, with the design's ``name``: see :meth:`pdf`); ``figures``:
         :meth:`figures` already drawn (to write both formats drawing them once)."""
         path = Path(path)
         kind = path.suffix.lower().lstrip(".")
@@ -80,9 +90,7 @@ class ReportResult:
         if kind == "html":
             path.write_text(self.html(figures), encoding="utf-8")
         else:
-            from .pdf import write_pdf
-            write_pdf(self, path, figures)
+            path.write_bytes(self.pdf(figures, paper=paper, name=name))
         return path
-
 
 __all__ = ["ReportResult", "SECTIONS", "FORMATS"]
