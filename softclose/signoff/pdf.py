@@ -133,6 +133,38 @@ def _svg_outlines(fig, text_width_in: float) -> bytes:
     return re.sub(r"<metadata>.*?</metadata>", "", buf.getvalue(), flags=re.S).encode("utf-8")
 
 
+def _clipped_svg():
+    """fpdf2's SVG converter, which clips a group (<g clip-path=...>: matplotlib's markers)
+    as it clips a path: a marker outside its axes is not drawn, as in matplotlib."""
+    from fpdf.svg import SVGObject
+
+    class ClippedSVG(SVGObject):
+        def build_group(self, group, pdf_group=None, inherited_style=None):
+            out = super().build_group(group, pdf_group, inherited_style)
+            m = re.search(r"url\((#[\w-]+)\)", group.attrib.get("clip-path", ""))
+            if m and m.group(1) in self.cross_references:
+                out.clipping_path = self.cross_references[m.group(1)]
+            return out
+
+    return ClippedSVG
+
+
+def _draw_svg(pdf, svg: bytes, x: float, y: float, w: float, h: float) -> None:
+    """Draw ``svg`` as vector graphics into the box (x, y, w, h) of the page (mm), clipped
+    to it."""
+    from fpdf.drawing import Transform
+    _, _, path = _clipped_svg()(svg).transform_to_rect_viewport(
+        scale=1, width=w, height=h, ignore_svg_top_attrs=True)
+    path.transform = path.transform @ Transform.translation(x, y)
+    old = pdf.x, pdf.y
+    try:
+        with pdf.rect_clip(x, y, w, h):
+            pdf.set_xy(0, 0)
+            pdf.draw_path(path)
+    finally:
+        pdf.set_xy(*old)
+
+
 def _md(text: str) -> str:
     """``text`` with fpdf2's markdown markers escaped (it is set as it reads)."""
     return re.sub(r"(\\|\*\*|__|--|~~)", r"\\\1", text)
@@ -143,13 +175,20 @@ def _wrap_names(text: str) -> str:
 
 
 #: a number and its unit stay on one line in a table's cell (no-break spaces: a PDF
-#: reader's text has plain spaces there)
-_UNIT = re.compile(r"(?<=\d) (?=[^\s\d])|(?<=\bN) (?=(?:s/m|m)\b)|(?<=\bN m) (?=s/rad)"
-                   r"|(?<=\bmargin) (?=-?\d)|(?<=[≤≥<>]) (?=-?\d)")
+#: reader's text has plain spaces there), and so do a relation or "margin" and its number
+#: where the columns allow it
+_UNIT = re.compile(r"(?<=\d) (?=[^\s\d])|(?<=\bN) (?=(?:s/m|m)\b)|(?<=\bN m) (?=s/rad)")
+_BOUND = re.compile(r"(?<=\bmargin) (?=-?\d)|(?<=[≤≥<>]) (?=-?\d)")
 
 
-def _keep(text: str) -> str:
-    return _UNIT.sub(NBSP, text)
+def _keep(text: str, level: int = 2) -> str:
+    """``text`` with the spaces it keeps at ``level`` (2: units and bounds, 1: units, 0:
+    none) made no-break spaces."""
+    if level >= 1:
+        text = _UNIT.sub(NBSP, text)
+    if level >= 2:
+        text = _BOUND.sub(NBSP, text)
+    return text
 
 
 class _Writer:
@@ -276,7 +315,7 @@ class _Writer:
             w, h = self._figure_size(b.name)
             return h + 8
         if isinstance(b, Table):
-            return 20
+            return self._layout(b)[4]
         return 12
 
     def _block(self, b) -> None:
@@ -353,10 +392,9 @@ class _Writer:
         if h + 10 > room:                    # (a figure taller than a page: scaled down)
             w, h = w * (room - 10) / h, room - 10
         self._room(h + 10)
-        svg = self._svgs(b.name)
         pdf.set_fill_color(0)               # (what SVG's shapes without a fill inherit)
         pdf.set_draw_color(0)
-        pdf.image(io.BytesIO(svg), x=MARGIN + (pdf.epw - w) / 2, y=pdf.get_y(), w=w, h=h)
+        _draw_svg(pdf, self._svgs(b.name), MARGIN + (pdf.epw - w) / 2, pdf.get_y(), w, h)
         pdf.set_y(pdf.get_y() + h + 1)
         pdf.set_font(SANS, "", SMALL)
         pdf.set_text_color(*GREY)
@@ -367,12 +405,13 @@ class _Writer:
         pdf.ln(3)
 
     # -- tables -----------------------------------------------------------------------------
-    def _widths(self, t: Table, size: float) -> tuple[list[float], list[float]]:
+    def _widths(self, t: Table, size: float, level: int) -> tuple[list[float], list[float]]:
         """Each column's natural width (its longest line) and least width (its longest
         word), in mm, at type size ``size``."""
         pdf = self.pdf
         n = len(t.head)
         nat, least = [0.0] * n, [0.0] * n
+        keep = lambda x: _keep(x, level)     # noqa: E731
 
         def measure(i, text, style):
             pdf.set_font(SANS, style, size)
@@ -385,36 +424,59 @@ class _Writer:
             measure(i, _wrap_names(str(h)), "B")
         for row in t.rows:
             for i, c in enumerate(row):
-                measure(i, _keep(c.text), "")
+                measure(i, keep(c.text), "")
                 if c.strong:                 # (a bold word and a space before the text)
                     pdf.set_font(SANS, "B", size)
                     bold = pdf.get_string_width(c.strong + " ")
                     least[i] = max(least[i], bold)
                     pdf.set_font(SANS, "", size)
-                    nat[i] = max(nat[i], bold + pdf.get_string_width(_keep(c.text).split("\n")[0]))
+                    nat[i] = max(nat[i], bold + pdf.get_string_width(keep(c.text).split("\n")[0]))
                 for note in c.notes:
-                    measure(i, _keep(note), "I")
+                    measure(i, keep(note), "I")
         extra = 2 * PAD + 0.6
         return [x + extra for x in nat], [x + extra for x in least]
+
+    def _layout(self, t: Table) -> tuple:
+        """(type size, column widths, whether words stay whole, line height, the height to
+        keep on one page) of table ``t``: its natural widths when they fit, else each column
+        its longest word and the rest of the width by what it would take; the type smaller
+        (down to :data:`TABLE_MIN`) while the words do not fit."""
+        cache = self.__dict__.setdefault("_layouts", {})
+        if id(t) in cache:
+            return cache[id(t)][1]
+        pdf = self.pdf
+        avail = pdf.epw
+        # the type at TABLE, a little smaller, with fewer no-break spaces, down to
+        # TABLE_MIN with none, until every column's longest word fits
+        sizes = [TABLE - 0.5 * i for i in range(int((TABLE - TABLE_MIN) / 0.5) + 1)]
+        tries = [(x, level) for level in (2, 1) for x in sizes[:3]] + [(x, 0) for x in sizes]
+        for size, level in tries:
+            nat, least = self._widths(t, size, level)
+            if sum(least) <= avail:
+                break
+        whole = sum(least) <= avail
+        if sum(nat) <= avail:
+            widths = nat
+        elif whole:
+            slack = [a - b for a, b in zip(nat, least)]
+            widths = [b + (avail - sum(least)) * s / sum(slack) for b, s in zip(least, slack)]
+        else:                                # (words wrap inside: the type is at its least)
+            widths = [b * avail / sum(least) for b in least]
+        line = size * PT * 1.3
+        height = self._height(t, widths, size, line, level)
+        # a table of up to a third of a page is kept whole; a longer one starts with a few rows
+        page = pdf.page_break_trigger - pdf.t_margin
+        out = (size, widths, whole, line, height if height < page / 3 else line * 6 + 4 * PAD,
+               level)
+        cache[id(t)] = (t, out)
+        return out
 
     def _table(self, t: Table) -> None:
         from fpdf.fonts import FontFace
         pdf = self.pdf
         avail = pdf.epw
-        size = TABLE
-        while True:
-            nat, least = self._widths(t, size)
-            if sum(least) <= avail or size <= TABLE_MIN:
-                break
-            size -= 0.5
-        if sum(nat) <= avail:
-            widths = nat
-        elif sum(least) <= avail:
-            slack = [a - b for a, b in zip(nat, least)]
-            widths = [b + (avail - sum(least)) * s / sum(slack) for b, s in zip(least, slack)]
-        else:                                # (words wrap inside: the type is at its least)
-            widths = [b * avail / sum(least) for b in least]
-        self._room(size * PT * 1.35 * 4 + 4)
+        size, widths, whole, line, keep, level = self._layout(t)
+        self._room(keep)
         pdf.set_font(SANS, "", size)
         pdf.set_fill_color(255)
         pdf.set_draw_color(*RULE)
@@ -422,8 +484,8 @@ class _Writer:
         head_style = FontFace(family=SANS, emphasis="BOLD", fill_color=HEAD_FILL)
         with pdf.table(width=min(sum(widths), avail), col_widths=tuple(widths), align="LEFT",
                        text_align="LEFT", v_align="TOP", markdown=True,
-                       headings_style=head_style, line_height=size * PT * 1.3,
-                       padding=PAD, wrapmode="WORD" if sum(least) <= avail else "CHAR",
+                       headings_style=head_style, line_height=line,
+                       padding=PAD, wrapmode="WORD" if whole else "CHAR",
                        repeat_headings=1) as table:
             head = table.row()
             for h in t.head:
@@ -431,15 +493,30 @@ class _Writer:
             for r in t.rows:
                 row = table.row()
                 for c in r:
-                    self._cell(row, c, FontFace)
+                    self._cell(row, c, FontFace, level)
         pdf.ln(2.5)
         pdf.set_font(SANS, "", BODY)
 
+    def _height(self, t: Table, widths, size: float, line: float, level: int) -> float:
+        """About the height (mm) of table ``t`` with columns ``widths``: its rows' lines."""
+        pdf = self.pdf
+        pdf.set_font(SANS, "", size)
+        total = 0.0
+        for row in ((Cell(_wrap_names(str(h))) for h in t.head),) + tuple(t.rows):
+            lines = 1
+            for c, w in zip(row, widths):
+                text = (c.strong + " " if c.strong else "") + _keep(c.text, level)
+                n = sum(max(1, -(-pdf.get_string_width(x) // max(w - 2 * PAD, 1.0)))
+                        for x in text.split("\n") + [_keep(n, level) for n in c.notes])
+                lines = max(lines, n)
+            total += lines * line + 2 * PAD
+        return total
+
     @staticmethod
-    def _cell(row, c: Cell, FontFace) -> None:
-        text = (f"**{_md(c.strong)}** " if c.strong else "") + _md(_keep(c.text))
+    def _cell(row, c: Cell, FontFace, level: int) -> None:
+        text = (f"**{_md(c.strong)}** " if c.strong else "") + _md(_keep(c.text, level))
         if c.notes:
-            text += "".join(f"\n__{_md(_keep(n))}__" for n in c.notes)
+            text += "".join(f"\n__{_md(_keep(n, level))}__" for n in c.notes)
         style = FontFace(fill_color=CELL_FILL[c.mark]) if c.mark else None
         row.cell(text, style=style)
 

@@ -82,6 +82,8 @@ class ReportResult:
         """Write the report as ``path``: HTML (``.html``) or PDF (``.pdf``, on ``paper``
         ``"a4"`` or ``"letter"``, with the design's ``name``: see :meth:`pdf`); ``figures``:
         :meth:`figures` already drawn (to write both formats drawing them once)."""
+        from .pdf import check_paper
+        check_paper(paper)
         path = Path(path)
         kind = path.suffix.lower().lstrip(".")
         if kind not in FORMATS:
