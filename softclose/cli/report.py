@@ -106,15 +106,7 @@ def run(cfg, args) -> Outcome:
     skipped = pdf_unavailable() if "pdf" in kinds else None
     if skipped:                 # the HTML instead: the report is written all the same
         kinds = ("html",)
-    figs = res.figures()
-    files = []
-    try:
-        for kind in kinds:
-            files.append(res.save(out / f"report.{kind}", figs, paper=args.paper,
-                                  name=args.config))
-    finally:
-        from ..signoff.figures import close
-        close(figs)
+    files = res.save_all(out, formats=kinds, paper=args.paper, name=args.config)
     payload["files"] = [str(f) for f in files]
     payload["timings"]["files"] = time.perf_counter() - t0
     text = format_report(payload) + wrote(files)

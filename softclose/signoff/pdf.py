@@ -78,14 +78,24 @@ def design_name(r) -> str:
             f"damper c = {num(d['damper_c'], 4)} N s/m")
 
 
-#: the font families (as matplotlib's SVG names them) and their files in matplotlib's data
+#: the font families (as matplotlib's SVG names them) and styles the PDF embeds, and their
+#: files in matplotlib's data (a figure whose text needs another is drawn with its text as
+#: outlines)
 SANS, MONO = "DejaVu Sans", "DejaVu Sans Mono"
 FONTS = {(SANS, ""): "DejaVuSans.ttf", (SANS, "B"): "DejaVuSans-Bold.ttf",
-         (SANS, "I"): "DejaVuSans-Oblique.ttf", (SANS, "BI"): "DejaVuSans-BoldOblique.ttf",
-         (MONO, ""): "DejaVuSansMono.ttf", (MONO, "B"): "DejaVuSansMono-Bold.ttf",
-         (MONO, "I"): "DejaVuSansMono-Oblique.ttf",
-         (MONO, "BI"): "DejaVuSansMono-BoldOblique.ttf"}
-_FAMILY = re.compile(r"font-family:\s*'?([^',;\"]+)")
+         (SANS, "I"): "DejaVuSans-Oblique.ttf", (MONO, ""): "DejaVuSansMono.ttf"}
+_STYLE = re.compile(r'style="([^"]*font-family[^"]*)"')
+
+
+def _fonts_of(svg: str) -> set:
+    """The (family, style) of every text of ``svg``."""
+    out = set()
+    for style in _STYLE.findall(svg):
+        family = re.search(r"font-family:\s*'?([^',;]+)", style).group(1).strip()
+        bold = re.search(r"font-weight:\s*(bold|[6-9]00)", style) is not None
+        italic = re.search(r"font-style:\s*(italic|oblique)", style) is not None
+        out.add((family, ("B" if bold else "") + ("I" if italic else "")))
+    return out
 
 
 def _svg(figs: dict, name: str, text_width_in: float) -> bytes:
@@ -103,7 +113,7 @@ def _svg(figs: dict, name: str, text_width_in: float) -> bytes:
     resize = (size[0] > WIDE * text_width_in and engine is not None
               and type(engine).__name__ == "ConstrainedLayoutEngine")
     text = None if resize else figure_svg(figs, name)
-    if text is not None and not {f.strip() for f in _FAMILY.findall(text)} <= {SANS, MONO}:
+    if text is not None and not _fonts_of(text) <= set(FONTS):
         text = None
     if text is None:
         buf = io.StringIO()
@@ -117,7 +127,7 @@ def _svg(figs: dict, name: str, text_width_in: float) -> bytes:
             if resize:
                 fig.set_size_inches(*size)
         text = buf.getvalue()
-        if not {f.strip() for f in _FAMILY.findall(text)} <= {SANS, MONO}:
+        if not _fonts_of(text) <= set(FONTS):
             return _svg_outlines(fig, text_width_in)
     text = re.sub(r"<metadata>.*?</metadata>", "", text, flags=re.S)
     text = re.sub(r"font-size:\s*([\d.]+)px", r"font-size: \1", text)

@@ -95,4 +95,21 @@ class ReportResult:
             path.write_bytes(self.pdf(figures, paper=paper, name=name))
         return path
 
+    def save_all(self, folder, *, stem: str = "report", formats=FORMATS, paper: str = "a4",
+                 name: str | None = None) -> list[Path]:
+        """Write the report in each of ``formats`` as ``folder/stem.html`` and
+        ``folder/stem.pdf``, its figures drawn once; a PDF this machine cannot make
+        (:func:`~softclose.signoff.pdf_unavailable` says why) is left out. Returns the files
+        written."""
+        from .figures import close
+        from .pdf import check_paper, pdf_unavailable
+        check_paper(paper)
+        kinds = [k for k in formats if k != "pdf" or not pdf_unavailable()]
+        figs = self.figures()
+        try:
+            return [self.save(Path(folder) / f"{stem}.{k}", figs, paper=paper, name=name)
+                    for k in kinds]
+        finally:
+            close(figs)
+
 __all__ = ["ReportResult", "SECTIONS", "FORMATS"]
