@@ -228,6 +228,17 @@ def test_pdf_is_a_document_of_a4_pages_with_the_sections_as_its_outline(rep, pdf
     assert "The closing stroke at each operating temperature" in text
 
 
+def test_pdf_pages_hold_what_the_docs_list(pdf_bytes):
+    """docs/report.md's page list of this report: each section's heading on its page."""
+    pages = [re.sub(r"\s+", " ", p.extract_text()) for p in pdf_reader(pdf_bytes).pages]
+    assert len(pages) == 9
+    first = {s: next(i + 1 for i, t in enumerate(pages) if s in t) for s in SECTIONS}
+    assert list(first.values()) == [1, 2, 3, 4, 6, 7, 7, 7]
+    assert "EN 13906-1 check" in pages[2] and "Hand force at 0 °C" in pages[4]
+    assert "Hand force at 23 °C" in pages[4] and "Hand force at 40 °C" in pages[5]
+    assert "[tolerance]" in pages[8]
+
+
 def test_letter_pages_with_the_option(letter_bytes, pdf_bytes):
     pdf = pdf_reader(letter_bytes)
     assert {(float(p.mediabox.width), float(p.mediabox.height)) for p in pdf.pages} == {LETTER}

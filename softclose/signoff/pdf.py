@@ -277,8 +277,8 @@ class _Writer:
         self._title(doc)
         for s in doc.sections:
             self._heading(s.title, s.blocks[0] if s.blocks else None)
-            for b in s.blocks:
-                self._block(b)
+            for b, after in zip(s.blocks, s.blocks[1:] + (None,)):
+                self._block(b, after)
         return bytes(pdf.output())
 
     def _title(self, doc):
@@ -328,10 +328,13 @@ class _Writer:
             return self._layout(b)[4]
         return 12
 
-    def _block(self, b) -> None:
+    def _block(self, b, after=None) -> None:
+        """Set block ``b`` (``after``: the block that follows it, or None)."""
         pdf = self.pdf
         if isinstance(b, Table):
-            self._table(b)
+            # a short table stays on the page with the note under it
+            note = isinstance(after, Paragraph) and after.small
+            self._table(b, 2 * SMALL * PT * 1.35 + 2 if note else 0.0)
         elif isinstance(b, Paragraph):
             size = SMALL if b.small else BODY
             pdf.set_font(SANS, "", size)
@@ -481,12 +484,12 @@ class _Writer:
         cache[id(t)] = (t, out)
         return out
 
-    def _table(self, t: Table) -> None:
+    def _table(self, t: Table, then: float = 0.0) -> None:
         from fpdf.fonts import FontFace
         pdf = self.pdf
         avail = pdf.epw
         size, widths, whole, line, keep, level = self._layout(t)
-        self._room(keep)
+        self._room(keep + then)
         pdf.set_font(SANS, "", size)
         pdf.set_fill_color(255)
         pdf.set_draw_color(*RULE)
