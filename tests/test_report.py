@@ -350,8 +350,9 @@ def test_without_fpdf2_the_command_writes_the_html_and_says_why_not_the_pdf(tmp_
                                                                              monkeypatch):
     import sys
     monkeypatch.setitem(sys.modules, "fpdf", None)
-    rc, out, err = run_cli(["report", "--config", str(ROOT / "examples" / "lids" / "chest_lid.toml"),
-                            "--out", str(tmp_path), "--format", "pdf", "--samples", "50"])
+    chest = str(ROOT / "examples" / "lids" / "chest_lid.toml")
+    rc, out, err = run_cli(["report", "--config", chest, "--out", str(tmp_path), "--format", "pdf",
+                            "--samples", "50"])
     assert rc in (0, 3) and "Traceback" not in err
     assert (tmp_path / "report.html").exists() and not (tmp_path / "report.pdf").exists()
     skipped = [ln for ln in out.splitlines() if "report.pdf skipped" in ln]
@@ -422,3 +423,43 @@ def test_the_spring_to_buy_is_that_of_softclose_spring(rep):
     part = rep.parts["spring"]
     assert rc == 0 and part["ok"] and part["mode"] == "designed"
     assert part["coil_spring"] == spring["spring"] and part["checks"] == spring["checks"]
+
+
+def test_pdf_figures_keep_matplotlibs_clipping_and_fonts():
+    """A figure's SVG in the PDF: text as text in the embedded fonts (sizes in points, not
+    3/4 of them), as outlines in a font the PDF lacks; a marker outside its axes, clipped
+    by matplotlib, is not drawn."""
+    import matplotlib.pyplot as plt
+    import pypdfium2
+    from fpdf import FPDF
+
+    from softclose.signoff.figures import Figures
+    from softclose.signoff.pdf import _draw_svg, _svg
+    fig = plt.figure(figsize=(4, 3))
+    ax = fig.add_axes([0.2, 0.2, 0.5, 0.6])
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1)
+    ax.plot([0.5, 1.3], [0.5, 0.5], "s", color="red", ms=12, clip_on=True)
+    ax.set_xlabel("x in the sans")
+    fig.text(0.98, 0.1, "edge", ha="right")      # (the cropped figure reaches past 1.3)
+    other = plt.figure(figsize=(4, 3))
+    other.text(0.5, 0.5, "in a serif", family="DejaVu Serif")
+    try:
+        figs = Figures(plain=fig, serif=other)
+        svg = _svg(figs, "plain", 6.8).decode()
+        assert "x in the sans" in svg and "font-size: 10;" in svg and "px;" not in svg
+        serif = _svg(figs, "serif", 6.8).decode()
+        assert "<text" not in serif and "in a serif" not in serif.split("-->")[-1]
+        pdf = FPDF(unit="pt", format=(400, 300))
+        pdf.add_page()
+        _draw_svg(pdf, svg.encode(), 0, 0, 400, 300)
+        doc = pypdfium2.PdfDocument(bytes(pdf.output()))
+        img = np.asarray(doc[0].render(scale=1).to_pil().convert("RGB")).astype(int)
+        doc.close()
+    finally:
+        plt.close(fig)
+        plt.close(other)
+    red = (img[..., 0] > 200) & (img[..., 1] < 80) & (img[..., 2] < 80)
+    cols = np.nonzero(red.any(axis=0))[0]
+    assert red.sum() > 50                                  # the marker inside is drawn
+    assert cols.max() - cols.min() < 30                    # and only that one

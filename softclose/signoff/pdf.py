@@ -99,48 +99,38 @@ def _fonts_of(svg: str) -> set:
 
 
 def _svg(figs: dict, name: str, text_width_in: float) -> bytes:
-    """Figure ``name`` as SVG for the PDF: the HTML's SVG (text as text) when every font
-    it names is one the PDF holds, else its text as outlines; a constrained-layout figure
+    """Figure ``name`` as SVG for the PDF: the HTML's SVG (its text as text) when the PDF
+    holds every font it names, else with its text as outlines; a constrained-layout figure
     much wider than the text (the linkage's two panels) is drawn again at the text width,
     so that its lettering keeps its size. Font sizes are given in the SVG's own units (its
     px are points: fpdf2 would take them for 3/4 pt)."""
-    from matplotlib import rc_context
-
     from .figures import figure_svg
     fig = figs[name]
-    size = tuple(fig.get_size_inches())
-    engine = fig.get_layout_engine()
-    resize = (size[0] > WIDE * text_width_in and engine is not None
-              and type(engine).__name__ == "ConstrainedLayoutEngine")
-    text = None if resize else figure_svg(figs, name)
-    if text is not None and not _fonts_of(text) <= set(FONTS):
-        text = None
-    if text is None:
-        buf = io.StringIO()
-        try:
-            if resize:
-                k = WIDE * text_width_in / size[0]
-                fig.set_size_inches(size[0] * k, size[1] * k)
-            with rc_context({"svg.fonttype": "none" if resize else "path"}):
-                fig.savefig(buf, format="svg", bbox_inches="tight", metadata={"Date": None})
-        finally:
-            if resize:
-                fig.set_size_inches(*size)
-        text = buf.getvalue()
-        if not _fonts_of(text) <= set(FONTS):
-            return _svg_outlines(fig, text_width_in)
+    width = fig.get_size_inches()[0]
+    engine = type(fig.get_layout_engine()).__name__
+    scale = (WIDE * text_width_in / width
+             if width > WIDE * text_width_in and engine == "ConstrainedLayoutEngine" else 1.0)
+    text = figure_svg(figs, name) if scale == 1.0 else _render(fig, "none", scale)
+    if not _fonts_of(text) <= set(FONTS):
+        text = _render(fig, "path", scale)
     text = re.sub(r"<metadata>.*?</metadata>", "", text, flags=re.S)
     text = re.sub(r"font-size:\s*([\d.]+)px", r"font-size: \1", text)
     return text.encode("utf-8")
 
 
-def _svg_outlines(fig, text_width_in: float) -> bytes:
-    """``fig`` as SVG with its text as outlines (a font the PDF does not hold)."""
+def _render(fig, fonttype: str, scale: float) -> str:
+    """``fig`` as SVG (``fonttype``: matplotlib's ``svg.fonttype``) drawn at ``scale``
+    times its size (then given its size back)."""
     from matplotlib import rc_context
+    size = tuple(fig.get_size_inches())
     buf = io.StringIO()
-    with rc_context({"svg.fonttype": "path"}):
-        fig.savefig(buf, format="svg", bbox_inches="tight", metadata={"Date": None})
-    return re.sub(r"<metadata>.*?</metadata>", "", buf.getvalue(), flags=re.S).encode("utf-8")
+    try:
+        fig.set_size_inches(size[0] * scale, size[1] * scale)
+        with rc_context({"svg.fonttype": fonttype}):
+            fig.savefig(buf, format="svg", bbox_inches="tight", metadata={"Date": None})
+    finally:
+        fig.set_size_inches(*size)
+    return buf.getvalue()
 
 
 def _clipped_svg():
