@@ -233,7 +233,9 @@ class _Writer:
         pdf.set_y(9)
         pdf.set_font(SANS, "", 7.5)
         pdf.set_text_color(*GREY)
-        pdf.cell(pdf.epw * 0.75, 4, f"Sign-off report · {self.name}", align="L")
+        head = "Sign-off report · "
+        pdf.cell(pdf.epw * 0.75, 4, head + self._fit(self.name, pdf.epw * 0.74
+                                                     - pdf.get_string_width(head)), align="L")
         word = "PASS" if self.r.success else "FAILS"
         pdf.set_text_color(*(PASS_TEXT if self.r.success else FAIL_TEXT))
         pdf.set_font(SANS, "B", 7.5)
@@ -249,10 +251,21 @@ class _Writer:
         pdf.set_y(-12)
         pdf.set_font(SANS, "", 7.5)
         pdf.set_text_color(*GREY)
-        pdf.cell(pdf.epw * 0.8, 4, f"{self.name} · {self.date} · softclose {self.r.version}",
-                 align="L")
+        tail = f" · {self.date} · softclose {self.r.version}"
+        pdf.cell(pdf.epw * 0.8, 4, self._fit(self.name, pdf.epw * 0.79 - pdf.get_string_width(tail))
+                 + tail, align="L")
         pdf.cell(pdf.epw * 0.2, 4, f"page {pdf.page_no()} of {{nb}}", align="R")
         pdf.set_text_color(0)
+
+    def _fit(self, text: str, width: float) -> str:
+        """``text`` cut short at its start ("…") to ``width`` mm in the current font (a long
+        path keeps its file name)."""
+        pdf = self.pdf
+        if pdf.get_string_width(text) <= width:
+            return text
+        while text and pdf.get_string_width("…" + text) > width:
+            text = text[1:]
+        return "…" + text
 
     def _room(self, h: float) -> None:
         """A new page unless ``h`` mm fit on this one."""
