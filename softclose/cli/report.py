@@ -91,16 +91,15 @@ def format_report(payload: dict) -> str:
 
 
 def run(cfg, args) -> Outcome:
+    import time
+
     from ..errors import ConfigError
-    from ..signoff import report
+    from ..signoff import pdf_unavailable, report
     if args.samples is not None and args.samples < 1:
         raise ConfigError(f"--samples {args.samples}: expected a whole number >= 1")
     out = prepare_out(args.out if args.out is not None else ".")
     res = report(cfg, optimiser=optimiser_json(args.config, cfg), samples=args.samples)
     payload = res.to_json()
-    import time
-
-    from ..signoff import pdf_unavailable
     t0 = time.perf_counter()
     kinds = ("html", "pdf") if args.format == "both" else (args.format,)
     skipped = pdf_unavailable() if "pdf" in kinds else None
