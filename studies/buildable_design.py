@@ -17,6 +17,7 @@ Writes to studies/out/buildable_design/:
   spring_force.png   spring force over the stroke of each design, the valid sides shaded
   price.png          the objective of each kind, nominal and robust, against the idealised
   report.html        the sign-off report of the robust design with buildable springs
+  report.pdf         the same, to print (A4)
 
 Usage: python studies/buildable_design.py [--fast] [--json] [--out DIR]
 """
@@ -155,7 +156,7 @@ def main(argv=None) -> int:
     if chosen.design is not None:                  # its sign-off report
         sign_off = softclose.report(chosen.design_config(), optimiser=chosen.to_json(),
                                     samples=2000 if a.fast else None)
-        files.append(sign_off.save(a.out / "report.html"))
+        files += sign_off.save_all(a.out, name="the robust design with buildable springs")
         summary["report"] = sign_off.message
     save_summary(summary, a.out / "designs.json", files)
     if a.json:

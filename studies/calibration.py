@@ -32,6 +32,7 @@ Writes to studies/out/calibration/:
   comparison.csv    one row per design: closing time and impact speed on the true lid
   report.html       the calibrated robust design signed off (softclose.report) on the
                     calibrated lid
+  report.pdf        the same, to print (A4)
 
 Usage: python studies/calibration.py [--fast] [--json] [--out DIR]
 """
@@ -128,7 +129,7 @@ def main(argv=None) -> int:
     if final.design is not None:
         signed = softclose.report(final.design_config(), optimiser=final.to_json(),
                                   samples=200 if a.fast else None)
-        signed.save(a.out / "report.html")
+        signed.save_all(a.out, name="the calibrated robust design")
         verdict = signed.message
 
     summary = {"fit": {k: {"value": fit.values[k], "ci95": fit.ci95[k], "truth": TRUTH[k],

@@ -18,6 +18,7 @@ Writes to studies/out/catalog_selection/:
   ranking.csv       every pair of the catalog, best first (softclose select's table)
   selection.png     yield against worst-case J of every pair, the robust optimum marked
   report.html       the sign-off report of the best catalog pair
+  report.pdf        the same, to print (A4)
 
 Usage: python studies/catalog_selection.py [--fast] [--json] [--out DIR]
 """
@@ -126,7 +127,7 @@ def main(argv=None) -> int:
     if best is not None:                  # the best pair, signed off
         from softclose.catalog import pair_config
         sign_off = softclose.report(pair_config(cfg, best), samples=samples)
-        files.append(sign_off.save(a.out / "report.html"))
+        files += sign_off.save_all(a.out, name="the best catalog pair")
         out["report"] = sign_off.message
     save_summary(out, a.out / "comparison.json", files)
     if a.json:

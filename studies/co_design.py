@@ -29,6 +29,7 @@ Writes to studies/out/co_design/:
   gains.png           J of each lever, nominal and robust
   attachments.png     the best robust design's points, lines over the stroke, its boxes
   report.html         the sign-off report of the best robust design
+  report.pdf          the same, to print (A4)
 
 Usage: python studies/co_design.py [--fast] [--json] [--out DIR]
 """
@@ -143,7 +144,7 @@ def main(argv=None) -> int:
                        "end_damper_angle_deg lower)"}
     sign_off = softclose.report(best.design_config(), optimiser=best.to_json(),
                                 samples=2000 if a.fast else None)
-    files.append(sign_off.save(a.out / "report.html"))
+    files += sign_off.save_all(a.out, name="the best robust co-design")
     summary["report"] = sign_off.message
     save_summary(summary, a.out / "levers.json", files)
     if a.json:

@@ -11,6 +11,7 @@ Writes to studies/out/hinge_lids/:
   lids.json             the same, with each result's message
   *_design.toml         each lid's design as a config (softclose simulate --config ...)
   *_report.html         each lid's sign-off report
+  *_report.pdf          the same, to print (A4)
 
 Usage: python studies/hinge_lids.py [--fast] [--out DIR]
 """
@@ -65,7 +66,7 @@ def main(argv=None) -> int:
         toml.write_text(to_toml(design_cfg, header=f"{path.stem}: the design of "
                                                    "studies/hinge_lids.py"))
         sign_off = softclose.report(design_cfg, samples=200 if a.fast else None)
-        files += [toml, sign_off.save(a.out / f"{path.stem}_report.html")]
+        files += [toml, *sign_off.save_all(a.out, stem=f"{path.stem}_report", name=path.name)]
         row["sign_off"] = sign_off.message
         print(f"{path.stem}: closes in {row['closing_time']:.3g} s at "
               f"{row['impact_tip_speed']:.3g} m/s; {sign_off.message}", file=sys.stderr)

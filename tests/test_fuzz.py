@@ -92,8 +92,9 @@ COMMANDS = {
     "spring": (["spring", "--out", "{out}", "--set", 'design.spring_kind="compression"',
                 "--set", "design.spring_k=1914.709", "--set",
                 "design.spring_rest_length=0.07925707"], "cheap"),
-    # the sign-off report of the default lid: HTML only, 200 yield samples a temperature
-    "report": (["report", "--out", "{out}", "--format", "html", "--samples", "200"], "medium"),
+    # the sign-off report of the default lid, 200 yield samples a temperature (its files:
+    # OPTIONS, HTML unless drawn otherwise)
+    "report": (["report", "--out", "{out}", "--samples", "200"], "medium"),
 }
 #: the pairs of the catalog the fuzzed select runs (4 springs x 2 dampers)
 SELECT_PAIRS = 8
@@ -155,6 +156,9 @@ OPTIONS = {
     "prepare": {"--free": (None, [(v, True) for v in (
                     "nope=1:2", "geometry.lid_e[1]=abc", "geometry.lid_e[9]=0:1",
                     "design.spring_k=5:1", "")] + [("geometry.lid_e[1]=0.004:0.024", False)])},
+    # the report's files: HTML, or the PDF on a drawn paper (refused values too)
+    "report": {"--format": ("html", [(v, True) for v in ("pdf", "both", "doc", "", "HTML")]),
+               "--paper": ("a4", [(v, True) for v in ("letter", "A4", "legal", "", "a4 ")])},
     "pareto": {"--closing-times": ("0.4:1:2", [(v, False) for v in (
         "0.4:1:1", "1:0.4:2", "0:1:2", "nan:1:2", "0.4:inf:2", "0.4:1:0", "0.4:1:100000",
         "0.3:3:2:log", "abc", "1e9:1e10:2", "0.4:30:2", "0.4:1:-2", "0.4:1:2.5")])},

@@ -62,7 +62,7 @@ def page(rep, figs):
 
 @pytest.fixture(scope="module")
 def pdf_bytes(rep, figs, tmp_path_factory):
-    path = rep.save(tmp_path_factory.mktemp("report") / "report.pdf", figs)
+    path = rep.save(tmp_path_factory.mktemp("report") / "report.pdf", figs, name="cold.toml")
     return path.read_bytes()
 
 
@@ -179,22 +179,148 @@ def test_result_is_immutable_and_its_json_strict(rep):
     assert frag.count("<svg") == 6
 
 
-def pdf_string(data: bytes, key: bytes) -> str:
-    """The text of a string of the PDF's document information (/Key (...))."""
-    raw = re.search(rb"/" + key + rb" \(((?:\\.|[^\\)])*)\)", data, re.S).group(1)
-    raw = re.sub(rb"\\(.)", rb"\1", raw, flags=re.S)
-    return raw[2:].decode("utf-16-be") if raw.startswith(b"\xfe\xff") else raw.decode("latin-1")
+def pdf_reader(data: bytes):
+    import pypdf
+    return pypdf.PdfReader(io.BytesIO(data))
 
 
-def test_pdf_has_the_sections_and_the_figures(rep, pdf_bytes, figs):
-    assert pdf_bytes.startswith(b"%PDF")
-    kw = re.search(rb"/Keywords \((.*?)\)", pdf_bytes).group(1).decode("latin-1")
-    assert kw.split("; ") == list(SECTIONS)
-    assert pdf_string(pdf_bytes, b"Subject") == rep.message
-    assert pdf_string(pdf_bytes, b"Title") == "Sign-off report"
-    pages = len(re.findall(rb"/Type /Page\b", pdf_bytes))
-    # a title page, one text page per section (the config two) and every figure
-    assert pages >= 1 + len(SECTIONS) + len(figs)
+def pdf_text(data: bytes) -> str:
+    """The PDF's text as a reader's tool extracts it, its whitespace made single spaces (a
+    table cell's lines, a paragraph's wrapping) and the header's break hints dropped."""
+    text = " ".join(p.extract_text() for p in pdf_reader(data).pages)
+    return re.sub(r"\s+", " ", text.replace("\u200b", "").replace("\u00a0", " "))
+
+
+#: A4 and US Letter in points
+A4, LETTER = (595.28, 841.89), (612.0, 792.0)
+
+
+@pytest.fixture(scope="module")
+def letter_bytes(rep, figs):
+    return rep.pdf(figs, paper="letter", name="cold lid")
+
+
+def test_pdf_is_a_document_of_a4_pages_with_the_sections_as_its_outline(rep, pdf_bytes, page):
+    pdf = pdf_reader(pdf_bytes)
+    sizes = {(round(float(p.mediabox.width), 2), round(float(p.mediabox.height), 2))
+             for p in pdf.pages}
+    assert sizes == {A4} and 6 <= len(pdf.pages) <= 14
+    info = pdf.metadata
+    assert info.title == "Sign-off report" and info.subject == rep.message
+    assert info["/Keywords"].split("; ") == list(SECTIONS)
+    # the same section titles in the HTML's headings, the PDF's outline and its text, in order
+    html_titles = re.findall(r"<h2>(.*?)</h2>", page)
+    assert html_titles == list(SECTIONS) == [o.title for o in pdf.outline]
+    text = pdf_text(pdf_bytes)
+    at = [text.index(s) for s in SECTIONS]
+    assert at == sorted(at)
+    # the title block: the design's name, the verdict, the date and the version, first
+    first = re.sub(r"\s+", " ", pdf.pages[0].extract_text())
+    assert first.startswith("Sign-off report cold.toml ")
+    assert re.search(rf"\d{{4}}-\d\d-\d\d · softclose {re.escape(rep.version)}", first)
+    assert rep.message in first
+    # every page's footer: the design's name and "page n of N"
+    n = len(pdf.pages)
+    for i, p in enumerate(pdf.pages):
+        assert re.search(rf"cold\.toml · .*page {i + 1} of {n}", p.extract_text(), re.S)
+    # the figures are vector graphics: no raster image in the document, their text is text
+    assert all(len(p.images) == 0 for p in pdf.pages)
+    assert "The closing stroke at each operating temperature" in text
+
+
+def test_pdf_pages_hold_what_the_docs_list(pdf_bytes):
+    """docs/report.md's page list of this report: each section's heading on its page."""
+    pages = [re.sub(r"\s+", " ", p.extract_text()) for p in pdf_reader(pdf_bytes).pages]
+    assert len(pages) == 9
+    first = {s: next(i + 1 for i, t in enumerate(pages) if s in t) for s in SECTIONS}
+    assert list(first.values()) == [1, 2, 3, 4, 6, 7, 7, 7]
+    assert "EN 13906-1 check" in pages[2] and "Hand force at 0 °C" in pages[4]
+    assert "Hand force at 23 °C" in pages[4] and "Hand force at 40 °C" in pages[5]
+    assert "[tolerance]" in pages[8]
+
+
+def test_letter_pages_with_the_option(letter_bytes, pdf_bytes):
+    pdf = pdf_reader(letter_bytes)
+    assert {(float(p.mediabox.width), float(p.mediabox.height)) for p in pdf.pages} == {LETTER}
+    assert "cold lid" in pdf.pages[0].extract_text()
+    assert pdf_text(letter_bytes).count("PASS") == pdf_text(pdf_bytes).count("PASS")
+
+
+def test_pdf_text_holds_the_verdict_every_constraint_and_the_numbers_of_the_json(rep,
+                                                                                 pdf_bytes):
+    from softclose.signoff.text import matrix_cell
+    text = pdf_text(pdf_bytes)
+    assert rep.message in text and all(f in text for f in rep.failures)
+    m = rep.matrix
+    for row in m["rows"]:                           # every constraint, every cell's value
+        assert row["name"] in text and row["what"] in text
+        for col, x in m["cells"][row["name"]].items():
+            value, margin, verdict, where = matrix_cell(row, x)
+            assert f"{verdict} {value}" in text, (row["name"], col)
+            assert margin in text and where in text
+    cells = [x for row in m["cells"].values() for x in row.values()]
+    assert text.count("PASS ") >= sum(x["ok"] for x in cells)
+    assert text.count("FAIL ") >= sum(not x["ok"] for x in cells)
+    # the design's numbers as the JSON has them (to the digits the table shows)
+    d = rep.to_json()["design"]
+    design = text[text.index(SECTIONS[0]):text.index(SECTIONS[1])]
+    for key in ("spring_k", "spring_rest_length", "damper_c"):
+        got = float(re.search(rf"\b{key} ([-\d.e+]+)", design).group(1))
+        assert got == pytest.approx(d[key], rel=1e-5)
+    # the verified metrics to ten digits, by the reference and by simulate
+    ref, sim = rep.metrics["reference"], rep.metrics["simulate"]
+    for key in ("closing_time", "impact_tip_speed", "peak_tip_speed"):
+        metrics = text[text.index(SECTIONS[2]):text.index(SECTIONS[3])]
+        a, b = re.search(rf"\b{key} ([-\d.e+]+) \S+ ([-\d.e+]+)", metrics).groups()
+        assert float(a) == pytest.approx(ref[key], rel=1e-9)
+        assert float(b) == pytest.approx(sim[key], rel=1e-9)
+    # the yield per temperature and the config
+    for p in rep.yields["per_temperature"]:
+        assert f"{p['temperature_c']:g} °C {100 * p['yield']:.4g} %" in text
+    assert "spring_k = 1914.709221447523" in text
+
+
+def test_pdf_pages_rendered_keep_their_content_within_the_margins(pdf_bytes):
+    """Each page drawn at 1 px a point: nothing outside the margins but the running header
+    and footer, something inside them; the verdict box and the matrix's PASS and FAIL cells
+    in the HTML's colours."""
+    import pypdfium2
+    from softclose.signoff.html import CSS
+    from softclose.signoff.pdf import BOTTOM, CELL_FILL, FAIL_FILL, MARGIN, TOP
+    mm = 72 / 25.4
+    doc = pypdfium2.PdfDocument(pdf_bytes)
+    colours = set()
+    try:
+        for i in range(len(doc)):
+            img = np.asarray(doc[i].render(scale=1).to_pil().convert("RGB")).astype(int)
+            h, w, _ = img.shape
+            ink = (img < 245).any(axis=2)
+            left, right = int(MARGIN * mm) - 1, w - int(MARGIN * mm) + 1
+            assert not ink[:, :left].any() and not ink[:, right:].any(), f"page {i + 1}"
+            body = ink[int((TOP - 2) * mm):h - int(BOTTOM * mm)]
+            assert body.sum() > 2000, f"page {i + 1} is nearly blank"
+            assert ink[:int(6 * mm)].sum() == 0 and ink[h - int(4 * mm):].sum() == 0
+            colours |= set(map(tuple, img.reshape(-1, 3)[::7]))
+    finally:
+        doc.close()
+    for fill in (CELL_FILL["ok"], CELL_FILL["bad"], FAIL_FILL):
+        assert fill in colours
+    css = {k: tuple(int(v[j:j + 2], 16) for j in (0, 2, 4))
+           for k, v in re.findall(r"td\.(ok|bad)\{background:#(\w{6})\}", CSS)}
+    assert css == CELL_FILL                     # the cells shaded as in the HTML
+
+
+def test_pdf_that_cannot_be_made_is_refused_in_one_line(rep, monkeypatch, tmp_path):
+    import sys
+
+    from softclose.errors import ConfigError
+    from softclose.signoff.pdf import PdfUnavailable
+    with pytest.raises(ConfigError, match="paper: 'legal'"):
+        rep.save(tmp_path / "report.pdf", paper="legal")
+    monkeypatch.setitem(sys.modules, "fpdf", None)          # fpdf2 missing
+    with pytest.raises(PdfUnavailable, match="fpdf2 cannot be imported"):
+        rep.pdf()
+    assert not (tmp_path / "report.pdf").exists()
 
 
 def test_a_figure_of_the_report_renders_to_an_image(figs, tmp_path):
@@ -220,11 +346,26 @@ def test_hinge_lid_report_from_the_command_line(tmp_path):
     assert not (tmp_path / "report.pdf").exists()
 
 
+def test_without_fpdf2_the_command_writes_the_html_and_says_why_not_the_pdf(tmp_path,
+                                                                             monkeypatch):
+    import sys
+    monkeypatch.setitem(sys.modules, "fpdf", None)
+    chest = str(ROOT / "examples" / "lids" / "chest_lid.toml")
+    rc, out, err = run_cli(["report", "--config", chest, "--out", str(tmp_path), "--format", "pdf",
+                            "--samples", "50"])
+    assert rc in (0, 3) and "Traceback" not in err
+    assert (tmp_path / "report.html").exists() and not (tmp_path / "report.pdf").exists()
+    skipped = [ln for ln in out.splitlines() if "report.pdf skipped" in ln]
+    assert len(skipped) == 1 and "fpdf2 cannot be imported" in skipped[0]
+
+
 def test_bad_input_is_one_line_and_exit_2(tmp_path):
     rc, _, err = run_cli(["report", "--format", "doc", "--out", str(tmp_path)])
     assert rc == 2 and len(err.strip().splitlines()) == 1 and "--format" in err
     rc, _, err = run_cli(["report", "--samples", "0", "--out", str(tmp_path)])
     assert rc == 2 and "--samples" in err
+    rc, _, err = run_cli(["report", "--paper", "legal", "--out", str(tmp_path)])
+    assert rc == 2 and len(err.strip().splitlines()) == 1 and "--paper" in err
 
 
 def test_without_a_tolerance_box_yield_is_skipped(cold_cfg):
@@ -282,3 +423,43 @@ def test_the_spring_to_buy_is_that_of_softclose_spring(rep):
     part = rep.parts["spring"]
     assert rc == 0 and part["ok"] and part["mode"] == "designed"
     assert part["coil_spring"] == spring["spring"] and part["checks"] == spring["checks"]
+
+
+def test_pdf_figures_keep_matplotlibs_clipping_and_fonts():
+    """A figure's SVG in the PDF: text as text in the embedded fonts (sizes in points, not
+    3/4 of them), as outlines in a font the PDF lacks; a marker outside its axes, clipped
+    by matplotlib, is not drawn."""
+    import matplotlib.pyplot as plt
+    import pypdfium2
+    from fpdf import FPDF
+
+    from softclose.signoff.figures import Figures
+    from softclose.signoff.pdf import _draw_svg, _svg
+    fig = plt.figure(figsize=(4, 3))
+    ax = fig.add_axes([0.2, 0.2, 0.5, 0.6])
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1)
+    ax.plot([0.5, 1.3], [0.5, 0.5], "s", color="red", ms=12, clip_on=True)
+    ax.set_xlabel("x in the sans")
+    fig.text(0.98, 0.1, "edge", ha="right")      # (the cropped figure reaches past 1.3)
+    other = plt.figure(figsize=(4, 3))
+    other.text(0.5, 0.5, "in a serif", family="DejaVu Serif")
+    try:
+        figs = Figures(plain=fig, serif=other)
+        svg = _svg(figs, "plain", 6.8).decode()
+        assert "x in the sans" in svg and "font-size: 10;" in svg and "px;" not in svg
+        serif = _svg(figs, "serif", 6.8).decode()
+        assert "<text" not in serif and "in a serif" not in serif.split("-->")[-1]
+        pdf = FPDF(unit="pt", format=(400, 300))
+        pdf.add_page()
+        _draw_svg(pdf, svg.encode(), 0, 0, 400, 300)
+        doc = pypdfium2.PdfDocument(bytes(pdf.output()))
+        img = np.asarray(doc[0].render(scale=1).to_pil().convert("RGB")).astype(int)
+        doc.close()
+    finally:
+        plt.close(fig)
+        plt.close(other)
+    red = (img[..., 0] > 200) & (img[..., 1] < 80) & (img[..., 2] < 80)
+    cols = np.nonzero(red.any(axis=0))[0]
+    assert red.sum() > 50                                  # the marker inside is drawn
+    assert cols.max() - cols.min() < 30                    # and only that one

@@ -1,4 +1,5 @@
-"""``softclose report [--out DIR] [--format html|pdf|both]``: the sign-off report of a design."""
+"""``softclose report [--out DIR] [--format html|pdf|both] [--paper a4|letter]``: the sign-off
+report of a design."""
 
 from __future__ import annotations
 
@@ -11,7 +12,9 @@ from .common import Outcome, add_common, add_out, prepare_out, wrote
 DESCRIPTION = """\
 The sign-off report of the config's design (e.g. the design.toml of `softclose optimise --out
 D`, a robust design, a calibrated config; a four-bar or a hinge lid): one self-contained HTML
-page (figures inline, nothing fetched: it opens offline) and a PDF of the same sections.
+page (figures inline, nothing fetched: it opens offline) and a PDF of the same sections to
+print (A4 or, with --paper letter, US Letter pages: a title block with the verdict, running
+header and footer, tables and vector figures).
 
 At the top, the verdict in one line. Then: the lid and the design (a linkage drawing); the
 parts to buy (the spring, with the EN 13906-1 checks of a compression spring, and the
@@ -40,6 +43,8 @@ def register(sub) -> None:
                    help="which files to write (default both)")
     p.add_argument("--samples", metavar="N", type=int, default=None,
                    help="Monte Carlo samples of each yield (default tolerance.samples)")
+    p.add_argument("--paper", choices=("a4", "letter"), default="a4",
+                   help="the PDF's paper size: A4 or US Letter (default a4)")
     p.set_defaults(run=run)
 
 
@@ -86,8 +91,10 @@ def format_report(payload: dict) -> str:
 
 
 def run(cfg, args) -> Outcome:
+    import time
+
     from ..errors import ConfigError
-    from ..signoff import report
+    from ..signoff import pdf_unavailable, report
     if args.samples is not None and args.samples < 1:
         raise ConfigError(f"--samples {args.samples}: expected a whole number >= 1")
     out = prepare_out(args.out if args.out is not None else ".",
@@ -95,19 +102,18 @@ def run(cfg, args) -> Outcome:
                                                 else (args.format,))])
     res = report(cfg, optimiser=optimiser_json(args.config, cfg), samples=args.samples)
     payload = res.to_json()
-    import time
     t0 = time.perf_counter()
-    figs = res.figures()
-    files = []
-    try:
-        for kind in (("html", "pdf") if args.format == "both" else (args.format,)):
-            files.append(res.save(out / f"report.{kind}", figs))
-    finally:
-        from ..signoff.figures import close
-        close(figs)
+    kinds = ("html", "pdf") if args.format == "both" else (args.format,)
+    skipped = pdf_unavailable() if "pdf" in kinds else None
+    if skipped:                 # the HTML instead: the report is written all the same
+        kinds = ("html",)
+    files = res.save_all(out, formats=kinds, paper=args.paper, name=args.config)
     payload["files"] = [str(f) for f in files]
     payload["timings"]["files"] = time.perf_counter() - t0
     text = format_report(payload) + wrote(files)
+    if skipped:
+        payload["skipped"] = {"pdf": skipped}
+        text += f"\n  report.pdf skipped: {skipped}"
     if res.success:
         return Outcome(payload, text, 0, tuple(files))
     payload["exit_code"] = 3

@@ -4,6 +4,8 @@ its zones at each."""
 
 from __future__ import annotations
 
+import io
+
 import numpy as np
 
 from ..present.figures import plt
@@ -38,9 +40,33 @@ def plot_strokes(strokes: dict, limit: float | None = None):
     return fig
 
 
-def report_figures(result) -> dict:
+class Figures(dict):
+    """The report's figures (matplotlib Figures) by name, in the order the report shows
+    them; each one's SVG (:func:`figure_svg`) is drawn once and kept, for the HTML page and
+    the PDF alike (a figure changed after its first SVG keeps that SVG)."""
+
+    def __init__(self, *args, **kw):
+        super().__init__(*args, **kw)
+        self.svgs = {}
+
+
+def figure_svg(figs: dict, name: str) -> str:
+    """Figure ``name`` of ``figs`` as SVG, its text as SVG text (light, searchable, set in
+    the reader's fonts), cropped to what is drawn, without a date: drawn once for a
+    :class:`Figures`."""
+    from matplotlib import rc_context
+    memo = getattr(figs, "svgs", {})
+    if name not in memo:
+        buf = io.StringIO()
+        with rc_context({"svg.fonttype": "none"}):
+            figs[name].savefig(buf, format="svg", bbox_inches="tight", metadata={"Date": None})
+        memo[name] = buf.getvalue()
+    return memo[name]
+
+
+def report_figures(result) -> Figures:
     """The figures of a :class:`~softclose.signoff.ReportResult`, by name, in the order the
-    report shows them."""
+    report shows them (a :class:`Figures`)."""
     d = result.drawing
     model, st = d["model"], d["cfg"].stroke
     figs = {"linkage": plot_linkage(model, [st.theta0, st.theta_closed], ["open", "closed"],
@@ -51,7 +77,7 @@ def report_figures(result) -> dict:
     for T, hf in d["hands"].items():
         if hf is not None:
             figs[f"hand_force_{T:g}C"] = plot_hand_force(hf, title=f"Hand force at {T:g} °C")
-    return figs
+    return Figures(figs)
 
 
 def close(figs: dict) -> None:
@@ -59,4 +85,4 @@ def close(figs: dict) -> None:
         plt.close(f)
 
 
-__all__ = ["plot_strokes", "report_figures", "close"]
+__all__ = ["plot_strokes", "report_figures", "close", "Figures", "figure_svg"]

@@ -1,5 +1,5 @@
 """The sign-off report as an immutable result: its numbers (``to_json``), its HTML
-(``html``, ``_repr_html_``) and its files (``save``)."""
+(``html``, ``_repr_html_``), its PDF (``pdf``) and its files (``save``)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import ConfigError
-from ..files import write_text, write_with
+from ..files import write_bytes, write_text
 from .text import SECTIONS
 #: the report's file formats (by a path's suffix)
 FORMATS = ("html", "pdf")
@@ -70,9 +70,21 @@ class ReportResult:
     def __repr__(self) -> str:
         return f"ReportResult({self.message})"
 
-    def save(self, path, figures: dict | None = None) -> Path:
-        """Write the report as ``path``: HTML (``.html``) or PDF (``.pdf``); ``figures``:
+    def pdf(self, figures: dict | None = None, *, paper: str = "a4",
+            name: str | None = None) -> bytes:
+        """The report as a printable PDF document (its bytes): ``paper`` ``"a4"`` or
+        ``"letter"``; ``name``: the design's name on its title block and in its running
+        footer (default: what the design is); ``figures``: :meth:`figures` already drawn."""
+        from .pdf import write_pdf
+        return write_pdf(self, figures, paper=paper, name=name)
+
+    def save(self, path, figures: dict | None = None, *, paper: str = "a4",
+             name: str | None = None) -> Path:
+        """Write the report as ``path``: HTML (``.html``) or PDF (``.pdf``, on ``paper``
+        ``"a4"`` or ``"letter"``, with the design's ``name``: see :meth:`pdf`); ``figures``:
         :meth:`figures` already drawn (to write both formats drawing them once)."""
+        from .pdf import check_paper
+        check_paper(paper)
         path = Path(path)
         kind = path.suffix.lower().lstrip(".")
         if kind not in FORMATS:
@@ -81,9 +93,24 @@ class ReportResult:
         if kind == "html":
             write_text(path, self.html(figures))
         else:
-            from .pdf import write_pdf
-            write_with(path, lambda p: write_pdf(self, p, figures))
+            write_bytes(path, self.pdf(figures, paper=paper, name=name))
         return path
 
+    def save_all(self, folder, *, stem: str = "report", formats=FORMATS, paper: str = "a4",
+                 name: str | None = None) -> list[Path]:
+        """Write the report in each of ``formats`` as ``folder/stem.html`` and
+        ``folder/stem.pdf``, its figures drawn once; a PDF this machine cannot make
+        (:func:`~softclose.signoff.pdf_unavailable` says why) is left out. Returns the files
+        written."""
+        from .figures import close
+        from .pdf import check_paper, pdf_unavailable
+        check_paper(paper)
+        kinds = [k for k in formats if k != "pdf" or not pdf_unavailable()]
+        figs = self.figures()
+        try:
+            return [self.save(Path(folder) / f"{stem}.{k}", figs, paper=paper, name=name)
+                    for k in kinds]
+        finally:
+            close(figs)
 
 __all__ = ["ReportResult", "SECTIONS", "FORMATS"]
