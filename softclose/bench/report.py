@@ -11,15 +11,10 @@ import math
 from pathlib import Path
 
 from ..files import replacing, write_text
+from ..present.display import num
 
 
 # -- text ----------------------------------------------------------------------------------
-def _fmt(v, spec=".2e"):
-    if v is None or (isinstance(v, float) and not math.isfinite(v)):
-        return "—"
-    return format(v, spec)
-
-
 def _ms(step: float) -> str:
     return f"{step * 1e3:g} ms"
 
@@ -63,11 +58,11 @@ def work_precision_markdown(wp) -> str:
     out = []
     for dname, t in wp.truths.items():
         out.append(f"**{dname}** — truth (CVODES, tol {TRUTH_TOL:g}): closing_time "
-                   f"{_fmt(t.closing_time, '.10g')} s, impact_theta_dot "
-                   f"{_fmt(t.impact_theta_dot, '.10g')} rad/s, peak_tip_speed "
-                   f"{_fmt(t.peak_tip_speed, '.10g')} m/s; truth uncertainty (tol "
+                   f"{num(t.closing_time, spec='.10g')} s, impact_theta_dot "
+                   f"{num(t.impact_theta_dot, spec='.10g')} rad/s, peak_tip_speed "
+                   f"{num(t.peak_tip_speed, spec='.10g')} m/s; truth uncertainty (tol "
                    f"{10 * TRUTH_TOL:g} against it): "
-                   + ", ".join(f"{k} {_fmt(v, '.0e')}" for k, v in wp.truth_floor[dname].items()))
+                   + ", ".join(f"{k} {num(v, spec='.0e')}" for k, v in wp.truth_floor[dname].items()))
         out.append("")
         out.append("| method | step / tol | status | µs per stroke | Δ closing_time (s) | "
                    "Δ impact_theta_dot (rad/s) | rel Δ impact_tip_speed | rel Δ peak_tip_speed "
@@ -83,7 +78,7 @@ def work_precision_markdown(wp) -> str:
                 name += " (cheapest here)"
             out.append(f"| {name} | {r['step']:g} | {r['status']} | "
                        f"{r['time_per_stroke'] * 1e6:.1f} | "
-                       + " | ".join(_fmt(r[f'err_{k}']) for k in METRICS)
+                       + " | ".join(num(r[f'err_{k}'], spec='.2e') for k in METRICS)
                        + f" | {'yes' if r['meets_targets'] else 'no'} |")
         out.append("")
     out.append("Fitted order (slope of log error against log step, asymptotic points):")
@@ -96,8 +91,8 @@ def work_precision_markdown(wp) -> str:
             if (dname, m, METRICS[0]) not in wp.orders:
                 continue
             out.append(f"| {dname} | {m} | "
-                       + " | ".join(_fmt(wp.orders[(dname, m, k)], '.2f') for k in METRICS)
-                       + f" | {_fmt(wp.slopes[(dname, m, 'impact_theta_dot')], '.2f')} |")
+                       + " | ".join(num(wp.orders[(dname, m, k)], spec='.2f') for k in METRICS)
+                       + f" | {num(wp.slopes[(dname, m, 'impact_theta_dot')], spec='.2f')} |")
     out += ["", ORDER_DASH]
     return "\n".join(out)
 
@@ -179,7 +174,7 @@ def structures_markdown(rows) -> str:
                  if r.get("derivatives_c_ms") is not None else "—")
         prepared = {True: "yes", False: "no"}.get(r.get("prepared"), "—")
         lines.append(f"| `{r['command']}` | {r['nlp']} | {r['variables']} | "
-                     f"{r['constraints']} | {r['parameters']} | {_fmt(r['build_s'], '.2f')} s | "
+                     f"{r['constraints']} | {r['parameters']} | {num(r['build_s'], spec='.2f')} s | "
                      f"{r['c_mb']:.2f} MB | {r['generate_s']:.1f} s | {comp} | {deriv} | "
                      f"{prepared} |")
     return "\n".join(lines)
@@ -197,8 +192,8 @@ def optimiser_markdown(rows, note="") -> str:
             out.append(f"| {r['nodes']} | {r['substeps']} | no | {r['message']} |" + " |" * 7)
             continue
         out.append(f"| {r['nodes']} | {r['substeps']} | {'yes' if r['success'] else 'no'} | "
-                   f"{r['objective']:.8g} | {_fmt(r['objective_reference'], '.8g')} | "
-                   f"{_fmt(r.get('objective_error'))} | {_fmt(r['discretisation_error'])} | "
+                   f"{r['objective']:.8g} | {num(r['objective_reference'], spec='.8g')} | "
+                   f"{num(r.get('objective_error'), spec='.2e')} | {num(r['discretisation_error'], spec='.2e')} | "
                    f"{r['solve_time']:.3f} | {r['spring_k']:.5g} | "
                    f"{r['spring_rest_length']:.5g} | {r['damper_c']:.5g} |")
     if rows[0].get("J_star") is not None:

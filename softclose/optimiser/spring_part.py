@@ -19,6 +19,7 @@ from ..model import elements
 from ..model.elements.springs import GAS, strut_stroke
 from ..problem import PARAM_KEYS, feasible, params_of, resolve
 from ..simulation.simulator import Simulator
+from ..simulation.stroke import StrokeStatus
 
 #: the ladders of deviations tried, each side: free length (m), rate (relative)
 FREE_LENGTH_STEPS = np.r_[np.arange(1, 101) * 1e-5, np.arange(11, 301) * 1e-4]   # to 30 mm
@@ -157,7 +158,7 @@ def margins(cfg, p, model=None) -> dict:
             rows.append(P)
         r = sim.run_batch(np.vstack(rows))
         ok = feasible(cfg.optimise, r["closed"], r["closing_time"], r["holding_moment"],
-                      r["theta_dot_max"]) & (r["status"] == 0)
+                      r["theta_dot_max"]) & (r["status"] == StrokeStatus.CLOSED)
         return np.split(ok, np.cumsum([len(x) for x in which])[:-1])
 
     # every LADDER_STRIDE-th step first, then the steps below the first that fails

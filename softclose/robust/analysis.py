@@ -39,6 +39,7 @@ from .stats import CI_METHOD, margins, percentiles, wilson
 from .verify import reference_check
 from ..problem import UNITS, at_temperature, sign_off_temperatures
 from ..jsonio import jsonable
+from ..simulation.stroke import StrokeStatus
 
 #: metrics whose percentiles are reported (closing time over every sample, the others over
 #: the samples that closed)
@@ -166,7 +167,7 @@ def analyse_samples(cfg: Config, box: Box, z: np.ndarray, *, seed: int = 0,
     ok = np.asarray(cols["feasible"], bool)
     k = int(ok.sum())
     status = np.asarray(cols["status"], int)
-    numerical = int(np.sum((status != 0) & (status != 1)))
+    numerical = int(np.sum(~np.isin(status, (StrokeStatus.CLOSED, StrokeStatus.NOT_CLOSED))))
     reasons = Counter(r for r in cols["reason"] if r)
     ct = np.where(cols["closed"], cols["closing_time"], np.inf)
     closed = np.asarray(cols["closed"], bool)

@@ -32,6 +32,7 @@ from ..model import elements
 from ..model.lid import model_key
 from ..model.temperature import parameter_factors
 from ..simulation.simulator import Simulator
+from ..simulation.stroke import StrokeStatus
 from ..problem import opening_wanted, resolve
 
 #: the kernel's output columns kept per sample
@@ -151,7 +152,7 @@ def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
                             lid_mass=None if masses is None else masses[rows],
                             explain=explain, points=prow, opening=opening)
         status = np.asarray(out["status"], int)
-        ok = (status == 0) | (status == 1)
+        ok = (status == StrokeStatus.CLOSED) | (status == StrokeStatus.NOT_CLOSED)
         for k in METRIC_KEYS[1:] + ("theta_dot_max", "theta_min"):
             if k not in out:        # (the opening effort, not asked for: NaN)
                 continue
@@ -159,9 +160,9 @@ def evaluate(cfg: Config, keys, X, *, t_end: float | None = None,
             if k not in ("holding_moment", "opening_force"):
                 v[~ok] = np.nan
             if k in ("closing_time", "impact_theta_dot", "impact_tip_speed"):
-                v[status != 0] = np.nan
+                v[status != StrokeStatus.CLOSED] = np.nan
             cols[k][rows] = v
-        cols["closed"][rows] = status == 0
+        cols["closed"][rows] = status == StrokeStatus.CLOSED
         cols["status"][rows] = status
     o = cfg.optimise
     cols["objective"] = objective(o, cols["impact_theta_dot"], cols["peak_tip_speed"])
