@@ -1120,7 +1120,7 @@ def config_bytes(draw) -> bytes:
 
 
 @pytest.mark.fuzz
-@settings(max_examples=60, deadline=None, database=None,
+@settings(max_examples=40, deadline=None, database=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=config_bytes())
 def test_fuzz_config_files(data, out_root):
@@ -1154,7 +1154,7 @@ COLLIDING = {
 
 
 @pytest.mark.fuzz
-@settings(max_examples=30, deadline=None, database=None,
+@settings(max_examples=20, deadline=None, database=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(command=st.sampled_from(sorted(COLLIDING)), what=st.sampled_from(
     ["folder at a file", "out is a file", "out under a file", "nothing"]), pick=st.integers(0, 9))
