@@ -94,6 +94,23 @@ T_FLOOR = 1e-3
 PHASE_FLOOR = 1e-4
 
 
+def stroke_bounds(lbx, ubx, stroke, iT: int, iT1: int | None, iX: int, N: int,
+                  t_lo: float, t_hi: float) -> None:
+    """Set in (lbx, ubx) the bounds of one stroke's variables in a shooting NLP: its closing
+    time T (at ``iT``) in [max(t_lo, T_FLOOR), t_hi], its engagement time T1 (at ``iT1``;
+    None: one phase), its N nodes' states (from ``iX``: theta in [theta_closed, theta0],
+    theta' <= 0, the last node on the rim) and its peak-speed bound s >= 0 (after them)."""
+    st = stroke
+    lbx[iT], ubx[iT] = max(t_lo, T_FLOOR), t_hi
+    if iT1 is not None:
+        lbx[iT1], ubx[iT1] = PHASE_FLOOR, ubx[iT]
+    j = iX
+    lbx[j:j + 2 * N:2], ubx[j:j + 2 * N:2] = st.theta_closed, st.theta0
+    ubx[j + 1:j + 1 + 2 * N:2] = 0.0
+    lbx[j + 2 * (N - 1)] = ubx[j + 2 * (N - 1)] = st.theta_closed
+    lbx[j + 2 * N] = 0.0
+
+
 def group_bounds(o) -> tuple[dict, dict]:
     """(lower, upper) bound of each constraint group the shooting NLPs (the nominal and the
     scenario NLP) share, by group name, of the config's [optimise] ``o``. (The group
@@ -480,15 +497,9 @@ class ShootingNLP(NLP):
         lbx, ubx = np.full(self.nw, -np.inf), np.full(self.nw, np.inf)
         for i, (lo, hi) in enumerate(self.design_bounds(cfg)):
             lbx[i], ubx[i] = lo / self.scales[i], hi / self.scales[i]
-        i, j = self.iT, self.iX
-        lbx[i] = max(o.closing_time_min if t_min is None else t_min, T_FLOOR)
-        ubx[i] = min(o.closing_time_max, st.t_max) if t_max is None else t_max
-        if self.two_phase:
-            lbx[self.iT1], ubx[self.iT1] = PHASE_FLOOR, ubx[i]
-        lbx[j:j + 2 * N:2], ubx[j:j + 2 * N:2] = st.theta_closed, st.theta0
-        ubx[j + 1:j + 1 + 2 * N:2] = 0.0
-        lbx[j + 2 * (N - 1)] = ubx[j + 2 * (N - 1)] = st.theta_closed
-        lbx[self.iS] = 0.0
+        stroke_bounds(lbx, ubx, st, self.iT, self.iT1, self.iX, N,
+                      o.closing_time_min if t_min is None else t_min,
+                      min(o.closing_time_max, st.t_max) if t_max is None else t_max)
         if self.coil:
             lbx[self.iS + 1:], ubx[self.iS + 1:] = z_bounds(cfg)
         lo, hi = group_bounds(o)

@@ -52,6 +52,16 @@ def _merge(new: Run, old: Run) -> Run:
                    origin=old.origin)
 
 
+def _rewarm(nlp: ShootingNLP, run: Run, bounds, notes: list, note) -> Run | None:
+    """``run`` re-solved warm (its multipliers) under ``bounds``, merged with it and
+    ``note(new run)`` noted; None when the re-solve fails."""
+    r = nlp.solve(run.x, run.p, *bounds, run.lam_x, run.lam_g, warm=True)
+    if not r.success:
+        return None
+    notes.append(note(r))
+    return _merge(r, run)
+
+
 def _own(nlp: ShootingNLP, run: Run) -> dict:
     """The NLP's own values of the metrics with an accuracy target (not the impact tip
     speed: it follows from the impact theta')."""
@@ -141,14 +151,13 @@ def tighten(cfg, nlp: ShootingNLP, run: Run, sim, t_limit: float, notes: list) -
             lo += t_lo - Ts + 1e-9 * t_lo
         else:
             return run
-        r = nlp.solve(run.x, run.p, *nlp.bounds(cfg, t_max=hi, t_min=lo), run.lam_x, run.lam_g,
-                      warm=True)
-        if not r.success:
+        new = _rewarm(nlp, run, nlp.bounds(cfg, t_max=hi, t_min=lo), notes, lambda r: (
+            f"closing-time bounds corrected for the NLP's discretisation error "
+            f"({shift:+.2e} s): solved with [{lo:.9g}, {hi:.9g}] s, "
+            f"{r.iterations} warm iterations"))
+        if new is None:
             return run
-        notes.append(f"closing-time bounds corrected for the NLP's discretisation error "
-                     f"({shift:+.2e} s): solved with [{lo:.9g}, {hi:.9g}] s, "
-                     f"{r.iterations} warm iterations")
-        run = _merge(r, run)
+        run = new
     return run
 
 
@@ -171,11 +180,11 @@ def keep_clear(cfg, nlp: ShootingNLP, run: Run, notes: list) -> Run:
         margin += 1.5 * -worst + 1e-7
         lbx, ubx, lbg, ubg = (np.array(b, float) for b in run.bounds)
         lbg[groups["keep_out"]] = margin
-        r = nlp.solve(run.x, run.p, lbx, ubx, lbg, ubg, run.lam_x, run.lam_g, warm=True)
-        if not r.success:
+        new = _rewarm(nlp, run, (lbx, ubx, lbg, ubg), notes, lambda r: (
+            f"keep-out: a line grazed a region between the NLP's angle nodes by "
+            f"{-worst * 1e3:.3f} mm: re-solved with a clearance of {margin * 1e3:.3f} mm "
+            f"at the nodes ({r.iterations} warm iterations)"))
+        if new is None:
             return run
-        notes.append(f"keep-out: a line grazed a region between the NLP's angle nodes by "
-                     f"{-worst * 1e3:.3f} mm: re-solved with a clearance of {margin * 1e3:.3f} mm "
-                     f"at the nodes ({r.iterations} warm iterations)")
-        run = _merge(r, run)
+        run = new
     return run

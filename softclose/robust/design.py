@@ -66,7 +66,7 @@ from .box import box_of
 from .evaluate import slow_keys
 from .infeasible import diagnose
 from ..optimiser.discretisation import discretisation, t_limit
-from .nlp import T_FLOOR
+from ..optimiser.nlp import T_FLOOR
 from .policy import (MAX_WIDEN, SLOW_YIELD_SAMPLES, WIDEN, YIELD_REFERENCE, check_keys,
                      max_corners)
 from .result import RobustResult, box_summary

@@ -59,7 +59,7 @@ from ..optimiser.interval import (ChebyshevFit, combine_function, END_C, free_la
                                   gas_nlp, interval_function, mapped, nlp_elements)
 from ..model import elements
 from ..optimiser import compiled
-from ..optimiser.nlp import check_linear_solver, group_bounds, PHASE_FLOOR
+from ..optimiser.nlp import check_linear_solver, group_bounds, stroke_bounds
 from ..optimiser.base import NLP
 from ..optimiser.ipopt import nlpsol, shooting_options, warm_solver
 from ..optimiser.run import Run
@@ -80,8 +80,6 @@ NP = len(PARAM_KEYS)
 
 #: NLP parameters before the time grid and the scenario maps
 PARAMS = ("theta0", "theta_closed", "weight_impact", "weight_peak_tip", *FIXED, "J_ref")
-#: smallest closing time a scenario may take (s)
-T_FLOOR = 1e-3
 #: per-scenario constraint groups, in order
 GROUPS = ("continuity", "theta_above_closed", "theta_dot_nonpositive", "peak_tip_speed",
           "holding_moment", "release_downwards", "epigraph", "opening_force", "self_close",
@@ -481,17 +479,11 @@ class ScenarioNLP(NLP):
         if self.robust_objective != "worst":
             lbx[self.nd] = ubx[self.nd] = 0.0
         for s in range(self.S):
-            i, j = self.offset(s), self.x_offset(s)
-            lbx[i] = max(o.closing_time_min if t_lo is None else t_lo[s], T_FLOOR)
-            ubx[i] = t_limit(cfg) if t_hi is None else t_hi[s]
-            if self.two_phase:
-                lbx[i + 1], ubx[i + 1] = PHASE_FLOOR, ubx[i]
-            th = slice(j, j + 2 * N, 2)
-            thd = slice(j + 1, j + 1 + 2 * N, 2)
-            lbx[th], ubx[th] = st.theta_closed, st.theta0
-            ubx[thd] = 0.0
-            lbx[j + 2 * (N - 1)] = ubx[j + 2 * (N - 1)] = st.theta_closed
-            lbx[j + 2 * N] = 0.0
+            i = self.offset(s)
+            stroke_bounds(lbx, ubx, st, i, i + 1 if self.two_phase else None,
+                          self.x_offset(s), N,
+                          o.closing_time_min if t_lo is None else t_lo[s],
+                          t_limit(cfg) if t_hi is None else t_hi[s])
         lo, hi = group_bounds(o)
         lo["epigraph"] = 0.0 if self.robust_objective == "worst" else -np.inf
         hi["epigraph"] = np.inf

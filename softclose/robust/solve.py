@@ -25,7 +25,8 @@ from ..problem import DESIGN_KEYS, objective, PARAM_COLUMNS, with_designs
 from .box import Box, box_of
 from .evaluate import evaluate, simulator, slow_keys
 from ..optimiser.discretisation import scenario_node_times, t_limit
-from .nlp import T_FLOOR, ScenarioNLP, model_config
+from .nlp import ScenarioNLP, model_config
+from ..optimiser.nlp import T_FLOOR
 from .scenario_cache import get_scenario_nlp
 from .policy import (AGREE_RTOL, CHECK_SAMPLES, MAX_REFINE, MAX_ROUNDS, REFINE_RTOL,
                      SLOW_CHECK_SAMPLES, t_end)
