@@ -107,3 +107,19 @@ def test_yield_at_several_temperatures_prints_the_api_result(capsys):
     assert code == (0 if res.meets_required else 3)
     assert cli_text(capsys, "yield", "--samples", "200", *sets) == \
         res.text("design (the defaults)")
+
+
+def test_report_prints_the_api_result(capsys, tmp_path):
+    """The report's JSON is the result's, and the list of the files the command wrote (it
+    always writes them: ``--out`` defaults to the working folder)."""
+    cfg = softclose.default_config()
+    res = softclose.report(cfg, samples=200)
+    code, payload = cli_json(capsys, "report", "--samples", "200", "--out", str(tmp_path))
+    api = res.to_json()
+    assert set(payload) - {"files"} <= set(api), sorted(set(payload) - set(api))
+    assert payload["message"] == api["message"] and payload["matrix"] == api["matrix"]
+    assert sorted(Path(f).name for f in payload["files"]) == ["report.html", "report.pdf"]
+    text = cli_text(capsys, "report", "--samples", "200", "--out", str(tmp_path))
+    strip = lambda s: [x for x in s.split("\n") if not x.startswith("  (")  # noqa: E731
+                       and not x.startswith("  wrote")]
+    assert strip(text) == strip(res.text())

@@ -392,7 +392,7 @@ def test_report_of_the_default_optimum_at_three_temperatures_takes_at_most_10_s(
 
 
 def test_the_optimisers_json_of_the_same_design_says_what_limits_it(tmp_path, cold_cfg):
-    from softclose.cli.report import optimiser_json
+    from softclose.signoff.build import optimiser_json
     design = {k: getattr(cold_cfg.design, k) for k in ("spring_k", "spring_rest_length",
                                                        "damper_c")}
     active = [{"name": "closing_time_max", "kind": "constraint", "bound": "upper",

@@ -4,8 +4,6 @@ report of a design."""
 from __future__ import annotations
 
 import argparse
-import json
-from pathlib import Path
 
 from .common import Outcome, add_common, add_out, prepare_out, wrote
 
@@ -48,48 +46,6 @@ def register(sub) -> None:
     p.set_defaults(run=run)
 
 
-#: the optimisers' JSON files that `--out D` writes next to D/design.toml
-OPTIMISER_FILES = ("robust.json", "optimise.json")
-
-
-def optimiser_json(config: str | None, cfg) -> dict | None:
-    """The optimiser's JSON next to a design file (``robust.json`` or ``optimise.json``) whose
-    design is cfg's, if there is one; it says which constraints are active and their dJ. A
-    file of another design (a folder written twice, a design edited since) is not used."""
-    if not config:
-        return None
-    for name in OPTIMISER_FILES:
-        try:
-            payload = json.loads((Path(config).parent / name).read_text())
-            design = payload["design"]
-            same = all(abs(float(v) - float(getattr(cfg.design, k))) <= 1e-12 * max(1.0, abs(v))
-                       for k, v in design.items())
-        except (OSError, ValueError, KeyError, TypeError, AttributeError):
-            continue
-        if same:
-            return payload
-    return None
-
-
-def format_report(payload: dict) -> str:
-    """The text form: the verdict, the sign-off matrix in short, the time."""
-    m = payload["matrix"]
-    lines = [payload["message"], "sign-off matrix (PASS/FAIL per column: "
-             + ", ".join(m["columns"]) + "):"]
-    for row in m["rows"]:
-        cells = m["cells"][row["name"]]
-        lines.append(f"  {row['name']:<19} " + "  ".join(
-            ("PASS" if cells[c]["ok"] else "FAIL") if c in cells else "  — "
-            for c in m["columns"]))
-    y = payload["yield"]
-    if "joint" in y:
-        j = y["joint"]
-        lines.append(f"  yield at every temperature {100 * j['yield']:.4g} % (95 % interval "
-                     f"{100 * j['yield_ci'][0]:.4g}–{100 * j['yield_ci'][1]:.4g} %)")
-    lines.append(f"  ({payload['time']:.2f} s)")
-    return "\n".join(lines)
-
-
 def run(cfg, args) -> Outcome:
     import time
 
@@ -100,6 +56,7 @@ def run(cfg, args) -> Outcome:
     out = prepare_out(args.out if args.out is not None else ".",
                       [f"report.{k}" for k in (("html", "pdf") if args.format == "both"
                                                 else (args.format,))])
+    from ..signoff.build import optimiser_json
     res = report(cfg, optimiser=optimiser_json(args.config, cfg), samples=args.samples)
     payload = res.to_json()
     t0 = time.perf_counter()
@@ -110,7 +67,7 @@ def run(cfg, args) -> Outcome:
     files = res.save_all(out, formats=kinds, paper=args.paper, name=args.config)
     payload["files"] = [str(f) for f in files]
     payload["timings"]["files"] = time.perf_counter() - t0
-    text = format_report(payload) + wrote(files)
+    text = res.text() + wrote(files)
     if skipped:
         payload["skipped"] = {"pdf": skipped}
         text += f"\n  report.pdf skipped: {skipped}"

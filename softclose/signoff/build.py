@@ -3,6 +3,9 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import math
 import time
 
@@ -216,4 +219,27 @@ def report(cfg: Config, *, optimiser: dict | None = None, samples: int | None = 
                  "hands": {T: strokes[T]["hand"] for T in temps}})
 
 
-__all__ = ["report"]
+#: the optimisers' JSON files that `--out D` writes next to D/design.toml
+OPTIMISER_FILES = ("robust.json", "optimise.json")
+
+
+def optimiser_json(config: str | None, cfg) -> dict | None:
+    """The optimiser's JSON next to a design file (``robust.json`` or ``optimise.json``) whose
+    design is cfg's, if there is one; it says which constraints are active and their dJ. A
+    file of another design (a folder written twice, a design edited since) is not used."""
+    if not config:
+        return None
+    for name in OPTIMISER_FILES:
+        try:
+            payload = json.loads((Path(config).parent / name).read_text())
+            design = payload["design"]
+            same = all(abs(float(v) - float(getattr(cfg.design, k))) <= 1e-12 * max(1.0, abs(v))
+                       for k, v in design.items())
+        except (OSError, ValueError, KeyError, TypeError, AttributeError):
+            continue
+        if same:
+            return payload
+    return None
+
+
+__all__ = ["report", "optimiser_json"]

@@ -56,6 +56,11 @@ class ReportResult:
         from .figures import report_figures
         return report_figures(self)
 
+    def text(self) -> str:
+        """What ``softclose report`` prints: the verdict, the sign-off matrix in short."""
+        from .text import report_text
+        return report_text(self.to_json())
+
     def html(self, figures: dict | None = None) -> str:
         """The report as one self-contained HTML page (figures inline as SVG, CSS inline,
         nothing fetched); ``figures``: :meth:`figures` already drawn."""

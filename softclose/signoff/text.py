@@ -194,5 +194,25 @@ def config_lines(r) -> tuple:
     return facts, r.config_toml
 
 
-__all__ = ["SECTIONS", "design_rows", "spring_rows", "damper_rows", "metric_rows", "stroke_rows",
+def report_text(payload: dict) -> str:
+    """What ``softclose report`` prints of a report's JSON: the verdict, the sign-off matrix
+    in short, the time."""
+    m = payload["matrix"]
+    lines = [payload["message"], "sign-off matrix (PASS/FAIL per column: "
+             + ", ".join(m["columns"]) + "):"]
+    for row in m["rows"]:
+        cells = m["cells"][row["name"]]
+        lines.append(f"  {row['name']:<19} " + "  ".join(
+            ("PASS" if cells[c]["ok"] else "FAIL") if c in cells else "  — "
+            for c in m["columns"]))
+    y = payload["yield"]
+    if "joint" in y:
+        j = y["joint"]
+        lines.append(f"  yield at every temperature {100 * j['yield']:.4g} % (95 % interval "
+                     f"{100 * j['yield_ci'][0]:.4g}–{100 * j['yield_ci'][1]:.4g} %)")
+    lines.append(f"  ({payload['time']:.2f} s)")
+    return "\n".join(lines)
+
+
+__all__ = ["SECTIONS", "report_text", "design_rows", "spring_rows", "damper_rows", "metric_rows", "stroke_rows",
            "matrix_cell", "yield_rows", "limit_lines", "config_lines"]
