@@ -356,6 +356,19 @@ def check(spring: CoilSpring, duty: Duty, *, grade: int = en15800.DEFAULT_GRADE,
     return _evaluate(spring, duty, grade, max_outer_d, min_inner_d)
 
 
+def _room_and_temperature(s, m, duty, max_outer_d, min_inner_d) -> list:
+    """The checks every spring kind shares: the room it fits (outer and inner diameter, when
+    given) and the duty's temperatures within its material's range."""
+    checks = []
+    if max_outer_d is not None:
+        checks.append(_check("outer_d", s.outer_d, max_outer_d, "<=", "m"))
+    if min_inner_d is not None:
+        checks.append(_check("inner_d", s.inner_d, min_inner_d, ">=", "m"))
+    checks.append(_check("temperature_min", min(duty.temperatures_c), m.t_min, ">=", "degC"))
+    checks.append(_check("temperature_max", max(duty.temperatures_c), m.t_max, "<=", "degC"))
+    return checks
+
+
 def _evaluate(spring, duty, grade, max_outer_d, min_inner_d) -> SpringCheck:
     if duty.kind == "extension":
         return _evaluate_extension(spring, duty, grade, max_outer_d, min_inner_d)
@@ -395,12 +408,7 @@ def _evaluate(spring, duty, grade, max_outer_d, min_inner_d) -> SpringCheck:
         _check("fatigue", tau_kh, tau_kh_allowed, "<=", "Pa"),
         _check("buckling", s2, s_k, "<", "m"),
     ]
-    if max_outer_d is not None:
-        checks.append(_check("outer_d", s.outer_d, max_outer_d, "<=", "m"))
-    if min_inner_d is not None:
-        checks.append(_check("inner_d", s.inner_d, min_inner_d, ">=", "m"))
-    checks.append(_check("temperature_min", min(duty.temperatures_c), m.t_min, ">=", "degC"))
-    checks.append(_check("temperature_max", max(duty.temperatures_c), m.t_max, "<=", "degC"))
+    checks += _room_and_temperature(s, m, duty, max_outer_d, min_inner_d)
     return SpringCheck(
         spring=s, duty=duty, grade=int(grade), max_outer_d=max_outer_d,
         min_inner_d=min_inner_d, rate=R, rate_deviation=dev, forces=forces,
@@ -455,12 +463,7 @@ def _evaluate_extension(spring, duty, grade, max_outer_d, min_inner_d) -> Spring
         _check("static", tau_2, tau_2_allowed, "<=", "Pa"),
         _check("fatigue", tau_kh, tau_kh_allowed, "<=", "Pa"),
     ]
-    if max_outer_d is not None:
-        checks.append(_check("outer_d", s.outer_d, max_outer_d, "<=", "m"))
-    if min_inner_d is not None:
-        checks.append(_check("inner_d", s.inner_d, min_inner_d, ">=", "m"))
-    checks.append(_check("temperature_min", min(duty.temperatures_c), m.t_min, ">=", "degC"))
-    checks.append(_check("temperature_max", max(duty.temperatures_c), m.t_max, "<=", "degC"))
+    checks += _room_and_temperature(s, m, duty, max_outer_d, min_inner_d)
     return SpringCheck(
         spring=s, duty=duty, grade=int(grade), max_outer_d=max_outer_d,
         min_inner_d=min_inner_d, rate=R, rate_deviation=dev, forces=forces,

@@ -64,15 +64,22 @@ def plot_spring(check):
                label="0.56 R_m: tau at the solid length below it")
     at.plot(mm, 1e-6 * c["stress_corrected"], color="tab:purple",
             label="tau_k, corrected (fatigue check)")
+    _fatigue_and_verdict(at, check)
+    return fig
+
+
+def _fatigue_and_verdict(at, check) -> None:
+    """On the stress axes ``at``: the corrected tau_k's largest value over the stroke for the
+    duty's cycles (the fatigue check's line), the legend, and the verdict as the title."""
+    st, d = check.stresses, check.duty
     upper = st["tau_k1"] + st["tau_kh_allowed"]
-    at.hlines(1e-6 * upper, 1e3 * d.longest_length, 1e3 * d.shortest_length,
+    at.hlines(1e-6 * upper, 1e3 * d.shortest_length, 1e3 * d.longest_length,
               color="tab:purple", ls="-.", lw=1.5,
               label=f"largest tau_k over the stroke for {d.cycles:.3g} cycles")
     at.set_ylabel("shear stress (MPa)")
     at.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     at.set_title("ok: every check met" if check.ok else
                  "fails: " + ", ".join(check.failed), fontsize=9)
-    return fig
 
 
 def _plot_extension(check):
@@ -100,14 +107,7 @@ def _plot_extension(check):
                label="0.45 R_m: tau at the longest working length below it")
     at.plot(mm, 1e-6 * c["stress_corrected"], color="tab:purple",
             label="tau_k, corrected (the body's fatigue)")
-    upper = st["tau_k1"] + st["tau_kh_allowed"]
-    at.hlines(1e-6 * upper, 1e3 * d.shortest_length, 1e3 * d.longest_length,
-              color="tab:purple", ls="-.", lw=1.5,
-              label=f"largest tau_k over the stroke for {d.cycles:.3g} cycles")
-    at.set_ylabel("shear stress (MPa)")
-    at.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    at.set_title("ok: every check met" if check.ok else
-                 "fails: " + ", ".join(check.failed), fontsize=9)
+    _fatigue_and_verdict(at, check)
     return fig
 
 
