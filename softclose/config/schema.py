@@ -12,11 +12,11 @@ tables of the docs (:mod:`softclose.config.docs`).
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 from ..coil_spring.materials import DEFAULT_MATERIAL, MATERIALS
 from ..model import elements
+from ..model.resolved import StrokeEnds
 from ..model.keys import Key
 
 INTEGRATORS = ("rk4", "euler_cromer", "gauss4", "radau5")
@@ -286,15 +286,10 @@ class Section:
 
 
 class _StrokeAngles:
+    """The stroke's angles in radians, as the resolved stroke gives them."""
     __slots__ = ()
-
-    @property
-    def theta0(self) -> float:
-        return math.radians(self.theta0_deg)
-
-    @property
-    def theta_closed(self) -> float:
-        return math.radians(self.theta_closed_deg)
+    theta0 = StrokeEnds.theta0
+    theta_closed = StrokeEnds.theta_closed
 
 
 def _section_type(section: str):

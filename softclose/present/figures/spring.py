@@ -38,13 +38,10 @@ def plot_spring(check):
     where there is one, is marked."""
     if check.kind == "extension":
         return _plot_extension(check)
-    c = spring_curves(check)
+    c, fig, (af, at) = _force_and_stress_axes(check)
     s, d, st = check.spring, check.duty, check.stresses
     mm = 1e3 * c["length"]
-    fig, (af, at) = plt.subplots(1, 2, figsize=(11.0, 3.6), layout="constrained")
     for ax in (af, at):
-        ax.axvspan(1e3 * d.shortest_length, 1e3 * d.longest_length, color="tab:green",
-                   alpha=0.15, label="working range L1..L2")
         ax.axvline(1e3 * s.min_working_length, color="0.4", ls=":", lw=1,
                    label="shortest allowed length L_n")
         ax.set_xlabel("spring length (mm)")
@@ -68,6 +65,18 @@ def plot_spring(check):
     return fig
 
 
+def _force_and_stress_axes(check):
+    """The curves of ``check``'s spring and a figure of its force (left) and stresses (right)
+    over its length, the working range L1..L2 shaded on both."""
+    c = spring_curves(check)
+    d = check.duty
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 3.6), layout="constrained")
+    for ax in axes:
+        ax.axvspan(1e3 * d.shortest_length, 1e3 * d.longest_length, color="tab:green",
+                   alpha=0.15, label="working range L1..L2")
+    return c, fig, axes
+
+
 def _fatigue_and_verdict(at, check) -> None:
     """On the stress axes ``at``: the corrected tau_k's largest value over the stroke for the
     duty's cycles (the fatigue check's line), the legend, and the verdict as the title."""
@@ -86,13 +95,10 @@ def _plot_extension(check):
     """An extension spring's force and stresses over its length (the free length on the
     left): tau at the longest working length below 0.45 R_m (static), the corrected tau_k's
     upper value over the stroke below the Goodman line's (the body's fatigue)."""
-    c = spring_curves(check)
+    c, fig, (af, at) = _force_and_stress_axes(check)
     s, d, st = check.spring, check.duty, check.stresses
     mm = 1e3 * c["length"]
-    fig, (af, at) = plt.subplots(1, 2, figsize=(11.0, 3.6), layout="constrained")
     for ax in (af, at):
-        ax.axvspan(1e3 * d.shortest_length, 1e3 * d.longest_length, color="tab:green",
-                   alpha=0.15, label="working range L1..L2")
         ax.set_xlabel("spring length (mm)")
         ax.set_xlim(mm[0], mm[-1])
     af.plot(mm, c["force"], color="tab:blue")
