@@ -205,8 +205,6 @@ def write_outputs(out: Path, csv_name: str, frame, fig_name: str, plot) -> list[
     return [table, save_figure(plot(), Path(out) / fig_name)]
 
 
-
-
 def metrics_line(m: dict | None, J: float | None) -> str:
     """The metrics a design file's header quotes (one line)."""
     if not m or not m.get("closed"):
