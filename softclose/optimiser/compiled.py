@@ -2,7 +2,10 @@
 built once per structure, in the foreground, with a line on stderr saying what is built
 (:func:`compiling`, ``softclose prepare``), loaded by ``nlpsol`` from the library when the cache
 holds one. A library is keyed by the NLP's structure, the C compiler (its ``--version``) and
-the flags; a damaged or foreign one is dropped and built again."""
+the flags; a damaged or foreign one is dropped and built again. Two processes that would
+compile one NLP do not both compile it: the second waits for the first's build
+(:func:`build_lock`) and loads its library. The compiler runs in a process group of its own
+that ends with the command (:func:`softclose.buildcache.run_compiler`)."""
 
 from __future__ import annotations
 
