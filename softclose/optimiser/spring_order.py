@@ -17,6 +17,9 @@ its free length ``spring_rest_length`` (its body closed: the model's l0), its in
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from pathlib import Path
+
 import numpy as np
 
 from ..errors import ConfigError
@@ -125,4 +128,98 @@ def spring_order(cfg, duty: Duty | None = None, rank: str = "mass"):
                   **space)
 
 
-__all__ = ["working_lengths", "spring_duty", "spring_order", "GRID"]
+@dataclass(frozen=True)
+class SpringOrder:
+    """The design's spring made to order (``softclose spring``): the spring checked (a
+    :class:`~softclose.coil_spring.SpringCheck`, when the config gives its wire, coil diameter
+    and coils) or designed (a :class:`~softclose.coil_spring.SpringDesign`), for ``duty``."""
+
+    result: object
+    duty: object
+
+    @property
+    def checked(self) -> bool:
+        from ..coil_spring import SpringCheck
+        return isinstance(self.result, SpringCheck)
+
+    @property
+    def success(self) -> bool:
+        return bool(self.result.ok if self.checked else self.result.success)
+
+    @property
+    def best(self):
+        """The spring's checks: the one checked, or the best design (None: none found)."""
+        return self.result if self.checked else self.result.best
+
+    @property
+    def message(self) -> str:
+        return self.to_json()["message"]
+
+    def to_json(self) -> dict:
+        from ..jsonio import jsonable
+        payload = self.result.to_json()
+        if self.checked:
+            payload.update(mode="check", success=self.success, message=(
+                "the spring meets every check" if self.success else
+                "the spring fails " + "; ".join(_failed(c) for c in payload["checks"]
+                                                if not c["ok"])))
+        else:
+            payload["mode"] = "design"
+            if not self.success:
+                payload["message"] += MORE_ROOM[self.duty.kind == "extension"]
+        payload["duty"] = self.duty.to_json()
+        return jsonable(payload)
+
+    def text(self) -> str:
+        """What ``softclose spring`` prints."""
+        from .spring_text import spring_text
+        return spring_text(self.to_json())
+
+    def save(self, folder, figure_format: str = "png", figure_style: str | None = None
+             ) -> list[Path]:
+        """``spring.json``, the checks and the candidates as CSV and the figure of the
+        spring's force and stress over its length in ``folder``; the paths."""
+        import json
+
+        from ..files import write_text, write_with
+        from ..present.figures import save
+        out = Path(folder)
+        files = [write_text(out / "spring.json",
+                            json.dumps(self.to_json(), indent=1, allow_nan=False) + "\n")]
+        best = self.best
+        if best is not None:
+            files.append(write_with(out / "spring_checks.csv",
+                                    lambda p: best.to_frame().to_csv(p, index=False)))
+        if not self.checked:
+            files.append(write_with(out / "spring_candidates.csv",
+                                    lambda p: self.result.to_frame().to_csv(p, index=False)))
+        if best is not None:
+            from ..present.figures.spring import plot_spring
+            files.append(save(plot_spring(best), out / f"spring.{figure_format}", figure_style))
+        return files
+
+
+#: what to change when no spring meets every check: (a compression spring, an extension one)
+MORE_ROOM = (" (more room: spring.max_outer_d, spring.min_inner_d; fewer spring.cycles; "
+             "shot-peened wire; another free length or rate of the design)",
+             " (more room: spring.max_outer_d, spring.min_inner_d; fewer spring.cycles; a "
+             "longer free length, a stiffer rate or a lower initial tension of the design)")
+
+
+def _failed(c: dict) -> str:
+    """A failed check in words: 'buckling: 26.99 mm, limit < 13.62 mm'."""
+    scale, shown = {"m": (1e3, "mm"), "Pa": (1e-6, "MPa"), "1": (100.0, "%")}.get(
+        c["unit"], (1.0, c["unit"]))
+    return (f"{c['name']}: {c['value'] * scale:.4g} {shown}, limit {c['relation']} "
+            f"{c['limit'] * scale:.4g} {shown}")
+
+
+def order_spring(cfg) -> SpringOrder:
+    """The spring of ``cfg``'s design made to order: checked when the config gives its
+    wire, coil diameter and coils, else designed (:func:`spring_order`), for its duty
+    (:func:`spring_duty`)."""
+    duty = spring_duty(cfg)
+    return SpringOrder(spring_order(cfg, duty), duty)
+
+
+__all__ = ["working_lengths", "spring_duty", "spring_order", "order_spring", "SpringOrder", "GRID"]
