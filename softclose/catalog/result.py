@@ -80,6 +80,13 @@ class SelectResult(Displayed):
     def best(self) -> dict | None:
         return self.ranking[0] if self.ranking else None
 
+    def save(self, folder, cfg, figure_format: str = "png", figure_style: str | None = None
+             ) -> list:
+        """The ranking in ``folder`` (what ``softclose select --out`` writes): select.csv,
+        select.json, its figure and the best pairs' configs made from ``cfg``; the paths."""
+        from .folder import save_selection
+        return save_selection(self, folder, cfg, figure_format, figure_style)
+
     def text(self, top: int = 15) -> str:
         """What ``softclose select`` prints (the ``top`` pairs of the ranking)."""
         from .text import select_text

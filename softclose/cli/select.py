@@ -14,11 +14,8 @@ Ctrl-C (the pairs screened so far are ranked and written).
 from __future__ import annotations
 
 import argparse
-import json
-
-from .common import (Outcome, add_common, add_out, figures, interactive, prepare_out,
-                     save_figure, wrote)
-from ..files import write_text, write_with
+from .common import (FIGURES, Outcome, add_common, add_out, figures, interactive,
+                     prepare_out, wrote)
 
 DESCRIPTION = """\
 Rank the springs one can buy (extension, compression, gas strut) -- with every damper of
@@ -110,31 +107,6 @@ def _check(args) -> None:
         raise ConfigError(f"--verify {args.verify}: must be non-negative")
 
 
-#: the ranked pairs whose config ``--out`` writes (the best first)
-PAIR_CONFIGS = 10
-
-
-def _pair_configs(cfg, res, out) -> list:
-    """The best pairs' configs, ``pairs/01_<spring>_<damper>.toml`` (softclose report
-    --config signs one off)."""
-    import re
-    from ..catalog import pair_config
-    from ..config import to_toml
-    if not res.ranking:
-        return []
-    folder = out / "pairs"
-    folder.mkdir(exist_ok=True)
-    files = []
-    for rank, e in enumerate(res.ranking[:PAIR_CONFIGS], 1):
-        name = re.sub(r"[^\w.-]+", "-", f"{rank:02d}_{e['spring']}_{e['damper']}")
-        path = folder / f"{name}.toml"
-        write_text(path, to_toml(pair_config(cfg, e), header=(
-            f"softclose select: pair {rank}, {e['spring']} + {e['damper']}: its parts and "
-            "their own tolerances")))
-        files.append(path)
-    return files
-
-
 def run(cfg, args) -> Outcome:
     from ..catalog import read_dampers, read_springs, select
     _check(args)
@@ -153,16 +125,7 @@ def run(cfg, args) -> Outcome:
     payload = res.to_json()
     files = []
     if out is not None:
-        from ..jsonio import jsonable
-        path = out / "select.csv"
-        write_with(path, lambda p: res.to_frame().to_csv(p, index=False))
-        files.append(path)
-        path = out / "select.json"
-        write_text(path, json.dumps(jsonable(payload), indent=1, allow_nan=False))
-        files.append(path)
-        if res.ranking and not res.interrupted:
-            files.append(save_figure(res.plot(), out / "select.png"))
-        files += _pair_configs(cfg, res, out)
+        files = res.save(out, cfg, FIGURES["format"], FIGURES["style"])
         payload["files"] = [str(f) for f in files]
     code = 130 if res.interrupted else (0 if res.success else 3)
     return Outcome(payload, res.text() + wrote(files), code, tuple(files),
