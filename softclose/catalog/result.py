@@ -1,11 +1,15 @@
-"""The result of ``select``: the ranked pairs, each with its verdicts and why it fails."""
+"""The result of ``select``: the ranked pairs, each with its verdicts and why it fails, and
+the files ``select --out`` writes of it."""
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from ..present.display import Display, Displayed, Table, num, percent
+from ..files import write_text, write_with
 from ..jsonio import jsonable
 
 
@@ -84,7 +88,6 @@ class SelectResult(Displayed):
              ) -> list:
         """The ranking in ``folder`` (what ``softclose select --out`` writes): select.csv,
         select.json, its figure and the best pairs' configs made from ``cfg``; the paths."""
-        from .folder import save_selection
         return save_selection(self, folder, cfg, figure_format, figure_style)
 
     def text(self, top: int = 15) -> str:
@@ -148,3 +151,44 @@ class SelectResult(Displayed):
         return Display("SelectResult: catalog parts ranked over their tolerance boxes",
                        self.success, self.message, tuple(facts), (table,),
                        tuple(self.warnings[:5]))
+
+
+def save_selection(res, folder, cfg, figure_format: str = "png",
+                   figure_style: str | None = None) -> list[Path]:
+    """``select.csv``, ``select.json``, ``select.png`` (a finished ranking) and the best pairs'
+    configs (``pairs/``, made from ``cfg``, the config the catalogs were screened for) in
+    ``folder``; the paths."""
+    from ..present.figures import save
+    out = Path(folder)
+    files = [write_with(out / "select.csv", lambda p: res.to_frame().to_csv(p, index=False)),
+             write_text(out / "select.json",
+                        json.dumps(jsonable(res.to_json()), indent=1, allow_nan=False))]
+    if res.ranking and not res.interrupted:
+        files.append(save(res.plot(), out / f"select.{figure_format}", figure_style))
+    return files + save_pair_configs(res, cfg, out)
+
+
+#: the ranked pairs whose config ``--out`` writes (the best first)
+PAIR_CONFIGS = 10
+
+
+def save_pair_configs(res, cfg, out) -> list:
+    """The best pairs' configs, ``pairs/01_<spring>_<damper>.toml`` (softclose report
+    --config signs one off)."""
+    import re
+    from ..config import to_toml
+    if not res.ranking:
+        return []
+    folder = out / "pairs"
+    folder.mkdir(exist_ok=True)
+    files = []
+    for rank, e in enumerate(res.ranking[:PAIR_CONFIGS], 1):
+        name = re.sub(r"[^\w.-]+", "-", f"{rank:02d}_{e['spring']}_{e['damper']}")
+        path = folder / f"{name}.toml"
+        write_text(path, to_toml(pair_config(cfg, e), header=(
+            f"softclose select: pair {rank}, {e['spring']} + {e['damper']}: its parts and "
+            "their own tolerances")))
+        files.append(path)
+    return files
+
+
