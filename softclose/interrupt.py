@@ -189,6 +189,17 @@ def _handler(signum, frame):
     # KeyboardInterrupt is raised when the call returns (:func:`solving`)
 
 
+def handle_until_exit() -> None:
+    """For a program that runs one guarded command and exits (the command line): SIGINT and
+    SIGTERM go to the guard's handler from now on, also once the command has ended, so that
+    a signal landing while the program prints its outcome or exits is ignored -- the exit
+    code stays the command's -- instead of killing it or raising a traceback there."""
+    if threading.current_thread() is threading.main_thread():
+        _quiet.clear()
+        signal.signal(signal.SIGINT, _handler)
+        signal.signal(signal.SIGTERM, _handler)
+
+
 @contextlib.contextmanager
 def guard():
     """Run a command so that Ctrl-C ends it even inside a compiled solver (module docstring).
@@ -217,4 +228,4 @@ def guard():
 
 
 __all__ = ["guard", "interrupted", "check", "solving", "ipopt_options", "stop_requested",
-           "sigint_handler", "signal_name", "line_open"]
+           "sigint_handler", "signal_name", "line_open", "handle_until_exit"]

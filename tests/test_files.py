@@ -343,3 +343,23 @@ def test_the_reliability_section_quotes_the_reader(tmp_path, monkeypatch, capsys
     said = capsys.readouterr().err.strip().removeprefix("softclose: error: ")
     docs = " ".join((ROOT / "docs" / "internals.md").read_text().split())
     assert f"e.g. `{said}`" in docs
+
+
+def test_a_signal_after_the_command_leaves_its_exit_code():
+    """The command line's process: SIGTERM or SIGINT landing once the command has ended
+    (while it prints or exits) is ignored -- no kill, no traceback, the command's code."""
+    script = textwrap.dedent(f"""
+        import os, signal, sys
+        sys.path.insert(0, {str(ROOT)!r})
+        from softclose import interrupt
+        interrupt.handle_until_exit()
+        with interrupt.guard():
+            pass
+        os.kill(os.getpid(), signal.SIGTERM)
+        os.kill(os.getpid(), signal.SIGINT)
+        print("still here")
+        sys.exit(3)
+    """)
+    r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                       timeout=60)
+    assert (r.returncode, r.stdout, r.stderr) == (3, "still here\n", "")

@@ -124,6 +124,9 @@ def _interrupted() -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
+    if argv is None:            # the program: a signal after the command changes nothing
+        from ..interrupt import handle_until_exit
+        handle_until_exit()
     argv = sys.argv[1:] if argv is None else list(argv)
     return _main(argv)
 
