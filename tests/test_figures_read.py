@@ -5,6 +5,8 @@ grid, the animation shows the default stroke in at least 60 frames, and the benc
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 
@@ -184,4 +186,7 @@ def test_bench_load_is_the_other_processes_not_the_bench_s_own():
         p.kill()
         p.wait()
     assert own.value is not None and other.value is not None
+    cores = os.cpu_count() or 1
+    if own.value > cores - 1.2:     # no free core for the spinner: nothing to tell apart
+        pytest.skip(f"the machine is busy ({own.value:.2f} of {cores} cores used by others)")
     assert other.value - own.value >= 0.4, (own.value, other.value)
