@@ -48,18 +48,22 @@ def _fallback_name() -> str:
 
 def _compile(out: Path) -> None:
     """Compile ``_kernel.c`` into ``out`` (NumericalError, one line, when it cannot be)."""
-    import subprocess
     import sysconfig
+
+    from ... import buildcache
     cc = os.environ.get("CC") or "cc"
     inc = sysconfig.get_paths()["include"]
     cmd = [cc, *KERNEL_CFLAGS, f"-I{inc}", str(SOURCE), "-o", str(out), "-lm"]
+    # in a process group of its own that ends with this process (an interrupt, a signal)
     try:
-        subprocess.run(cmd, check=True, capture_output=True, stdin=subprocess.DEVNULL)
-    except (OSError, subprocess.CalledProcessError) as exc:
+        code, said = buildcache.run_compiler(cmd, Path(out).parent)
+    except OSError as exc:
+        code, said = -1, str(exc)
+    if code != 0:
         raise NumericalError(
             "the stroke kernel is not built and could not be compiled "
-            f"({exc}); reinstall softclose with `pip install .` on a machine with a C compiler"
-        ) from None
+            f"({said.strip()[-300:] or f'exit {code}'}); reinstall softclose with "
+            "`pip install .` on a machine with a C compiler")
 
 
 def _compile_fallback() -> tuple[Path, bool]:
