@@ -33,7 +33,8 @@ from .config.free import config_value
 from .config.load import STEP_BUDGET, TRAJECTORY_BUDGET
 from .config.schema import KEYS, RANGES
 from .model import elements
-from .model.elements import ELEMENTS, PARAM_DEFAULTS, PARAM_NAMES, PARAMS, as_params
+from .model.elements import ELEMENTS, PARAM_NAMES, PARAMS
+from .model.elements import PARAM_DEFAULTS, as_params  # noqa: F401  (re-exported: their home is the element registry)
 from .model.resolved import (Lid, LidCase, Mounting, SolverSettings, StrokeEnds,
                              Temperatures)
 
