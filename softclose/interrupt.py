@@ -30,6 +30,7 @@ import contextlib
 import signal
 import sys
 import threading
+from typing import NoReturn
 
 _pending = threading.Event()     # Ctrl-C was pressed under the current guard
 _quiet = threading.Event()       # the guarded command has ended
@@ -200,6 +201,29 @@ def handle_until_exit() -> None:
         signal.signal(signal.SIGTERM, _handler)
 
 
+def exit_program(code: int) -> NoReturn:
+    """End the program (the command line) with exit code ``code``, whatever was interrupted.
+
+    CPython remembers a KeyboardInterrupt raised inside code that ``exec()`` or ``eval()`` ran
+    from a string -- the methods a dataclass generates while a module is imported -- even when
+    the command caught it, and then ends the program by SIGINT instead of with its exit code
+    (a Ctrl-C during the first imports exited -2, not 130). So the command line ends here: the
+    exit functions run (``atexit``, as at a normal exit), the streams are flushed, and the
+    process exits with ``code``. The command has ended every thread and process it started.
+    """
+    import atexit
+    import os
+    try:
+        atexit._run_exitfuncs()
+    finally:
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except Exception:       # a closed pipe: nothing more can be said there
+                pass
+        os._exit(int(code))
+
+
 @contextlib.contextmanager
 def guard():
     """Run a command so that Ctrl-C ends it even inside a compiled solver (module docstring).
@@ -228,4 +252,4 @@ def guard():
 
 
 __all__ = ["guard", "interrupted", "check", "solving", "ipopt_options", "stop_requested",
-           "sigint_handler", "signal_name", "line_open", "handle_until_exit"]
+           "sigint_handler", "signal_name", "line_open", "handle_until_exit", "exit_program"]

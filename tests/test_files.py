@@ -363,3 +363,25 @@ def test_a_signal_after_the_command_leaves_its_exit_code():
     r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
                        timeout=60)
     assert (r.returncode, r.stdout, r.stderr) == (3, "still here\n", "")
+
+
+@pytest.mark.parametrize("ends_with, code", [("sys.exit(130)", -signal.SIGINT),
+                                             ("interrupt.exit_program(130)", 130)])
+def test_a_ctrl_c_caught_during_an_import_leaves_exit_code_130(ends_with, code, tmp_path):
+    """CPython ends a program run with ``python -m`` by SIGINT (-2) when a KeyboardInterrupt
+    was raised inside code that exec() ran from a string (a dataclass's generated methods
+    while a module is imported), even though the program caught it; the command line
+    therefore ends through interrupt.exit_program, which keeps the command's code (130)."""
+    (tmp_path / "program.py").write_text(textwrap.dedent(f"""
+        import sys
+        sys.path.insert(0, {str(ROOT)!r})
+        from softclose import interrupt
+        try:
+            exec("raise KeyboardInterrupt")
+        except KeyboardInterrupt:
+            print("caught")
+        {ends_with}
+    """))
+    r = subprocess.run([sys.executable, "-m", "program"], capture_output=True, text=True,
+                       timeout=60, env={**os.environ, "PYTHONPATH": str(tmp_path)})
+    assert (r.returncode, r.stdout) == (code, "caught\n"), r.stderr

@@ -124,11 +124,15 @@ def _interrupted() -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    if argv is None:            # the program: a signal after the command changes nothing
-        from ..interrupt import handle_until_exit
-        handle_until_exit()
-    argv = sys.argv[1:] if argv is None else list(argv)
-    return _main(argv)
+    """Run one command: ``argv`` (a list) returns its exit code; with no ``argv`` this is the
+    program (``softclose ...``): it reads ``sys.argv`` and ends the process with that code
+    (:func:`softclose.interrupt.exit_program`), and a signal after the command changes
+    nothing."""
+    if argv is not None:
+        return _main(list(argv))
+    from ..interrupt import exit_program, handle_until_exit
+    handle_until_exit()
+    exit_program(_main(sys.argv[1:]))
 
 
 def free_overrides(args) -> list[str]:
