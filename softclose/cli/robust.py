@@ -10,8 +10,7 @@ from __future__ import annotations
 
 import argparse
 
-from .common import (Outcome, add_common, add_out, figures, prepare_out, write_outputs,
-                     wrote)
+from .common import FIGURES, Outcome, add_common, add_out, figures, prepare_out, wrote
 
 
 YIELD = """\
@@ -92,8 +91,7 @@ def run_yield(cfg, args) -> Outcome:
     payload = r.to_json()
     files = []
     if out is not None:
-        files = write_outputs(out, "yield_samples.csv", r.to_frame(),
-                              "yield_histograms.png", r.plot)
+        files = r.save(out, FIGURES["format"], FIGURES["style"])
         payload["files"] = [str(f) for f in files]
     code = 0 if r.success else 3
     return Outcome(payload, r.text(_source(args)) + wrote(files), code, tuple(files),
@@ -108,9 +106,7 @@ def _yield_by_temperature(cfg, args, seed, out) -> Outcome:
     payload = t.to_json()
     files = []
     if out is not None:
-        for T, r in zip(t.temperatures, t.results):
-            files += write_outputs(out, f"yield_samples_{T:g}C.csv", r.to_frame(),
-                                   f"yield_histograms_{T:g}C.png", r.plot)
+        files = t.save(out, FIGURES["format"], FIGURES["style"])
         payload["files"] = [str(f) for f in files]
     return Outcome(payload, t.text(_source(args)) + wrote(files), 0 if t.meets_required else 3,
                    tuple(files), error=t.message or None)
@@ -125,7 +121,7 @@ def run_sensitivity(cfg, args) -> Outcome:
     payload = r.to_json()
     files = []
     if out is not None:
-        files = write_outputs(out, "sobol.csv", r.to_frame(), "sobol.png", r.plot)
+        files = r.save(out, FIGURES["format"], FIGURES["style"])
         payload["files"] = [str(f) for f in files]
     return Outcome(payload, r.text(_source(args)) + wrote(files), 0, tuple(files))
 
@@ -140,7 +136,6 @@ def robust_outcome(cfg, args) -> Outcome:
     payload = res.to_json()
     files = []
     if out is not None:
-        from .common import FIGURES
         files = res.save(out, FIGURES["format"], FIGURES["style"])
         payload["files"] = [str(f) for f in files]
     return Outcome(payload, res.text() + wrote(files), 0 if res.success else 3,
