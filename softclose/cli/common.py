@@ -157,5 +157,16 @@ def interactive(args) -> bool:
     return (not getattr(args, "json", False)) and sys.stderr.isatty()
 
 
+def saved(res, out: Path | None, payload: dict, *args) -> list[Path]:
+    """With ``--out``: ``res.save(out, *args, figure format, figure style)`` (in this
+    command's figure options), its files also listed in ``payload["files"]``; without: no
+    file."""
+    if out is None:
+        return []
+    files = res.save(out, *args, FIGURES["format"], FIGURES["style"])
+    payload["files"] = [str(f) for f in files]
+    return files
+
+
 def wrote(files) -> str:
     return ("\n  wrote " + ", ".join(str(f) for f in files)) if files else ""

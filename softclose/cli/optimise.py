@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 
 from .common import (FIGURES, Outcome, add_common, add_out, add_slow_motion,
-                     figures, interactive, prepare_out, slow_motion, stroke_files, wrote)
+                     figures, interactive, prepare_out, saved, slow_motion, stroke_files, wrote)
 from ..config.write import DESIGN_FILE
 from ..problem import PARETO_DEFAULT
 
@@ -88,10 +88,7 @@ def run_optimise(cfg, args) -> Outcome:
     from ..optimiser import optimise
     res = optimise(cfg, progress=interactive(args))
     payload = res.to_json()
-    files = []
-    if out is not None and res.design is not None:
-        files = res.save(out, factor, FIGURES["format"], FIGURES["style"])
-        payload["files"] = [str(f) for f in files]
+    files = saved(res, out if res.design is not None else None, payload, factor)
     text = res.text() + wrote(files)
     return Outcome(payload, text, 0 if res.success else 3, tuple(files),
                    None if res.success else (res.message or f"no optimum ({res.status})"))
