@@ -142,6 +142,16 @@ def assert_formulations_agree(model, absolute, p, states) -> float:
     return red
 
 
+def energy_rate(model):
+    """A CasADi Function of ([theta, theta'], p): (dE/dt along the model's equation of motion,
+    by automatic differentiation; the dampers' power)."""
+    import casadi as ca
+    from softclose.problem import PARAM_KEYS
+    x, ps = ca.SX.sym("x", 2), ca.SX.sym("p", len(PARAM_KEYS))
+    E = model.energy_fn(x, ps)
+    return ca.Function("r", [x, ps], [ca.jtimes(E, x, model.ode(x, ps)), model.power_fn(x, ps)])
+
+
 def run_cli(*argv) -> tuple[int, str]:
     """(exit code, stdout) of ``softclose ARGV`` run in this process."""
     import io

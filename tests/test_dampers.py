@@ -11,18 +11,17 @@ not, and the kernel and the reference agree on both.
 
 from __future__ import annotations
 
-import casadi as ca
 import numpy as np
 import pytest
 
 from softclose.config import default_config
 from softclose.model.lid import LidModel
-from softclose.problem import PARAM_KEYS, TARGETS
+from softclose.problem import TARGETS
 from softclose.simulation.reference import Reference
 from softclose.simulation.simulator import Simulator
 from softclose.validation.textbook.lid_absolute import read_parameters
 
-from conftest import assert_formulations_agree, uniform_states
+from conftest import assert_formulations_agree, energy_rate, uniform_states
 
 PIVOTS = ("O", "B", "A", "C")
 
@@ -53,9 +52,7 @@ def test_three_formulations_agree_for_a_damper_at_each_pivot(case):
 
 def test_energy_falls_by_the_damper_power(case):
     _, cfg, model = case
-    x, ps = ca.SX.sym("x", 2), ca.SX.sym("p", len(PARAM_KEYS))
-    E = model.energy_fn(x, ps)
-    rate = ca.Function("r", [x, ps], [ca.jtimes(E, x, model.ode(x, ps)), model.power_fn(x, ps)])
+    rate = energy_rate(model)
     p = model.params()
     for th, thd in ((0.05, -1.0), (0.2, -4.0)):
         dEdt, P = (float(v) for v in rate([th, thd], p))

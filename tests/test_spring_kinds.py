@@ -13,12 +13,11 @@ from __future__ import annotations
 
 import math
 
-import casadi as ca
 import numpy as np
 import pytest
 
 import softclose
-from conftest import (assert_formulations_agree, assert_potential, np_closure,
+from conftest import (assert_formulations_agree, assert_potential, energy_rate, np_closure,
                       uniform_states)
 from softclose.cli import main
 from softclose.config import default_config
@@ -85,9 +84,7 @@ def test_potential_and_holding_moment_against_an_independent_closure(case):
 
 def test_energy_balance_and_the_reference(case):
     _, cfg, model = case
-    x, ps = ca.SX.sym("x", 2), ca.SX.sym("p", len(PARAM_KEYS))
-    E = model.energy_fn(x, ps)
-    rate = ca.Function("r", [x, ps], [ca.jtimes(E, x, model.ode(x, ps)), model.power_fn(x, ps)])
+    rate = energy_rate(model)
     p = model.params()
     for th, thd in ((0.05, -1.0), (0.2, -3.0), (0.3, 1.0)):
         dEdt, P = (float(v) for v in rate([th, thd], p))

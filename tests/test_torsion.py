@@ -9,12 +9,11 @@ from __future__ import annotations
 
 import math
 
-import casadi as ca
 import numpy as np
 import pytest
 
 import softclose
-from conftest import (assert_formulations_agree, assert_potential, np_closure,
+from conftest import (assert_formulations_agree, assert_potential, energy_rate, np_closure,
                       uniform_states)
 from softclose.simulation.kernel import binding
 from softclose.config import default_config
@@ -66,10 +65,7 @@ def test_energy_rate_equals_damper_power_with_torsion(case):
     """dE/dt along the equation of motion (AD) is the dampers' power: the torsion spring's
     potential is the integral of its moment."""
     _, cfg, model = case
-    x, ps = ca.SX.sym("x", 2), ca.SX.sym("p", len(PARAM_KEYS))
-    E = model.energy_fn(x, ps)
-    rate = ca.Function("r", [x, ps], [ca.jtimes(E, x, model.ode(x, ps)),
-                                      model.power_fn(x, ps)])
+    rate = energy_rate(model)
     p = model.params()
     for th, thd in _states(model, 10, seed=4):
         dEdt, P = (float(v) for v in rate([th, thd], p))
