@@ -506,22 +506,16 @@ _STRUCTURES: dict = {}
 def get_scenario_structure(key: tuple) -> ScenarioStructure:
     """The ScenarioStructure of ``key`` (:attr:`ScenarioNLP.structure_key`), built once:
     its compiled library when ``softclose prepare`` built one, else symbolically."""
-    if key not in _STRUCTURES:
-        from .. import buildcache
-        disk = buildcache.key_of("scenario-nlp", key)
-        (S, els, names, degree, nodes, substeps, M_engaged, free, place, objective, opening,
-         keep_out, hessian, linear_solver, max_iter, tol, self_close, held) = key
+    (S, els, names, degree, nodes, substeps, M_engaged, free, place, objective, opening,
+     keep_out, hessian, linear_solver, max_iter, tol, self_close, held) = key
 
-        def make(library=None, meta=None):
-            return ScenarioStructure(S, tuple(elements.BY_NAME[e] for e in els), names,
-                                     degree, nodes, substeps, M_engaged, free, place, objective,
-                                     opening, keep_out, hessian, linear_solver, max_iter,
-                                     tol, library=library, meta=meta, self_close=self_close,
-                                     held=held)
-        what = (f"of the robust optimiser ({S} scenarios, {nodes} x {substeps} RK4 steps, "
-                f"{objective} case{', the points free' if place else ''})")
-        st = compiled.load_or_build(disk, make, make, what, compiled.SCENARIO_CFLAGS) \
-            if not place else compiled.build_interpreted(make, what)   # (.prepared)
-        st.key = disk
-        _STRUCTURES[key] = st
-    return _STRUCTURES[key]
+    def make(library=None, meta=None):
+        return ScenarioStructure(S, tuple(elements.BY_NAME[e] for e in els), names, degree,
+                                 nodes, substeps, M_engaged, free, place, objective, opening,
+                                 keep_out, hessian, linear_solver, max_iter, tol,
+                                 library=library, meta=meta, self_close=self_close, held=held)
+    what = (f"of the robust optimiser ({S} scenarios, {nodes} x {substeps} RK4 steps, "
+            f"{objective} case{', the points free' if place else ''})")
+    # (the points free: never compiled, ScenarioStructure.prepared)
+    return compiled.kept_structure(_STRUCTURES, key, "scenario-nlp", make, make, what,
+                                   compiled.SCENARIO_CFLAGS, compile_it=not place)
