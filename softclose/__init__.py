@@ -67,19 +67,21 @@ def simulate(cfg: Config, trajectory: bool = False, hand_force: bool = False) ->
 
     Returns a :class:`~softclose.simulation.stroke.StrokeResult`: the metrics, each fixed-step
     one with its estimated distance from the converged answer (``accuracy``), and with
-    ``trajectory=True`` the time histories (``.plot()``, ``.trajectory_frame()``). With
-    ``hand_force=True`` also what ``softclose simulate`` reports beside them: the hand force
-    and the lid's zones (``.hand_force``), at each sign-off temperature of
-    ``operating.temperatures_c`` when it lists several (``.hand_forces``), and what the end
-    damper did when it does not engage on the way down (``.end_damper``). A stroke the
-    method cannot integrate is reported (``ok`` False, ``message`` says what to change),
-    never raised.
+    ``trajectory=True`` the time histories (``.plot()``, ``.trajectory_frame()``; ``.save()``
+    writes them and the figures). With ``hand_force=True`` also what ``softclose simulate``
+    reports beside them: the hand force and the lid's zones (``.hand_force``), at each
+    sign-off temperature of ``operating.temperatures_c`` when it lists several
+    (``.hand_forces``), and what the end damper did when it does not engage on the way down
+    (``.end_damper``). A stroke the method cannot integrate is reported (``ok`` False,
+    ``message`` says what to change), never raised.
     """
+    from dataclasses import replace
     sim = Simulator(resolve(cfg), cached=True)
     res = sim.run(trajectory=trajectory)
+    if trajectory:
+        res = replace(res, model=sim.model)
     if not (hand_force and res.ok):
         return res
-    from dataclasses import replace
 
     from .problem import at_temperature, sign_off_temperatures
     from .simulation.handforce import hand_force as hand_force_of

@@ -24,7 +24,6 @@ Usage: python studies/buildable_design.py [--fast] [--json] [--out DIR]
 
 from __future__ import annotations
 
-import csv
 import math
 import sys
 from pathlib import Path
@@ -32,7 +31,8 @@ from pathlib import Path
 import softclose
 from softclose.present.figures import save
 from softclose.robust import optimise_robust
-from softclose.present.study import parse, print_json, save_summary, study_options
+from softclose.present.study import (add_report, parse, print_json, save_summary, study_options,
+                                     write_rows)
 
 KINDS = {"idealised": ["linear"], "buildable": ["compression", "extension"]}
 
@@ -141,23 +141,16 @@ def main(argv=None) -> int:
         ideal = answers[(problem, "idealised")].objective
         build = answers[(problem, "buildable")].objective
         price[problem] = (build / ideal if ideal and build is not None else None)
-    files = []
-    path = a.out / "kinds.csv"
-    with open(path, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    files.append(path)
+    files = [write_rows(rows, a.out / "kinds.csv")]
     files.append(draw_force(cfg, answers, a.out / "spring_force.png"))
     files.append(draw_price(rows, a.out / "price.png"))
     summary = {"designs": designs, "price": price,
                "note": "price: J with the springs one can buy over J with the idealised one"}
     chosen = answers[("robust", "buildable")]
     if chosen.design is not None:                  # its sign-off report
-        sign_off = softclose.report(chosen.design_config(), optimiser=chosen.to_json(),
-                                    samples=2000 if a.fast else None)
-        files += sign_off.save_all(a.out, name="the robust design with buildable springs")
-        summary["report"] = sign_off.message
+        add_report(summary, files, softclose.report(
+            chosen.design_config(), optimiser=chosen.to_json(), samples=2000 if a.fast else None),
+            a.out, "the robust design with buildable springs")
     save_summary(summary, a.out / "designs.json", files)
     if a.json:
         print_json(summary)

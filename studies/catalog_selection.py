@@ -32,7 +32,7 @@ import softclose
 from softclose.catalog import (DamperEntry, SpringEntry, read_dampers, read_springs,
                                standard_free_length_tolerance)
 from softclose.present.figures import save
-from softclose.present.study import parse, print_json, save_summary, study_options
+from softclose.present.study import add_report, parse, print_json, save_summary, study_options
 
 ROOT = Path(__file__).resolve().parents[1]
 CATALOG = ROOT / "examples" / "catalogs"
@@ -126,9 +126,8 @@ def main(argv=None) -> int:
     files.append(draw(sel, own, a.out / "selection.png"))
     if best is not None:                  # the best pair, signed off
         from softclose.catalog import pair_config
-        sign_off = softclose.report(pair_config(cfg, best), samples=samples)
-        files += sign_off.save_all(a.out, name="the best catalog pair")
-        out["report"] = sign_off.message
+        add_report(out, files, softclose.report(pair_config(cfg, best), samples=samples), a.out,
+                   "the best catalog pair")
     save_summary(out, a.out / "comparison.json", files)
     if a.json:
         print_json(out)

@@ -36,7 +36,6 @@ Usage: python studies/co_design.py [--fast] [--json] [--out DIR]
 
 from __future__ import annotations
 
-import csv
 import json
 import sys
 import time
@@ -44,7 +43,8 @@ from pathlib import Path
 
 import softclose
 from softclose.present.figures import save
-from softclose.present.study import parse, print_json, save_summary, study_options
+from softclose.present.study import (add_report, parse, print_json, save_summary, study_options,
+                                     write_rows)
 
 SPRING = {"geometry.spring_anchor[0]": [-0.09, -0.03], "geometry.spring_anchor[1]": [-0.01, 0.05],
           "geometry.lid_e[0]": [-0.006, 0.044], "geometry.lid_e[1]": [0.004, 0.024]}
@@ -117,13 +117,7 @@ def main(argv=None) -> int:
                      "gain": gain, "success": res.success, "seconds": seconds,
                      "points": json.dumps(points), "end_damper": json.dumps(end),
                      "engage": json.dumps(engage), "message": res.message or ""})
-    files = []
-    path = a.out / "levers.csv"
-    with open(path, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    files.append(path)
+    files = [write_rows(rows, a.out / "levers.csv")]
     files.append(draw_gains(rows, a.out / "gains.png"))
     robust = [(res.objective, lever, res) for (p, lever), (res, _) in answers.items()
               if p == "robust" and res.success and res.objective is not None]
@@ -142,10 +136,9 @@ def main(argv=None) -> int:
                "note": "gain: J(lever) / J(today's points) - 1; compression spring; the end "
                        "damper lever's answer sits on its bounds (active: end_damper_c upper, "
                        "end_damper_angle_deg lower)"}
-    sign_off = softclose.report(best.design_config(), optimiser=best.to_json(),
-                                samples=2000 if a.fast else None)
-    files += sign_off.save_all(a.out, name="the best robust co-design")
-    summary["report"] = sign_off.message
+    add_report(summary, files, softclose.report(
+        best.design_config(), optimiser=best.to_json(), samples=2000 if a.fast else None),
+        a.out, "the best robust co-design")
     save_summary(summary, a.out / "levers.json", files)
     if a.json:
         print_json(summary)

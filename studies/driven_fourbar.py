@@ -19,7 +19,7 @@ import numpy as np
 from softclose.validation.textbook.driven_fourbar import (DrivenFourBar, assemble_driven_fourbar,
                                                build_driven_fourbar, evaluate_constraints,
                                                locate_joints, track_motion)
-from softclose.present.study import parse, print_json, study_options
+from softclose.present.study import parse, print_files, print_json, study_options
 
 
 
@@ -77,9 +77,8 @@ def draw(p, t, Q, QD, QDD, out: Path) -> list[str]:
 
 
 def main(argv=None) -> int:
-    ap = study_options(__doc__, __file__, fast="smoke test: coarse plot grid")
+    ap = study_options(__doc__, __file__, fast="smoke test: coarse plot grid", plots=True)
     ap.add_argument("--times", default="0,1,2.5,5,10", help="comma-separated times in s")
-    ap.add_argument("--no-plots", action="store_true")
     args = parse(ap, argv)
 
     p = DrivenFourBar()
@@ -101,8 +100,7 @@ def main(argv=None) -> int:
         for k, t in enumerate(times):
             print(f"t = {t:g} s\n  q   = {Q[k]}\n  q'  = {QD[k]}\n  q'' = {QDD[k]}")
         print(f"max constraint residual: {residual:.2e}")
-        for f in report.get("figures", []):
-            print("wrote", f)
+        print_files(report.get("figures", []))
     return 0
 
 

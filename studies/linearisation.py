@@ -20,7 +20,7 @@ import numpy as np
 from softclose.validation.textbook.linearisation import (LeverFourBar, compare_linearisation,
                                               compute_loop_residual, solve_error_limit,
                                               solve_output_angle)
-from softclose.present.study import parse, print_json, study_options
+from softclose.present.study import parse, print_files, print_json, save_figure, study_options
 
 
 
@@ -28,8 +28,6 @@ def draw(link, r, limit, limit_seed, out: Path) -> str:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from softclose.present.figures import save
 
     out.mkdir(parents=True, exist_ok=True)
     phi = np.degrees(r["phi"])
@@ -71,16 +69,12 @@ def draw(link, r, limit, limit_seed, out: Path) -> str:
     for a in ax:
         a.grid(alpha=0.3)
     fig.suptitle("Linearised lever ratio |A0A|/|B0B| = 1.5 against the exact four-bar")
-    fig.tight_layout()
-    path = out / "linearisation.png"
-    path = save(fig, path)
-    return str(path)
+    return save_figure(fig, out / "linearisation.png")
 
 
 def main(argv=None) -> int:
-    ap = study_options(__doc__, __file__, fast="smoke test: coarse grid")
+    ap = study_options(__doc__, __file__, fast="smoke test: coarse grid", plots=True)
     ap.add_argument("--step-deg", type=float, default=0.1, help="grid step of phi (deg)")
-    ap.add_argument("--no-plots", action="store_true")
     args = parse(ap, argv)
 
     step = 1.0 if args.fast else args.step_deg
@@ -111,8 +105,7 @@ def main(argv=None) -> int:
                   f"linear = {report['theta_b_linear_deg'][k]:8.3f}   rel. error = {100 * r['relative_error'][k]:6.3f} %")
         print(f"1 % error on the output rotation reached at phi = {limit:.2f} deg")
         print(f"1 % error by the seed's measure (absolute angle) at phi = {limit_seed:.2f} deg (seed: 'up to 30 deg')")
-        for f in report.get("figures", []):
-            print("wrote", f)
+        print_files(report.get("figures", []))
     return 0
 
 

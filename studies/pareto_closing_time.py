@@ -29,7 +29,7 @@ import numpy as np
 import softclose
 from softclose.present.figures import save
 from softclose.jsonio import dumps
-from softclose.present.study import parse, study_options
+from softclose.present.study import parse, print_files, study_options
 
 
 def main(argv=None) -> int:
@@ -61,8 +61,7 @@ def main(argv=None) -> int:
         print(frame[cols].to_string(index=False, float_format=lambda v: f"{v:.6g}"))
         print(f"front of {len(fr.points)} points in {fr.total_time:.2f} s, "
               f"{'every point verified' if fr.success else fr.message}")
-        for f in files:
-            print("wrote", f)
+        print_files(files)
     return 0 if fr.success else 3
 
 

@@ -27,7 +27,7 @@ from softclose.bench import SEED_KEYS, seed_reproduction
 from softclose.present.figures import save
 from softclose.present.figures.bench import plot_seed_reproduction
 from softclose.jsonio import dumps
-from softclose.present.study import parse, study_options
+from softclose.present.study import parse, print_files, study_options
 
 
 def main(argv=None) -> int:
@@ -48,8 +48,7 @@ def main(argv=None) -> int:
               f"error {s[k] - r[k]: .2e}  EC located {rep['euler_cromer_located_errors'][k]: .2e}"
               f"  {d['method']} {d['step'] * 1e3:g} ms {rep['default_errors'][k]: .2e}")
     print(f"observed orders: {rep['observed_order']}")
-    for f in numbers["files"]:
-        print("wrote", f)
+    print_files(numbers["files"])
     return 0
 
 

@@ -28,7 +28,7 @@ from softclose.present.figures import save
 from softclose.jsonio import dumps
 from softclose.optimiser import optimise
 from softclose.sweeps import sweep
-from softclose.present.study import parse, study_options
+from softclose.present.study import parse, print_files, study_options
 
 #: the swept config keys and the optimiser's design key of each
 KEYS = {"design.spring_k": "spring_k", "design.damper_c": "damper_c",
@@ -97,8 +97,7 @@ def main(argv=None) -> int:
                   + f", objective {bw['objective']:.6g}")
         print(f"coarse: {coarse.points} designs at {coarse.designs_per_second or 0:,.0f}/s; "
               f"window: {fine.points} at {fine.designs_per_second or 0:,.0f}/s")
-        for f in report["files"]:
-            print("wrote", f)
+        print_files(report["files"])
     return 0
 
 

@@ -21,7 +21,7 @@ import numpy as np
 from softclose.validation.textbook.synthesis import (PIVOT_A, PROBLEM7_POINTS, classify_solutions,
                                           locate_poses, make_design, solve_precision_points,
                                           trace_circuit)
-from softclose.present.study import parse, print_json, study_options
+from softclose.present.study import parse, print_files, print_json, save_figure, study_options
 
 
 
@@ -49,8 +49,6 @@ def draw(result, z, out: Path) -> str:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from softclose.present.figures import save
-
     out.mkdir(parents=True, exist_ok=True)
     d, a = result.points, result.pivot_a
     design = make_design(z, d, a)
@@ -77,16 +75,12 @@ def draw(result, z, out: Path) -> str:
     ax.set_ylabel("y (length unit)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="lower right")
-    fig.tight_layout()
-    path = out / "straight_line.png"
-    path = save(fig, path)
-    return str(path)
+    return save_figure(fig, out / "straight_line.png")
 
 
 def main(argv=None) -> int:
-    ap = study_options(__doc__, __file__, fast="smoke test: Problem 7 only")
+    ap = study_options(__doc__, __file__, fast="smoke test: Problem 7 only", plots=True)
     ap.add_argument("--seed", type=int, default=0, help="seed of the random points")
-    ap.add_argument("--no-plots", action="store_true")
     args = parse(ap, argv)
 
     try:
@@ -120,8 +114,7 @@ def main(argv=None) -> int:
             print(f"{name}: {s['n_paths']} paths, {s['n_finite']} finite, {s['n_real']} real, "
                   f"{s['n_ordered']} with ordered coupler angles, {s['n_valid']} valid designs; "
                   f"max residual {s['max_residual']:.1e}; {s['seconds']:.1f} s")
-        for f in report.get("figures", []):
-            print("wrote", f)
+        print_files(report.get("figures", []))
     return 0
 
 

@@ -102,6 +102,75 @@ def assembly_angles(geometry: dict, theta_deg: float, near_phi_deg: float) -> li
     return [theta_deg, math.degrees(phi) % 360.0, math.degrees(gamma) % 360.0]
 
 
+def assert_potential(cfg, model, V, angles):
+    """At each of ``angles``: the model's dV/dtheta and the kernel table's slope against the
+    central difference of an independent potential ``V(theta)``, the table's potential
+    energy against V; the model's parameter vector."""
+    from softclose.simulation import statics
+    sim = Simulator.from_config(cfg, model=model)
+    p = model.params()
+    h = 1e-5
+    for th in angles:
+        fd = (V(th + h) - V(th - h)) / (2 * h)
+        assert float(model.dV(th, p)) == pytest.approx(fd, rel=1e-7, abs=1e-9)
+        assert float(statics.slopes(sim.table, th, p[None, :])[0]) == pytest.approx(
+            fd, rel=1e-7, abs=1e-9)
+        assert float(statics.potential_energy(sim.table, th, p[None, :])[0]) == pytest.approx(
+            V(th), rel=1e-9, abs=1e-9)
+    return p
+
+
+def uniform_states(model, n: int, seed: int, theta_dot=(-6, 3)) -> list:
+    """``n`` states (theta, theta') drawn uniformly: theta 0.02 rad inside the model's range,
+    theta' in ``theta_dot``."""
+    rng = np.random.default_rng(seed)
+    lo, hi = model.theta_range
+    return [(rng.uniform(lo + 0.02, hi - 0.02), rng.uniform(*theta_dot)) for _ in range(n)]
+
+
+def assert_formulations_agree(model, absolute, p, states) -> float:
+    """theta'' of the reduced model, of its Newton-Euler equations (row 8) and of the lid in
+    absolute coordinates (``absolute``: :func:`read_parameters` of the config) agree to 1e-10
+    at each of ``states``; the last one's reduced theta''."""
+    from softclose.validation.textbook.lid_absolute import compute_theta_ddot
+    for th, thd in states:
+        red = model.theta_ddot(th, thd, p)
+        ne = float(np.asarray(model.newton_euler(th, thd, p)).ravel()[8])
+        ab = compute_theta_ddot(absolute, th, thd)
+        assert ne == pytest.approx(red, rel=1e-10, abs=1e-10)
+        assert ab == pytest.approx(red, rel=1e-10, abs=1e-10)
+    return red
+
+
+def energy_rate(model):
+    """A CasADi Function of ([theta, theta'], p): (dE/dt along the model's equation of motion,
+    by automatic differentiation; the dampers' power)."""
+    import casadi as ca
+    from softclose.problem import PARAM_KEYS
+    x, ps = ca.SX.sym("x", 2), ca.SX.sym("p", len(PARAM_KEYS))
+    E = model.energy_fn(x, ps)
+    return ca.Function("r", [x, ps], [ca.jtimes(E, x, model.ode(x, ps)), model.power_fn(x, ps)])
+
+
+def run_cli(*argv) -> tuple[int, str]:
+    """(exit code, stdout) of ``softclose ARGV`` run in this process."""
+    import io
+    from contextlib import redirect_stdout
+
+    from softclose.cli import main
+    buf = io.StringIO()
+    with redirect_stdout(buf):
+        code = main(list(argv))
+    return code, buf.getvalue()
+
+
+def write_file(folder, name: str, text: str) -> Path:
+    """``folder/name`` holding ``text``."""
+    p = Path(folder) / name
+    p.write_text(text)
+    return p
+
+
 def wrap_deg(a):
     return (a + 180.0) % 360.0 - 180.0
 
@@ -111,19 +180,23 @@ def cfg():
     return default_config()
 
 
-@pytest.fixture(scope="session")
-def model(cfg):
-    return LidModel.from_config(cfg)
+def lid_fixtures(suffix: str = ""):
+    """The session's model, simulator and reference of the config fixture ``cfg<suffix>``,
+    as the fixtures ``model<suffix>``, ``sim<suffix>`` and ``ref<suffix>``."""
+    def model(request):
+        return LidModel.from_config(request.getfixturevalue("cfg" + suffix))
+
+    def sim(request):
+        return Simulator.from_config(request.getfixturevalue("cfg" + suffix),
+                                     request.getfixturevalue("model" + suffix))
+
+    def ref(request):
+        return Reference(request.getfixturevalue("model" + suffix))
+    return tuple(pytest.fixture(scope="session", name=f.__name__ + suffix)(f)
+                 for f in (model, sim, ref))
 
 
-@pytest.fixture(scope="session")
-def sim(cfg, model):
-    return Simulator.from_config(cfg, model)
-
-
-@pytest.fixture(scope="session")
-def ref(model):
-    return Reference(model)
+model, sim, ref = lid_fixtures()
 
 
 @pytest.fixture(scope="session")
@@ -133,19 +206,7 @@ def cfg2():
     return from_dict({"geometry": {**GEOMETRY2, "assembly": asm}, "mass": MASS2})
 
 
-@pytest.fixture(scope="session")
-def model2(cfg2):
-    return LidModel.from_config(cfg2)
-
-
-@pytest.fixture(scope="session")
-def sim2(cfg2, model2):
-    return Simulator.from_config(cfg2, model2)
-
-
-@pytest.fixture(scope="session")
-def ref2(model2):
-    return Reference(model2)
+model2, sim2, ref2 = lid_fixtures("2")
 
 
 @pytest.fixture(scope="session", params=["default", "second"])

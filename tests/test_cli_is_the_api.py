@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -92,6 +93,26 @@ def test_fit_prints_the_api_result(capsys):
     assert cli_text(capsys, "fit", data, "--free", "design.damper_c") == res.text()
 
 
+def test_select_prints_the_api_result(capsys, tmp_path):
+    """select's JSON is SelectResult's (a few parts of the example catalogs)."""
+    from softclose.catalog import read_dampers, read_springs
+    springs, dampers = tmp_path / "springs.csv", tmp_path / "dampers.csv"
+    for path, rows in ((springs, 9), (dampers, 4)):
+        lines = [ln for ln in (EXAMPLES / "catalogs" / path.name).read_text().splitlines()
+                 if not ln.startswith("#")]
+        path.write_text("\n".join(lines[:rows]) + "\n")
+    cfg = softclose.default_config()
+    res = softclose.select(cfg, read_springs(springs), read_dampers(dampers), samples=16,
+                           verify=0)
+    argv = ["select", "--springs", str(springs), "--dampers", str(dampers), "--samples",
+            "16", "--verify", "0"]
+    code, payload = cli_json(capsys, *argv)
+    same(payload, res.to_json(), volatile=("seconds", "times"))
+    assert code == (0 if res.success else 3)
+    untimed = lambda s: re.sub(r"\d+\.\d+ s\b", "_ s", s)  # noqa: E731
+    assert untimed(cli_text(capsys, *argv)) == untimed(res.text())
+
+
 def test_yield_at_several_temperatures_prints_the_api_result(capsys):
     from softclose.robust import yield_by_temperature
     sets = ["--set", "operating.temperatures_c=[-10, 20, 50]"]
@@ -116,7 +137,7 @@ def test_report_prints_the_api_result(capsys, tmp_path):
     res = softclose.report(cfg, samples=200)
     code, payload = cli_json(capsys, "report", "--samples", "200", "--out", str(tmp_path))
     api = res.to_json()
-    assert set(payload) - {"files"} <= set(api), sorted(set(payload) - set(api))
+    assert set(payload) <= set(api), sorted(set(payload) - set(api))
     assert payload["message"] == api["message"] and payload["matrix"] == api["matrix"]
     assert sorted(Path(f).name for f in payload["files"]) == ["report.html", "report.pdf"]
     text = cli_text(capsys, "report", "--samples", "200", "--out", str(tmp_path))

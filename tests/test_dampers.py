@@ -11,16 +11,17 @@ not, and the kernel and the reference agree on both.
 
 from __future__ import annotations
 
-import casadi as ca
 import numpy as np
 import pytest
 
 from softclose.config import default_config
 from softclose.model.lid import LidModel
-from softclose.problem import PARAM_KEYS, TARGETS
+from softclose.problem import TARGETS
 from softclose.simulation.reference import Reference
 from softclose.simulation.simulator import Simulator
-from softclose.validation.textbook.lid_absolute import compute_theta_ddot, read_parameters
+from softclose.validation.textbook.lid_absolute import read_parameters
+
+from conftest import assert_formulations_agree, energy_rate, uniform_states
 
 PIVOTS = ("O", "B", "A", "C")
 
@@ -41,15 +42,9 @@ def test_three_formulations_agree_for_a_damper_at_each_pivot(case):
     p = model.params()
     absolute = read_parameters(cfg)
     assert absolute.rot_pivot == pivot
-    rng = np.random.default_rng(3)
-    lo, hi = model.theta_range
-    for _ in range(8):
-        th, thd = rng.uniform(lo + 0.02, hi - 0.02), rng.uniform(-6, 3)
-        red = model.theta_ddot(th, thd, p)
-        ne = float(np.asarray(model.newton_euler(th, thd, p)).ravel()[8])
-        ab = compute_theta_ddot(absolute, th, thd)
-        assert ne == pytest.approx(red, rel=1e-10, abs=1e-10)
-        assert ab == pytest.approx(red, rel=1e-10, abs=1e-10)
+    states = uniform_states(model, 8, seed=3)
+    assert_formulations_agree(model, absolute, p, states)
+    th = states[-1][0]
     # the damper at the pivot is not the damper on the lid (the test can fail)
     lid = LidModel.from_config(cfg.set("design.rotary_damper_pivot", "lid"))
     assert abs(lid.theta_ddot(th, -3.0, p) - model.theta_ddot(th, -3.0, p)) > 1e-4
@@ -57,9 +52,7 @@ def test_three_formulations_agree_for_a_damper_at_each_pivot(case):
 
 def test_energy_falls_by_the_damper_power(case):
     _, cfg, model = case
-    x, ps = ca.SX.sym("x", 2), ca.SX.sym("p", len(PARAM_KEYS))
-    E = model.energy_fn(x, ps)
-    rate = ca.Function("r", [x, ps], [ca.jtimes(E, x, model.ode(x, ps)), model.power_fn(x, ps)])
+    rate = energy_rate(model)
     p = model.params()
     for th, thd in ((0.05, -1.0), (0.2, -4.0)):
         dEdt, P = (float(v) for v in rate([th, thd], p))

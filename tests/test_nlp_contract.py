@@ -30,6 +30,19 @@ def test_ipopt_solvers_are_made_in_one_place():
     assert calls and all(c.startswith("optimiser/ipopt.py:") for c in calls), calls
 
 
+def test_every_solver_is_made_by_one_method():
+    """``nlpsol(`` is written once in softclose/ (CasADi's call in optimiser/ipopt.py): every
+    family's solvers, cold and warm, come from :meth:`Structure.make_solver`."""
+    from softclose.optimiser.base import Structure
+    from softclose.optimiser.nlp import ShootingStructure
+    from softclose.robust.nlp import ScenarioStructure
+    hits = [f"{p.relative_to(ROOT)}:{i + 1}" for p in sorted(ROOT.rglob("*.py"))
+            for i, line in enumerate(p.read_text().splitlines()) if "nlpsol(" in line]
+    assert len(hits) == 1 and hits[0].startswith("optimiser/ipopt.py:"), hits
+    for family in (ShootingStructure, ScenarioStructure, FitNLP):
+        assert issubclass(family, Structure)
+
+
 def test_every_family_follows_the_contract():
     for family in (ShootingNLP, ScenarioNLP, FitNLP):
         assert issubclass(family, NLP)

@@ -9,12 +9,10 @@ limits (so the reference's own range check judges them).
 
 from __future__ import annotations
 
-import io
 import itertools
 import json
 import math
 import os
-from contextlib import redirect_stdout
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +20,8 @@ import pytest
 
 from softclose.cli import main
 from softclose.config import default_config
+
+from conftest import run_cli as _run, write_file as _write
 
 SPRINGS = """\
 part,kind,rate_N_per_m,free_length_m,preload_N,min_length_m,max_length_m,rate_tolerance,free_length_tolerance_m
@@ -50,19 +50,6 @@ def _cfg():
     # the catalog's own spreads replace those of k, l0 and c; the lid's mass is held fixed
     # here (8 corners a pair keep the reference's check of every corner of every pair short)
     return default_config().update({"tolerance.mass.lid": 0.0})
-
-
-def _write(tmp_path, name, text):
-    p = tmp_path / name
-    p.write_text(text)
-    return p
-
-
-def _run(*argv) -> tuple[int, str]:
-    buf = io.StringIO()
-    with redirect_stdout(buf):
-        code = main(list(argv))
-    return code, buf.getvalue()
 
 
 def _rows(text):

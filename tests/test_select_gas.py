@@ -5,17 +5,16 @@ coefficient column is its ``design.damper_temperature_coeff``."""
 
 from __future__ import annotations
 
-import io
 import json
 import math
-from contextlib import redirect_stdout
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from softclose.cli import main
 from softclose.config import default_config
+
+from conftest import run_cli as _run, write_file as _write
 
 #: two struts of one series (60 mm extended, 20 mm stroke, F1 10 N, K 1.2); the second's
 #: friction band (300 N, F_R 150 N) holds the lid where it is released
@@ -33,19 +32,6 @@ DATA = Path(__file__).resolve().parent / "data"
 
 def _cfg():
     return default_config().update({"tolerance.mass.lid": 0.0})
-
-
-def _write(tmp_path, name, text):
-    p = tmp_path / name
-    p.write_text(text)
-    return p
-
-
-def _run(*argv) -> tuple[int, str]:
-    buf = io.StringIO()
-    with redirect_stdout(buf):
-        code = main(list(argv))
-    return code, buf.getvalue()
 
 
 def _tension(cfg, length: float) -> float:

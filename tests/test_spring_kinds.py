@@ -13,13 +13,12 @@ from __future__ import annotations
 
 import math
 
-import casadi as ca
 import numpy as np
 import pytest
 
 import softclose
-from conftest import np_closure
-from softclose.simulation import statics
+from conftest import (assert_formulations_agree, assert_potential, energy_rate, np_closure,
+                      uniform_states)
 from softclose.cli import main
 from softclose.config import default_config
 from softclose.model.lid import LidModel
@@ -27,7 +26,7 @@ from softclose.problem import PARAM_KEYS, TARGETS, resolve
 from softclose.simulation.reference import Reference
 from softclose.simulation.simulator import Simulator
 from softclose.simulation.stroke import StrokeStatus
-from softclose.validation.textbook.lid_absolute import compute_theta_ddot, read_parameters
+from softclose.validation.textbook.lid_absolute import read_parameters
 
 #: a compression spring (gas strut) that stays shorter than its free length over the stroke
 #: (l runs 52.3..58.4 mm on the default geometry), and an extension spring that stays longer
@@ -57,15 +56,7 @@ def test_three_formulations_agree_with_a_preload(case):
     absolute = read_parameters(cfg)
     assert absolute.F == pytest.approx(
         (1.0 if cfg.design.spring_kind == "extension" else -1.0) * cfg.design.spring_preload)
-    rng = np.random.default_rng(7)
-    lo, hi = model.theta_range
-    for _ in range(10):
-        th, thd = rng.uniform(lo + 0.02, hi - 0.02), rng.uniform(-5, 3)
-        red = model.theta_ddot(th, thd, p)
-        ne = float(np.asarray(model.newton_euler(th, thd, p)).ravel()[8])
-        ab = compute_theta_ddot(absolute, th, thd)
-        assert ne == pytest.approx(red, rel=1e-10, abs=1e-10)
-        assert ab == pytest.approx(red, rel=1e-10, abs=1e-10)
+    assert_formulations_agree(model, absolute, p, uniform_states(model, 10, 7, (-5, 3)))
 
 
 def test_potential_and_holding_moment_against_an_independent_closure(case):
@@ -87,24 +78,13 @@ def test_potential_and_holding_moment_against_an_independent_closure(case):
         return (m.gravity * (m.lid * G1[1] + m.crank_oa * 0.5 * A[1] + m.crank_bc * G3[1])
                 + 0.5 * d.spring_k * (l - d.spring_rest_length) ** 2 + s * d.spring_preload * l)
 
-    sim = Simulator.from_config(cfg, model=model)
-    p = model.params()
-    h = 1e-5
-    for th in (0.0, 0.15, 0.3):
-        fd = (V(th + h) - V(th - h)) / (2 * h)
-        assert float(model.dV(th, p)) == pytest.approx(fd, rel=1e-7, abs=1e-9)
-        assert float(statics.slopes(sim.table, th, p[None, :])[0]) == pytest.approx(
-            fd, rel=1e-7, abs=1e-9)
-        assert float(statics.potential_energy(sim.table, th, p[None, :])[0]) == pytest.approx(
-            V(th), rel=1e-9, abs=1e-9)
+    p = assert_potential(cfg, model, V, (0.0, 0.15, 0.3))
     assert model.holding_moment(p) == pytest.approx(float(model.dV(0.0, p)))
 
 
 def test_energy_balance_and_the_reference(case):
     _, cfg, model = case
-    x, ps = ca.SX.sym("x", 2), ca.SX.sym("p", len(PARAM_KEYS))
-    E = model.energy_fn(x, ps)
-    rate = ca.Function("r", [x, ps], [ca.jtimes(E, x, model.ode(x, ps)), model.power_fn(x, ps)])
+    rate = energy_rate(model)
     p = model.params()
     for th, thd in ((0.05, -1.0), (0.2, -3.0), (0.3, 1.0)):
         dEdt, P = (float(v) for v in rate([th, thd], p))

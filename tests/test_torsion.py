@@ -9,21 +9,20 @@ from __future__ import annotations
 
 import math
 
-import casadi as ca
 import numpy as np
 import pytest
 
 import softclose
-from conftest import np_closure
+from conftest import (assert_formulations_agree, assert_potential, energy_rate, np_closure,
+                      uniform_states)
 from softclose.simulation.kernel import binding
-from softclose.simulation import statics
 from softclose.config import default_config
 from softclose.numerics.integrators import casadi_step, get_method
 from softclose.model.lid import LidModel
 from softclose.problem import PARAM_KEYS, TARGETS, as_params
 from softclose.simulation.reference import Reference
 from softclose.simulation.simulator import Simulator
-from softclose.validation.textbook.lid_absolute import compute_theta_ddot, read_parameters
+from softclose.validation.textbook.lid_absolute import read_parameters
 
 #: a free angle per pivot near its angle over the default stroke (deg): a spring that acts
 #: both ways over the stroke
@@ -46,9 +45,7 @@ def case(request):
 
 
 def _states(model, n, seed):
-    rng = np.random.default_rng(seed)
-    lo, hi = model.theta_range
-    return [(rng.uniform(lo + 0.02, hi - 0.02), rng.uniform(-6, 3)) for _ in range(n)]
+    return uniform_states(model, n, seed)
 
 
 def test_reduced_newton_euler_and_absolute_coordinates_agree(case):
@@ -56,12 +53,9 @@ def test_reduced_newton_euler_and_absolute_coordinates_agree(case):
     p = model.params()
     absolute = read_parameters(cfg)
     assert absolute.kt == 0.5 and absolute.pivot == pivot
-    for th, thd in _states(model, 12, seed=3):
-        red = model.theta_ddot(th, thd, p)
-        ne = float(np.asarray(model.newton_euler(th, thd, p)).ravel()[8])
-        ab = compute_theta_ddot(absolute, th, thd)
-        assert ne == pytest.approx(red, rel=1e-10, abs=1e-10)
-        assert ab == pytest.approx(red, rel=1e-10, abs=1e-10)
+    states = _states(model, 12, seed=3)
+    red = assert_formulations_agree(model, absolute, p, states)
+    th, thd = states[-1]
     # and the spring changes the answer (the test can fail)
     off = model.theta_ddot(th, thd, as_params(np.r_[p[:4], 0.0, 0.0]))
     assert abs(off - red) > 1e-3
@@ -71,10 +65,7 @@ def test_energy_rate_equals_damper_power_with_torsion(case):
     """dE/dt along the equation of motion (AD) is the dampers' power: the torsion spring's
     potential is the integral of its moment."""
     _, cfg, model = case
-    x, ps = ca.SX.sym("x", 2), ca.SX.sym("p", len(PARAM_KEYS))
-    E = model.energy_fn(x, ps)
-    rate = ca.Function("r", [x, ps], [ca.jtimes(E, x, model.ode(x, ps)),
-                                      model.power_fn(x, ps)])
+    rate = energy_rate(model)
     p = model.params()
     for th, thd in _states(model, 10, seed=4):
         dEdt, P = (float(v) for v in rate([th, thd], p))
@@ -111,16 +102,7 @@ def test_holding_moment_is_the_slope_of_an_independent_potential(case):
         return (Vg + 0.5 * d.spring_k * (l - d.spring_rest_length) ** 2
                 + 0.5 * d.torsion_k * (psi - math.radians(d.torsion_free_angle_deg)) ** 2)
 
-    sim = Simulator.from_config(cfg, model=model)
-    p = model.params()
-    h = 1e-5
-    for th in (0.0, 0.1, 0.3):
-        fd = (V(th + h) - V(th - h)) / (2 * h)
-        assert float(model.dV(th, p)) == pytest.approx(fd, rel=1e-7, abs=1e-9)
-        assert float(statics.slopes(sim.table, th, p[None, :])[0]) == pytest.approx(
-            fd, rel=1e-7, abs=1e-9)
-        assert float(statics.potential_energy(sim.table, th, p[None, :])[0]) == pytest.approx(
-            V(th), rel=1e-9, abs=1e-9)
+    assert_potential(cfg, model, V, (0.0, 0.1, 0.3))
 
 
 def test_kernel_strokes_match_the_adaptive_reference(case):

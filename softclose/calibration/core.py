@@ -264,7 +264,7 @@ def solve(cfg, data, free, *, axis=None, starts: int = 1, seed: int = 0, prepare
         corr = cov / np.outer(std, std)
     tq = t_quantile(dof)
     # per stroke: the release, the residuals in the data's unit, the model at the samples
-    per, pos, j = [], 0, nk
+    per, pos = [], 0
     for s, ix in zip(strokes, nlp.index):
         nres = len(s.rest) + len(s.window) + len(s.moving)
         rs = r[pos:pos + nres] * s.sigma

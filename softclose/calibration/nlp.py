@@ -27,8 +27,7 @@ import math
 import casadi as ca
 
 from ..numerics.integrators import casadi_step, get_method
-from ..optimiser.base import NLP
-from ..optimiser.ipopt import nlpsol
+from ..optimiser.base import NLP, Structure
 from ..optimiser.run import Run
 from .equation import fit_ode
 
@@ -65,10 +64,12 @@ def _flow(model, cfg, keys, n: int):
     return ca.Function("flow", [x0, u, h], [x]).expand()
 
 
-class FitNLP(NLP):
+class FitNLP(Structure, NLP):
     """The NLP of one shape: ``shapes`` a tuple per stroke of (kind, rest, window, moving)
     sample counts. Its constraints are one group, the continuity of every stroke
-    (lbg = ubg = 0)."""
+    (lbg = ubg = 0). It is its own structure (built once per shape, no warm starts)."""
+
+    name = "fit"
 
     #: a re-solve with halved sub-steps starts from the previous answer as Ipopt left it
     clip_start = False
@@ -84,10 +85,9 @@ class FitNLP(NLP):
         u = ca.MX.sym("u", nk)           # scaled keys
         scale = ca.MX.sym("scale", nk)
         uu = u * scale
-        w, P, lbw, ubw, g, r = [u], [scale], [], [], [], []
+        w, P, g, r = [u], [scale], [], []
         self.index = []                  # per stroke: slices of its variables and parameters
         nw = nk
-        np_ = nk
         for kind, nr, nwin, nm in self.shapes:
             rate = kind == "rate"
             v = ca.MX.sym("v", 3 if rate else 2)          # theta_r, t_r, (b)
@@ -134,15 +134,15 @@ class FitNLP(NLP):
             nw += nv + 2 * nm
         self.w, self.P = ca.vertcat(*w), ca.vertcat(*P)
         self.r, self.g = ca.vertcat(*r), ca.vertcat(*g)
-        self.nw, self.ng, self.nr = self.w.numel(), self.g.numel(), self.r.numel()
+        self.nw, self.nr = self.w.numel(), self.r.numel()
+        self.g_sizes, self.n_params = [self.g.numel()], self.P.numel()
         J = ca.jacobian(self.r, self.w)
         lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", self.ng)
         hess = ca.Function("nlp_hess_l", [self.w, self.P, lam_f, lam_g],
                            [lam_f * ca.triu(ca.mtimes(J.T, J))],
                            ["x", "p", "lam_f", "lam_g"], ["hess_gamma_x_x"])
-        nlp = {"x": self.w, "p": self.P, "f": 0.5 * ca.sumsqr(self.r), "g": self.g}
-        self.solver = nlpsol("fit", nlp, {**IPOPT, "hess_lag": hess}, self.nw, self.ng,
-                             self.P.numel())
+        self.cold_options = {**IPOPT, "hess_lag": hess}
+        self.make_solver({"x": self.w, "p": self.P, "f": 0.5 * ca.sumsqr(self.r), "g": self.g})
         self.jac = ca.Function("fit_jac", [self.w, self.P],
                                [self.r, J, ca.jacobian(self.g, self.w)])
         #: the largest change of a fitted sample when the sub-steps are halved (in units of
@@ -152,7 +152,7 @@ class FitNLP(NLP):
         self.n_move, self.n_release = n_move, n_release
 
     def blocks(self) -> list[list[tuple[str, int]]]:
-        return [[("continuity", int(self.ng))]]
+        return [[("continuity", self.ng)]]
 
     def fit(self, w0, p, lbw, ubw) -> Run:
         """One Ipopt run from ``w0`` within [lbw, ubw], every continuity constraint = 0."""

@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
+from ..present.display import num
+
 
 def _pair(e) -> str:
     return e["spring"] + (f" + {e['damper']}" if e["damper"] else
                           f" + dashpot c = {e['design']['damper_c']:.4g} N s/m")
-
-
-def _num(v, fmt=".4g") -> str:
-    return "—" if v is None else format(v, fmt)
 
 
 def select_text(r, top: int = 15) -> str:
@@ -32,7 +30,7 @@ def select_text(r, top: int = 15) -> str:
     for i, e in enumerate(r.ranking[:top], 1):
         ver = {None: "—", True: "yes", False: "DIFFERS"}[e["verified"]]
         lines.append(f"  {i:>3} {_pair(e)[:34]:<34} {e['corners_feasible']:>3}/{e['corners']:<4}"
-                     f" {100 * e['yield']:>7.2f}% {_num(e['worst_objective'], '.5g'):>10} "
+                     f" {100 * e['yield']:>7.2f}% {num(e['worst_objective'], spec='.5g'):>10} "
                      f"{ver:>9}  {e['reason']}")
     if len(r.ranking) > top:
         lines.append(f"  ... {len(r.ranking) - top} more (--out DIR writes every pair)")

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import ConfigError
-from ..files import check_targets, write_with
+from ..files import check_targets
 
 
 @dataclass(frozen=True)
@@ -157,18 +157,15 @@ def interactive(args) -> bool:
     return (not getattr(args, "json", False)) and sys.stderr.isatty()
 
 
-def write_outputs(out: Path, csv_name: str, frame, fig_name: str, plot) -> list[Path]:
-    """Write a result's table and figure in ``out``: ``frame`` (a pandas DataFrame, e.g.
-    the result's ``to_frame()``) as ``out/csv_name`` without the index, then the figure
-    ``plot()`` draws as ``out/fig_name`` (:func:`softclose.present.figures.save`). Returns the two
-    paths, table first.
-
-    The figure is drawn only once the table is on disk, so that a failure or a Ctrl-C while
-    matplotlib draws still leaves the numbers.
-    """
-    table = Path(out) / csv_name
-    write_with(table, lambda p: frame.to_csv(p, index=False))
-    return [table, save_figure(plot(), Path(out) / fig_name)]
+def saved(res, out: Path | None, payload: dict, *args) -> list[Path]:
+    """With ``--out``: ``res.save(out, *args, figure format, figure style)`` (in this
+    command's figure options), its files also listed in ``payload["files"]``; without: no
+    file."""
+    if out is None:
+        return []
+    files = res.save(out, *args, FIGURES["format"], FIGURES["style"])
+    payload["files"] = [str(f) for f in files]
+    return files
 
 
 def wrote(files) -> str:

@@ -7,8 +7,8 @@ from __future__ import annotations
 import argparse
 
 from ..errors import ConfigError
-from .common import (FIGURES, Outcome, add_common, add_out, figures, interactive,
-                     prepare_out, wrote)
+from .common import (Outcome, add_common, add_out, figures, interactive, prepare_out, saved,
+                     wrote)
 
 DESCRIPTION = """\
 Fit config keys of the lid's dynamics (masses, inertias, the dampers, friction, a spring's
@@ -67,10 +67,7 @@ def run(cfg, args) -> Outcome:
     out = prepare_out(args.out, ["calibrated.toml", "fit.csv", "samples.csv", *figures("fit")])
     res = fit(cfg, args.data, keys, axis=args.axis, starts=starts, progress=interactive(args))
     payload = res.to_json()
-    files = []
-    if out is not None and res.success:
-        files = res.save(out, args.data, FIGURES["format"], FIGURES["style"])
-        payload["files"] = [str(f) for f in files]
+    files = saved(res, out if res.success else None, payload, args.data)
     text = res.text() + wrote(files)
     if not res.success:
         return Outcome(payload, text, 3, tuple(files), error=res.message)

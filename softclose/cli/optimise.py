@@ -11,8 +11,7 @@ from __future__ import annotations
 import argparse
 
 from .common import (FIGURES, Outcome, add_common, add_out, add_slow_motion,
-                     figures, interactive, prepare_out, slow_motion, stroke_files,
-                     write_outputs, wrote)
+                     figures, interactive, prepare_out, saved, slow_motion, stroke_files, wrote)
 from ..config.write import DESIGN_FILE
 from ..problem import PARETO_DEFAULT
 
@@ -89,10 +88,7 @@ def run_optimise(cfg, args) -> Outcome:
     from ..optimiser import optimise
     res = optimise(cfg, progress=interactive(args))
     payload = res.to_json()
-    files = []
-    if out is not None and res.design is not None:
-        files = res.save(out, factor, FIGURES["format"], FIGURES["style"])
-        payload["files"] = [str(f) for f in files]
+    files = saved(res, out if res.design is not None else None, payload, factor)
     text = res.text() + wrote(files)
     return Outcome(payload, text, 0 if res.success else 3, tuple(files),
                    None if res.success else (res.message or f"no optimum ({res.status})"))
@@ -118,7 +114,9 @@ def run_pareto(cfg, args) -> Outcome:
         frame = fr.to_frame()
         frame["design_file"] = [str(designs[i].relative_to(out)) if i in designs else ""
                                 for i in range(len(fr.points))]
-        files = write_outputs(out, "pareto.csv", frame, "pareto.png", fr.plot)
+        from ..present.figures import save_with_table
+        files = save_with_table(out, "pareto.csv", frame, "pareto", fr.plot,
+                                FIGURES["format"], FIGURES["style"])
         files += list(designs.values())
         payload["files"] = [str(f) for f in files]
         for i, pt in enumerate(payload["points"]):

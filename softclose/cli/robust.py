@@ -10,8 +10,7 @@ from __future__ import annotations
 
 import argparse
 
-from .common import (Outcome, add_common, add_out, figures, prepare_out, write_outputs,
-                     wrote)
+from .common import Outcome, add_common, add_out, figures, prepare_out, saved, wrote
 
 
 YIELD = """\
@@ -90,11 +89,7 @@ def run_yield(cfg, args) -> Outcome:
         return _yield_by_temperature(cfg, args, seed, out)
     r = tolerance_analysis(cfg, samples=args.samples, seed=seed)
     payload = r.to_json()
-    files = []
-    if out is not None:
-        files = write_outputs(out, "yield_samples.csv", r.to_frame(),
-                              "yield_histograms.png", r.plot)
-        payload["files"] = [str(f) for f in files]
+    files = saved(r, out, payload)
     code = 0 if r.success else 3
     return Outcome(payload, r.text(_source(args)) + wrote(files), code, tuple(files),
                    error=None if r.success else r.message)
@@ -106,12 +101,7 @@ def _yield_by_temperature(cfg, args, seed, out) -> Outcome:
     from ..robust import yield_by_temperature
     t = yield_by_temperature(cfg, samples=args.samples, seed=seed)
     payload = t.to_json()
-    files = []
-    if out is not None:
-        for T, r in zip(t.temperatures, t.results):
-            files += write_outputs(out, f"yield_samples_{T:g}C.csv", r.to_frame(),
-                                   f"yield_histograms_{T:g}C.png", r.plot)
-        payload["files"] = [str(f) for f in files]
+    files = saved(t, out, payload)
     return Outcome(payload, t.text(_source(args)) + wrote(files), 0 if t.meets_required else 3,
                    tuple(files), error=t.message or None)
 
@@ -123,10 +113,7 @@ def run_sensitivity(cfg, args) -> Outcome:
     out = prepare_out(args.out, ["sobol.csv", *figures("sobol")])
     r = sensitivity(cfg, samples=args.samples, seed=seed)
     payload = r.to_json()
-    files = []
-    if out is not None:
-        files = write_outputs(out, "sobol.csv", r.to_frame(), "sobol.png", r.plot)
-        payload["files"] = [str(f) for f in files]
+    files = saved(r, out, payload)
     return Outcome(payload, r.text(_source(args)) + wrote(files), 0, tuple(files))
 
 
@@ -138,10 +125,6 @@ def robust_outcome(cfg, args) -> Outcome:
     from .common import interactive
     res = optimise_robust(cfg, progress=interactive(args))
     payload = res.to_json()
-    files = []
-    if out is not None:
-        from .common import FIGURES
-        files = res.save(out, FIGURES["format"], FIGURES["style"])
-        payload["files"] = [str(f) for f in files]
+    files = saved(res, out, payload)
     return Outcome(payload, res.text() + wrote(files), 0 if res.success else 3,
                    tuple(files), error=None if res.success else res.message)

@@ -14,8 +14,8 @@ Ctrl-C (the pairs screened so far are ranked and written).
 from __future__ import annotations
 
 import argparse
-from .common import (FIGURES, Outcome, add_common, add_out, figures, interactive,
-                     prepare_out, wrote)
+from .common import (Outcome, add_common, add_out, figures, interactive, prepare_out, saved,
+                     wrote)
 
 DESCRIPTION = """\
 Rank the springs one can buy (extension, compression, gas strut) -- with every damper of
@@ -123,10 +123,7 @@ def run(cfg, args) -> Outcome:
         res = select(cfg, springs, dampers, samples=args.samples, seed=args.seed,
                      verify=args.verify, progress=interactive(args), nlp=args.nlp)
     payload = res.to_json()
-    files = []
-    if out is not None:
-        files = res.save(out, cfg, FIGURES["format"], FIGURES["style"])
-        payload["files"] = [str(f) for f in files]
+    files = saved(res, out, payload, cfg)
     code = 130 if res.interrupted else (0 if res.success else 3)
     return Outcome(payload, res.text() + wrote(files), code, tuple(files),
                    error=None if res.success or res.interrupted else res.message)

@@ -5,8 +5,7 @@ from __future__ import annotations
 import argparse
 
 from .common import (Outcome, add_common, add_out, add_slow_motion, prepare_out, slow_motion,
-                     wrote, figures, stroke_files)
-from ..problem import resolve
+                     saved, wrote, figures, stroke_files)
 
 DESCRIPTION = """\
 One closing stroke of the config's design: the lid released from rest at stroke.theta0_deg
@@ -37,18 +36,5 @@ def run(cfg, args) -> Outcome:
         from ..simulation.stroke import StrokeStatus
         code = 2 if res.status is StrokeStatus.OUT_OF_RANGE else 3   # an invalid design
         return Outcome(payload, res.text(), code, error=res.message)
-    files = []
-    if out is not None:
-        from ..simulation.folder import write_stroke_outputs
-        from ..model.lid import LidModel
-        from .common import FIGURES, save_figure
-        files = write_stroke_outputs(LidModel.cached(resolve(cfg)), res, out,
-                                     slow_motion=factor, figure_format=FIGURES["format"],
-                                     figure_style=FIGURES["style"])
-        from ..present.figures.handforce import plot_hand_force, plot_hand_force_by_temperature
-        files.append(save_figure(plot_hand_force(res.hand_force), out / "hand_force.png"))
-        if res.hand_forces:
-            files.append(save_figure(plot_hand_force_by_temperature(res.hand_forces),
-                                     out / "hand_force_temperatures.png"))
-        payload["files"] = [str(f) for f in files]
+    files = saved(res, out, payload, factor)
     return Outcome(payload, res.text() + wrote(files), 0, tuple(files))

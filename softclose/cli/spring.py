@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-from .common import Outcome, add_common, add_out, figures, prepare_out, wrote
+from .common import Outcome, add_common, add_out, figures, prepare_out, saved, wrote
 
 DESCRIPTION = """\
 The design's compression spring (design.spring_kind = "compression", EN 13906-1) or extension
@@ -49,16 +49,12 @@ def register(sub) -> None:
 
 
 def run(cfg, args) -> Outcome:
-    from .common import FIGURES
     from ..optimiser.spring_order import order_spring
     out = prepare_out(args.out, ["spring.json", "spring_checks.csv", "spring_candidates.csv",
                                  *figures("spring")])
     res = order_spring(cfg)
     payload = res.to_json()
-    files = []
-    if out is not None:
-        files = res.save(out, FIGURES["format"], FIGURES["style"])
-        payload["files"] = [str(f) for f in files]
+    files = saved(res, out, payload)
     text = res.text() + wrote(files)
     if res.success:
         return Outcome(payload, text, 0, tuple(files))

@@ -383,40 +383,48 @@ def _evaluate(spring, duty, grade, max_outer_d, min_inner_d) -> SpringCheck:
     per_newton = en13906.shear_stress(1.0, d, D)          # tau per N of force
     Rm = s.tensile_strength
     # working stresses at the temperature where G (and the rate) is largest
-    t_ref = duty.reference_temperature_c
-    factors = {t: m.g_factor(t, t_ref) for t in duty.temperatures_c}
-    t_gov = max(factors, key=lambda t: (factors[t], -t))
-    f_gov = factors[t_gov]
+    factors, t_gov, f_gov = _governing(m, duty)
     tau_k1 = k * per_newton * R * f_gov * s1
     tau_k2 = k * per_newton * R * f_gov * s2
     tau_kh = tau_k2 - tau_k1
     tau_c = per_newton * forces["Fc"]
     tau_c_allowed = en13906.static_limit(Rm)
-    goodman = m.goodman(d)
-    tau_kh_allowed = goodman.permissible_stroke(tau_k1, duty.cycles)
-    life = goodman.life(tau_k1, tau_kh)
+    tau_kh_allowed, life = _fatigue(m, d, duty, tau_k1, tau_kh)
     s_k = en13906.buckling_deflection(L0, D, m.G, m.E, duty.seating)
     buckling = {"s_k": s_k, "s_2": s2, "safe": s_k is None or s2 < s_k}
     temps = tuple({"temperature_c": t, "rate": R * f, "F1": R * f * s1, "F2": R * f * s2}
                   for t, f in factors.items())
     tol = en15800.spring_tolerances(d, D, n, R, forces["F1"], forces["F2"], grade)
-    dev = R / duty.rate - 1.0
-    checks = [
-        _check("rate", abs(dev), COIL_ROUNDING / 2 / n, "<=", "1"),
-        _check("min_working_length", Ln, L2, "<=", "m"),
-        _check("static", tau_c, tau_c_allowed, "<=", "Pa"),
-        _check("fatigue", tau_kh, tau_kh_allowed, "<=", "Pa"),
-        _check("buckling", s2, s_k, "<", "m"),
-    ]
-    checks += _room_and_temperature(s, m, duty, max_outer_d, min_inner_d)
-    return SpringCheck(
-        spring=s, duty=duty, grade=int(grade), max_outer_d=max_outer_d,
-        min_inner_d=min_inner_d, rate=R, rate_deviation=dev, forces=forces,
+    checks = [_check("min_working_length", Ln, L2, "<=", "m"),
+              _check("static", tau_c, tau_c_allowed, "<=", "Pa"),
+              _check("fatigue", tau_kh, tau_kh_allowed, "<=", "Pa"),
+              _check("buckling", s2, s_k, "<", "m")]
+    return _spring_check(
+        s, duty, grade, max_outer_d, min_inner_d, forces, checks,
         stresses={"tau_k1": tau_k1, "tau_k2": tau_k2, "tau_kh": tau_kh, "tau_c": tau_c,
                   "tau_c_allowed": tau_c_allowed, "tau_kh_allowed": tau_kh_allowed},
         life=life, buckling=buckling, natural_frequency=s.natural_frequency, mass=s.mass,
-        tolerance=tol, governing_temperature_c=t_gov, temperatures=temps,
-        checks=tuple(checks))
+        tolerance=tol, governing_temperature_c=t_gov, temperatures=temps)
+
+
+def _spring_check(s, duty, grade, max_outer_d, min_inner_d, forces, checks, **rest
+                  ) -> SpringCheck:
+    """The :class:`SpringCheck` of ``s`` for ``duty``: its rate's check, then ``checks`` (its
+    kind's), then its room's and temperatures' (:func:`_room_and_temperature`); ``rest``:
+    the kind's stresses, life, buckling, mass, tolerances and temperatures."""
+    dev = s.rate / duty.rate - 1.0
+    checks = [_check("rate", abs(dev), COIL_ROUNDING / 2 / s.active_coils, "<=", "1"),
+              *checks, *_room_and_temperature(s, s.mat, duty, max_outer_d, min_inner_d)]
+    return SpringCheck(spring=s, duty=duty, grade=int(grade), max_outer_d=max_outer_d,
+                       min_inner_d=min_inner_d, rate=s.rate, rate_deviation=dev,
+                       forces=forces, checks=tuple(checks), **rest)
+
+
+def _fatigue(m, d, duty, tau_k1, tau_kh) -> tuple:
+    """(the permissible stroke stress at the lower stress tau_k1 for the duty's cycles, the
+    life at the stroke stress tau_kh) of the material ``m``'s Goodman diagram at wire d."""
+    goodman = m.goodman(d)
+    return goodman.permissible_stroke(tau_k1, duty.cycles), goodman.life(tau_k1, tau_kh)
 
 
 def _governing(m, duty):
@@ -448,29 +456,22 @@ def _evaluate_extension(spring, duty, grade, max_outer_d, min_inner_d) -> Spring
     tau_0_allowed = en13906_2.initial_stress_range(s.index)[1]
     tau_2 = per_newton * f_gov * forces["F2"]
     tau_2_allowed = en13906_2.static_limit(Rm)
-    goodman = m.goodman(d)
-    tau_kh_allowed = goodman.permissible_stroke(tau_k1, duty.cycles)
-    life = goodman.life(tau_k1, tau_kh)
+    tau_kh_allowed, life = _fatigue(m, d, duty, tau_k1, tau_kh)
     temps = tuple({"temperature_c": t, "rate": R * f, "F0": F0 * f,
                    "F1": forces["F1"] * f, "F2": forces["F2"] * f}
                   for t, f in factors.items())
-    dev = R / duty.rate - 1.0
     Lk = en13906_2.body_length(n, d)
-    checks = [
-        _check("rate", abs(dev), COIL_ROUNDING / 2 / n, "<=", "1"),
-        _check("body_length", Lk, L0 - en13906_2.hook_room(D, d), "<=", "m"),
-        _check("initial_tension", tau_0, tau_0_allowed, "<=", "Pa"),
-        _check("static", tau_2, tau_2_allowed, "<=", "Pa"),
-        _check("fatigue", tau_kh, tau_kh_allowed, "<=", "Pa"),
-    ]
-    checks += _room_and_temperature(s, m, duty, max_outer_d, min_inner_d)
-    return SpringCheck(
-        spring=s, duty=duty, grade=int(grade), max_outer_d=max_outer_d,
-        min_inner_d=min_inner_d, rate=R, rate_deviation=dev, forces=forces,
-        stresses={"tau_0": tau_0, "tau_0_allowed": tau_0_allowed, "tau_k1": tau_k1, "tau_k2": tau_k2, "tau_kh": tau_kh,
+    checks = [_check("body_length", Lk, L0 - en13906_2.hook_room(D, d), "<=", "m"),
+              _check("initial_tension", tau_0, tau_0_allowed, "<=", "Pa"),
+              _check("static", tau_2, tau_2_allowed, "<=", "Pa"),
+              _check("fatigue", tau_kh, tau_kh_allowed, "<=", "Pa")]
+    return _spring_check(
+        s, duty, grade, max_outer_d, min_inner_d, forces, checks,
+        stresses={"tau_0": tau_0, "tau_0_allowed": tau_0_allowed, "tau_k1": tau_k1,
+                  "tau_k2": tau_k2, "tau_kh": tau_kh,
                   "tau_2": tau_2, "tau_2_allowed": tau_2_allowed,
                   "tau_kh_allowed": tau_kh_allowed},
         life=life, buckling={"s_k": None, "s_2": None, "safe": True},
         natural_frequency=s.natural_frequency,
         mass=en13906_2.mass(d, D, n, m.rho), tolerance=None, governing_temperature_c=t_gov,
-        temperatures=temps, checks=tuple(checks))
+        temperatures=temps)

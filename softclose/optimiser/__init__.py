@@ -22,7 +22,8 @@ from ..problem import DESIGN_KEYS, METRIC_KEYS, SCALES
 from .cache import get_model, get_nlp
 from .discretisation import H_MAX, MAX_STEPS, Discretisation, discretisation
 from .interval import ChebyshevFit, hermite_max, interval_function
-from .nlp import CONVERGED, Run, ShootingNLP
+from .ipopt import CONVERGED
+from .nlp import Run, ShootingNLP
 from .optimiser import active_set, claims, optimise, solve
 from .pareto import continue_from, front
 from .result import Active, FrontResult, OptimiseResult

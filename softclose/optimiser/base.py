@@ -14,20 +14,27 @@ which goes through the one Ipopt wrapper (:func:`softclose.optimiser.ipopt.run`)
 returns a :class:`~softclose.optimiser.run.Run` whose ``violations`` are
 :meth:`NLP.violations`: per block, {group: largest violation}.
 
-**Adding an NLP.** Subclass :class:`NLP` in the new family's own ``nlp.py``: build the
-CasADi problem {x, p, f, g} and its solver with :func:`softclose.optimiser.ipopt.nlpsol`
-(never ``casadi.nlpsol`` directly) as :attr:`solver`; give :meth:`blocks`; give
-:attr:`warm_solver` (:func:`softclose.optimiser.ipopt.warm_solver`) if it re-solves from a
-previous answer's multipliers; set :attr:`library` to a compiled library
-(:mod:`softclose.buildcache`, :func:`softclose.optimiser.compiled.load_or_build`) or leave
-it None for CasADi's virtual machine; and ``pack``/``unpack``/``params``/``bounds`` in the
-terms of its own problem. Everything that differs between two NLPs is then the expression
-graph, never the solve.
+What is built once per structure -- the cold and the warm Ipopt solver, and what a compiled
+library keeps beside it -- is a :class:`Structure`: the nominal and the scenario NLP bind one
+(:attr:`NLP.structure`) to a lid's numbers; the calibration NLP is its own.
+
+**Adding an NLP.** Subclass :class:`NLP` in the new family's own ``nlp.py`` and, for what
+is built once, :class:`Structure` (one class may be both, as :class:`FitNLP
+<softclose.calibration.nlp.FitNLP>`): set :attr:`Structure.name`,
+:attr:`Structure.cold_options` (and :attr:`Structure.warm_options` if it re-solves from a
+previous answer's multipliers), build the CasADi problem {x, p, f, g} and call
+:meth:`Structure.make_solver` with it (never ``casadi.nlpsol``); give :meth:`NLP.blocks`;
+to be compiled (:func:`softclose.optimiser.compiled.load_or_build`), name in
+:attr:`Structure.kept` the functions its solves need beside the solver, and
+:meth:`Structure.load` restores them with the solver from the library; and
+``pack``/``unpack``/``params``/``bounds`` in the terms of its own problem. Everything that
+differs between two NLPs is then the expression graph, never the solve.
 """
 
 from __future__ import annotations
 
 import abc
+import functools
 
 import numpy as np
 
@@ -35,29 +42,99 @@ from . import ipopt
 from .run import Run
 
 
+class Structure:
+    """What an NLP builds once: its cold Ipopt solver (:meth:`make_solver`, from the CasADi
+    problem or a compiled library), its warm solver (:attr:`warm_solver`, on first use) and
+    what a compiled library keeps beside it (:meth:`meta`, :meth:`load`).
+
+    A structure sets :attr:`name`, :attr:`cold_options` (nlpsol's), :attr:`warm_options`
+    where it re-solves warm, and before :meth:`make_solver`: :attr:`nw`, :attr:`g_sizes`
+    (the sizes of its constraint groups: a list, or one list per block) and
+    :attr:`n_params`."""
+
+    #: the solvers' name (the warm one's: with ``_warm``)
+    name = "nlp"
+    #: the compiled library the solvers are loaded from; None: CasADi's virtual machine
+    library = None
+    #: nlpsol's options of the cold solve, and of the warm re-solve (None: no warm starts)
+    cold_options: dict = {}
+    warm_options: dict | None = None
+    #: the CasADi functions a compiled structure keeps beside its solver: {meta key:
+    #: attribute}
+    kept: dict = {}
+
+    @property
+    def ng(self) -> int:
+        """The number of constraints (every group of every block)."""
+        sizes = np.asarray(self.g_sizes, int)
+        return int(sizes.sum())
+
+    def make_solver(self, problem) -> None:
+        """:attr:`solver`: the cold Ipopt solver of ``problem`` -- a dict {x, p, f, g} of
+        CasADi expressions, or the path of the structure's compiled library (then its
+        dimensions must be the structure's: ValueError)."""
+        self.solver = ipopt.ipopt_solver(self.name, problem, self.cold_options, self.nw,
+                                         self.ng, self.n_params)
+        if not isinstance(problem, dict) and (self.solver.size1_in(0), self.solver.size1_in(1),
+                                              self.solver.size1_in(5)) != \
+                (self.nw, self.n_params, self.ng):
+            raise ValueError(f"the compiled NLP {self.name} has other dimensions")
+
+    @functools.cached_property
+    def warm_solver(self):
+        """The solver of warm starts (the previous answer's multipliers given), built on
+        first use beside the cold one (:func:`~softclose.optimiser.ipopt.warm_solver`)."""
+        if self.warm_options is None:
+            raise NotImplementedError(f"{type(self).__name__} has no warm starts")
+        return ipopt.warm_solver(f"{self.name}_warm", self.solver, self.library,
+                                 self.warm_options)
+
+    def meta(self) -> dict:
+        """What a compiled library of this structure needs beside it
+        (:mod:`softclose.buildcache`): the constraint groups' sizes, the size of w, the
+        functions of :attr:`kept`."""
+        return {"g_sizes": np.array(self.g_sizes), "nw": np.array([self.nw]),
+                **{k: getattr(self, a).serialize().encode() for k, a in self.kept.items()}}
+
+    def load(self, library, meta: dict) -> None:
+        """The solver from the compiled ``library`` and the numbers and functions
+        :meth:`meta` kept: nothing symbolic is built."""
+        import casadi as ca
+        from ..buildcache import text
+        self.library = library
+        self.g_sizes = np.asarray(meta["g_sizes"]).astype(int).tolist()
+        self.nw = int(meta["nw"][0])
+        for k, a in self.kept.items():
+            setattr(self, a, ca.Function.deserialize(text(meta[k])))
+        self.make_solver(library)
+
+
 class NLP(abc.ABC):
     """One NLP of softclose (see the module docstring).
 
-    Attributes a family sets: :attr:`solver` (the cold solver, made by
-    :func:`~softclose.optimiser.ipopt.nlpsol`), :attr:`nw` (the number of variables),
-    :attr:`library` (its compiled library, or None: CasADi's virtual machine evaluates it);
-    :attr:`warm_solver` where warm starts are used. Methods a family gives: :meth:`blocks`,
-    and ``pack``, ``unpack``, ``params``, ``bounds`` in its own terms.
+    Attributes a family sets: :attr:`structure` (its :class:`Structure`, which made
+    :attr:`solver`, the cold solver), :attr:`nw` (the number of variables), :attr:`library`
+    (its compiled library, or None: CasADi's virtual machine evaluates it). Methods a family
+    gives: :meth:`blocks`, and ``pack``, ``unpack``, ``params``, ``bounds`` in its own terms.
     """
 
-    #: the cold solver (Ipopt, :func:`~softclose.optimiser.ipopt.nlpsol`)
+    #: the cold solver (Ipopt, :meth:`Structure.make_solver`)
     solver = None
     #: the compiled library the solvers are loaded from; None: CasADi's virtual machine
     library = None
+    #: what was built once (the solvers); an NLP that is its own structure needs none
+    structure: Structure | None = None
     #: is the start clipped into [lbx, ubx] before Ipopt? (a fit re-solves from an answer
     #: Ipopt may leave 1e-8 outside its bounds, and keeps that point as it is)
     clip_start = True
 
     @property
     def warm_solver(self):
-        """The solver of warm starts (the previous answer's multipliers given); a family
-        without warm starts has none."""
-        raise NotImplementedError(f"{type(self).__name__} has no warm starts")
+        """The solver of warm starts (the previous answer's multipliers given): its
+        structure's (:attr:`Structure.warm_solver`)."""
+        if self.structure is None:
+            raise NotImplementedError(f"{type(self).__name__} has no warm starts")
+        return self.structure.warm_solver
 
     @abc.abstractmethod
     def blocks(self) -> list[list[tuple[str, int]]]:
@@ -94,4 +171,4 @@ class NLP(abc.ABC):
                          self.violations)
 
 
-__all__ = ["NLP"]
+__all__ = ["NLP", "Structure"]

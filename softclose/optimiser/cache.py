@@ -110,19 +110,12 @@ def get_structure(key: tuple, what: str = "") -> ShootingStructure:
     one is in the cache (:mod:`softclose.buildcache`, compiled by ``softclose prepare``),
     else built symbolically for CasADi's virtual machine -- and, inside
     :func:`softclose.optimiser.compiled.compiling`, compiled now (``what`` names it)."""
-    from .. import buildcache
-    if key not in _STRUCTURES:
-        disk = buildcache.key_of("nlp", key)
+    def load(library, meta):
+        return build_structure(key, library=library, meta=meta)
 
-        def load(library, meta):
-            return build_structure(key, library=library, meta=meta)
-
-        def build():    # threads for the virtual machine; C maps serially (interval.mapped)
-            return build_structure(key, threads=1 if compiled.will_compile() else map_threads())
-        st = compiled.load_or_build(disk, load, build, what)
-        st.key = key
-        _STRUCTURES[key] = st
-    return _STRUCTURES[key]
+    def build():    # threads for the virtual machine; C maps serially (interval.mapped)
+        return build_structure(key, threads=1 if compiled.will_compile() else map_threads())
+    return compiled.kept_structure(_STRUCTURES, key, "nlp", load, build, what)
 
 
 def build_nlp(cfg, nodes: int, substeps: int, substeps_engaged: int | None = None) -> ShootingNLP:

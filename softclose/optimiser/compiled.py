@@ -150,6 +150,23 @@ def load_or_build(disk: str, restore, build, what: str = "", flags: tuple = CFLA
     return nlp
 
 
+def kept_structure(store: dict, key: tuple, kind: str, restore, build, what: str = "",
+                   flags: tuple = CFLAGS, compile_it: bool = True):
+    """The NLP structure of ``key`` (of ``kind``: the build cache's name), kept in ``store``
+    for this process: built once by :func:`load_or_build` (``restore(library, meta)`` its
+    compiled library, or ``build()``, compiled with ``flags`` inside :func:`compiling`), or
+    by :func:`build_interpreted` when ``compile_it`` is false. The one way the nominal and
+    the scenario NLPs' structures are kept: ``st.key`` is ``key``, ``st.disk`` the build
+    cache's key."""
+    if key not in store:
+        disk = key_of(kind, key)
+        st = load_or_build(disk, restore, build, what, flags) if compile_it else \
+            build_interpreted(build, what)
+        st.key, st.disk = key, disk
+        store[key] = st
+    return store[key]
+
+
 @contextlib.contextmanager
 def build_lock(key: str, flags: tuple = CFLAGS, what: str = ""):
     """Hold the lock of the NLP ``key``'s build (with ``flags``) in the cache for the block:

@@ -1,4 +1,4 @@
-"""The one place softclose calls Ipopt: :func:`nlpsol` makes every solver (the nominal, the
+"""The one place softclose calls Ipopt: :func:`ipopt_solver` makes every solver (the nominal, the
 scenario and the calibration NLP's, cold and warm), :func:`run` solves once and returns a
 :class:`~.run.Run`; the options of a cold solve and of a warm re-solve, and the checks that
 an asked-for linear solver can be loaded and that Ipopt took the options."""
@@ -42,7 +42,7 @@ def shooting_options(tol: float, max_iter: int, hessian: str, linear_solver: str
 CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
 
-def nlpsol(name: str, problem, options: dict, nx: int, ng: int, np_: int):
+def ipopt_solver(name: str, problem, options: dict, nx: int, ng: int, np_: int):
     """An Ipopt solver of ``problem``: a dict {x, p, f, g} of CasADi expressions (CasADi's
     virtual machine evaluates it) or the path of its compiled library
     (:mod:`softclose.buildcache`). ``options``: nlpsol's, to which the Ctrl-C iteration
@@ -92,10 +92,10 @@ def warm_solver(name: str, cold, library, options: dict):
     import casadi as ca
     nx, np_, ng = cold.size1_in(0), cold.size1_in(1), cold.size1_in(5)
     if library is not None:
-        return nlpsol(name, library, options, nx, ng, np_)
+        return ipopt_solver(name, library, options, nx, ng, np_)
     x, p = ca.MX.sym("x", nx), ca.MX.sym("p", np_)
     f, g = cold.oracle()(x, p)
-    return nlpsol(name, {"x": x, "p": p, "f": f, "g": g}, options, nx, ng, np_)
+    return ipopt_solver(name, {"x": x, "p": p, "f": f, "g": g}, options, nx, ng, np_)
 
 
 def check_linear_solver(name: str) -> None:

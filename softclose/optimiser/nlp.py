@@ -61,7 +61,6 @@ answer is verified at a config with the points set (:meth:`ShootingNLP.placed_co
 
 from __future__ import annotations
 
-import functools
 import time
 
 import casadi as ca
@@ -81,12 +80,10 @@ from .coil_nlp import COIL_PARAMS, GROUPS as COIL_GROUPS, coil_params, spring_of
     z_start
 from .coil_nlp import nlp_terms as coil_terms
 from .free_points import placed_bounds, placed_config, placed_constraints, slot_values
-from ..buildcache import text
-from .base import NLP
+from .base import NLP, Structure
 from .run import Run  # noqa: F401  (re-exported)
-from .ipopt import (COLD_OPTIONS, CONVERGED, LINEAR_ALGEBRA,  # noqa: F401  (re-exported)
-                    MUMPS_OPTIONS, WARM_OPTIONS, check_linear_solver, check_options, nlpsol,
-                    shooting_options, warm_solver)
+from .ipopt import (COLD_OPTIONS, LINEAR_ALGEBRA, MUMPS_OPTIONS, WARM_OPTIONS,
+                    check_linear_solver, shooting_options)
 #: smallest closing time the NLP may take (s): T = 0 would make every step vanish
 T_FLOOR = 1e-3
 #: shortest phase of a two-phase stroke (s): the engagement time T1 and T - T1 (a phase of
@@ -127,7 +124,7 @@ def group_bounds(o) -> tuple[dict, dict]:
     return lo, hi
 
 
-class ShootingStructure:
+class ShootingStructure(Structure):
     """The multiple-shooting NLP of one structure: the elements it carries, the series'
     names and padded degree, the free variables and points (which, not their values), the
     discretisation, the opening bound, the self-close constraint and the keep-out regions. It
@@ -146,6 +143,8 @@ class ShootingStructure:
     #: ``softclose prepare`` compiles every nominal structure (-O1 solves ~2x faster than
     #: the virtual machine: ``softclose bench --structures``)
     prepared = True
+    name = "softclose_ms"
+    kept = {"peak": "_peak"}
 
     def __init__(self, els, names: tuple, degree: int, nodes: int, substeps: int,
                  engaged: tuple | None = None, free: tuple = (), place: tuple = (),
@@ -186,9 +185,10 @@ class ShootingStructure:
                               **LINEAR_ALGEBRA}
         if linear_solver == "mumps":
             self.ipopt_options.update(MUMPS_OPTIONS)
-        self.library = library
+        self.cold_options = {**self.ipopt_options, **COLD_OPTIONS}
+        self.warm_options = {**self.ipopt_options, **WARM_OPTIONS}
         if library is not None:
-            self._load(library, meta)
+            self.load(library, meta)
             self.build_time = time.perf_counter() - t0
             return
         if self.placed and opening:
@@ -285,29 +285,20 @@ class ShootingStructure:
         # the largest sub-step speed or Hermite maximum: the NLP's own peak tip speed
         self._peak = ca.Function("peak", [w, P], [ca.mmax(sp)])
         f = J / Jref + mass_term if self.coil else J / Jref
-        nlp = {"x": w, "f": f, "g": ca.vertcat(*g_all.values()), "p": P}
-        self.solver = nlpsol("softclose_ms", nlp, {**self.ipopt_options, **COLD_OPTIONS},
-                             self.nw, sum(self.g_sizes), int(P.numel()))
+        self.make_solver({"x": w, "f": f, "g": ca.vertcat(*g_all.values()), "p": P})
         self.build_time = time.perf_counter() - t0
 
-    @functools.cached_property
-    def warm_solver(self) -> ca.Function:
-        """The solver of warm starts (refinement, a changed parameter), built on first use
-        (:func:`.ipopt.warm_solver`)."""
-        return warm_solver("softclose_ms_warm", self.solver, self.library,
-                           {**self.ipopt_options, **WARM_OPTIONS})
-
-    def _load(self, library, meta: dict) -> None:
-        """The solvers from a compiled library and the numbers :meth:`meta` kept."""
+    def load(self, library, meta: dict) -> None:
+        """The solvers from a compiled library and the numbers :meth:`meta` kept (the
+        constraint groups' names too)."""
         self.g_names = [str(n) for n in meta["g_names"]]
-        self.g_sizes = [int(n) for n in meta["g_sizes"]]
-        self.nw = int(meta["nw"][0])
-        self._peak = ca.Function.deserialize(text(meta["peak"]))
-        self.solver = nlpsol("softclose_ms", library, {**self.ipopt_options, **COLD_OPTIONS},
-                             self.nw, sum(self.g_sizes), self.n_params)
-        if (self.solver.size1_in(0), self.solver.size1_in(1),
-                self.solver.size1_in(5)) != (self.nw, self.n_params, sum(self.g_sizes)):
-            raise ValueError("the compiled NLP has other dimensions")
+        super().load(library, meta)
+
+    def meta(self) -> dict:
+        """What a compiled library of this structure needs beside it
+        (:mod:`softclose.buildcache`): the constraint groups, the size of w, the peak
+        function."""
+        return {"g_names": np.array(self.g_names), **super().meta()}
 
     def __getattr__(self, name):
         """``interval``, ``f`` and ``interval_engaged`` of a structure loaded from its compiled
@@ -321,13 +312,6 @@ class ShootingStructure:
                                                    placement=self.placed)
             return getattr(self, name)
         raise AttributeError(name)
-
-    def meta(self) -> dict:
-        """What a compiled library of this structure needs beside it
-        (:mod:`softclose.buildcache`): the constraint groups, the size of w, the peak
-        function."""
-        return {"g_names": np.array(self.g_names), "g_sizes": np.array(self.g_sizes),
-                "nw": np.array([self.nw]), "peak": self._peak.serialize().encode()}
 
 
 class ShootingNLP(NLP):
@@ -560,11 +544,6 @@ class ShootingNLP(NLP):
     def grid_of(self, p) -> np.ndarray:
         """The time grid in the parameters ``p`` of this NLP."""
         return np.asarray(p, float)[len(NLP_PARAMS):len(NLP_PARAMS) + self.N]
-
-    @property
-    def warm_solver(self):
-        """The structure's solver of warm starts."""
-        return self.structure.warm_solver
 
     def blocks(self) -> list[list[tuple[str, int]]]:
         """One block: the constraint groups of g (:meth:`groups`)."""

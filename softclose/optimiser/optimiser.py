@@ -24,7 +24,8 @@ from .discretisation import Discretisation, discretisation
 from .interval import END_C
 from .kinds import kind_config
 from .made_to_order import made_to_order, with_spring
-from .nlp import J_INDEX, Run, ShootingNLP, check_options
+from .ipopt import check_options
+from .nlp import J_INDEX, Run, ShootingNLP
 from .polish import keep_clear, nlp_objective, refine, tighten
 from .result import Active, OptimiseResult
 from .starts import MAX_STARTS, initial_guess, sweep_starts, sweep_time

@@ -17,6 +17,7 @@ its free length ``spring_rest_length`` (its body closed: the model's l0), its in
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -153,9 +154,16 @@ class SpringOrder:
 
     @property
     def message(self) -> str:
-        return self.to_json()["message"]
+        return self._json["message"]
 
     def to_json(self) -> dict:
+        """The checks or the design, ``mode``, ``success``, ``message`` and the duty (a
+        copy: made once, :meth:`text` and :attr:`message` read it too)."""
+        import copy
+        return copy.deepcopy(self._json)
+
+    @functools.cached_property
+    def _json(self) -> dict:
         from ..jsonio import jsonable
         payload = self.result.to_json()
         if self.checked:
@@ -173,7 +181,7 @@ class SpringOrder:
     def text(self) -> str:
         """What ``softclose spring`` prints."""
         from .spring_text import spring_text
-        return spring_text(self.to_json())
+        return spring_text(self._json)
 
     def save(self, folder, figure_format: str = "png", figure_style: str | None = None
              ) -> list[Path]:
@@ -185,7 +193,7 @@ class SpringOrder:
         from ..present.figures import save
         out = Path(folder)
         files = [write_text(out / "spring.json",
-                            json.dumps(self.to_json(), indent=1, allow_nan=False) + "\n")]
+                            json.dumps(self._json, indent=1, allow_nan=False) + "\n")]
         best = self.best
         if best is not None:
             files.append(write_with(out / "spring_checks.csv",

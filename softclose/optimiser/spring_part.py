@@ -77,13 +77,19 @@ class SpringPart:
                      f"{c['mass'] * 1e3:.3g} g: "
                      + ("every EN 13906 check met" if c["ok"] else "checks FAIL: " + ", ".join(
                          x["name"] for x in c["checks"] if not x["ok"])))
+        return line + self._made_to("free length", "rate", "rate",
+                                    "the spring leaves its valid range")
+
+    def _made_to(self, length: str, key: str, name: str, beyond: str) -> str:
+        """The line of the tolerances the part is made to (none without them): its
+        ``length`` in mm and the tolerance ``key`` as ``name`` in per cent."""
         t = self.tolerance
-        if t:
-            fl, k = t.get("free_length", (0, 0)), t.get("rate", (0, 0))
-            line += (f"\n  made to: free length -{fl[0] * 1e3:.3f}/+{fl[1] * 1e3:.3f} mm, rate "
-                     f"-{k[0] * 100:.2f}/+{k[1] * 100:.2f} % (each alone; beyond, a constraint "
-                     "fails or the spring leaves its valid range)")
-        return line
+        if not t:
+            return ""
+        fl, x = t.get("free_length", (0, 0)), t.get(key, (0, 0))
+        return (f"\n  made to: {length} -{fl[0] * 1e3:.3f}/+{fl[1] * 1e3:.3f} mm, {name} "
+                f"-{x[0] * 100:.2f}/+{x[1] * 100:.2f} % (each alone; beyond, a constraint "
+                f"fails or {beyond})")
 
     def _strut_text(self) -> str:
         lo, hi = self.working_length
@@ -95,13 +101,8 @@ class SpringPart:
                 f"{self.largest_force:.4g} N")
         if self.friction:
             line += f"; friction band F3 - F1 = {2 * self.friction:.3g} N"
-        t = self.tolerance
-        if t:
-            fl, f1 = t.get("free_length", (0, 0)), t.get("force", (0, 0))
-            line += (f"\n  made to: extended length -{fl[0] * 1e3:.3f}/+{fl[1] * 1e3:.3f} mm, "
-                     f"F1 -{f1[0] * 100:.2f}/+{f1[1] * 100:.2f} % (each alone; beyond, a "
-                     "constraint fails or the strut leaves its stroke)")
-        return line
+        return line + self._made_to("extended length", "force", "F1",
+                                    "the strut leaves its stroke")
 
 
 def spring_part(cfg, design: dict | None, metrics: dict | None,

@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-
-def _mm(x) -> str:
-    return "—" if x is None else f"{x * 1e3:.4g} mm"
+from ..present.display import mm
 
 
 def _mpa(x) -> str:
@@ -25,11 +23,11 @@ def _format_extension(payload: dict, s: dict, life: str) -> list[str]:
     st, F = s["stresses"], s["forces"]
     return [
         f"extension spring {'checked' if payload['mode'] == 'check' else 'designed'}: "
-        f"{s['material']}, d = {_mm(s['wire_d'])}, D = {_mm(s['coil_d'])} (outer "
-        f"{_mm(s['outer_d'])}, inner {_mm(s['inner_d'])}), n = {s['active_coils']:g} active",
-        f"  free length {_mm(s['free_length'])} (body closed {_mm(s['body_length'])}, "
-        f"{_mm(s['length_for_hooks'])} left for the hooks), works from "
-        f"{_mm(s['working_lengths'][0])} to {_mm(s['working_lengths'][1])}",
+        f"{s['material']}, d = {mm(s['wire_d'])}, D = {mm(s['coil_d'])} (outer "
+        f"{mm(s['outer_d'])}, inner {mm(s['inner_d'])}), n = {s['active_coils']:g} active",
+        f"  free length {mm(s['free_length'])} (body closed {mm(s['body_length'])}, "
+        f"{mm(s['length_for_hooks'])} left for the hooks), works from "
+        f"{mm(s['working_lengths'][0])} to {mm(s['working_lengths'][1])}",
         f"  rate {s['rate']:.5g} N/m (requested {s['rate_required']:.5g} N/m, "
         f"{s['rate_deviation']:+.2%}); initial tension F0 = {F['F0']:.4g} N, forces F1 = "
         f"{F['F1']:.4g} N, F2 = {F['F2']:.4g} N",
@@ -58,12 +56,12 @@ def spring_text(payload: dict) -> str:
     life = _life(s)
     lines = [
         f"spring {'checked' if payload['mode'] == 'check' else 'designed'}: {s['material']}, "
-        f"d = {_mm(s['wire_d'])}, D = {_mm(s['coil_d'])} (outer {_mm(s['outer_d'])}, inner "
-        f"{_mm(s['inner_d'])}), n = {s['active_coils']:g} active of {s['total_coils']:g}, "
+        f"d = {mm(s['wire_d'])}, D = {mm(s['coil_d'])} (outer {mm(s['outer_d'])}, inner "
+        f"{mm(s['inner_d'])}), n = {s['active_coils']:g} active of {s['total_coils']:g}, "
         f"ends {ends}",
-        f"  free length {_mm(s['free_length'])}, works from {_mm(s['working_lengths'][0])} "
-        f"to {_mm(s['working_lengths'][1])}; solid length {_mm(s['solid_length'])}, shortest "
-        f"allowed {_mm(s['min_working_length'])}",
+        f"  free length {mm(s['free_length'])}, works from {mm(s['working_lengths'][0])} "
+        f"to {mm(s['working_lengths'][1])}; solid length {mm(s['solid_length'])}, shortest "
+        f"allowed {mm(s['min_working_length'])}",
         f"  rate {s['rate']:.5g} N/m (requested {s['rate_required']:.5g} N/m, "
         f"{s['rate_deviation']:+.2%}); forces F1 = {s['forces']['F1']:.4g} N, F2 = "
         f"{s['forces']['F2']:.4g} N, at solid length {s['forces']['Fc']:.4g} N",
@@ -71,11 +69,11 @@ def spring_text(payload: dict) -> str:
         f"stroke tau_kh = {_mpa(st['tau_kh'])} (allowed {_mpa(st['tau_kh_allowed'])} for "
         f"{s['cycles']:.3g} strokes), solid tau_c = {_mpa(st['tau_c'])} (allowed "
         f"{_mpa(st['tau_c_allowed'])}); life {life}",
-        "  buckling: " + (f"s_K = {_mm(b['s_k'])} against s_2 = {_mm(b['s_2'])}"
+        "  buckling: " + (f"s_K = {mm(b['s_k'])} against s_2 = {mm(b['s_2'])}"
                            if b["s_k"] is not None else "cannot buckle")
         + f" (seating nu = {s['seating']:g}); natural frequency "
           f"{s['natural_frequency']:.4g} Hz; mass {s['mass'] * 1e3:.4g} g",
-        f"  EN 15800 grade {tol['grade']}: free length ±{_mm(tol['free_length'])}, F1 "
+        f"  EN 15800 grade {tol['grade']}: free length ±{mm(tol['free_length'])}, F1 "
         f"±{tol['force']['F1']:.3g} N, F2 ±{tol['force']['F2']:.3g} N",
         "checks (value, relation, limit):"]
     return _format_rest(payload, lines)

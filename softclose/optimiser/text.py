@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import math
 
+from ..present.display import num
+
 
 def design_text(d: dict) -> str:
     """A design as the reports quote it, every variable with its unit: 7 significant digits
@@ -58,12 +60,9 @@ def closing_time_text(pr: dict) -> str:
     return text + f" (solved as [{solved[0]:.9g}, {solved[1]:.9g}] s: {'; '.join(why)})"
 
 
-def _v(x, fmt=".9g") -> str:
-    if x is None:
-        return "—"
-    if isinstance(x, bool):
-        return "yes" if x else "no"
-    return format(x, fmt)
+def _v(x) -> str:
+    """A metric in the verification table: yes/no (``closed``), else nine digits."""
+    return num(x) if isinstance(x, bool) else num(x, spec=".9g")
 
 
 def optimum_text(res) -> str:
@@ -107,9 +106,10 @@ def optimum_text(res) -> str:
             vv = res.metrics.get(k) if res.metrics else None
             diff = a.get("difference")
             flag = "" if a.get("ok", True) else "  <-- DISAGREES"
-            lines.append(f"  {k:<19} {_v(vv):>15} {_v(res.optimiser.get(k)):>15} "
-                         f"{_v(diff, '.2e') if diff is not None else '':>11} "
-                         f"{_v(a.get('tolerance'), '.1e') if a.get('tolerance') else '':>9}  "
+            lines.append(f"  {k:<19} {_v(vv):>15} "
+                         f"{_v(res.optimiser.get(k)):>15} "
+                         f"{num(diff, spec='.2e') if diff is not None else '':>11} "
+                         f"{num(a.get('tolerance'), spec='.1e') if a.get('tolerance') else '':>9}  "
                          f"{UNITS[k]}{flag}")
     if ver is not None and ver.constraints:
         bad = [k for k, c in ver.constraints.items() if not c["ok"]]
@@ -161,8 +161,8 @@ def front_text(fr) -> str:
         act = ", ".join(f"{a.name} ({a.bound})" for a in p.active)
         lines.append(f"  {t:9.4g} {p.design['spring_k']:9.1f} "
                      f"{p.design['spring_rest_length']:8.5f} {p.design['damper_c']:9.1f} "
-                     f"{p.objective:10.6g} {_v(m.get('impact_tip_speed'), '12.5f'):>12} "
-                     f"{_v(m.get('peak_tip_speed'), '10.5f'):>10} "
+                     f"{p.objective:10.6g} {num(m.get('impact_tip_speed'), spec='12.5f'):>12} "
+                     f"{num(m.get('peak_tip_speed'), spec='10.5f'):>10} "
                      f"{'yes' if p.success else 'NO':>8}  {act}")
     lines.append("  (speeds: the adaptive reference's simulation of each optimum; "
                  "J: the optimiser's, agreeing with the reference's to 1e-3; designs rounded "

@@ -30,6 +30,7 @@ from ..simulation.stroke import StrokeResult, StrokeStatus
 from ..simulation.handforce import HandForce, hand_force
 from .cache import get_model
 from ..jsonio import jsonable
+from ..present.display import num
 from ..simulation.reference import Reference
 
 #: output grid of the verifying reference simulation (s): events and peaks are located by
@@ -155,19 +156,24 @@ class Verification:
         for k, c in self.constraints.items():
             if not c["ok"] and c.get("reason"):
                 out.append(f"{k} is violated in the reference simulation: {c['reason']}")
+            elif not c["ok"] and isinstance(c["value"], bool):
+                out.append(f"{k} is violated in the reference simulation "
+                           f"({c['value']} against the bound {c['bound']})")
             elif not c["ok"]:
                 u = f" {c['unit']}" if c.get("unit") else ""
                 out.append(f"{k} is violated in the reference simulation "
-                           f"({_g(c['value'])}{u} against the bound {_g(c['bound'])}{u})")
+                           f"({num(c['value'], spec='.9g')}{u} against the bound "
+                           f"{num(c['bound'], spec='.9g')}{u})")
         for k, a in self.agreement.items():
             if not a["ok"]:
                 u = f" {UNITS.get(k, '')}" if UNITS.get(k) else ""
-                if a["reference"] is None or a["optimiser"] is None or k == "closed":
+                if a["difference"] is None:
                     out.append(f"{k}: the optimiser has {a['optimiser']}, the reference "
                                f"{a['reference']}")
                 else:
-                    out.append(f"{k}: the optimiser's {_g(a['optimiser'])}{u} differs from the "
-                               f"reference's {_g(a['reference'])}{u} by "
+                    out.append(f"{k}: the optimiser's {num(a['optimiser'], spec='.9g')}{u} "
+                               f"differs from the reference's "
+                               f"{num(a['reference'], spec='.9g')}{u} by "
                                f"{abs(a['difference']):.2e} (allowed {a['tolerance']:.1e})")
         return tuple(out)
 
@@ -209,8 +215,22 @@ class Verification:
         return jsonable(out)
 
 
-def _g(v) -> str:
-    return f"{v:.9g}" if isinstance(v, float) else str(v)
+def agree(key: str, claimed, reference) -> dict:
+    """One number a solver claims against the adaptive reference's (the nominal and the
+    robust optimiser's one rule): {optimiser, reference, difference, tolerance, ok}.
+    ``closed`` agrees when both say the same; a number only one side has, or a non-finite
+    one, disagrees (no difference); the objective agrees within VERIFY_RTOL (relative), a
+    metric within :func:`softclose.problem.agreement_tolerance`."""
+    a, b = claimed, reference
+    if key == "closed":
+        return {"optimiser": a, "reference": b, "difference": None, "tolerance": None,
+                "ok": bool(a) == bool(b)}
+    if a is None or b is None or not math.isfinite(a) or not math.isfinite(b):
+        return {"optimiser": a, "reference": b, "difference": None, "tolerance": None,
+                "ok": a is None and b is None}
+    tol = VERIFY_RTOL * abs(b) if key == "objective" else agreement_tolerance(key, b)
+    return {"optimiser": float(a), "reference": float(b), "difference": float(a - b),
+            "tolerance": float(tol), "ok": bool(abs(a - b) <= tol)}
 
 
 def verify(cfg, design: dict, claims: dict | None = None,
@@ -291,26 +311,9 @@ def verify(cfg, design: dict, claims: dict | None = None,
         # the engagement (two phases): its time and speed as the NLP's node between the
         # phases has them, against the reference's located event
         for k in METRIC_KEYS + tuple(k for k in ENGAGE_KEYS if k in claims):
-            a, b = claims.get(k), getattr(ref, k)
-            if k == "closed":
-                agreement[k] = {"optimiser": a, "reference": b, "difference": None,
-                                "tolerance": None, "ok": bool(a) == bool(b)}
-            elif a is None or b is None:
-                agreement[k] = {"optimiser": a, "reference": b, "difference": None,
-                                "tolerance": None, "ok": a is None and b is None}
-            else:
-                tol = agreement_tolerance(k, b)
-                agreement[k] = {"optimiser": a, "reference": b, "difference": a - b,
-                                "tolerance": tol, "ok": abs(a - b) <= tol}
+            agreement[k] = agree(k, claims.get(k), getattr(ref, k))
     if claimed_objective is not None:
-        if J is None:
-            agreement["objective"] = {"optimiser": claimed_objective, "reference": None,
-                                      "difference": None, "tolerance": None, "ok": False}
-        else:
-            tol = VERIFY_RTOL * abs(J)
-            agreement["objective"] = {"optimiser": claimed_objective, "reference": J,
-                                      "difference": claimed_objective - J, "tolerance": tol,
-                                      "ok": abs(claimed_objective - J) <= tol}
+        agreement["objective"] = agree("objective", claimed_objective, J)
     return Verification(ref, J, cons, agreement, method, time.perf_counter() - t0,
                         hand=hand_zones)
 

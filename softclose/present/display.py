@@ -11,7 +11,7 @@ shows its size, its feasible count and its best rows, never the rows themselves.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from ..problem import UNITS
 from ..config.schema import KEYS
 
@@ -85,6 +85,11 @@ def pm(v, accuracy, unit: str = "", digits: int = 7) -> str:
     if accuracy is None or v is None or (isinstance(accuracy, float) and math.isnan(accuracy)):
         return s
     return f"{s} ± {float(accuracy):.1e}"
+
+
+def mm(v) -> str:
+    """A length in metres as millimetres, four significant digits ("—" for None)."""
+    return "—" if v is None else f"{num(v * 1e3, spec='.4g')} mm"
 
 
 def _pct(x: float) -> str:
@@ -191,5 +196,5 @@ class Displayed:
         return to_html(self._display())
 
 
-__all__ = ["Display", "Displayed", "Table", "to_html", "to_text", "num", "with_unit", "pm",
+__all__ = ["Display", "Displayed", "Table", "to_html", "to_text", "num", "mm", "with_unit", "pm",
            "percent", "interval", "unit_of", "MAX_ROWS"]

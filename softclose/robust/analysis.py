@@ -109,6 +109,16 @@ class YieldResult(Displayed):
         cols.update({k: v for k, v in d["cols"].items() if k != "status"})
         return pd.DataFrame(cols)
 
+    def save(self, folder, figure_format: str = "png", figure_style: str | None = None,
+             tag: str = "") -> list:
+        """The samples (``yield_samples.csv``) and their histograms
+        (``yield_histograms``) in ``folder`` (what ``softclose yield --out`` writes; ``tag``
+        ends both names, e.g. ``_20C``); the paths."""
+        from ..present.figures import save_with_table
+        return save_with_table(folder, f"yield_samples{tag}.csv", self.to_frame(),
+                               f"yield_histograms{tag}", self.plot, figure_format,
+                               figure_style)
+
     def _display(self) -> Display:
         return Display("YieldResult: Monte Carlo yield over the tolerance box",
                        self.success, self.message, yield_facts(self), yield_tables(self))
@@ -281,6 +291,14 @@ class TemperatureYield:
             return ""
         return (f"the yield at every temperature is {100 * self.yield_:.2f} %, below the "
                 f"required {100 * self.required_yield:g} % (lowest at {self.limiting:g} °C)")
+
+    def save(self, folder, figure_format: str = "png", figure_style: str | None = None
+             ) -> list:
+        """Each temperature's samples and histograms in ``folder``
+        (``yield_samples_<T>C.csv``, ``yield_histograms_<T>C``: what ``softclose yield --out``
+        writes); the paths."""
+        return [f for T, r in zip(self.temperatures, self.results)
+                for f in r.save(folder, figure_format, figure_style, f"_{T:g}C")]
 
     def to_json(self) -> dict:
         """The joint yield's keys, the design and its box (the same at each temperature),

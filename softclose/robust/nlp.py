@@ -41,7 +41,6 @@ stage, :mod:`softclose.robust.codesign`), after (k, l0, c) and before the points
 from __future__ import annotations
 
 import dataclasses
-import functools
 import time
 
 import casadi as ca
@@ -60,8 +59,8 @@ from ..optimiser.interval import (ChebyshevFit, combine_function, END_C, free_la
 from ..model import elements
 from ..optimiser import compiled
 from ..optimiser.nlp import check_linear_solver, group_bounds, stroke_bounds
-from ..optimiser.base import NLP
-from ..optimiser.ipopt import nlpsol, shooting_options, warm_solver
+from ..optimiser.base import NLP, Structure
+from ..optimiser.ipopt import COLD_OPTIONS, shooting_options
 from ..optimiser.run import Run
 from ..optimiser.cache import get_model, keep_out_of
 from ..config.free import config_value
@@ -69,7 +68,6 @@ from ..optimiser.parameters import (holding_moment, LidLayout, opening_angles, o
                                     OPENING_INTERVALS, padded_degree, SELF_CLOSE_INTERVALS,
                                     check_self_close, self_close_bound, self_close_function,
                                     SymbolicSeries)
-from ..buildcache import text
 from ..optimiser.keep_out import keep_out_constraints
 from ..model.lid import model_key
 from .evaluate import with_values
@@ -111,7 +109,7 @@ def scenario_fit(cfg_model: Config, placement: bool = False):
                                gas=gas_nlp(cfg_model))
 
 
-class ScenarioStructure:
+class ScenarioStructure(Structure):
     """The symbolic scenario NLP of one structure: S scenarios of a model with the elements
     ``els`` (series ``names`` at the padded ``degree``), the free variables and points
     (which), the discretisation, the objective, the opening bound, the self-close constraint
@@ -120,6 +118,9 @@ class ScenarioStructure:
     variables' scales, the attachment points and every scenario's lid vector
     (:mod:`softclose.optimiser.parameters`, with the self-close angle) are parameters
     (:meth:`ScenarioNLP.params`)."""
+
+    name = "softclose_robust"
+    kept = {"peak": "peak_fn", "J": "J_fn"}
 
     def __init__(self, S: int, els, names, degree: int, nodes: int, substeps: int,
                  M_engaged: int | None, free: tuple, place: tuple, robust_objective: str,
@@ -155,9 +156,10 @@ class ScenarioStructure:
         check_linear_solver(linear_solver)
         self.options = shooting_options(tol, max_iter, hessian, linear_solver,
                                         calc_lam_p=any(self.held))
-        self.library = library
+        self.cold_options = {**self.options, **COLD_OPTIONS}
+        self.warm_options = {**self.options, **WARM_OPTIONS}
         if library is not None:
-            self._load(library, meta)
+            self.load(library, meta)
             self.build_time = time.perf_counter() - t0
             return
         n1, M = nodes, substeps
@@ -287,40 +289,16 @@ class ScenarioStructure:
         thd = ca.vertcat(*[X[s][1, N - 1] for s in range(S)])
         self.peak_fn = ca.Function("peaks", [w, P], [pv])
         self.J_fn = ca.Function("J", [w, P], [wi * thd ** 2 + wp * pv ** 2])
-        nlp = {"x": w, "f": f_obj, "g": ca.vertcat(*g), "p": P}
-        self.solver = nlpsol("softclose_robust", nlp,
-                             {**self.options, "ipopt.mu_strategy": "adaptive"},
-                             self.nw, int(nlp["g"].numel()), int(P.numel()))
+        self.make_solver({"x": w, "f": f_obj, "g": ca.vertcat(*g), "p": P})
         self.build_time = time.perf_counter() - t0
 
-    @functools.cached_property
-    def warm_solver(self) -> ca.Function:
-        """The warm starts' solver, built on first use (:func:`softclose.optimiser.ipopt.
-        warm_solver`; a co-design's first stage never needs it: 1.1 s for 9 scenarios)."""
-        return warm_solver("softclose_robust_warm", self.solver, self.library,
-                           {**self.options, **WARM_OPTIONS})
-
-    def _load(self, library, meta: dict) -> None:
+    def load(self, library, meta: dict) -> None:
         """The solvers from a compiled library (:mod:`softclose.buildcache`) and the numbers
         :meth:`meta` kept: nothing symbolic is built."""
-        self.g_sizes = [[int(n) for n in row] for row in np.asarray(meta["g_sizes"])]
-        self.block, self.nw = sum(self.g_sizes[0]), int(meta["nw"][0])
-        self.peak_fn = ca.Function.deserialize(text(meta["peak"]))
-        self.J_fn = ca.Function.deserialize(text(meta["J"]))
-        self.solver = nlpsol("softclose_robust", library,
-                             {**self.options, "ipopt.mu_strategy": "adaptive"},
-                             self.nw, sum(map(sum, self.g_sizes)), self.n_params)
-        if (len(self.g_sizes), self.solver.size1_in(0), self.solver.size1_in(1),
-                self.solver.size1_in(5)) != (self.S, self.nw, self.n_params,
-                                             sum(map(sum, self.g_sizes))):
+        super().load(library, meta)
+        if len(self.g_sizes) != self.S:
             raise ValueError("the compiled scenario NLP has other dimensions")
-
-    def meta(self) -> dict:
-        """What a compiled library of this NLP needs beside it: the constraint groups'
-        sizes, the size of w, the peak and objective functions."""
-        return {"g_sizes": np.array(self.g_sizes), "nw": np.array([self.nw]),
-                "peak": self.peak_fn.serialize().encode(),
-                "J": self.J_fn.serialize().encode()}
+        self.block = sum(self.g_sizes[0])
 
 
 class ScenarioNLP(NLP):
@@ -498,11 +476,6 @@ class ScenarioNLP(NLP):
         """Per scenario, its constraint groups (:data:`GROUPS`) and their sizes."""
         return [list(zip(GROUPS, sizes)) for sizes in self.g_sizes]
 
-    @property
-    def warm_solver(self):
-        """The structure's solver of warm starts."""
-        return self.structure.warm_solver
-
     def peaks(self, w, p) -> np.ndarray:
         """Each scenario's own peak tip speed at w: its largest sub-step speed or Hermite
         maximum (not the epigraph variable s_s, which nothing pins when weight_peak_tip is
@@ -533,22 +506,16 @@ _STRUCTURES: dict = {}
 def get_scenario_structure(key: tuple) -> ScenarioStructure:
     """The ScenarioStructure of ``key`` (:attr:`ScenarioNLP.structure_key`), built once:
     its compiled library when ``softclose prepare`` built one, else symbolically."""
-    if key not in _STRUCTURES:
-        from .. import buildcache
-        disk = buildcache.key_of("scenario-nlp", key)
-        (S, els, names, degree, nodes, substeps, M_engaged, free, place, objective, opening,
-         keep_out, hessian, linear_solver, max_iter, tol, self_close, held) = key
+    (S, els, names, degree, nodes, substeps, M_engaged, free, place, objective, opening,
+     keep_out, hessian, linear_solver, max_iter, tol, self_close, held) = key
 
-        def make(library=None, meta=None):
-            return ScenarioStructure(S, tuple(elements.BY_NAME[e] for e in els), names,
-                                     degree, nodes, substeps, M_engaged, free, place, objective,
-                                     opening, keep_out, hessian, linear_solver, max_iter,
-                                     tol, library=library, meta=meta, self_close=self_close,
-                                     held=held)
-        what = (f"of the robust optimiser ({S} scenarios, {nodes} x {substeps} RK4 steps, "
-                f"{objective} case{', the points free' if place else ''})")
-        st = compiled.load_or_build(disk, make, make, what, compiled.SCENARIO_CFLAGS) \
-            if not place else compiled.build_interpreted(make, what)   # (.prepared)
-        st.key = disk
-        _STRUCTURES[key] = st
-    return _STRUCTURES[key]
+    def make(library=None, meta=None):
+        return ScenarioStructure(S, tuple(elements.BY_NAME[e] for e in els), names, degree,
+                                 nodes, substeps, M_engaged, free, place, objective, opening,
+                                 keep_out, hessian, linear_solver, max_iter, tol,
+                                 library=library, meta=meta, self_close=self_close, held=held)
+    what = (f"of the robust optimiser ({S} scenarios, {nodes} x {substeps} RK4 steps, "
+            f"{objective} case{', the points free' if place else ''})")
+    # (the points free: never compiled, ScenarioStructure.prepared)
+    return compiled.kept_structure(_STRUCTURES, key, "scenario-nlp", make, make, what,
+                                   compiled.SCENARIO_CFLAGS, compile_it=not place)

@@ -45,7 +45,7 @@ def get_scenario_nlp(cfg: Config, model_cfgs: list[Config], nodes: int, substeps
         _NLPS.clear()
     nlp = ScenarioNLP(cfg, model_cfgs, nodes, substeps, robust_objective,
                       substeps_engaged=M_engaged)
-    nlp.key = nlp.structure.key
+    nlp.key = nlp.structure.disk
     _NLPS[key] = nlp
     return nlp, False
 

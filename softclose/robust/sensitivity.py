@@ -110,6 +110,14 @@ class SensitivityResult(Displayed):
         return Display("SensitivityResult: Sobol indices over the tolerance box",
                        self.success, self.message, tuple(facts), tuple(tables), short=2)
 
+    def save(self, folder, figure_format: str = "png", figure_style: str | None = None
+             ) -> list:
+        """The indices (``sobol.csv``) and their bars (``sobol``) in ``folder`` (what
+        ``softclose sensitivity --out`` writes); the paths."""
+        from ..present.figures import save_with_table
+        return save_with_table(folder, "sobol.csv", self.to_frame(), "sobol", self.plot,
+                               figure_format, figure_style)
+
     def plot(self, title: str | None = None):
         """Bars of S1 and ST with their intervals, one panel per output (a Figure)."""
         from ..present.figures.robust import plot_sobol

@@ -18,14 +18,13 @@ import numpy as np
 
 from ..simulation import statics
 from ..config import Config
-from ..problem import (DESIGN_KEYS, ENGAGE_KEYS, METRIC_KEYS, VERIFY_RTOL, agreement_tolerance,
-                       design_of, params_of)
+from ..problem import DESIGN_KEYS, ENGAGE_KEYS, METRIC_KEYS, design_of, params_of
 from ..problem import PARAM_COLUMNS, at_temperature
 from .box import box_of
 from .scenarios import design_dict
 from .evaluate import with_values
 from .scenarios import label, temperatures
-from ..optimiser.verify import verify_design
+from ..optimiser.verify import agree, verify_design
 
 
 def _verify_design():
@@ -43,24 +42,11 @@ CLAIMED = ("closing_time", "impact_theta_dot", "peak_tip_speed", "holding_moment
 
 
 def agreement(claims: dict, reference: dict) -> dict:
-    """Each claimed number (:data:`CLAIMED` and ``objective``) against the reference's:
-    {key: {optimiser, reference, difference, tolerance, ok}}. A metric agrees within
-    :func:`softclose.problem.agreement_tolerance`, the objective within VERIFY_RTOL
-    (relative); a number the reference does not have (a lid that does not close) disagrees."""
-    out = {}
-    for k in CLAIMED + ("objective",):
-        a = claims.get(k)
-        if a is None:
-            continue
-        b = reference.get(k)
-        if b is None or not math.isfinite(a) or not math.isfinite(b):
-            out[k] = {"optimiser": a, "reference": b, "difference": None, "tolerance": None,
-                      "ok": False}
-            continue
-        tol = VERIFY_RTOL * abs(b) if k == "objective" else agreement_tolerance(k, b)
-        out[k] = {"optimiser": float(a), "reference": float(b), "difference": float(a - b),
-                  "tolerance": float(tol), "ok": bool(abs(a - b) <= tol)}
-    return out
+    """Each claimed number (:data:`CLAIMED` and ``objective``) against the reference's
+    (:func:`softclose.optimiser.verify.agree`, the nominal optimiser's rule):
+    {key: {optimiser, reference, difference, tolerance, ok}}."""
+    return {k: agree(k, claims[k], reference.get(k)) for k in CLAIMED + ("objective",)
+            if claims.get(k) is not None}
 
 
 def reference_check(cfg: Config, keys, x, label: str = "", kernel: dict | None = None,

@@ -20,7 +20,9 @@ class ReportResult:
     ``success``: the design meets every requirement (every cell of the sign-off matrix, the
     parts, the required yield); ``message``: the one-line verdict; ``failures``: each failed
     requirement in words. The sections' numbers are plain JSON values; ``drawing`` holds
-    what the figures are drawn from (not compared, not in the JSON).
+    what the figures are drawn from (not compared, not in the JSON); ``files``: the files
+    the report was written to (``softclose report`` lists those :meth:`save_all` wrote;
+    none in a result just made).
     """
 
     success: bool
@@ -40,6 +42,7 @@ class ReportResult:
     time: float = 0.0
     timings: dict = field(default_factory=dict)
     drawing: dict = field(default_factory=dict, compare=False)
+    files: tuple = ()
 
     def to_json(self) -> dict:
         """Every number of the report as plain JSON values, by section."""
@@ -49,7 +52,8 @@ class ReportResult:
                 "design": self.design, "problem": self.problem, "parts": self.parts,
                 "metrics": self.metrics, "strokes": self.strokes, "matrix": self.matrix,
                 "yield": self.yields, "limits": self.limits, "config": self.config_toml,
-                "time": self.time, "timings": self.timings}
+                "time": self.time, "timings": self.timings,
+                "files": [str(f) for f in self.files]}
 
     def figures(self) -> dict:
         """The report's figures (matplotlib Figures), by name, in the order shown."""

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..present.display import num
+from ..present.display import mm, num
 from ..problem import METRIC_KEYS, UNITS
 
 #: the report's sections, in order (the HTML's and the PDF's headings)
@@ -15,10 +15,6 @@ SECTIONS = ("1. The lid and the design", "2. The parts to buy",
 def _u(v, unit: str = "", digits: int = 6) -> str:
     t = num(v, digits)
     return f"{t} {unit}".rstrip() if unit and t != "—" else t
-
-
-def _mm(v) -> str:
-    return "—" if v is None else f"{v * 1e3:.4g} mm"
 
 
 def design_rows(r) -> list:
@@ -43,10 +39,10 @@ def spring_rows(r) -> tuple:
     kind = s["kind"]
     if kind == "none":
         return "Spring", [("spring", "none (design.spring_k = 0)")], [], ""
-    lengths = [("works between", f"{_mm(s.get('shortest_length'))} and "
-                                  f"{_mm(s.get('longest_length'))}")]
+    lengths = [("works between", f"{mm(s.get('shortest_length'))} and "
+                                  f"{mm(s.get('longest_length'))}")]
     if kind == "gas_strut":
-        rows = [("extended length", _mm(s["extended_length"])), ("stroke", _mm(s["stroke"])),
+        rows = [("extended length", mm(s["extended_length"])), ("stroke", mm(s["stroke"])),
                 ("force F1 at full extension", _u(s["force_f1"], "N")),
                 ("progression K", num(s["progression"])),
                 ("force F2 at full compression", _u(s["force_f2"], "N")),
@@ -55,22 +51,22 @@ def spring_rows(r) -> tuple:
                  for a in s["force_f1_at"]]
         return "Gas strut", rows, [], ""
     rows = [("kind", s["what"]), ("rate", _u(s["rate"], "N/m")),
-            ("rest length", _mm(s["rest_length"])), ("preload", _u(s["preload"], "N"))]
+            ("rest length", mm(s["rest_length"])), ("preload", _u(s["preload"], "N"))]
     rows += lengths
     checks = []
     c = s.get("coil_spring")
     if c:
         rows += [(f"coil spring ({s['mode']})",
-                  f"{s['material']}: wire d = {_mm(c['wire_d'])}, mean coil D = "
-                  f"{_mm(c['coil_d'])}, {c['active_coils']:g} active coils of "
+                  f"{s['material']}: wire d = {mm(c['wire_d'])}, mean coil D = "
+                  f"{mm(c['coil_d'])}, {c['active_coils']:g} active coils of "
                   f"{c['total_coils']:g}"),
-                 ("free length / solid length", f"{_mm(c['free_length'])} / "
-                                                f"{_mm(c['solid_length'])}")
+                 ("free length / solid length", f"{mm(c['free_length'])} / "
+                                                f"{mm(c['solid_length'])}")
                  if c.get("kind") != "extension" else
-                 ("free length / closed body", f"{_mm(c['free_length'])} / "
-                                               f"{_mm(c['body_length'])}; hooks: "
+                 ("free length / closed body", f"{mm(c['free_length'])} / "
+                                               f"{mm(c['body_length'])}; hooks: "
                                                f"{c['hooks']}"),
-                 ("outer diameter", _mm(c["outer_d"])), ("mass", f"{c['mass'] * 1e3:.4g} g")]
+                 ("outer diameter", mm(c["outer_d"])), ("mass", f"{c['mass'] * 1e3:.4g} g")]
         for ch in s.get("checks", ()):
             scale, unit = {"m": (1e3, "mm"), "Pa": (1e-6, "MPa"), "1": (100.0, "%")}.get(
                 ch["unit"], (1.0, ch["unit"]))

@@ -26,7 +26,7 @@ from ..model import elements
 from .kernel import binding
 from . import statics
 from ..errors import ConfigError, NumericalError
-from ..numerics.integrators import Method, amplification, get_method, spectral_radius
+from ..numerics.integrators import get_method, spectral_radius
 from ..model.lid import LidModel, model_key
 from ..model.dynamics import COEFFS
 from ..model.temperature import at_temperature, parameter_factors

@@ -102,6 +102,9 @@ class StrokeResult(Displayed):
     hand_force: object | None = field(default=None, repr=False, compare=False)
     hand_forces: tuple = field(default=(), repr=False, compare=False)
     end_damper: str | None = None
+    #: with ``trajectory=True`` (:func:`softclose.simulate`): the lid's model, which draws
+    #: the linkage and the animation (:meth:`save`)
+    model: object | None = field(default=None, repr=False, compare=False)
 
     @property
     def ok(self) -> bool:
@@ -206,6 +209,32 @@ class StrokeResult(Displayed):
         if self.trajectory is None:
             raise ValueError("this result has no trajectory: simulate(cfg, trajectory=True)")
         return plot_time_histories(self)
+
+    def save(self, folder, slow_motion: float | None = None, figure_format: str = "png",
+             figure_style: str | None = None) -> list:
+        """The stroke in ``folder`` (what ``softclose simulate --out`` writes): its
+        trajectory CSV, time histories, linkage drawing and animation (``slow_motion``: the
+        GIF's factor), and the hand force (at each sign-off temperature too) when it was
+        asked for; the paths. Needs ``softclose.simulate(cfg, trajectory=True)``."""
+        from pathlib import Path
+
+        from ..present.figures import save
+        from .folder import write_stroke_outputs
+        if self.trajectory is None or self.model is None:
+            raise ValueError("this result has no trajectory: simulate(cfg, trajectory=True)")
+        out = Path(folder)
+        files = write_stroke_outputs(self.model, self, out, slow_motion=slow_motion,
+                                     figure_format=figure_format, figure_style=figure_style)
+        if self.hand_force is not None:
+            from ..present.figures.handforce import (plot_hand_force,
+                                                     plot_hand_force_by_temperature)
+            files.append(save(plot_hand_force(self.hand_force),
+                              out / f"hand_force.{figure_format}", figure_style))
+            if self.hand_forces:
+                files.append(save(plot_hand_force_by_temperature(self.hand_forces),
+                                  out / f"hand_force_temperatures.{figure_format}",
+                                  figure_style))
+        return files
 
 
 def metrics_text(m: dict) -> str:

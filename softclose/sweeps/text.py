@@ -3,6 +3,8 @@ optimal design at every grid point."""
 
 from __future__ import annotations
 
+from ..present.display import num
+
 
 def sweep_text(res, payload: dict, files, resume: str | None) -> str:
     """What ``softclose sweep`` prints: designs computed and feasible, the speed, the best
@@ -19,7 +21,7 @@ def sweep_text(res, payload: dict, files, resume: str | None) -> str:
     b = res.best
     if b:
         lines.append(f"  best feasible (id {b['id']}): "
-                     + ", ".join(f"{k} = {_g(b[k])}" for k in res.keys)
+                     + ", ".join(f"{k} = {num(b[k], spec='.6g')}" for k in res.keys)
                      + f"; objective {b['objective']:.6g}, closing_time "
                        f"{b['closing_time']:.4f} s, impact {b['impact_theta_dot']:.4f} rad/s, "
                        f"peak tip {b['peak_tip_speed']:.4f} m/s")
@@ -30,10 +32,6 @@ def sweep_text(res, payload: dict, files, resume: str | None) -> str:
     if resume:
         lines.append(f"  interrupted: the finished chunks are kept; resume with: {resume}")
     return "\n".join(lines)
-
-
-def _g(v) -> str:
-    return v if isinstance(v, str) else f"{v:.6g}"
 
 
 def _best_per_word(res) -> list[str]:

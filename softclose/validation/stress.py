@@ -20,7 +20,6 @@ NaN, a traceback, a hang or an answer the reference contradicts is a finding.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import re
 import time

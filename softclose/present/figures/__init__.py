@@ -234,5 +234,18 @@ def save(fig, path, style: str | None = None) -> Path:
     return path
 
 
-__all__ = ["plt", "save", "DPI", "FORMATS", "STYLES", "set_style", "current_style", "style",
+def save_with_table(folder, table: str, frame, figure: str, plot, figure_format: str = "png",
+                    style: str | None = None) -> list[Path]:
+    """A result's table and figure in ``folder``: ``frame`` (a pandas DataFrame) as
+    ``table`` without the index, then the figure ``plot()`` draws as ``figure`` (its stem)
+    in ``figure_format`` and ``style``; the two paths, table first. The figure is drawn only
+    once the table is on disk: a failure or a Ctrl-C while matplotlib draws still leaves
+    the numbers."""
+    path = Path(folder) / table
+    write_with(path, lambda p: frame.to_csv(p, index=False))
+    return [path, save(plot(), Path(folder) / f"{figure}.{figure_format}", style)]
+
+
+__all__ = ["plt", "save", "save_with_table", "DPI", "FORMATS", "STYLES", "set_style",
+           "current_style", "style",
            "restyle", "figure_format", "place_label"]

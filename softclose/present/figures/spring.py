@@ -55,14 +55,21 @@ def plot_spring(check):
     af.legend(fontsize=7, loc="upper left")
     af.set_title(f"{s.material}: d = {1e3 * s.wire_d:g} mm, D = {1e3 * s.coil_d:g} mm, "
                  f"n = {s.active_coils:g}", fontsize=9)
-    at.plot(mm, 1e-6 * c["stress"], color="tab:red", label="tau (static check)")
     at.plot(mm[-1], 1e-6 * c["stress"][-1], "o", color="tab:red")
-    at.axhline(1e-6 * st["tau_c_allowed"], color="tab:red", ls="--", lw=1,
-               label="0.56 R_m: tau at the solid length below it")
-    at.plot(mm, 1e-6 * c["stress_corrected"], color="tab:purple",
-            label="tau_k, corrected (fatigue check)")
-    _fatigue_and_verdict(at, check)
+    _stresses(at, check, mm, c, st["tau_c_allowed"],
+              "0.56 R_m: tau at the solid length below it", "fatigue check")
     return fig
+
+
+def _stresses(at, check, mm, c, allowed: float, limit: str, fatigue: str) -> None:
+    """The stress panel ``at``: tau of the static check and its limit ``allowed`` (Pa,
+    labelled ``limit``), the corrected tau_k of the ``fatigue`` check, the fatigue line and
+    the verdict (:func:`_fatigue_and_verdict`)."""
+    at.plot(mm, 1e-6 * c["stress"], color="tab:red", label="tau (static check)")
+    at.axhline(1e-6 * allowed, color="tab:red", ls="--", lw=1, label=limit)
+    at.plot(mm, 1e-6 * c["stress_corrected"], color="tab:purple",
+            label=f"tau_k, corrected ({fatigue})")
+    _fatigue_and_verdict(at, check)
 
 
 def _force_and_stress_axes(check):
@@ -108,12 +115,8 @@ def _plot_extension(check):
     af.set_title(f"extension spring, {s.material}: d = {1e3 * s.wire_d:g} mm, "
                  f"D = {1e3 * s.coil_d:g} mm, n = {s.active_coils:g} (hooks not covered)",
                  fontsize=9)
-    at.plot(mm, 1e-6 * c["stress"], color="tab:red", label="tau (static check)")
-    at.axhline(1e-6 * st["tau_2_allowed"], color="tab:red", ls="--", lw=1,
-               label="0.45 R_m: tau at the longest working length below it")
-    at.plot(mm, 1e-6 * c["stress_corrected"], color="tab:purple",
-            label="tau_k, corrected (the body's fatigue)")
-    _fatigue_and_verdict(at, check)
+    _stresses(at, check, mm, c, st["tau_2_allowed"],
+              "0.45 R_m: tau at the longest working length below it", "the body's fatigue")
     return fig
 
 
