@@ -155,7 +155,7 @@ def test_ctrl_c_during_a_stroke_batch(tmp_path, spreads):
     code, err, latency = interrupt_at(
         "kernel", ["yield", "--samples", "20000", *_LONG_STROKES, *spreads], tmp_path)
     assert_one_line_130(code, err, "yield interrupted in the stroke kernel")
-    assert latency is not None and latency < 10.0, f"took {latency:.1f} s to stop"
+    assert latency is not None and latency < 20.0, f"took {latency:.1f} s to stop"
 
 
 def _png_complete(path: Path) -> bool:
