@@ -5,24 +5,26 @@ Single shooting. Each evaluation integrates the closing stroke with
 equation of motion (:attr:`softclose.model.lid.LidModel.ode`, the exact equation, called
 from Python), stops it at the rim with a terminal event (theta = theta_closed moving down:
 the closing time and impact speed to the integrator's accuracy) and reads the peak tip speed
-and the largest theta' from the dense output on a 400-point grid, the peak refined by a
-bounded scalar search around the grid's maximum. ``scipy.optimize.minimize`` (SLSQP) then
-minimises J (divided by the start's J: order one) over (k, l0, c) scaled to order one (by :data:`softclose.problem.SCALES`), in
-the design box, with the closing-time bounds, no rebound (max theta' <= 0) and the holding
-moment as inequality constraints, from the config's design, its gradients by forward
-differences (step 1e-6 of the scaled variables: well above the integrator's noise),
-starting from the best feasible design of a 3 x 3 x 3 grid of the box (SLSQP started where
-the lid does not close finds no gradient of the closing time and ends infeasible). One
-stroke's results are cached per design, so the objective and the constraints at one point
-cost one integration.
+and the largest theta' after the release from the dense output on a 400-point grid, the
+peak refined by a bounded scalar search around the grid's maximum. ``scipy.optimize.minimize``
+(SLSQP) then minimises J (divided by the start's J: order one) over (k, l0, c) scaled to
+order one (by :data:`softclose.problem.SCALES`), in the design box, with the closing-time
+bounds, no rebound (max theta' <= 0) and the holding moment as inequality constraints, its
+gradients by forward differences (step 1e-6 of the scaled variables: well above the
+integrator's noise), from the best feasible design of a 3 x 3 x 3 grid of the box (SLSQP
+started where the lid does not close finds no gradient of the closing time and stays
+infeasible). One stroke's results are kept per design, so the objective and the constraints
+at one point cost one integration. (``method="trust-constr"`` is the other choice a user
+has; on this problem it needs more iterations than SLSQP.)
 
 What it does differently from softclose: one start (softclose tries six and keeps the best);
-an adaptive integration per evaluation and ~4 per gradient, where softclose's multiple
-shooting NLP carries the stroke as variables with exact derivatives; the stroke's
-constraints read on a grid of the dense output (softclose imposes them at every RK4 sub-step
-and the Hermite maxima between); a linear spring over the whole box (softclose's default
-also checks that the spring is one that can be bought, a compression or an extension
-spring, one problem each).
+an adaptive integration per evaluation and four per gradient, where softclose's multiple
+shooting NLP carries the stroke as variables with exact derivatives (so the closing time's
+steep dependence on the design near a lid that nearly stalls is a constraint on states, not
+on a shooting function); the stroke's constraints read on a grid of the dense output
+(softclose imposes them at every RK4 sub-step and the Hermite maxima between); a linear
+spring over the whole box (softclose's default also asks the spring to be one that can be
+bought, a compression or an extension spring, one problem each).
 """
 
 from __future__ import annotations
