@@ -84,7 +84,8 @@ def solve(cfg, log=None) -> dict:
 
     def callback(i, _solution):
         iterations[0] = i
-        interrupt.check()                   # Ctrl-C: stop between Ipopt iterations
+        if interrupt.stop_requested():      # Ctrl-C (noted): Ipopt stops at this iteration
+            raise KeyboardInterrupt
 
     ocp.callback(callback)
     ocp.solver("ipopt", {"expand": True, "print_time": False,
@@ -94,18 +95,19 @@ def solve(cfg, log=None) -> dict:
                          "ipopt.bound_relax_factor": 0.0})
     log("  rockit: transcribing and solving ...")
     try:
-        sol = ocp.solve()
-        status, ok = "converged", True
+        with interrupt.solving():           # Ctrl-C noted, raised when the solve returns
+            sol = ocp.solve()
+        status = "converged"
     except RuntimeError as exc:              # Ipopt did not converge: its last iterate
         if interrupt.interrupted():
             raise KeyboardInterrupt from exc
-        sol, status, ok = ocp.non_converged_solution, "not converged", False
+        sol, status = ocp.non_converged_solution, "not converged"
     stats = sol.stats
     zs = np.asarray(sol.value(z), float).ravel() * SCALES
     J = float(sol.value(o.weight_impact * ocp.at_tf(theta_dot) ** 2 + o.weight_peak_tip * peak2))
     return {"design": dict(zip(DESIGN_KEYS, (float(v) for v in zs))), "objective": J,
             "iterations": int(stats.get("iter_count", iterations[0])),
-            "time": time.perf_counter() - t0, "status": status if ok else status,
+            "time": time.perf_counter() - t0, "status": status,
             "message": str(stats.get("return_status", ""))}
 
 

@@ -117,11 +117,12 @@ def solve(cfg, log=None, method: str = "SLSQP") -> dict:
         i = int(np.argmax(v))
         peak = float(v[i])
         if 0 < i < GRID - 1:        # refine the peak between the grid's neighbours
-            r = minimize_scalar(lambda t: -float(speed(sol.sol(t))), bounds=(tt[i - 1], tt[i + 1]),
-                                method="bounded", options={"xatol": 1e-12})
+            r = minimize_scalar(lambda t: -float(speed(sol.sol(t))),
+                                bounds=(tt[i - 1], tt[i + 1]), method="bounded",
+                                options={"xatol": 1e-12})
             peak = max(peak, -float(r.fun))
-        return {"closed": bool(sol.t_events[0].size), "T": T, "impact": impact, "peak": peak, "thd_max": float(Y[1].max()),
-                "hold": float(model.dV(st.theta_closed, p))}
+        return {"closed": bool(sol.t_events[0].size), "T": T, "impact": impact, "peak": peak,
+                "thd_max": float(Y[1].max()), "hold": float(model.dV(st.theta_closed, p))}
 
     cache: dict = {}       # one stroke per design: J and the constraints read it
 
