@@ -184,19 +184,21 @@ def structures_markdown(rows) -> str:
 def peers_markdown(rows) -> str:
     """The peers' table: each tool's time to its optimum (wall, CPU, as a multiple of
     softclose's), its J and violations in softclose's adaptive reference, its iterations."""
-    head = ("| tool | time | CPU | × softclose | J (reference) | vs softclose | "
+    head = ("| tool | time | CPU | × softclose | J (reference) | J / softclose's − 1 | "
             "violations (reference) | closing time (reference) | iterations | starts |\n"
             "|---|---:|---:|---:|---:|---:|---|---:|---:|---:|")
     lines = [head]
     for r in rows:
         rel = r.get("objective_relative")
-        rel = "—" if rel is None or r["tool"] == "softclose" else f"{100 * rel:+.3f} %"
+        rel = "—" if rel is None or r["tool"] == "softclose" else f"{rel:+.2e}"
+        its = str(r["iterations"]) + (f" ({r['evaluations']} strokes)"
+                                      if r.get("evaluations") else "")
         ratio = "1" if r["tool"] == "softclose" else num(r.get("ratio"), spec=".1f")
         closing = r.get("closing_time")
         lines.append(f"| {r['tool']} | {r['time_s']:.2f} s | {r['cpu_s']:.2f} s | {ratio} | "
                      f"{num(r.get('objective_reference'), spec='.8g')} | {rel} | "
                      f"{', '.join(r['violations']) or 'none'} | "
-                     f"{'—' if closing is None else f'{closing:.9f} s'} | {r['iterations']} | "
+                     f"{'—' if closing is None else f'{closing:.9f} s'} | {its} | "
                      f"{r['starts']} |")
     return "\n".join(lines)
 
@@ -302,9 +304,11 @@ def write_structures(res, out: Path) -> list[Path]:
 
 
 def peers_record(res) -> dict:
-    """The peers' rows of a run with the machine and load they were measured on."""
+    """The peers' rows of a run with the machine, the load and the tools' versions."""
+    from .peers import versions
     return {"machine": res.machine, "date": res.date, "commit": res.commit,
-            "load": list(res.load), "rows": [dict(r) for r in res.peers]}
+            "load": list(res.load), "versions": versions(),
+            "rows": [dict(r) for r in res.peers]}
 
 
 def write_peers(res, out: Path) -> list[Path]:

@@ -42,6 +42,19 @@ WHAT = {
 }
 
 
+def versions() -> dict:
+    """The versions of the tools of the table (None: not installed)."""
+    from importlib.metadata import PackageNotFoundError, version
+    out = {}
+    for tool, dist in (("softclose", "softclose"), ("rockit", "rockit-meco"),
+                       ("scipy", "scipy"), ("casadi", "casadi")):
+        try:
+            out[tool] = version(dist)
+        except PackageNotFoundError:
+            out[tool] = None
+    return out
+
+
 def require_peers() -> None:
     """Refuse (one line, exit 2) when the peers' extra is not installed."""
     from .rockit_ocp import available
@@ -147,4 +160,4 @@ def peer_rows(cfg, log=None, tools: tuple = TOOLS) -> list[dict]:
     return rows
 
 
-__all__ = ["peer_rows", "require_peers", "timed", "judged", "TOOLS", "INSTALL", "WHAT"]
+__all__ = ["peer_rows", "require_peers", "versions", "timed", "judged", "TOOLS", "INSTALL", "WHAT"]
