@@ -84,8 +84,7 @@ def solve(cfg, log=None) -> dict:
 
     def callback(i, _solution):
         iterations[0] = i
-        if interrupt.stop_requested():      # Ctrl-C (noted): Ipopt stops at this iteration
-            raise KeyboardInterrupt
+        interrupt.check()                   # Ctrl-C noted: Ipopt stops at this iteration
 
     ocp.callback(callback)
     ocp.solver("ipopt", {"expand": True, "print_time": False,
@@ -95,8 +94,9 @@ def solve(cfg, log=None) -> dict:
                          "ipopt.bound_relax_factor": 0.0})
     log("  rockit: transcribing and solving ...")
     try:
-        with interrupt.solving():           # Ctrl-C noted, raised when the solve returns
-            sol = ocp.solve()
+        # Ctrl-C: raised at once in rockit's Python code, and inside Ipopt in the
+        # iteration callback, which ends the solve (CasADi's own building, in C++, ends first)
+        sol = ocp.solve()
         status = "converged"
     except RuntimeError as exc:              # Ipopt did not converge: its last iterate
         if interrupt.interrupted():
