@@ -71,6 +71,9 @@ class BenchResult(Displayed):
     load: tuple = ()  # 1-minute load average at the start and at the end of the run
     #: the NLP structures of the README's commands (:mod:`softclose.bench.structures`)
     structures: tuple = ()
+    #: the default design problem in the tools a user would pick instead
+    #: (:mod:`softclose.bench.peers`)
+    peers: tuple = ()
 
     @property
     def default(self) -> dict:
@@ -137,16 +140,21 @@ class BenchResult(Displayed):
                          "speed": list(self.speed), "optimiser": list(self.optimiser),
                          "optimiser_note": self.optimiser_note, "elapsed": self.elapsed,
                          "load": list(self.load), "config": self.config,
-                         "structures": list(self.structures)})
+                         "structures": list(self.structures), "peers": list(self.peers)})
 
 
 def run(cfg: Config, quick: bool = False, log=None, cli: bool = True,
-        optimiser: bool = True, features: bool = True, structures: bool = False
-        ) -> BenchResult:
+        optimiser: bool = True, features: bool = True, structures: bool = False,
+        peers: bool = False) -> BenchResult:
     """The whole benchmark: work precision, speed, optimiser (see the module docstring);
     with ``structures``, the NLP structures of the README's commands too (their size, build
-    and compile times: minutes)."""
+    and compile times: minutes); with ``peers``, the default design problem in rockit and in
+    a scipy notebook beside softclose (:mod:`softclose.bench.peers`: minutes; rockit is the
+    ``peers`` extra, refused in one line when missing, before anything runs)."""
     log = log or (lambda *a: None)
+    if peers:
+        from .peers import require_peers
+        require_peers()
     t0 = time.perf_counter()
     load0 = _load()
     log("work precision ...")
@@ -161,6 +169,11 @@ def run(cfg: Config, quick: bool = False, log=None, cli: bool = True,
         log("NLP structures ...")
         from .structures import structure_rows
         st = tuple(structure_rows(cfg, log=log))
+    pe = ()
+    if peers:
+        log("peers ...")
+        from .peers import peer_rows
+        pe = tuple(peer_rows(cfg, log=log))
     return BenchResult(machine=machine(),
                        date=datetime.datetime.now().astimezone().isoformat(timespec="seconds"),
                        commit=commit(), quick=quick, work_precision=wp, speed=tuple(sp),
@@ -170,7 +183,7 @@ def run(cfg: Config, quick: bool = False, log=None, cli: bool = True,
                                "step": cfg.simulate.step,
                                "nodes": cfg.optimise.nodes,
                                "substeps": cfg.optimise.substeps},
-                       load=(load0, _load()), structures=st)
+                       load=(load0, _load()), structures=st, peers=pe)
 
 
 def _time(t) -> str:

@@ -1,7 +1,8 @@
 """The text, Markdown tables and files of a benchmark run (:class:`BenchResult`): what
 ``softclose bench`` prints and what ``--out DIR`` holds -- ``work_precision.csv``,
 ``speed.csv``, ``optimiser.csv``, ``bench.md``, ``bench.json``, ``speed.json`` (the speed rows
-alone), with ``--structures`` ``structures.csv`` and ``structures.json``, and the figures
+alone), with ``--structures`` ``structures.csv`` and ``structures.json``, with ``--peers``
+``peers.csv`` and ``peers.json``, and the figures
 ``work_precision``, ``error_vs_step`` and ``optimiser``."""
 
 from __future__ import annotations
@@ -180,6 +181,28 @@ def structures_markdown(rows) -> str:
     return "\n".join(lines)
 
 
+def peers_markdown(rows) -> str:
+    """The peers' table: each tool's time to its optimum (wall, CPU, as a multiple of
+    softclose's), its J and violations in softclose's adaptive reference, its iterations."""
+    head = ("| tool | time | CPU | × softclose | J (reference) | J / softclose's − 1 | "
+            "violations (reference) | closing time (reference) | iterations | starts |\n"
+            "|---|---:|---:|---:|---:|---:|---|---:|---:|---:|")
+    lines = [head]
+    for r in rows:
+        rel = r.get("objective_relative")
+        rel = "—" if rel is None or r["tool"] == "softclose" else f"{rel:+.2e}"
+        its = str(r["iterations"]) + (f" ({r['evaluations']} strokes)"
+                                      if r.get("evaluations") else "")
+        ratio = "1" if r["tool"] == "softclose" else num(r.get("ratio"), spec=".1f")
+        closing = r.get("closing_time")
+        lines.append(f"| {r['tool']} | {r['time_s']:.2f} s | {r['cpu_s']:.2f} s | {ratio} | "
+                     f"{num(r.get('objective_reference'), spec='.8g')} | {rel} | "
+                     f"{', '.join(r['violations']) or 'none'} | "
+                     f"{'—' if closing is None else f'{closing:.9f} s'} | {its} | "
+                     f"{r['starts']} |")
+    return "\n".join(lines)
+
+
 def optimiser_markdown(rows, note="") -> str:
     """The optimiser table (N, sub-steps, objective error, solve time, design)."""
     if not rows:
@@ -222,6 +245,8 @@ def report_text(res) -> str:
         "optimiser:", optimiser_markdown(res.optimiser, res.optimiser_note), "",
         *(["NLP structures:", structures_markdown(res.structures), ""] if res.structures
           else []),
+        *(["peers (the default design problem in each tool, each optimum re-simulated by the "
+           "adaptive reference):", peers_markdown(res.peers), ""] if res.peers else []),
         default_text(res.default)])
 
 
@@ -233,7 +258,8 @@ def report_markdown(res) -> str:
             f"## Speed\n\n{speed_markdown(res.speed)}\n\n"
             f"## Optimiser\n\n{optimiser_markdown(res.optimiser, res.optimiser_note)}\n"
             + (f"\n## NLP structures\n\n{structures_markdown(res.structures)}\n"
-               if res.structures else ""))
+               if res.structures else "")
+            + (f"\n## Peers\n\n{peers_markdown(res.peers)}\n" if res.peers else ""))
 
 
 # -- files ---------------------------------------------------------------------------------
@@ -277,6 +303,26 @@ def write_structures(res, out: Path) -> list[Path]:
     return [write_csv(list(res.structures), Path(out) / "structures.csv"), path]
 
 
+def peers_record(res) -> dict:
+    """The peers' rows of a run with the machine, the load and the tools' versions."""
+    from .peers import versions
+    return {"machine": res.machine, "date": res.date, "commit": res.commit,
+            "load": list(res.load), "versions": versions(),
+            "rows": [dict(r) for r in res.peers]}
+
+
+def write_peers(res, out: Path) -> list[Path]:
+    """The peers' table (CSV) and record (JSON: the rows with where they were measured, the
+    record the performance page's table is held to: docs/bench_peers.json,
+    tests/test_bench_peers.py) into ``out``."""
+    from ..jsonio import dumps
+    path = Path(out) / "peers.json"
+    write_text(path, dumps(peers_record(res), indent=1))
+    rows = [{k: (", ".join(v) if isinstance(v, list) else v) for k, v in r.items()
+             if k not in ("design", "violation_text")} for r in res.peers]
+    return [write_csv(rows, Path(out) / "peers.csv"), path]
+
+
 def write_files(res, out: Path, figure_format: str = "png", figure_style: str | None = None
                 ) -> list[Path]:
     """Tables, report, JSON and figures of one bench run into ``out`` (which exists), the
@@ -300,6 +346,8 @@ def write_files(res, out: Path, figure_format: str = "png", figure_style: str | 
         files.append(write_csv(res.optimiser, out / "optimiser.csv"))
     if res.structures:
         files += write_structures(res, out)
+    if res.peers:
+        files += write_peers(res, out)
     write_text(out / "bench.md", report_markdown(res))
     files.append(out / "bench.md")
     files.append(figure(plot_work_precision(res.work_precision), "work_precision"))
@@ -315,7 +363,8 @@ def write_files(res, out: Path, figure_format: str = "png", figure_style: str | 
     return files
 
 
-__all__ = ["write_files", "write_structures", "structures_record", "speed_record", "write_csv",
+__all__ = ["write_files", "write_structures", "structures_record", "write_peers",
+           "peers_record", "peers_markdown", "speed_record", "write_csv",
            "report_text", "report_markdown", "default_text", "work_precision_markdown",
            "speed_markdown", "optimiser_markdown", "structures_markdown", "met_text",
            "target_text", "ORDER_DASH"]

@@ -1,4 +1,5 @@
-"""``softclose bench [--quick] [--out DIR]``: run time against error, speeds, optimiser.
+"""``softclose bench [--quick] [--structures] [--peers] [--out DIR]``: run time against error,
+speeds, optimiser; the NLP structures; the peers.
 
 The measuring is :func:`softclose.bench.run`; its result prints and saves itself
 (:meth:`softclose.bench.BenchResult.save`: the files ``--out DIR`` holds, checked before any
@@ -31,16 +32,25 @@ def register(sub) -> None:
                    help="also measure the NLP structures of the main commands (optimise, --robust, "
                         "the co-designs): variables, parameters, generated C and the time to "
                         "build and compile it (minutes)")
+    p.add_argument("--peers", action="store_true",
+                   help="also solve the default design problem in rockit and in a scipy "
+                        "notebook, each timed to its optimum beside `softclose optimise` and "
+                        "re-simulated by the adaptive reference (minutes; needs the peers "
+                        'extra: pip install "softclose[peers]")')
     p.set_defaults(run=run)
 
 
 def run(cfg, args) -> Outcome:
+    if args.peers:               # the extra is missing: one line, before any work
+        from ..bench.peers import require_peers
+        require_peers()
     out = prepare_out(args.out)
     from .. import bench
     # progress on a terminal only: a failing run's stderr is then its one-line error
     log = (lambda *a: print(*a, file=sys.stderr, flush=True)) if interactive(args) else \
         (lambda *a: None)
-    res = bench.run(cfg, quick=args.quick, log=log, structures=args.structures)
+    res = bench.run(cfg, quick=args.quick, log=log, structures=args.structures,
+                    peers=args.peers)
     files = res.save(out, FIGURES["format"], FIGURES["style"]) if out is not None else []
     payload = res.to_json()
     payload["files"] = [str(f) for f in files]
