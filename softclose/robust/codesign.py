@@ -6,21 +6,31 @@ mounted, not a spread); so is the end damper's engagement angle, and its coeffic
 nominal value of a part made to a tolerance (its relative spread, like the dashpot's, moves
 with it). Two stages:
 
-1. **Where**: the nominal optimum with the points free (:func:`softclose.optimise`'s NLP)
-   gives the start points; a coarse kernel sweep of (k, l0, c) at them, judged over the
-   box's starting scenarios (:func:`softclose.robust.solve.start_design`), the start design;
-   then the scenario NLP with the points (the end damper's c_e and angle) as shared design
-   variables (:class:`softclose.robust.nlp.ScenarioNLP`: every scenario's spring length and
-   holding moment at the points, each scenario's spring kind valid over the stroke with its
-   own free length; every scenario two-phase at the shared angle, with its own c_e) chooses
-   them and the design for the worst case over the scenarios. The spring kinds are solved
-   one after the other: a later kind whose nominal optimum already exceeds an earlier
-   kind's worst case stops there (:func:`choose_points`).
+1. **Where**: the C kernel screens the box of the shared variables
+   (:mod:`softclose.optimiser.screening`: a grid of placements, its corners among them,
+   each with its best design of a coarse (k, l0, c) grid judged over the nominal lid and
+   the box's corners at every sign-off temperature). The best few placements each start the
+   scenario NLP with the points fixed there (the robust optimiser's own NLP, its start design
+   the robust sweep's at those points); the best of those answers starts the scenario NLP
+   with the points (the end damper's c_e and angle) as shared design variables
+   (:class:`softclose.robust.nlp.ScenarioNLP`: every scenario's spring length and holding
+   moment at the points, each scenario's spring kind valid over the stroke with its own free
+   length; every scenario two-phase at the shared angle, with its own c_e), which chooses
+   them and the design for the worst case over the scenarios. A free end damper (or a gas
+   strut) goes from the best screened placement to the joint NLP at once (its NLP at fixed
+   values is no cheaper). The spring kinds are solved one after the other: a later kind
+   whose nominal co-design optimum already exceeds an earlier kind's worst case stops there
+   (:func:`choose_points`).
 2. **What, verified**: at those points (a config with them set, the points no longer free)
    the robust optimiser runs as without free points (:func:`optimise_robust_kind`: start,
    scenario NLP, the interior worst cases and every corner in the kernel, the accuracy
    loop, every scenario re-simulated by the adaptive reference, the yield). Its design is
    the answer; the points are reported with it (``design``: ``spring_anchor[0]`` ...).
+
+Stage 2 runs at the first stage's answer; should its verified worst case be above the best
+the screening saw (or should it fail), it runs at the first stage's other candidates too
+(the fixed placements' answers, best first) and the best verified one is kept
+(:func:`softclose.robust.design.optimise_robust`).
 
 Stage 2 only adds scenarios the NLP of stage 1 did not have; the points are not moved for
 them (a design that stays feasible over them is still verified over every corner).
@@ -95,8 +105,13 @@ def choose_points(cfg: Config, notes: list, bound: float | None = None) -> tuple
     own = {k: float(np.clip(_value(cfg, k), lo, hi)) for k, lo, hi in free_of(cfg)
            if k in CHOSEN}
     fixed = []
-    # (a gas strut's free variables are set up for free points: it goes to the joint NLP)
-    for i in scr.kept if cfg.design.spring_kind != "gas_strut" else ():
+    # the scenario NLP at fixed points is the robust optimiser's own (prepared, compiled):
+    # cheaper than the joint one. Not so with the end damper chosen (its NLP at a fixed end
+    # damper is another structure) or a gas strut (whose free variables are set up for free
+    # points): those go to the joint NLP at once
+    cheaper = cfg.design.spring_kind != "gas_strut" and not any(
+        k in (END_C, END_ANGLE) for k in layout)
+    for i in scr.kept if cheaper else ():
         pts = {**own, **scr.placement(i)}
         t1 = time.perf_counter()
         run, scen = _fixed(cfg, pts)
@@ -113,7 +128,8 @@ def choose_points(cfg: Config, notes: list, bound: float | None = None) -> tuple
     candidates = [f[2] for f in ranked]
     start_pts = candidates[0] if candidates else \
         ({**own, **scr.placement(scr.kept[0])} if scr.kept else own)
-    start = ranked[0][3].design[:3] if ranked else None
+    start = ranked[0][3].design[:3] if ranked else (scr.designs[scr.kept[0]] if scr.kept
+                                                     else None)
     t1 = time.perf_counter()
     run, c_s, scen = _joint(_at(cfg, start_pts), start)
     info.setdefault("attempts", []).append({"from": "the best fixed placement"
