@@ -161,14 +161,18 @@ class Screening:
                                         if np.isfinite(self.objective[i]) else None)}
                          for i in self.kept]}
 
-    def line(self) -> str:
-        """The screening in one line of text."""
+    def line(self, started: int | None = None) -> str:
+        """The screening in one line of text (``started``: how many of the kept placements
+        started an NLP, default all)."""
         best = self.best_objective
         return (f"screening: {len(self.values)} placements x {self.scenarios} scenario"
                 f"{'s' if self.scenarios != 1 else ''} in the kernel ({self.strokes} strokes, "
                 f"{self.seconds:.2f} s), best screened J "
                 + (f"{best:.6g}" if best is not None else "none (no placement met every "
-                   "constraint)") + f"; the best {len(self.kept)} started the NLP")
+                   "constraint)") + "; " + (
+                    "the best started the NLP" if started == 1 else
+                    f"the best {len(self.kept) if started is None else started} started "
+                    "the NLPs"))
 
 
 def screen(box: tuple, G: np.ndarray, judge, scenarios: int, worst: bool = True,

@@ -38,6 +38,7 @@ them (a design that stays feasible over them is still verified over every corner
 
 from __future__ import annotations
 
+import itertools
 import time
 
 import numpy as np
@@ -55,7 +56,7 @@ from ..optimiser.optimiser import optimise_kind
 from ..optimiser.kinds import kind_config
 from ..optimiser.screening import Screening, placement_designs, screen, shared_box
 from ..problem import PARAM_COLUMNS, with_designs
-from .scenarios import factors, maps
+from .scenarios import Scenario, factors, maps, temperatures
 from .stats import margins
 from .policy import t_end
 from .evaluate import evaluate, simulator
@@ -163,7 +164,7 @@ def choose_points(cfg: Config, notes: list, bound: float | None = None) -> tuple
     if not candidates:
         candidates = [points]
     info.update(points=dict(points), candidates=candidates, time=time.perf_counter() - t0)
-    notes.append(scr.line())
+    notes.append(scr.line(len(fixed) or 1))
     return points, info
 
 
@@ -171,14 +172,32 @@ def _finite(v) -> float | None:
     return float(v) if np.isfinite(v) else None
 
 
+#: most scenarios the screening judges every placement in: beyond, those
+#: :func:`~.scenarios.initial_scenarios` picks at the config's design
+MAX_SCREENED_SCENARIOS = 257
+
+
+def screened_scenarios(cfg: Config, box) -> list:
+    """The scenarios the screening judges a placement's designs in: the nominal lid and
+    every corner of the box, at every sign-off temperature (the nominal lid nearest the
+    reference temperature first)."""
+    ref = cfg.operating.reference_temperature_c
+    temps = sorted(temperatures(cfg), key=lambda T: abs(T - ref))
+    if (2 ** box.dim + 1) * len(temps) > MAX_SCREENED_SCENARIOS:
+        return initial_scenarios(box, cfg, [[getattr(cfg.design, k) for k in DESIGN_KEYS]],
+                                 1.0)
+    zero = tuple([0.0] * box.dim)
+    out = [Scenario(zero, "nominal", T) for T in temps]
+    out += [Scenario(tuple(map(float, z)), "corner", T) for T in temps
+            for z in itertools.product((-1.0, 1.0), repeat=box.dim)]
+    return out
+
+
 def screen_robust(cfg: Config) -> Screening:
-    """The first stage's screening (:func:`softclose.optimiser.screening.screen`) over the
-    box's starting scenarios (the nominal lid and the corners at every sign-off
-    temperature; beyond :func:`~.policy.max_corners`, those
-    :func:`~.scenarios.initial_scenarios` picks at the config's design)."""
+    """The first stage's screening (:func:`softclose.optimiser.screening.screen`) over
+    :func:`screened_scenarios`."""
     box = box_of(cfg)
-    ref = [getattr(cfg.design, k) for k in DESIGN_KEYS]
-    scen = initial_scenarios(box, cfg, [ref], 1.0)
+    scen = screened_scenarios(cfg, box)
     m = [maps(box, np.asarray(s.z), factors(cfg, s.temperature_c)) for s in scen]
     shared = shared_box(cfg, end_damper=True)
     keys = [k for k, _, _ in shared]
