@@ -305,4 +305,37 @@ def _quoted(key: str, v: float) -> str:
     return f"{key} = {v:.6g} " + ("deg" if key == END_ANGLE else "N m s/rad")
 
 
-__all__ = ["choose_points", "fixed_points"]
+def best_verified(cfg, kind, r, c, points, info, notes, solve):
+    """Stage 2's answer at the first stage's points, or -- when it failed, or its worst-case
+    J is above the best the screening saw -- the best of it and stage 2 at the first stage's
+    other candidates (:func:`choose_points`), tried in order until one is no worse than
+    the screening's best: (result, its config, its points). ``solve``: stage 2 of a
+    config."""
+    scr = info.get("screening")
+    target = None if scr is None else scr.best_objective
+    best = (r, c, points)
+
+    def good(x):
+        return x.success and x.objective is not None and (
+            target is None or x.objective <= target * (1 + 1e-9))
+
+    for pts in (info.get("candidates") or [])[1:]:
+        if good(best[0]):
+            break
+        c2, why = kind_config(fixed_points(cfg, pts), kind, robust=True)
+        if why is not None:
+            continue
+        r2 = solve(c2)
+        notes.append(f"stage 2 at another candidate of the first stage: worst J "
+                     + (f"{r2.objective:.6g}" if r2.objective is not None else "none")
+                     + f" ({'verified' if r2.success else 'not verified'}) against "
+                     + (f"{best[0].objective:.6g}" if best[0].objective is not None
+                        else "none"))
+        if (r2.success, -(r2.objective if r2.objective is not None else np.inf)) > \
+                (best[0].success, -(best[0].objective if best[0].objective is not None
+                                    else np.inf)):
+            best = (r2, c2, pts)
+    return best
+
+
+__all__ = ["choose_points", "fixed_points", "best_verified"]

@@ -79,7 +79,7 @@ from .worst_cases import check_corners
 from ..optimiser.optimiser import optimise_kind
 from ..present.progress import Progress
 from ..optimiser.keep_out import clearance
-from .codesign import choose_points, fixed_points
+from .codesign import best_verified, choose_points, fixed_points
 from ..optimiser.free_points import SLOTS
 from ..optimiser.interval import END_ANGLE, END_C
 from ..optimiser.spring_part import spring_part
@@ -156,9 +156,10 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
             r = optimise_robust_kind(c, progress=progress, samples=samples, seed=seed,
                                      verify=verify, report=report)
         if placed:      # the best verified: another candidate when this one is worse
-            r, c, points = _best_verified(cfg, kind, r, c, points, info, stage_notes,
-                                          dict(progress=progress, samples=samples,
-                                               seed=seed, verify=verify, report=report))
+            r, c, points = best_verified(cfg, kind, r, c, points, info, stage_notes,
+                                         lambda c2: optimise_robust_kind(
+                                             c2, progress=progress, samples=samples,
+                                             seed=seed, verify=verify, report=report))
             if screening is not None:
                 r = replace(r, screening=screening.to_json())
         if placed:              # stage 2 ran at the points (end damper): report them
@@ -196,38 +197,6 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
         limiting = temps[0]
     return replace(best, kind=kind, kinds=tuple(rows), part=part, notes=notes, times=times,
                    config=out_cfg, temperatures=temps, limiting_temperature_c=limiting)
-
-
-def _best_verified(cfg, kind, r, c, points, info, notes, opts):
-    """Stage 2's answer at the first stage's points, or -- when it failed, or its worst-case
-    J is above the best the screening saw -- the best of it and stage 2 at the first stage's
-    other candidates (:func:`~.codesign.choose_points`), tried in order until one is no worse
-    than the screening's best: (result, its config, its points)."""
-    scr = info.get("screening")
-    target = None if scr is None else scr.best_objective
-    best = (r, c, points)
-
-    def good(x):
-        return x.success and x.objective is not None and (
-            target is None or x.objective <= target * (1 + 1e-9))
-
-    for pts in (info.get("candidates") or [])[1:]:
-        if good(best[0]):
-            break
-        c2, why = kind_config(fixed_points(cfg, pts), kind, robust=True)
-        if why is not None:
-            continue
-        r2 = optimise_robust_kind(c2, **opts)
-        notes.append(f"stage 2 at another candidate of the first stage: worst J "
-                     + (f"{r2.objective:.6g}" if r2.objective is not None else "none")
-                     + f" ({'verified' if r2.success else 'not verified'}) against "
-                     + (f"{best[0].objective:.6g}" if best[0].objective is not None
-                        else "none"))
-        if (r2.success, -(r2.objective if r2.objective is not None else np.inf)) > \
-                (best[0].success, -(best[0].objective if best[0].objective is not None
-                                    else np.inf)):
-            best = (r2, c2, pts)
-    return best
 
 
 def _objective(x) -> float:
