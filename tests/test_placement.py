@@ -126,6 +126,14 @@ def test_robust_co_design_meets_every_corner_and_beats_todays_points():
     for k, (lo, hi) in BOX.items():
         assert lo - 1e-9 <= r.design[k.split(".", 1)[1]] <= hi + 1e-9
     assert r.objective < 0.12548 * 0.95
+    assert r.objective <= 0.1136636
+    # the first stage's screening (docs/codesign.md): the 3^4 grid of placements over the
+    # nominal lid and the 8 corners, a few tens of thousands of strokes; the answer no
+    # worse than the best placement it saw
+    scr = r.to_json()["screening"]
+    assert (scr["placements"], scr["scenarios"], len(scr["kept"])) == (81, 9, 3)
+    assert 10_000 <= scr["strokes"] < 100_000
+    assert r.objective <= scr["best_objective"]
     # the answer's config holds the points (not free any more): its robust design is the
     # same when solved again at them
     c = r.design_config()

@@ -53,6 +53,30 @@ def strut_force_bound(cfg: Config) -> float:
     return float(next(m * e for m in (1, 2, 5, 10) if m * e >= F))
 
 
+def _length_spread(cfg: Config, kind: str, robust: bool):
+    """The free length's spread a robust design must stay valid over (None: none)."""
+    if kind != "linear" and robust:             # l0 (1 -+ s) or l0 -+ s must stay valid
+        return next((x for x in cfg.tolerance.spreads
+                     if x.key == "design.spring_rest_length"), None)
+    return None
+
+
+def free_length_bounds(cfg: Config, kind: str, lmin, lmax, robust: bool = False):
+    """optimise.spring_rest_length tightened so that a spring of ``kind`` whose length runs
+    over [lmin, lmax] stays valid (with ``robust``, over the free length's tolerance too):
+    (lo, hi), numbers or arrays like lmin and lmax (lo > hi: none is valid). A gas strut's
+    and a linear spring's are the config's."""
+    lo, hi = cfg.optimise.spring_rest_length
+    s = _length_spread(cfg, kind, robust)
+    if kind == "compression":
+        need = lmax if s is None else (lmax / (1 - s.value) if s.relative else lmax + s.value)
+        lo = np.maximum(lo, need)
+    elif kind == "extension":
+        need = lmin if s is None else (lmin / (1 + s.value) if s.relative else lmin - s.value)
+        hi = np.minimum(hi, need)
+    return lo, hi
+
+
 def kind_config(cfg: Config, kind: str, robust: bool = False) -> tuple[Config, str | None]:
     """``cfg`` for solving with a spring of ``kind``: design.spring_kind set, and the free
     length's bounds tightened so that the spring stays valid over the whole stroke (with
@@ -65,23 +89,16 @@ def kind_config(cfg: Config, kind: str, robust: bool = False) -> tuple[Config, s
         return cfg.update({"design.spring_kind": kind}), None
     lmin, lmax = spring_range(cfg)
     lo, hi = o.spring_rest_length
-    if kind != "linear" and robust:             # l0 (1 -+ s) or l0 -+ s must stay valid
-        s = next((x for x in cfg.tolerance.spreads if x.key == "design.spring_rest_length"),
-                 None)
-    else:
-        s = None
+    s = _length_spread(cfg, kind, robust)
     if kind == "gas_strut":
         return _strut_config(cfg, lo, hi, lmin, lmax, s)
+    lo, hi = free_length_bounds(cfg, kind, lmin, lmax, robust)
     if kind == "compression":
-        need = lmax if s is None else (lmax / (1 - s.value) if s.relative else lmax + s.value)
-        lo = max(lo, need)
         if d.spring_min_length is not None and d.spring_min_length > lmin:
             return cfg, (f"a compression spring would be compressed to {lmin * 1e3:.2f} mm, "
                          f"below its solid length design.spring_min_length = "
                          f"{d.spring_min_length * 1e3:.2f} mm")
     elif kind == "extension":
-        need = lmin if s is None else (lmin / (1 + s.value) if s.relative else lmin - s.value)
-        hi = min(hi, need)
         if d.spring_max_length is not None and d.spring_max_length < lmax:
             return cfg, (f"an extension spring would be stretched to {lmax * 1e3:.2f} mm, "
                          f"beyond its maximum length design.spring_max_length = "

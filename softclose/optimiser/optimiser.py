@@ -28,10 +28,11 @@ from .ipopt import check_options
 from .nlp import J_INDEX, Run, ShootingNLP
 from .polish import keep_clear, nlp_objective, refine, tighten
 from .result import Active, OptimiseResult
-from .starts import MAX_STARTS, initial_guess, sweep_starts, sweep_time
+from .starts import MAX_STARTS, design_rows, initial_guess, sweep_starts, sweep_time
+from .screening import KEEP, nominal_judge, placement_designs, screen, shared_box
 from .verify import get_checker, verify as verify_design
 from ..interrupt import check
-from .free_points import placed_config
+from .free_points import placed_config, placement_layout
 from .keep_out import clearance
 from ..config.free import config_value
 
@@ -374,6 +375,11 @@ class Plan:
     designs: np.ndarray     # (starts, 3): where each start begins
     info: dict              # the sweep's summary
     bounds: tuple
+    #: free attachment points: the kernel's screening of their box
+    #: (:mod:`.screening`), whose best placements are the first starts, each with its
+    #: simulator (the initial guess's stroke at its points); else None and ()
+    screening: object = None
+    sims: tuple = ()
 
     @property
     def n_starts(self) -> int:
@@ -393,8 +399,19 @@ def plan_kind(cfg, starts: int | None = None, nodes: int | None = None,
     nlp = get_nlp(cfg, disc.nodes, disc.substeps)
     sim = stroke_simulator(cfg, sweep_time(cfg, disc.t_limit))
     designs, info = sweep_starts(cfg, n_starts, disc.t_limit, sim)
+    screening, sims = None, ()
+    if placement_layout(cfg):   # a global look at the points' box first
+        box = shared_box(cfg)
+        screening = screen(box, lambda V: placement_designs(cfg, sim.table, box, V),
+                           nominal_judge(cfg, sim, box, disc.t_limit), 1,
+                           keep=min(KEEP, n_starts))
+        placed = [placed_config(cfg, screening.placement(i)) for i in screening.kept]
+        rows = [design_rows(c, screening.designs[i][None])[0]
+                for c, i in zip(placed, screening.kept)]
+        designs = np.vstack(rows + list(designs[:max(n_starts - len(rows), 0)]))
+        sims = tuple(stroke_simulator(c, sweep_time(c, disc.t_limit)) for c in placed)
     return Plan(cfg, disc, nlp, 0.0 if cached else nlp.build_time, sim, designs, info,
-                nlp.bounds(cfg))
+                nlp.bounds(cfg), screening, sims)
 
 
 def solve_start(plan: Plan, i: int) -> tuple[Run, dict]:
@@ -403,9 +420,11 @@ def solve_start(plan: Plan, i: int) -> tuple[Run, dict]:
     check()
     nlp, cfg, d0 = plan.nlp, plan.cfg, plan.designs[i]
     p = nlp.params(cfg)
-    w0, J0 = initial_guess(nlp, cfg, d0, plan.sim, p, plan.disc.t_limit)
+    sim = plan.sims[i] if i < len(plan.sims) else plan.sim
+    w0, J0 = initial_guess(nlp, cfg, d0, sim, p, plan.disc.t_limit)
     p[J_INDEX] = max(J0, 1e-8)
-    r = nlp.solve(w0, p, *plan.bounds, origin=f"start {i + 1}")
+    r = nlp.solve(w0, p, *plan.bounds, origin=f"start {i + 1}" + (
+        " (a screened placement)" if i < len(plan.sims) else ""))
     check_options(r, cfg)
     return r, start_row(nlp, cfg, d0, r, J0)
 
@@ -449,6 +468,9 @@ def optimise_kind(cfg, *, starts: int | None = None, verify: bool = True,
         runs = [solved[i][0] for i in range(plan.n_starts)]
         rows = [solved[i][1] for i in range(plan.n_starts)]
         base = dict(starts=tuple(rows), build_time=plan.build, sweep=plan.info)
+        if plan.screening is not None:
+            base["screening"] = plan.screening.to_json()
+            notes.append(plan.screening.line())
         ok = [i for i, r in enumerate(runs) if r.success]
         if not ok:
             msg, inf = diagnose(cfg, nlp, runs)

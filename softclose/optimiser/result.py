@@ -89,6 +89,9 @@ class OptimiseResult(Displayed):
     problem: dict = field(default_factory=dict)
     sweep: dict | None = None
     infeasibility: dict | None = None
+    #: free attachment points: the kernel's screening of their box
+    #: (:meth:`softclose.optimiser.screening.Screening.to_json`), else None
+    screening: dict | None = None
     notes: tuple = ()
     config: object = field(default=None, repr=False, compare=False)
     run: object = field(default=None, repr=False, compare=False)    # the final Ipopt run
@@ -135,6 +138,8 @@ class OptimiseResult(Displayed):
         out["problem"] = self.problem
         out["starts"] = list(self.starts)
         out["sweep"] = self.sweep
+        if self.screening is not None:
+            out["screening"] = self.screening
         out["solver"] = {"method": "direct multiple shooting, RK4, Ipopt" + (
                              ", two phases (switched at the end damper's engagement angle, "
                              "its time free)" if self.substeps_engaged else ""),

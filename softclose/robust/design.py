@@ -79,7 +79,7 @@ from .worst_cases import check_corners
 from ..optimiser.optimiser import optimise_kind
 from ..present.progress import Progress
 from ..optimiser.keep_out import clearance
-from .codesign import choose_points, fixed_points
+from .codesign import best_verified, choose_points, fixed_points
 from ..optimiser.free_points import SLOTS
 from ..optimiser.interval import END_ANGLE, END_C
 from ..optimiser.spring_part import spring_part
@@ -143,6 +143,7 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
                                  "nominal lid is a scenario)")})
                 continue
             c, why = kind_config(fixed_points(cfg, points), kind, robust=True)
+            screening = info.get("screening")
         if why is not None:
             rows.append({"kind": kind, "success": False, "objective": None,
                          "message": why})
@@ -154,6 +155,13 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
         else:
             r = optimise_robust_kind(c, progress=progress, samples=samples, seed=seed,
                                      verify=verify, report=report)
+        if placed:      # the best verified: another candidate when this one is worse
+            r, c, points = best_verified(cfg, kind, r, c, points, info, stage_notes,
+                                         lambda c2: optimise_robust_kind(
+                                             c2, progress=progress, samples=samples,
+                                             seed=seed, verify=verify, report=report))
+            if screening is not None:
+                r = replace(r, screening=screening.to_json())
         if placed:              # stage 2 ran at the points (end damper): report them
             r = replace(r, design={**(r.design or {}), **{k.split(".", 1)[1]: v
                                                           for k, v in points.items()}},

@@ -61,6 +61,9 @@ class RobustResult(Displayed):
     #: a compression spring made to order: the EN 15800 box the answer holds for (grade, the
     #: spreads used, their source, the spring d x D x n; :mod:`softclose.robust.spring_box`)
     spring_tolerance: dict | None = None
+    #: a co-design: the first stage's screening of the shared variables' box
+    #: (:meth:`softclose.optimiser.screening.Screening.to_json`), else None
+    screening: dict | None = None
     #: the config it was designed for
     config: object = field(default=None, repr=False, compare=False)
 
@@ -126,6 +129,8 @@ class RobustResult(Displayed):
             out["corner_check"] = self.corner_check
         if self.spring_tolerance is not None:
             out["spring_tolerance"] = self.spring_tolerance
+        if self.screening is not None:
+            out["screening"] = self.screening
         if self.infeasibility is not None:
             out["infeasibility"] = self.infeasibility
         if self.notes:
