@@ -85,6 +85,22 @@ class HandForce:
                              "friction_torque": self.friction, "lever": self.lever})
 
 
+def _hand_function(model):
+    """``(theta, p) -> (dV/dtheta, F_open, tau)``: the model's ``dV``, the first output of its
+    ``opening`` and the ``tau`` row of its ``coeffs``, as one function of those expressions
+    only (the full ``coeffs`` and the derivatives cost ~4x the work on the grid; the same
+    operations, so the same numbers). Built once per model."""
+    fn = model.__dict__.get("_hand_fn")
+    if fn is None:
+        import casadi as ca
+        th = ca.SX.sym("theta")
+        p = ca.SX.sym("p", model.dV.size1_in(1))
+        fn = ca.Function("hand_parts", [th, p], [model.dV(th, p), model.opening(th, p)[0],
+                                                  model.coeffs(th)[0][COEFFS.index("tau")]])
+        model.__dict__["_hand_fn"] = fn
+    return fn
+
+
 def _parts(model, p, th):
     """(dV/dtheta, T_fr, tau) at the angles th (rad) from the exact model."""
     th = np.atleast_1d(np.asarray(th, float))
@@ -92,14 +108,10 @@ def _parts(model, p, th):
     P = np.repeat(np.asarray(p, float)[:, None], n, 1)
     maps = model.__dict__.setdefault("_hand_maps", {})  # (mapping builds a Function: once)
     if n not in maps:
-        maps[n] = tuple(f if n == 1 else f.map(n) for f in (model.dV, model.opening,
-                                                            model.coeffs))
-    fdV, fop, fco = maps[n]
-    dV = np.asarray(fdV(th, P)).ravel()
-    F = np.asarray(fop(th, P)[0]).ravel()
-    c = np.asarray(fco(th)[0]).reshape(len(COEFFS), n)
-    tau = np.abs(c[COEFFS.index("tau"), :])
-    fr = F * c[COEFFS.index("tau"), :] - dV       # (the model's friction moment)
+        maps[n] = _hand_function(model) if n == 1 else _hand_function(model).map(n)
+    dV, F, tau = (np.asarray(v).ravel() for v in maps[n](th, P))
+    fr = F * tau - dV                             # (the model's friction moment)
+    tau = np.abs(tau)
     fr = np.where(np.abs(fr) < 1e-12 * np.maximum(1.0, np.abs(dV)), 0.0, fr)
     return dV, fr, tau
 
