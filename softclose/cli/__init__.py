@@ -35,8 +35,9 @@ COMMANDS = {"state": "state", "simulate": "simulate", "optimise": "optimise",
 PROG = "softclose"
 
 DESCRIPTION = """\
-Design soft-closing lids on a four-bar linkage: simulate the closing stroke, optimise the
-spring and damper, sweep any config keys, and judge a design under manufacturing tolerances.
+Design soft-closing lids, on a four-bar linkage or a hinge (one pivot): simulate the closing
+stroke, optimise the spring and damper, sweep any config keys, and judge a design under
+manufacturing tolerances.
 
 Start with `softclose optimise --out D`: it writes the optimal design as D/design.toml,
 which every command takes with `--config D/design.toml` (e.g. `softclose yield --config
