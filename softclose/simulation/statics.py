@@ -354,17 +354,18 @@ def opening_force_exact(model, p, grid=None) -> float:
     th = np.linspace(st.theta_closed, st.theta0, OPENING_EXACT_GRID)
     if grid is not None and np.array_equal(grid[0], th):
         F, dF = grid[1], grid[2]
-    else:
+    else:          # the model's hand function: F and dF as ``opening`` has them, ~1/3 the work
         fn = model.__dict__.get("_opening_grid")
         if fn is None:                # (mapping a Function builds one: once per model)
-            fn = model.__dict__["_opening_grid"] = model.opening.map(OPENING_EXACT_GRID)
-        F, dF = (np.asarray(a).ravel() for a in fn(th, np.repeat(p[:, None], len(th), 1)))
+            fn = model.__dict__["_opening_grid"] = model.hand.map(OPENING_EXACT_GRID)
+        F, dF = (np.asarray(a).ravel()
+                 for a in fn(th, np.repeat(p[:, None], len(th), 1))[1:3])
     i = int(np.argmax(F))
     best = float(F[i])
     if 0 < i < len(th) - 1 and dF[i - 1] > 0 > dF[i + 1]:
         def dF_at(x):           # every force met on the way counts towards the largest
             nonlocal best
-            Fx, dFx = (float(v) for v in model.opening(x, p))
+            Fx, dFx = (float(v) for v in model.hand(x, p)[1:3])
             best = max(best, Fx)
             return dFx
         illinois(dF_at, th[i - 1], th[i + 1], dF[i - 1], dF[i + 1],
