@@ -1,4 +1,4 @@
-"""softclose: design soft-closing paper-bin lids on a four-bar linkage.
+"""softclose: design soft-closing lids, on a four-bar linkage or a hinge (one pivot).
 
 The public API. Each function takes a :class:`Config` and plain Python values, writes no
 file, prints nothing unless ``progress=True``, and returns an immutable result with

@@ -259,7 +259,6 @@ def sweep_temporaries(where: Path) -> list[Path]:
     """Remove the temporary files and build folders (``.NAME.PID.tmp``, ``.build-KEY.PID``)
     left in ``where`` by processes that are gone (killed midway); the removed ones. Those of
     live processes -- this one, another run writing now -- are left alone."""
-    import shutil
     gone = []
     try:
         found = [p for p in where.iterdir() if p.name.startswith(".")]
@@ -273,6 +272,7 @@ def sweep_temporaries(where: Path) -> list[Path]:
             if _alive(int(parts[1])):
                 continue
             if p.is_dir():
+                import shutil   # (only here: shutil and its compressors cost ~3 ms)
                 shutil.rmtree(p, ignore_errors=True)
             else:
                 _remove(p)

@@ -8,6 +8,7 @@ The work-precision run here is the quick one, restricted to rk4 (spec8 and soft_
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -224,29 +225,43 @@ def test_simulate_start_up_imports_nothing_heavy():
 
 
 def test_start_up_rows_are_ratios_to_import_casadi(monkeypatch):
-    """The two start-up rows: each command's alternated median over the median of
-    ``python -c "import casadi"``, held to 1.5x (simulate) and 4x (optimise)."""
+    """The two start-up rows: each command's median over the median of ``python -c "import
+    casadi"``, the fresh interpreters run in turn (casadi, simulate, optimise, round after
+    round; the first round not counted), held to 1.5x (simulate) and 4x (optimise); beside
+    it the ratio pair by pair and that of the CPU times."""
     from softclose.bench import calls
-    times = iter([0.10, 0.14, 0.50] * 4)           # casadi, simulate, optimise; 4 rounds
+    # (wall, cpu) of each fresh interpreter: casadi, simulate, optimise; a warm-up round
+    # then 5 rounds, the host slower in the last two
+    rounds = [(1.0, 9.0, 9.0)] + [(0.10, 0.14, 0.50)] * 3 + [(0.20, 0.28, 1.00)] * 2
+    runs = iter([(t, t / 2) for r in rounds for t in r])
+    seen = []
 
-    class Done:
-        returncode = 0
-
-    monkeypatch.setattr(calls.subprocess, "run", lambda *a, **k: Done())
+    def timed(cmd, env):
+        seen.append(cmd)
+        return next(runs)
+    monkeypatch.setattr(calls, "timed_process", timed)
     import softclose.optimiser.cache as oc
     monkeypatch.setattr(oc, "prepare", lambda cfg: None)
-    # each subprocess "takes" the next time: perf_counter before and after
-    stamps = []
-    for t in times:
-        stamps += [0.0, t]
-    it = iter(stamps)
-    monkeypatch.setattr("time.perf_counter", lambda: next(it))
-    rows = calls.startup_rows(repeats=3)
+    rows = calls.startup_rows(repeats=5)
+    assert [c[-1] for c in seen[:3]] == ["import casadi", "--json", "--json"]
+    assert [c[-2] for c in seen[1:3]] == ["simulate", "optimise"]
+    assert len(seen) == 18
     sim, opt = rows
     assert sim["key"] == "startup_simulate" and sim["ratio"] == pytest.approx(1.4)
+    assert sim["paired_ratio"] == pytest.approx(1.4) and sim["cpu_ratio"] == pytest.approx(1.4)
+    assert sim["floor_s"] == pytest.approx(0.10) and sim["median_s"] == pytest.approx(0.14)
     assert sim["met"] is True and sim["target"] == {"max_ratio": 1.5}
     assert opt["ratio"] == pytest.approx(5.0) and opt["met"] is False
-    assert "interpreted" in opt["note"]
+    assert "interpreted" in opt["note"] and "medians of 5" in opt["note"]
+
+
+def test_a_timed_process_counts_its_wall_and_cpu_time():
+    from softclose.bench import calls
+    wall, cpu = calls.timed_process([sys.executable, "-c", "sum(range(3000000))"],
+                                    dict(os.environ))
+    assert wall > 0 and cpu is not None and 0 < cpu < 10 * wall + 1
+    with pytest.raises(RuntimeError, match="failed"):
+        calls.timed_process([sys.executable, "-c", "raise SystemExit(3)"], dict(os.environ))
 
 
 def test_cheapest_is_a_method_s_largest_passing_step_whatever_the_timings_say():

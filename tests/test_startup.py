@@ -1,6 +1,7 @@
 """The first second: what is built from a config is kept on disk (softclose.buildcache) and
 gives the same numbers; a damaged or stale entry is ignored; the optimiser's NLP compiled to C
-gives the same optimum; a command line builds only its own parser."""
+gives the same optimum; a command line builds only its own parser and imports only what it
+uses (the structure is tested here; the times are `softclose bench`'s start-up rows)."""
 
 from __future__ import annotations
 
@@ -133,6 +134,7 @@ def test_using_an_nlp_compiles_nothing_and_starts_no_process(cache, cfg, monkeyp
     """An NLP used again and again (in other processes) is built symbolically each time;
     nothing is compiled, nothing started: compiling is only done when asked for."""
     import subprocess
+    compiled.toolchain()             # (the compiler's --version: asked once, then remembered)
     started = []
     monkeypatch.setattr(subprocess, "Popen", lambda *a, **k: started.append(a))
     from softclose.optimiser.cache import get_nlp
@@ -141,7 +143,7 @@ def test_using_an_nlp_compiles_nothing_and_starts_no_process(cache, cfg, monkeyp
         assert get_nlp(cfg).library is None
     assert not started
     assert not [p.name for p in cache.glob("*/*") if not p.name.startswith(
-        ("model-", "table-", "nlpmeta-"))]
+        ("model-", "table-", "fit-", "nlpmeta-"))]
 
 
 def test_prepare_compiles_in_the_foreground_saying_what(cache, cfg, monkeypatch, capfd):
@@ -169,7 +171,8 @@ def test_prepare_compiles_in_the_foreground_saying_what(cache, cfg, monkeypatch,
     assert err.startswith("softclose: building the NLP of the optimiser (")
     assert "(C, -O1) ..." in err and err.rstrip().endswith(" s")
     left = {p.name.split("-")[0] for p in lib.parent.iterdir()}
-    assert {"nlp", "nlpmeta"} <= left <= {"model", "table", "nlp", "nlpmeta", "locks"}, left
+    assert {"nlp", "nlpmeta"} <= left <= {"model", "table", "fit", "nlp", "nlpmeta",
+                                          "locks"}, left
     assert prepare(cfg) == lib and len(runs) == 1         # compiled already
     key = buildcache.key_of("nlp", nlp_key(cfg))
     assert compiled.compiled_nlp(key) == lib
@@ -293,3 +296,103 @@ def test_prepare_refuses_without_a_cache_or_a_compiler(monkeypatch, capsys, tmp_
     assert main(["prepare"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "no C compiler 'no-such-compiler-here'" in err[0]
+
+
+def test_a_kept_fit_gives_the_same_numbers(cache, cfg):
+    """The optimiser's Chebyshev fit of a lid, kept beside the model, reads back to the
+    fitted numbers bit for bit; a damaged entry is fitted again."""
+    from softclose.optimiser.cache import get_model, kept_fit
+    from softclose.optimiser.interval import ChebyshevFit, gas_nlp, nlp_elements
+    _clear_memory()
+    model, els = get_model(cfg), nlp_elements(cfg)
+    fresh = ChebyshevFit(model, els=els, gas=gas_nlp(cfg))
+    stored = kept_fit(model, els, False, gas_nlp(cfg))         # fitted and stored
+    assert len(list(cache.glob("*/fit-*.bin"))) == 1
+    loaded = kept_fit(model, els, False, gas_nlp(cfg))         # read back
+    assert not hasattr(loaded, "exact")
+    for f in (stored, loaded):
+        assert f.names == fresh.names and f.degree == fresh.degree
+        assert (f.lo, f.hi, f.max_rel_error) == (fresh.lo, fresh.hi, fresh.max_rel_error)
+        assert np.array_equal(f.coef, fresh.coef)
+    for path in cache.glob("*/fit-*.bin"):
+        path.write_bytes(b"damaged")
+    assert np.array_equal(kept_fit(model, els, False, gas_nlp(cfg)).coef, fresh.coef)
+
+
+def test_the_compilers_version_is_asked_once(cache, monkeypatch):
+    """The compiler's ``--version`` keys its libraries; it is asked once per compiler file,
+    then read from the cache folder: a command that loads a compiled NLP starts no
+    process."""
+    import subprocess
+    if compiled._which(compiled.compiler()) is None:
+        pytest.skip("no C compiler")
+    first = compiled.compiler_version(compiled.compiler())
+    assert first and list(cache.glob("compiler-*.txt"))
+
+    def refused(*a, **k):
+        raise AssertionError("a process was started")
+    monkeypatch.setattr(subprocess, "run", refused)
+    assert compiled.compiler_version(compiled.compiler()) == first
+    assert compiled.compiler_version("no-such-compiler-here") is None
+
+
+def _modules_after(*args: str) -> set:
+    """The modules a command line (``softclose ARGS``, run in a process of its own) has
+    imported when it returns."""
+    import json
+    import subprocess
+    import sys
+    code = ("import sys, io, contextlib, json\n"
+            "from softclose.cli import main\n"
+            "with contextlib.redirect_stdout(io.StringIO()):\n"
+            f"    code = main({list(args)!r})\n"
+            "print(json.dumps([code, sorted(sys.modules)]))")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    code, modules = json.loads(r.stdout)
+    assert code == 0, r.stderr
+    return set(modules)
+
+
+#: what no command that draws, tabulates or writes nothing needs
+HEAVY = ("pandas", "matplotlib", "scipy", "dask", "distributed", "pyarrow", "fpdf",
+         "numpy.ma", "numpy.polynomial")
+
+
+def test_simulate_imports_only_what_it_uses():
+    """``softclose simulate --json`` loads none of the libraries a table, a figure, a sweep
+    or a report needs, no standard of the coil spring it does not design, no feature of the
+    package and nothing that would start a process (the start-up this keeps is measured by
+    ``softclose bench``'s start-up rows)."""
+    loaded = _modules_after("simulate", "--json")
+    assert [m for m in HEAVY if m in loaded] == []
+    assert not [m for m in loaded if m.startswith(("softclose.optimiser", "softclose.robust",
+                                                   "softclose.sweeps", "softclose.catalog",
+                                                   "softclose.signoff", "softclose.bench",
+                                                   "softclose.present.figures"))]
+    assert "softclose.coil_spring.design" not in loaded
+    assert "softclose.coil_spring.materials" in loaded
+    assert not {"subprocess", "shutil", "bz2", "lzma"} & loaded
+
+
+def test_the_command_line_imports_only_the_commands_it_runs():
+    import subprocess
+    import sys
+    code = ("import sys, softclose.cli\n"
+            "print(' '.join(sorted(m for m in sys.modules)))")
+    loaded = set(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                                check=True).stdout.split())
+    assert [m for m in HEAVY if m in loaded] == []
+    assert [m for m in loaded if m.startswith("softclose.cli.") and m != "softclose.cli.common"] \
+        == []
+
+
+@pytest.mark.slow
+def test_optimise_imports_only_what_it_uses():
+    """``softclose optimise --json`` solves and verifies without a table, a figure or a
+    sweep's libraries, and without numpy.ma (np.unique(x) would import it: ~60 ms)."""
+    loaded = _modules_after("optimise", "--json")
+    assert [m for m in HEAVY if m in loaded and m != "numpy.polynomial"] == []
+    assert not [m for m in loaded if m.startswith(("softclose.sweeps", "softclose.catalog",
+                                                   "softclose.signoff",
+                                                   "softclose.present.figures"))]

@@ -83,10 +83,11 @@ def speed(cfg: Config, quick: bool = False, cli: bool = True, features: bool = T
                       "(fresh interpreter)", cli_time(["simulate", "--json"], rc), rc, note))
         if quick:
             rows.extend(not_measured(key, f"{what} end to end / `python -c \"import casadi\"`",
-                                     "not measured with --quick (40 fresh interpreters): "
-                                     "run softclose bench") for key, _, what in STARTUP)
+                                     f"not measured with --quick ({3 * (STARTUP_REPEATS + 1)} "
+                                     "fresh interpreters): run softclose bench")
+                        for key, _, what in STARTUP)
         else:
-            rows.extend(startup_rows(rc, log))
+            rows.extend(startup_rows(STARTUP_REPEATS, log))
     if features:
         rows.extend(feature_entries(cfg, quick=quick, log=log))
     return rows
@@ -97,16 +98,45 @@ def speed(cfg: Config, quick: bool = False, cli: bool = True, features: bool = T
 STARTUP = (("startup_simulate", ["simulate", "--json"], "`softclose simulate --json`"),
            ("startup_optimise", ["optimise", "--json"], "`softclose optimise --json` (the "
             "main job: 6 starts, verification)"))
+#: fresh interpreters of each command of :data:`STARTUP` and of ``import casadi`` (after one
+#: round that warms the caches): the rows are medians of this many
+STARTUP_REPEATS = 5
 
 
-def startup_rows(repeats: int = 9, log=None) -> list[dict]:
-    """The start-up ratios of :data:`STARTUP` on the default config: medians of ``repeats``
-    fresh interpreters of each command and of ``python -c "import casadi"``, run in turn
-    (alternated, so that a change of the host's speed touches all alike), after one run of
-    each and with the optimiser's NLP compiled (:func:`softclose.optimiser.cache.prepare`):
-    what a user's second and later runs take."""
-    import statistics
+def _children_cpu() -> float | None:
+    """CPU seconds (user + system) of this process's finished children, None where the OS
+    does not count them."""
+    try:
+        import resource
+    except ImportError:             # pragma: no cover  (not a POSIX system)
+        return None
+    ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return ru.ru_utime + ru.ru_stime
+
+
+def timed_process(cmd: list[str], env: dict) -> tuple[float, float | None]:
+    """(wall seconds, CPU seconds or None) of one fresh process running ``cmd`` to its end;
+    a RuntimeError with its last words when it fails."""
     import time
+    c0, t0 = _children_cpu(), time.perf_counter()
+    r = subprocess.run(cmd, capture_output=True, env=env, text=True)
+    wall, c1 = time.perf_counter() - t0, _children_cpu()
+    if r.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd[2:])} failed: {r.stderr.strip()[-300:]}")
+    return wall, None if c0 is None or c1 is None else c1 - c0
+
+
+def startup_rows(repeats: int = STARTUP_REPEATS, log=None) -> list[dict]:
+    """The start-up ratios of :data:`STARTUP` on the default config: each command's median
+    wall time over ``repeats`` fresh interpreters, divided by the median of as many of
+    ``python -c "import casadi"``, the two run in turn (``import casadi``, then each
+    command, round after round: a change of the host's speed touches all alike), after one
+    round that warms the caches and with the optimiser's NLP compiled
+    (:func:`softclose.optimiser.cache.prepare`): what a user's second and later runs take.
+    Each row also has the ratio taken pair by pair (each command against the ``import
+    casadi`` of its round; ``paired_ratio``, the median) and the ratio of the CPU times'
+    medians (``cpu_ratio``: on a busy host the steadier of the three)."""
+    import statistics
     log = log or (lambda *a: None)
     lib = optimiser_cache.prepare(default_config())
     how = ("the NLP compiled" if lib is not None else
@@ -120,24 +150,30 @@ def startup_rows(repeats: int = 9, log=None) -> list[dict]:
     env = fresh_env()
     cmds = {"casadi": fresh_command("-c", "import casadi")}
     cmds.update({k: fresh_command("-m", "softclose", *argv) for k, argv, _ in STARTUP})
-    times: dict = {k: [] for k in cmds}
+    wall: dict = {k: [] for k in cmds}
+    cpu: dict = {k: [] for k in cmds}
     for i in range(repeats + 1):
         for k, cmd in cmds.items():
-            t = time.perf_counter()
-            r = subprocess.run(cmd, capture_output=True, env=env, text=True)
-            dt = time.perf_counter() - t
-            if r.returncode != 0:
-                raise RuntimeError(f"{' '.join(cmd[2:])} failed: {r.stderr.strip()[-300:]}")
+            w, c = timed_process(cmd, env)
             if i:                                    # the first round warms the caches
-                times[k].append(dt)
-    floor = statistics.median(times["casadi"])
+                wall[k].append(w)
+                cpu[k].append(c)
+    floor = statistics.median(wall["casadi"])
+    cpu_floor = None if None in cpu["casadi"] else statistics.median(cpu["casadi"])
     rows = []
     for key, _, what in STARTUP:
-        t = statistics.median(times[key])
-        rows.append(speed_row(key, f"{what} end to end / `python -c \"import casadi\"`", t,
-                              repeats, f"{t:.3f} s against {floor:.3f} s (alternated medians); "
-                              f"{how}", ratio=t / floor))
-        log(f"  {what}: {t / floor:.2f} x import casadi")
+        t = statistics.median(wall[key])
+        paired = statistics.median(a / b for a, b in zip(wall[key], wall["casadi"]))
+        cpu_ratio = None if cpu_floor is None or None in cpu[key] or cpu_floor <= 0 else \
+            statistics.median(cpu[key]) / cpu_floor
+        row = speed_row(key, f"{what} end to end / `python -c \"import casadi\"`", t, repeats,
+                        f"{t * 1e3:.0f} ms against {floor * 1e3:.0f} ms (medians of {repeats}, "
+                        f"alternated); pair by pair {paired:.2f}x"
+                        + (f"; CPU {cpu_ratio:.2f}x" if cpu_ratio is not None else "")
+                        + f"; {how}", ratio=t / floor)
+        row.update(floor_s=floor, paired_ratio=paired, cpu_ratio=cpu_ratio)
+        rows.append(row)
+        log(f"  {what}: {t / floor:.2f} x import casadi (pair by pair {paired:.2f} x)")
     return rows
 
 

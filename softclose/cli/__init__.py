@@ -35,8 +35,9 @@ COMMANDS = {"state": "state", "simulate": "simulate", "optimise": "optimise",
 PROG = "softclose"
 
 DESCRIPTION = """\
-Design soft-closing lids on a four-bar linkage: simulate the closing stroke, optimise the
-spring and damper, sweep any config keys, and judge a design under manufacturing tolerances.
+Design soft-closing lids, on a four-bar linkage or a hinge (one pivot): simulate the closing
+stroke, optimise the spring and damper, sweep any config keys, and judge a design under
+manufacturing tolerances.
 
 Start with `softclose optimise --out D`: it writes the optimal design as D/design.toml,
 which every command takes with `--config D/design.toml` (e.g. `softclose yield --config
@@ -48,7 +49,27 @@ what to change), 130 interrupted. `softclose COMMAND --help` describes a command
 `softclose docs` the commands, the design problem and every config key."""
 
 
+def _columns() -> int:
+    """The terminal's width as argparse's help formatter takes it (``COLUMNS``, else the
+    terminal of stdout, else 80) -- without importing shutil, which argparse would import
+    (with bz2 and lzma) for every parser it builds."""
+    import os
+    try:
+        columns = int(os.environ["COLUMNS"])
+    except (KeyError, ValueError):
+        columns = 0
+    if columns > 0:
+        return columns
+    try:
+        return os.get_terminal_size(sys.__stdout__.fileno()).columns or 80
+    except (AttributeError, ValueError, OSError):
+        return 80
+
+
 class _Parser(argparse.ArgumentParser):
+    def _get_formatter(self):
+        return self.formatter_class(prog=self.prog, width=_columns() - 2)
+
     def error(self, message):  # one line, exit code 2; the prefix is main's
         where = self.prog.removeprefix(PROG).strip()
         if not where and "required: COMMAND" in message:

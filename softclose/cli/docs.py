@@ -39,7 +39,7 @@ def overview() -> str:
     from . import build_parser
     parser = build_parser()
     sub = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)][0]
-    lines = ["softclose: design soft-closing lids on a four-bar linkage", "",
+    lines = ["softclose: design soft-closing lids, on a four-bar linkage or a hinge", "",
              "commands (softclose COMMAND --help for each):"]
     seen = set()
     for choice in sub._choices_actions:

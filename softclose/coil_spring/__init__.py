@@ -25,12 +25,46 @@ Example::
           initial_tension=4.0)).ok
 """
 
-from .design import Check, CoilSpring, Duty, SpringCheck, check
-from .designer import SpringDesign, design
-from .materials import (DEFAULT_MATERIAL, MATERIALS, PREFERRED_WIRE_D, Goodman, Material,
-                        material)
-from .tolerances import Tolerances, spring_tolerances
+import sys
+from importlib import import_module
+from types import ModuleType
+
+#: the package's names and the module of each, imported on first use: the model reads only
+#: the materials, and a command that designs or checks no spring loads no standard
+_LAZY = {"Check": "design", "CoilSpring": "design", "Duty": "design", "SpringCheck": "design",
+         "check": "design", "SpringDesign": "designer", "DEFAULT_MATERIAL": "materials",
+         "MATERIALS": "materials", "PREFERRED_WIRE_D": "materials", "Goodman": "materials",
+         "Material": "materials", "material": "materials", "Tolerances": "tolerances",
+         "spring_tolerances": "tolerances"}
 
 __all__ = ["Check", "CoilSpring", "Duty", "SpringCheck", "SpringDesign", "check", "design",
            "DEFAULT_MATERIAL", "MATERIALS", "PREFERRED_WIRE_D", "Goodman", "Material",
            "material", "Tolerances", "spring_tolerances"]
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        value = getattr(import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY) | {"design"})
+
+
+class _Package(ModuleType):
+    """This package: ``design`` names the designer (:func:`.designer.design`), never the
+    module of the same name (which the import system would set here when it is loaded)."""
+
+    @property
+    def design(self):
+        return import_module(".designer", __name__).design
+
+    @design.setter
+    def design(self, module):
+        pass
+
+
+sys.modules[__name__].__class__ = _Package

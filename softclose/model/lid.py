@@ -15,6 +15,8 @@ visits, and builds the CasADi functions the rest of softclose calls:
 - ``coeffs(theta) -> (M, dM, Vg, dVg, l, dl, dd, tau)`` and their theta-derivatives, which the
   fast kernels tabulate, and ``xcoeffs`` the same for the columns of the coordinate table
   (:data:`softclose.model.dynamics.COORDINATE_COEFFS`);
+- ``dV(theta, p)``, ``opening(theta, p) -> (F, dF/dtheta)`` and ``hand(theta, p) -> (dV, F,
+  dF, tau)`` (what the hand force evaluates on its grid, in one function);
 - kinematics, energy and (built only on first use) the Newton-Euler reactions.
 """
 
@@ -60,7 +62,7 @@ def model_key(case: LidCase) -> tuple:
 
 #: the CasADi functions a model carries (attribute names), kept serialised in the disk cache
 FUNCTIONS = ("ode", "ode_moving", "coeffs", "xcoeffs", "energy_fn", "power_fn", "kin", "dV",
-             "opening", "friction_moment", "_u")
+             "opening", "friction_moment", "hand", "_u")
 
 
 _SHARED: dict = {}
@@ -124,7 +126,7 @@ class LidModel:
         sigma, lo, hi, u = (float(v) for v in entry["numbers"])
         m.sigma, m.theta_range, m.max_abs_u = int(sigma), (lo, hi), u
         m._serialised = {k: text(v) for k, v in entry.items() if k != "numbers"}
-        if set(m._serialised) < {f"fn{n}" for n in FUNCTIONS}:
+        if not {f"fn{n}" for n in FUNCTIONS} <= set(m._serialised):
             raise ValueError("incomplete model entry")
         return m
 
@@ -340,7 +342,14 @@ class LidModel:
         self.friction_moment = ca.Function("friction_moment", [th, p],
                                            [0.0 if fr is None else fr])
         F = (slope if fr is None else slope + fr) / cf["tau"]
-        self.opening = ca.Function("opening", [th, p], [F, ca.jacobian(F, th)])
+        dF = ca.jacobian(F, th)
+        self.opening = ca.Function("opening", [th, p], [F, dF])
+        # what the hand force reads on its grid, in one function: dV, the opening force and
+        # its derivative (``opening``) and the tip's lever tau (a row of ``coeffs``)
+        # (the derivative repeats much of F: common subexpressions once, ~1/3 the work)
+        hand = ca.cse(ca.vertcat(slope, F, dF, cf["tau"]))
+        self.hand = ca.Function("hand", [th, p], [hand[i] for i in range(4)],
+                                ["theta", "p"], ["dV", "F", "dF", "tau"])
         # every element's coordinate and its theta-derivative: {name: Function theta -> (q, q')}
         self.coordinate_fns = {e: ca.Function(f"q_{e}", [th], [c.q, c.dq])
                                for e, c in cf["coords"].items()}

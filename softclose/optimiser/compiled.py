@@ -15,8 +15,8 @@ import sys
 from functools import lru_cache
 from pathlib import Path
 
-from ..buildcache import (_prune, _remove, _touch, folder, key_of, load, run_compiler, store,
-                          sweep_temporaries, whole_library)
+from ..buildcache import (_prune, _remove, _touch, _write_atomic, base, folder, key_of, load,
+                          run_compiler, store, sweep_temporaries, whole_library)
 
 #: compiler flags of the NLP: -O1 compiles the default NLP in ~10 s and solves 2.3x faster
 #: than the virtual machine (-O2: 50 s to compile, 3.4x; -O0: 4 s, 1.5x)
@@ -39,17 +39,57 @@ def compiler() -> str:
 def _toolchain(cc: str, flags: tuple) -> str | None:
     """A key of the compiler ``cc`` (the first line of its ``--version``) and ``flags``; None
     when there is no such compiler."""
-    import shutil
-    import subprocess
-    if shutil.which(cc) is None:
+    version = compiler_version(cc)
+    return None if version is None else key_of(cc, version, flags)[:12]
+
+
+def compiler_version(cc: str) -> str | None:
+    """The first line of ``cc --version`` ("" when it prints nothing), None when there is no
+    such compiler. Asked once per compiler file: the line is remembered in the cache folder
+    under the file's path, size and time (``compiler-*.txt``), so that a command that loads
+    a compiled NLP starts no process."""
+    path = _which(cc)
+    if path is None:
         return None
+    root = base()
+    memo = None
+    try:
+        real = os.path.realpath(path)
+        st = os.stat(real)
+        if root is not None:
+            stamp = key_of(cc, path, real, st.st_size, st.st_mtime_ns, st.st_ino)
+            memo = root / f"compiler-{stamp}.txt"
+            return memo.read_text().removesuffix("\n")
+    except OSError:
+        pass
+    import subprocess
     try:
         out = subprocess.run([cc, "--version"], capture_output=True, text=True, timeout=30,
                              stdin=subprocess.DEVNULL)
     except (OSError, subprocess.SubprocessError):
         return None
-    version = (out.stdout or out.stderr).strip().splitlines()
-    return key_of(cc, version[0] if version else "", flags)[:12]
+    lines = (out.stdout or out.stderr).strip().splitlines()
+    version = lines[0] if lines else ""
+    if memo is not None:
+        try:
+            if root.is_dir():
+                _write_atomic(memo, (version + "\n").encode())
+                _prune(root, "compiler-*.txt")
+        except OSError:
+            pass
+    return version
+
+
+def _which(cmd: str) -> str | None:
+    """The executable file ``cmd`` names (on the PATH unless it names a folder), as
+    ``shutil.which`` finds it on POSIX (without importing shutil and its compressors)."""
+    folders = [""] if os.path.dirname(cmd) else \
+        (os.environ.get("PATH") or os.defpath).split(os.pathsep)
+    for d in folders:
+        path = os.path.join(d, cmd)
+        if os.path.isfile(path) and os.access(path, os.X_OK):
+            return path
+    return None
 
 
 def toolchain(flags: tuple = CFLAGS) -> str | None:

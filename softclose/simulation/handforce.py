@@ -22,7 +22,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConfigError
-from ..model.dynamics import COEFFS
 from ..model.temperature import at_temperature, parameter_factors
 from ..numerics.roots import illinois
 from .statics import _parabola_max, opening_force_exact
@@ -87,21 +86,22 @@ class HandForce:
 
 def _parts(model, p, th):
     """(dV/dtheta, T_fr, tau) at the angles th (rad) from the exact model."""
+    return _hand_parts(model, p, th)[:3]
+
+
+def _hand_parts(model, p, th):
+    """(dV/dtheta, T_fr, tau, F_open, dF_open/dtheta) at the angles th (rad): the model's
+    ``hand`` function (one function of what the grid needs)."""
     th = np.atleast_1d(np.asarray(th, float))
     n = len(th)
     P = np.repeat(np.asarray(p, float)[:, None], n, 1)
     maps = model.__dict__.setdefault("_hand_maps", {})  # (mapping builds a Function: once)
     if n not in maps:
-        maps[n] = tuple(f if n == 1 else f.map(n) for f in (model.dV, model.opening,
-                                                            model.coeffs))
-    fdV, fop, fco = maps[n]
-    dV = np.asarray(fdV(th, P)).ravel()
-    F = np.asarray(fop(th, P)[0]).ravel()
-    c = np.asarray(fco(th)[0]).reshape(len(COEFFS), n)
-    tau = np.abs(c[COEFFS.index("tau"), :])
-    fr = F * c[COEFFS.index("tau"), :] - dV       # (the model's friction moment)
+        maps[n] = model.hand if n == 1 else model.hand.map(n)
+    dV, F, dF, tau = (np.asarray(v).ravel() for v in maps[n](th, P))
+    fr = F * tau - dV                             # (the model's friction moment)
     fr = np.where(np.abs(fr) < 1e-12 * np.maximum(1.0, np.abs(dV)), 0.0, fr)
-    return dV, fr, tau
+    return dV, fr, np.abs(tau), F, dF
 
 
 def _roots(g, th, gv):
@@ -130,7 +130,7 @@ def hand_force(model, p=None, case=None, grid: int = HAND_GRID) -> HandForce:
     st = model.stroke if case is None else case.stroke
     lo, hi = st.theta_closed, math.radians(st.theta_open_deg)
     th = np.linspace(lo, hi, grid)
-    dV, fr, tau = _parts(model, p, th)
+    dV, fr, tau, F, dF = _hand_parts(model, p, th)
     bad = ~(np.isfinite(dV) & np.isfinite(fr) & (tau > 0))
     if bad.any():
         raise ConfigError(f"stroke.theta_open_deg: the linkage does not assemble (or stands "
@@ -161,14 +161,14 @@ def hand_force(model, p=None, case=None, grid: int = HAND_GRID) -> HandForce:
     zones = tuple((z, deg(a), deg(b)) for z, a, b in zones)
     f_open, f_close = (dV + fr) / tau, (dV - fr) / tau
     if st.theta_open_deg == st.theta0_deg and model.stroke.theta0_deg == st.theta0_deg:
-        opening = float(opening_force_exact(model, p))
+        opening = float(opening_force_exact(model, p, grid=(th, F, dF)))
     else:
         opening = float(_parabola_max(f_open[None, :], th)[0])
     closing = float(max(0.0, _parabola_max(-f_close[None, :], th)[0]))
     self_close = zones[0][2] if zones[0][0] == "self_close" else None
     self_rise = zones[-1][1] if zones[-1][0] == "self_rise" else None
     hold = tuple((a, b) for z, a, b in zones if z == "hold_open")
-    tl = lambda v: tuple(float(x) for x in v)          # noqa: E731
+    tl = lambda v: tuple(np.asarray(v, float).tolist())   # noqa: E731  (plain floats)
     return HandForce(tl(np.degrees(th)), tl(f_open), tl(f_close), tl(dV), tl(fr), tl(tau),
                      zones, opening, closing, self_close, self_rise, hold)
 

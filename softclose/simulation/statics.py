@@ -339,27 +339,33 @@ def _parabola_max(F: np.ndarray, th: np.ndarray) -> np.ndarray:
     return best
 
 
-def opening_force_exact(model, p) -> float:
+def opening_force_exact(model, p, grid=None) -> float:
     """The opening effort of one design from the exact model (the reference's): the largest
     (dV/dtheta + T_f) / |dr_T/dtheta| (``model.opening``) over a 2001-point grid of
     [theta_closed, theta0], then the root of its theta-derivative between the neighbours of
-    the largest point (Illinois false position; an end stays an end)."""
+    the largest point (Illinois false position; an end stays an end). ``grid``: (angles,
+    F, dF) of ``model.opening`` at ``p`` evaluated already by the caller, used when the
+    angles are this grid's."""
     st = model.stroke
     p = np.asarray(p, float)
     last = model.__dict__.get("_opening_last")     # the optimiser's claims, then the
     if last is not None and last[0] == p.tobytes():  # reference's: the same design twice
         return last[1]
-    grid = model.__dict__.get("_opening_grid")
-    if grid is None:                  # (mapping a Function builds one: once per model)
-        grid = model.__dict__["_opening_grid"] = model.opening.map(OPENING_EXACT_GRID)
     th = np.linspace(st.theta_closed, st.theta0, OPENING_EXACT_GRID)
-    F, dF = (np.asarray(a).ravel() for a in grid(th, np.repeat(p[:, None], len(th), 1)))
+    if grid is not None and np.array_equal(grid[0], th):
+        F, dF = grid[1], grid[2]
+    else:          # the model's hand function: F and dF as ``opening`` has them, ~1/3 the work
+        fn = model.__dict__.get("_opening_grid")
+        if fn is None:                # (mapping a Function builds one: once per model)
+            fn = model.__dict__["_opening_grid"] = model.hand.map(OPENING_EXACT_GRID)
+        F, dF = (np.asarray(a).ravel()
+                 for a in fn(th, np.repeat(p[:, None], len(th), 1))[1:3])
     i = int(np.argmax(F))
     best = float(F[i])
     if 0 < i < len(th) - 1 and dF[i - 1] > 0 > dF[i + 1]:
         def dF_at(x):           # every force met on the way counts towards the largest
             nonlocal best
-            Fx, dFx = (float(v) for v in model.opening(x, p))
+            Fx, dFx = (float(v) for v in model.hand(x, p)[1:3])
             best = max(best, Fx)
             return dFx
         illinois(dF_at, th[i - 1], th[i + 1], dF[i - 1], dF[i + 1],

@@ -226,7 +226,7 @@ class Spring(Element):
         x, e, w = (np.asarray(excess, float) * 1e3).tolist(), edge.tolist(), worst.tolist()
         out = [""] * len(case)
         key = case * 3 + span
-        for g in np.unique(key).tolist():
+        for g in sorted(set(key.tolist())):   # (np.unique would import numpy.ma)
             c, sp = divmod(g, 3)
             t = self._template(c, sp, mounting)
             idx = np.flatnonzero(key == g).tolist()
