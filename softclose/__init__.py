@@ -102,9 +102,12 @@ def state(cfg: Config, theta_deg: float, theta_dot: float = 0.0):
     :class:`~softclose.simulation.state.LinkageState` (``.to_json()``, ``.text()``)."""
     import math
 
+    from .model.life import aged, at_end_of_life, shut_coordinates
     from .simulation.state import linkage_state
-    model = LidModel(resolve(cfg))
-    return linkage_state(model, cfg.stroke.theta0, math.radians(theta_deg), theta_dot)
+    case = resolve(cfg)
+    model = LidModel(case)
+    p = at_end_of_life(case.p, case.life, shut_coordinates(model)) if aged(case.life) else None
+    return linkage_state(model, cfg.stroke.theta0, math.radians(theta_deg), theta_dot, p)
 
 
 def _model_from_config(cls, cfg: Config, cached: bool = False) -> LidModel:

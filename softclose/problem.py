@@ -35,7 +35,7 @@ from .config.schema import KEYS, RANGES
 from .model import elements
 from .model.elements import ELEMENTS, PARAM_NAMES, PARAMS
 from .model.elements import PARAM_DEFAULTS, as_params  # noqa: F401  (re-exported: their home is the element registry)
-from .model.resolved import (Lid, LidCase, Mounting, SolverSettings, StrokeEnds,
+from .model.resolved import (Lid, LidCase, Life, Mounting, SolverSettings, StrokeEnds,
                              Temperatures)
 
 #: the design variables the optimiser picks (config section [design], bounds in [optimise])
@@ -198,7 +198,14 @@ def resolve(cfg) -> LidCase:
     return LidCase(resolve_lid(cfg), resolve_stroke(cfg),
                    tuple(float(v) for v in params_of(cfg)),
                    SolverSettings(sim.integrator, sim.step, sim.reference_tol),
-                   resolve_temperatures(cfg))
+                   resolve_temperatures(cfg), resolve_life(cfg))
+
+
+def resolve_life(cfg) -> Life:
+    """What changes by the end of life in ``cfg`` and the state of its strokes."""
+    lf = cfg.life
+    return Life(lf.strut_force_loss, lf.spring_relaxation, lf.damper_change,
+                lf.friction_change, lf.state)
 
 
 def with_designs(cfg, D) -> np.ndarray:
@@ -389,6 +396,32 @@ def check_reference_temperature(cfg, what: str) -> None:
             f"(operating.reference_temperature_c = {op.reference_temperature_c:g} °C), not at "
             f"{op.temperature_c:g} °C; simulate, sweep and yield run strokes at other "
             "temperatures, optimise --robust and select sign off at them")
+
+
+def check_new_parts(cfg, what: str) -> None:
+    """Refuse (ConfigError, one line) a config whose strokes are at the end of life for
+    ``what``, which designs with the new parts (SPEC §17: a design's values are the new
+    parts'; ``optimise --robust``, yield, select and report sign off at the end of life)."""
+    from .model.life import aged
+    if aged(resolve_life(cfg)):
+        raise ConfigError(
+            f'life.state: {what} designs with the new parts, not at "end_of_life"; simulate, '
+            "state and sweep run strokes at the end of life, optimise --robust, yield, select "
+            "and report sign off at it")
+
+
+def sign_off_states(cfg) -> tuple[str, ...]:
+    """The states a design must meet its constraints in (SPEC §17): the new lid, and the end
+    of life when ``[life]`` changes a part."""
+    from .model.life import ages
+    return ("new", "end_of_life") if ages(resolve_life(cfg)) else ("new",)
+
+
+def at_state(cfg, state: str):
+    """``cfg`` with its strokes in ``state`` (``life.state``: new or end_of_life)."""
+    if cfg.life.state == state:
+        return cfg
+    return cfg.replace(life={"state": state})
 
 
 def sign_off_temperatures(cfg) -> tuple[float, ...]:

@@ -29,6 +29,7 @@ from ..errors import ConfigError, NumericalError
 from ..numerics.integrators import Method, amplification, get_method, spectral_radius
 from ..model.lid import LidModel, model_key
 from ..model.dynamics import COEFFS
+from ..model.life import aged, at_end_of_life, shut_coordinates
 from ..model.temperature import at_temperature, parameter_factors
 from ..model.resolved import LidCase
 from ..problem import (DEFAULT_STEP, ERROR_KEYS, MIN_STEP, STEP_BUDGET, TRAJECTORY_BUDGET,
@@ -139,6 +140,9 @@ class Simulator:
         #: temperature): every p given to :meth:`run` and :meth:`run_batch` is a design at
         #: the reference temperature, and its stroke runs at the operating one
         self.temperature_factors = parameter_factors(case.temperatures)
+        #: what changes by the end of life when the case's strokes are aged (None: new
+        #: parts): applied to every p before the temperature (:mod:`softclose.model.life`)
+        self.life = case.life if aged(case.life) else None
         if self.table.max_rel_error > TABLE_TOL:
             raise NumericalError(
                 f"the linkage passes close to a toggle position (transmission angle "
@@ -158,7 +162,32 @@ class Simulator:
         other = copy.copy(self)
         other.case, other.stroke = case, case.stroke
         other.temperature_factors = parameter_factors(case.temperatures)
+        other.life = case.life if aged(case.life) else None
         return other
+
+    def _aged(self, P, points=None):
+        """Rows P of new parts at the end of life when the case's strokes are aged (the same
+        P else): a coil spring relaxes at its length shut, each row's own with ``points``."""
+        if self.life is None:
+            return P
+        return at_end_of_life(P, self.life, self._shut(points, len(np.atleast_2d(P))))
+
+    def _shut(self, points, n: int) -> dict:
+        """The springs' coordinates at the shut angle: the model's, exact; a row with its own
+        attachment points its own spring length (the table's pose pieces at its points)."""
+        shut = getattr(self, "_shut_exact", None)
+        if shut is None:
+            shut = self._shut_exact = shut_coordinates(self.model)
+        if points is None:
+            return shut
+        X = np.asarray(points, float)
+        has = ~np.isnan(X[:, 0])
+        if not has.any():
+            return shut
+        q = statics.table_coordinate(self.table, X)
+        th = np.full(n, self.stroke.theta_closed)
+        lengths = np.where(has, q(elements.BY_NAME["spring"], th, np.arange(n)), shut["spring"])
+        return {**shut, "spring": lengths}
 
     # -- batches ---------------------------------------------------------------------
     def energy_tol(self, P: np.ndarray, lid_mass=None, points=None) -> np.ndarray:
@@ -202,12 +231,12 @@ class Simulator:
         (reasons, valid ranges, holding moments, opening efforts) while the kernel's threads
         integrate the next: the same numbers, a row's depend on that row alone.
         """
-        P = at_temperature(as_params(np.atleast_2d(np.asarray(P, float))),
-                           self.temperature_factors)
+        P = as_params(np.atleast_2d(np.asarray(P, float)))
+        X = binding.point_rows(self.table, points, len(P))
+        P = at_temperature(self._aged(P, X), self.temperature_factors)
         st = self.stroke
         m = None if lid_mass is None else \
             np.broadcast_to(np.asarray(lid_mass, float), (len(P),)).copy()
-        X = binding.point_rows(self.table, points, len(P))
         cols = [binding.kernel_rows(P), self.energy_tol(P, m, X)]
         if m is not None or X is not None:
             cols.append(np.full(len(P), np.nan) if m is None else m)
@@ -299,7 +328,7 @@ class Simulator:
 
     # -- one stroke ------------------------------------------------------------------
     def run(self, p=None, trajectory: bool = False, estimate_error: bool = True) -> StrokeResult:
-        p = at_temperature(self.model.params() if p is None else as_params(p),
+        p = at_temperature(self._aged(self.model.params() if p is None else as_params(p)),
                            self.temperature_factors)
         st = self.stroke
         design = np.r_[binding.kernel_rows(p), self.energy_tol(p[None, :])]
@@ -395,6 +424,7 @@ class Simulator:
         half.__dict__.update(self.__dict__)
         half.step = self.step / 2
         half.temperature_factors = None        # (p holds the parts at the temperature)
+        half.life = None                       # (and at the end of life)
         r2 = half.run(p, estimate_error=False)
         q = 2.0 ** self.method.order
         tab = self.table.max_rel_error * self.friction_gain(p)
