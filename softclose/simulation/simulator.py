@@ -29,7 +29,6 @@ from ..errors import ConfigError, NumericalError
 from ..numerics.integrators import Method, amplification, get_method, spectral_radius
 from ..model.lid import LidModel, model_key
 from ..model.dynamics import COEFFS
-from ..model.life import aged, at_end_of_life, shut_coordinates
 from ..model.temperature import at_temperature, parameter_factors
 from ..model.resolved import LidCase
 from ..problem import (DEFAULT_STEP, ERROR_KEYS, MIN_STEP, STEP_BUDGET, TRAJECTORY_BUDGET,
@@ -140,9 +139,7 @@ class Simulator:
         #: temperature): every p given to :meth:`run` and :meth:`run_batch` is a design at
         #: the reference temperature, and its stroke runs at the operating one
         self.temperature_factors = parameter_factors(case.temperatures)
-        #: what changes by the end of life when the case's strokes are aged (None: new
-        #: parts): applied to every p before the temperature (:mod:`softclose.model.life`)
-        self.life = case.life if aged(case.life) else None
+        self._aged = statics.Aging(case.life, self.model, self.table)  # (the end of life)
         if self.table.max_rel_error > TABLE_TOL:
             raise NumericalError(
                 f"the linkage passes close to a toggle position (transmission angle "
@@ -162,32 +159,8 @@ class Simulator:
         other = copy.copy(self)
         other.case, other.stroke = case, case.stroke
         other.temperature_factors = parameter_factors(case.temperatures)
-        other.life = case.life if aged(case.life) else None
+        other._aged = statics.Aging(case.life, self.model, self.table)
         return other
-
-    def _aged(self, P, points=None):
-        """Rows P of new parts at the end of life when the case's strokes are aged (the same
-        P else): a coil spring relaxes at its length shut, each row's own with ``points``."""
-        if self.life is None:
-            return P
-        return at_end_of_life(P, self.life, self._shut(points, len(np.atleast_2d(P))))
-
-    def _shut(self, points, n: int) -> dict:
-        """The springs' coordinates at the shut angle: the model's, exact; a row with its own
-        attachment points its own spring length (the table's pose pieces at its points)."""
-        shut = getattr(self, "_shut_exact", None)
-        if shut is None:
-            shut = self._shut_exact = shut_coordinates(self.model)
-        if points is None:
-            return shut
-        X = np.asarray(points, float)
-        has = ~np.isnan(X[:, 0])
-        if not has.any():
-            return shut
-        q = statics.table_coordinate(self.table, X)
-        th = np.full(n, self.stroke.theta_closed)
-        lengths = np.where(has, q(elements.BY_NAME["spring"], th, np.arange(n)), shut["spring"])
-        return {**shut, "spring": lengths}
 
     # -- batches ---------------------------------------------------------------------
     def energy_tol(self, P: np.ndarray, lid_mass=None, points=None) -> np.ndarray:
@@ -424,7 +397,7 @@ class Simulator:
         half.__dict__.update(self.__dict__)
         half.step = self.step / 2
         half.temperature_factors = None        # (p holds the parts at the temperature)
-        half.life = None                       # (and at the end of life)
+        half._aged = statics.Aging(None, None, None)     # (and at the end of life)
         r2 = half.run(p, estimate_error=False)
         q = 2.0 ** self.method.order
         tab = self.table.max_rel_error * self.friction_gain(p)
