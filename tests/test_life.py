@@ -224,3 +224,22 @@ def test_the_optimiser_designs_the_new_parts():
                         "life.state=end_of_life", "--set", "life.damper_change=-0.1"],
                        capture_output=True, text=True, cwd=ROOT)
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "life.state" in r.stderr
+
+
+def test_the_spring_made_to_order_is_checked_at_its_relaxed_free_length():
+    """A compression spring relaxed by r loses r of its shut force k (L0 - l_shut): its free
+    length is (1 - r) L0 + r l_shut, and softclose spring checks it there."""
+    from softclose.optimiser.spring_order import spring_duty
+    cfg = lid(**{"design.spring_kind": "compression", "design.spring_rest_length": 0.075,
+                 "design.spring_preload": 0.0})
+    new, ls = spring_duty(cfg), spring_shut(cfg)
+    r = 0.03
+    aged_duty = spring_duty(old(cfg, spring_relaxation=r))
+    assert new.free_length == pytest.approx(0.075, rel=1e-12)
+    assert aged_duty.free_length == pytest.approx((1 - r) * 0.075 + r * ls, rel=1e-12)
+    assert aged_duty.rate == new.rate and aged_duty.shortest_length == new.shortest_length
+    # with a preload the free length L0 + F0/k shortens by the loss over the rate
+    pre = cfg.update({"design.spring_preload": 3.0})
+    free = 0.075 + 3.0 / 1500.0
+    assert spring_duty(old(pre, spring_relaxation=r)).free_length == pytest.approx(
+        free - r * (free - ls), rel=1e-12)
