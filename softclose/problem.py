@@ -432,9 +432,42 @@ def sign_off_temperatures(cfg) -> tuple[float, ...]:
     return tuple(dict.fromkeys(float(t) for t in temps))
 
 
+#: a sign-off condition at the end of life is its temperature (°C) + this: one number, above
+#: every admissible temperature (the config's end at 150 °C), so that the robust design's
+#: arrays of scenario temperatures carry the state too (:func:`sign_off_conditions`)
+END_OF_LIFE = 1000.0
+
+
+def sign_off_conditions(cfg) -> tuple[float, ...]:
+    """The conditions a design must meet its constraints in (SPEC §12, §17): each sign-off
+    temperature of the new lid, then, when ``[life]`` changes a part, each at the end of life
+    (its temperature + :data:`END_OF_LIFE`; :func:`condition_parts`)."""
+    temps = sign_off_temperatures(cfg)
+    if len(sign_off_states(cfg)) == 1:
+        return temps
+    return temps + tuple(T + END_OF_LIFE for T in temps)
+
+
+def condition_parts(condition: float) -> tuple[float, str | None]:
+    """(temperature °C, state) of a sign-off condition (:func:`sign_off_conditions`): the
+    state None for a plain temperature (the config's own state)."""
+    c = float(condition)
+    return (c - END_OF_LIFE, "end_of_life") if c >= END_OF_LIFE / 2 else (c, None)
+
+
+def condition_text(condition: float) -> str:
+    """A condition in words: ``-10 °C``, ``-10 °C at the end of life``."""
+    T, state = condition_parts(condition)
+    return f"{T:g} °C" + (" at the end of life" if state == "end_of_life" else "")
+
+
 def at_temperature(cfg, temperature_c: float):
     """``cfg`` with its strokes at ``temperature_c`` (the design's values stay those given at
-    the reference temperature)."""
-    if cfg.operating.temperature_c == temperature_c:
+    the reference temperature); a sign-off condition at the end of life
+    (:func:`sign_off_conditions`) sets ``life.state`` too."""
+    T, state = condition_parts(temperature_c)
+    if state is not None and cfg.life.state != state:
+        cfg = at_state(cfg, state)
+    if cfg.operating.temperature_c == T:
         return cfg
-    return cfg.replace(operating={"temperature_c": float(temperature_c)})
+    return cfg.replace(operating={"temperature_c": float(T)})

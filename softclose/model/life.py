@@ -158,6 +158,34 @@ def at_end_of_life(P, life: Life | None, shut: dict | None) -> np.ndarray:
     return P[0] if one else P
 
 
+def life_map(p, life: Life, shut: dict, temperature=None) -> np.ndarray:
+    """The end of ``life`` as an affine map of a stroke's parameters, for the scenario NLP
+    (whose scenarios map the design's p as ``a p + b``): (2, len(p)), rows f and g with
+    ``p_eol = f p + g``, then the ``temperature``'s factor row (None: 1) on both. The factors
+    of the strut, the dampers and the friction are exact; a relaxed coil spring without a
+    preload moves its free length to (1 - r) l0 + r l_shut (exact, affine), a torsion
+    spring's free angle the same; with a preload its loss is taken at the design ``p`` (exact
+    there; the verification judges the design with :func:`at_end_of_life`)."""
+    p = np.asarray(p, float)
+    gas = p[_COL["spring_kind"]] == GAS
+    f = factors(life)[int(gas)].copy()
+    g = np.zeros(len(p))
+    r = life.spring_relaxation
+    if r and not gas:
+        i, j = _COL["spring_rest_length"], _COL["spring_preload"]
+        f[i], g[i] = 1.0 - r, r * float(np.mean(shut["spring"]))
+        if p[j] > 0 and p[_COL["spring_k"]] > 0:     # (the preload's part: at the design)
+            old = at_end_of_life(p, life, shut)
+            g[i] = old[i] - (1.0 - r) * p[i]
+            f[j] = old[j] / p[j]
+        if p[_COL["torsion_k"]] > 0:
+            i = _COL["torsion_free_angle_deg"]
+            f[i], g[i] = 1.0 - r, r * float(np.degrees(shut["torsion"]))
+    if temperature is not None:
+        f, g = f * temperature, g * temperature
+    return np.vstack([f, g])
+
+
 def stroke_params(P, case, shut_of=None) -> np.ndarray:
     """Parameter vectors ``P`` (new parts at the reference temperature) as a stroke of the
     resolved ``case`` (:class:`softclose.model.resolved.LidCase`) sees them: at the end of its
@@ -173,4 +201,4 @@ def stroke_params(P, case, shut_of=None) -> np.ndarray:
 
 
 __all__ = ["LIFE_KEYS", "STATES", "Life", "ages", "aged", "factors", "shut_coordinates",
-           "at_end_of_life", "stroke_params", "check_life"]
+           "at_end_of_life", "life_map", "stroke_params", "check_life"]

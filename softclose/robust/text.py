@@ -202,6 +202,19 @@ def robust_text(res) -> str:
         if lim is not None:
             lines.append(f"  limiting temperature: {lim:g} °C (its corner is the closest of "
                          "all to breaking a constraint)")
+    states = tuple(getattr(res, "states", ()) or ())
+    if len(states) > 1:
+        by_state = {}
+        for t in (cc or {}).get("temperatures", ()):
+            st = t.get("state", "new")
+            w = t["worst_margin"]
+            by_state[st] = w if st not in by_state else min(by_state[st], w)
+        lines.append("  sign-off states (every scenario in each): " + ", ".join(
+            st.replace("_", " ") + (f" (smallest corner margin {by_state[st]:.3g})"
+                                    if by_state.get(st) is not None else "")
+            for st in states))
+        if res.limiting_state is not None:
+            lines.append(f"  limiting state: {res.limiting_state.replace('_', ' ')}")
     if res.yield_result is not None:
         lines.append("  Monte Carlo, both designs on the same samples:")
         lines += ["  " + x for x in yield_lines(res.yield_result, "robust design")]
