@@ -461,6 +461,12 @@ def condition_text(condition: float) -> str:
     return f"{T:g} °C" + (" at the end of life" if state == "end_of_life" else "")
 
 
+def condition_tag(condition: float) -> str:
+    """A condition in a file name: ``-10C``, ``-10C_end_of_life``."""
+    T, state = condition_parts(condition)
+    return f"{T:g}C" + (f"_{state}" if state else "")
+
+
 def at_temperature(cfg, temperature_c: float):
     """``cfg`` with its strokes at ``temperature_c`` (the design's values stay those given at
     the reference temperature); a sign-off condition at the end of life

@@ -78,7 +78,7 @@ def _source(args) -> str:
 
 def run_yield(cfg, args) -> Outcome:
     from ..robust import tolerance_analysis
-    from ..problem import sign_off_temperatures
+    from ..problem import sign_off_conditions
     _check_samples(args.samples)
     seed = _seed(args)
     out = prepare_out(args.out, ["yield_samples.csv", *figures("yield_histograms")])
@@ -86,7 +86,7 @@ def run_yield(cfg, args) -> Outcome:
         from ..errors import ConfigError
         raise ConfigError("tolerance: no key has a spread; give at least one "
                           "(e.g. --set tolerance.design.spring_k=0.1)")
-    if len(sign_off_temperatures(cfg)) > 1:
+    if len(sign_off_conditions(cfg)) > 1:      # (several temperatures or states)
         return _yield_by_temperature(cfg, args, seed, out)
     r = tolerance_analysis(cfg, samples=args.samples, seed=seed)
     payload = r.to_json()
@@ -108,9 +108,10 @@ def _yield_by_temperature(cfg, args, seed, out) -> Outcome:
     payload = t.to_json()
     files = []
     if out is not None:
+        from ..problem import condition_tag
         for T, r in zip(t.temperatures, t.results):
-            files += write_outputs(out, f"yield_samples_{T:g}C.csv", r.to_frame(),
-                                   f"yield_histograms_{T:g}C.png", r.plot)
+            files += write_outputs(out, f"yield_samples_{condition_tag(T)}.csv", r.to_frame(),
+                                   f"yield_histograms_{condition_tag(T)}.png", r.plot)
         payload["files"] = [str(f) for f in files]
     return Outcome(payload, t.text(_source(args)) + wrote(files), 0 if t.meets_required else 3,
                    tuple(files), error=t.message or None)
