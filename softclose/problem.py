@@ -54,6 +54,10 @@ PARAM_COLUMNS = {q.key: i for i, q in enumerate(PARAMS)}
 #: key: p holds each word's number (:attr:`Param.codes`); a sweep takes the words and its
 #: tables show them
 WORD_PARAMS = {q.key: q for q in PARAMS if q.codes is not None}
+#: a word key that is not a parameter of p but a state of the stroke (SPEC §17): a sweep takes
+#: its words too, and sets it in the config of each of its values
+WORD_PARAMS["life.state"] = elements.Param("state", codes={"new": 0.0, "end_of_life": 1.0},
+                                           config_key="life.state")
 
 
 def word_text(key: str, number: float) -> str:

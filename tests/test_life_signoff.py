@@ -112,3 +112,15 @@ def test_the_robust_design_meets_every_constraint_at_every_corner_of_both_states
     ls = shut_coordinates(softclose.LidModel(resolve(cfg)))["spring"]
     assert (0.97 * d["spring_rest_length"] + 0.03 * ls) >= js["max_spring_length"] - 1e-9
     assert r.corner_check["worst_margin"] >= -1e-7
+
+
+def test_life_state_is_a_sweep_key():
+    from softclose import sweep
+    cfg = load_config(CHEST).update(WORN)
+    res = sweep(cfg, {"life.state": ["new", "end_of_life"]})
+    df = res.to_frame()
+    assert list(df["life.state"]) == ["new", "end_of_life"]
+    for state, t in zip(df["life.state"], df["closing_time"]):
+        one = softclose.simulate(cfg.update({"life.state": state}))
+        assert t == pytest.approx(one.closing_time, rel=1e-12)
+    assert df["closing_time"].iloc[1] < df["closing_time"].iloc[0]
