@@ -124,3 +124,27 @@ def test_life_state_is_a_sweep_key():
         one = softclose.simulate(cfg.update({"life.state": state}))
         assert t == pytest.approx(one.closing_time, rel=1e-12)
     assert df["closing_time"].iloc[1] < df["closing_time"].iloc[0]
+
+
+def test_select_screens_and_verifies_both_states():
+    """A strut and a dashpot that close the lid no faster than 0.6 s new are too fast once the
+    dashpot has faded 40 %: select judges every corner new and at the end of life, names the
+    state a pair fails in, and counts a sample towards the yield when it holds in both."""
+    from softclose.catalog.files import read_dampers, read_springs
+    cat = ROOT / "examples" / "catalogs"
+    springs = [s for s in read_springs(cat / "springs.csv").parts
+               if s.part in ("GS-070-F020", "CS-068-00500")]
+    dampers = [d for d in read_dampers(cat / "dampers.csv").parts
+               if d.part in ("DP-5000", "RD-A-1")]
+    cfg = default_config().update({"optimise.closing_time_min": 0.6})
+    worn = cfg.update({"life.damper_change": -0.4, "life.spring_relaxation": 0.05})
+    new = {(e["spring"], e["damper"]): e for e in
+           softclose.select(cfg, springs, dampers, samples=64, verify=1).ranking}
+    old = {(e["spring"], e["damper"]): e for e in
+           softclose.select(worn, springs, dampers, samples=64, verify=1).ranking}
+    pair = ("GS-070-F020", "DP-5000")
+    assert old[pair]["limiting_state"] == "end_of_life"
+    assert old[pair]["reason"].endswith("at the end of life") and not old[pair]["feasible"]
+    assert "end of life" not in new[pair]["reason"] and "limiting_state" not in new[pair]
+    for k in new:                      # both states: never a better yield than new alone
+        assert old[k]["yield"] <= new[k]["yield"]
