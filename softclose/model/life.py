@@ -39,19 +39,17 @@ STATES = ("new", "end_of_life")
 LIFE_KEYS: tuple[Key, ...] = (
     Key("life", "strut_force_loss", "nonneg", 0.0, "1",
         "fraction of a gas strut's force lost by the end of life: its whole force curve x "
-        "(1 - loss) (makers: up to 0.10 over a strut's life)", lo=0.0, hi=1.0,
-        note="below 1"),
+        "(1 - loss) (makers: up to 0.10 over a strut's life)", lo=0.0, hi=0.99),
     Key("life", "spring_relaxation", "nonneg", 0.0, "1",
         "relaxation r of a coil spring (EN 13906-1: force lost at constant length): it loses "
         "r of the force it holds while the lid is shut, at every length, its rate unchanged; a "
-        "torsion spring the same with its moment", lo=0.0, hi=1.0, note="below 1"),
+        "torsion spring the same with its moment", lo=0.0, hi=0.99),
     Key("life", "damper_change", "real", 0.0, "1",
         "relative change of every viscous coefficient (dashpot, rotary dampers, end damper) "
-        "by the end of life: c x (1 + change); negative: fade", lo=-1.0, hi=100.0,
-        note="above -1"),
+        "by the end of life: c x (1 + change); negative: fade", lo=-0.99, hi=100.0),
     Key("life", "friction_change", "real", 0.0, "1",
         "relative change of `friction.torque` and `design.strut_friction` by the end of "
-        "life: x (1 + change)", lo=-1.0, hi=100.0, note="above -1"),
+        "life: x (1 + change)", lo=-0.99, hi=100.0),
     Key("life", "state", "str:" + ",".join(STATES), "new", "",
         "the state of one stroke (simulate, state, a sweep key): `new` or `end_of_life` (the "
         "parts changed as [life] says)"),
