@@ -90,10 +90,23 @@ def simulate(cfg: Config, trajectory: bool = False, hand_force: bool = False) ->
     by_temperature = tuple((T, hand_force_of(sim.model, case=resolve(at_temperature(cfg, T))))
                            for T in temps) if len(temps) > 1 else ()
     d, st = cfg.design, cfg.stroke
-    return replace(res, hand_force=hand_force_of(sim.model, case=sim.case),
-                   hand_forces=by_temperature,
-                   end_damper=end_damper_note(res, d.end_damper_c, d.end_damper_angle_deg,
-                                              st.theta0_deg, st.theta_closed_deg))
+    res = replace(res, hand_force=hand_force_of(sim.model, case=sim.case),
+                  hand_forces=by_temperature,
+                  end_damper=end_damper_note(res, d.end_damper_c, d.end_damper_angle_deg,
+                                             st.theta0_deg, st.theta_closed_deg))
+    from .problem import at_state, sign_off_states
+    if len(sign_off_states(cfg)) == 1:
+        return res
+    states = []        # the stroke in each state, beside this one (SPEC §17)
+    for state in sign_off_states(cfg):
+        if state == cfg.life.state:
+            states.append((state, res))
+            continue
+        case = resolve(at_state(cfg, state))
+        other = sim.for_case(case).run()
+        states.append((state, replace(other, hand_force=hand_force_of(sim.model, case=case))
+                       if other.ok else other))
+    return replace(res, states=tuple(states))
 
 
 def state(cfg: Config, theta_deg: float, theta_dot: float = 0.0):
@@ -104,9 +117,12 @@ def state(cfg: Config, theta_deg: float, theta_dot: float = 0.0):
     :class:`~softclose.simulation.state.LinkageState` (``.to_json()``, ``.text()``)."""
     import math
 
+    from .model.life import aged, at_end_of_life, shut_coordinates
     from .simulation.state import linkage_state
-    model = LidModel(resolve(cfg))
-    return linkage_state(model, cfg.stroke.theta0, math.radians(theta_deg), theta_dot)
+    case = resolve(cfg)
+    model = LidModel(case)
+    p = at_end_of_life(case.p, case.life, shut_coordinates(model)) if aged(case.life) else None
+    return linkage_state(model, cfg.stroke.theta0, math.radians(theta_deg), theta_dot, p)
 
 
 def _model_from_config(cls, cfg: Config, cached: bool = False) -> LidModel:

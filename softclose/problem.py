@@ -35,7 +35,7 @@ from .config.schema import KEYS, RANGES
 from .model import elements
 from .model.elements import ELEMENTS, PARAM_NAMES, PARAMS
 from .model.elements import PARAM_DEFAULTS, as_params  # noqa: F401  (re-exported: their home is the element registry)
-from .model.resolved import (Lid, LidCase, Mounting, SolverSettings, StrokeEnds,
+from .model.resolved import (Lid, LidCase, Life, Mounting, SolverSettings, StrokeEnds,
                              Temperatures)
 
 #: the design variables the optimiser picks (config section [design], bounds in [optimise])
@@ -54,6 +54,10 @@ PARAM_COLUMNS = {q.key: i for i, q in enumerate(PARAMS)}
 #: key: p holds each word's number (:attr:`Param.codes`); a sweep takes the words and its
 #: tables show them
 WORD_PARAMS = {q.key: q for q in PARAMS if q.codes is not None}
+#: a word key that is not a parameter of p but a state of the stroke (SPEC §17): a sweep takes
+#: its words too, and sets it in the config of each of its values
+WORD_PARAMS["life.state"] = elements.Param("state", codes={"new": 0.0, "end_of_life": 1.0},
+                                           config_key="life.state")
 
 
 def word_text(key: str, number: float) -> str:
@@ -198,7 +202,14 @@ def resolve(cfg) -> LidCase:
     return LidCase(resolve_lid(cfg), resolve_stroke(cfg),
                    tuple(float(v) for v in params_of(cfg)),
                    SolverSettings(sim.integrator, sim.step, sim.reference_tol),
-                   resolve_temperatures(cfg))
+                   resolve_temperatures(cfg), resolve_life(cfg))
+
+
+def resolve_life(cfg) -> Life:
+    """What changes by the end of life in ``cfg`` and the state of its strokes."""
+    lf = cfg.life
+    return Life(lf.strut_force_loss, lf.spring_relaxation, lf.damper_change,
+                lf.friction_change, lf.state)
 
 
 def with_designs(cfg, D) -> np.ndarray:
@@ -391,6 +402,32 @@ def check_reference_temperature(cfg, what: str) -> None:
             "temperatures, optimise --robust and select sign off at them")
 
 
+def check_new_parts(cfg, what: str) -> None:
+    """Refuse (ConfigError, one line) a config whose strokes are at the end of life for
+    ``what``, which designs with the new parts (SPEC §17: a design's values are the new
+    parts'; ``optimise --robust``, yield, select and report sign off at the end of life)."""
+    from .model.life import aged
+    if aged(resolve_life(cfg)):
+        raise ConfigError(
+            f'life.state: {what} designs with the new parts, not at "end_of_life"; simulate, '
+            "state and sweep run strokes at the end of life, optimise --robust, yield, select "
+            "and report sign off at it")
+
+
+def sign_off_states(cfg) -> tuple[str, ...]:
+    """The states a design must meet its constraints in (SPEC §17): the new lid, and the end
+    of life when ``[life]`` changes a part."""
+    from .model.life import ages
+    return ("new", "end_of_life") if ages(resolve_life(cfg)) else ("new",)
+
+
+def at_state(cfg, state: str):
+    """``cfg`` with its strokes in ``state`` (``life.state``: new or end_of_life)."""
+    if cfg.life.state == state:
+        return cfg
+    return cfg.replace(life={"state": state})
+
+
 def sign_off_temperatures(cfg) -> tuple[float, ...]:
     """The temperatures a design must meet its constraints at (SPEC §12):
     ``operating.temperatures_c``, or ``[operating.temperature_c]`` when it is empty; each
@@ -399,9 +436,48 @@ def sign_off_temperatures(cfg) -> tuple[float, ...]:
     return tuple(dict.fromkeys(float(t) for t in temps))
 
 
+#: a sign-off condition at the end of life is its temperature (°C) + this: one number, above
+#: every admissible temperature (the config's end at 150 °C), so that the robust design's
+#: arrays of scenario temperatures carry the state too (:func:`sign_off_conditions`)
+END_OF_LIFE = 1000.0
+
+
+def sign_off_conditions(cfg) -> tuple[float, ...]:
+    """The conditions a design must meet its constraints in (SPEC §12, §17): each sign-off
+    temperature of the new lid, then, when ``[life]`` changes a part, each at the end of life
+    (its temperature + :data:`END_OF_LIFE`; :func:`condition_parts`)."""
+    temps = sign_off_temperatures(cfg)
+    if len(sign_off_states(cfg)) == 1:
+        return temps
+    return temps + tuple(T + END_OF_LIFE for T in temps)
+
+
+def condition_parts(condition: float) -> tuple[float, str | None]:
+    """(temperature °C, state) of a sign-off condition (:func:`sign_off_conditions`): the
+    state None for a plain temperature (the config's own state)."""
+    c = float(condition)
+    return (c - END_OF_LIFE, "end_of_life") if c >= END_OF_LIFE / 2 else (c, None)
+
+
+def condition_text(condition: float) -> str:
+    """A condition in words: ``-10 °C``, ``-10 °C at the end of life``."""
+    T, state = condition_parts(condition)
+    return f"{T:g} °C" + (" at the end of life" if state == "end_of_life" else "")
+
+
+def condition_tag(condition: float) -> str:
+    """A condition in a file name: ``-10C``, ``-10C_end_of_life``."""
+    T, state = condition_parts(condition)
+    return f"{T:g}C" + (f"_{state}" if state else "")
+
+
 def at_temperature(cfg, temperature_c: float):
     """``cfg`` with its strokes at ``temperature_c`` (the design's values stay those given at
-    the reference temperature)."""
-    if cfg.operating.temperature_c == temperature_c:
+    the reference temperature); a sign-off condition at the end of life
+    (:func:`sign_off_conditions`) sets ``life.state`` too."""
+    T, state = condition_parts(temperature_c)
+    if state is not None and cfg.life.state != state:
+        cfg = at_state(cfg, state)
+    if cfg.operating.temperature_c == T:
         return cfg
-    return cfg.replace(operating={"temperature_c": float(temperature_c)})
+    return cfg.replace(operating={"temperature_c": float(T)})

@@ -877,6 +877,18 @@ ISSUE_CASES = [
                 ("design.damper_temperature_coeff", "in_range", "-0.005")], []),
     ("sweep", [("design.damper_temperature_coeff", "in_range", "-0.005")],
      ["--grid=operating.temperature_c=-60:150:4"]),
+    # the end of life (SPEC §17): a stroke at it, a sweep over the state, the yield and the
+    # robust design signed off new and at the end of life, a value at its strict end
+    ("simulate", [("life.strut_force_loss", "in_range", "0.1"),
+                  ("life.damper_change", "in_range", "-0.15"),
+                  ("life.state", "string", '"end_of_life"')], []),
+    ("simulate", [("life.strut_force_loss", "edge", "1.0")], []),
+    ("sweep", [("life.damper_change", "in_range", "-0.15")],
+     ["--grid=life.state=[new, end_of_life]"]),
+    ("yield", [("life.damper_change", "in_range", "-0.15"),
+               ("life.spring_relaxation", "in_range", "0.03")], []),
+    ("optimise --robust", [("life.spring_relaxation", "in_range", "0.03"),
+                           ("life.damper_change", "in_range", "-0.15")], []),
 ]
 
 
@@ -885,7 +897,8 @@ SLOW_ISSUE_CASES = {"fit mass.lid=0.6 --starts=2", "optimise optimise.closing_ti
                     "optimise --free=design.end_damper_c=0:2 --free=design.end_damper_angle_deg=1:10",
                     "optimise --robust operating.temperatures_c=[0.0, 23 "
                     "design.damper_temperature_coeff=-0.005",
-                    "optimise --robust operating.temperature_c=-10.0"}
+                    "optimise --robust operating.temperature_c=-10.0",
+                    "optimise --robust life.spring_relaxation=0.03 life.damper_change=-0.15"}
 ISSUE_IDS = [f"{c} " + " ".join([f"{k}={t[:8]}" for k, _, t in v] + o) for c, v, o in ISSUE_CASES]
 
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from .equation import FIT_KEYS
 from .result import FitResult, StrokeFit
-from ..problem import check_reference_temperature
+from ..problem import check_reference_temperature, check_new_parts
 
 
 def fit(cfg, data, free, *, axis: str | None = None, starts: int = 1,
@@ -25,6 +25,7 @@ def fit(cfg, data, free, *, axis: str | None = None, starts: int = 1,
     :class:`~softclose.errors.ConfigError`; a fit that does not converge returns a result
     with ``success`` False. ``progress``: a progress line over the starts on a terminal."""
     check_reference_temperature(cfg, "the fit")
+    check_new_parts(cfg, "the fit")
     from .core import solve
     return solve(cfg, data, free, axis=axis, starts=starts, seed=seed, progress=progress)
 

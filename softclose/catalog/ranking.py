@@ -38,6 +38,7 @@ from .mounting import parts_fix, place_pair, placement_keys
 from . import coil, verify
 from ..robust.scenarios import at_reference
 from .screen import limiting_temperature
+from ..problem import condition_parts
 
 #: rows of the kernel per chunk of pairs (a chunk is the unit of progress and of Ctrl-C)
 CHUNK_ROWS = 40_000
@@ -318,9 +319,12 @@ def screen_chunk(cfg: Config, box: PairBox, a: int, chunk: list) -> tuple[int, l
                        int(sm["corner_count"][p]), nc,
                        {k: float(v[p]) for k, v in sm["nominal"].items()})
         coil.apply(e, coil.spring_checks(cfg, s, lengths))
-        if len(box.temperatures) > 1:
-            e["limiting_temperature_c"] = limiting_temperature(box, cols, cfg.optimise, p,
-                                                               sm["fail_row"][p])
+        if len(box.temperatures) > 1:      # (each sign-off temperature, in each state)
+            T, state = condition_parts(limiting_temperature(box, cols, cfg.optimise, p,
+                                                            sm["fail_row"][p]))
+            e["limiting_temperature_c"] = T
+            if any(condition_parts(c)[1] for c in box.temperatures):
+                e["limiting_state"] = state or "new"
         F = cols["feasible"][p * n:p * n + nc].copy()
         J = np.asarray(cols["objective"][p * n:p * n + nc], float).copy()
         out.append((e, (F, J)))

@@ -39,7 +39,7 @@ from ..config.load import from_dict
 from ..model.elements.springs import KINDS
 from ..robust.box import Box, box_of
 from ..robust.evaluate import evaluate, point_values, simulator, slow_keys
-from ..problem import LID_MASS, at_temperature, param_rows, resolve
+from ..problem import LID_MASS, at_temperature, condition_text, param_rows, resolve
 from ..robust.scenarios import temperatures as sign_off
 from ..robust.stats import margins
 from ..simulation.stroke import NUMERICAL_FAILURES, StrokeStatus
@@ -106,7 +106,7 @@ class PairBox:
     def row_label(self, row: int, spring, damper) -> str:
         """:meth:`label` of a row, with its temperature when there are several."""
         text = self.label(self.Z[row], spring, damper)
-        return text if self.Ts is None else f"{text} at {self.Ts[row]:g} °C"
+        return text if self.Ts is None else f"{text} at {condition_text(self.Ts[row])}"
 
     @property
     def points(self) -> int:

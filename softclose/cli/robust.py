@@ -77,7 +77,7 @@ def _source(args) -> str:
 
 def run_yield(cfg, args) -> Outcome:
     from ..robust import tolerance_analysis
-    from ..problem import sign_off_temperatures
+    from ..problem import sign_off_conditions
     _check_samples(args.samples)
     seed = _seed(args)
     out = prepare_out(args.out, ["yield_samples.csv", *figures("yield_histograms")])
@@ -85,7 +85,7 @@ def run_yield(cfg, args) -> Outcome:
         from ..errors import ConfigError
         raise ConfigError("tolerance: no key has a spread; give at least one "
                           "(e.g. --set tolerance.design.spring_k=0.1)")
-    if len(sign_off_temperatures(cfg)) > 1:
+    if len(sign_off_conditions(cfg)) > 1:      # (several temperatures or states)
         return _yield_by_temperature(cfg, args, seed, out)
     r = tolerance_analysis(cfg, samples=args.samples, seed=seed)
     payload = r.to_json()

@@ -19,6 +19,7 @@ from typing import Any, Iterable
 
 from ..errors import ConfigError
 from .schema import BY_NAME, CRANK_KEYS, KEYS, RANGES, SCHEMA, SECTION_TYPES, SECTIONS
+from ..model.life import check_life
 from .free import free_table, read_free
 from .tolerance import Tolerance, read_tolerance
 from .values import check, fmt, in_range, number
@@ -64,6 +65,7 @@ class Config:
     optimise: Optimise
     spring: Spring
     operating: Operating
+    life: Life
     tolerance: "Tolerance"
     raw: dict = dataclasses.field(default_factory=dict, repr=False, compare=False)
 
@@ -169,6 +171,9 @@ def from_dict(raw: dict[str, Any]) -> Config:
         if o[key][0] < 0:
             raise ConfigError(f"optimise.{key}: lower bound must be non-negative, got {o[key][0]}")
     _check_spring(values["spring"])
+    bad = check_life(values["life"])
+    if bad:
+        raise ConfigError(bad)
     sections = {name: SECTION_TYPES[name](**values[name]) for name in SECTIONS}
     tolerance = read_tolerance(raw.get("tolerance", {}), values)
     return Config(**sections, tolerance=tolerance, raw={k: dict(v) for k, v in raw.items()})

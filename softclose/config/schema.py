@@ -18,12 +18,13 @@ from ..coil_spring.materials import DEFAULT_MATERIAL, MATERIALS
 from ..model import elements
 from ..model.resolved import StrokeEnds
 from ..model.keys import Key
+from ..model.life import LIFE_KEYS
 
 INTEGRATORS = ("rk4", "euler_cromer", "gauss4", "radau5")
 HESSIANS = ("exact", "limited-memory")
 #: the sections of a config, in order; "tolerance" holds spreads and their options
 SECTIONS = ("geometry", "mass", "design", "friction", "stroke", "simulate", "optimise",
-            "spring", "operating")
+            "spring", "operating", "life")
 
 
 #: the keys of the cranks: a hinge lid (``geometry.mechanism = "hinge"``) has none
@@ -201,7 +202,7 @@ SPRING: tuple[Key, ...] = (
     Key("design", "damper_temperature_coeff", "real", 0.0, "1/K",
         "beta: every viscous coefficient (dashpot, rotary, end damper) is c exp(beta (T - "
         "T_ref)); silicone-oil rotary dampers about -0.005", lo=-0.1, hi=0.1),
-)
+) + LIFE_KEYS
 
 #: the options of the [tolerance] section (every other key there names a toleranced key)
 TOLERANCE_KEYS: tuple[Key, ...] = (
@@ -307,7 +308,7 @@ def _section(section: str, values: dict) -> Section:
 
 #: the section classes, by section
 SECTION_TYPES = {s: _section_type(s) for s in SECTIONS}
-Geometry, Mass, Design, Friction, Stroke, Simulate, Optimise, Spring, Operating = (
+Geometry, Mass, Design, Friction, Stroke, Simulate, Optimise, Spring, Operating, Life = (
     SECTION_TYPES[s] for s in SECTIONS)
 
 

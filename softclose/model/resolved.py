@@ -13,8 +13,9 @@ features nothing takes a config:
 - :class:`SolverSettings` -- the fixed-step integrator, its step, the reference's tolerance;
 - :class:`Temperatures` -- the operating and reference temperatures and the laws that move
   the parts' values between them;
-- :class:`LidCase` -- one config's lid, stroke, design vector p, solver settings and
-  temperatures together: what a :class:`~softclose.simulation.simulator.Simulator` runs.
+- :class:`Life` -- what changes by the end of the parts' life, and the state of a stroke;
+- :class:`LidCase` -- one config's lid, stroke, design vector p, solver settings,
+  temperatures and life together: what a :class:`~softclose.simulation.simulator.Simulator` runs.
 
 Every object is a NamedTuple of values (equal and hashed by value, picklable); the sections
 it holds (``geometry``, ``mass``) are the config's immutable section values.
@@ -107,6 +108,22 @@ class Temperatures(NamedTuple):
     spring_material: str = DEFAULT_MATERIAL
 
 
+class Life(NamedTuple):
+    """What changes by the end of the parts' life and the state of a stroke
+    (:mod:`softclose.model.life`); every factor 0: nothing changes."""
+
+    #: a gas strut's force lost (fraction)
+    strut_force_loss: float = 0.0
+    #: a coil spring's relaxation: the fraction of its shut force lost, at every length
+    spring_relaxation: float = 0.0
+    #: relative change of every viscous coefficient
+    damper_change: float = 0.0
+    #: relative change of the friction torque and the strut's friction
+    friction_change: float = 0.0
+    #: ``new`` or ``end_of_life``: the state of a stroke
+    state: str = "new"
+
+
 class LidCase(NamedTuple):
     """One config, resolved: the lid, its stroke, its design (the parameter vector p, at the
     reference temperature), the solver settings and the temperatures."""
@@ -117,6 +134,8 @@ class LidCase(NamedTuple):
     design: tuple[float, ...]
     solver: SolverSettings = SolverSettings()
     temperatures: Temperatures = Temperatures()
+    #: what changes by the end of life and the state of the stroke
+    life: Life = Life()
 
     @property
     def p(self) -> np.ndarray:
@@ -124,4 +143,4 @@ class LidCase(NamedTuple):
         return np.array(self.design, float)
 
 
-__all__ = ["Lid", "Mounting", "StrokeEnds", "SolverSettings", "Temperatures", "LidCase"]
+__all__ = ["Lid", "Mounting", "StrokeEnds", "SolverSettings", "Temperatures", "Life", "LidCase"]

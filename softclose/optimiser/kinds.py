@@ -92,6 +92,7 @@ def kind_config(cfg: Config, kind: str, robust: bool = False) -> tuple[Config, s
     s = _length_spread(cfg, kind, robust)
     if kind == "gas_strut":
         return _strut_config(cfg, lo, hi, lmin, lmax, s)
+    lmin, lmax = _relaxed_range(cfg, kind, lmin, lmax) if robust else (lmin, lmax)
     lo, hi = free_length_bounds(cfg, kind, lmin, lmax, robust)
     if kind == "compression":
         if d.spring_min_length is not None and d.spring_min_length > lmin:
@@ -120,6 +121,23 @@ def kind_config(cfg: Config, kind: str, robust: bool = False) -> tuple[Config, s
     out = cfg.update({"design.spring_kind": kind,
                       "optimise.spring_rest_length": [float(lo), float(hi)]})
     return out, None
+
+
+def _relaxed_range(cfg, kind: str, lmin: float, lmax: float) -> tuple[float, float]:
+    """The range a coil spring's new free length must keep valid when it also signs off at
+    the end of life relaxed by r (SPEC §17): its relaxed free length (1 - r) l0 + r l_shut
+    (without a preload; a preload only helps) stays beyond the stroke's longest length (a
+    compression spring) or below its shortest (an extension spring)."""
+    from ..model.life import shut_coordinates
+    from ..problem import resolve_life, sign_off_states
+    r = resolve_life(cfg).spring_relaxation
+    if not r or kind not in ("compression", "extension") or len(sign_off_states(cfg)) == 1:
+        return lmin, lmax
+    from .cache import get_model
+    ls = shut_coordinates(get_model(cfg))["spring"]
+    moved = lambda length: (length - r * ls) / (1 - r)  # noqa: E731
+    return (min(lmin, moved(lmin)), lmax) if kind == "extension" else \
+        (lmin, max(lmax, moved(lmax)))
 
 
 def _strut_config(cfg, lo, hi, lmin, lmax, s) -> tuple[Config, str | None]:

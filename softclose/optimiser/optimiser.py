@@ -15,7 +15,7 @@ import numpy as np
 
 from ..simulation import statics
 from ..errors import ConfigError, NumericalError, SoftcloseError
-from ..problem import check_reference_temperature, DESIGN_KEYS, PARAM_COLUMNS, SCALES, UNITS, describe
+from ..problem import check_reference_temperature, check_new_parts, DESIGN_KEYS, PARAM_COLUMNS, SCALES, UNITS, describe
 from ..present.progress import Progress
 from .cache import get_model, get_nlp, has_nlp, stroke_simulator
 from .spring_part import spring_part
@@ -277,6 +277,7 @@ def optimise(cfg, *, starts: int | None = None, verify: bool = True,
     rate (:mod:`.made_to_order`): the part names the spring.
     """
     check_reference_temperature(cfg, "the optimiser")
+    check_new_parts(cfg, "the optimiser")
     opts = dict(starts=starts, verify=verify, progress=progress, nodes=nodes,
                 substeps=substeps)
     res = _optimise_kinds(cfg, **opts)

@@ -16,7 +16,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..errors import ConfigError
-from ..problem import PARETO_DEFAULT, check_reference_temperature, describe
+from ..problem import PARETO_DEFAULT, check_reference_temperature, check_new_parts, describe
 from ..present.progress import Progress
 from .spring_part import spring_part
 from .cache import get_nlp, stroke_simulator
@@ -41,6 +41,7 @@ def front(cfg, closing_times, *, starts: int = 3, progress: bool = False) -> Fro
     reported in it (and the next point continues from the last good one).
     """
     check_reference_temperature(cfg, "the Pareto front")
+    check_new_parts(cfg, "the Pareto front")
     t0 = time.perf_counter()
     try:
         times = [float(t) for t in np.atleast_1d(np.asarray(closing_times, dtype=float))]

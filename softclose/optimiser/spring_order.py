@@ -77,9 +77,10 @@ def spring_duty(cfg) -> Duty:
     if not d.spring_k > 0:
         raise ConfigError(f"design.spring_k: the {d.spring_kind} spring has no rate (0 N/m); "
                           "a coil spring to order needs a rate above 0")
+    l0, F0 = relaxed(cfg)
     if d.spring_kind == "extension":
-        return _extension_duty(cfg)
-    free = d.spring_rest_length + d.spring_preload / d.spring_k
+        return _extension_duty(cfg, l0, F0)
+    free = l0 + F0 / d.spring_k
     longest, shortest = working_lengths(cfg)
     if longest > free * (1 + 1e-12):
         raise ConfigError(f"design.spring_rest_length: the compression spring's free length "
@@ -91,9 +92,24 @@ def spring_duty(cfg) -> Duty:
                 seating=cfg.spring.seating)
 
 
-def _extension_duty(cfg) -> Duty:
+def relaxed(cfg) -> tuple[float, float]:
+    """(l0, F0) of the design's coil spring: the new spring's (``design.spring_rest_length``,
+    ``design.spring_preload``), or at the end of its life when ``life.state`` says so
+    (relaxed: SPEC §17, :func:`softclose.model.life.at_end_of_life`; its preload and free
+    length lose the force it held shut, and its checks are at the new length)."""
+    from ..model.elements import PARAM_NAMES
+    from ..model.life import aged, at_end_of_life, shut_coordinates
+    d, case = cfg.design, resolve(cfg)
+    if not aged(case.life):
+        return d.spring_rest_length, d.spring_preload
+    p = at_end_of_life(case.p, case.life, shut_coordinates(shared_model(case)))
+    return (float(p[PARAM_NAMES.index("spring_rest_length")]),
+            float(p[PARAM_NAMES.index("spring_preload")]))
+
+
+def _extension_duty(cfg, l0, F0) -> Duty:
     d = cfg.design
-    free = d.spring_rest_length
+    free = l0
     longest, shortest = working_lengths(cfg)
     if shortest < free * (1 - 1e-12):
         raise ConfigError(f"design.spring_rest_length: the extension spring's free length "
@@ -103,7 +119,7 @@ def _extension_duty(cfg) -> Duty:
     return Duty(rate=d.spring_k, free_length=free, longest_length=longest,
                 shortest_length=max(shortest, free), cycles=cfg.spring.cycles,
                 seating=cfg.spring.seating, kind="extension",
-                initial_tension=d.spring_preload)
+                initial_tension=F0)
 
 
 def spring_order(cfg, duty: Duty | None = None, rank: str = "mass"):
@@ -230,4 +246,4 @@ def order_spring(cfg) -> SpringOrder:
     return SpringOrder(spring_order(cfg, duty), duty)
 
 
-__all__ = ["working_lengths", "spring_duty", "spring_order", "order_spring", "SpringOrder", "GRID"]
+__all__ = ["working_lengths", "spring_duty", "relaxed", "spring_order", "order_spring", "SpringOrder", "GRID"]

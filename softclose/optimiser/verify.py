@@ -23,6 +23,7 @@ import numpy as np
 
 from ..errors import ConfigError, NumericalError
 from ..interrupt import solving
+from ..model.life import aged, shut_coordinates, stroke_params
 from ..problem import (CONSTRAINT_TOL, ENGAGE_KEYS, METRIC_KEYS, UNITS, opening_wanted,
                        VERIFY_RTOL, PARAM_KEYS, REFERENCE_TOL, agreement_tolerance, objective,
                        params_of, resolve)
@@ -271,10 +272,13 @@ def verify(cfg, design: dict, claims: dict | None = None,
                                     "ok": T >= o.closing_time_min * (1 - CLOSING_RTOL)}
     # no rebound: theta' <= 0 throughout (from the release: theta''(0) <= 0), and the lid
     # never passes the rim
-    release = float(model.ode(ca.vertcat(st.theta0, 0.0), p)[1])
+    case = resolve(cfg)
+    q = p if not aged(case.life) else stroke_params(      # (the parts at the end of life)
+        p, case, lambda: shut_coordinates(model))
+    release = float(model.ode(ca.vertcat(st.theta0, 0.0), q)[1])
     try:                            # (a lid friction holds where it is released: at rest)
         held = not ref.closed and float(ref.theta_min) >= st.theta0 - 1e-12
-        thd_max = 0.0 if held else chk.theta_dot_max(p, T if T is not None else st.t_max)
+        thd_max = 0.0 if held else chk.theta_dot_max(q, T if T is not None else st.t_max)
     except RuntimeError as exc:     # CVODES on the equation without its stick (a lid that
         if ref.closed:              # friction holds where it is released chatters there)
             return Verification(None, None, method=method, time=time.perf_counter() - t0,

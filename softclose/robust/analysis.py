@@ -37,7 +37,8 @@ from .box import Box, box_of
 from .evaluate import evaluate
 from .stats import CI_METHOD, margins, percentiles, wilson
 from .verify import reference_check
-from ..problem import UNITS, at_temperature, sign_off_temperatures
+from ..problem import (UNITS, at_state, at_temperature, condition_parts, condition_text,
+                       sign_off_conditions, sign_off_states)
 from ..jsonio import jsonable
 from ..simulation.stroke import StrokeStatus
 
@@ -290,36 +291,59 @@ class TemperatureYield:
         if self.meets_required:
             return ""
         return (f"the yield at every temperature is {100 * self.yield_:.2f} %, below the "
-                f"required {100 * self.required_yield:g} % (lowest at {self.limiting:g} °C)")
+                f"required {100 * self.required_yield:g} % (lowest at "
+                f"{condition_text(self.limiting)})")
+
+    def state_yields(self) -> list[dict]:
+        """With the end of life a sign-off state (SPEC §17): each state's yield over its
+        temperatures (the same samples), [] with the new lid alone."""
+        states: dict = {}
+        for T, r in zip(self.temperatures, self.results):
+            st = condition_parts(T)[1] or "new"
+            ok = np.asarray(r.data["cols"]["feasible"], bool)
+            states[st] = ok if st not in states else states[st] & ok
+        if len(states) <= 1:
+            return []
+        return [{"state": st, "yield": float(ok.mean()),
+                 "yield_ci": list(wilson(int(ok.sum()), len(ok)))} for st, ok in states.items()]
 
     def save(self, folder, figure_format: str = "png", figure_style: str | None = None
              ) -> list:
-        """Each temperature's samples and histograms in ``folder``
-        (``yield_samples_<T>C.csv``, ``yield_histograms_<T>C``: what ``softclose yield --out``
-        writes); the paths."""
+        """Each sign-off condition's samples and histograms in ``folder``
+        (``yield_samples_<T>C.csv``, ``yield_histograms_<T>C``, with ``_end_of_life`` at the
+        end of life: what ``softclose yield --out`` writes); the paths."""
+        from ..problem import condition_tag
         return [f for T, r in zip(self.temperatures, self.results)
-                for f in r.save(folder, figure_format, figure_style, f"_{T:g}C")]
+                for f in r.save(folder, figure_format, figure_style, f"_{condition_tag(T)}")]
 
     def to_json(self) -> dict:
         """The joint yield's keys, the design and its box (the same at each temperature),
         ``success`` (the joint yield meets the required one) and ``temperatures``: each
         temperature's yield."""
-        first = self.results[0]
+        first, states = self.results[0], self.state_yields()
         return jsonable({
             "design": first.design, "box": first.box, "distribution": first.distribution,
             "seed": first.seed, "success": self.meets_required, "message": self.message,
             "yield": self.yield_, "yield_ci": list(self.yield_ci), "ci_method": CI_METHOD,
             "samples": self.samples, "required_yield": self.required_yield,
-            "meets_required": self.meets_required, "limiting_temperature_c": self.limiting,
-            "temperatures": [dict(r.to_json(), temperature_c=T)
-                             for T, r in zip(self.temperatures, self.results)]})
+            "meets_required": self.meets_required,
+            "limiting_temperature_c": condition_parts(self.limiting)[0],
+            "temperatures": [dict(r.to_json(), temperature_c=condition_parts(T)[0],
+                                  **({"state": condition_parts(T)[1] or "new"} if states
+                                     else {}))
+                             for T, r in zip(self.temperatures, self.results)],
+            **({"states": states,
+                "limiting_state": condition_parts(self.limiting)[1] or "new"}
+               if states else {})})
 
 
 def yield_by_temperature(cfg: Config, *, samples: int | None = None, seed: int = 0,
                          reference: int = 3, progress: bool = False) -> TemperatureYield:
     """:func:`tolerance_analysis` at each sign-off temperature
     (:func:`sign_off_temperatures`), with the same samples, and the joint yield."""
-    temps = sign_off_temperatures(cfg)
+    temps = sign_off_conditions(cfg)          # (each temperature new, and at the end of life)
+    if len(sign_off_states(cfg)) > 1:
+        cfg = at_state(cfg, "new")
     results, joint = [], None
     for T in temps:
         y = tolerance_analysis(at_temperature(cfg, T), samples=samples, seed=seed,

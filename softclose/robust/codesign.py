@@ -326,7 +326,7 @@ def best_verified(cfg, kind, r, c, points, info, notes, solve):
         if why is not None:
             continue
         r2 = solve(c2)
-        notes.append(f"stage 2 at another candidate of the first stage: worst J "
+        notes.append("stage 2 at another candidate of the first stage: worst J "
                      + (f"{r2.objective:.6g}" if r2.objective is not None else "none")
                      + f" ({'verified' if r2.success else 'not verified'}) against "
                      + (f"{best[0].objective:.6g}" if best[0].objective is not None

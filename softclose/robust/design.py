@@ -84,7 +84,8 @@ from ..optimiser.free_points import SLOTS
 from ..optimiser.interval import END_ANGLE, END_C
 from ..optimiser.spring_part import spring_part
 from ..optimiser.kinds import kind_config
-from ..problem import at_temperature
+from ..problem import (at_temperature, condition_parts, condition_text, sign_off_states,
+                       sign_off_temperatures)
 
 
 def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None = None,
@@ -191,12 +192,16 @@ def optimise_robust(cfg: Config, *, progress: bool = False, samples: int | None 
         out_cfg = fixed_points(out_cfg, {full: v for k, v in (best.design or {}).items()
                                          for full in (f"geometry.{k}", f"design.{k}")
                                          if full in chosen})
-    temps = temperatures(cfg)
+    conditions = temperatures(cfg)      # (each sign-off temperature, in each state)
     limiting = (best.corner_check or {}).get("limiting_temperature_c")
-    if limiting is None and len(temps) == 1 and best.design is not None:
-        limiting = temps[0]
+    if limiting is None and len(conditions) == 1 and best.design is not None:
+        limiting = conditions[0]
+    states = sign_off_states(cfg)
+    lim_T, lim_state = (None, None) if limiting is None else condition_parts(limiting)
     return replace(best, kind=kind, kinds=tuple(rows), part=part, notes=notes, times=times,
-                   config=out_cfg, temperatures=temps, limiting_temperature_c=limiting)
+                   config=out_cfg, temperatures=sign_off_temperatures(cfg),
+                   limiting_temperature_c=lim_T, states=states,
+                   limiting_state=None if lim_T is None else (lim_state or "new"))
 
 
 def _objective(x) -> float:
@@ -487,8 +492,9 @@ def _yield_note(cfg: Config, what: str, at: float) -> str | None:
     """Which temperature a reported yield is at, with several sign-off temperatures."""
     if len(temperatures(cfg)) <= 1:
         return None
-    return (f"{what}'s yield and nominal lid: at {at:g} °C, the lowest yield of the sign-off "
-            "temperatures (the same samples at each; softclose yield gives the joint one)")
+    return (f"{what}'s yield and nominal lid: at {condition_text(at)}, the lowest yield of "
+            "the sign-off conditions (the same samples at each; softclose yield gives the "
+            "joint one)")
 
 
 def _nominal_yield(cfg: Config, nominal: dict, z_yield: np.ndarray, seed: int,

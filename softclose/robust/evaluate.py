@@ -30,6 +30,7 @@ from ..config.free import PLACEMENT_KEYS, point_refusals
 from ..problem import LID_MASS, METRIC_KEYS, PARAM_COLUMNS, infeasibility, objective, params_of
 from ..model import elements
 from ..model.lid import model_key
+from ..model.life import aged
 from ..model.temperature import parameter_factors
 from ..simulation.simulator import Simulator
 from ..simulation.stroke import StrokeStatus
@@ -84,7 +85,8 @@ def simulator(cfg: Config, t_end: float | None = None):
     key = (cfg.geometry, cfg.mass, cfg.stroke, cfg.simulate,
            elements.structure(case.lid.mounting),
            cfg.design.spring_min_length, cfg.design.spring_max_length,
-           None if factors is None else tuple(map(float, factors.ravel())))
+           None if factors is None else tuple(map(float, factors.ravel())),
+           case.life if aged(case.life) else None)         # (the end of life: its changes)
     if key not in _SIMS:
         if len(_SIMS) > 32:
             _SIMS.clear()

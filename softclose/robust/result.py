@@ -58,6 +58,10 @@ class RobustResult(Displayed):
     #: without a design or a box
     temperatures: tuple = ()
     limiting_temperature_c: float | None = None
+    #: the states every scenario was checked in (SPEC §17: ``new``, and ``end_of_life`` when
+    #: ``[life]`` changes a part) and the state of that limiting corner
+    states: tuple = ("new",)
+    limiting_state: str | None = None
     #: a compression spring made to order: the EN 15800 box the answer holds for (grade, the
     #: spreads used, their source, the spring d x D x n; :mod:`softclose.robust.spring_box`)
     spring_tolerance: dict | None = None
@@ -102,7 +106,8 @@ class RobustResult(Displayed):
                "robust_objective": self.robust_objective, "kind": self.kind,
                "part": None if self.part is None else self.part.to_json(),
                "kinds": list(self.kinds), "temperatures": list(self.temperatures),
-               "limiting_temperature_c": self.limiting_temperature_c}
+               "limiting_temperature_c": self.limiting_temperature_c,
+               "states": list(self.states), "limiting_state": self.limiting_state}
         for k in METRIC_KEYS:
             out[k] = None if self.metrics is None else self.metrics.get(k)
         for k in ENGAGE_KEYS:       # the nominal lid's end damper engages: when, how fast
@@ -169,6 +174,10 @@ class RobustResult(Displayed):
                           ", ".join(f"{T:g}" for T in self.temperatures) + " °C"
                           + ("" if lim is None else f" (limiting: {lim:g} °C, the corner "
                              "closest to breaking a constraint)")))
+        if len(self.states) > 1:
+            facts.append(("sign-off states", ", ".join(self.states).replace("_", " ") + (
+                "" if self.limiting_state is None else
+                f" (limiting: {self.limiting_state.replace('_', ' ')})")))
         tables = []
         if self.design:
             nom = (self.nominal or {}).get("design") or {}

@@ -24,8 +24,11 @@ import numpy as np
 
 from ..config import Config
 from ..model.temperature import factors_of, parameter_factors
-from ..problem import (DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, at_temperature, params_of,
-                       resolve_temperatures, sign_off_temperatures, with_designs)
+from ..model.life import aged, life_map, shut_coordinates
+from ..optimiser.cache import get_model
+from ..problem import (DESIGN_KEYS, PARAM_COLUMNS, PARAM_KEYS, at_temperature, condition_text,
+                       params_of, resolve_life, resolve_temperatures, sign_off_conditions,
+                       sign_off_temperatures, with_designs)
 from .box import Box, box_of
 from .evaluate import evaluate
 from .policy import max_corners, t_end
@@ -49,6 +52,8 @@ def at_reference(cfg: Config) -> Config:
     config back when it is so already (the default)."""
     op = cfg.operating
     temps = sign_off_temperatures(cfg)
+    if cfg.life.state != "new":          # (the new lid; the end of life is a condition)
+        cfg = cfg.replace(life={"state": "new"})
     if op.temperature_c == op.reference_temperature_c and tuple(op.temperatures_c) in (
             (), temps) and temps == (op.reference_temperature_c,):
         return cfg
@@ -57,8 +62,10 @@ def at_reference(cfg: Config) -> Config:
 
 
 def temperatures(cfg: Config) -> tuple[float, ...]:
-    """The sign-off temperatures (°C) every scenario point is checked at."""
-    return sign_off_temperatures(cfg)
+    """The sign-off conditions every scenario point is checked at: the sign-off temperatures
+    (°C) of the new lid and, when ``[life]`` changes a part, each at the end of life
+    (:func:`softclose.problem.sign_off_conditions`)."""
+    return sign_off_conditions(cfg)
 
 
 def factors(cfg: Config, temperature_c: float | None) -> np.ndarray | None:
@@ -67,8 +74,12 @@ def factors(cfg: Config, temperature_c: float | None) -> np.ndarray | None:
     has the design's kind). None at the reference temperature, and for None."""
     if temperature_c is None:
         return None
-    return factors_of(parameter_factors(resolve_temperatures(at_temperature(
-        cfg, temperature_c))), params_of(cfg))
+    c = at_temperature(cfg, temperature_c)
+    f = factors_of(parameter_factors(resolve_temperatures(c)), params_of(cfg))
+    life = resolve_life(c)
+    if not aged(life):
+        return f
+    return life_map(params_of(cfg), life, shut_coordinates(get_model(cfg)), f)
 
 
 def label(box: Box, z, temperature_c: float | None, temps=()) -> str:
@@ -76,7 +87,7 @@ def label(box: Box, z, temperature_c: float | None, temps=()) -> str:
     temperatures."""
     text = box.label(z)
     return text if temperature_c is None or len(temps) <= 1 else \
-        f"{text} at {temperature_c:g} °C"
+        f"{text} at {condition_text(temperature_c)}"
 
 
 def maps(box: Box, z, factors: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, dict]:
@@ -94,8 +105,9 @@ def maps(box: Box, z, factors: np.ndarray | None = None) -> tuple[np.ndarray, np
                 b[col] = box.spreads[j] * zj
         else:
             values[key] = float(box.nominal[j] + box.half[j] * max(z[j], box.z_min[j]))
-    if factors is not None:
-        a, b = a * factors, b * factors
+    if factors is not None:            # (at the end of life: rows f and an added term)
+        f, add = (factors, 0.0) if np.ndim(factors) == 1 else factors
+        a, b = a * f, b * f + add
     return a, b, values
 
 

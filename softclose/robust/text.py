@@ -105,16 +105,21 @@ def yield_by_temperature_text(t, source: str = "design") -> str:
     yield on the same samples and the joint one; ``source`` says where the design
     comes from."""
     first = t.results[0]
+    from ..problem import condition_text
     lines = [f"softclose yield: tolerance box {box_line(first.box)} ({first.distribution}), "
-             f"at {', '.join(f'{T:g}' for T in t.temperatures)} °C, the same samples at each"]
+             f"at {', '.join(condition_text(T) for T in t.temperatures)}, the same samples "
+             "at each"]
     for T, r in zip(t.temperatures, t.results):
-        lines.append(f"  at {T:g} °C:")
+        lines.append(f"  at {condition_text(T)}:")
         lines += ["  " + x for x in yield_lines(r, source)]
+    for st in t.state_yields():
+        lines.append(f"  {st['state'].replace('_', ' ')}, at every temperature: yield "
+                     f"{100 * st['yield']:.2f} %")
     lo, hi = t.yield_ci
-    lines.append(f"  at every temperature: yield {100 * t.yield_:.2f} % (95 % Wilson interval "
+    lines.append(f"  at every condition: yield {100 * t.yield_:.2f} % (95 % Wilson interval "
                  f"{100 * lo:.2f} – {100 * hi:.2f} %) of {t.samples} samples; required "
                  f"{100 * t.required_yield:g} %: {'met' if t.meets_required else 'NOT met'}; "
-                 f"lowest at {t.limiting:g} °C")
+                 f"lowest at {condition_text(t.limiting)}")
     return "\n".join(lines)
 
 
@@ -202,6 +207,19 @@ def robust_text(res) -> str:
         if lim is not None:
             lines.append(f"  limiting temperature: {lim:g} °C (its corner is the closest of "
                          "all to breaking a constraint)")
+    states = tuple(getattr(res, "states", ()) or ())
+    if len(states) > 1:
+        by_state = {}
+        for t in (cc or {}).get("temperatures", ()):
+            st = t.get("state", "new")
+            w = t["worst_margin"]
+            by_state[st] = w if st not in by_state else min(by_state[st], w)
+        lines.append("  sign-off states (every scenario in each): " + ", ".join(
+            st.replace("_", " ") + (f" (smallest corner margin {by_state[st]:.3g})"
+                                    if by_state.get(st) is not None else "")
+            for st in states))
+        if res.limiting_state is not None:
+            lines.append(f"  limiting state: {res.limiting_state.replace('_', ' ')}")
     if res.yield_result is not None:
         lines.append("  Monte Carlo, both designs on the same samples:")
         lines += ["  " + x for x in yield_lines(res.yield_result, "robust design")]

@@ -19,7 +19,7 @@ import numpy as np
 from ..simulation import statics
 from ..config import Config
 from ..problem import DESIGN_KEYS, ENGAGE_KEYS, METRIC_KEYS, design_of, params_of
-from ..problem import PARAM_COLUMNS, at_temperature
+from ..problem import PARAM_COLUMNS, at_temperature, condition_parts
 from .box import box_of
 from .scenarios import design_dict
 from .evaluate import with_values
@@ -112,7 +112,9 @@ def scenario_report(cfg, problem, run, verify: bool) -> tuple[list, bool]:
                  "z": list(map(float, z)), "metrics": metrics, "objective": float(run.J[s]),
                  "worst": s == worst}
         if len(temps) > 1 or (T is not None and T != cfg.operating.reference_temperature_c):
-            entry["temperature_c"] = T
+            entry["temperature_c"], state = condition_parts(T)
+            if any(condition_parts(c)[1] for c in temps):      # (new and end of life)
+                entry["state"] = state or "new"
         if verify:
             # the NLP's own numbers of this scenario against the reference's, the reference
             # at the scenario's temperature (the NLP's parameters moved by its factors)

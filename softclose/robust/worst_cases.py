@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from ..config import Config
-from ..problem import at_temperature
+from ..problem import at_temperature, condition_parts
 from .box import Box, box_of
 from .evaluate import evaluate
 from .policy import ADD_PER_ROUND, MC_TOL, OBJ_RTOL, t_end
@@ -136,5 +136,7 @@ def check_corners(cfg: Config, scale: float, run, have=()) -> tuple[list, dict]:
         "corners": int(len(Z)), "violating": int(np.sum(score > MC_TOL)),
         "worst_margin": float(np.min(m)) if np.all(np.isfinite(m)) else -math.inf,
         "breaking": breaking, "added": [label(box_d, Z[i], Ts[i], temps) for i in picks],
-        "temperatures": [{"temperature_c": T, "worst_margin": w} for T, w in zip(temps, by_T)],
+        "temperatures": [{"temperature_c": condition_parts(T)[0],
+                          "state": condition_parts(T)[1] or "new", "worst_margin": w}
+                         for T, w in zip(temps, by_T)],
         "limiting_temperature_c": float(Ts[int(np.argmin(m))])}

@@ -12,7 +12,8 @@ import time
 from ..config import Config, check_batch, to_toml
 from ..errors import ConfigError
 from ..jsonio import jsonable
-from ..problem import METRIC_KEYS, resolve
+from ..problem import (METRIC_KEYS, condition_parts, condition_text, resolve,
+                       sign_off_conditions, sign_off_states)
 from ..simulation.simulator import Simulator
 from ..version import __version__
 from . import checks, parts
@@ -69,14 +70,15 @@ def _yields(cfg: Config, samples: int | None) -> dict:
                 f"{SLOW_SAMPLES} samples a temperature instead of tolerance.samples = "
                 f"{cfg.tolerance.samples} (--samples N to choose)")
     t = yield_by_temperature(cfg, samples=samples, reference=0)
-    per = [{"temperature_c": T, "yield": y.yield_, "yield_ci": list(y.yield_ci),
+    per = [{"temperature_c": condition_parts(T)[0], "state": condition_parts(T)[1] or "new",
+            "yield": y.yield_, "yield_ci": list(y.yield_ci),
             "samples": y.samples, "failures": y.failures,
             "meets_required": y.meets_required, "message": y.message}
            for T, y in zip(t.temperatures, t.results)]
     results = t.results
     return {"required_yield": cfg.tolerance.required_yield, "note": note,
             "distribution": cfg.tolerance.distribution, "keys": list(results[0].keys),
-            "per_temperature": per,
+            "per_temperature": per, "per_state": t.state_yields(),
             "joint": {"yield": t.yield_, "yield_ci": list(t.yield_ci), "samples": t.samples,
                       "meets_required": t.meets_required}}
 
@@ -103,7 +105,7 @@ def _limits(cfg: Config, matrix: dict, optimiser: dict | None) -> dict:
 
 
 def _column_name(T: float) -> str:
-    return f"{T:g} °C"
+    return condition_text(T)
 
 
 def _verdict(cfg, matrix: dict, parts_: dict, yields: dict, temps) -> tuple[bool, str, list]:
@@ -134,14 +136,19 @@ def _verdict(cfg, matrix: dict, parts_: dict, yields: dict, temps) -> tuple[bool
         fails.append(f)
     for y in yields.get("per_temperature", ()):
         if not y["meets_required"]:
-            fails.append(f"yield at {y['temperature_c']:g} °C is {100 * y['yield']:.3g} %, "
-                         f"required {100 * yields['required_yield']:.3g} %")
+            eol = " at the end of life" if y.get("state") == "end_of_life" else ""
+            fails.append(f"yield at {y['temperature_c']:g} °C{eol} is "
+                         f"{100 * y['yield']:.3g} %, required "
+                         f"{100 * yields['required_yield']:.3g} %")
     at = ", ".join(_column_name(T) for T in temps)
     if not fails:
         corner = " and at every corner of the tolerance box" if "worst corner" in \
             matrix["columns"] else ""
         return True, f"This design meets every requirement at {at}{corner}.", fails
     more = f" (and {len(fails) - 3} more)" if len(fails) > 3 else ""
+    if all("at the end of life" in f for f in fails):       # (new, it passes)
+        return False, ("This design passes new but FAILS at the end of life: "
+                       + "; ".join(fails[:3]) + more), fails
     return False, "This design FAILS: " + "; ".join(fails[:3]) + more, fails
 
 
@@ -165,19 +172,22 @@ def report(cfg: Config, *, optimiser: dict | None = None, samples: int | None = 
                 "--samples" if samples else "tolerance.samples")
     nominal = _stroke(cfg)
     strokes = {}
-    for T in temps:
-        strokes[T] = (nominal if T == cfg.operating.temperature_c
+    # the end of life a sign-off state (SPEC §17): each temperature's column at it too
+    states = sign_off_states(cfg)
+    conditions = sign_off_conditions(cfg)
+    for T in conditions:
+        strokes[T] = (nominal if T == cfg.operating.temperature_c and cfg.life.state == "new"
                       else _stroke(checks.at_temperature(cfg, T)))
     timings["strokes"] = time.perf_counter() - t0
     if progress:
         print(f"report: strokes at {len(temps)} temperatures", flush=True)
-    columns = ["nominal"] + [_column_name(T) for T in temps]
+    columns = ["nominal"] + [_column_name(T) for T in conditions]
     cells = {r: {} for r in checks.constraint_rows(cfg)}
-    for col, s in [("nominal", nominal)] + [(_column_name(T), strokes[T]) for T in temps]:
+    for col, s in [("nominal", nominal)] + [(_column_name(T), strokes[T]) for T in conditions]:
         for r, c in checks.column(cfg, s["verification"]).items():
             cells[r][col] = c
     t1 = time.perf_counter()
-    corners, corner_facts = checks.worst_corners(cfg, temps)
+    corners, corner_facts = checks.worst_corners(cfg, conditions)
     if corners:
         columns.append("worst corner")
         for r, c in corners.items():
@@ -193,7 +203,10 @@ def report(cfg: Config, *, optimiser: dict | None = None, samples: int | None = 
     yields = _yields(cfg, samples)
     timings["yield"] = time.perf_counter() - t1
     ok, verdict, fails = _verdict(cfg, matrix, parts_, yields, temps)
-    by_t = {_column_name(T): {"temperature_c": T, **_metrics(strokes[T])} for T in temps}
+    by_t = {_column_name(T): {"temperature_c": condition_parts(T)[0],
+                              **({"state": condition_parts(T)[1] or "new"}
+                                 if len(states) > 1 else {}),
+                              **_metrics(strokes[T])} for T in conditions}
     design = {"mechanism": cfg.geometry.mechanism, "spring_kind": cfg.design.spring_kind,
               **checks.design_values(cfg),
               "rotary_damper_c": cfg.design.rotary_damper_c,
@@ -201,13 +214,14 @@ def report(cfg: Config, *, optimiser: dict | None = None, samples: int | None = 
               "damper_temperature_coeff": cfg.design.damper_temperature_coeff,
               "reference_temperature_c": cfg.operating.reference_temperature_c,
               "temperature_c": cfg.operating.temperature_c}
+    limits = _limits(cfg, matrix, optimiser)
     timings["total"] = time.perf_counter() - t0
     return ReportResult(
         success=ok, message=verdict, failures=tuple(fails), version=__version__,
         temperatures=temps, design=jsonable(design), parts=jsonable(parts_),
         metrics=jsonable(_metrics(nominal)), strokes=jsonable(by_t),
         matrix=jsonable(matrix), yields=jsonable(yields),
-        limits=jsonable(_limits(cfg, matrix, optimiser)), config_toml=to_toml(cfg),
+        limits=jsonable(limits), config_toml=to_toml(cfg),
         problem={"closing_time_max": cfg.optimise.closing_time_max,
                  "closing_time_min": cfg.optimise.closing_time_min,
                  "holding_moment_min": cfg.optimise.holding_moment_min,
@@ -216,7 +230,20 @@ def report(cfg: Config, *, optimiser: dict | None = None, samples: int | None = 
         time=timings["total"], timings=timings,
         drawing={"cfg": cfg, "model": nominal["model"],
                  "strokes": {T: strokes[T]["simulate"] for T in temps},
-                 "hands": {T: strokes[T]["hand"] for T in temps}})
+                 "hands": {T: strokes[T]["hand"] for T in temps}},
+        states=states, limiting_state=_limiting_state(limits, fails, states))
+
+
+def _limiting_state(limits: dict, fails, states) -> str | None:
+    """The state that limits the design: the end of life when every failure is there, the
+    new lid when one is new; without failures the state of the column with the smallest
+    relative margin (None with the new lid alone)."""
+    if len(states) == 1:
+        return None
+    if fails:
+        return "end_of_life" if all("at the end of life" in f for f in fails) else "new"
+    col = (limits.get("smallest_margin") or {}).get("column", "")
+    return "end_of_life" if "at the end of life" in col else "new"
 
 
 #: the optimisers' JSON files that `--out D` writes next to D/design.toml

@@ -16,7 +16,8 @@ import numpy as np
 
 from ..optimiser.verify import verify
 from ..problem import DESIGN_KEYS, design_of, params_of
-from ..problem import at_temperature, sign_off_temperatures as temperatures
+from ..problem import at_state, condition_parts, condition_text, sign_off_states
+from ..problem import at_temperature as _at_temperature, sign_off_temperatures as temperatures
 from ..robust.box import box_of
 from ..robust.evaluate import evaluate
 from ..robust.verify import point_config
@@ -32,6 +33,15 @@ ROWS = {
     "opening_force_max": ("opening force", "≤", "N"),
     "self_close_min_deg": ("closes by itself up to", "≥", "deg"),
 }
+
+
+def at_temperature(cfg, condition: float):
+    """``cfg`` at a sign-off condition: a temperature of the new lid (the new lid when the
+    end of life is a sign-off state too), or one at the end of life
+    (:func:`softclose.problem.sign_off_conditions`)."""
+    if condition_parts(condition)[1] is None and len(sign_off_states(cfg)) > 1:
+        cfg = at_state(cfg, "new")
+    return _at_temperature(cfg, condition)
 
 
 def design_values(cfg) -> dict:
@@ -139,7 +149,7 @@ def worst_corners(cfg, temps) -> tuple[dict, dict]:
         box = boxes[T]
         pc = point_config(c, box.keys, box.values(Z[i])[0])
         ver = verify(pc, design_of(params_of(pc)), hand=True)
-        checked[(T, i)] = (column(cfg, ver), f"{box.label(Z[i])} at {T:g} °C")
+        checked[(T, i)] = (column(cfg, ver), f"{box.label(Z[i])} at {condition_text(T)}")
     out = {}
     for r in rows:
         if r in best:
@@ -155,7 +165,9 @@ def worst_corners(cfg, temps) -> tuple[dict, dict]:
                     worst = (key, {**x, "where": where + " (the worst of the corners "
                                                       "checked for the other rows)"})
             out[r] = worst[1]
-    facts = {"keys": list(box0.keys), "corners": int(len(Z)), "temperatures": list(temps),
+    facts = {"keys": list(box0.keys), "corners": int(len(Z)),
+             "temperatures": list(dict.fromkeys(condition_parts(T)[0] for T in temps)),
+             "states": list(dict.fromkeys(condition_parts(T)[1] or "new" for T in temps)),
              "kernel_strokes": int(len(Z) * len(temps)), "reference_checks": len(checked)}
     return out, facts
 

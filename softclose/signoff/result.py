@@ -43,6 +43,11 @@ class ReportResult:
     timings: dict = field(default_factory=dict)
     drawing: dict = field(default_factory=dict, compare=False)
     files: tuple = ()
+    #: the states the design is signed off in (SPEC §17) and the one that limits it: the
+    #: state of every failed column when only the end of life fails, else of the smallest
+    #: margin (None with the new lid alone)
+    states: tuple = ("new",)
+    limiting_state: str | None = None
 
     def to_json(self) -> dict:
         """Every number of the report as plain JSON values, by section."""
@@ -52,8 +57,8 @@ class ReportResult:
                 "design": self.design, "problem": self.problem, "parts": self.parts,
                 "metrics": self.metrics, "strokes": self.strokes, "matrix": self.matrix,
                 "yield": self.yields, "limits": self.limits, "config": self.config_toml,
-                "time": self.time, "timings": self.timings,
-                "files": [str(f) for f in self.files]}
+                "time": self.time, "timings": self.timings, "states": list(self.states),
+                "limiting_state": self.limiting_state, "files": [str(f) for f in self.files]}
 
     def figures(self) -> dict:
         """The report's figures (matplotlib Figures), by name, in the order shown."""

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConfigError
+from ..model.life import aged, at_end_of_life, shut_coordinates
 from ..model.temperature import at_temperature, parameter_factors
 from ..numerics.roots import illinois
 from .statics import _parabola_max, opening_force_exact
@@ -125,7 +126,9 @@ def hand_force(model, p=None, case=None, grid: int = HAND_GRID) -> HandForce:
     if p is None:
         p = model.params() if case is None else case.p
     p = np.asarray(p, float)
-    if case is not None:                 # the parts at the operating temperature
+    if case is not None:                 # the parts at the end of life, at the temperature
+        if aged(case.life):
+            p = at_end_of_life(p, case.life, shut_coordinates(model))
         p = at_temperature(p, parameter_factors(case.temperatures))
     st = model.stroke if case is None else case.stroke
     lo, hi = st.theta_closed, math.radians(st.theta_open_deg)

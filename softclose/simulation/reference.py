@@ -26,6 +26,7 @@ from ..model import elements
 from . import statics
 from ..errors import NumericalError
 from ..interrupt import solving
+from ..model.life import aged, at_end_of_life, shut_coordinates
 from ..model.temperature import at_temperature, parameter_factors
 from ..problem import REFERENCE_TOL, as_params
 from ..numerics.roots import hermite_peak, hermite_root, illinois
@@ -240,8 +241,10 @@ class Reference:
         """
         m, st = self.model, self.model.stroke
         case = self.case if case is None else case
-        p = at_temperature(m.params() if p is None else as_params(p),
-                           None if case is None else parameter_factors(case.temperatures))
+        p = m.params() if p is None else as_params(p)
+        if case is not None and aged(case.life):    # the parts at the end of their life
+            p = at_end_of_life(p, case.life, shut_coordinates(m))
+        p = at_temperature(p, None if case is None else parameter_factors(case.temperatures))
         mounting = m.mounting if case is None else case.lid.mounting
         thc, t_max, dt = st.theta_closed, st.t_max, self.grid_step
         x = np.array([st.theta0, 0.0])

@@ -139,6 +139,7 @@ class Simulator:
         #: temperature): every p given to :meth:`run` and :meth:`run_batch` is a design at
         #: the reference temperature, and its stroke runs at the operating one
         self.temperature_factors = parameter_factors(case.temperatures)
+        self._aged = statics.Aging(case.life, self.model, self.table)  # (the end of life)
         if self.table.max_rel_error > TABLE_TOL:
             raise NumericalError(
                 f"the linkage passes close to a toggle position (transmission angle "
@@ -158,6 +159,7 @@ class Simulator:
         other = copy.copy(self)
         other.case, other.stroke = case, case.stroke
         other.temperature_factors = parameter_factors(case.temperatures)
+        other._aged = statics.Aging(case.life, self.model, self.table)
         return other
 
     # -- batches ---------------------------------------------------------------------
@@ -202,12 +204,12 @@ class Simulator:
         (reasons, valid ranges, holding moments, opening efforts) while the kernel's threads
         integrate the next: the same numbers, a row's depend on that row alone.
         """
-        P = at_temperature(as_params(np.atleast_2d(np.asarray(P, float))),
-                           self.temperature_factors)
+        P = as_params(np.atleast_2d(np.asarray(P, float)))
+        X = binding.point_rows(self.table, points, len(P))
+        P = at_temperature(self._aged(P, X), self.temperature_factors)
         st = self.stroke
         m = None if lid_mass is None else \
             np.broadcast_to(np.asarray(lid_mass, float), (len(P),)).copy()
-        X = binding.point_rows(self.table, points, len(P))
         cols = [binding.kernel_rows(P), self.energy_tol(P, m, X)]
         if m is not None or X is not None:
             cols.append(np.full(len(P), np.nan) if m is None else m)
@@ -299,7 +301,7 @@ class Simulator:
 
     # -- one stroke ------------------------------------------------------------------
     def run(self, p=None, trajectory: bool = False, estimate_error: bool = True) -> StrokeResult:
-        p = at_temperature(self.model.params() if p is None else as_params(p),
+        p = at_temperature(self._aged(self.model.params() if p is None else as_params(p)),
                            self.temperature_factors)
         st = self.stroke
         design = np.r_[binding.kernel_rows(p), self.energy_tol(p[None, :])]
@@ -395,6 +397,7 @@ class Simulator:
         half.__dict__.update(self.__dict__)
         half.step = self.step / 2
         half.temperature_factors = None        # (p holds the parts at the temperature)
+        half._aged = statics.Aging(None, None, None)     # (and at the end of life)
         r2 = half.run(p, estimate_error=False)
         q = 2.0 ** self.method.order
         tab = self.table.max_rel_error * self.friction_gain(p)

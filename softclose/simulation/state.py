@@ -47,15 +47,17 @@ class LinkageState:
         return self.text()
 
 
-def linkage_state(model, theta0: float, theta: float, theta_dot: float = 0.0) -> LinkageState:
+def linkage_state(model, theta0: float, theta: float, theta_dot: float = 0.0,
+                  p=None) -> LinkageState:
     """The state of ``model`` (a :class:`~softclose.model.lid.LidModel`) at ``theta`` and
-    ``theta_dot`` on the branch followed from the release angle ``theta0`` (rad); a
-    ConfigError when that branch does not reach ``theta`` (a toggle position between)."""
+    ``theta_dot`` on the branch followed from the release angle ``theta0`` (rad), with the
+    parameters ``p`` (default the model's design); a ConfigError when that branch does not
+    reach ``theta`` (a toggle position between)."""
     toggle = model.toggle_between(theta0, theta)
     if toggle is not None:  # the branch followed from the stroke does not reach theta
         raise ConfigError(f"--theta-deg: the loop cannot close at {math.degrees(theta):g} deg "
                           f"on this branch (toggle position at {math.degrees(toggle):.3f} deg)")
-    return LinkageState(model.state(theta, theta_dot), model.lid.mechanism == "hinge")
+    return LinkageState(model.state(theta, theta_dot, p), model.lid.mechanism == "hinge")
 
 
 __all__ = ["LinkageState", "linkage_state"]

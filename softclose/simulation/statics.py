@@ -186,6 +186,42 @@ def table_coordinate(table, points=None):
     return q
 
 
+class Aging:
+    """``aged(P, points=None)``: rows P of new parts at the end of ``life``
+    (:func:`softclose.model.life.at_end_of_life`) when its strokes are aged, P itself else; a
+    coil spring relaxes at its shut length, each row's own with ``points`` (picklable)."""
+
+    def __init__(self, life, model, table):
+        from ..model.life import aged
+        self.life = life if aged(life) else None
+        self.model, self.table, self.shut = model, table, None
+
+    def __call__(self, P, points=None):
+        if self.life is None:
+            return P
+        from ..model.life import at_end_of_life, shut_coordinates
+        if self.shut is None:
+            self.shut = shut_coordinates(self.model)
+        return at_end_of_life(P, self.life, shut_lengths(
+            self.table, self.model.stroke.theta_closed, self.shut, points))
+
+
+def shut_lengths(table, theta_closed: float, shut: dict, points=None) -> dict:
+    """The springs' coordinates at the shut angle (``shut``: the model's, exact;
+    :func:`softclose.model.life.shut_coordinates`), a row with its own attachment points
+    (``points``, the kernel's convention) its own spring length (the table's pose pieces)."""
+    if points is None:
+        return shut
+    X = np.asarray(points, float)
+    has = ~np.isnan(X[:, 0])
+    if not has.any():
+        return shut
+    n = len(X)
+    q = table_coordinate(table, X)(elements.BY_NAME["spring"], np.full(n, theta_closed),
+                                   np.arange(n))
+    return {**shut, "spring": np.where(has, q, shut["spring"])}
+
+
 #: angles per stroke where :func:`_leaves` looks for the edge of the invalid region (the
 #: edge is interpolated between two of them, the worst point refined by a parabola)
 LEAVE_GRID = 101

@@ -105,6 +105,9 @@ class StrokeResult(Displayed):
     #: with ``trajectory=True`` (:func:`softclose.simulate`): the lid's model, which draws
     #: the linkage and the animation (:meth:`save`)
     model: object | None = field(default=None, repr=False, compare=False)
+    #: with ``hand_force=True`` and ``[life]`` changing a part (SPEC §17): the stroke in each
+    #: state, ``(("new", StrokeResult), ("end_of_life", StrokeResult))`` (this one among them)
+    states: tuple = field(default=(), repr=False, compare=False)
 
     @property
     def ok(self) -> bool:
@@ -138,6 +141,13 @@ class StrokeResult(Displayed):
         if self.hand_forces:                # at each sign-off temperature (SPEC §12, §13)
             out["temperatures"] = [dict(h.metrics(), temperature_c=T)
                                    for T, h in self.hand_forces]
+        if self.states:                     # new and at the end of life (SPEC §17)
+            out["states"] = [dict(r.metrics(), state=st, status=r.status.text,
+                                  **({} if r.hand_force is None else {
+                                      k: v for k, v in r.hand_force.metrics().items()
+                                      if k != "opening_force"}),
+                                  **({"error": r.message} if not r.ok else {}))
+                             for st, r in self.states]
         if not self.ok:
             out["error"] = self.message
         else:
@@ -157,6 +167,13 @@ class StrokeResult(Displayed):
             lines.append(f"  hand force: {self.hand_force.describe()}")
         if self.end_damper:
             lines.append(f"  end damper: {self.end_damper}")
+        for st, r in self.states:
+            lines.append(f"  {st.replace('_', ' ')}: " + (
+                (f"closes in {r.closing_time:.4g} s, impact tip speed "
+                 f"{r.impact_tip_speed:.4g} m/s, peak {r.peak_tip_speed:.4g} m/s"
+                 if r.closed else "does not close") +
+                f", holding moment {r.holding_moment:.4g} N m" if r.ok else
+                f"{r.status.text}: {r.message}"))
         if self.message:
             lines.append(f"  {self.message}")
         return "\n".join(lines)

@@ -38,8 +38,8 @@ from collections import OrderedDict
 import numpy as np
 
 from ..config.free import PLACEMENT_KEYS, point_refusals
-from ..problem import (LID_MASS, METRIC_KEYS, PARAM_COLUMNS, infeasibility, objective,
-                       params_of, resolve)
+from ..problem import (LID_MASS, METRIC_KEYS, PARAM_COLUMNS, WORD_PARAMS, infeasibility,
+                       objective, params_of, resolve)
 from ..simulation.stroke import StrokeStatus
 from ..errors import SoftcloseError
 from ..config import from_dict, RANGES, to_dict
@@ -142,7 +142,9 @@ def evaluate_chunk(cfg_dict: dict, keys: list[str], ids: np.ndarray, X: np.ndarr
     bounds = np.searchsorted(inv[order], np.arange(len(uniq) + 1))
     for g in range(len(uniq)):
         rows = order[bounds[g]:bounds[g + 1]]
-        values = {keys[j]: float(uniq[g, i]) for i, j in enumerate(other)}
+        values = {keys[j]: WORD_PARAMS[keys[j]].word(float(uniq[g, i]))
+                  if keys[j] in WORD_PARAMS else float(uniq[g, i])       # (life.state)
+                  for i, j in enumerate(other)}
         try:
             cfg = base.update(values) if values else base
             sim = _simulator(cfg)
