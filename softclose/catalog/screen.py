@@ -99,6 +99,22 @@ class PairBox:
         return PairBox(self.other, self.Z[:n], self.corners, 0,
                        None if self.Ts is None else self.Ts[:n], self.strut)
 
+    def part(self, rows) -> "PairBox":
+        """Some sample rows alone (``rows``: indices into :attr:`Z` past the nominal
+        point): a box of no corners, run as samples."""
+        rows = np.asarray(rows, int)
+        return PairBox(self.other, self.Z[rows], 0, len(rows),
+                       None if self.Ts is None else self.Ts[rows], self.strut)
+
+    @property
+    def outside(self) -> np.ndarray:
+        """The sample rows outside the box (a unit coordinate beyond ±1: only with
+        ``distribution = "normal"``, whose spread is 3 sigma), which its corners do not
+        bound."""
+        first = self.corners + 1
+        out = (np.abs(self.Z[first:]) > 1.0 + 1e-12).any(axis=1)
+        return first + np.flatnonzero(out)
+
     def config_at(self, cfg: Config, row: int) -> Config:
         """``cfg`` at the temperature of row ``row``."""
         return cfg if self.Ts is None else at_temperature(cfg, float(self.Ts[row]))
@@ -228,7 +244,8 @@ def damper_group(damper) -> tuple:
 def run_pairs(cfg: Config, box: PairBox, pairs: list) -> dict:
     """Every row of every pair ``(spring, damper)``: the metric columns of
     :func:`softclose.robust.evaluate.evaluate`, ``reason`` and ``feasible`` with the parts'
-    length limits checked, and the row's lower and upper length limit; rows pair-major."""
+    length limits checked, and the row's lower and upper length limit; rows pair-major
+    (a box of no corners, :meth:`PairBox.part`, has no nominal row: no opening effort)."""
     n = box.points
     groups: dict = {}
     for i, (s, d) in enumerate(pairs):
@@ -271,7 +288,7 @@ def _evaluate(c: Config, box: PairBox, keys, X: np.ndarray, npairs: int) -> dict
     nominal row, which reports it."""
     Trow = None if box.Ts is None else np.tile(box.Ts, npairs)
     cols = _at_temperatures(c, box, keys, X, Trow, False)
-    if c.optimise.opening_force_max is not None:
+    if c.optimise.opening_force_max is not None or box.corners == 0:
         return cols
     nominal = np.arange(npairs) * box.points + box.corners
     part = _at_temperatures(c, box, keys, X[nominal], None if Trow is None else Trow[nominal],
