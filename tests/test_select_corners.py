@@ -76,8 +76,14 @@ def test_corners_first_ranks_as_every_sample_with_normal_spreads_and_temperature
 
 @pytest.mark.slow
 def test_corners_first_ranks_as_every_sample_on_the_shipped_catalogs():
+    """All 3,445 pairs; the counts docs/parts.md quotes."""
     first, _ = _same_ranking(default_config(), *_catalogs(1))
     assert first.pairs == 3445
+    sc = first.screening
+    assert (sc["decided_by_corners"], sc["met_every_corner"], sc["failed_every_corner"],
+            sc["sampled"]) == (2856, 1666, 1190, 589)
+    assert ("corners first: 2856 pairs decided by their corners (1666 meet every one, 1190 "
+            "fail every one), 589 sampled") in first.text()
 
 
 def _spy(monkeypatch):
