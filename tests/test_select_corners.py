@@ -87,15 +87,16 @@ def test_corners_first_ranks_as_every_sample_on_the_shipped_catalogs():
 
 
 def _spy(monkeypatch):
-    """The rows :func:`softclose.catalog.corners.screen_rows` runs, per call (points of the
-    box, pairs)."""
+    """The rows :func:`softclose.catalog.corners.screen_rows` runs, per call (pairs, rows
+    in all)."""
     import softclose.catalog.corners as C
     calls = []
     real = C.run_pairs
 
-    def run_pairs(cfg, box, pairs):
-        calls.append((box.points, len(pairs)))
-        return real(cfg, box, pairs)
+    def run_pairs(cfg, box, pairs, rows=None):
+        calls.append((len(pairs), len(pairs) * box.points if rows is None else
+                      sum(len(r) for r in rows)))
+        return real(cfg, box, pairs, rows)
     monkeypatch.setattr(C, "run_pairs", run_pairs)
     return calls
 
@@ -109,7 +110,8 @@ def test_a_pair_failing_every_corner_has_yield_0_and_one_meeting_every_corner_1(
     cfg = default_config()
     springs, dampers = _catalogs(1)
     box = pair_box(cfg, 64)
-    every, _ = screen_rows(cfg, box, [(s, d) for s in springs[::9] for d in dampers], True)
+    every, _, _ = screen_rows(cfg, box, [(s, d) for s in springs[::9] for d in dampers],
+                              True)
     sm = summarise(box, every, len(springs[::9]) * len(dampers))
     pairs = [(s, d) for s in springs[::9] for d in dampers]
     cc = sm["corner_count"]
@@ -117,9 +119,9 @@ def test_a_pair_failing_every_corner_has_yield_0_and_one_meeting_every_corner_1(
     meet = next(p for p in range(len(pairs)) if cc[p] == box.corners)
     assert sm["yield"][fail] == 0.0 and sm["yield"][meet] == 1.0
     calls = _spy(monkeypatch)
-    cols, sampled = screen_rows(cfg, box, [pairs[fail], pairs[meet]])
-    assert not sampled.any()
-    assert calls == [(box.corners + 1, 2)]           # the corners and nominal point alone
+    cols, sampled, runs = screen_rows(cfg, box, [pairs[fail], pairs[meet]])
+    assert not sampled.any() and not runs.any()
+    assert calls == [(2, 2 * (box.corners + 1))]     # the corners and nominal point alone
     first = summarise(box, cols, 2)
     assert list(first["yield"]) == [0.0, 1.0]
     assert first["reason"] == [sm["reason"][fail], ""]
@@ -128,19 +130,27 @@ def test_a_pair_failing_every_corner_has_yield_0_and_one_meeting_every_corner_1(
 
 
 def test_a_pair_meeting_some_corners_is_sampled(monkeypatch):
+    """Pairs meeting some corners: their samples judged one by one, the same yield as every
+    sample run; those whose unsettled constraints are monotone run only some samples (in
+    rounds: the rest decided by a sample run that meets or fails the constraint and is no
+    better or no worse placed along its orientation)."""
     from softclose.catalog.corners import screen_rows
     from softclose.catalog.screen import pair_box, summarise
     cfg = default_config()
     springs, dampers = _catalogs(1)
-    box = pair_box(cfg, 32)
+    box = pair_box(cfg, 128)
     pairs = [(s, d) for s in springs[::9] for d in dampers]
-    every, _ = screen_rows(cfg, box, pairs, True)
+    every, _, _ = screen_rows(cfg, box, pairs, True)
     sm = summarise(box, every, len(pairs))
-    some = next(p for p in range(len(pairs)) if 0 < sm["corner_count"][p] < box.corners)
+    some = [p for p in range(len(pairs)) if 0 < sm["corner_count"][p] < box.corners]
     calls = _spy(monkeypatch)
-    cols, sampled = screen_rows(cfg, box, [pairs[some]])
-    assert sampled.all() and calls == [(box.corners + 1, 1), (box.samples, 1)]
-    assert summarise(box, cols, 1)["yield"][0] == sm["yield"][some]
+    cols, sampled, runs = screen_rows(cfg, box, [pairs[p] for p in some])
+    assert sampled.all() and calls[0] == (len(some), len(some) * (box.corners + 1))
+    assert sum(c[1] for c in calls[1:]) == runs.sum() <= len(some) * box.samples
+    assert runs.min() < box.samples                  # some samples decided without a run
+    first = summarise(box, cols, len(some))
+    assert list(first["yield"]) == [sm["yield"][p] for p in some]
+    assert list(first["worst_objective"]) == [sm["worst_objective"][p] for p in some]
 
 
 def _head(box, ct, hm=1.0, closed=True):

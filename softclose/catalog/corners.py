@@ -115,10 +115,39 @@ def wobble(S: np.ndarray, d: int) -> np.ndarray:
     return w
 
 
-def corner_verdicts(box: PairBox, head: dict, npairs: int, opt) -> np.ndarray:
-    """Per pair, :data:`MET`, :data:`FAILED` or :data:`OPEN` from its rows at the corners
-    and the nominal point (``head``: :func:`.screen.run_pairs` of ``box.head()``; module
-    docstring)."""
+#: the constraints whose slack means something only where the lid closed (elsewhere it
+#: is not evidence for :func:`orientation` and :func:`_infer`)
+WHERE_CLOSED = ("rebound", "min_length", "max_length", "holding_moment_min")
+
+
+def as_evidence(S: dict, closed) -> dict:
+    """The slacks of :func:`constraint_slacks` as evidence of a monotone constraint: those
+    of :data:`WHERE_CLOSED` NaN where the lid did not close."""
+    closed = np.asarray(closed, bool)
+    return {k: np.where(closed, v, np.nan) if k in WHERE_CLOSED else v for k, v in S.items()}
+
+
+def orientation(S: np.ndarray, d: int) -> np.ndarray:
+    """Per pair and axis, the sign of a slack's edge differences (``S`` (pairs, 2^d) at the
+    corners; edges with a NaN end left out): +1 rising, -1 falling, 0 flat along the axis;
+    NaN where the edges disagree or none is left."""
+    out = np.full((len(S), d), np.nan)
+    for ax, (low, high) in enumerate(edges(d)):
+        a, b = S[:, low], S[:, high]
+        with np.errstate(invalid="ignore"):
+            df = np.where(a == b, 0.0, b - a)
+        ok = ~np.isnan(df).all(axis=1)
+        up, down = (df > 0).any(axis=1), (df < 0).any(axis=1)
+        out[ok & up & ~down, ax] = 1.0
+        out[ok & down & ~up, ax] = -1.0
+        out[ok & ~up & ~down, ax] = 0.0
+    return out
+
+
+def _verdicts(box: PairBox, head: dict, npairs: int, opt):
+    """:func:`corner_verdicts`, and per pair the slacks at its head rows, which constraints
+    its corners do not settle (met at every corner with a margin) and their orientations
+    per temperature (NaN: not monotone)."""
     nh, nc = box.corners + 1, box.corners
     nT = max(len(box.temperatures), 1)
     per_T = nc // nT
@@ -128,34 +157,90 @@ def corner_verdicts(box: PairBox, head: dict, npairs: int, opt) -> np.ndarray:
     none = ~F[:, :nc].any(axis=1)
     ok_met = met.copy()
     failed_by = np.zeros(npairs, bool)
-    for S in constraint_slacks(head, opt).values():
+    slacks, open_, sigma = {}, {}, {}
+    closed = np.asarray(head["closed"], bool).reshape(npairs, nh)
+    for k, S in constraint_slacks(head, opt).items():
         S = S.reshape(npairs, nh)
         corners = S[:, :nc]
-        w = np.max([wobble(corners[:, t * per_T:(t + 1) * per_T], d) for t in range(nT)],
-                   axis=0)
+        blocks = [corners[:, t * per_T:(t + 1) * per_T] for t in range(nT)]
+        w = np.max([wobble(b, d) for b in blocks], axis=0)
         with np.errstate(invalid="ignore"):
             lowest, highest = corners.min(axis=1), corners.max(axis=1)
-            ok_met &= (lowest > MARGIN * w) & ~(S[:, nc] < lowest - w)
+            settled = (lowest > MARGIN * w) & ~(S[:, nc] < lowest - w)
+            ok_met &= settled
             failed_by |= (highest < -MARGIN * w) & ~(S[:, nc] > highest + w)
+        slacks[k], open_[k] = S, ~settled
+        if k in WHERE_CLOSED:
+            corners = np.where(closed[:, :nc], corners, np.nan)
+            blocks = [corners[:, t * per_T:(t + 1) * per_T] for t in range(nT)]
+        sigma[k] = np.stack([orientation(b, d) for b in blocks], axis=1)   # (P, nT, d)
     out = np.full(npairs, OPEN)
     out[ok_met] = MET
     out[none & failed_by] = FAILED
+    return out, slacks, open_, sigma
+
+
+def corner_verdicts(box: PairBox, head: dict, npairs: int, opt) -> np.ndarray:
+    """Per pair, :data:`MET`, :data:`FAILED` or :data:`OPEN` from its rows at the corners
+    and the nominal point (``head``: :func:`.screen.run_pairs` of ``box.head()``; module
+    docstring)."""
+    return _verdicts(box, head, npairs, opt)[0]
+
+
+def _infer(z_rows, t_rows, known, S, sigma, todo):
+    """For the rows ``todo`` of one pair, what a monotone constraint says there: +1 met
+    (a row known to meet it is no better placed, along its orientation ``sigma`` (nT, d),
+    at the same temperature), -1 failed (a row known to fail it is no worse placed), 0
+    unknown. ``known``: the rows that may be evidence (inside the box), ``S``: the
+    constraint's slack at every row (NaN: not run, no evidence)."""
+    out = np.zeros(len(todo), int)
+    if not len(known) or not len(todo):
+        return out
+    Sk = S[known]
+    Yt = z_rows[todo] * sigma[t_rows[todo]]            # oriented: larger is better
+    Yk = z_rows[known] * sigma[t_rows[known]]
+    several = len(sigma) > 1
+    met = np.zeros(len(todo), bool)
+    failed = np.zeros(len(todo), bool)
+    for sel, side in ((Sk >= 0, met), (Sk < 0, failed)):
+        if not sel.any():
+            continue
+        Y = Yk[sel]
+        a, b = (Yt, Y) if side is met else (Y, Yt)     # a row no worse / no better placed
+        hit = a[:, :1] >= b[:, :1].T if side is met else a[:, :1].T >= b[:, :1]
+        for ax in range(1, Yt.shape[1]):
+            hit &= (a[:, ax:ax + 1] >= b[:, ax:ax + 1].T) if side is met else \
+                (a[:, ax:ax + 1].T >= b[:, ax:ax + 1])
+        if several:
+            hit &= t_rows[todo][:, None] == t_rows[known][sel][None, :]
+        side |= hit.any(axis=1)
+    out[met & ~failed] = 1
+    out[failed & ~met] = -1
     return out
 
 
+#: the samples of a pair run in each round of :func:`screen_rows`'s inference (the rest:
+#: every sample still unknown)
+ROUNDS = (32, 64)
+
+
 def screen_rows(cfg, box: PairBox, pairs: list, every_sample: bool = False
-                ) -> tuple[dict, np.ndarray]:
-    """The rows of every pair, as :func:`.screen.run_pairs` of the whole box, and whether
-    each pair's samples were run. Corners first (module docstring); a pair decided by its
+                ) -> tuple[dict, np.ndarray, np.ndarray]:
+    """The rows of every pair, as :func:`.screen.run_pairs` of the whole box; whether its
+    corners left each pair open (its samples judged one by one); how many of each pair's
+    sample rows were run. Corners first (module docstring); a pair decided by its
     corners has its samples inside the box filled with its verdict (feasible or not, J
-    -inf so that its worst J is its corners' and nominal point's, the metrics NaN).
+    -inf so that its worst J is its corners' and nominal point's, the metrics NaN), and so
+    has a sample of an open pair that its constraints' monotonicity decides.
     ``every_sample``: every pair's samples run."""
     npairs = len(pairs)
     if every_sample or not box.samples or not npairs:
-        return run_pairs(cfg, box, pairs), np.ones(npairs, bool)
+        return run_pairs(cfg, box, pairs), np.ones(npairs, bool), \
+            np.full(npairs, box.points - box.corners - 1)
     n, nh = box.points, box.corners + 1
+    opt = cfg.optimise
     head = run_pairs(cfg, box.head(), pairs)
-    verdict = corner_verdicts(box, head, npairs, cfg.optimise)
+    verdict, _, open_, sigma = _verdicts(box, head, npairs, opt)
     sampled = verdict == OPEN
     out = {}
     for k, v in head.items():
@@ -172,12 +257,78 @@ def screen_rows(cfg, box: PairBox, pairs: list, every_sample: bool = False
     out["feasible"][decided, nh:] = (verdict[decided] == MET)[:, None]
     out["objective"][decided, nh:] = -np.inf
     out["reason"][np.flatnonzero(verdict == FAILED)[:, None], np.arange(nh, n)] = "decided"
-    for who, rows in ((np.flatnonzero(sampled), np.arange(nh, n)),
-                      (np.flatnonzero(decided), box.outside)):
-        if not len(who) or not len(rows):
+    samples = np.arange(nh, n)
+    outside = box.outside
+    inside = np.setdiff1d(samples, outside)
+    in_box = np.ones(n, bool)
+    in_box[outside] = False
+    todo = {int(p): outside for p in np.flatnonzero(decided) if len(outside)}
+    # an open pair whose unsettled constraints keep one sign along every axis at every
+    # temperature (sigma): its samples inside the box in rounds, the rows its monotone
+    # constraints decide filled in, the rest run
+    unsettled = {int(p): [k for k in open_ if open_[k][p]] for p in np.flatnonzero(sampled)}
+    corner_failed = ~np.asarray(head["feasible"], bool).reshape(npairs, nh)[:, :-1].all(axis=1)
+    mono = [p for p, ks in unsettled.items() if corner_failed[p]
+            and not any(np.isnan(sigma[k][p]).any() for k in ks)]
+    for p in unsettled:
+        todo[p] = samples
+    unknown, ran = {}, {}
+    for p in mono:
+        ran[p] = np.zeros(n, bool)
+        ran[p][:nh] = True
+        todo[p] = np.r_[outside, inside[:ROUNDS[0]]]
+        unknown[p] = inside[ROUNDS[0]:]
+    temps = {T: i for i, T in enumerate(box.temperatures)}
+    t_rows = np.zeros(n, int) if box.Ts is None else np.array([temps[float(T)]
+                                                              for T in box.Ts])
+    for r in range(len(ROUNDS) + 1):
+        _run_into(cfg, box, pairs, todo, out)
+        for p in mono:
+            if p in todo:
+                ran[p][todo[p]] = True
+        todo = {}
+        for p in mono:
+            rows = unknown[p]
+            if not len(rows):
+                continue
+            S = as_evidence(constraint_slacks({c: v[p] for c, v in out.items()}, opt),
+                         out["closed"][p])
+            evidence = np.flatnonzero(ran[p] & in_box)      # rows run, inside the box
+            state = np.ones(len(rows), int)
+            for k in unsettled[p]:
+                live = np.flatnonzero(state >= 0)        # (a row failed is decided)
+                v = _infer(box.Z, t_rows, evidence, S[k], sigma[k][p], rows[live])
+                state[live] = np.where(v < 0, -1, np.where(v == 0, 0, state[live]))
+            ok, bad = rows[state == 1], rows[state == -1]
+            out["feasible"][p, ok] = True
+            out["feasible"][p, bad] = False
+            out["objective"][p, np.r_[ok, bad]] = -np.inf
+            out["reason"][p, bad] = "decided"
+            left = rows[state == 0]
+            take = left if r + 1 >= len(ROUNDS) else left[:ROUNDS[r + 1]]
+            unknown[p] = left[len(take):]
+            if len(take):
+                todo[p] = take
+        if not todo:
+            break
+    runs = np.where(sampled, 0, len(outside))
+    for p in unsettled:
+        runs[p] = n - nh if p not in ran else int(ran[p][nh:].sum())
+    return {k: v.reshape(npairs * n) for k, v in out.items()}, sampled, runs
+
+
+def _run_into(cfg, box: PairBox, pairs: list, todo: dict, out: dict) -> None:
+    """Run the rows ``todo`` ({pair index: rows of the box}) of the pairs, in one batch,
+    into ``out`` (columns (pairs, rows of the box))."""
+    who = [p for p, rows in todo.items() if len(rows)]
+    if not who:
+        return
+    rows = [np.asarray(todo[p], int) for p in who]
+    cols = run_pairs(cfg, box, [pairs[p] for p in who], rows)
+    at = np.r_[0, np.cumsum([len(r) for r in rows])]
+    for k, v in cols.items():
+        if k not in out:
             continue
-        cols = run_pairs(cfg, box.part(rows), [pairs[i] for i in who])
-        for k, v in cols.items():
-            v = np.asarray(v).reshape(len(who), len(rows))
-            out[k][who[:, None], rows[None, :]] = v
-    return {k: v.reshape(npairs * n) for k, v in out.items()}, sampled
+        v = np.asarray(v)
+        for j, p in enumerate(who):
+            out[k][p, rows[j]] = v[at[j]:at[j + 1]]

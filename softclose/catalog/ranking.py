@@ -307,8 +307,9 @@ def screen_chunk(cfg: Config, box: PairBox, a: int, chunk: list,
                  every_sample: bool = False) -> tuple[int, list]:
     """Screen one chunk of pairs, corners first (:mod:`.corners`; ``every_sample``: every
     pair's samples run): (its first index, [(ranking entry, (corner verdicts, corner J))
-    per pair]); an entry's ``sampled`` says whether its samples were run."""
-    cols, sampled = screen_rows(cfg, box, chunk, every_sample)
+    per pair]); an entry's ``sampled`` says whether its corners left it open (its samples
+    run, or decided by its constraints' monotonicity), ``samples_run`` how many were run."""
+    cols, sampled, runs = screen_rows(cfg, box, chunk, every_sample)
     sm = summarise(box, cols, len(chunk))
     n, nc = box.points, box.corners
     rng = [p for p, r in enumerate(sm["reason"]) if r == RANGE]
@@ -325,7 +326,7 @@ def screen_chunk(cfg: Config, box: PairBox, a: int, chunk: list,
                        float(sm["worst_objective"][p]), text,
                        int(sm["corner_count"][p]), nc,
                        {k: float(v[p]) for k, v in sm["nominal"].items()})
-        e["sampled"] = bool(sampled[p])
+        e["sampled"], e["samples_run"] = bool(sampled[p]), int(runs[p])
         coil.apply(e, coil.spring_checks(cfg, s, lengths))
         if len(box.temperatures) > 1:
             e["limiting_temperature_c"] = limiting_temperature(box, cols, cfg.optimise, p,
@@ -341,9 +342,12 @@ def _screening(entries: dict, box: PairBox, every_sample: bool) -> dict:
     corners decided (met at every one, failed at every one) and how many were sampled."""
     met = sum(1 for e in entries.values() if not e["sampled"] and e["corners_feasible"])
     decided = sum(1 for e in entries.values() if not e["sampled"])
+    rows = sum(e["samples_run"] for e in entries.values())
     return {"method": "every sample" if every_sample or not box.samples else "corners first",
             "decided_by_corners": decided, "met_every_corner": met,
-            "failed_every_corner": decided - met, "sampled": len(entries) - decided}
+            "failed_every_corner": decided - met, "sampled": len(entries) - decided,
+            "sample_rows_run": rows,
+            "sample_rows_every": len(entries) * (box.points - box.corners - 1)}
 
 
 def _box_json(box: PairBox) -> dict:
