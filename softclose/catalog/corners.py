@@ -13,8 +13,14 @@ integrated, the opening force where it is bounded). Then, per pair:
   box, its largest value is at a corner, so it fails at every sample inside the box too:
   yield 0 without a sample run (a pair whose corners fail different constraints -- too
   slow at one, too fast at another -- may pass between them: it is sampled);
-- **anything else** (some corners met, or monotonicity not shown): every sample is run, as
-  when each pair is sampled.
+- **anything else** (some corners met, or monotonicity not shown) is open: its samples
+  are judged one by one. Where each constraint its corners do not settle keeps one sign
+  along every axis (:func:`orientation`; the slacks of :data:`WHERE_CLOSED` read only
+  where the lid closed), the samples run in rounds (:data:`ROUNDS`): a sample no better
+  placed along a constraint's orientation than one that fails it fails it too, one no
+  worse placed than one that meets it meets it too, so such samples are decided without
+  a run; the rest run in the next round. Otherwise (and for a pair that meets every
+  corner but is not settled) every sample runs, as when each pair is sampled.
 
 **Where monotonicity is checked** (:func:`wobble`): along each axis of the box, the corners
 pair up into 2^(d-1) edges, and each edge's difference of a slack is the sign of that
@@ -35,7 +41,8 @@ samples run at every temperature). With ``distribution = "normal"`` the samples 
 the box (a unit coordinate past ±1, about 1 % of them) are not bounded by its corners:
 they are run for every pair, decided or not.
 
-A decided pair's worst J is over its corners and nominal point (J's largest value over
+A decided pair's worst J is over its corners and nominal point (an open pair's: also over
+the samples run) (J's largest value over
 the box where J too is monotone in it; on the shipped catalogs the same as over the
 samples); its reason is its corners' (as when every sample is run: corners decide it).
 """

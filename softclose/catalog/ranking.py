@@ -7,7 +7,8 @@ The procedure, step by step:
    the corners of the box over a geometric grid of ``optimise.damper_c``'s bounds, then a
    finer grid around the best), made to the ``[tolerance]`` spread of ``design.damper_c``.
 2. **Screen** (:mod:`.screen`): each pair at the corners of its own tolerance box, at its
-   nominal point and on the same Monte Carlo samples, in the C kernel, chunk by chunk. A
+   nominal point and on the same Monte Carlo samples, in the C kernel, chunk by chunk;
+   corners first (:mod:`.corners`): the samples only where the corners leave it open. A
    spring whose coil the catalog gives is checked at its working lengths (:mod:`.coil`:
    static stress, fatigue, buckling); one that fails makes its pair infeasible.
 3. **Rank**: meets every constraint at every corner first, then yield (the share of samples
