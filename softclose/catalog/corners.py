@@ -50,6 +50,7 @@ samples); its reason is its corners' (as when every sample is run: corners decid
 from __future__ import annotations
 
 import itertools
+import warnings
 
 import numpy as np
 
@@ -180,6 +181,13 @@ def _verdicts(box: PairBox, head: dict, npairs: int, opt):
         if k in WHERE_CLOSED:
             corners = np.where(closed[:, :nc], corners, np.nan)
             blocks = [corners[:, t * per_T:(t + 1) * per_T] for t in range(nT)]
+            # one value, met, at every corner where the lid closes (a spring length's
+            # extreme: the stroke's geometry): met wherever the lid closes, which the
+            # constraint "closed" judges
+            with np.errstate(invalid="ignore"), warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                lo_c, hi_c = np.nanmin(corners, axis=1), np.nanmax(corners, axis=1)
+            open_[k] &= ~((lo_c == hi_c) & (lo_c > 0))
         sigma[k] = np.stack([orientation(b, d) for b in blocks], axis=1)   # (P, nT, d)
     out = np.full(npairs, OPEN)
     out[ok_met] = MET
