@@ -82,8 +82,10 @@ def test_corners_first_ranks_as_every_sample_on_the_shipped_catalogs():
     sc = first.screening
     assert (sc["decided_by_corners"], sc["met_every_corner"], sc["failed_every_corner"],
             sc["sampled"]) == (2856, 1666, 1190, 589)
+    assert sc["sample_rows_run"] == 79455 and sc["sample_rows_every"] == 881920
     assert ("corners first: 2856 pairs decided by their corners (1666 meet every one, 1190 "
-            "fail every one), 589 sampled") in first.text()
+            "fail every one), 589 sampled (79455 of 881920 sample strokes run)") \
+        in first.text()
 
 
 def _spy(monkeypatch):

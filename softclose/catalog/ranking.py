@@ -114,7 +114,8 @@ def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: 
     the grid's). ``mapper``: run chunks elsewhere
     (``softclose.catalog.distributed``). ``every_sample``: every pair's samples run (by
     default corners first, :mod:`.corners`: the samples of the pairs the corners leave
-    open; the same ranking where the constraints are monotone over the boxes). Ctrl-C between chunks keeps the pairs screened
+    open; the same ranking where the constraints are monotone over the boxes). Ctrl-C
+    between chunks keeps the pairs screened
     (``result.interrupted``). Returns a :class:`SelectResult`; never raises for a part
     that fails (it is ranked with the reason).
     """
@@ -219,7 +220,8 @@ def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: 
         pairs=len(pairs), seconds=seconds, interrupted=interrupted,
         warnings=tuple(warnings), samples=samples, seed=seed, corners=box.corners,
         box=_box_json(box), continuous=dmp is None, verified_count=len(checked),
-        screening=_screening(entries, box, every_sample), times=times, springs=spr.path, dampers=None if dmp is None else dmp.path)
+        screening=_screening(entries, box, every_sample), times=times, springs=spr.path,
+        dampers=None if dmp is None else dmp.path)
 
 
 def _verify_best(cfg, box, pairs, entries, kernel, order, n, checked: dict,

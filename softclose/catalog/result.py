@@ -106,7 +106,8 @@ class SelectResult(Displayed):
             "warnings": list(self.warnings), "samples": self.samples, "seed": self.seed,
             "corners": self.corners, "box": self.box,
             "damper_c_optimised": self.continuous, "verified_pairs": self.verified_count,
-            "screening": self.screening, "times": self.times, "springs": self.springs, "dampers": self.dampers})
+            "screening": self.screening, "times": self.times, "springs": self.springs,
+            "dampers": self.dampers})
 
     def to_frame(self):
         """One row per pair, best first: rank, the parts, the verdicts, why it fails,

@@ -101,9 +101,9 @@ class PairBox:
 
     @property
     def outside(self) -> np.ndarray:
-        """The sample rows (indices into :attr:`Z`) outside the box (a unit coordinate beyond ±1: only with
-        ``distribution = "normal"``, whose spread is 3 sigma), which its corners do not
-        bound."""
+        """The sample rows (indices into :attr:`Z`) outside the box (a unit coordinate
+        beyond ±1: only with ``distribution = "normal"``, whose spread is 3 sigma), which
+        its corners do not bound."""
         first = self.corners + 1
         out = (np.abs(self.Z[first:]) > 1.0 + 1e-12).any(axis=1)
         return first + np.flatnonzero(out)

@@ -22,7 +22,8 @@ def select_text(r, top: int = 15) -> str:
     if sc and sc.get("method") == "corners first":
         lines.append(f"  corners first: {sc['decided_by_corners']} pairs decided by their corners "
                      f"({sc['met_every_corner']} meet every one, {sc['failed_every_corner']} "
-                     f"fail every one), {sc['sampled']} sampled")
+                     f"fail every one), {sc['sampled']} sampled ({sc['sample_rows_run']} of "
+                     f"{sc['sample_rows_every']} sample strokes run)")
     if r.continuous:
         lines.append("  no damper catalog: the dashpot's c chosen per spring within "
                      "optimise.damper_c, made to [tolerance] design.damper_c")
