@@ -3,8 +3,9 @@ first and with every pair sampled.
 
 The ten-times catalog is made of scaled variants of the shipped springs
 (``examples/catalogs/springs.csv``): each spring ``variants`` times, its rate -- a gas
-strut's F1 and rate -- times a factor from 0.91 to 1.09 (a coil's active coils divided by
-it, so that its coil stays its rate), named ``<part>-v<j>``; the shipped dampers as they are.
+strut's F1 and rate -- times a factor from 0.91 to 1.09 (a coil's mean diameter divided by
+its cube root, so that its coil stays its rate), named ``<part>-v<j>``; the shipped
+dampers as they are.
 With 265 springs x 13 dampers shipped, that is 2,650 springs, 34,450 pairs.
 
 It reports per catalog (shipped, ten times) and screening (corners first; every sample,
@@ -56,8 +57,8 @@ def scaled_springs(src: Path, dst: Path, variants: int = 10) -> Path:
             r["rate_N_per_m"] = f"{float(row['rate_N_per_m']) * f:.6g}"
             if row["kind"] == "gas_strut":
                 r["preload_N"] = f"{float(row['preload_N']) * f:.6g}"
-            if row.get("active_coils"):
-                r["active_coils"] = f"{float(row['active_coils']) / f:.6g}"
+            if row.get("coil_d_m"):        # (the coil's rate G d^4 / (8 D^3 n))
+                r["coil_d_m"] = f"{float(row['coil_d_m']) / f ** (1 / 3):.6g}"
             out.append(r)
     def write(path):
         with open(path, "w", newline="") as fh:
