@@ -82,9 +82,9 @@ def test_corners_first_ranks_as_every_sample_on_the_shipped_catalogs():
     sc = first.screening
     assert (sc["decided_by_corners"], sc["met_every_corner"], sc["failed_every_corner"],
             sc["sampled"]) == (2856, 1666, 1190, 589)
-    assert sc["sample_rows_run"] == 79455 and sc["sample_rows_every"] == 881920
+    assert sc["sample_rows_run"] == 150784 and sc["sample_rows_every"] == 881920
     assert ("corners first: 2856 pairs decided by their corners (1666 meet every one, 1190 "
-            "fail every one), 589 sampled (79455 of 881920 sample strokes run)") \
+            "fail every one), 589 sampled (150784 of 881920 sample strokes run)") \
         in first.text()
 
 
@@ -132,10 +132,10 @@ def test_a_pair_failing_every_corner_has_yield_0_and_one_meeting_every_corner_1(
 
 
 def test_a_pair_meeting_some_corners_is_sampled(monkeypatch):
-    """Pairs meeting some corners: their samples judged one by one, the same yield as every
-    sample run; those whose unsettled constraints are monotone run only some samples (in
-    rounds: the rest decided by a sample run that meets or fails the constraint and is no
-    better or no worse placed along its orientation)."""
+    """Pairs meeting some corners: every sample run by default; with ``infer=True`` those
+    whose unsettled constraints are monotone run only some samples (in rounds: the rest
+    decided by a sample run that meets or fails the constraint and is no better or no
+    worse placed along its orientation), the same yields and worst J here."""
     from softclose.catalog.corners import screen_rows
     from softclose.catalog.screen import pair_box, summarise
     cfg = default_config()
@@ -145,8 +145,10 @@ def test_a_pair_meeting_some_corners_is_sampled(monkeypatch):
     every, _, _ = screen_rows(cfg, box, pairs, True)
     sm = summarise(box, every, len(pairs))
     some = [p for p in range(len(pairs)) if 0 < sm["corner_count"][p] < box.corners]
+    _, _, runs = screen_rows(cfg, box, [pairs[p] for p in some])
+    assert (runs == box.samples).all()
     calls = _spy(monkeypatch)
-    cols, sampled, runs = screen_rows(cfg, box, [pairs[p] for p in some])
+    cols, sampled, runs = screen_rows(cfg, box, [pairs[p] for p in some], infer=True)
     assert sampled.all() and calls[0] == (len(some), len(some) * (box.corners + 1))
     assert sum(c[1] for c in calls[1:]) == runs.sum() <= len(some) * box.samples
     assert runs.min() < box.samples                  # some samples decided without a run

@@ -311,7 +311,7 @@ def screen_chunk(cfg: Config, box: PairBox, a: int, chunk: list,
     """Screen one chunk of pairs, corners first (:mod:`.corners`; ``every_sample``: every
     pair's samples run): (its first index, [(ranking entry, (corner verdicts, corner J))
     per pair]); an entry's ``sampled`` says whether its corners left it open (its samples
-    run, or decided by its constraints' monotonicity), ``samples_run`` how many were run."""
+    run), ``samples_run`` how many were run."""
     cols, sampled, runs = screen_rows(cfg, box, chunk, every_sample)
     sm = summarise(box, cols, len(chunk))
     n, nc = box.points, box.corners
