@@ -15,9 +15,9 @@ from .ranking import screen_chunk
 from ..config.load import from_dict
 
 
-def _select_task(cfg_dict: dict, box, a: int, chunk: list):
+def _select_task(cfg_dict: dict, box, a: int, chunk: list, every_sample: bool = False):
     """One chunk of pairs on a worker: :func:`softclose.catalog.ranking.screen_chunk`."""
-    return screen_chunk(from_dict(cfg_dict), box, a, chunk)
+    return screen_chunk(from_dict(cfg_dict), box, a, chunk, every_sample)
 
 
 class _Mapper:
@@ -25,11 +25,12 @@ class _Mapper:
         self.client = client
         self.lost = None
 
-    def __call__(self, cfg, box, tasks):
+    def __call__(self, cfg, box, tasks, every_sample: bool = False):
         raw = {k: dict(v) for k, v in cfg.raw.items()}
         try:
             for _, result in map_tasks(self.client, _select_task,
-                                       ((a, (raw, box, a, chunk)) for a, chunk in tasks),
+                                       ((a, (raw, box, a, chunk, every_sample))
+                                        for a, chunk in tasks),
                                        label="chunk of pairs"):
                 yield result
         except ClusterLost as exc:

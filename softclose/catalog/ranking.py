@@ -7,7 +7,8 @@ The procedure, step by step:
    the corners of the box over a geometric grid of ``optimise.damper_c``'s bounds, then a
    finer grid around the best), made to the ``[tolerance]`` spread of ``design.damper_c``.
 2. **Screen** (:mod:`.screen`): each pair at the corners of its own tolerance box, at its
-   nominal point and on the same Monte Carlo samples, in the C kernel, chunk by chunk. A
+   nominal point and on the same Monte Carlo samples, in the C kernel, chunk by chunk;
+   corners first (:mod:`.corners`): the samples only where the corners leave it open. A
    spring whose coil the catalog gives is checked at its working lengths (:mod:`.coil`:
    static stress, fatigue, buckling); one that fails makes its pair infeasible.
 3. **Rank**: meets every constraint at every corner first, then yield (the share of samples
@@ -33,6 +34,7 @@ from .files import Catalog, DamperEntry, as_catalog, read_dampers, read_springs
 from .result import SelectResult, pair_entry
 from .screen import (RANGE, PairBox, pair_box, range_texts, reason_text, run_pairs,
                      summarise)
+from .corners import screen_rows
 from .nlp import NLP_SAMPLES, solve_c
 from .mounting import parts_fix, place_pair, placement_keys
 from . import coil, verify
@@ -40,8 +42,9 @@ from ..robust.scenarios import at_reference
 from .screen import limiting_temperature
 from ..problem import condition_parts
 
-#: rows of the kernel per chunk of pairs (a chunk is the unit of progress and of Ctrl-C)
-CHUNK_ROWS = 40_000
+#: rows of the whole box per chunk of pairs (a chunk is the unit of progress and of Ctrl-C;
+#: corners first, most of its pairs' samples are not run)
+CHUNK_ROWS = 160_000
 #: default Monte Carlo samples per pair
 SAMPLES = 256
 #: default number of best pairs verified by the reference at every corner
@@ -100,7 +103,7 @@ def _rank_key(e: dict):
 
 def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: int = 0,
            verify: int = VERIFY, progress: bool = False, mapper=None,
-           nlp: bool = True) -> SelectResult:
+           nlp: bool = True, every_sample: bool = False) -> SelectResult:
     """Rank every spring (x damper) of the catalogs by how the lid closes with it, each
     over its own tolerance box and ``[tolerance]`` for the other keys (module docstring).
 
@@ -110,7 +113,10 @@ def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: 
     pairs the adaptive reference checks at every corner; ``nlp`` (without dampers): those
     pairs' c re-solved first by the robust NLP (:mod:`.nlp`; kept when it ranks better than
     the grid's). ``mapper``: run chunks elsewhere
-    (``softclose.catalog.distributed``). Ctrl-C between chunks keeps the pairs screened
+    (``softclose.catalog.distributed``). ``every_sample``: every pair's samples run (by
+    default corners first, :mod:`.corners`: the samples of the pairs the corners leave
+    open; the same ranking where the constraints are monotone over the boxes). Ctrl-C
+    between chunks keeps the pairs screened
     (``result.interrupted``). Returns a :class:`SelectResult`; never raises for a part
     that fails (it is ranked with the reason).
     """
@@ -149,8 +155,8 @@ def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: 
         bar = Progress(len(pairs), "select", enabled=progress, unit="pairs")
         try:
             tasks = ((a, pairs[a:b]) for a, b in chunks(len(pairs), size))
-            results = mapper(cfg, box, tasks) if mapper is not None else \
-                (screen_chunk(cfg, box, a, chunk) for a, chunk in tasks)
+            results = mapper(cfg, box, tasks, every_sample) if mapper is not None else \
+                (screen_chunk(cfg, box, a, chunk, every_sample) for a, chunk in tasks)
             for a, rows in results:       # (chunks may arrive out of order)
                 for i, (entry, corners) in enumerate(rows):
                     found[a + i] = entry
@@ -167,7 +173,8 @@ def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: 
     if dmp is None and nlp and not interrupted and verify:
         tn = time.perf_counter()
         try:
-            order = _resolve_c(cfg, box, pairs, entries, kernel, order, verify)
+            order = _resolve_c(cfg, box, pairs, entries, kernel, order, verify,
+                               every_sample)
         except KeyboardInterrupt:
             interrupted = True
         times["nlp"] = time.perf_counter() - tn
@@ -176,7 +183,7 @@ def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: 
         tp = time.perf_counter()
         try:
             order = _place_best(cfg, box, pairs, entries, kernel, order, verify, cfgs,
-                                samples, progress)
+                                samples, progress, every_sample)
         except KeyboardInterrupt:
             interrupted = True
         times["placement"] = time.perf_counter() - tp
@@ -214,7 +221,8 @@ def select(cfg: Config, springs, dampers=None, *, samples: int = SAMPLES, seed: 
         pairs=len(pairs), seconds=seconds, interrupted=interrupted,
         warnings=tuple(warnings), samples=samples, seed=seed, corners=box.corners,
         box=_box_json(box), continuous=dmp is None, verified_count=len(checked),
-        times=times, springs=spr.path, dampers=None if dmp is None else dmp.path)
+        screening=_screening(entries, box, every_sample), times=times, springs=spr.path,
+        dampers=None if dmp is None else dmp.path)
 
 
 def _verify_best(cfg, box, pairs, entries, kernel, order, n, checked: dict,
@@ -250,7 +258,7 @@ def _verify_best(cfg, box, pairs, entries, kernel, order, n, checked: dict,
 
 
 def _place_best(cfg, box, pairs, entries, kernel, order, n, cfgs: dict, samples: int,
-                progress: bool) -> list:
+                progress: bool, every_sample: bool = False) -> list:
     """The best ``n`` pairs' attachment points re-optimised (:mod:`.place`); a pair screened
     again at its points keeps them when it ranks better there (``cfgs`` gets its config).
     Returns the new order."""
@@ -263,7 +271,7 @@ def _place_best(cfg, box, pairs, entries, kernel, order, n, cfgs: dict, samples:
             kept = "config"
             if info["values"]:
                 c_i = cfg.update(info["values"])
-                _, rows = screen_chunk(c_i, box, i, [(s, d)])
+                _, rows = screen_chunk(c_i, box, i, [(s, d)], every_sample)
                 e2, corners2 = rows[0]
                 if _rank_key(e2) < _rank_key(entries[i]):
                     e2["design"].update({k.removeprefix("geometry."): v
@@ -276,7 +284,8 @@ def _place_best(cfg, box, pairs, entries, kernel, order, n, cfgs: dict, samples:
     return sorted(entries, key=lambda i: _rank_key(entries[i]))
 
 
-def _resolve_c(cfg, box, pairs, entries, kernel, order, n) -> list:
+def _resolve_c(cfg, box, pairs, entries, kernel, order, n, every_sample: bool = False
+               ) -> list:
     """The best ``n`` springs' c re-solved by the robust NLP (:mod:`.nlp`); the pair is
     screened again with the NLP's c and keeps whichever c ranks better. Returns the new
     order."""
@@ -288,7 +297,7 @@ def _resolve_c(cfg, box, pairs, entries, kernel, order, n) -> list:
         kept = "grid"
         if info["c"] is not None and info["c"] != d.c:
             d2 = replace(d, c=info["c"])
-            _, rows = screen_chunk(cfg, box, i, [(s, d2)])
+            _, rows = screen_chunk(cfg, box, i, [(s, d2)], every_sample)
             e2, corners2 = rows[0]
             if _rank_key(e2) < _rank_key(entries[i]):
                 entries[i], kernel[i], pairs[i] = e2, corners2, (s, d2)
@@ -298,10 +307,13 @@ def _resolve_c(cfg, box, pairs, entries, kernel, order, n) -> list:
     return sorted(entries, key=lambda i: _rank_key(entries[i]))
 
 
-def screen_chunk(cfg: Config, box: PairBox, a: int, chunk: list) -> tuple[int, list]:
-    """Screen one chunk of pairs: (its first index, [(ranking entry, (corner verdicts,
-    corner J)) per pair])."""
-    cols = run_pairs(cfg, box, chunk)
+def screen_chunk(cfg: Config, box: PairBox, a: int, chunk: list,
+                 every_sample: bool = False) -> tuple[int, list]:
+    """Screen one chunk of pairs, corners first (:mod:`.corners`; ``every_sample``: every
+    pair's samples run): (its first index, [(ranking entry, (corner verdicts, corner J))
+    per pair]); an entry's ``sampled`` says whether its corners left it open (its samples
+    run), ``samples_run`` how many were run."""
+    cols, sampled, runs = screen_rows(cfg, box, chunk, every_sample)
     sm = summarise(box, cols, len(chunk))
     n, nc = box.points, box.corners
     rng = [p for p, r in enumerate(sm["reason"]) if r == RANGE]
@@ -318,6 +330,7 @@ def screen_chunk(cfg: Config, box: PairBox, a: int, chunk: list) -> tuple[int, l
                        float(sm["worst_objective"][p]), text,
                        int(sm["corner_count"][p]), nc,
                        {k: float(v[p]) for k, v in sm["nominal"].items()})
+        e["sampled"], e["samples_run"] = bool(sampled[p]), int(runs[p])
         coil.apply(e, coil.spring_checks(cfg, s, lengths))
         if len(box.temperatures) > 1:      # (each sign-off temperature, in each state)
             T, state = condition_parts(limiting_temperature(box, cols, cfg.optimise, p,
@@ -329,6 +342,19 @@ def screen_chunk(cfg: Config, box: PairBox, a: int, chunk: list) -> tuple[int, l
         J = np.asarray(cols["objective"][p * n:p * n + nc], float).copy()
         out.append((e, (F, J)))
     return a, out
+
+
+def _screening(entries: dict, box: PairBox, every_sample: bool) -> dict:
+    """How the pairs were screened: corners first or every sample; how many pairs their
+    corners decided (met at every one, failed at every one) and how many were sampled."""
+    met = sum(1 for e in entries.values() if not e["sampled"] and e["corners_feasible"])
+    decided = sum(1 for e in entries.values() if not e["sampled"])
+    rows = sum(e["samples_run"] for e in entries.values())
+    return {"method": "every sample" if every_sample or not box.samples else "corners first",
+            "decided_by_corners": decided, "met_every_corner": met,
+            "failed_every_corner": decided - met, "sampled": len(entries) - decided,
+            "sample_rows_run": rows,
+            "sample_rows_every": len(entries) * (box.points - box.corners - 1)}
 
 
 def _box_json(box: PairBox) -> dict:

@@ -76,6 +76,9 @@ class SelectResult(Displayed):
     box: dict = field(default_factory=dict)
     continuous: bool = False
     verified_count: int = 0
+    #: how the pairs were screened (:mod:`softclose.catalog.corners`): ``method``,
+    #: ``decided_by_corners`` (``met_every_corner`` + ``failed_every_corner``), ``sampled``
+    screening: dict = field(default_factory=dict)
     times: dict = field(default_factory=dict)
     springs: str = ""
     dampers: str | None = None
@@ -103,7 +106,8 @@ class SelectResult(Displayed):
             "warnings": list(self.warnings), "samples": self.samples, "seed": self.seed,
             "corners": self.corners, "box": self.box,
             "damper_c_optimised": self.continuous, "verified_pairs": self.verified_count,
-            "times": self.times, "springs": self.springs, "dampers": self.dampers})
+            "screening": self.screening, "times": self.times, "springs": self.springs,
+            "dampers": self.dampers})
 
     def to_frame(self):
         """One row per pair, best first: rank, the parts, the verdicts, why it fails,

@@ -99,6 +99,15 @@ class PairBox:
         return PairBox(self.other, self.Z[:n], self.corners, 0,
                        None if self.Ts is None else self.Ts[:n], self.strut)
 
+    @property
+    def outside(self) -> np.ndarray:
+        """The sample rows (indices into :attr:`Z`) outside the box (a unit coordinate
+        beyond ±1: only with ``distribution = "normal"``, whose spread is 3 sigma), which
+        its corners do not bound."""
+        first = self.corners + 1
+        out = (np.abs(self.Z[first:]) > 1.0 + 1e-12).any(axis=1)
+        return first + np.flatnonzero(out)
+
     def config_at(self, cfg: Config, row: int) -> Config:
         """``cfg`` at the temperature of row ``row``."""
         return cfg if self.Ts is None else at_temperature(cfg, float(self.Ts[row]))
@@ -225,32 +234,44 @@ def damper_group(damper) -> tuple:
             getattr(damper, "temperature_coeff", None))
 
 
-def run_pairs(cfg: Config, box: PairBox, pairs: list) -> dict:
+def run_pairs(cfg: Config, box: PairBox, pairs: list, rows: list | None = None) -> dict:
     """Every row of every pair ``(spring, damper)``: the metric columns of
     :func:`softclose.robust.evaluate.evaluate`, ``reason`` and ``feasible`` with the parts'
-    length limits checked, and the row's lower and upper length limit; rows pair-major."""
+    length limits checked, and the row's lower and upper length limit; rows pair-major.
+    ``rows``: per pair, the rows of the box it is run at (indices into ``box.Z``; None:
+    every row); the opening effort is computed at its nominal row when it is among them."""
     n = box.points
+    every = np.arange(n)
+    rows = [every] * len(pairs) if rows is None else [np.asarray(r, int) for r in rows]
+    starts = np.r_[0, np.cumsum([len(r) for r in rows])]
+    total = int(starts[-1])
     groups: dict = {}
     for i, (s, d) in enumerate(pairs):
-        groups.setdefault(damper_group(d), []).append(i)
+        if len(rows[i]):
+            groups.setdefault(damper_group(d), []).append(i)
     out = None
     for _, idx in groups.items():
         c = pivot_config(cfg, pairs[idx[0]][1])
         keys, X = None, []
         for i in idx:
             keys, x = pair_rows(box, *pairs[i])
-            X.append(x)
-        cols = _evaluate(c, box, keys, np.vstack(X), len(idx))
+            X.append(x if len(rows[i]) == n else x[rows[i]])
+        mine = np.concatenate([rows[i] for i in idx])
+        cols = _evaluate(c, box, keys, np.vstack(X), mine)
         if out is None:
-            out = {k: np.empty((len(pairs) * n,) + np.shape(v)[1:], np.asarray(v).dtype)
+            out = {k: np.empty((total,) + np.shape(v)[1:], np.asarray(v).dtype)
                    for k, v in cols.items()}
-            out["reason"] = np.empty(len(pairs) * n, dtype=object)
-        rows = (np.asarray(idx)[:, None] * n + np.arange(n)).ravel()
+            out["reason"] = np.empty(total, dtype=object)
+        at = np.concatenate([np.arange(starts[i], starts[i + 1]) for i in idx])
         for k, v in cols.items():
-            out[k][rows] = v
+            out[k][at] = v
+    if out is None:
+        return _no_rows()
+    counts = np.diff(starts)
     lo = np.repeat([np.nan if s.min_length is None or s.is_strut else s.min_length
-                    for s, _ in pairs], n)
-    hi = np.repeat([np.nan if s.max_length is None else s.max_length for s, _ in pairs], n)
+                    for s, _ in pairs], counts)
+    hi = np.repeat([np.nan if s.max_length is None else s.max_length for s, _ in pairs],
+                   counts)
     with np.errstate(invalid="ignore"):
         bad = (out["min_spring_length"] < lo * (1 - LIMIT_RTOL)) \
             | (out["max_spring_length"] > hi * (1 + LIMIT_RTOL)) | (out["status"] == StrokeStatus.OUT_OF_RANGE)
@@ -263,17 +284,23 @@ def run_pairs(cfg: Config, box: PairBox, pairs: list) -> dict:
     return out
 
 
-def _evaluate(c: Config, box: PairBox, keys, X: np.ndarray, npairs: int) -> dict:
-    """:func:`softclose.robust.evaluate.evaluate` of the rows X of ``npairs`` pairs, each
-    row at its temperature. The opening effort (statics over 241 angles a row, a fifth of
-    the screen's time) is computed at every row only where it is a constraint
-    (``optimise.opening_force_max``: ``evaluate`` computes it then); else at each pair's
-    nominal row, which reports it."""
-    Trow = None if box.Ts is None else np.tile(box.Ts, npairs)
+def _no_rows() -> dict:
+    """:func:`run_pairs`'s columns of no row."""
+    return {"feasible": np.zeros(0, bool), "reason": np.zeros(0, object),
+            "lo": np.zeros(0), "hi": np.zeros(0)}
+
+
+def _evaluate(c: Config, box: PairBox, keys, X: np.ndarray, rows: np.ndarray) -> dict:
+    """:func:`softclose.robust.evaluate.evaluate` of the rows X (rows ``rows`` of the box,
+    of one pair after another), each row at its temperature. The opening effort (statics
+    over 241 angles a row, a fifth of the screen's time) is computed at every row only
+    where it is a constraint (``optimise.opening_force_max``: ``evaluate`` computes it
+    then); else at each pair's nominal row, which reports it."""
+    Trow = None if box.Ts is None else box.Ts[rows]
     cols = _at_temperatures(c, box, keys, X, Trow, False)
-    if c.optimise.opening_force_max is not None:
+    nominal = np.flatnonzero(rows == box.corners) if box.corners else np.zeros(0, int)
+    if c.optimise.opening_force_max is not None or not len(nominal):
         return cols
-    nominal = np.arange(npairs) * box.points + box.corners
     part = _at_temperatures(c, box, keys, X[nominal], None if Trow is None else Trow[nominal],
                             True)
     cols["opening_force"][nominal] = part["opening_force"]

@@ -14,8 +14,14 @@ def select_text(r, top: int = 15) -> str:
     """What ``softclose select`` prints: the screen, the ranking (its ``top`` pairs), the
     best pair with its parts, its damping and placement, the reference's verdict."""
     lines = [f"softclose select: {r.evaluated} of {r.pairs} pairs screened over their tolerance "
-             f"boxes ({r.corners} corners, {r.samples} samples each) in {r.seconds:.2f} s; the "
+             f"boxes ({r.corners} corners, {r.samples} samples) in {r.seconds:.2f} s; the "
              f"best {r.verified_count} checked at every corner by the adaptive reference"]
+    sc = r.screening
+    if sc and sc.get("method") == "corners first":
+        lines.append(f"  corners first: {sc['decided_by_corners']} pairs decided by their corners "
+                     f"({sc['met_every_corner']} meet every one, {sc['failed_every_corner']} "
+                     f"fail every one), {sc['sampled']} sampled ({sc['sample_rows_run']} of "
+                     f"{sc['sample_rows_every']} sample strokes run)")
     if r.continuous:
         lines.append("  no damper catalog: the dashpot's c chosen per spring within "
                      "optimise.damper_c, made to [tolerance] design.damper_c")
