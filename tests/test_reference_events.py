@@ -111,3 +111,16 @@ def test_the_chunks_speeds_are_the_single_calls():
         x = np.frombuffer(key[0])
         w, dw = ref._speed_fn(x, p, ref._moving, ref._engaged)
         assert (v, dv) == (float(w), float(dw))
+
+
+def test_a_ringing_lid_stops_the_reference_with_what_to_change():
+    """A torsion spring of 1e5 N m/rad rings the lid at hundreds of turns a second; the
+    reference stops at its MAX_TURNS-th turn with one line saying what to change (following
+    every turn took tens of seconds a stroke), while an ordinary stroke turns far fewer
+    times."""
+    from softclose.errors import NumericalError
+    ring = Reference.from_config(softclose.load_config(None, ["design.torsion_k=100000.0"]))
+    with pytest.raises(NumericalError, match=rf"more than {ref_mod.MAX_TURNS} times .* "
+                                             r"soften the spring or damp it"):
+        ring.simulate()
+    assert Reference.from_config(softclose.load_config()).simulate().closed
