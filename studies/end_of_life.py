@@ -37,7 +37,7 @@ from softclose.present.study import parse, print_json, save_summary, study_optio
 #: dampers' fade
 LIFE = {"life.strut_force_loss": 0.10, "life.spring_relaxation": 0.03,
         "life.damper_change": -0.15}
-CHEST = Path(softclose.__file__).resolve().parents[1] / "examples" / "lids" / "chest_lid.toml"
+CHEST = Path(__file__).resolve().parents[1] / "examples" / "lids" / "chest_lid.toml"
 COLUMNS = ("closing_time", "impact_tip_speed", "peak_tip_speed", "holding_moment",
            "opening_force", "objective")
 

@@ -120,7 +120,7 @@ def test_a_ringing_lid_stops_the_reference_with_what_to_change():
     times."""
     from softclose.errors import NumericalError
     ring = Reference.from_config(softclose.load_config(None, ["design.torsion_k=100000.0"]))
-    with pytest.raises(NumericalError, match=rf"more than {ref_mod.MAX_TURNS} times .* "
+    with pytest.raises(NumericalError, match=r"the lid rings: it turned back \d+ times .* "
                                              r"soften the spring or damp it"):
         ring.simulate()
     assert Reference.from_config(softclose.load_config()).simulate().closed
