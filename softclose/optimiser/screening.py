@@ -33,6 +33,7 @@ import numpy as np
 from ..problem import DESIGN_KEYS, PARAM_COLUMNS, objective, with_designs
 from .free_points import SLOTS
 from .interval import END_ANGLE, END_C, free_of
+from .starts import batch_violation
 
 #: levels per shared variable of the grid of placements
 LEVELS = 3
@@ -285,13 +286,7 @@ def nominal_judge(cfg, sim, box: tuple, t_limit: float):
         r = sim.run_batch(P, points=points or None, explain=False)
         T = np.where(r["closed"], r["closing_time"], np.inf)
         J = objective(o, r["impact_theta_dot"], r["peak_tip_speed"])
-        with np.errstate(invalid="ignore"):
-            v = (np.maximum(T - t_limit, 0) / t_limit
-                 + np.maximum(o.closing_time_min - T, 0) / max(t_limit, 1e-9)
-                 + np.maximum(o.holding_moment_min - r["holding_moment"], 0)
-                 / max(abs(o.holding_moment_min), 1e-3)
-                 + np.maximum(r["theta_dot_max"], 0))
-        v = np.where(np.isfinite(v), v, 1e3)
+        v = batch_violation(o, r, T, t_limit)
         return np.where(np.isfinite(T), J, np.nan), v
     return judge
 

@@ -63,6 +63,22 @@ def sweep_time(cfg, t_limit: float) -> float:
     return 1.05 * t_limit + 0.05
 
 
+def batch_violation(o, r: dict, T: np.ndarray, t_limit: float, release=0.0) -> np.ndarray:
+    """How far each stroke of a kernel batch ``r`` (closing times ``T``, inf where open)
+    lies outside the problem's limits ``o`` (optimise): the closing-time window and the
+    holding moment relative to their limits, plus ``release`` (the start sweep's measure of
+    a lid that does not move down at release; 0 where not judged) and theta' > 0 anywhere;
+    0 when feasible, 1e3 where a term is not finite."""
+    with np.errstate(invalid="ignore"):
+        v = (np.maximum(T - t_limit, 0) / t_limit
+             + np.maximum(o.closing_time_min - T, 0) / max(t_limit, 1e-9)
+             + np.maximum(o.holding_moment_min - r["holding_moment"], 0)
+             / max(abs(o.holding_moment_min), 1e-3)
+             + release
+             + np.maximum(r["theta_dot_max"], 0))
+    return np.where(np.isfinite(v), v, 1e3)
+
+
 def _measure(cfg, sim, G: np.ndarray, keys: tuple, t_limit: float):
     """(violation, J, closing time) by the kernel of the designs ``G`` (rows of k, l0, c,
     then the values of the swept ``keys``): the violation (relative, 0 when feasible) ranks
@@ -76,14 +92,7 @@ def _measure(cfg, sim, G: np.ndarray, keys: tuple, t_limit: float):
     dVg0 = sim.table.evaluate([st.theta0])[0][COEFFS.index("dVg")]  # gravity's alone
     T = np.where(r["closed"], r["closing_time"], np.inf)
     J = objective(o, r["impact_theta_dot"], r["peak_tip_speed"])
-    with np.errstate(invalid="ignore"):
-        viol = (np.maximum(T - t_limit, 0) / t_limit
-                + np.maximum(o.closing_time_min - T, 0) / max(t_limit, 1e-9)
-                + np.maximum(o.holding_moment_min - r["holding_moment"], 0)
-                / max(abs(o.holding_moment_min), 1e-3)
-                + np.maximum(release, 0) / max(abs(dVg0), 1e-6)
-                + np.maximum(r["theta_dot_max"], 0))
-    viol = np.where(np.isfinite(viol), viol, 1e3)
+    viol = batch_violation(o, r, T, t_limit, np.maximum(release, 0) / max(abs(dVg0), 1e-6))
     return viol, J, T
 
 
